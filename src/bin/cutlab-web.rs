@@ -1,0 +1,5 @@
+//! The browser app's entry point, built by Trunk. All UI lives in `cutlab::web`.
+
+fn main() {
+    cutlab::web::start();
+}

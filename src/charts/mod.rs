@@ -1,0 +1,1 @@
+//! Charts: plotters drawing functions over any `DrawingArea`.

@@ -1,0 +1,101 @@
+//! The `cutlab` command line: the same core as the browser lab, in a terminal.
+//!
+//! [`run`] takes the arguments and the standard streams, so tests drive the whole command line
+//! in-process. Each subcommand lives in its own module with a `run(args, io)` function and lists
+//! itself once in [`COMMANDS`], which also produces the top-level help.
+
+pub mod args;
+
+use std::io::{BufRead, Write};
+
+pub use args::{CliError, OptionSpec, Options};
+
+/// The standard streams a subcommand reads and writes.
+pub struct Io<'a> {
+    /// Standard input (samples, evaluations).
+    pub stdin: &'a mut dyn BufRead,
+    /// Standard output (results).
+    pub stdout: &'a mut dyn Write,
+}
+
+/// One subcommand: its name, a line of help and its entry point.
+pub struct Command {
+    /// The word typed after `cutlab`.
+    pub name: &'static str,
+    /// One line for `cutlab --help`.
+    pub about: &'static str,
+    /// Runs the subcommand on the arguments after its name.
+    pub run: fn(&[String], &mut Io<'_>) -> Result<(), CliError>,
+}
+
+/// Every subcommand, in the order `cutlab --help` lists them.
+pub const COMMANDS: &[Command] = &[];
+
+/// The version line printed by `cutlab --version`.
+pub fn version_line() -> String {
+    format!("cutlab {}", env!("CARGO_PKG_VERSION"))
+}
+
+/// The top-level help.
+pub fn help_text() -> String {
+    let mut out = String::from(
+        "cutlab — adaptive cutting-force control of CNC milling: signal chain, simulated machine,\n\
+         estimators, controllers and safety envelope.\n\n\
+         Usage: cutlab <COMMAND> [OPTIONS]\n\nCommands:\n",
+    );
+    let width = COMMANDS.iter().map(|c| c.name.len()).max().unwrap_or(0);
+    for c in COMMANDS {
+        out.push_str(&format!("  {:width$}  {}\n", c.name, c.about));
+    }
+    out.push_str(
+        "\nOptions:\n  --help     Print this help (also after a command: cutlab <COMMAND> --help)\n  \
+         --version  Print the version\n",
+    );
+    out
+}
+
+/// Runs the command line on `args` (without the program name).
+pub fn run(args: &[String], io: &mut Io<'_>) -> Result<(), CliError> {
+    let Some(first) = args.first() else {
+        io.stdout.write_all(help_text().as_bytes())?;
+        return Ok(());
+    };
+    match first.as_str() {
+        "--help" | "-h" | "help" => {
+            io.stdout.write_all(help_text().as_bytes())?;
+            Ok(())
+        }
+        "--version" | "-V" => {
+            writeln!(io.stdout, "{}", version_line())?;
+            Ok(())
+        }
+        name => {
+            let command = COMMANDS.iter().find(|c| c.name == name).ok_or_else(|| {
+                CliError::new(format!(
+                    "unknown command {name:?}; commands: {}",
+                    COMMANDS
+                        .iter()
+                        .map(|c| c.name)
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                ))
+            })?;
+            (command.run)(&args[1..], io)
+        }
+    }
+}
+
+/// True when `args` asks for help (`--help` or `-h` anywhere before a `--`).
+pub fn wants_help(args: &[String]) -> bool {
+    args.iter()
+        .take_while(|a| a.as_str() != "--")
+        .any(|a| a == "--help" || a == "-h")
+}
+
+/// Writes `value` as pretty JSON followed by a newline.
+pub fn write_json<T: serde::Serialize>(out: &mut dyn Write, value: &T) -> Result<(), CliError> {
+    serde_json::to_writer_pretty(&mut *out, value)
+        .map_err(|e| CliError::new(format!("cannot write JSON: {e}")))?;
+    writeln!(out)?;
+    Ok(())
+}

@@ -1,0 +1,47 @@
+//! # cutlab — adaptive cutting-force control of CNC milling, as a library
+//!
+//! The force on a milling cutter is measured indirectly from motor current and a controller
+//! adjusts the feed override to hold it at a target. Every module here is plain Rust that builds
+//! natively and for `wasm32-unknown-unknown`; the browser app (`web`, behind the `web` feature) and
+//! the command line (`cli`, behind the `cli` feature) only show and steer it.
+//!
+//! ## Data flow
+//!
+//! ```text
+//! scenario ─► CNC (programmed feed × override) ─► cutting process ─► feed / spindle drives
+//!    ─► sensors (Hall, ADC) ─► signal chain (filter, RMS, spectrum) ─► estimator (current → force)
+//!    ─► controller ─► safety envelope ─► feed override ─► back to the CNC
+//! ```
+//!
+//! ## Modules
+//!
+//! | module | what it holds |
+//! |---|---|
+//! | [`signal`] | Butterworth design (second-order sections), biquad-cascade filtering, zero-phase filtering, RMS, Clarke/Park, spectra, min/max decimation |
+//! | [`plant`] | the simulated machine: milling mechanics, feed and spindle drives, motor currents, sensors, the FANUC-style CNC, scenarios and the papers' presets |
+//! | [`rng`] | the seeded random source every simulation draws from |
+//! | [`math`] | transcendental functions that give the same bits natively and in wasm |
+//! | `cli` | the `cutlab` command line (feature `cli`) |
+//! | `charts` | plotters drawing functions over any `DrawingArea` (feature `web`) |
+//! | `web` | the Leptos browser app (feature `web`) |
+//!
+//! ## Conventions
+//!
+//! Units live in names (`force_n`, `feed_mm_min`, `cutoff_hz`, `dt_s`). A design or configuration
+//! value is made by a constructor that returns `Result` for bad parameters; once it exists it is
+//! valid, and the per-sample `process`/`step` methods cannot fail. Nothing a user can influence
+//! panics: user data goes through `Result`s whose messages say where the problem is.
+
+pub mod math;
+pub mod plant;
+pub mod rng;
+pub mod signal;
+
+#[cfg(feature = "cli")]
+pub mod cli;
+
+#[cfg(feature = "web")]
+pub mod charts;
+
+#[cfg(feature = "web")]
+pub mod web;

@@ -1,0 +1,2 @@
+//! The Leptos browser app.
+pub fn start() {}
