@@ -18,11 +18,12 @@
 //! | module | what it holds |
 //! |---|---|
 //! | [`signal`] | Butterworth design (second-order sections), biquad-cascade filtering, zero-phase filtering, RMS, Clarke/Park, spectra, min/max decimation |
+//! | [`machine`] | the one interface between the closed loop and a machine: simulated, replayed or real |
 //! | [`plant`] | the simulated machine: milling mechanics, feed and spindle drives, motor currents, sensors, the FANUC-style CNC, scenarios and the papers' presets |
 //! | [`rng`] | the seeded random source every simulation draws from |
 //! | [`math`] | transcendental functions that give the same bits natively and in wasm |
 //! | `cli` | the `cutlab` command line (feature `cli`) |
-//! | `charts` | plotters drawing functions over any `DrawingArea` (feature `web`) |
+//! | `charts` | plotters drawing functions over any `DrawingArea` (feature `charts`, part of `web`) |
 //! | `web` | the Leptos browser app (feature `web`) |
 //!
 //! ## Conventions
@@ -32,6 +33,7 @@
 //! valid, and the per-sample `process`/`step` methods cannot fail. Nothing a user can influence
 //! panics: user data goes through `Result`s whose messages say where the problem is.
 
+pub mod machine;
 pub mod math;
 pub mod plant;
 pub mod rng;
@@ -40,7 +42,7 @@ pub mod signal;
 #[cfg(feature = "cli")]
 pub mod cli;
 
-#[cfg(feature = "web")]
+#[cfg(feature = "charts")]
 pub mod charts;
 
 #[cfg(feature = "web")]

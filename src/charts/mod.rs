@@ -1,1 +1,528 @@
-//! Charts: plotters drawing functions over any `DrawingArea`.
+//! Charts: what to draw ([`LineChart`]) apart from where to draw it.
+//!
+//! The drawing functions take any plotters [`DrawingArea`], so the browser draws them on a canvas
+//! (plotters-canvas) and the tests draw them into an SVG string natively. A chart returns the
+//! [`PlotGeometry`] it used, which lets the UI turn a mouse position back into data coordinates for
+//! hover readouts, zoom and pan without asking plotters again.
+//!
+//! Non-finite points are gaps: a series is split into separate polylines around them, so one bad
+//! sample never draws a line to infinity. On a logarithmic axis, points at or below zero are gaps
+//! too.
+
+use std::ops::Range;
+
+use plotters::coord::Shift;
+use plotters::prelude::*;
+
+/// An sRGB colour.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Rgb(pub u8, pub u8, pub u8);
+
+impl Rgb {
+    /// The colour as a CSS string, for legends drawn in HTML.
+    pub fn css(self) -> String {
+        format!("rgb({}, {}, {})", self.0, self.1, self.2)
+    }
+
+    fn plotters(self) -> RGBColor {
+        RGBColor(self.0, self.1, self.2)
+    }
+}
+
+/// A palette that stays distinguishable for colour-blind readers (Okabe & Ito, 2008).
+pub const PALETTE: [Rgb; 8] = [
+    Rgb(0, 114, 178),
+    Rgb(230, 159, 0),
+    Rgb(0, 158, 115),
+    Rgb(204, 121, 167),
+    Rgb(86, 180, 233),
+    Rgb(213, 94, 0),
+    Rgb(240, 228, 66),
+    Rgb(0, 0, 0),
+];
+
+/// How a series' line is drawn.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Stroke {
+    /// A continuous line.
+    Solid,
+    /// A dashed line, for targets and limits.
+    Dashed,
+}
+
+/// One named line.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Series {
+    /// Legend text.
+    pub label: String,
+    /// Line colour.
+    pub color: Rgb,
+    /// Line style.
+    pub stroke: Stroke,
+    /// The points, in data coordinates, in drawing order.
+    pub points: Vec<(f64, f64)>,
+}
+
+impl Series {
+    /// A solid series.
+    pub fn new(label: impl Into<String>, color: Rgb, points: Vec<(f64, f64)>) -> Self {
+        Self {
+            label: label.into(),
+            color,
+            stroke: Stroke::Solid,
+            points,
+        }
+    }
+
+    /// The same series drawn dashed.
+    pub fn dashed(mut self) -> Self {
+        self.stroke = Stroke::Dashed;
+        self
+    }
+}
+
+/// Linear or logarithmic axis.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Scale {
+    /// Evenly spaced values.
+    Linear,
+    /// Evenly spaced decades; only positive values are shown.
+    Log,
+}
+
+/// One axis: its label (with unit) and the shown range.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Axis {
+    /// Label with unit, e.g. `"frequency (Hz)"`.
+    pub label: String,
+    /// The shown range; [`LineChart::fit`] fills it from the data.
+    pub range: Range<f64>,
+    /// Linear or logarithmic.
+    pub scale: Scale,
+}
+
+impl Axis {
+    /// A linear axis with an empty range, to be fitted to the data.
+    pub fn linear(label: impl Into<String>) -> Self {
+        Self {
+            label: label.into(),
+            range: 0.0..1.0,
+            scale: Scale::Linear,
+        }
+    }
+
+    /// A logarithmic axis with an empty range, to be fitted to the data.
+    pub fn log(label: impl Into<String>) -> Self {
+        Self {
+            scale: Scale::Log,
+            ..Self::linear(label)
+        }
+    }
+}
+
+/// A line chart: axes and series.
+#[derive(Debug, Clone, PartialEq)]
+pub struct LineChart {
+    /// Caption above the plot, if any.
+    pub caption: Option<String>,
+    /// Horizontal axis.
+    pub x: Axis,
+    /// Vertical axis.
+    pub y: Axis,
+    /// The lines, drawn in order.
+    pub series: Vec<Series>,
+}
+
+/// Where the plotting area landed on the drawing area, in backend pixels, and what it shows.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PlotGeometry {
+    /// Pixel columns of the plotting area.
+    pub x_px: Range<i32>,
+    /// Pixel rows of the plotting area (top to bottom).
+    pub y_px: Range<i32>,
+    /// The data range shown horizontally.
+    pub x_range: Range<f64>,
+    /// The data range shown vertically.
+    pub y_range: Range<f64>,
+    /// Horizontal scale.
+    pub x_scale: Scale,
+    /// Vertical scale.
+    pub y_scale: Scale,
+}
+
+impl PlotGeometry {
+    /// The data x at pixel column `px` (outside the plotting area it extrapolates).
+    ///
+    /// ```
+    /// use cutlab::charts::{PlotGeometry, Scale};
+    /// let g = PlotGeometry { x_px: 100..300, y_px: 0..100, x_range: 1.0..100.0,
+    ///     y_range: 0.0..1.0, x_scale: Scale::Log, y_scale: Scale::Linear };
+    /// assert!((g.x_at(200.0) - 10.0).abs() < 1e-12);
+    /// assert!((g.y_at(25.0) - 0.75).abs() < 1e-12);
+    /// ```
+    pub fn x_at(&self, px: f64) -> f64 {
+        let t =
+            (px - f64::from(self.x_px.start)) / f64::from((self.x_px.end - self.x_px.start).max(1));
+        interpolate(&self.x_range, self.x_scale, t)
+    }
+
+    /// The data y at pixel row `py`.
+    pub fn y_at(&self, py: f64) -> f64 {
+        let t =
+            (f64::from(self.y_px.end) - py) / f64::from((self.y_px.end - self.y_px.start).max(1));
+        interpolate(&self.y_range, self.y_scale, t)
+    }
+
+    /// True if the pixel lies inside the plotting area.
+    pub fn contains(&self, px: f64, py: f64) -> bool {
+        px >= f64::from(self.x_px.start)
+            && px <= f64::from(self.x_px.end)
+            && py >= f64::from(self.y_px.start)
+            && py <= f64::from(self.y_px.end)
+    }
+}
+
+fn interpolate(range: &Range<f64>, scale: Scale, t: f64) -> f64 {
+    match scale {
+        Scale::Linear => range.start + t * (range.end - range.start),
+        Scale::Log => {
+            let (a, b) = (range.start.log10(), range.end.log10());
+            10f64.powf(a + t * (b - a))
+        }
+    }
+}
+
+impl LineChart {
+    /// A chart with the given axes and no series.
+    pub fn new(x: Axis, y: Axis) -> Self {
+        Self {
+            caption: None,
+            x,
+            y,
+            series: Vec::new(),
+        }
+    }
+
+    /// Sets both axis ranges to the data's extent (with a small margin vertically).
+    pub fn fit(&mut self) {
+        self.x.range = data_extent(&self.series, |p| p.0, self.x.scale, 0.0);
+        self.y.range = data_extent(&self.series, |p| p.1, self.y.scale, 0.05);
+    }
+}
+
+/// The extent of one coordinate over every finite point, widened by `margin` of its span; a
+/// degenerate or empty extent becomes a unit-wide range so an axis can always be drawn.
+fn data_extent(
+    series: &[Series],
+    coordinate: impl Fn(&(f64, f64)) -> f64,
+    scale: Scale,
+    margin: f64,
+) -> Range<f64> {
+    let values = series
+        .iter()
+        .flat_map(|s| s.points.iter())
+        .filter(|p| p.0.is_finite() && p.1.is_finite())
+        .map(coordinate)
+        .filter(|v| scale == Scale::Linear || *v > 0.0);
+    let (lo, hi) = values.fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| {
+        (lo.min(v), hi.max(v))
+    });
+    match scale {
+        _ if !(lo.is_finite() && hi.is_finite()) => match scale {
+            Scale::Linear => 0.0..1.0,
+            Scale::Log => 1.0..10.0,
+        },
+        Scale::Linear if hi - lo <= f64::EPSILON * hi.abs().max(1.0) => (lo - 0.5)..(hi + 0.5),
+        Scale::Linear => {
+            let pad = margin * (hi - lo);
+            (lo - pad)..(hi + pad)
+        }
+        Scale::Log if hi / lo < 1.0 + 1e-9 => (lo / 2.0)..(hi * 2.0),
+        Scale::Log => lo..hi,
+    }
+}
+
+/// Splits a series into runs of drawable points (finite, and positive where an axis is
+/// logarithmic), so gaps stay gaps.
+fn drawable_runs<'a>(
+    points: &'a [(f64, f64)],
+    x_scale: Scale,
+    y_scale: Scale,
+) -> impl Iterator<Item = &'a [(f64, f64)]> {
+    let drawable = move |p: &(f64, f64)| {
+        p.0.is_finite()
+            && p.1.is_finite()
+            && (x_scale == Scale::Linear || p.0 > 0.0)
+            && (y_scale == Scale::Linear || p.1 > 0.0)
+    };
+    points
+        .split(move |p| !drawable(p))
+        .filter(|run| !run.is_empty())
+}
+
+/// Visual settings that depend on the output device.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ChartStyle {
+    /// Device pixels per CSS pixel (2 on most high-DPI screens): fonts and lines scale with it so
+    /// the chart is crisp without looking tiny.
+    pub pixel_ratio: f64,
+}
+
+impl Default for ChartStyle {
+    fn default() -> Self {
+        Self { pixel_ratio: 1.0 }
+    }
+}
+
+impl ChartStyle {
+    fn px(&self, css_px: f64) -> u32 {
+        (css_px * self.pixel_ratio).round().max(1.0) as u32
+    }
+}
+
+/// The error type of drawing on backend `DB`.
+pub type DrawResult<DB> =
+    Result<PlotGeometry, DrawingAreaErrorKind<<DB as DrawingBackend>::ErrorType>>;
+
+/// Draws `chart` on `area`, filling it, and returns where the plotting area landed.
+pub fn draw_line_chart<DB: DrawingBackend>(
+    area: &DrawingArea<DB, Shift>,
+    chart: &LineChart,
+    style: ChartStyle,
+) -> DrawResult<DB> {
+    area.fill(&WHITE)?;
+    let x = sanitized(&chart.x);
+    let y = sanitized(&chart.y);
+    match (x.scale, y.scale) {
+        (Scale::Linear, Scale::Linear) => {
+            draw_in(area, chart, style, x.range.clone(), y.range.clone(), &x, &y)
+        }
+        (Scale::Log, Scale::Linear) => draw_in(
+            area,
+            chart,
+            style,
+            x.range.clone().log_scale(),
+            y.range.clone(),
+            &x,
+            &y,
+        ),
+        (Scale::Linear, Scale::Log) => draw_in(
+            area,
+            chart,
+            style,
+            x.range.clone(),
+            y.range.clone().log_scale(),
+            &x,
+            &y,
+        ),
+        (Scale::Log, Scale::Log) => draw_in(
+            area,
+            chart,
+            style,
+            x.range.clone().log_scale(),
+            y.range.clone().log_scale(),
+            &x,
+            &y,
+        ),
+    }
+}
+
+/// An axis whose range plotters can draw: finite, increasing, positive on a log scale.
+fn sanitized(axis: &Axis) -> Axis {
+    let Range { start, end } = axis.range;
+    let usable = start.is_finite()
+        && end.is_finite()
+        && end > start
+        && (axis.scale == Scale::Linear || start > 0.0);
+    Axis {
+        label: axis.label.clone(),
+        scale: axis.scale,
+        range: if usable {
+            start..end
+        } else if axis.scale == Scale::Log {
+            1.0..10.0
+        } else {
+            0.0..1.0
+        },
+    }
+}
+
+fn draw_in<DB, XR, YR>(
+    area: &DrawingArea<DB, Shift>,
+    chart: &LineChart,
+    style: ChartStyle,
+    x_spec: XR,
+    y_spec: YR,
+    x_axis: &Axis,
+    y_axis: &Axis,
+) -> DrawResult<DB>
+where
+    DB: DrawingBackend,
+    XR: plotters::coord::ranged1d::AsRangedCoord<Value = f64>,
+    YR: plotters::coord::ranged1d::AsRangedCoord<Value = f64>,
+    XR::CoordDescType: plotters::coord::ranged1d::ValueFormatter<f64>,
+    YR::CoordDescType: plotters::coord::ranged1d::ValueFormatter<f64>,
+{
+    let font = ("sans-serif", f64::from(style.px(13.0)));
+    let small_font = ("sans-serif", f64::from(style.px(12.0)));
+    let mut builder = ChartBuilder::on(area);
+    builder
+        .margin(style.px(8.0))
+        .x_label_area_size(style.px(40.0))
+        .y_label_area_size(style.px(64.0));
+    if let Some(caption) = &chart.caption {
+        builder.caption(caption, font);
+    }
+    let mut ctx = builder.build_cartesian_2d(x_spec, y_spec)?;
+    ctx.configure_mesh()
+        .x_desc(x_axis.label.as_str())
+        .y_desc(y_axis.label.as_str())
+        .label_style(small_font)
+        .axis_desc_style(font)
+        .light_line_style(RGBColor(236, 239, 243))
+        .bold_line_style(RGBColor(214, 220, 228))
+        .x_labels(8)
+        .y_labels(6)
+        .draw()?;
+
+    let width = style.px(1.6);
+    for series in &chart.series {
+        let color = series.color.plotters();
+        let line_style = color.stroke_width(width);
+        for run in drawable_runs(&series.points, x_axis.scale, y_axis.scale) {
+            match series.stroke {
+                Stroke::Solid => {
+                    ctx.draw_series(LineSeries::new(run.iter().copied(), line_style))?;
+                }
+                Stroke::Dashed => {
+                    ctx.draw_series(DashedLineSeries::new(
+                        run.iter().copied(),
+                        style.px(6.0),
+                        style.px(4.0),
+                        line_style,
+                    ))?;
+                }
+            }
+        }
+    }
+    let (x_px, y_px) = ctx.plotting_area().get_pixel_range();
+    Ok(PlotGeometry {
+        x_px,
+        y_px,
+        x_range: x_axis.range.clone(),
+        y_range: y_axis.range.clone(),
+        x_scale: x_axis.scale,
+        y_scale: y_axis.scale,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn render(chart: &LineChart) -> (String, PlotGeometry) {
+        let mut svg = String::new();
+        let geometry = {
+            let area = SVGBackend::with_string(&mut svg, (640, 360)).into_drawing_area();
+            let g = draw_line_chart(&area, chart, ChartStyle::default()).unwrap();
+            area.present().unwrap();
+            g
+        };
+        (svg, geometry)
+    }
+
+    fn sine_chart() -> LineChart {
+        let mut chart = LineChart::new(Axis::linear("time (s)"), Axis::linear("current (A)"));
+        chart.series.push(Series::new(
+            "i_u",
+            PALETTE[0],
+            (0..200)
+                .map(|i| {
+                    let t = f64::from(i) / 100.0;
+                    (t, (std::f64::consts::TAU * t).sin())
+                })
+                .collect(),
+        ));
+        chart.fit();
+        chart
+    }
+
+    #[test]
+    fn fit_covers_the_data_with_a_vertical_margin() {
+        let chart = sine_chart();
+        assert_eq!(chart.x.range, 0.0..1.99);
+        assert!(chart.y.range.start < -0.99 && chart.y.range.start > -1.2);
+        assert!(chart.y.range.end > 0.99 && chart.y.range.end < 1.2);
+    }
+
+    #[test]
+    fn draws_axes_labels_and_lines() {
+        let (svg, geometry) = render(&sine_chart());
+        assert!(svg.contains("time (s)"));
+        assert!(svg.contains("current (A)"));
+        assert!(svg.contains("<polyline"), "no line drawn");
+        assert!(geometry.x_px.start > 0 && geometry.x_px.end < 640);
+        // The pixel mapping returns the axis ends.
+        assert!((geometry.x_at(f64::from(geometry.x_px.start)) - 0.0).abs() < 1e-12);
+        assert!((geometry.x_at(f64::from(geometry.x_px.end)) - 1.99).abs() < 1e-12);
+    }
+
+    #[test]
+    fn non_finite_points_split_the_line_instead_of_breaking_the_chart() {
+        let mut chart = LineChart::new(Axis::linear("x"), Axis::linear("y"));
+        chart.series.push(Series::new(
+            "gappy",
+            PALETTE[1],
+            vec![
+                (0.0, 0.0),
+                (1.0, 1.0),
+                (2.0, f64::NAN),
+                (3.0, 1.0),
+                (4.0, 0.0),
+            ],
+        ));
+        chart.fit();
+        assert_eq!(chart.y.range.start, -0.05);
+        let (svg, _) = render(&chart);
+        let series_lines = svg
+            .lines()
+            .filter(|l| l.contains("<polyline") && l.contains("#E69F00"))
+            .count();
+        assert_eq!(series_lines, 2, "{svg}");
+    }
+
+    #[test]
+    fn empty_and_degenerate_charts_still_draw() {
+        let mut chart = LineChart::new(Axis::log("f (Hz)"), Axis::linear("y"));
+        chart.fit();
+        assert_eq!(chart.x.range, 1.0..10.0);
+        render(&chart);
+        chart.series.push(Series::new(
+            "flat",
+            PALETTE[2],
+            vec![(5.0, 3.0), (50.0, 3.0)],
+        ));
+        chart.fit();
+        assert_eq!(chart.y.range, 2.5..3.5);
+        chart.x.range = f64::NAN..1.0;
+        render(&chart);
+    }
+
+    #[test]
+    fn log_axis_hides_non_positive_points() {
+        let runs: Vec<_> = drawable_runs(
+            &[
+                (0.0, 1.0),
+                (1.0, 1.0),
+                (10.0, 2.0),
+                (-1.0, 3.0),
+                (100.0, 4.0),
+            ],
+            Scale::Log,
+            Scale::Linear,
+        )
+        .collect();
+        assert_eq!(runs.len(), 2);
+        assert_eq!(runs[0], &[(1.0, 1.0), (10.0, 2.0)]);
+    }
+}

@@ -1,0 +1,110 @@
+//! The boundary every closed loop talks through.
+//!
+//! A [`Machine`] takes the feed-override command of one sample period and returns what its sensors
+//! read in that period. The simulated FANUC machine ([`crate::plant`]), a replayed CSV log and a
+//! real machine behind the serial protocol all implement it, so the signal chain, estimator,
+//! controllers and safety envelope above it are one code path in every mode.
+//!
+//! [`SensorSample`] holds only what a real installation can measure; what only a simulation knows
+//! (the true force, the depth of cut) travels beside it in [`PlantTruth`], used for plots and
+//! metrics, never by a controller.
+
+/// What the adaptive controller asks of the machine for the next sample period.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct OverrideCommand {
+    /// Feed override in percent of the programmed feed, already limited and quantised by the
+    /// safety envelope.
+    pub override_pct: f64,
+    /// Feed hold: the axes decelerate to a stop and stay there while it is set.
+    pub feed_hold: bool,
+}
+
+impl Default for OverrideCommand {
+    fn default() -> Self {
+        Self {
+            override_pct: 100.0,
+            feed_hold: false,
+        }
+    }
+}
+
+/// One sample of what the machine's sensors and control report.
+///
+/// Non-finite values are possible (a broken sensor, a corrupt log line) and are the safety
+/// envelope's to detect: nothing here is validated.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct SensorSample {
+    /// Time since the start of the run.
+    pub time_s: f64,
+    /// Feed-drive motor phase currents i_u, i_v, i_w as read through the Hall sensors and ADC.
+    pub feed_phase_currents_a: [f64; 3],
+    /// Spindle motor phase currents i_u, i_v, i_w.
+    pub spindle_phase_currents_a: [f64; 3],
+    /// The spindle's frequency-to-voltage converter output (paper 003), proportional to speed
+    /// within each gear range.
+    pub spindle_fv_voltage_v: f64,
+    /// Spindle speed as the control reports it.
+    pub spindle_speed_rpm: f64,
+    /// Programmed feed of the current block, before override.
+    pub programmed_feed_mm_min: f64,
+    /// Actual path feed of the axes.
+    pub feed_mm_min: f64,
+    /// The override the machine is applying now (after its own quantisation).
+    pub applied_override_pct: f64,
+    /// Whether the spindle is turning.
+    pub spindle_running: bool,
+    /// Time since the spindle last started, for the arming delay.
+    pub time_since_spindle_start_s: f64,
+}
+
+/// What only a simulation knows: the ground truth for plots and metrics.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct PlantTruth {
+    /// Cutting force components on the tool in the machine frame.
+    pub force_x_n: f64,
+    /// Cutting force, y component.
+    pub force_y_n: f64,
+    /// Cutting force, z (axial) component.
+    pub force_z_n: f64,
+    /// Magnitude of the cutting force in the x-y plane, the quantity the controllers regulate.
+    pub force_resultant_n: f64,
+    /// Feed-direction component of the cutting force (paper 000's F_c).
+    pub feed_force_n: f64,
+    /// Cutting torque on the spindle.
+    pub spindle_torque_nm: f64,
+    /// Cutting power.
+    pub cutting_power_w: f64,
+    /// Axial depth of cut at the tool.
+    pub depth_mm: f64,
+    /// Radial width of cut at the tool.
+    pub width_mm: f64,
+    /// Feed per tooth actually cut.
+    pub feed_per_tooth_mm: f64,
+    /// Distance travelled along the programmed path.
+    pub path_position_mm: f64,
+    /// Material removal rate.
+    pub material_removal_mm3_s: f64,
+}
+
+/// One step's result.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct MachineStep {
+    /// What the sensors read.
+    pub sensors: SensorSample,
+    /// Ground truth, if the machine is simulated.
+    pub truth: Option<PlantTruth>,
+}
+
+/// A machine the closed loop can drive, one sensor sample period at a time.
+///
+/// Object-safe so the lab can switch between simulation, replay and hardware at run time.
+pub trait Machine {
+    /// The sensor sample rate.
+    fn sample_rate_hz(&self) -> f64;
+
+    /// Applies `command` for one sample period and returns the sensors' reading at its end.
+    fn step(&mut self, command: OverrideCommand) -> MachineStep;
+
+    /// True once the program (or log) has ended; `step` after that keeps returning the last state.
+    fn finished(&self) -> bool;
+}
