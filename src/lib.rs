@@ -20,6 +20,7 @@
 //! | [`signal`] | Butterworth design (second-order sections), biquad-cascade filtering, zero-phase filtering, RMS, Clarke/Park, spectra, min/max decimation |
 //! | [`machine`] | the one interface between the closed loop and a machine: simulated, replayed or real |
 //! | [`plant`] | the simulated machine: milling mechanics, feed and spindle drives, motor currents, sensors, the FANUC-style CNC, scenarios and the papers' presets |
+//! | [`safety`] | the safety envelope after every controller: limits, rate limit, quantisation, arming, sensor faults, overload |
 //! | [`rng`] | the seeded random source every simulation draws from |
 //! | [`math`] | transcendental functions that give the same bits natively and in wasm |
 //! | `cli` | the `cutlab` command line (feature `cli`) |
@@ -33,10 +34,13 @@
 //! valid, and the per-sample `process`/`step` methods cannot fail. Nothing a user can influence
 //! panics: user data goes through `Result`s whose messages say where the problem is.
 
+pub mod control;
+pub mod estimation;
 pub mod machine;
 pub mod math;
 pub mod plant;
 pub mod rng;
+pub mod safety;
 pub mod signal;
 
 #[cfg(feature = "cli")]

@@ -1,0 +1,9 @@
+//! Feed-override controllers: one interface ([`law::Controller`]), one registry.
+
+pub mod fixed;
+pub mod law;
+pub mod mrac;
+pub mod pi;
+pub mod registry;
+pub mod restriction;
+pub mod threshold;

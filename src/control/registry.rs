@@ -1,0 +1,584 @@
+//! The controller registry: every controller the lab offers, its parameters with units, defaults
+//! and ranges, and one constructor. The CLI (`cutlab controllers`, `--set key=value`), the browser
+//! forms and the tests all read this one table, so a new parameter appears everywhere at once.
+
+use std::fmt;
+use std::str::FromStr;
+
+use serde::{Deserialize, Serialize};
+
+use super::fixed::FixedFeed;
+use super::law::Controller;
+use super::mrac::{ModelReferenceAdaptive, MracParams};
+use super::pi::{PiController, PiParams};
+use super::restriction::{CurrentRestriction, RestrictionParams};
+use super::threshold::{ThresholdParams, ThresholdProportional};
+
+/// One tunable parameter.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct ParamSpec {
+    /// Key for `--set key=value`, URLs and JSON.
+    pub key: &'static str,
+    /// Label for forms.
+    pub label: &'static str,
+    /// Unit, shown beside the value (empty for dimensionless).
+    pub unit: &'static str,
+    /// Default value.
+    pub default: f64,
+    /// Smallest accepted value.
+    pub min: f64,
+    /// Largest accepted value.
+    pub max: f64,
+    /// One sentence on what it does.
+    pub help: &'static str,
+}
+
+const fn param(
+    key: &'static str,
+    label: &'static str,
+    unit: &'static str,
+    default: f64,
+    min: f64,
+    max: f64,
+    help: &'static str,
+) -> ParamSpec {
+    ParamSpec {
+        key,
+        label,
+        unit,
+        default,
+        min,
+        max,
+        help,
+    }
+}
+
+const FIXED_PARAMS: &[ParamSpec] = &[param(
+    "override_pct",
+    "Override",
+    "%",
+    100.0,
+    0.0,
+    255.0,
+    "the override held for the whole run",
+)];
+
+const RESTRICTION_PARAMS: &[ParamSpec] = &[
+    param(
+        "band_pct",
+        "Band width",
+        "% of target",
+        10.0,
+        0.5,
+        100.0,
+        "distance between the upper and lower limit, centred on the target",
+    ),
+    param(
+        "step_pct",
+        "Step",
+        "%",
+        10.0,
+        0.1,
+        50.0,
+        "override change per control period outside the band (one dial grade)",
+    ),
+];
+
+const THRESHOLD_PARAMS: &[ParamSpec] = &[
+    param(
+        "gap_pct",
+        "Threshold gap",
+        "% of target",
+        10.0,
+        0.0,
+        100.0,
+        "distance between the maximum and minimum thresholds, centred on the target",
+    ),
+    param(
+        "kp",
+        "K_p",
+        "% per %",
+        0.5,
+        0.0,
+        10.0,
+        "override change per percent of force beyond a threshold (paper 003: 0.5)",
+    ),
+    param(
+        "ignore_after_start_s",
+        "Ignore after spindle start",
+        "s",
+        3.0,
+        0.0,
+        60.0,
+        "time after spindle start during which the current is ignored (paper 003: 3 s)",
+    ),
+];
+
+const PI_PARAMS: &[ParamSpec] = &[
+    param(
+        "kp",
+        "K_p",
+        "% per %",
+        0.3,
+        0.0,
+        10.0,
+        "proportional gain on the relative force error",
+    ),
+    param(
+        "ki_per_s",
+        "K_i",
+        "% per %·s",
+        1.0,
+        0.0,
+        100.0,
+        "integral gain on the relative force error",
+    ),
+    param(
+        "tracking_time_s",
+        "Anti-windup time",
+        "s",
+        0.5,
+        0.001,
+        100.0,
+        "back-calculation time constant: how fast the integrator follows a clamp",
+    ),
+    param(
+        "initial_override_pct",
+        "Initial override",
+        "%",
+        100.0,
+        0.0,
+        255.0,
+        "override the integrator starts from",
+    ),
+];
+
+const MRAC_PARAMS: &[ParamSpec] = &[
+    param(
+        "lambda_per_s",
+        "λ",
+        "1/s",
+        2.0,
+        0.01,
+        100.0,
+        "slope of the sliding variable E = dF̃/dt + λF̃",
+    ),
+    param(
+        "kd_pct_s",
+        "K_d",
+        "%·s",
+        20.0,
+        0.0,
+        1000.0,
+        "gain on the sliding variable",
+    ),
+    param(
+        "gamma_beta_pct_per_s",
+        "γ₃",
+        "%/s",
+        50.0,
+        0.0,
+        10_000.0,
+        "adaptation gain of β̂",
+    ),
+    param(
+        "gamma_dynamics_pct_per_s",
+        "γ₁ = γ₂",
+        "%/s",
+        0.0,
+        0.0,
+        10_000.0,
+        "adaptation gains of m̂ and α̂ (act only while the target changes)",
+    ),
+    param(
+        "initial_beta_pct",
+        "Initial β̂",
+        "%",
+        100.0,
+        1.0,
+        255.0,
+        "the override first assumed to give the target force",
+    ),
+    param(
+        "min_beta_pct",
+        "β̂ lower bound",
+        "%",
+        5.0,
+        0.0,
+        255.0,
+        "projection bound of β̂",
+    ),
+    param(
+        "max_beta_pct",
+        "β̂ upper bound",
+        "%",
+        255.0,
+        1.0,
+        1000.0,
+        "projection bound of β̂",
+    ),
+    param(
+        "derivative_time_s",
+        "Derivative filter",
+        "s",
+        0.2,
+        0.001,
+        10.0,
+        "time constant of the filtered differentiator of the force",
+    ),
+];
+
+/// Every controller of the lab.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum ControllerKind {
+    /// Fixed feed override, the baseline.
+    Fixed,
+    /// Paper 000's upper/lower limit stepping.
+    Restriction,
+    /// Paper 003's thresholds with proportional correction.
+    Threshold,
+    /// PI with anti-windup.
+    Pi,
+    /// Paper 001's Lyapunov model-reference adaptive control.
+    Mrac,
+}
+
+impl ControllerKind {
+    /// Every controller, in the order the lab lists them.
+    pub const ALL: [ControllerKind; 5] = [
+        ControllerKind::Fixed,
+        ControllerKind::Restriction,
+        ControllerKind::Threshold,
+        ControllerKind::Pi,
+        ControllerKind::Mrac,
+    ];
+
+    /// The name used on the command line and in URLs.
+    pub fn name(self) -> &'static str {
+        match self {
+            ControllerKind::Fixed => "fixed",
+            ControllerKind::Restriction => "restriction",
+            ControllerKind::Threshold => "threshold",
+            ControllerKind::Pi => "pi",
+            ControllerKind::Mrac => "mrac",
+        }
+    }
+
+    /// A human label.
+    pub fn label(self) -> &'static str {
+        match self {
+            ControllerKind::Fixed => "Fixed feed",
+            ControllerKind::Restriction => "Current restriction",
+            ControllerKind::Threshold => "Threshold-proportional",
+            ControllerKind::Pi => "PI with anti-windup",
+            ControllerKind::Mrac => "Lyapunov adaptive (MRAC)",
+        }
+    }
+
+    /// Where the law comes from.
+    pub fn source(self) -> &'static str {
+        match self {
+            ControllerKind::Fixed => "baseline: the programmed feed at a fixed override",
+            ControllerKind::Restriction => "Wang, Ai, Ze, He (paper 000), §1 and §5",
+            ControllerKind::Threshold => "Kim, Kwon, Chu (paper 003), §8, Fig. 9",
+            ControllerKind::Pi => "textbook; back-calculation anti-windup per Åström & Hägglund",
+            ControllerKind::Mrac => "Maneerat, Khaengsarigid, Pasaya (paper 001), §3, eq 5–10",
+        }
+    }
+
+    /// The parameters, in form order.
+    pub fn params(self) -> &'static [ParamSpec] {
+        match self {
+            ControllerKind::Fixed => FIXED_PARAMS,
+            ControllerKind::Restriction => RESTRICTION_PARAMS,
+            ControllerKind::Threshold => THRESHOLD_PARAMS,
+            ControllerKind::Pi => PI_PARAMS,
+            ControllerKind::Mrac => MRAC_PARAMS,
+        }
+    }
+}
+
+impl fmt::Display for ControllerKind {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+impl FromStr for ControllerKind {
+    type Err = ParamError;
+
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        ControllerKind::ALL
+            .into_iter()
+            .find(|k| k.name() == s.trim())
+            .ok_or_else(|| {
+                ParamError(format!(
+                    "unknown controller \"{}\"; controllers: {}",
+                    s.trim(),
+                    ControllerKind::ALL
+                        .iter()
+                        .map(|k| k.name())
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                ))
+            })
+    }
+}
+
+/// A bad controller parameter; the message names it.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct ParamError(pub String);
+
+impl fmt::Display for ParamError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(&self.0)
+    }
+}
+
+impl std::error::Error for ParamError {}
+
+/// A controller choice with its parameter values, each inside its range.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(try_from = "ControllerConfigText", into = "ControllerConfigText")]
+pub struct ControllerConfig {
+    kind: ControllerKind,
+    values: Vec<f64>,
+}
+
+/// The serialised form: `{"kind": "pi", "params": {"kp": 0.3, ...}}`; missing parameters take
+/// their defaults, unknown or out-of-range ones are errors.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+struct ControllerConfigText {
+    kind: ControllerKind,
+    #[serde(default)]
+    params: std::collections::BTreeMap<String, f64>,
+}
+
+impl TryFrom<ControllerConfigText> for ControllerConfig {
+    type Error = ParamError;
+
+    fn try_from(text: ControllerConfigText) -> Result<Self, ParamError> {
+        let mut config = ControllerConfig::new(text.kind);
+        for (key, value) in text.params {
+            config.set(&key, value)?;
+        }
+        Ok(config)
+    }
+}
+
+impl From<ControllerConfig> for ControllerConfigText {
+    fn from(config: ControllerConfig) -> Self {
+        ControllerConfigText {
+            kind: config.kind,
+            params: config
+                .kind
+                .params()
+                .iter()
+                .zip(&config.values)
+                .map(|(p, v)| (p.key.to_string(), *v))
+                .collect(),
+        }
+    }
+}
+
+/// What a controller needs to know about the run it is built for.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RunContext {
+    /// The force to hold.
+    pub target_force_n: f64,
+    /// The control period.
+    pub control_period_s: f64,
+}
+
+impl ControllerConfig {
+    /// The controller with every parameter at its default.
+    pub fn new(kind: ControllerKind) -> Self {
+        Self {
+            kind,
+            values: kind.params().iter().map(|p| p.default).collect(),
+        }
+    }
+
+    /// Which controller.
+    pub fn kind(&self) -> ControllerKind {
+        self.kind
+    }
+
+    /// The value of parameter `key`.
+    pub fn get(&self, key: &str) -> Option<f64> {
+        self.kind
+            .params()
+            .iter()
+            .position(|p| p.key == key)
+            .map(|i| self.values[i])
+    }
+
+    /// `(spec, value)` for every parameter.
+    pub fn values(&self) -> impl Iterator<Item = (&'static ParamSpec, f64)> + '_ {
+        self.kind.params().iter().zip(self.values.iter().copied())
+    }
+
+    /// Sets parameter `key`, checking its range.
+    pub fn set(&mut self, key: &str, value: f64) -> Result<(), ParamError> {
+        let params = self.kind.params();
+        let Some(index) = params.iter().position(|p| p.key == key) else {
+            return Err(ParamError(format!(
+                "controller \"{}\" has no parameter \"{key}\"; its parameters: {}",
+                self.kind,
+                params.iter().map(|p| p.key).collect::<Vec<_>>().join(", ")
+            )));
+        };
+        let spec = params[index];
+        if !(value.is_finite() && value >= spec.min && value <= spec.max) {
+            return Err(ParamError(format!(
+                "{key} = {value} is outside {}..={} {}",
+                spec.min, spec.max, spec.unit
+            )));
+        }
+        self.values[index] = value;
+        Ok(())
+    }
+
+    /// Sets a parameter from `key=value` text, as typed on the command line.
+    ///
+    /// ```
+    /// use cutlab::control::registry::{ControllerConfig, ControllerKind};
+    /// let mut c = ControllerConfig::new(ControllerKind::Pi);
+    /// c.set_text("kp=0.8").unwrap();
+    /// assert_eq!(c.get("kp"), Some(0.8));
+    /// assert!(c.set_text("kp=fast").unwrap_err().to_string().contains("kp"));
+    /// ```
+    pub fn set_text(&mut self, assignment: &str) -> Result<(), ParamError> {
+        let Some((key, value)) = assignment.split_once('=') else {
+            return Err(ParamError(format!(
+                "\"{assignment}\" is not of the form key=value"
+            )));
+        };
+        let key = key.trim();
+        let value: f64 = value.trim().parse().map_err(|_| {
+            ParamError(format!(
+                "{key}: cannot parse \"{}\" as a number",
+                value.trim()
+            ))
+        })?;
+        self.set(key, value)
+    }
+
+    fn value(&self, key: &str) -> f64 {
+        self.get(key).unwrap_or(f64::NAN)
+    }
+
+    /// Builds the controller for a run. Cross-parameter checks happen here.
+    pub fn build(&self, context: &RunContext) -> Result<Box<dyn Controller>, ParamError> {
+        if !(context.target_force_n.is_finite() && context.target_force_n > 0.0) {
+            return Err(ParamError(format!(
+                "the target force must be positive, not {} N",
+                context.target_force_n
+            )));
+        }
+        let v = |key| self.value(key);
+        let target = context.target_force_n;
+        Ok(match self.kind {
+            ControllerKind::Fixed => Box::new(FixedFeed::new(v("override_pct"))),
+            ControllerKind::Restriction => {
+                let half_band = target * v("band_pct") / 200.0;
+                Box::new(CurrentRestriction::new(RestrictionParams {
+                    upper_limit_n: target + half_band,
+                    lower_limit_n: target - half_band,
+                    step_pct: v("step_pct"),
+                }))
+            }
+            ControllerKind::Threshold => Box::new(ThresholdProportional::new(ThresholdParams {
+                gap_pct: v("gap_pct"),
+                kp: v("kp"),
+                ignore_after_start_s: v("ignore_after_start_s"),
+            })),
+            ControllerKind::Pi => Box::new(PiController::new(PiParams {
+                kp: v("kp"),
+                ki_per_s: v("ki_per_s"),
+                tracking_time_s: v("tracking_time_s"),
+                initial_override_pct: v("initial_override_pct"),
+            })),
+            ControllerKind::Mrac => {
+                if v("min_beta_pct") >= v("max_beta_pct") {
+                    return Err(ParamError(
+                        "min_beta_pct must be below max_beta_pct".to_string(),
+                    ));
+                }
+                Box::new(ModelReferenceAdaptive::new(MracParams {
+                    lambda_per_s: v("lambda_per_s"),
+                    kd_pct_s: v("kd_pct_s"),
+                    gamma_beta_pct_per_s: v("gamma_beta_pct_per_s"),
+                    gamma_dynamics_pct_per_s: v("gamma_dynamics_pct_per_s"),
+                    initial_beta_pct: v("initial_beta_pct")
+                        .clamp(v("min_beta_pct"), v("max_beta_pct")),
+                    min_beta_pct: v("min_beta_pct"),
+                    max_beta_pct: v("max_beta_pct"),
+                    derivative_time_s: v("derivative_time_s"),
+                }))
+            }
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::control::law::ControlInput;
+
+    #[test]
+    fn every_default_lies_in_its_range_and_every_controller_builds() {
+        let context = RunContext {
+            target_force_n: 300.0,
+            control_period_s: 0.1,
+        };
+        for kind in ControllerKind::ALL {
+            assert_eq!(kind.name().parse::<ControllerKind>(), Ok(kind));
+            for p in kind.params() {
+                assert!(p.min <= p.default && p.default <= p.max, "{kind}.{}", p.key);
+            }
+            let mut controller = ControllerConfig::new(kind).build(&context).unwrap();
+            let out = controller.step(&ControlInput {
+                time_s: 10.0,
+                dt_s: 0.1,
+                force_n: 300.0,
+                target_force_n: 300.0,
+                programmed_feed_mm_min: 200.0,
+                applied_override_pct: 100.0,
+                time_since_spindle_start_s: 10.0,
+            });
+            // On target at 100 % every controller's request is 100 %.
+            assert!((out - 100.0).abs() < 1e-9, "{kind}: {out}");
+        }
+    }
+
+    #[test]
+    fn parameters_are_checked_and_errors_name_them() {
+        let mut c = ControllerConfig::new(ControllerKind::Threshold);
+        assert!(c.set("kp", 0.8).is_ok());
+        let e = c.set("kp", -1.0).unwrap_err();
+        assert!(e.0.starts_with("kp = -1"), "{e}");
+        let e = c.set("ki", 1.0).unwrap_err();
+        assert!(e.0.contains("no parameter \"ki\""), "{e}");
+        assert!(c.set("kp", f64::NAN).is_err());
+        assert!("warp".parse::<ControllerKind>().is_err());
+    }
+
+    #[test]
+    fn json_round_trip_keeps_values_and_rejects_bad_ones() {
+        let mut c = ControllerConfig::new(ControllerKind::Mrac);
+        c.set("kd_pct_s", 35.0).unwrap();
+        let text = serde_json::to_string(&c).unwrap();
+        let back: ControllerConfig = serde_json::from_str(&text).unwrap();
+        assert_eq!(back, c);
+        let partial: ControllerConfig =
+            serde_json::from_str(r#"{"kind":"pi","params":{"kp":0.7}}"#).unwrap();
+        assert_eq!(partial.get("kp"), Some(0.7));
+        assert_eq!(partial.get("ki_per_s"), Some(1.0));
+        assert!(
+            serde_json::from_str::<ControllerConfig>(r#"{"kind":"pi","params":{"kp":-3}}"#)
+                .is_err()
+        );
+    }
+}

@@ -1,0 +1,3 @@
+//! Estimation: motor current → cutting force.
+
+pub mod least_squares;

@@ -1,0 +1,710 @@
+//! The safety envelope: the last word between any controller and the machine.
+//!
+//! Every override request passes through [`SafetyEnvelope::command`], in every mode (simulation,
+//! log replay, hardware), whatever the controller. The envelope
+//!
+//! 1. holds a fixed *arming* override until the spindle has run for the arming delay (its
+//!    starting current says nothing about the cut, paper 003);
+//! 2. clamps the request to `[min, max]` and rate-limits it (a continuous internal value moves
+//!    by at most `max_rate_pct_per_s · dt` per period);
+//! 3. quantises it to what the machine can take (a 16-position dial, 1 % steps, or continuous),
+//!    never outside `[min, max]`;
+//! 4. watches the sensors ([`SafetyEnvelope::observe`], every sample): non-finite, stuck or
+//!    out-of-range currents and missing samples raise a fault, during which the override is held
+//!    (or moves to a fallback value) and the controller's request is ignored;
+//! 5. raises an overload alarm when the estimated force stays above a hard limit for longer than
+//!    a set time, and then latches feed hold.
+//!
+//! Each of these emits a [`SafetyEvent`] for the event log.
+//!
+//! Guarantees, checked by property tests with random (also non-finite) inputs: the commanded
+//! override is always finite, inside `[min, max]`, one of the machine's positions, and moves per
+//! period by at most the rate limit plus one quantisation step.
+
+use std::fmt;
+
+use crate::machine::{OverrideCommand, SensorSample};
+
+/// The override positions a machine can take.
+#[derive(Debug, Clone, PartialEq)]
+pub enum OverrideResolution {
+    /// Any value.
+    Continuous,
+    /// Whole percent (paper 003's DSP board drives 0–255 % in 1 % steps).
+    WholePercent,
+    /// A dial with a machine-builder table of positions in percent, ascending (paper 000's FANUC
+    /// 18M reads 16 positions from four PMC inputs).
+    Dial(Vec<f64>),
+}
+
+impl OverrideResolution {
+    /// The position nearest to `pct` among those inside `[min_pct, max_pct]`; `None` if no
+    /// position lies inside (the envelope's constructor rules that out).
+    ///
+    /// ```
+    /// use cutlab::safety::OverrideResolution;
+    /// let dial = OverrideResolution::Dial((0..16).map(|i| 10.0 * f64::from(i)).collect());
+    /// assert_eq!(dial.nearest(73.0, 0.0, 150.0), Some(70.0));
+    /// assert_eq!(dial.nearest(73.0, 75.0, 150.0), Some(80.0));
+    /// assert_eq!(OverrideResolution::WholePercent.nearest(99.6, 0.0, 255.0), Some(100.0));
+    /// ```
+    pub fn nearest(&self, pct: f64, min_pct: f64, max_pct: f64) -> Option<f64> {
+        let inside = |v: f64| v >= min_pct && v <= max_pct;
+        match self {
+            OverrideResolution::Continuous => Some(pct.clamp(min_pct, max_pct)),
+            OverrideResolution::WholePercent => {
+                let v = pct.round().clamp(min_pct.ceil(), max_pct.floor());
+                inside(v).then_some(v)
+            }
+            OverrideResolution::Dial(positions) => positions
+                .iter()
+                .copied()
+                .filter(|v| inside(*v))
+                .min_by(|a, b| (a - pct).abs().total_cmp(&(b - pct).abs())),
+        }
+    }
+
+    /// The largest gap between neighbouring positions (0 for continuous).
+    pub fn step_pct(&self) -> f64 {
+        match self {
+            OverrideResolution::Continuous => 0.0,
+            OverrideResolution::WholePercent => 1.0,
+            OverrideResolution::Dial(p) => p.windows(2).map(|w| w[1] - w[0]).fold(0.0, f64::max),
+        }
+    }
+}
+
+/// What to do while a sensor fault lasts.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum FaultAction {
+    /// Keep the override where it was when the fault began.
+    Hold,
+    /// Move (rate-limited) to this override.
+    Fallback(f64),
+}
+
+/// Settings of the envelope.
+#[derive(Debug, Clone, PartialEq)]
+pub struct EnvelopeConfig {
+    /// Lowest override the envelope commands.
+    pub min_override_pct: f64,
+    /// Highest override the envelope commands.
+    pub max_override_pct: f64,
+    /// Fastest change of the (continuous) override.
+    pub max_rate_pct_per_s: f64,
+    /// The machine's override positions.
+    pub resolution: OverrideResolution,
+    /// Time after spindle start before the controller is listened to.
+    pub arming_delay_s: f64,
+    /// Override commanded until armed.
+    pub arming_override_pct: f64,
+    /// A phase current beyond ± this is out of range.
+    pub max_current_a: f64,
+    /// Identical readings of every phase current for this long, while the axes move, are a stuck
+    /// sensor (a rotating motor's currents always change).
+    pub stuck_after_s: f64,
+    /// A gap between samples longer than this many nominal periods is missing data.
+    pub max_gap_periods: f64,
+    /// Fault-free time needed before a fault counts as cleared.
+    pub recover_after_s: f64,
+    /// What to do during a fault.
+    pub fault_action: FaultAction,
+    /// The hard force limit of the overload alarm.
+    pub overload_limit_n: f64,
+    /// How long the force may exceed the hard limit before feed hold.
+    pub overload_time_s: f64,
+}
+
+impl EnvelopeConfig {
+    /// Defaults for a force target: override 10–150 % at up to 100 %/s on FANUC's 16-position
+    /// dial (0, 10, …, 150 %), arming 3 s after spindle start (paper 003), overload at 1.5 × target
+    /// for 0.2 s.
+    pub fn for_target(target_force_n: f64) -> Self {
+        Self {
+            min_override_pct: 10.0,
+            max_override_pct: 150.0,
+            max_rate_pct_per_s: 100.0,
+            resolution: OverrideResolution::Dial((0..16).map(|i| 10.0 * f64::from(i)).collect()),
+            arming_delay_s: 3.0,
+            arming_override_pct: 100.0,
+            max_current_a: 100.0,
+            stuck_after_s: 0.05,
+            max_gap_periods: 3.0,
+            recover_after_s: 0.1,
+            fault_action: FaultAction::Hold,
+            overload_limit_n: 1.5 * target_force_n,
+            overload_time_s: 0.2,
+        }
+    }
+}
+
+/// A configuration the envelope cannot honour.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct EnvelopeError(pub String);
+
+impl fmt::Display for EnvelopeError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(&self.0)
+    }
+}
+
+impl std::error::Error for EnvelopeError {}
+
+/// A sensor fault the envelope recognises.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum SensorFault {
+    /// A phase current is NaN or infinite.
+    NonFinite,
+    /// A phase current exceeds the plausible range.
+    OutOfRange,
+    /// Every phase current repeats exactly while the axes move.
+    Stuck,
+    /// Samples are missing (a time gap).
+    MissingSamples,
+}
+
+impl SensorFault {
+    /// A short description for the event log.
+    pub fn describe(self) -> &'static str {
+        match self {
+            SensorFault::NonFinite => "a current reading is not a number",
+            SensorFault::OutOfRange => "a current reading is out of range",
+            SensorFault::Stuck => "the current readings are stuck",
+            SensorFault::MissingSamples => "samples are missing",
+        }
+    }
+}
+
+/// Something the envelope did or saw, for the event log.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum SafetyEvent {
+    /// The arming delay passed: the controller is now in charge.
+    Armed {
+        /// When.
+        time_s: f64,
+    },
+    /// A sensor fault began; the override is held or falls back.
+    FaultDetected {
+        /// When.
+        time_s: f64,
+        /// Which fault.
+        fault: SensorFault,
+    },
+    /// The sensors have been healthy for the recovery time.
+    FaultCleared {
+        /// When.
+        time_s: f64,
+    },
+    /// The estimated force stayed above the hard limit: feed hold is latched.
+    Overload {
+        /// When.
+        time_s: f64,
+        /// The force that tripped the alarm.
+        force_n: f64,
+    },
+}
+
+impl SafetyEvent {
+    /// When the event happened.
+    pub fn time_s(&self) -> f64 {
+        match *self {
+            SafetyEvent::Armed { time_s }
+            | SafetyEvent::FaultDetected { time_s, .. }
+            | SafetyEvent::FaultCleared { time_s }
+            | SafetyEvent::Overload { time_s, .. } => time_s,
+        }
+    }
+
+    /// A one-line description.
+    pub fn describe(&self) -> String {
+        match *self {
+            SafetyEvent::Armed { .. } => "armed: the controller now sets the override".into(),
+            SafetyEvent::FaultDetected { fault, .. } => {
+                format!("sensor fault: {}; override held", fault.describe())
+            }
+            SafetyEvent::FaultCleared { .. } => "sensor fault cleared".into(),
+            SafetyEvent::Overload { force_n, .. } => {
+                format!("overload: {force_n:.0} N above the hard limit; feed hold")
+            }
+        }
+    }
+}
+
+/// The envelope's state.
+#[derive(Debug, Clone)]
+pub struct SafetyEnvelope {
+    config: EnvelopeConfig,
+    sample_period_s: f64,
+    /// The rate-limited continuous override that the quantised output follows.
+    continuous_pct: f64,
+    output_pct: f64,
+    armed: bool,
+    feed_hold: bool,
+    fault: Option<SensorFault>,
+    fault_free_s: f64,
+    previous_sample: Option<SensorSample>,
+    unchanged_s: f64,
+    overload_s: f64,
+    events: Vec<SafetyEvent>,
+}
+
+/// Events kept before the caller drains them; more in one period are dropped, which cannot
+/// happen with the event kinds above (at most four per period).
+const EVENT_CAPACITY: usize = 16;
+
+impl SafetyEnvelope {
+    /// An envelope for a machine whose sensors deliver `sample_rate_hz`.
+    pub fn new(config: EnvelopeConfig, sample_rate_hz: f64) -> Result<Self, EnvelopeError> {
+        let c = &config;
+        let err = |m: String| Err(EnvelopeError(m));
+        let all_finite = [
+            c.min_override_pct,
+            c.max_override_pct,
+            c.max_rate_pct_per_s,
+            c.arming_delay_s,
+            c.arming_override_pct,
+            c.max_current_a,
+            c.stuck_after_s,
+            c.max_gap_periods,
+            c.recover_after_s,
+            c.overload_limit_n,
+            c.overload_time_s,
+            sample_rate_hz,
+        ]
+        .iter()
+        .all(|v| v.is_finite());
+        if !all_finite {
+            return err("every safety setting must be a finite number".into());
+        }
+        if !(c.min_override_pct >= 0.0 && c.min_override_pct < c.max_override_pct) {
+            return err(format!(
+                "minimum override {} % must be at least 0 and below the maximum {} %",
+                c.min_override_pct, c.max_override_pct
+            ));
+        }
+        if c.max_rate_pct_per_s <= 0.0 {
+            return err("the override rate limit must be positive".into());
+        }
+        if sample_rate_hz <= 0.0 {
+            return err("the sample rate must be positive".into());
+        }
+        if c.max_current_a <= 0.0 || c.overload_limit_n <= 0.0 {
+            return err("the current range and the overload limit must be positive".into());
+        }
+        if c.stuck_after_s < 0.0
+            || c.recover_after_s < 0.0
+            || c.arming_delay_s < 0.0
+            || c.overload_time_s < 0.0
+            || c.max_gap_periods < 1.0
+        {
+            return err("safety times must be non-negative and the gap at least one period".into());
+        }
+        if let OverrideResolution::Dial(p) = &c.resolution {
+            if p.is_empty()
+                || p.windows(2).any(|w| w[1] <= w[0])
+                || p.iter().any(|v| !v.is_finite())
+            {
+                return err("the dial table must list finite positions in ascending order".into());
+            }
+        }
+        if c.resolution
+            .nearest(c.min_override_pct, c.min_override_pct, c.max_override_pct)
+            .is_none()
+        {
+            return err(format!(
+                "no override position of the machine lies between {} % and {} %",
+                c.min_override_pct, c.max_override_pct
+            ));
+        }
+        if let FaultAction::Fallback(v) = c.fault_action {
+            if !(v.is_finite() && v >= c.min_override_pct && v <= c.max_override_pct) {
+                return err(format!(
+                    "the fault fallback override {v} % must lie within the override limits"
+                ));
+            }
+        }
+        let start = c
+            .arming_override_pct
+            .clamp(c.min_override_pct, c.max_override_pct);
+        let mut envelope = Self {
+            continuous_pct: start,
+            output_pct: start,
+            sample_period_s: 1.0 / sample_rate_hz,
+            armed: false,
+            feed_hold: false,
+            fault: None,
+            fault_free_s: 0.0,
+            previous_sample: None,
+            unchanged_s: 0.0,
+            overload_s: 0.0,
+            events: Vec::with_capacity(EVENT_CAPACITY),
+            config,
+        };
+        envelope.output_pct = envelope.quantize(start);
+        Ok(envelope)
+    }
+
+    /// The configuration.
+    pub fn config(&self) -> &EnvelopeConfig {
+        &self.config
+    }
+
+    /// The override commanded now.
+    pub fn output_pct(&self) -> f64 {
+        self.output_pct
+    }
+
+    /// Whether the controller is in charge.
+    pub fn armed(&self) -> bool {
+        self.armed
+    }
+
+    /// The sensor fault in force, if any.
+    pub fn fault(&self) -> Option<SensorFault> {
+        self.fault
+    }
+
+    /// Whether feed hold is latched.
+    pub fn feed_hold(&self) -> bool {
+        self.feed_hold
+    }
+
+    fn quantize(&self, pct: f64) -> f64 {
+        let c = &self.config;
+        c.resolution
+            .nearest(pct, c.min_override_pct, c.max_override_pct)
+            .unwrap_or(c.min_override_pct)
+    }
+
+    fn emit(&mut self, event: SafetyEvent) {
+        if self.events.len() < EVENT_CAPACITY {
+            self.events.push(event);
+        }
+    }
+
+    /// Moves the events raised since the last call into `sink`.
+    pub fn drain_events(&mut self, sink: &mut Vec<SafetyEvent>) {
+        sink.append(&mut self.events);
+    }
+
+    /// Watches one sensor sample for faults. Call for every sample, before [`Self::command`].
+    pub fn observe(&mut self, sample: &SensorSample) {
+        let currents = sample
+            .feed_phase_currents_a
+            .iter()
+            .chain(&sample.spindle_phase_currents_a);
+        let mut fault = None;
+        if currents.clone().any(|i| !i.is_finite()) || !sample.time_s.is_finite() {
+            fault = Some(SensorFault::NonFinite);
+        } else if currents
+            .clone()
+            .any(|i| i.abs() > self.config.max_current_a)
+        {
+            fault = Some(SensorFault::OutOfRange);
+        }
+        if let Some(previous) = self.previous_sample {
+            let gap_s = sample.time_s - previous.time_s;
+            if fault.is_none() && gap_s > self.config.max_gap_periods * self.sample_period_s {
+                fault = Some(SensorFault::MissingSamples);
+            }
+            let unchanged = previous.feed_phase_currents_a == sample.feed_phase_currents_a
+                && previous.spindle_phase_currents_a == sample.spindle_phase_currents_a;
+            let moving = sample.feed_mm_min.abs() > 0.0 && sample.spindle_running;
+            self.unchanged_s = if unchanged && moving {
+                self.unchanged_s + self.sample_period_s
+            } else {
+                0.0
+            };
+            if fault.is_none()
+                && self.unchanged_s >= self.config.stuck_after_s
+                && self.unchanged_s > 0.0
+            {
+                fault = Some(SensorFault::Stuck);
+            }
+        }
+        self.previous_sample = Some(*sample);
+        let time_s = sample.time_s;
+        match (self.fault, fault) {
+            (None, Some(f)) => {
+                self.fault = Some(f);
+                self.fault_free_s = 0.0;
+                self.emit(SafetyEvent::FaultDetected { time_s, fault: f });
+            }
+            (Some(_), Some(_)) => self.fault_free_s = 0.0,
+            (Some(_), None) => {
+                self.fault_free_s += self.sample_period_s;
+                if self.fault_free_s >= self.config.recover_after_s {
+                    self.fault = None;
+                    self.emit(SafetyEvent::FaultCleared { time_s });
+                }
+            }
+            (None, None) => {}
+        }
+    }
+
+    /// Turns a controller's request into the command the machine receives for the next control
+    /// period of length `dt_s`. `force_n` is the estimated force (for the overload alarm).
+    pub fn command(
+        &mut self,
+        request_pct: f64,
+        force_n: f64,
+        time_s: f64,
+        dt_s: f64,
+        sample: &SensorSample,
+    ) -> OverrideCommand {
+        let c = &self.config;
+        let dt_s = if dt_s.is_finite() && dt_s > 0.0 {
+            dt_s
+        } else {
+            0.0
+        };
+
+        // Overload alarm: a latched feed hold, independent of everything else.
+        if force_n.is_finite() && force_n > c.overload_limit_n {
+            self.overload_s += dt_s;
+        } else {
+            self.overload_s = 0.0;
+        }
+        if !self.feed_hold && self.overload_s > c.overload_time_s {
+            self.feed_hold = true;
+            self.emit(SafetyEvent::Overload { time_s, force_n });
+        }
+
+        let armed_now = sample.spindle_running
+            && sample.time_since_spindle_start_s >= self.config.arming_delay_s;
+        if armed_now && !self.armed {
+            self.armed = true;
+            self.emit(SafetyEvent::Armed { time_s });
+        } else if !sample.spindle_running {
+            self.armed = false;
+        }
+
+        let c = &self.config;
+        let wanted = if !self.armed {
+            c.arming_override_pct
+        } else {
+            match (self.fault, c.fault_action) {
+                (Some(_), FaultAction::Hold) => self.continuous_pct,
+                (Some(_), FaultAction::Fallback(v)) => v,
+                (None, _) if request_pct.is_finite() => request_pct,
+                // A non-finite request (a controller fed garbage) holds.
+                (None, _) => self.continuous_pct,
+            }
+        };
+        let wanted = wanted.clamp(c.min_override_pct, c.max_override_pct);
+        let max_step = c.max_rate_pct_per_s * dt_s;
+        self.continuous_pct += (wanted - self.continuous_pct).clamp(-max_step, max_step);
+        self.output_pct = self.quantize(self.continuous_pct);
+        OverrideCommand {
+            override_pct: self.output_pct,
+            feed_hold: self.feed_hold,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::rng::Rng;
+
+    fn running_sample(time_s: f64) -> SensorSample {
+        SensorSample {
+            time_s,
+            feed_phase_currents_a: [1.0, -0.5, -0.5],
+            spindle_phase_currents_a: [5.0, -2.5, -2.5],
+            feed_mm_min: 100.0,
+            spindle_running: true,
+            time_since_spindle_start_s: 10.0 + time_s,
+            ..SensorSample::default()
+        }
+    }
+
+    fn envelope(config: EnvelopeConfig) -> SafetyEnvelope {
+        SafetyEnvelope::new(config, 1000.0).unwrap()
+    }
+
+    #[test]
+    fn holds_the_arming_override_until_the_delay_has_passed() {
+        let mut env = envelope(EnvelopeConfig::for_target(300.0));
+        let mut s = running_sample(0.0);
+        s.time_since_spindle_start_s = 1.0;
+        let cmd = env.command(40.0, 100.0, 0.0, 0.1, &s);
+        assert_eq!(cmd.override_pct, 100.0);
+        assert!(!env.armed());
+        s.time_since_spindle_start_s = 3.0;
+        env.command(40.0, 100.0, 0.1, 0.1, &s);
+        assert!(env.armed());
+        let mut events = Vec::new();
+        env.drain_events(&mut events);
+        assert_eq!(events, vec![SafetyEvent::Armed { time_s: 0.1 }]);
+    }
+
+    #[test]
+    fn rate_limit_moves_the_dial_one_grade_at_a_time() {
+        let mut env = envelope(EnvelopeConfig::for_target(300.0));
+        let s = running_sample(0.0);
+        // 100 %/s for 0.1 s periods: 10 % per period, one dial grade.
+        let outputs: Vec<f64> = (0..5)
+            .map(|i| {
+                env.command(40.0, 100.0, f64::from(i) * 0.1, 0.1, &s)
+                    .override_pct
+            })
+            .collect();
+        assert_eq!(outputs, vec![90.0, 80.0, 70.0, 60.0, 50.0]);
+    }
+
+    #[test]
+    fn stuck_currents_raise_a_fault_and_hold_then_clear() {
+        let mut env = envelope(EnvelopeConfig::for_target(300.0));
+        let mut events = Vec::new();
+        let mut t = 0.0;
+        // A healthy, rotating signal first.
+        for i in 0..100 {
+            let mut s = running_sample(t);
+            s.feed_phase_currents_a[0] = f64::from(i % 7);
+            env.observe(&s);
+            t += 0.001;
+        }
+        assert_eq!(env.fault(), None);
+        // 60 ms of identical readings (the limit is 50 ms).
+        for _ in 0..60 {
+            env.observe(&running_sample(t));
+            t += 0.001;
+        }
+        assert_eq!(env.fault(), Some(SensorFault::Stuck));
+        let s = running_sample(t);
+        let before = env.output_pct();
+        assert_eq!(env.command(20.0, 100.0, t, 0.1, &s).override_pct, before);
+        for i in 0..150 {
+            let mut s = running_sample(t);
+            s.feed_phase_currents_a[0] = f64::from(i % 5);
+            env.observe(&s);
+            t += 0.001;
+        }
+        assert_eq!(env.fault(), None);
+        env.drain_events(&mut events);
+        events.retain(|e| !matches!(e, SafetyEvent::Armed { .. }));
+        assert!(matches!(
+            events[..],
+            [
+                SafetyEvent::FaultDetected {
+                    fault: SensorFault::Stuck,
+                    ..
+                },
+                SafetyEvent::FaultCleared { .. }
+            ]
+        ));
+    }
+
+    #[test]
+    fn a_time_gap_is_missing_samples() {
+        let mut env = envelope(EnvelopeConfig::for_target(300.0));
+        env.observe(&running_sample(0.0));
+        env.observe(&running_sample(0.010));
+        assert_eq!(env.fault(), Some(SensorFault::MissingSamples));
+    }
+
+    #[test]
+    fn overload_latches_feed_hold_after_the_set_time() {
+        let mut env = envelope(EnvelopeConfig::for_target(300.0));
+        let s = running_sample(0.0);
+        let mut held_at = None;
+        for i in 0..10 {
+            let cmd = env.command(100.0, 500.0, f64::from(i) * 0.1, 0.1, &s);
+            if cmd.feed_hold && held_at.is_none() {
+                held_at = Some(i);
+            }
+        }
+        // 0.2 s must be exceeded: the third period above the limit trips it.
+        assert_eq!(held_at, Some(2));
+        // Latched: a normal force does not release it.
+        assert!(env.command(100.0, 100.0, 1.0, 0.1, &s).feed_hold);
+    }
+
+    #[test]
+    fn rejects_configurations_it_cannot_honour() {
+        let mut c = EnvelopeConfig::for_target(300.0);
+        c.min_override_pct = 151.0;
+        assert!(SafetyEnvelope::new(c, 1000.0).is_err());
+        let mut c = EnvelopeConfig::for_target(300.0);
+        c.min_override_pct = 11.0;
+        c.max_override_pct = 19.0;
+        let e = SafetyEnvelope::new(c, 1000.0).unwrap_err();
+        assert!(e.0.contains("no override position"), "{e}");
+        let mut c = EnvelopeConfig::for_target(300.0);
+        c.max_rate_pct_per_s = f64::NAN;
+        assert!(SafetyEnvelope::new(c, 1000.0).is_err());
+    }
+
+    /// A random value that is sometimes wild: huge, negative, NaN or infinite.
+    fn wild(rng: &mut Rng, typical: f64) -> f64 {
+        match rng.next_u64() % 10 {
+            0 => f64::NAN,
+            1 => f64::INFINITY,
+            2 => f64::NEG_INFINITY,
+            3 => -typical * 10.0 * rng.uniform(),
+            4 => typical * 1e6 * rng.uniform(),
+            _ => typical * 2.0 * rng.uniform(),
+        }
+    }
+
+    #[test]
+    fn property_output_stays_inside_the_envelope_for_random_inputs() {
+        let resolutions = [
+            OverrideResolution::Continuous,
+            OverrideResolution::WholePercent,
+            OverrideResolution::Dial((0..16).map(|i| 10.0 * f64::from(i)).collect()),
+        ];
+        let mut rng = Rng::seed_from(2024);
+        for case in 0..300 {
+            let mut config = EnvelopeConfig::for_target(300.0);
+            config.resolution = resolutions[case % 3].clone();
+            config.min_override_pct = 10.0 * (rng.uniform() * 5.0).floor();
+            config.max_override_pct =
+                config.min_override_pct + 20.0 + 10.0 * (rng.uniform() * 10.0).floor();
+            config.max_rate_pct_per_s = 5.0 + 200.0 * rng.uniform();
+            config.arming_delay_s = 2.0 * rng.uniform();
+            if rng.uniform() < 0.5 {
+                config.fault_action = FaultAction::Fallback(config.min_override_pct);
+            }
+            let step = config.resolution.step_pct();
+            let (min, max, rate) = (
+                config.min_override_pct,
+                config.max_override_pct,
+                config.max_rate_pct_per_s,
+            );
+            let mut env = SafetyEnvelope::new(config.clone(), 1000.0).unwrap();
+            let mut previous = env.output_pct();
+            let mut t = 0.0;
+            for _ in 0..200 {
+                for _ in 0..10 {
+                    let mut s = running_sample(t);
+                    s.feed_phase_currents_a[0] = wild(&mut rng, 5.0);
+                    s.spindle_running = rng.uniform() < 0.95;
+                    s.time_since_spindle_start_s = wild(&mut rng, 3.0);
+                    env.observe(&s);
+                    t += if rng.uniform() < 0.01 { 0.05 } else { 0.001 };
+                }
+                let dt = 0.01;
+                let s = running_sample(t);
+                let cmd = env.command(wild(&mut rng, 100.0), wild(&mut rng, 300.0), t, dt, &s);
+                let out = cmd.override_pct;
+                assert!(out.is_finite(), "case {case}: non-finite output");
+                assert!(
+                    out >= min && out <= max,
+                    "case {case}: {out} outside [{min}, {max}]"
+                );
+                assert_eq!(
+                    config.resolution.nearest(out, min, max),
+                    Some(out),
+                    "case {case}: {out} is not a machine position"
+                );
+                assert!(
+                    (out - previous).abs() <= rate * dt + step + 1e-9,
+                    "case {case}: jump {previous} → {out}"
+                );
+                previous = out;
+            }
+        }
+    }
+}
