@@ -34,6 +34,7 @@
 //! valid, and the per-sample `process`/`step` methods cannot fail. Nothing a user can influence
 //! panics: user data goes through `Result`s whose messages say where the problem is.
 
+pub mod closed_loop;
 pub mod control;
 pub mod estimation;
 pub mod machine;

@@ -1,0 +1,349 @@
+//! Metrics of a run, computed from its trace alone, so a run recorded from a real machine or a
+//! replayed log is judged by the same code as a simulation.
+//!
+//! Force metrics count only the rows where the tool is cutting and the controller is armed:
+//! before arming the controller is not in charge, and in air there is no force to hold. On a real
+//! machine, where the depth of cut is unknown (NaN), every armed row counts.
+
+use serde::Serialize;
+
+use super::trace::{Trace, TraceRow};
+
+/// Settings of the metrics.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct MetricsConfig {
+    /// The force limit for "time above the limit" (e.g. the tool's safe load).
+    pub force_limit_n: f64,
+    /// Half-width of the settling band around the target, percent of target.
+    pub settling_band_pct: f64,
+    /// A depth change larger than this between two control periods is a step.
+    pub depth_step_mm: f64,
+}
+
+/// The response to one depth-of-cut step.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct StepResponse {
+    /// When the depth changed.
+    pub time_s: f64,
+    /// Depth before the step.
+    pub depth_before_mm: f64,
+    /// Depth after the step.
+    pub depth_after_mm: f64,
+    /// Largest force above the target until the next step, percent of target (0 if none).
+    pub overshoot_pct: f64,
+    /// Time until the force stays inside the settling band up to the next step; `None` if it
+    /// never does.
+    pub settling_time_s: Option<f64>,
+}
+
+/// What a run achieved.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Metrics {
+    /// Time to the end of the program (or of the run, if it did not complete).
+    pub cycle_time_s: f64,
+    /// Whether the program ran to its end.
+    pub completed: bool,
+    /// Time spent cutting with the controller armed.
+    pub controlled_cutting_time_s: f64,
+    /// Integral of |F − F_target| over the controlled cutting time.
+    pub force_iae_n_s: f64,
+    /// RMS of F − F_target over the controlled cutting time.
+    pub force_rms_error_n: f64,
+    /// Mean |F − F_target| / F_target over the controlled cutting time.
+    pub force_mean_abs_error_pct: f64,
+    /// Largest regulated force of the run.
+    pub peak_force_n: f64,
+    /// Time with the force above the force limit.
+    pub time_above_limit_s: f64,
+    /// Largest overshoot over all depth steps, percent of target.
+    pub max_overshoot_pct: f64,
+    /// Longest settling time over the depth steps that settled.
+    pub max_settling_time_s: Option<f64>,
+    /// Each depth step's response.
+    pub steps: Vec<StepResponse>,
+    /// Total variation of the commanded override, Σ|Δu|.
+    pub override_total_variation_pct: f64,
+    /// Number of changes of the commanded override.
+    pub override_changes: usize,
+    /// Volume removed.
+    pub removed_volume_mm3: f64,
+    /// Mean material removal rate over the cycle.
+    pub mean_material_removal_mm3_s: f64,
+    /// Cycle-time saving against the programmed feed at 100 %, percent (positive = faster).
+    pub saving_vs_programmed_pct: Option<f64>,
+    /// Cycle-time saving against the highest fixed override that keeps the peak force under the
+    /// limit, percent.
+    pub saving_vs_safe_fixed_pct: Option<f64>,
+}
+
+/// Whether a row counts for the force metrics.
+fn controlled_cut(row: &TraceRow) -> bool {
+    let cutting = row.depth_mm.is_nan() || (row.depth_mm > 0.0 && row.width_mm > 0.0);
+    row.armed && cutting && row.force_n.is_finite()
+}
+
+/// The duration each row stands for: the time since the previous row.
+fn durations(rows: &[TraceRow]) -> impl Iterator<Item = (f64, &TraceRow)> {
+    let mut previous = rows.first().map_or(0.0, |r| r.time_s);
+    rows.iter().enumerate().map(move |(i, r)| {
+        let dt = if i == 0 { 0.0 } else { r.time_s - previous };
+        previous = r.time_s;
+        (dt.max(0.0), r)
+    })
+}
+
+/// Computes every metric of `trace`. The savings stay `None`; [`with_savings`] fills them from
+/// the cycle times of reference runs.
+///
+/// ```
+/// use cutlab::closed_loop::metrics::{compute, MetricsConfig};
+/// use cutlab::closed_loop::trace::{Trace, TraceRow};
+/// let rows = (0..=10).map(|i| TraceRow { time_s: f64::from(i) * 0.1, depth_mm: 2.0,
+///     width_mm: 10.0, force_n: 110.0, target_force_n: 100.0, armed: true, ..TraceRow::default() })
+///     .collect();
+/// let m = compute(&Trace { rows, completed: true, ..Trace::default() },
+///     &MetricsConfig { force_limit_n: 105.0, settling_band_pct: 5.0, depth_step_mm: 0.2 });
+/// assert!((m.force_iae_n_s - 10.0).abs() < 1e-9);     // 10 N for 1 s
+/// assert!((m.time_above_limit_s - 1.0).abs() < 1e-9);
+/// ```
+pub fn compute(trace: &Trace, config: &MetricsConfig) -> Metrics {
+    let rows = &trace.rows;
+    let first_time = rows.first().map_or(0.0, |r| r.time_s);
+    let cycle_time_s = rows.last().map_or(0.0, |r| r.time_s - first_time);
+
+    let mut controlled_s = 0.0;
+    let mut iae = 0.0;
+    let mut squared = 0.0;
+    let mut relative = 0.0;
+    let mut above_s = 0.0;
+    let mut removed = 0.0;
+    for (dt, r) in durations(rows) {
+        if r.material_removal_mm3_s.is_finite() {
+            removed += r.material_removal_mm3_s * dt;
+        }
+        if r.force_n.is_finite() && r.force_n > config.force_limit_n {
+            above_s += dt;
+        }
+        if controlled_cut(r) {
+            let error = r.force_n - r.target_force_n;
+            controlled_s += dt;
+            iae += error.abs() * dt;
+            squared += error * error * dt;
+            relative += (error / r.target_force_n).abs() * dt;
+        }
+    }
+    let peak_force_n = rows
+        .iter()
+        .map(|r| r.force_n)
+        .filter(|f| f.is_finite())
+        .fold(0.0, f64::max);
+
+    let steps = step_responses(rows, config);
+    let max_overshoot_pct = steps.iter().map(|s| s.overshoot_pct).fold(0.0, f64::max);
+    let max_settling_time_s = steps
+        .iter()
+        .filter_map(|s| s.settling_time_s)
+        .reduce(f64::max);
+
+    let mut total_variation = 0.0;
+    let mut changes = 0;
+    for pair in rows.windows(2) {
+        let change = pair[1].override_pct - pair[0].override_pct;
+        if change.is_finite() && change != 0.0 {
+            total_variation += change.abs();
+            changes += 1;
+        }
+    }
+
+    Metrics {
+        cycle_time_s,
+        completed: trace.completed,
+        controlled_cutting_time_s: controlled_s,
+        force_iae_n_s: iae,
+        force_rms_error_n: if controlled_s > 0.0 {
+            (squared / controlled_s).sqrt()
+        } else {
+            0.0
+        },
+        force_mean_abs_error_pct: if controlled_s > 0.0 {
+            100.0 * relative / controlled_s
+        } else {
+            0.0
+        },
+        peak_force_n,
+        time_above_limit_s: above_s,
+        max_overshoot_pct,
+        max_settling_time_s,
+        steps,
+        override_total_variation_pct: total_variation,
+        override_changes: changes,
+        removed_volume_mm3: removed,
+        mean_material_removal_mm3_s: if cycle_time_s > 0.0 {
+            removed / cycle_time_s
+        } else {
+            0.0
+        },
+        saving_vs_programmed_pct: None,
+        saving_vs_safe_fixed_pct: None,
+    }
+}
+
+/// Fills the savings from the cycle times of the reference runs: the programmed feed at 100 %
+/// and the highest fixed override that keeps the peak force under the limit.
+pub fn with_savings(
+    mut metrics: Metrics,
+    programmed_cycle_time_s: Option<f64>,
+    safe_fixed_cycle_time_s: Option<f64>,
+) -> Metrics {
+    let saving = |reference: f64| 100.0 * (reference - metrics.cycle_time_s) / reference;
+    metrics.saving_vs_programmed_pct = programmed_cycle_time_s.filter(|t| *t > 0.0).map(saving);
+    metrics.saving_vs_safe_fixed_pct = safe_fixed_cycle_time_s.filter(|t| *t > 0.0).map(saving);
+    metrics
+}
+
+/// Finds the depth steps and measures the force's response to each.
+fn step_responses(rows: &[TraceRow], config: &MetricsConfig) -> Vec<StepResponse> {
+    let step_indices: Vec<usize> = (1..rows.len())
+        .filter(|&i| {
+            let change = rows[i].depth_mm - rows[i - 1].depth_mm;
+            change.is_finite() && change.abs() > config.depth_step_mm
+        })
+        .collect();
+    step_indices
+        .iter()
+        .enumerate()
+        .map(|(k, &start)| {
+            let end = step_indices.get(k + 1).copied().unwrap_or(rows.len());
+            let window = &rows[start..end];
+            let t0 = rows[start].time_s;
+            let target = rows[start].target_force_n;
+            let band = target * config.settling_band_pct / 100.0;
+            let overshoot = window
+                .iter()
+                .filter(|r| controlled_cut(r))
+                .map(|r| 100.0 * (r.force_n - r.target_force_n) / r.target_force_n)
+                .fold(0.0, f64::max);
+            // Settled from the row after the last one outside the band (if any row remains).
+            let last_outside = window
+                .iter()
+                .rposition(|r| !(r.force_n - r.target_force_n).abs().le(&band));
+            let settling_time_s = match last_outside {
+                None => Some(0.0),
+                Some(i) if i + 1 < window.len() => Some(window[i + 1].time_s - t0),
+                Some(_) => None,
+            };
+            StepResponse {
+                time_s: t0,
+                depth_before_mm: rows[start - 1].depth_mm,
+                depth_after_mm: rows[start].depth_mm,
+                overshoot_pct: overshoot,
+                settling_time_s,
+            }
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn config() -> MetricsConfig {
+        MetricsConfig {
+            force_limit_n: 120.0,
+            settling_band_pct: 5.0,
+            depth_step_mm: 0.2,
+        }
+    }
+
+    /// A run at 0.1 s periods: depth 1 mm, then 2 mm from t = 1 s; the force jumps to 150 N at
+    /// the step and decays linearly to the 100 N target by t = 2 s.
+    fn step_trace() -> Trace {
+        let rows = (0..=30)
+            .map(|i| {
+                let t = f64::from(i) * 0.1;
+                let force = if t < 1.0 - 1e-9 {
+                    100.0
+                } else {
+                    (150.0 - 50.0 * (t - 1.0)).max(100.0)
+                };
+                TraceRow {
+                    time_s: t,
+                    depth_mm: if t < 1.0 - 1e-9 { 1.0 } else { 2.0 },
+                    width_mm: 10.0,
+                    force_n: force,
+                    target_force_n: 100.0,
+                    override_pct: if t < 1.0 - 1e-9 { 100.0 } else { 80.0 },
+                    material_removal_mm3_s: 50.0,
+                    armed: true,
+                    ..TraceRow::default()
+                }
+            })
+            .collect();
+        Trace {
+            rows,
+            completed: true,
+            ..Trace::default()
+        }
+    }
+
+    #[test]
+    fn a_step_is_found_with_its_overshoot_and_settling_time() {
+        let m = compute(&step_trace(), &config());
+        assert_eq!(m.steps.len(), 1);
+        let s = m.steps[0];
+        assert!((s.time_s - 1.0).abs() < 1e-9);
+        assert_eq!((s.depth_before_mm, s.depth_after_mm), (1.0, 2.0));
+        assert!((s.overshoot_pct - 50.0).abs() < 1e-9);
+        // Inside ±5 N from 145 − 50·(t − 1) ≤ 105, i.e. t ≥ 1.9 s.
+        assert!((s.settling_time_s.unwrap() - 0.9).abs() < 1e-9, "{s:?}");
+    }
+
+    #[test]
+    fn force_errors_are_integrals_over_the_controlled_cut() {
+        let m = compute(&step_trace(), &config());
+        // Rectangle rule on 0.1 s rows: the error triangle 50 N × 1 s sampled at its right ends.
+        let expected: f64 = (11..=20)
+            .map(|i| 50.0 - 5.0 * f64::from(i - 10))
+            .sum::<f64>()
+            * 0.1
+            + 50.0 * 0.1;
+        assert!(
+            (m.force_iae_n_s - expected).abs() < 1e-9,
+            "{}",
+            m.force_iae_n_s
+        );
+        assert!((m.controlled_cutting_time_s - 3.0).abs() < 1e-9);
+        assert_eq!(m.peak_force_n, 150.0);
+        // Above 120 N while 150 − 50(t − 1) > 120: rows at t = 1.0 … 1.5 (5 periods after the first).
+        assert!(
+            (m.time_above_limit_s - 0.6).abs() < 1e-9,
+            "{}",
+            m.time_above_limit_s
+        );
+        assert_eq!(m.override_changes, 1);
+        assert_eq!(m.override_total_variation_pct, 20.0);
+        assert!((m.removed_volume_mm3 - 150.0).abs() < 1e-9);
+        assert!((m.mean_material_removal_mm3_s - 50.0).abs() < 1e-9);
+    }
+
+    #[test]
+    fn savings_compare_cycle_times() {
+        let m = with_savings(compute(&step_trace(), &config()), Some(4.0), Some(6.0));
+        assert_eq!(m.saving_vs_programmed_pct, Some(25.0));
+        assert_eq!(m.saving_vs_safe_fixed_pct, Some(50.0));
+    }
+
+    #[test]
+    fn unarmed_and_air_rows_do_not_count() {
+        let mut trace = step_trace();
+        for r in &mut trace.rows[..5] {
+            r.armed = false;
+        }
+        for r in &mut trace.rows[5..10] {
+            r.depth_mm = 0.0;
+        }
+        let m = compute(&trace, &config());
+        // Rows 10–30 remain, each standing for the 0.1 s before it.
+        assert!((m.controlled_cutting_time_s - 2.1).abs() < 1e-9);
+    }
+}

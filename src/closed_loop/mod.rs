@@ -1,0 +1,5 @@
+//! The closed loop: scenario → machine → signal chain → estimator → controller → safety envelope
+//! → override, recorded as a trace and judged by metrics.
+
+pub mod metrics;
+pub mod trace;

@@ -1,0 +1,231 @@
+//! What a closed-loop run records: one row per control period, plus the events.
+//!
+//! Rows carry every signal a user may want to plot, with units in the field names. Signals that
+//! change within a control period (the raw phase current, the instantaneous force) are kept as
+//! their minimum and maximum over the period, so a chart of the rows shows every peak without
+//! storing every sample.
+
+use serde::Serialize;
+
+use crate::safety::SafetyEvent;
+
+/// One control period of a run.
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize)]
+pub struct TraceRow {
+    /// Time at the end of the period.
+    pub time_s: f64,
+    /// Axial depth of cut at the tool (simulation only; NaN for a real machine).
+    pub depth_mm: f64,
+    /// Radial width of cut.
+    pub width_mm: f64,
+    /// Distance along the programmed path.
+    pub path_position_mm: f64,
+    /// Programmed feed of the current block.
+    pub programmed_feed_mm_min: f64,
+    /// Actual path feed.
+    pub feed_mm_min: f64,
+    /// Override the controller asked for.
+    pub requested_override_pct: f64,
+    /// Override the envelope commanded.
+    pub override_pct: f64,
+    /// Override the machine applied.
+    pub applied_override_pct: f64,
+    /// The regulated force quantity, true value (simulation only).
+    pub force_n: f64,
+    /// The regulated force quantity as estimated from current.
+    pub force_est_n: f64,
+    /// The paper-004 power-law estimate, a sensorless cross-check.
+    pub force_power_law_n: f64,
+    /// Target force.
+    pub target_force_n: f64,
+    /// Minimum of the true instantaneous resultant force over the period.
+    pub force_min_n: f64,
+    /// Maximum of the true instantaneous resultant force over the period.
+    pub force_max_n: f64,
+    /// Spindle RMS current after the signal chain.
+    pub spindle_current_rms_a: f64,
+    /// Feed-drive RMS current after the signal chain.
+    pub feed_current_rms_a: f64,
+    /// Minimum of the raw feed phase current i_u over the period.
+    pub feed_current_u_min_a: f64,
+    /// Maximum of the raw feed phase current i_u over the period.
+    pub feed_current_u_max_a: f64,
+    /// Spindle speed.
+    pub spindle_speed_rpm: f64,
+    /// Material removal rate.
+    pub material_removal_mm3_s: f64,
+    /// Whether the controller was in charge.
+    pub armed: bool,
+    /// Whether a sensor fault was in force.
+    pub sensor_fault: bool,
+    /// Whether feed hold was latched.
+    pub feed_hold: bool,
+}
+
+/// A whole run.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Trace {
+    /// One row per control period.
+    pub rows: Vec<TraceRow>,
+    /// Safety events in time order.
+    pub events: Vec<SafetyEvent>,
+    /// Names and units of the controller's internal terms, in column order.
+    pub term_names: Vec<(&'static str, &'static str)>,
+    /// The controller's terms, `term_names.len()` values per row.
+    pub terms: Vec<f64>,
+    /// True if the program ran to its end (not stopped by feed hold or the time limit).
+    pub completed: bool,
+}
+
+impl Trace {
+    /// The values of term `index` over the run.
+    pub fn term_series(&self, index: usize) -> impl Iterator<Item = f64> + '_ {
+        let width = self.term_names.len().max(1);
+        self.terms.iter().skip(index).step_by(width).copied()
+    }
+}
+
+/// The CSV columns [`write_csv`] writes, in order.
+pub const CSV_COLUMNS: [&str; 17] = [
+    "time_s",
+    "depth_mm",
+    "width_mm",
+    "path_position_mm",
+    "programmed_feed_mm_min",
+    "feed_mm_min",
+    "requested_override_pct",
+    "override_pct",
+    "applied_override_pct",
+    "force_n",
+    "force_est_n",
+    "force_power_law_n",
+    "target_force_n",
+    "spindle_current_rms_a",
+    "feed_current_rms_a",
+    "spindle_speed_rpm",
+    "material_removal_mm3_s",
+];
+
+/// Writes the trace as CSV with a header: the [`CSV_COLUMNS`], the controller's terms, and the
+/// state flags. Numbers are written at full precision (shortest round-trip form).
+pub fn write_csv(trace: &Trace, out: &mut dyn std::io::Write) -> std::io::Result<()> {
+    let mut header: Vec<String> = CSV_COLUMNS.iter().map(|c| c.to_string()).collect();
+    for (name, unit) in &trace.term_names {
+        header.push(csv_term_header(name, unit));
+    }
+    header.extend(["armed", "sensor_fault", "feed_hold"].map(String::from));
+    writeln!(out, "{}", header.join(","))?;
+    let width = trace.term_names.len();
+    for (i, r) in trace.rows.iter().enumerate() {
+        let values = [
+            r.time_s,
+            r.depth_mm,
+            r.width_mm,
+            r.path_position_mm,
+            r.programmed_feed_mm_min,
+            r.feed_mm_min,
+            r.requested_override_pct,
+            r.override_pct,
+            r.applied_override_pct,
+            r.force_n,
+            r.force_est_n,
+            r.force_power_law_n,
+            r.target_force_n,
+            r.spindle_current_rms_a,
+            r.feed_current_rms_a,
+            r.spindle_speed_rpm,
+            r.material_removal_mm3_s,
+        ];
+        let mut line: Vec<String> = values.iter().map(|v| v.to_string()).collect();
+        line.extend(
+            trace
+                .terms
+                .iter()
+                .skip(i * width)
+                .take(width)
+                .map(|v| v.to_string()),
+        );
+        line.extend([r.armed, r.sensor_fault, r.feed_hold].map(|b| u8::from(b).to_string()));
+        writeln!(out, "{}", line.join(","))?;
+    }
+    Ok(())
+}
+
+/// A CSV-safe column name for a controller term: ASCII, lower case, with the unit.
+fn csv_term_header(name: &str, unit: &str) -> String {
+    let ascii: String = name
+        .chars()
+        .map(|c| match c {
+            'β' => "beta".to_string(),
+            'α' => "alpha".to_string(),
+            'Δ' => "delta".to_string(),
+            '−' => "minus".to_string(),
+            '·' | ' ' | '_' => "_".to_string(),
+            c if c.is_ascii_alphanumeric() => c.to_ascii_lowercase().to_string(),
+            _ => String::new(),
+        })
+        .collect();
+    let unit = match unit {
+        "%" => "pct".to_string(),
+        "" => String::new(),
+        u => u
+            .chars()
+            .filter(|c| c.is_ascii_alphanumeric())
+            .collect::<String>()
+            .to_lowercase(),
+    };
+    let mut name = format!("term_{ascii}");
+    if !unit.is_empty() {
+        name.push('_');
+        name.push_str(&unit);
+    }
+    name.replace("__", "_")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn csv_has_a_header_the_required_columns_and_one_line_per_row() {
+        let mut trace = Trace {
+            rows: vec![TraceRow::default(); 3],
+            term_names: vec![("β̂", "%"), ("E", "1/s")],
+            terms: vec![1.0, 2.0, 3.0, 4.0, 5.0, 6.0],
+            ..Trace::default()
+        };
+        trace.rows[1].time_s = 0.1;
+        let mut out = Vec::new();
+        write_csv(&trace, &mut out).unwrap();
+        let text = String::from_utf8(out).unwrap();
+        let lines: Vec<&str> = text.lines().collect();
+        assert_eq!(lines.len(), 4);
+        for required in [
+            "time_s",
+            "depth_mm",
+            "feed_mm_min",
+            "override_pct",
+            "force_n",
+            "force_est_n",
+            "spindle_current_rms_a",
+            "feed_current_rms_a",
+        ] {
+            assert!(lines[0].split(',').any(|c| c == required), "{required}");
+        }
+        assert!(lines[0].contains("term_beta_pct,term_e_1s"), "{}", lines[0]);
+        assert!(lines[2].starts_with("0.1,"));
+        assert_eq!(lines[2].split(',').count(), lines[0].split(',').count());
+        let third: Vec<&str> = lines[3].split(',').collect();
+        assert_eq!(third[CSV_COLUMNS.len()], "5");
+    }
+
+    #[test]
+    fn term_series_reads_one_column() {
+        let trace = Trace {
+            term_names: vec![("a", ""), ("b", "")],
+            terms: vec![1.0, 2.0, 3.0, 4.0],
+            ..Trace::default()
+        };
+        assert_eq!(trace.term_series(1).collect::<Vec<_>>(), vec![2.0, 4.0]);
+    }
+}
