@@ -5,6 +5,7 @@
 //! itself once in [`COMMANDS`], which also produces the top-level help.
 
 pub mod args;
+pub mod controllers;
 
 use std::io::{BufRead, Write};
 
@@ -29,7 +30,11 @@ pub struct Command {
 }
 
 /// Every subcommand, in the order `cutlab --help` lists them.
-pub const COMMANDS: &[Command] = &[];
+pub const COMMANDS: &[Command] = &[Command {
+    name: "controllers",
+    about: "List the controllers with their parameters, defaults and units",
+    run: controllers::run,
+}];
 
 /// The version line printed by `cutlab --version`.
 pub fn version_line() -> String {
@@ -90,6 +95,18 @@ pub fn wants_help(args: &[String]) -> bool {
     args.iter()
         .take_while(|a| a.as_str() != "--")
         .any(|a| a == "--help" || a == "-h")
+}
+
+/// Prints a subcommand's help.
+pub fn help_text_for(
+    io: &mut Io<'_>,
+    usage: &str,
+    about: &str,
+    options: &[OptionSpec],
+) -> Result<(), CliError> {
+    io.stdout
+        .write_all(args::help_text(usage, about, options).as_bytes())?;
+    Ok(())
 }
 
 /// Writes `value` as pretty JSON followed by a newline.

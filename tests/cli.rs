@@ -1,0 +1,69 @@
+//! The command line as a whole: help, version, errors, and `cutlab controllers`.
+#![cfg(feature = "cli")]
+
+use cutlab::cli::{run, Io};
+
+/// Runs the CLI in-process; returns (result, stdout).
+fn cutlab(args: &[&str], stdin: &str) -> (Result<(), String>, String) {
+    let args: Vec<String> = args.iter().map(|s| s.to_string()).collect();
+    let mut input = stdin.as_bytes();
+    let mut output = Vec::new();
+    let result = run(
+        &args,
+        &mut Io {
+            stdin: &mut input,
+            stdout: &mut output,
+        },
+    );
+    (
+        result.map_err(|e| e.to_string()),
+        String::from_utf8(output).expect("the CLI writes UTF-8"),
+    )
+}
+
+#[test]
+fn help_lists_every_command() {
+    let (result, out) = cutlab(&["--help"], "");
+    assert!(result.is_ok());
+    assert!(out.starts_with("cutlab"));
+    for command in cutlab::cli::COMMANDS {
+        assert!(out.contains(command.name), "help lacks {}", command.name);
+        let (result, sub_help) = cutlab(&[command.name, "--help"], "");
+        assert!(result.is_ok(), "{} --help failed", command.name);
+        assert!(sub_help.contains("Usage: cutlab"), "{}: {sub_help}", command.name);
+    }
+}
+
+#[test]
+fn version_names_the_package_version() {
+    let (result, out) = cutlab(&["--version"], "");
+    assert!(result.is_ok());
+    assert_eq!(out.trim(), format!("cutlab {}", env!("CARGO_PKG_VERSION")));
+}
+
+#[test]
+fn errors_are_one_line_and_name_what_is_wrong() {
+    let (result, _) = cutlab(&["frobnicate"], "");
+    let message = result.unwrap_err();
+    assert!(message.starts_with("unknown command \"frobnicate\""), "{message}");
+    assert!(!message.contains('\n'));
+    let (result, _) = cutlab(&["controllers", "--jsn"], "");
+    assert_eq!(result.unwrap_err(), "unknown option --jsn (see --help)");
+}
+
+#[test]
+fn controllers_json_lists_every_controller_with_parameter_units() {
+    let (result, out) = cutlab(&["controllers", "--json"], "");
+    assert!(result.is_ok());
+    let listing: serde_json::Value = serde_json::from_str(&out).unwrap();
+    let listing = listing.as_array().unwrap();
+    assert_eq!(listing.len(), cutlab::control::registry::ControllerKind::ALL.len());
+    for controller in listing {
+        for p in controller["params"].as_array().unwrap() {
+            assert!(p["unit"].is_string() && p["default"].is_number(), "{p}");
+        }
+    }
+    let (result, table) = cutlab(&["controllers"], "");
+    assert!(result.is_ok());
+    assert!(table.contains("ki_per_s"));
+}
