@@ -9,6 +9,8 @@
 //! sample never draws a line to infinity. On a logarithmic axis, points at or below zero are gaps
 //! too.
 
+pub mod view;
+
 use std::ops::Range;
 
 use plotters::coord::Shift;
@@ -244,11 +246,11 @@ fn data_extent(
 
 /// Splits a series into runs of drawable points (finite, and positive where an axis is
 /// logarithmic), so gaps stay gaps.
-fn drawable_runs<'a>(
-    points: &'a [(f64, f64)],
+fn drawable_runs(
+    points: &[(f64, f64)],
     x_scale: Scale,
     y_scale: Scale,
-) -> impl Iterator<Item = &'a [(f64, f64)]> {
+) -> impl Iterator<Item = &[(f64, f64)]> {
     let drawable = move |p: &(f64, f64)| {
         p.0.is_finite()
             && p.1.is_finite()
