@@ -84,6 +84,15 @@ pub struct PlantTruth {
     pub path_position_mm: f64,
     /// Material removal rate.
     pub material_removal_mm3_s: f64,
+    /// Tool position x in the program's coordinates (for drawing the tool on the path).
+    pub tool_x_mm: f64,
+    /// Tool position y.
+    pub tool_y_mm: f64,
+    /// True RMS current of the measured feed axis, before the sensors (eq 7 of paper 003 over
+    /// its three phases).
+    pub feed_current_rms_a: f64,
+    /// True RMS spindle current, before the sensors.
+    pub spindle_current_rms_a: f64,
 }
 
 /// One step's result.

@@ -17,7 +17,7 @@ fn cutlab(args: &[&str], stdin: &str) -> (Result<(), String>, String) {
     );
     (
         result.map_err(|e| e.to_string()),
-        String::from_utf8(output).expect("the CLI writes UTF-8"),
+        String::from_utf8_lossy(&output).into_owned(),
     )
 }
 
@@ -30,7 +30,11 @@ fn help_lists_every_command() {
         assert!(out.contains(command.name), "help lacks {}", command.name);
         let (result, sub_help) = cutlab(&[command.name, "--help"], "");
         assert!(result.is_ok(), "{} --help failed", command.name);
-        assert!(sub_help.contains("Usage: cutlab"), "{}: {sub_help}", command.name);
+        assert!(
+            sub_help.contains("Usage: cutlab"),
+            "{}: {sub_help}",
+            command.name
+        );
     }
 }
 
@@ -45,7 +49,10 @@ fn version_names_the_package_version() {
 fn errors_are_one_line_and_name_what_is_wrong() {
     let (result, _) = cutlab(&["frobnicate"], "");
     let message = result.unwrap_err();
-    assert!(message.starts_with("unknown command \"frobnicate\""), "{message}");
+    assert!(
+        message.starts_with("unknown command \"frobnicate\""),
+        "{message}"
+    );
     assert!(!message.contains('\n'));
     let (result, _) = cutlab(&["controllers", "--jsn"], "");
     assert_eq!(result.unwrap_err(), "unknown option --jsn (see --help)");
@@ -57,7 +64,10 @@ fn controllers_json_lists_every_controller_with_parameter_units() {
     assert!(result.is_ok());
     let listing: serde_json::Value = serde_json::from_str(&out).unwrap();
     let listing = listing.as_array().unwrap();
-    assert_eq!(listing.len(), cutlab::control::registry::ControllerKind::ALL.len());
+    assert_eq!(
+        listing.len(),
+        cutlab::control::registry::ControllerKind::ALL.len()
+    );
     for controller in listing {
         for p in controller["params"].as_array().unwrap() {
             assert!(p["unit"].is_string() && p["default"].is_number(), "{p}");

@@ -1,1 +1,233 @@
-//! The simulated machine.
+//! The simulated machine: a CNC mill whose motor currents look like the ones in the papers, built
+//! from their equations, for the lab to control when there is no machine.
+//!
+//! ## Data flow of one sample
+//!
+//! ```text
+//! OverrideCommand ─► cnc        override mode (16-position dial on X20.7/X20.4/X20.3/X20.2,
+//!                               0–255 % in 1 % steps, or continuous), PMC scan, feed hold,
+//!                               programmed feed × override, acceleration limits, corner stops,
+//!                               interpolation period, position loop
+//!                 ─► scenario   where the tool is: path (lines, arcs), axial depth and radial
+//!                               width profiles, material regions, air cuts
+//!                 ─► mechanics  feed per tooth, tooth angles at spindle speed, mechanistic forces
+//!                               F_x, F_y, F_z, torque, power (paper 003 eq 1–6, Altintas ch. 2)
+//!                 ─► feed_drive     axis load → motor torque (paper 000 eq 1–3) → i_q with the
+//!                                   servo's ~40 Hz lag → i_u, i_v, i_w (eq 4) at the axis's
+//!                                   electrical angle
+//!                 ─► spindle_drive  torque → RMS current = idle(n) + S(n, gear)·T with < 5 Hz lag,
+//!                                   gear change at 900 rpm, start current, F/V voltage (paper 003)
+//!                 ─► sensors    Hall sensor (6 A → 25 mA into 500 Ω, paper 000), ADC
+//!                 ─► SensorSample + PlantTruth (crate::machine)
+//! ```
+//!
+//! The reduced models stand in for the whole chain when a paper's own plant is wanted:
+//! [`reduced::SecondOrderMachine`] (paper 001's m·F̈ + (mc+d)·Ḟ + dc·F = k·f_r) and
+//! [`reduced::BondGraphMachine`] (paper 002's eq 5 with Table 1). [`bench::BrakeBench`] is
+//! paper 000's magnetic-particle brake bench. [`power_law`] is paper 004's empirical model, a
+//! sensorless cross-check rather than a plant.
+//!
+//! ## Modules
+//!
+//! | module | what it holds |
+//! |---|---|
+//! | [`materials`] | work materials and their mechanistic cutting coefficients, with sources |
+//! | [`mechanics`] | cutter, immersion, instantaneous and mean milling forces, paper 003's Martelotti relations |
+//! | [`power_law`] | paper 004's power-law force model with its published weights |
+//! | [`feed_drive`] | ball screw, guides, table and PMSM of one feed axis (paper 000) |
+//! | [`spindle_drive`] | induction spindle motor, gearbox and F/V converter (paper 003) |
+//! | [`sensors`] | Hall current sensors and the ADC |
+//! | [`cnc`] | the FANUC-style control: override modes, dial table, feed planning |
+//! | [`scenario`] | tool paths, depth/width profiles, material regions |
+//! | [`simulator`] | the full simulated mill, a [`crate::machine::Machine`] |
+//! | [`bench`] | paper 000's brake test bench, a `Machine` |
+//! | [`reduced`] | paper 001's and paper 002's reduced plants, each a `Machine` |
+//! | [`presets`] | the papers' experiments as named, seeded machines |
+//! | [`signals`] | every internal signal of a sample, with units, for plots and CSV |
+//! | [`dynamics`] | exactly discretised first- and second-order lags |
+//!
+//! ## Contracts
+//!
+//! Every configuration is a plain struct with documented defaults; the constructors of the
+//! running objects validate it and return [`PlantError`] naming the offending field. Once built,
+//! stepping cannot fail and does not allocate. A seed fixes every noise source (each one draws
+//! from its own [`crate::rng::Rng::fork`] stream), and all transcendental functions come from
+//! [`crate::math`], so a seed gives the same bits natively and in wasm.
+//!
+//! Non-finite values cannot enter through a validated configuration. The only run-time input is
+//! the [`crate::machine::OverrideCommand`]: a NaN override keeps the override the machine applied
+//! last, ±∞ clamps to the machine's limits.
+
+pub mod bench;
+pub mod cnc;
+pub mod dynamics;
+pub mod feed_drive;
+pub(crate) mod linalg;
+pub mod materials;
+pub mod mechanics;
+pub mod power_law;
+pub mod presets;
+pub mod reduced;
+pub mod scenario;
+pub mod sensors;
+pub mod signals;
+pub mod simulator;
+pub mod spindle_drive;
+
+use std::fmt;
+
+use crate::machine::{Machine, OverrideCommand};
+
+pub use presets::{Preset, PresetMachine};
+pub use signals::PlantSignals;
+pub use simulator::{SimConfig, Simulator};
+
+/// A simulated machine: a [`Machine`] that also shows its insides and can start over.
+///
+/// Object-safe, so the lab can hold any plant as `Box<dyn Plant>`.
+pub trait Plant: Machine {
+    /// Every internal signal of the last sample.
+    fn signals(&self) -> &PlantSignals;
+
+    /// Back to the state right after construction (same seed, same noise).
+    fn reset(&mut self);
+}
+
+/// Runs `plant` with a fixed `command` until it finishes or `max_samples` have passed, keeping
+/// every `every`-th sample's signals (and the last one). A convenience for tests, the CLI and
+/// open-loop plots; the closed loop steps the plant itself.
+///
+/// ```
+/// use cutlab::machine::OverrideCommand;
+/// use cutlab::plant::{record, Preset};
+/// let mut m = Preset::WangBrakeBench.machine(3).unwrap();
+/// let rows = record(&mut m, OverrideCommand::default(), 1000, 20_000);
+/// assert_eq!(rows.len(), 20);
+/// assert!((rows[19].time_s - 2.0).abs() < 1e-9);
+/// ```
+pub fn record(
+    plant: &mut dyn Plant,
+    command: OverrideCommand,
+    every: usize,
+    max_samples: usize,
+) -> Vec<PlantSignals> {
+    let every = every.max(1);
+    let mut rows = Vec::with_capacity(max_samples / every + 1);
+    let mut n = 0;
+    while n < max_samples && !plant.finished() {
+        plant.step(command);
+        n += 1;
+        if n % every == 0 {
+            rows.push(*plant.signals());
+        }
+    }
+    if n % every != 0 {
+        rows.push(*plant.signals());
+    }
+    rows
+}
+
+/// A configuration value the plant cannot be built from.
+///
+/// ```
+/// use cutlab::plant::mechanics::Cutter;
+/// let e = Cutter::new(-10.0, 2, 30.0).unwrap_err();
+/// assert_eq!(e.field, "diameter_mm");
+/// assert_eq!(e.to_string(), "diameter_mm: must be a finite number > 0, got -10");
+/// ```
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct PlantError {
+    /// The field, with its struct path where it helps (`feed_drive.screw_pitch_mm`).
+    pub field: String,
+    /// What is wrong with it.
+    pub message: String,
+}
+
+impl fmt::Display for PlantError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{}: {}", self.field, self.message)
+    }
+}
+
+impl std::error::Error for PlantError {}
+
+impl PlantError {
+    /// An error about `field`.
+    pub fn new(field: impl Into<String>, message: impl Into<String>) -> Self {
+        Self {
+            field: field.into(),
+            message: message.into(),
+        }
+    }
+
+    /// The same error with `prefix.` before the field, for errors found inside a nested config.
+    pub fn within(self, prefix: &str) -> Self {
+        Self {
+            field: format!("{prefix}.{}", self.field),
+            message: self.message,
+        }
+    }
+}
+
+/// `value` if it is finite and > 0.
+pub(crate) fn positive(field: &str, value: f64) -> Result<f64, PlantError> {
+    if value.is_finite() && value > 0.0 {
+        Ok(value)
+    } else {
+        Err(PlantError::new(
+            field,
+            format!("must be a finite number > 0, got {value}"),
+        ))
+    }
+}
+
+/// `value` if it is finite and ≥ 0.
+pub(crate) fn non_negative(field: &str, value: f64) -> Result<f64, PlantError> {
+    if value.is_finite() && value >= 0.0 {
+        Ok(value)
+    } else {
+        Err(PlantError::new(
+            field,
+            format!("must be a finite number ≥ 0, got {value}"),
+        ))
+    }
+}
+
+/// `value` if it is finite.
+pub(crate) fn finite(field: &str, value: f64) -> Result<f64, PlantError> {
+    if value.is_finite() {
+        Ok(value)
+    } else {
+        Err(PlantError::new(
+            field,
+            format!("must be a finite number, got {value}"),
+        ))
+    }
+}
+
+/// `value` if it lies in `[min, max]`.
+pub(crate) fn in_range(field: &str, value: f64, min: f64, max: f64) -> Result<f64, PlantError> {
+    if value.is_finite() && value >= min && value <= max {
+        Ok(value)
+    } else {
+        Err(PlantError::new(
+            field,
+            format!("must lie in [{min}, {max}], got {value}"),
+        ))
+    }
+}
+
+/// Seconds per minute, for mm/min ↔ mm/s.
+pub(crate) const S_PER_MIN: f64 = 60.0;
+
+/// Revolutions per minute from radians per second.
+#[inline]
+pub(crate) fn rpm_from_rad_s(rad_s: f64) -> f64 {
+    rad_s * S_PER_MIN / std::f64::consts::TAU
+}
+
+/// Radians per second from revolutions per minute.
+#[inline]
+pub(crate) fn rad_s_from_rpm(rpm: f64) -> f64 {
+    rpm * std::f64::consts::TAU / S_PER_MIN
+}

@@ -1,0 +1,807 @@
+//! The papers' experiments as named, seeded machines.
+//!
+//! | preset | source | plant |
+//! |---|---|---|
+//! | `kim-step-doc` | paper 003 Fig. 10: DOC 1 → 5 mm in 1 mm steps, SM45C, 2-flute Ø20 carbide end mill, 1000 rpm | mill |
+//! | `kim-material-taper` | paper 003 Fig. 11: SM45C then aluminium, DOC 1 → 4 mm, 600 rpm, 160 mm/min | mill |
+//! | `kim-circular-taper` | paper 003 Fig. 12–13: line at DOC 2 mm, then a circle with DOC 2 → 5 → 2 mm, 3000 rpm, 170 mm/min | mill |
+//! | `maneerat-doc-1/2/4` | paper 001 Fig. 7–9: Ø10 flat end mill, 3000 rpm, DOC 1/2/4 mm, targets 150/200/320 N | mill |
+//! | `liu-current-step` | paper 002 Fig. 7: bond-graph plant, 1500 mm/min, a step in load, I_ref 25 A | bond graph |
+//! | `wang-brake-bench` | paper 000 §4: magnetic-particle brake in excitation steps, with hysteresis | brake bench |
+//!
+//! Every value a paper leaves out is chosen and listed in [`Preset::choices`] (and in
+//! docs/plant.md). Each preset's machine takes a seed: the same seed gives the same run.
+
+use serde::Serialize;
+
+use super::bench::{BrakeBench, BrakeBenchConfig};
+use super::cnc::{CncConfig, OverrideMode};
+use super::materials::Material;
+use super::mechanics::{mean_forces, Cutter, Immersion, MillingMode};
+use super::reduced::{BondGraphMachine, BondGraphRun, SecondOrderConfig, SecondOrderRun};
+use super::scenario::{MaterialRegion, Move, Scenario, ScenarioSpec};
+use super::signals::PlantSignals;
+use super::simulator::{SimConfig, Simulator};
+use super::{Plant, PlantError};
+use crate::machine::{Machine, MachineStep, OverrideCommand};
+use crate::math;
+
+/// A named experiment.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Preset {
+    /// Paper 003 Fig. 10.
+    KimStepDoc,
+    /// Paper 003 Fig. 11.
+    KimMaterialTaper,
+    /// Paper 003 Fig. 12–13.
+    KimCircularTaper,
+    /// Paper 001 Fig. 7.
+    ManeeratDoc1,
+    /// Paper 001 Fig. 8.
+    ManeeratDoc2,
+    /// Paper 001 Fig. 9.
+    ManeeratDoc4,
+    /// Paper 002 Fig. 7.
+    LiuCurrentStep,
+    /// Paper 000 §4.
+    WangBrakeBench,
+}
+
+/// Which plant a preset runs on.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum PlantKind {
+    /// The full simulated mill ([`Simulator`]).
+    Mill,
+    /// Paper 002's bond graph ([`BondGraphMachine`]).
+    BondGraph,
+    /// Paper 000's brake bench ([`BrakeBench`]).
+    BrakeBench,
+}
+
+impl PlantKind {
+    /// Every plant kind.
+    pub const ALL: [PlantKind; 3] = [PlantKind::Mill, PlantKind::BondGraph, PlantKind::BrakeBench];
+
+    /// Short name.
+    ///
+    /// ```
+    /// use cutlab::plant::presets::PlantKind;
+    /// assert_eq!(PlantKind::ALL.map(PlantKind::name), ["mill", "bond-graph", "brake-bench"]);
+    /// ```
+    pub fn name(self) -> &'static str {
+        match self {
+            PlantKind::Mill => "mill",
+            PlantKind::BondGraph => "bond-graph",
+            PlantKind::BrakeBench => "brake-bench",
+        }
+    }
+
+    /// Label for forms.
+    pub fn label(self) -> &'static str {
+        match self {
+            PlantKind::Mill => "Simulated mill (mechanistic cutting, drives, sensors)",
+            PlantKind::BondGraph => "Paper 002's bond-graph spindle + x-axis model",
+            PlantKind::BrakeBench => "Paper 000's magnetic-particle brake bench",
+        }
+    }
+}
+
+/// A time schedule of a non-cutting preset's load, for drawing.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct LoadSchedule {
+    /// What the values are.
+    pub quantity: &'static str,
+    /// Their unit.
+    pub unit: &'static str,
+    /// (time in s, value) at each step; the value holds until the next point.
+    pub points: Vec<(f64, f64)>,
+    /// End of the run.
+    pub end_s: f64,
+}
+
+/// One line of `cutlab scenarios`.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct PresetSummary {
+    /// Preset name.
+    pub name: &'static str,
+    /// Label.
+    pub label: &'static str,
+    /// The paper and figure.
+    pub source: &'static str,
+    /// Which plant.
+    pub plant: &'static str,
+    /// Cutter, e.g. "Ø20 mm, 2 teeth, 30° helix".
+    pub tool: Option<String>,
+    /// Work material(s).
+    pub material: Option<String>,
+    /// Milling mode.
+    pub mode: Option<&'static str>,
+    /// Spindle speed.
+    pub spindle_rpm: Option<f64>,
+    /// Programmed feed.
+    pub programmed_feed_mm_min: Option<f64>,
+    /// Smallest and largest axial depth.
+    pub depth_mm: Option<[f64; 2]>,
+    /// Radial width.
+    pub width_mm: Option<f64>,
+    /// Path length.
+    pub path_length_mm: Option<f64>,
+    /// Run time at 100 % override (spindle start and corners not counted).
+    pub nominal_duration_s: f64,
+    /// How the override reaches the machine.
+    pub override_mode: &'static str,
+    /// Suggested force target, if the preset has one.
+    pub target_force_n: Option<f64>,
+    /// Suggested spindle-current target, if the preset has one.
+    pub target_spindle_current_a: Option<f64>,
+    /// Values chosen where the paper is silent.
+    pub choices: &'static [&'static str],
+}
+
+const KIM_TOOL: (f64, u32, f64) = (20.0, 2, 30.0);
+const MANEERAT_TOOL: (f64, u32, f64) = (10.0, 4, 30.0);
+const MANEERAT_FEED_MM_MIN: f64 = 900.0;
+const MANEERAT_WIDTH_MM: f64 = 3.0;
+
+impl Preset {
+    /// Every preset.
+    pub const ALL: [Preset; 8] = [
+        Preset::KimStepDoc,
+        Preset::KimMaterialTaper,
+        Preset::KimCircularTaper,
+        Preset::ManeeratDoc1,
+        Preset::ManeeratDoc2,
+        Preset::ManeeratDoc4,
+        Preset::LiuCurrentStep,
+        Preset::WangBrakeBench,
+    ];
+
+    /// Name for the CLI and URLs.
+    pub fn name(self) -> &'static str {
+        match self {
+            Preset::KimStepDoc => "kim-step-doc",
+            Preset::KimMaterialTaper => "kim-material-taper",
+            Preset::KimCircularTaper => "kim-circular-taper",
+            Preset::ManeeratDoc1 => "maneerat-doc-1",
+            Preset::ManeeratDoc2 => "maneerat-doc-2",
+            Preset::ManeeratDoc4 => "maneerat-doc-4",
+            Preset::LiuCurrentStep => "liu-current-step",
+            Preset::WangBrakeBench => "wang-brake-bench",
+        }
+    }
+
+    /// Label for lists.
+    pub fn label(self) -> &'static str {
+        match self {
+            Preset::KimStepDoc => "Depth steps 1→5 mm, SM45C",
+            Preset::KimMaterialTaper => "Taper across SM45C → aluminium",
+            Preset::KimCircularTaper => "Circular taper 2→5→2 mm",
+            Preset::ManeeratDoc1 => "Tool steel, DOC 1 mm, target 150 N",
+            Preset::ManeeratDoc2 => "Tool steel, DOC 2 mm, target 200 N",
+            Preset::ManeeratDoc4 => "Tool steel, DOC 4 mm, target 320 N",
+            Preset::LiuCurrentStep => "Bond-graph plant, load step",
+            Preset::WangBrakeBench => "Brake bench, excitation steps",
+        }
+    }
+
+    /// The paper and figure it reproduces.
+    pub fn source(self) -> &'static str {
+        match self {
+            Preset::KimStepDoc => "paper 003 (Kim, Kwon, Chu), Fig. 10",
+            Preset::KimMaterialTaper => "paper 003 (Kim, Kwon, Chu), Fig. 11",
+            Preset::KimCircularTaper => "paper 003 (Kim, Kwon, Chu), Fig. 12-13",
+            Preset::ManeeratDoc1 => "paper 001 (Maneerat et al.), Fig. 7",
+            Preset::ManeeratDoc2 => "paper 001 (Maneerat et al.), Fig. 8",
+            Preset::ManeeratDoc4 => "paper 001 (Maneerat et al.), Fig. 9",
+            Preset::LiuCurrentStep => "paper 002 (Liu, Wang, Wang), eq 5, Table 1, Fig. 7",
+            Preset::WangBrakeBench => "paper 000 (Wang, Ai, Ze, He), section 4, Fig. 5, 9, 11, 12",
+        }
+    }
+
+    /// The preset named `name`.
+    ///
+    /// ```
+    /// use cutlab::plant::Preset;
+    /// assert_eq!(Preset::from_name("kim-step-doc"), Some(Preset::KimStepDoc));
+    /// assert_eq!(Preset::from_name("nope"), None);
+    /// ```
+    pub fn from_name(name: &str) -> Option<Self> {
+        let n = name.trim();
+        Self::ALL.into_iter().find(|p| p.name() == n)
+    }
+
+    /// The plant it runs on.
+    pub fn plant_kind(self) -> PlantKind {
+        match self {
+            Preset::LiuCurrentStep => PlantKind::BondGraph,
+            Preset::WangBrakeBench => PlantKind::BrakeBench,
+            _ => PlantKind::Mill,
+        }
+    }
+
+    /// Every value this preset had to choose because its paper does not give it.
+    pub fn choices(self) -> &'static [&'static str] {
+        match self {
+            Preset::KimStepDoc => &[
+                "slot (full immersion, as eq 4-6 assume)",
+                "feed 200 mm/min (0.1 mm/tooth; Fig. 5 spans 30-500 mm/min)",
+                "30° helix",
+                "each depth step 30 mm long, 15 mm air approach and exit",
+                "target force: mean resultant at DOC 2.5 mm (control started at 3 mm)",
+                "override 0-255 % in 1 % steps (the paper's DSP board)",
+            ],
+            Preset::KimMaterialTaper => &[
+                "Ø20 mm 2-flute carbide end mill with 30° helix (Fig. 11 gives no tool)",
+                "slot",
+                "120 mm block: 60 mm SM45C then 60 mm aluminium 7050",
+                "taper 1 → 4 mm linear over the whole block",
+                "target force: mean resultant at DOC 2 mm in SM45C",
+                "override 0-255 % in 1 % steps",
+            ],
+            Preset::KimCircularTaper => &[
+                "Ø20 mm 2-flute carbide end mill with 30° helix, SM45C",
+                "slot along the whole path",
+                "A→B 30 mm (after 15 mm of air), circle of radius 20 mm about B + (20, 0) mm, clockwise: B→C then C→B",
+                "a 90° corner at B, so the axes stop (in-position check) as in Fig. 13's dip",
+                "depth 2 → 5 mm linear over B→C, 5 → 2 mm over C→B",
+                "target force: mean resultant at DOC 3 mm",
+                "override 0-255 % in 1 % steps",
+            ],
+            Preset::ManeeratDoc1 | Preset::ManeeratDoc2 | Preset::ManeeratDoc4 => &[
+                "4 flutes, 30° helix",
+                "hardened tool steel coefficients for the printed 'SKD41'",
+                "down milling at 3 mm radial width",
+                "programmed feed 900 mm/min (0.075 mm/tooth), above target at every depth",
+                "120 mm cut after 10 mm of air",
+                "continuous override (the paper's D/A card)",
+            ],
+            Preset::LiuCurrentStep => &[
+                "cutting resistance C_cut so the spindle draws the 25 A reference at 1500 mm/min",
+                "load step +40 % of the total resistance at 15 s; 40 s run",
+                "spindle voltage applied at t = 0, feed after 3 s",
+                "S_e2 set for the commanded feed in steady state",
+                "continuous override",
+            ],
+            Preset::WangBrakeBench => &[
+                "feed 600 mm/min: 4 Hz electrical frequency with a 10 mm screw and 4 pole pairs",
+                "brake 2 N·m/A, hysteresis ±0.03 A",
+                "excitation 0 → 1 A → 0 in 0.1 A steps of 3 s",
+                "override on the 16-position dial (paper 000's X20.7/X20.4/X20.3/X20.2)",
+            ],
+        }
+    }
+
+    fn mill_parameters(self) -> Option<MillParameters> {
+        let kim = |rpm: f64, feed: f64| MillParameters {
+            tool: KIM_TOOL,
+            mode: MillingMode::Slot,
+            width_mm: KIM_TOOL.0,
+            spindle_rpm: rpm,
+            feed_mm_min: feed,
+        };
+        let maneerat = MillParameters {
+            tool: MANEERAT_TOOL,
+            mode: MillingMode::Down,
+            width_mm: MANEERAT_WIDTH_MM,
+            spindle_rpm: 3000.0,
+            feed_mm_min: MANEERAT_FEED_MM_MIN,
+        };
+        match self {
+            Preset::KimStepDoc => Some(kim(1000.0, 200.0)),
+            Preset::KimMaterialTaper => Some(kim(600.0, 160.0)),
+            Preset::KimCircularTaper => Some(kim(3000.0, 170.0)),
+            Preset::ManeeratDoc1 | Preset::ManeeratDoc2 | Preset::ManeeratDoc4 => Some(maneerat),
+            Preset::LiuCurrentStep | Preset::WangBrakeBench => None,
+        }
+    }
+
+    fn maneerat_depth_mm(self) -> Option<f64> {
+        match self {
+            Preset::ManeeratDoc1 => Some(1.0),
+            Preset::ManeeratDoc2 => Some(2.0),
+            Preset::ManeeratDoc4 => Some(4.0),
+            _ => None,
+        }
+    }
+
+    /// The scenario of a mill preset (its path, depth and width profiles and materials, for
+    /// drawing); `None` for the bench and the bond graph.
+    pub fn scenario(self) -> Option<Scenario> {
+        self.scenario_spec()
+            .and_then(|spec| Scenario::new(spec).ok())
+    }
+
+    /// The scenario's plain specification.
+    pub fn scenario_spec(self) -> Option<ScenarioSpec> {
+        let p = self.mill_parameters()?;
+        let cutter = Cutter {
+            diameter_mm: p.tool.0,
+            teeth: p.tool.1,
+            helix_deg: p.tool.2,
+            runout_mm: 0.0,
+            runout_angle_deg: 0.0,
+        };
+        let region = |from_mm: f64, to_mm: f64, material: Material| MaterialRegion {
+            from_mm,
+            to_mm,
+            material,
+        };
+        let line = |x: f64| Move::line([x, 0.0], p.feed_mm_min, p.spindle_rpm);
+        let (start_mm, moves, depth_mm, materials) = match self {
+            Preset::KimStepDoc => (
+                [-15.0, 0.0],
+                vec![line(165.0)],
+                vec![
+                    (15.0, 1.0),
+                    (45.0, 1.0),
+                    (45.0, 2.0),
+                    (75.0, 2.0),
+                    (75.0, 3.0),
+                    (105.0, 3.0),
+                    (105.0, 4.0),
+                    (135.0, 4.0),
+                    (135.0, 5.0),
+                ],
+                vec![region(15.0, 165.0, Material::Sm45c)],
+            ),
+            Preset::KimMaterialTaper => (
+                [-15.0, 0.0],
+                vec![line(135.0)],
+                vec![(15.0, 1.0), (135.0, 4.0)],
+                vec![region(15.0, 135.0, Material::Composite)],
+            ),
+            Preset::KimCircularTaper => {
+                let radius = 20.0;
+                let half = std::f64::consts::PI * radius;
+                let b = 45.0;
+                (
+                    [-45.0, 0.0],
+                    vec![
+                        line(0.0),
+                        Move::arc(
+                            [2.0 * radius, 0.0],
+                            [radius, 0.0],
+                            true,
+                            p.feed_mm_min,
+                            p.spindle_rpm,
+                        ),
+                        Move::arc(
+                            [0.0, 0.0],
+                            [radius, 0.0],
+                            true,
+                            p.feed_mm_min,
+                            p.spindle_rpm,
+                        ),
+                    ],
+                    vec![(b, 2.0), (b + half, 5.0), (b + 2.0 * half, 2.0)],
+                    vec![region(15.0, b + 2.0 * half, Material::Sm45c)],
+                )
+            }
+            Preset::ManeeratDoc1 | Preset::ManeeratDoc2 | Preset::ManeeratDoc4 => (
+                [-10.0, 0.0],
+                vec![line(120.0)],
+                vec![(0.0, self.maneerat_depth_mm().unwrap_or(1.0))],
+                vec![region(10.0, 130.0, Material::ToolSteel)],
+            ),
+            Preset::LiuCurrentStep | Preset::WangBrakeBench => return None,
+        };
+        Some(ScenarioSpec {
+            name: self.name().to_string(),
+            start_mm,
+            moves,
+            cutter,
+            mode: p.mode,
+            depth_mm,
+            width_mm: vec![(0.0, p.width_mm)],
+            materials,
+            spindle_start_dwell_s: 0.0,
+        })
+    }
+
+    /// How the override reaches the preset's machine.
+    pub fn override_mode(self) -> OverrideMode {
+        match self {
+            Preset::KimStepDoc | Preset::KimMaterialTaper | Preset::KimCircularTaper => {
+                OverrideMode::WholePercent
+            }
+            Preset::WangBrakeBench => OverrideMode::default(),
+            _ => OverrideMode::Continuous,
+        }
+    }
+
+    /// The mill's configuration for `seed` (the defaults with this preset's override mode).
+    pub fn sim_config(self, seed: u64) -> SimConfig {
+        SimConfig {
+            seed,
+            cnc: CncConfig {
+                override_mode: self.override_mode(),
+                ..CncConfig::default()
+            },
+            ..SimConfig::default()
+        }
+    }
+
+    /// The full simulated mill of a mill preset.
+    pub fn simulator(self, seed: u64) -> Result<Simulator, PlantError> {
+        let spec = self.scenario_spec().ok_or_else(|| {
+            PlantError::new(
+                "preset",
+                format!(
+                    "{} runs on the {} plant, not the mill",
+                    self.name(),
+                    self.plant_kind().name()
+                ),
+            )
+        })?;
+        Simulator::new(Scenario::new(spec)?, self.sim_config(seed))
+    }
+
+    /// The brake bench's settings (wang-brake-bench only).
+    pub fn bench_config(self, seed: u64) -> Option<BrakeBenchConfig> {
+        (self == Preset::WangBrakeBench).then(|| BrakeBenchConfig {
+            seed,
+            cnc: CncConfig {
+                override_mode: self.override_mode(),
+                ..CncConfig::default()
+            },
+            ..BrakeBenchConfig::default()
+        })
+    }
+
+    /// The bond graph's run (liu-current-step only).
+    pub fn bond_graph_run(self, seed: u64) -> Option<BondGraphRun> {
+        (self == Preset::LiuCurrentStep).then(|| BondGraphRun {
+            seed,
+            cnc: CncConfig {
+                override_mode: self.override_mode(),
+                ..CncConfig::default()
+            },
+            ..BondGraphRun::paper_002()
+        })
+    }
+
+    /// The preset's machine, seeded.
+    ///
+    /// ```
+    /// use cutlab::machine::{Machine, OverrideCommand};
+    /// use cutlab::plant::Preset;
+    /// for preset in Preset::ALL {
+    ///     let mut m = preset.machine(42).unwrap();
+    ///     let s = m.step(OverrideCommand::default());
+    ///     assert!(s.truth.is_some() && m.sample_rate_hz() == 10_000.0);
+    /// }
+    /// ```
+    pub fn machine(self, seed: u64) -> Result<PresetMachine, PlantError> {
+        Ok(match self.plant_kind() {
+            PlantKind::Mill => PresetMachine::Mill(Box::new(self.simulator(seed)?)),
+            PlantKind::BrakeBench => {
+                let cfg = self
+                    .bench_config(seed)
+                    .ok_or_else(|| PlantError::new("preset", "not a bench preset"))?;
+                PresetMachine::BrakeBench(Box::new(BrakeBench::new(cfg)?))
+            }
+            PlantKind::BondGraph => {
+                let run = self
+                    .bond_graph_run(seed)
+                    .ok_or_else(|| PlantError::new("preset", "not a bond-graph preset"))?;
+                PresetMachine::BondGraph(Box::new(BondGraphMachine::new(run)?))
+            }
+        })
+    }
+
+    /// The load schedule of a non-cutting preset, for drawing (`None` for mill presets, whose
+    /// load is the scenario's depth profile).
+    ///
+    /// ```
+    /// use cutlab::plant::Preset;
+    /// let s = Preset::WangBrakeBench.load_schedule().unwrap();
+    /// assert_eq!((s.unit, s.points.len(), s.end_s), ("A", 21, 63.0));
+    /// assert!(Preset::KimStepDoc.load_schedule().is_none());
+    /// ```
+    pub fn load_schedule(self) -> Option<LoadSchedule> {
+        if let Some(cfg) = self.bench_config(0) {
+            return Some(LoadSchedule {
+                quantity: "brake excitation",
+                unit: "A",
+                points: cfg
+                    .excitation_steps_a
+                    .iter()
+                    .enumerate()
+                    .map(|(i, e)| (i as f64 * cfg.step_duration_s, *e))
+                    .collect(),
+                end_s: cfg.duration_s(),
+            });
+        }
+        self.bond_graph_run(0).map(|run| LoadSchedule {
+            quantity: "cutting resistance",
+            unit: "kN·s/m",
+            points: run
+                .load_steps
+                .iter()
+                .map(|s| (s.time_s, s.cutting_damping_n_s_per_m * 1e-3))
+                .collect(),
+            end_s: run.duration_s,
+        })
+    }
+
+    /// The force target the paper gives, or one chosen for it (see [`Preset::choices`]).
+    ///
+    /// ```
+    /// use cutlab::plant::Preset;
+    /// assert_eq!(Preset::ManeeratDoc4.target_force_n(), Some(320.0));
+    /// assert!(Preset::KimStepDoc.target_force_n().unwrap() > 100.0);
+    /// assert_eq!(Preset::WangBrakeBench.target_force_n(), None);
+    /// ```
+    pub fn target_force_n(self) -> Option<f64> {
+        let kim = |depth_mm: f64, material: Material| {
+            let p = self.mill_parameters()?;
+            Some(mean_resultant_n(&p, depth_mm, material))
+        };
+        match self {
+            Preset::ManeeratDoc1 => Some(150.0),
+            Preset::ManeeratDoc2 => Some(200.0),
+            Preset::ManeeratDoc4 => Some(320.0),
+            Preset::KimStepDoc => kim(2.5, Material::Sm45c),
+            Preset::KimMaterialTaper => kim(2.0, Material::Sm45c),
+            Preset::KimCircularTaper => kim(3.0, Material::Sm45c),
+            Preset::LiuCurrentStep | Preset::WangBrakeBench => None,
+        }
+    }
+
+    /// The spindle-current target the paper gives (paper 002: I_ref = 25 A).
+    pub fn target_spindle_current_a(self) -> Option<f64> {
+        (self == Preset::LiuCurrentStep).then_some(25.0)
+    }
+
+    /// Paper 001's reduced plant standing in for a maneerat preset: eq 2.3 with the static gain
+    /// of the mechanistic model's mean resultant at the programmed feed, τ_f = 1/K_v (the
+    /// position loop) and τ_c = one spindle revolution (chosen). `None` for other presets.
+    ///
+    /// ```
+    /// use cutlab::plant::Preset;
+    /// let run = Preset::ManeeratDoc2.second_order_equivalent(1).unwrap();
+    /// assert!((run.process.force_time_constant_s - 0.02).abs() < 1e-12);
+    /// assert!(Preset::KimStepDoc.second_order_equivalent(1).is_none());
+    /// ```
+    pub fn second_order_equivalent(self, seed: u64) -> Option<SecondOrderRun> {
+        let depth = self.maneerat_depth_mm()?;
+        let p = self.mill_parameters()?;
+        let machine = self.sim_config(seed);
+        let gain = mean_resultant_n(&p, depth, Material::ToolSteel) / p.feed_mm_min;
+        let process = SecondOrderConfig {
+            feed_time_constant_s: 1.0 / machine.cnc.position_loop_gain_per_s,
+            force_time_constant_s: 60.0 / p.spindle_rpm,
+            force_gain_n_per_mm_min: gain,
+        };
+        let k = Material::ToolSteel.coefficients();
+        Some(SecondOrderRun {
+            process,
+            length_mm: 130.0,
+            programmed_feed_mm_min: p.feed_mm_min,
+            spindle_rpm: p.spindle_rpm,
+            gain_n_per_mm_min: vec![(0.0, 0.0), (10.0, 0.0), (10.0, gain)],
+            cutter_radius_mm: 0.5 * p.tool.0,
+            radial_ratio: k.radial_ratio(),
+            machine,
+        })
+    }
+
+    /// The summary `cutlab scenarios` prints.
+    ///
+    /// ```
+    /// use cutlab::plant::Preset;
+    /// let s = Preset::KimMaterialTaper.summary();
+    /// assert_eq!((s.spindle_rpm, s.programmed_feed_mm_min), (Some(600.0), Some(160.0)));
+    /// assert_eq!(s.depth_mm, Some([1.0, 4.0]));
+    /// ```
+    pub fn summary(self) -> PresetSummary {
+        let p = self.mill_parameters();
+        let scenario = self.scenario();
+        let materials = scenario.as_ref().map(|s| {
+            let mut names: Vec<&str> = Vec::new();
+            for r in s.material_regions() {
+                if !names.contains(&r.material.name()) {
+                    names.push(r.material.name());
+                }
+            }
+            names.join(" then ")
+        });
+        let depth = scenario.as_ref().map(|s| {
+            let values: Vec<f64> = s.depth_profile().points().iter().map(|q| q.value).collect();
+            let lo = values.iter().copied().fold(f64::INFINITY, f64::min);
+            let hi = values.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+            [lo, hi]
+        });
+        let nominal_duration_s = match (&scenario, self.bench_config(0), self.bond_graph_run(0)) {
+            (Some(s), _, _) => s.nominal_duration_s(),
+            (None, Some(b), _) => b.duration_s(),
+            (None, None, Some(r)) => r.duration_s,
+            _ => 0.0,
+        };
+        let (spindle_rpm, programmed_feed_mm_min) = match (p, self) {
+            (Some(p), _) => (Some(p.spindle_rpm), Some(p.feed_mm_min)),
+            (None, Preset::WangBrakeBench) => (None, self.bench_config(0).map(|b| b.feed_mm_min)),
+            (None, _) => (
+                self.bond_graph_run(0).map(|r| {
+                    super::rpm_from_rad_s(
+                        r.params.spindle_voltage_v / r.params.spindle_armature_coefficient,
+                    )
+                }),
+                self.bond_graph_run(0).map(|r| r.programmed_feed_mm_min),
+            ),
+        };
+        PresetSummary {
+            name: self.name(),
+            label: self.label(),
+            source: self.source(),
+            plant: self.plant_kind().name(),
+            tool: p.map(|p| format!("Ø{} mm, {} teeth, {}° helix", p.tool.0, p.tool.1, p.tool.2)),
+            material: materials,
+            mode: p.map(|p| p.mode.name()),
+            spindle_rpm,
+            programmed_feed_mm_min,
+            depth_mm: depth,
+            width_mm: p.map(|p| p.width_mm),
+            path_length_mm: scenario.as_ref().map(Scenario::total_length_mm),
+            nominal_duration_s,
+            override_mode: self.override_mode().name(),
+            target_force_n: self.target_force_n(),
+            target_spindle_current_a: self.target_spindle_current_a(),
+            choices: self.choices(),
+        }
+    }
+}
+
+#[derive(Debug, Clone, Copy)]
+struct MillParameters {
+    tool: (f64, u32, f64),
+    mode: MillingMode,
+    width_mm: f64,
+    spindle_rpm: f64,
+    feed_mm_min: f64,
+}
+
+/// |F̄| of the mechanistic model at a depth, at the preset's programmed feed.
+fn mean_resultant_n(p: &MillParameters, depth_mm: f64, material: Material) -> f64 {
+    let cutter = Cutter {
+        diameter_mm: p.tool.0,
+        teeth: p.tool.1,
+        helix_deg: p.tool.2,
+        runout_mm: 0.0,
+        runout_angle_deg: 0.0,
+    };
+    let feed_per_tooth = p.feed_mm_min / (f64::from(p.tool.1) * p.spindle_rpm);
+    let f = mean_forces(
+        &cutter,
+        &material.coefficients(),
+        &Immersion::new(p.mode, p.width_mm, p.tool.0),
+        depth_mm,
+        feed_per_tooth,
+    );
+    math::hypot(f.fx_n, f.fy_n)
+}
+
+/// Any preset's machine.
+#[derive(Debug, Clone)]
+pub enum PresetMachine {
+    /// The full mill.
+    Mill(Box<Simulator>),
+    /// The brake bench.
+    BrakeBench(Box<BrakeBench>),
+    /// The bond graph.
+    BondGraph(Box<BondGraphMachine>),
+}
+
+impl PresetMachine {
+    fn plant(&self) -> &dyn Plant {
+        match self {
+            PresetMachine::Mill(m) => m.as_ref(),
+            PresetMachine::BrakeBench(m) => m.as_ref(),
+            PresetMachine::BondGraph(m) => m.as_ref(),
+        }
+    }
+
+    fn plant_mut(&mut self) -> &mut dyn Plant {
+        match self {
+            PresetMachine::Mill(m) => m.as_mut(),
+            PresetMachine::BrakeBench(m) => m.as_mut(),
+            PresetMachine::BondGraph(m) => m.as_mut(),
+        }
+    }
+
+    /// The scenario, for a mill.
+    pub fn scenario(&self) -> Option<&Scenario> {
+        match self {
+            PresetMachine::Mill(m) => Some(m.scenario()),
+            _ => None,
+        }
+    }
+}
+
+impl Machine for PresetMachine {
+    fn sample_rate_hz(&self) -> f64 {
+        self.plant().sample_rate_hz()
+    }
+
+    fn step(&mut self, command: OverrideCommand) -> MachineStep {
+        self.plant_mut().step(command)
+    }
+
+    fn finished(&self) -> bool {
+        self.plant().finished()
+    }
+}
+
+impl Plant for PresetMachine {
+    fn signals(&self) -> &PlantSignals {
+        self.plant().signals()
+    }
+
+    fn reset(&mut self) {
+        self.plant_mut().reset();
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn names_are_unique_and_round_trip() {
+        for p in Preset::ALL {
+            assert_eq!(Preset::from_name(p.name()), Some(p));
+            assert!(!p.choices().is_empty());
+            assert!(p.source().starts_with("paper 00"));
+        }
+    }
+
+    #[test]
+    fn mill_presets_have_valid_scenarios_and_the_others_a_schedule() {
+        for p in Preset::ALL {
+            match p.plant_kind() {
+                PlantKind::Mill => {
+                    let spec = p.scenario_spec().unwrap();
+                    Scenario::new(spec).unwrap();
+                    assert!(p.load_schedule().is_none());
+                }
+                _ => {
+                    assert!(p.scenario().is_none());
+                    assert!(p.load_schedule().unwrap().points.len() >= 2);
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn maneerat_forces_at_full_feed_exceed_their_targets() {
+        for p in [
+            Preset::ManeeratDoc1,
+            Preset::ManeeratDoc2,
+            Preset::ManeeratDoc4,
+        ] {
+            let params = p.mill_parameters().unwrap();
+            let depth = p.maneerat_depth_mm().unwrap();
+            let f = mean_resultant_n(&params, depth, Material::ToolSteel);
+            let target = p.target_force_n().unwrap();
+            assert!(f > target, "{}: {f} vs {target}", p.name());
+            // …and the target is reachable: the edge forces alone stay below it.
+            let edge_only = MillParameters {
+                feed_mm_min: 1e-9,
+                ..params
+            };
+            assert!(mean_resultant_n(&edge_only, depth, Material::ToolSteel) < target);
+        }
+    }
+
+    #[test]
+    fn the_circular_taper_has_a_right_angle_at_b() {
+        let s = Preset::KimCircularTaper.scenario().unwrap();
+        let blocks = s.plan_blocks();
+        let turn = (blocks[1].start_direction_rad - blocks[0].end_direction_rad).abs();
+        assert!((turn - std::f64::consts::FRAC_PI_2).abs() < 1e-9);
+        let end = s.point_at(s.total_length_mm());
+        assert!(end.position_mm[0].abs() < 1e-9 && end.position_mm[1].abs() < 1e-9);
+    }
+}

@@ -1,0 +1,661 @@
+//! The simulated mill: scenario → CNC → cutting → drives → sensors, one sample per step.
+//!
+//! Each [`Simulator::step`] (Δt = 1/sample rate, 10 kHz by default):
+//!
+//! 1. the PMC latches the override and feed hold ([`super::cnc::OverrideInput`]);
+//! 2. the CNC advances the commanded and actual path position ([`super::cnc::FeedPlanner`]),
+//!    holding motion until the spindle has reached speed;
+//! 3. the scenario gives the tool's position, direction α, depth, width and material there;
+//! 4. feed per tooth s_t = v/(Z·n) (at the tool centre: no curvature correction on arcs); the
+//!    mechanistic model gives the forces at the tooth angle φ = θ_spindle + α in the feed frame
+//!    ([`super::mechanics`]), rotated into the machine frame;
+//! 5. each feed axis carries the force component along it (paper 000 eq 3) and turns it into
+//!    phase currents ([`super::feed_drive`]); the spindle turns the cutting torque into its RMS
+//!    and phase currents ([`super::spindle_drive`]);
+//! 6. Hall sensors and the ADC read one feed axis and the spindle ([`super::sensors`]).
+//!
+//! Nothing in `step` allocates. Its only inputs are the override command and the seed, so two
+//! runs with the same seed and commands are bit-identical (natively and in wasm: all
+//! transcendental functions come from [`crate::math`]).
+//!
+//! The run ends when the program has ended and the axes are in position, or after
+//! [`SimConfig::max_duration_s`]; `step` then keeps returning the last sample.
+//!
+//! A NaN override keeps the override applied last and ±∞ clamps (see [`super::cnc`]); nothing
+//! else non-finite can reach a validated simulator, so its outputs stay finite.
+
+use serde::{Deserialize, Serialize};
+
+use super::cnc::{samples_per, AppliedOverride, CncConfig, FeedPlanner, OverrideInput};
+use super::feed_drive::{three_phase_rms_a, FeedDrive, FeedDriveConfig};
+use super::materials::{CuttingCoefficients, Material};
+use super::mechanics::{mean_forces, Immersion, MillingForceModel, MillingMode};
+use super::power_law::{PowerLawInputs, PowerLawMaterial, PowerLawModel};
+use super::scenario::Scenario;
+use super::sensors::{CurrentSensor, CurrentSensorConfig};
+use super::signals::{AxisSignals, PlantSignals};
+use super::spindle_drive::{SpindleDrive, SpindleDriveConfig};
+use super::{positive, Plant, PlantError};
+use crate::machine::{Machine, MachineStep, OverrideCommand, PlantTruth, SensorSample};
+
+/// Which feed axis the feed-current sensors are on.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum FeedAxis {
+    /// The X axis.
+    X,
+    /// The Y axis.
+    Y,
+}
+
+/// Everything about the simulated machine except the scenario.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct SimConfig {
+    /// Sensor sample rate; the simulation steps at Δt = 1/rate. Default 10 kHz.
+    pub sample_rate_hz: f64,
+    /// Seed of every noise source.
+    pub seed: u64,
+    /// The control.
+    pub cnc: CncConfig,
+    /// Both feed axes (the same drive on X and Y).
+    pub feed_drive: FeedDriveConfig,
+    /// The spindle drive.
+    pub spindle_drive: SpindleDriveConfig,
+    /// The feed-current channel.
+    pub feed_sensor: CurrentSensorConfig,
+    /// The spindle-current channel.
+    pub spindle_sensor: CurrentSensorConfig,
+    /// The axis the feed sensors measure. Default X.
+    pub measured_axis: FeedAxis,
+    /// The run ends after this long even if the program has not (e.g. with 0 % override).
+    /// Default 600 s.
+    pub max_duration_s: f64,
+}
+
+impl Default for SimConfig {
+    fn default() -> Self {
+        Self {
+            sample_rate_hz: 10_000.0,
+            seed: 0,
+            cnc: CncConfig::default(),
+            feed_drive: FeedDriveConfig::default(),
+            spindle_drive: SpindleDriveConfig::default(),
+            feed_sensor: CurrentSensorConfig::feed(),
+            spindle_sensor: CurrentSensorConfig::spindle(),
+            measured_axis: FeedAxis::X,
+            max_duration_s: 600.0,
+        }
+    }
+}
+
+impl FeedAxis {
+    /// Both axes.
+    pub const ALL: [FeedAxis; 2] = [FeedAxis::X, FeedAxis::Y];
+
+    /// Label for forms.
+    pub fn label(self) -> &'static str {
+        match self {
+            FeedAxis::X => "X axis",
+            FeedAxis::Y => "Y axis",
+        }
+    }
+}
+
+impl SimConfig {
+    /// The default machine with another seed.
+    ///
+    /// ```
+    /// use cutlab::plant::simulator::SimConfig;
+    /// let c = SimConfig::with_seed(7);
+    /// assert_eq!((c.seed, c.sample_rate_hz), (7, 10_000.0));
+    /// assert!(c.validate().is_ok());
+    /// ```
+    pub fn with_seed(seed: u64) -> Self {
+        Self {
+            seed,
+            ..Self::default()
+        }
+    }
+
+    /// Checks every field.
+    pub fn validate(&self) -> Result<(), PlantError> {
+        positive("sample_rate_hz", self.sample_rate_hz)?;
+        if self.sample_rate_hz > 1e6 {
+            return Err(PlantError::new(
+                "sample_rate_hz",
+                format!("must be at most 1 MHz, got {}", self.sample_rate_hz),
+            ));
+        }
+        self.cnc.validate().map_err(|e| e.within("cnc"))?;
+        self.feed_drive
+            .validate()
+            .map_err(|e| e.within("feed_drive"))?;
+        self.spindle_drive
+            .validate()
+            .map_err(|e| e.within("spindle_drive"))?;
+        self.feed_sensor
+            .validate()
+            .map_err(|e| e.within("feed_sensor"))?;
+        self.spindle_sensor
+            .validate()
+            .map_err(|e| e.within("spindle_sensor"))?;
+        positive("max_duration_s", self.max_duration_s)?;
+        Ok(())
+    }
+}
+
+/// Noise streams: the feed sensor uses 0–2, the spindle sensor 3–5.
+const FEED_SENSOR_STREAM: u64 = 0;
+const SPINDLE_SENSOR_STREAM: u64 = 3;
+
+/// A feed per tooth above this is a crash, not a cut; the model clamps to it.
+const MAX_FEED_PER_TOOTH_MM: f64 = 1.0;
+
+/// Below this spindle speed the tool is not cutting.
+const MIN_CUTTING_RPM: f64 = 1.0;
+
+/// Paper 004's model for `material` (cast iron's weights for GC30, carbon steel's for the rest),
+/// its bias calibrated to the mechanistic mean resultant of the scenario's nominal cut: the
+/// first block's feed per tooth at its spindle speed, the largest depth and width.
+fn calibrated_power_law(scenario: &Scenario, material: Material) -> PowerLawModel {
+    let published = PowerLawModel::published(match material {
+        Material::Gc30 => PowerLawMaterial::CastIron,
+        _ => PowerLawMaterial::CarbonSteel,
+    });
+    let cutter = scenario.cutter();
+    let first = &scenario.segments()[0];
+    let feed_per_tooth_mm = if first.spindle_rpm > 0.0 {
+        first.feed_mm_min / (f64::from(cutter.teeth) * first.spindle_rpm)
+    } else {
+        0.0
+    };
+    let depth_mm = scenario.depth_profile().max_value();
+    let immersion = Immersion::new(
+        scenario.mode(),
+        scenario.width_profile().max_value(),
+        cutter.diameter_mm,
+    );
+    let inputs = PowerLawInputs {
+        radial_width_mm: immersion.radial_width_mm(cutter.diameter_mm),
+        feed_per_tooth_mm,
+        axial_depth_mm: depth_mm,
+        diameter_mm: cutter.diameter_mm,
+        teeth_engaged: immersion.teeth_engaged(cutter.teeth),
+    };
+    let mean = mean_forces(
+        cutter,
+        &material.coefficients(),
+        &immersion,
+        depth_mm,
+        feed_per_tooth_mm,
+    );
+    // A scenario without a nominal cut (no depth, no feed) keeps the published biases.
+    published
+        .calibrated(&inputs, mean.resultant_n())
+        .unwrap_or(published)
+}
+
+/// The simulated mill.
+///
+/// ```
+/// use cutlab::machine::{Machine, OverrideCommand};
+/// use cutlab::plant::{Preset, Plant};
+/// let mut sim = Preset::KimStepDoc.simulator(1).unwrap();
+/// let mut last = sim.step(OverrideCommand::default());
+/// for _ in 0..20_000 { last = sim.step(OverrideCommand::default()); } // 2 s
+/// assert!(last.sensors.spindle_running);
+/// assert!((sim.signals().spindle_speed_rpm - 1000.0).abs() < 20.0);
+/// ```
+#[derive(Debug, Clone)]
+pub struct Simulator {
+    scenario: Scenario,
+    config: SimConfig,
+    dt_s: f64,
+    ipo_samples: u64,
+    override_input: OverrideInput,
+    planner: FeedPlanner,
+    force_model: MillingForceModel,
+    region_coefficients: Vec<CuttingCoefficients>,
+    region_power_law: Vec<PowerLawModel>,
+    spindle: SpindleDrive,
+    axes: [FeedDrive; 2],
+    feed_sensor: CurrentSensor,
+    spindle_sensor: CurrentSensor,
+    samples: u64,
+    segment_hint: usize,
+    immersion_width_mm: f64,
+    immersion: Immersion,
+    spindle_arrived_at_s: Option<f64>,
+    spindle_started_at_s: Option<f64>,
+    power_law_force_n: f64,
+    signals: PlantSignals,
+    last: MachineStep,
+    finished: bool,
+}
+
+impl Simulator {
+    /// A machine at rest at the start of `scenario`.
+    pub fn new(scenario: Scenario, config: SimConfig) -> Result<Self, PlantError> {
+        config.validate()?;
+        let dt_s = 1.0 / config.sample_rate_hz;
+        let blocks = scenario.plan_blocks();
+        let force_model = MillingForceModel::new(*scenario.cutter())?;
+        let region_coefficients = scenario
+            .material_regions()
+            .iter()
+            .map(|r| r.material.coefficients())
+            .collect();
+        let region_power_law = scenario
+            .material_regions()
+            .iter()
+            .map(|r| calibrated_power_law(&scenario, r.material))
+            .collect();
+        let axis = FeedDrive::new(config.feed_drive, dt_s).map_err(|e| e.within("feed_drive"))?;
+        let mut sim = Self {
+            dt_s,
+            ipo_samples: samples_per(config.cnc.interpolation_period_s, dt_s),
+            override_input: OverrideInput::new(&config.cnc, dt_s).map_err(|e| e.within("cnc"))?,
+            planner: FeedPlanner::new(blocks, config.cnc, dt_s).map_err(|e| e.within("cnc"))?,
+            force_model,
+            region_coefficients,
+            region_power_law,
+            spindle: SpindleDrive::new(config.spindle_drive, dt_s)
+                .map_err(|e| e.within("spindle_drive"))?,
+            axes: [axis, axis],
+            feed_sensor: CurrentSensor::new(
+                config.feed_sensor,
+                dt_s,
+                config.seed,
+                FEED_SENSOR_STREAM,
+            )
+            .map_err(|e| e.within("feed_sensor"))?,
+            spindle_sensor: CurrentSensor::new(
+                config.spindle_sensor,
+                dt_s,
+                config.seed,
+                SPINDLE_SENSOR_STREAM,
+            )
+            .map_err(|e| e.within("spindle_sensor"))?,
+            immersion: Immersion::new(MillingMode::Slot, 0.0, 1.0),
+            immersion_width_mm: f64::NAN,
+            scenario,
+            config,
+            samples: 0,
+            segment_hint: 0,
+            spindle_arrived_at_s: None,
+            spindle_started_at_s: None,
+            power_law_force_n: 0.0,
+            signals: PlantSignals::default(),
+            last: MachineStep::default(),
+            finished: false,
+        };
+        sim.reset();
+        Ok(sim)
+    }
+
+    /// The scenario being cut.
+    pub fn scenario(&self) -> &Scenario {
+        &self.scenario
+    }
+
+    /// The machine's configuration.
+    pub fn config(&self) -> &SimConfig {
+        &self.config
+    }
+
+    fn spindle_ready(&mut self, time_s: f64, command_rpm: f64) -> bool {
+        if command_rpm == 0.0 {
+            return true;
+        }
+        let tol = self.config.cnc.spindle_arrival_tolerance * command_rpm.abs();
+        let speed = self.spindle.speed_rpm();
+        let gear_ok = self.config.spindle_drive.gear_for(command_rpm)
+            == self
+                .config
+                .spindle_drive
+                .gear_for(speed.max(f64::MIN_POSITIVE));
+        let at_speed = (speed - command_rpm).abs() <= tol && gear_ok;
+        if at_speed && self.spindle_arrived_at_s.is_none() {
+            self.spindle_arrived_at_s = Some(time_s);
+        }
+        at_speed
+            && self
+                .spindle_arrived_at_s
+                .is_some_and(|t| time_s - t >= self.scenario.spec().spindle_start_dwell_s)
+    }
+
+    fn advance(&mut self, command: OverrideCommand) -> MachineStep {
+        self.samples += 1;
+        let time_s = self.samples as f64 * self.dt_s;
+        let ipo_tick = (self.samples - 1).is_multiple_of(self.ipo_samples);
+
+        // 1–2. Override through the PMC, then the CNC.
+        let (applied, feed_hold) = self.override_input.step(command);
+        let block = self.planner_block();
+        let spindle_command_rpm = self.scenario.segments()[block].spindle_rpm;
+        let ready = self.spindle_ready(time_s, spindle_command_rpm);
+        let cnc = self.planner.step(applied.pct, feed_hold, ready);
+
+        // 3. Where the tool is and what it meets.
+        let s = cnc.position_mm;
+        let point = self.scenario.point_from_hint(s, self.segment_hint);
+        self.segment_hint = point.segment;
+        let region = self.scenario.region_index_at(s);
+        let depth_mm = self.scenario.depth_profile().value_at(s);
+        let width_profile_mm = self.scenario.width_profile().value_at(s);
+        if width_profile_mm != self.immersion_width_mm {
+            self.immersion_width_mm = width_profile_mm;
+            self.immersion = Immersion::new(
+                self.scenario.mode(),
+                width_profile_mm,
+                self.scenario.cutter().diameter_mm,
+            );
+        }
+        let cutter = *self.scenario.cutter();
+        let width_mm = self.immersion.radial_width_mm(cutter.diameter_mm);
+
+        // 4. Cutting forces at the current tooth angle, feed frame then machine frame.
+        let spindle_rpm = self.spindle.speed_rpm();
+        let feed_mm_min = cnc.feed_mm_min;
+        let cutting = region.is_some() && spindle_rpm.abs() >= MIN_CUTTING_RPM && depth_mm > 0.0;
+        let feed_per_tooth_mm = if cutting {
+            (feed_mm_min.max(0.0) / (f64::from(cutter.teeth) * spindle_rpm.abs()))
+                .min(MAX_FEED_PER_TOOTH_MM)
+        } else {
+            0.0
+        };
+        let (cos_a, sin_a) = (point.direction_cos, point.direction_sin);
+        let forces = match region {
+            Some(r) if cutting => self.force_model.forces(
+                &self.region_coefficients[r],
+                &self.immersion,
+                depth_mm,
+                feed_per_tooth_mm,
+                self.spindle.angle_rad() + point.direction_rad,
+            ),
+            _ => Default::default(),
+        };
+        let force_x_n = cos_a * forces.fx_n - sin_a * forces.fy_n;
+        let force_y_n = sin_a * forces.fx_n + cos_a * forces.fy_n;
+
+        // 5. Drives: each axis resists its share of the force on the tool.
+        let vx = feed_mm_min * cos_a;
+        let vy = feed_mm_min * sin_a;
+        let ax = self.axes[0].step(vx, -force_x_n, 0.0);
+        let ay = self.axes[1].step(vy, -force_y_n, 0.0);
+        let spindle = self.spindle.step(spindle_command_rpm, forces.torque_nm);
+        if spindle.running && self.spindle_started_at_s.is_none() {
+            self.spindle_started_at_s = Some(time_s);
+        } else if !spindle.running {
+            self.spindle_started_at_s = None;
+        }
+
+        // 6. Sensors.
+        let measured = match self.config.measured_axis {
+            FeedAxis::X => &ax,
+            FeedAxis::Y => &ay,
+        };
+        let feed_read = self.feed_sensor.read(measured.phase_currents_a);
+        let spindle_read = self.spindle_sensor.read(spindle.phase_currents_a);
+
+        // Paper 004's estimate from what the CNC knows, once per interpolation period.
+        if ipo_tick {
+            self.power_law_force_n = match region {
+                Some(r) if cutting => self.region_power_law[r]
+                    .forces(&PowerLawInputs {
+                        radial_width_mm: width_mm,
+                        feed_per_tooth_mm,
+                        axial_depth_mm: depth_mm,
+                        diameter_mm: cutter.diameter_mm,
+                        teeth_engaged: self.immersion.teeth_engaged(cutter.teeth),
+                    })
+                    .resultant_n(),
+                _ => 0.0,
+            };
+        }
+
+        let in_work = region.is_some();
+        let cut_depth_mm = if in_work { depth_mm } else { 0.0 };
+        let cut_width_mm = if in_work { width_mm } else { 0.0 };
+        let resultant_n = forces.resultant_n();
+        let power_w = forces.power_w(spindle.speed_rpm);
+        let removal = cut_depth_mm * cut_width_mm * feed_mm_min.max(0.0) / 60.0;
+        let feed_rms = three_phase_rms_a(measured.phase_currents_a);
+        let time_since_start_s = self.spindle_started_at_s.map_or(0.0, |t| time_s - t);
+
+        let sensors = SensorSample {
+            time_s,
+            feed_phase_currents_a: feed_read,
+            spindle_phase_currents_a: spindle_read,
+            spindle_fv_voltage_v: spindle.fv_voltage_v,
+            spindle_speed_rpm: spindle.speed_rpm,
+            programmed_feed_mm_min: cnc.programmed_feed_mm_min,
+            feed_mm_min,
+            applied_override_pct: applied.pct,
+            spindle_running: spindle.running,
+            time_since_spindle_start_s: time_since_start_s,
+        };
+        let truth = PlantTruth {
+            force_x_n,
+            force_y_n,
+            force_z_n: forces.fz_n,
+            force_resultant_n: resultant_n,
+            feed_force_n: -forces.fx_n,
+            spindle_torque_nm: forces.torque_nm,
+            cutting_power_w: power_w,
+            depth_mm: cut_depth_mm,
+            width_mm: cut_width_mm,
+            feed_per_tooth_mm,
+            path_position_mm: s,
+            material_removal_mm3_s: removal,
+            tool_x_mm: point.position_mm[0],
+            tool_y_mm: point.position_mm[1],
+            feed_current_rms_a: feed_rms,
+            spindle_current_rms_a: spindle.rms_current_a,
+        };
+        self.signals = PlantSignals {
+            time_s,
+            path_position_mm: s,
+            commanded_position_mm: cnc.commanded_position_mm,
+            tool_x_mm: point.position_mm[0],
+            tool_y_mm: point.position_mm[1],
+            block: cnc.block,
+            programmed_feed_mm_min: cnc.programmed_feed_mm_min,
+            requested_override_pct: command.override_pct,
+            applied_override_pct: applied.pct,
+            dial_code: applied.dial_code,
+            feed_hold,
+            commanded_feed_mm_min: cnc.commanded_feed_mm_min,
+            feed_mm_min,
+            feed_per_tooth_mm,
+            spindle_command_rpm,
+            spindle_speed_rpm: spindle.speed_rpm,
+            spindle_gear: spindle.gear,
+            depth_mm: cut_depth_mm,
+            width_mm: cut_width_mm,
+            material: region.map(|r| self.scenario.material_regions()[r].material),
+            entry_deg: self.immersion.entry_rad.to_degrees(),
+            exit_deg: self.immersion.exit_rad.to_degrees(),
+            force_x_n,
+            force_y_n,
+            force_z_n: forces.fz_n,
+            force_resultant_n: resultant_n,
+            feed_force_n: -forces.fx_n,
+            spindle_torque_nm: forces.torque_nm,
+            cutting_power_w: power_w,
+            material_removal_mm3_s: removal,
+            power_law_force_n: self.power_law_force_n,
+            axis_x: AxisSignals {
+                velocity_mm_min: vx,
+                load_force_n: -force_x_n,
+                torque_nm: ax.torque_nm,
+                iq_a: ax.iq_a,
+                phase_currents_a: ax.phase_currents_a,
+            },
+            axis_y: AxisSignals {
+                velocity_mm_min: vy,
+                load_force_n: -force_y_n,
+                torque_nm: ay.torque_nm,
+                iq_a: ay.iq_a,
+                phase_currents_a: ay.phase_currents_a,
+            },
+            spindle_motor_torque_nm: spindle.motor_torque_nm,
+            spindle_current_rms_a: spindle.rms_current_a,
+            spindle_phase_currents_a: spindle.phase_currents_a,
+            feed_current_rms_a: feed_rms,
+            fv_voltage_v: spindle.fv_voltage_v,
+            feed_currents_read_a: feed_read,
+            spindle_currents_read_a: spindle_read,
+            brake_excitation_a: f64::NAN,
+            brake_torque_nm: f64::NAN,
+        };
+        self.finished = cnc.finished || time_s >= self.config.max_duration_s;
+        MachineStep {
+            sensors,
+            truth: Some(truth),
+        }
+    }
+
+    fn planner_block(&self) -> usize {
+        self.signals
+            .block
+            .min(self.scenario.segments().len().saturating_sub(1))
+    }
+
+    /// The override the machine applies now.
+    pub fn applied_override(&self) -> AppliedOverride {
+        self.override_input.applied()
+    }
+}
+
+impl Machine for Simulator {
+    fn sample_rate_hz(&self) -> f64 {
+        self.config.sample_rate_hz
+    }
+
+    fn step(&mut self, command: OverrideCommand) -> MachineStep {
+        if !self.finished {
+            self.last = self.advance(command);
+        }
+        self.last
+    }
+
+    fn finished(&self) -> bool {
+        self.finished
+    }
+}
+
+impl Plant for Simulator {
+    fn signals(&self) -> &PlantSignals {
+        &self.signals
+    }
+
+    fn reset(&mut self) {
+        self.override_input.reset();
+        self.planner.reset();
+        self.spindle.reset();
+        for axis in self.axes.iter_mut() {
+            axis.reset();
+        }
+        self.feed_sensor.reset(self.config.seed, FEED_SENSOR_STREAM);
+        self.spindle_sensor
+            .reset(self.config.seed, SPINDLE_SENSOR_STREAM);
+        self.samples = 0;
+        self.segment_hint = 0;
+        self.immersion_width_mm = f64::NAN;
+        self.spindle_arrived_at_s = None;
+        self.spindle_started_at_s = None;
+        self.power_law_force_n = 0.0;
+        let start = self.scenario.point_at(0.0);
+        self.signals = PlantSignals {
+            tool_x_mm: start.position_mm[0],
+            tool_y_mm: start.position_mm[1],
+            brake_excitation_a: f64::NAN,
+            brake_torque_nm: f64::NAN,
+            ..PlantSignals::default()
+        };
+        self.last = MachineStep::default();
+        self.finished = false;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::plant::mechanics::Cutter;
+    use crate::plant::scenario::{MaterialRegion, Move, ScenarioSpec};
+
+    fn short_slot(rpm: f64) -> Scenario {
+        Scenario::new(ScenarioSpec {
+            name: "short".into(),
+            start_mm: [0.0, 0.0],
+            moves: vec![Move::line([12.0, 0.0], 600.0, rpm)],
+            cutter: Cutter::new(10.0, 2, 30.0).unwrap(),
+            mode: MillingMode::Slot,
+            depth_mm: vec![(0.0, 2.0)],
+            width_mm: vec![(0.0, 10.0)],
+            materials: vec![MaterialRegion {
+                from_mm: 2.0,
+                to_mm: 12.0,
+                material: Material::Sm45c,
+            }],
+            spindle_start_dwell_s: 0.0,
+        })
+        .unwrap()
+    }
+
+    fn config() -> SimConfig {
+        SimConfig {
+            sample_rate_hz: 2000.0,
+            ..SimConfig::with_seed(5)
+        }
+    }
+
+    #[test]
+    fn nothing_moves_before_the_spindle_is_at_speed() {
+        let mut sim = Simulator::new(short_slot(3000.0), config()).unwrap();
+        for _ in 0..200 {
+            let s = sim.step(OverrideCommand::default());
+            assert_eq!(s.truth.unwrap().path_position_mm, 0.0);
+        }
+    }
+
+    #[test]
+    fn runs_to_the_end_of_the_program() {
+        let mut sim = Simulator::new(short_slot(1000.0), config()).unwrap();
+        let mut n = 0;
+        let mut peak_force = 0.0f64;
+        while !sim.finished() && n < 40_000 {
+            let s = sim.step(OverrideCommand::default());
+            peak_force = peak_force.max(s.truth.unwrap().force_resultant_n);
+            n += 1;
+        }
+        assert!(sim.finished());
+        assert!((sim.signals().path_position_mm - 12.0).abs() < 0.02);
+        assert!(peak_force > 100.0);
+        // Stepping after the end repeats the last sample.
+        let a = sim.step(OverrideCommand::default());
+        assert_eq!(a, sim.step(OverrideCommand::default()));
+    }
+
+    #[test]
+    fn reset_reproduces_the_first_run() {
+        let mut sim = Simulator::new(short_slot(1000.0), config()).unwrap();
+        let first: Vec<MachineStep> = (0..3000)
+            .map(|_| sim.step(OverrideCommand::default()))
+            .collect();
+        sim.reset();
+        let second: Vec<MachineStep> = (0..3000)
+            .map(|_| sim.step(OverrideCommand::default()))
+            .collect();
+        assert_eq!(first, second);
+    }
+
+    #[test]
+    fn bad_configs_name_the_nested_field() {
+        let mut c = config();
+        c.feed_drive.screw_pitch_mm = 0.0;
+        let e = Simulator::new(short_slot(1000.0), c).unwrap_err();
+        assert_eq!(e.field, "feed_drive.screw_pitch_mm");
+    }
+}
