@@ -7,6 +7,7 @@
 use std::ops::Range;
 
 use super::{LineChart, Scale, Series};
+use crate::signal::decimate::min_max;
 
 /// Zooms `range` by `factor` (< 1 zooms in) keeping the data value `anchor` at the same place.
 ///
@@ -45,7 +46,7 @@ fn transform(scale: Scale) -> AxisTransform {
 
 /// The chart as shown: series hidden by the legend removed, points outside `x_range` dropped
 /// (keeping one neighbour on each side so lines run to the edge), each series reduced to at most
-/// about `max_points` by min/max decimation (every peak stays visible), and the vertical range
+/// `max_points` by [`min_max`] decimation (every peak stays visible), and the vertical range
 /// fitted to what remains.
 pub fn visible(
     chart: &LineChart,
@@ -63,7 +64,7 @@ pub fn visible(
             .enumerate()
             .filter(|(i, _)| !hidden.get(*i).copied().unwrap_or(false))
             .map(|(_, s)| Series {
-                points: decimate(window(&s.points, x_range), max_points),
+                points: min_max(window(&s.points, x_range), max_points),
                 ..s.clone()
             })
             .collect(),
@@ -95,46 +96,6 @@ fn window<'a>(points: &'a [(f64, f64)], range: Option<&Range<f64>>) -> &'a [(f64
         .saturating_sub(1);
     let end = (points.partition_point(|p| p.0 <= range.end) + 1).min(points.len());
     &points[start.min(end)..end]
-}
-
-/// Min/max decimation: splits the points into buckets and keeps, in order, the first, minimum,
-/// maximum and last point of each, so no peak is lost however long the series.
-pub fn decimate(points: &[(f64, f64)], max_points: usize) -> Vec<(f64, f64)> {
-    let buckets = (max_points / 4).max(1);
-    if points.len() <= max_points.max(4) {
-        return points.to_vec();
-    }
-    let per_bucket = points.len().div_ceil(buckets);
-    let mut out = Vec::with_capacity(buckets * 4);
-    for chunk in points.chunks(per_bucket) {
-        let finite = |p: &&(f64, f64)| p.1.is_finite();
-        let min = chunk
-            .iter()
-            .filter(finite)
-            .min_by(|a, b| a.1.total_cmp(&b.1));
-        let max = chunk
-            .iter()
-            .filter(finite)
-            .max_by(|a, b| a.1.total_cmp(&b.1));
-        let (Some(&min), Some(&max)) = (min, max) else {
-            // An all-NaN bucket stays a gap.
-            out.push((chunk[0].0, f64::NAN));
-            continue;
-        };
-        let first = chunk[0];
-        let last = chunk[chunk.len() - 1];
-        let (lo, hi) = if min.0 <= max.0 {
-            (min, max)
-        } else {
-            (max, min)
-        };
-        for p in [first, lo, hi, last] {
-            if out.last() != Some(&p) {
-                out.push(p);
-            }
-        }
-    }
-    out
 }
 
 /// The point of `series` whose x is nearest to `x` (series sorted by x), if any.
@@ -175,19 +136,17 @@ mod tests {
     }
 
     #[test]
-    fn decimation_bounds_the_size_and_keeps_every_extreme() {
-        let points = long_series(1_000_000);
-        let reduced = decimate(&points, 2000);
-        assert!(reduced.len() <= 2000, "{}", reduced.len());
-        assert!(reduced.iter().any(|p| p.1 == 100.0), "the spike was lost");
-        let min = points.iter().map(|p| p.1).fold(f64::INFINITY, f64::min);
-        assert!(reduced.iter().any(|p| p.1 == min));
-        assert!(
-            reduced.windows(2).all(|w| w[0].0 <= w[1].0),
-            "order must be kept"
-        );
-        assert_eq!(reduced.first(), points.first());
-        assert_eq!(reduced.last(), points.last());
+    fn a_long_series_is_reduced_but_keeps_its_spike() {
+        let mut chart = LineChart::new(Axis::linear("t (s)"), Axis::linear("i (A)"));
+        chart
+            .series
+            .push(Series::new("i_u", PALETTE[0], long_series(1_000_000)));
+        chart.fit();
+        let shown = visible(&chart, None, &[], 2000);
+        let points = &shown.series[0].points;
+        assert!(points.len() <= 2000, "{}", points.len());
+        assert!(points.iter().any(|p| p.1 == 100.0), "the spike was lost");
+        assert!(shown.y.range.end > 100.0);
     }
 
     #[test]
