@@ -45,6 +45,8 @@ pub struct SensorSample {
     pub spindle_fv_voltage_v: f64,
     /// Spindle speed as the control reports it.
     pub spindle_speed_rpm: f64,
+    /// Programmed spindle speed (the S word), which fixes the gear range.
+    pub spindle_command_rpm: f64,
     /// Programmed feed of the current block, before override.
     pub programmed_feed_mm_min: f64,
     /// Actual path feed of the axes.
@@ -116,4 +118,11 @@ pub trait Machine {
 
     /// True once the program (or log) has ended; `step` after that keeps returning the last state.
     fn finished(&self) -> bool;
+
+    /// A sensorless estimate of the cutting force at the latest sample from the programmed cutting
+    /// conditions (paper 004's power law), if the machine knows them. The closed loop shows it
+    /// beside the current-based estimate and flags when they disagree.
+    fn sensorless_force_n(&self) -> Option<f64> {
+        None
+    }
 }

@@ -452,23 +452,11 @@ impl SafetyEnvelope {
         dt_s: f64,
         sample: &SensorSample,
     ) -> OverrideCommand {
-        let c = &self.config;
         let dt_s = if dt_s.is_finite() && dt_s > 0.0 {
             dt_s
         } else {
             0.0
         };
-
-        // Overload alarm: a latched feed hold, independent of everything else.
-        if force_n.is_finite() && force_n > c.overload_limit_n {
-            self.overload_s += dt_s;
-        } else {
-            self.overload_s = 0.0;
-        }
-        if !self.feed_hold && self.overload_s > c.overload_time_s {
-            self.feed_hold = true;
-            self.emit(SafetyEvent::Overload { time_s, force_n });
-        }
 
         let armed_now = sample.spindle_running
             && sample.time_since_spindle_start_s >= self.config.arming_delay_s;
@@ -477,6 +465,19 @@ impl SafetyEnvelope {
             self.emit(SafetyEvent::Armed { time_s });
         } else if !sample.spindle_running {
             self.armed = false;
+        }
+
+        // Overload alarm: a latched feed hold, independent of the controller. It counts only
+        // while armed: before that the estimate is dominated by the spindle's starting current
+        // (paper 003), which says nothing about the load on the tool.
+        if self.armed && force_n.is_finite() && force_n > self.config.overload_limit_n {
+            self.overload_s += dt_s;
+        } else {
+            self.overload_s = 0.0;
+        }
+        if !self.feed_hold && self.overload_s > self.config.overload_time_s {
+            self.feed_hold = true;
+            self.emit(SafetyEvent::Overload { time_s, force_n });
         }
 
         let c = &self.config;

@@ -1,5 +1,7 @@
 //! The command line as a whole: help, version, errors, and `cutlab controllers`.
 #![cfg(feature = "cli")]
+// Test code: unwrapping and panicking on a broken expectation is the point.
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
 
 use cutlab::cli::{run, Io};
 

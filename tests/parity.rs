@@ -13,6 +13,8 @@
 //! their largest value, far below any visible or physical difference.
 //!
 //! To store new native values after an intended change: `CUTLAB_BLESS=1 cargo test --test parity`.
+// Test code: unwrapping and panicking on a broken expectation is the point.
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
 
 #[cfg(target_arch = "wasm32")]
 use wasm_bindgen_test::wasm_bindgen_test as test;
@@ -68,7 +70,10 @@ fn bless(computed: &[Computed]) {
             serde_json::json!({ "digest": digest(&c.values), "sample": sample(&c.values), "count": c.values.len() }),
         );
     }
-    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/reference/parity/native.json");
+    let path = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/tests/reference/parity/native.json"
+    );
     let text = serde_json::to_string_pretty(&serde_json::Value::Object(map)).unwrap();
     std::fs::write(path, text + "\n").unwrap();
 }
@@ -103,9 +108,43 @@ fn math_functions() -> Computed {
     }
 }
 
+/// A whole closed loop: teach cut, estimator, PI controller, safety envelope, on the simulated
+/// mill with sensor noise.
+fn closed_loop_run() -> Computed {
+    use cutlab::closed_loop::lab::{simulate, RunSpec};
+    use cutlab::control::registry::ControllerKind;
+    use cutlab::plant::Preset;
+    let result =
+        simulate(&RunSpec::new(Preset::ManeeratDoc1, ControllerKind::Pi)).expect("the preset runs");
+    let values = result
+        .trace
+        .rows
+        .iter()
+        .flat_map(|r| {
+            [
+                r.time_s,
+                r.override_pct,
+                r.force_n,
+                r.force_est_n,
+                r.spindle_current_rms_a,
+                r.feed_current_rms_a,
+            ]
+        })
+        .chain(result.trace.terms.iter().copied())
+        .collect();
+    Computed {
+        name: "closed_loop_maneerat_doc_1_pi",
+        values,
+    }
+}
+
 /// Every check, with its tolerance: `None` demands bit equality.
 fn checks() -> Vec<(Computed, Option<f64>)> {
-    vec![(rng_stream(), None), (math_functions(), None)]
+    vec![
+        (rng_stream(), None),
+        (math_functions(), None),
+        (closed_loop_run(), None),
+    ]
 }
 
 #[test]

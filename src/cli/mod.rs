@@ -5,7 +5,13 @@
 //! itself once in [`COMMANDS`], which also produces the top-level help.
 
 pub mod args;
+pub mod calibrate;
 pub mod controllers;
+pub mod filter;
+pub mod force;
+pub mod scenarios;
+pub mod sim;
+pub mod spectrum;
 
 use std::io::{BufRead, Write};
 
@@ -30,11 +36,48 @@ pub struct Command {
 }
 
 /// Every subcommand, in the order `cutlab --help` lists them.
-pub const COMMANDS: &[Command] = &[Command {
-    name: "controllers",
-    about: "List the controllers with their parameters, defaults and units",
-    run: controllers::run,
-}];
+pub const COMMANDS: &[Command] = &[
+    Command {
+        name: "calibrate",
+        about: "Fit the current-to-force models from a logged teach cut (CSV)",
+        run: calibrate::run,
+    },
+    Command {
+        name: "compare",
+        about: "Run several controllers on one preset and print their metrics side by side",
+        run: sim::run_compare,
+    },
+    Command {
+        name: "controllers",
+        about: "List the controllers with their parameters, defaults and units",
+        run: controllers::run,
+    },
+    Command {
+        name: "filter",
+        about: "Design a Butterworth filter (second-order sections) or apply one to f64 samples",
+        run: filter::run,
+    },
+    Command {
+        name: "force",
+        about: "Mean and peak milling forces of one cut (mechanistic model, whole revolutions)",
+        run: force::run,
+    },
+    Command {
+        name: "scenarios",
+        about: "List the papers' experiments (presets), or run one open-loop",
+        run: scenarios::run,
+    },
+    Command {
+        name: "sim",
+        about: "Run one closed loop on a preset: teach cut, controller, safety envelope, metrics",
+        run: sim::run_sim,
+    },
+    Command {
+        name: "spectrum",
+        about: "Welch power spectral density of f64 samples on stdin (scipy.signal.welch)",
+        run: spectrum::run,
+    },
+];
 
 /// The version line printed by `cutlab --version`.
 pub fn version_line() -> String {

@@ -1,5 +1,8 @@
 //! The closed loop: scenario → machine → signal chain → estimator → controller → safety envelope
 //! → override, recorded as a trace and judged by metrics.
 
+pub mod chain;
+pub mod lab;
 pub mod metrics;
+pub mod runner;
 pub mod trace;

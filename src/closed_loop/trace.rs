@@ -60,6 +60,10 @@ pub struct TraceRow {
     pub sensor_fault: bool,
     /// Whether feed hold was latched.
     pub feed_hold: bool,
+    /// Whether the estimator's inputs lay inside its calibrated range.
+    pub estimate_in_range: bool,
+    /// Whether the current-based and the sensorless (power-law) estimates disagree.
+    pub cross_check_disagrees: bool,
 }
 
 /// A whole run.
@@ -113,7 +117,16 @@ pub fn write_csv(trace: &Trace, out: &mut dyn std::io::Write) -> std::io::Result
     for (name, unit) in &trace.term_names {
         header.push(csv_term_header(name, unit));
     }
-    header.extend(["armed", "sensor_fault", "feed_hold"].map(String::from));
+    header.extend(
+        [
+            "armed",
+            "sensor_fault",
+            "feed_hold",
+            "estimate_in_range",
+            "cross_check_disagrees",
+        ]
+        .map(String::from),
+    );
     writeln!(out, "{}", header.join(","))?;
     let width = trace.term_names.len();
     for (i, r) in trace.rows.iter().enumerate() {
@@ -145,7 +158,16 @@ pub fn write_csv(trace: &Trace, out: &mut dyn std::io::Write) -> std::io::Result
                 .take(width)
                 .map(|v| v.to_string()),
         );
-        line.extend([r.armed, r.sensor_fault, r.feed_hold].map(|b| u8::from(b).to_string()));
+        line.extend(
+            [
+                r.armed,
+                r.sensor_fault,
+                r.feed_hold,
+                r.estimate_in_range,
+                r.cross_check_disagrees,
+            ]
+            .map(|b| u8::from(b).to_string()),
+        );
         writeln!(out, "{}", line.join(","))?;
     }
     Ok(())

@@ -167,7 +167,7 @@ const MRAC_PARAMS: &[ParamSpec] = &[
         "kd_pct_s",
         "K_d",
         "%·s",
-        20.0,
+        8.0,
         0.0,
         1000.0,
         "gain on the sliding variable",

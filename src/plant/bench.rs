@@ -282,6 +282,7 @@ impl BrakeBench {
             spindle_phase_currents_a: [0.0; 3],
             spindle_fv_voltage_v: 0.0,
             spindle_speed_rpm: 0.0,
+            spindle_command_rpm: 0.0,
             programmed_feed_mm_min: self.config.feed_mm_min,
             feed_mm_min: cnc.feed_mm_min,
             applied_override_pct: applied.pct,

@@ -732,6 +732,10 @@ impl Machine for PresetMachine {
     fn finished(&self) -> bool {
         self.plant().finished()
     }
+
+    fn sensorless_force_n(&self) -> Option<f64> {
+        self.plant().sensorless_force_n()
+    }
 }
 
 impl Plant for PresetMachine {

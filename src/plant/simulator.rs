@@ -429,6 +429,7 @@ impl Simulator {
             spindle_phase_currents_a: spindle_read,
             spindle_fv_voltage_v: spindle.fv_voltage_v,
             spindle_speed_rpm: spindle.speed_rpm,
+            spindle_command_rpm,
             programmed_feed_mm_min: cnc.programmed_feed_mm_min,
             feed_mm_min,
             applied_override_pct: applied.pct,
@@ -542,6 +543,10 @@ impl Machine for Simulator {
 
     fn finished(&self) -> bool {
         self.finished
+    }
+
+    fn sensorless_force_n(&self) -> Option<f64> {
+        Some(self.signals.power_law_force_n)
     }
 }
 

@@ -1,0 +1,273 @@
+//! `cutlab filter design` and `cutlab filter apply`: Butterworth filters on the command line.
+//!
+//! `design` prints the second-order sections as JSON in scipy's layout; `apply` filters raw
+//! little-endian f64 samples from stdin to stdout, causally in constant memory, or zero-phase
+//! (scipy's `sosfiltfilt`) through a temporary file.
+
+use std::fs::{self, File, OpenOptions};
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicU64, Ordering};
+
+use super::{help_text_for, wants_help, CliError, Io, OptionSpec, Options};
+use crate::signal::butterworth::{butter, ButterworthSpec, Cutoff, DesignError, FilterKind};
+use crate::signal::filtfilt::{filter_stream, filtfilt_stream, StreamError};
+use crate::signal::sos::Sos;
+
+const DESIGN_OPTIONS: &[OptionSpec] = &[
+    OptionSpec::value(
+        "kind",
+        "KIND",
+        "lowpass, highpass, bandpass or bandstop (default lowpass)",
+    ),
+    OptionSpec::value(
+        "order",
+        "N",
+        "Filter order, 1 to 20 (band filters have 2N poles)",
+    ),
+    OptionSpec::value(
+        "cutoff",
+        "HZ[,HZ2]",
+        "Cut-off frequency in Hz; lower,upper for bandpass/bandstop",
+    ),
+    OptionSpec::value("fs", "HZ", "Sampling rate in Hz"),
+];
+
+const APPLY_OPTIONS: &[OptionSpec] = &[
+    OptionSpec::value(
+        "kind",
+        "KIND",
+        "lowpass, highpass, bandpass or bandstop (default lowpass)",
+    ),
+    OptionSpec::value("order", "N", "Filter order, 1 to 20 (band filters have 2N poles)"),
+    OptionSpec::value(
+        "cutoff",
+        "HZ[,HZ2]",
+        "Cut-off frequency in Hz; lower,upper for bandpass/bandstop",
+    ),
+    OptionSpec::value("fs", "HZ", "Sampling rate in Hz"),
+    OptionSpec::value(
+        "channels",
+        "C",
+        "Interleaved channels per frame, each filtered on its own (default 1)",
+    ),
+    OptionSpec::flag(
+        "zero-phase",
+        "Filter forward and backward (scipy's sosfiltfilt, default odd padding); buffers through a temporary file",
+    ),
+    OptionSpec::value(
+        "temp-dir",
+        "DIR",
+        "Where --zero-phase puts its temporary file (default: the system temp directory, $TMPDIR)",
+    ),
+];
+
+const ABOUT: &str = "Design a digital Butterworth filter as second-order sections, or apply one to samples.\n\n\
+Subcommands:\n  \
+design  Print the sections as JSON {\"sos\": [[b0, b1, b2, a0, a1, a2], ...]}, scipy's layout,\n          \
+equal to scipy.signal.butter(N, Wn, btype, fs=fs, output='sos')\n  \
+apply   Filter raw little-endian f64 samples from stdin to stdout\n\n\
+See `cutlab filter design --help` and `cutlab filter apply --help`.";
+
+const DESIGN_ABOUT: &str = "Design a digital Butterworth filter and print its second-order sections as JSON:\n\
+{\"sos\": [[b0, b1, b2, a0, a1, a2], ...]} in scipy's layout and order (gain in the first section),\n\
+every coefficient at full precision. Equal to scipy.signal.butter(N, Wn, btype, fs=fs, output='sos').\n\n\
+Example: cutlab filter design --order 10 --cutoff 50 --fs 10000";
+
+const APPLY_ABOUT: &str =
+    "Filter raw little-endian f64 samples from stdin to stdout, in the same format.\n\n\
+With --channels C the input is interleaved frames (c0 c1 ... c0 c1 ...), each channel filtered\n\
+with its own state; the input length must be a multiple of 8 × C bytes.\n\n\
+Causal (default): transposed direct form II from rest, as scipy.signal.sosfilt. Streams in\n\
+constant memory whatever the input length; output follows input block by block.\n\n\
+--zero-phase: forward then backward, as scipy.signal.sosfiltfilt with its default odd padding\n\
+(padlen = 3 × (2 × sections + 1 − first-order sections)); each channel needs more than padlen\n\
+samples. The backward pass cannot start before the input ends, so the forward pass goes to a\n\
+temporary file of (samples + 2 × padlen) × 8 bytes, is filtered backward in place and then\n\
+copied to stdout: memory stays constant, disk holds one copy of the input, and nothing is\n\
+written to stdout until the input has ended. The file is removed afterwards.\n\n\
+Example: cutlab filter apply --order 10 --cutoff 50 --fs 10000 --channels 3 < in.f64 > out.f64";
+
+/// Runs `cutlab filter`.
+pub fn run(args: &[String], io: &mut Io<'_>) -> Result<(), CliError> {
+    match args.first().map(String::as_str) {
+        Some("design") => design(&args[1..], io),
+        Some("apply") => apply(&args[1..], io),
+        Some(other) if !other.starts_with('-') => Err(CliError::new(format!(
+            "unknown filter subcommand {other:?}; subcommands: design, apply"
+        ))),
+        _ if wants_help(args) => {
+            help_text_for(io, "cutlab filter <design|apply> [OPTIONS]", ABOUT, &[])
+        }
+        _ => Err(CliError::new(
+            "cutlab filter needs a subcommand: design or apply (see cutlab filter --help)",
+        )),
+    }
+}
+
+fn design(args: &[String], io: &mut Io<'_>) -> Result<(), CliError> {
+    if wants_help(args) {
+        return help_text_for(
+            io,
+            "cutlab filter design [--kind KIND] --order N --cutoff HZ[,HZ2] --fs HZ",
+            DESIGN_ABOUT,
+            DESIGN_OPTIONS,
+        );
+    }
+    let options = Options::parse(args, DESIGN_OPTIONS)?;
+    reject_positionals(&options)?;
+    let sos = design_from(&options)?;
+    write_sos_json(io.stdout, &sos)
+}
+
+fn apply(args: &[String], io: &mut Io<'_>) -> Result<(), CliError> {
+    if wants_help(args) {
+        return help_text_for(
+            io,
+            "cutlab filter apply [--kind KIND] --order N --cutoff HZ[,HZ2] --fs HZ [--channels C] [--zero-phase] < IN > OUT",
+            APPLY_ABOUT,
+            APPLY_OPTIONS,
+        );
+    }
+    let options = Options::parse(args, APPLY_OPTIONS)?;
+    reject_positionals(&options)?;
+    let sos = design_from(&options)?;
+    let channels: usize = options.get_or("channels", 1)?;
+    if channels == 0 {
+        return Err(CliError::new("--channels: must be at least 1"));
+    }
+    if options.flag("zero-phase") {
+        let directory = options
+            .text("temp-dir")
+            .map(PathBuf::from)
+            .unwrap_or_else(std::env::temp_dir);
+        let mut scratch = TempFile::create(&directory)?;
+        filtfilt_stream(&sos, channels, io.stdin, io.stdout, &mut scratch.file)
+            .map_err(stream_error)?;
+    } else {
+        if options.text("temp-dir").is_some() {
+            return Err(CliError::new(
+                "--temp-dir only matters with --zero-phase (causal filtering needs no temporary file)",
+            ));
+        }
+        filter_stream(&sos, channels, io.stdin, io.stdout).map_err(stream_error)?;
+    }
+    io.stdout.flush()?;
+    Ok(())
+}
+
+fn reject_positionals(options: &Options) -> Result<(), CliError> {
+    match options.positionals().first() {
+        Some(extra) => Err(CliError::new(format!(
+            "unexpected argument {extra:?} (samples come on stdin)"
+        ))),
+        None => Ok(()),
+    }
+}
+
+/// The design the options describe; errors name the option.
+pub(crate) fn design_from(options: &Options) -> Result<Sos, CliError> {
+    let kind = match options.text("kind") {
+        Some(text) => text
+            .parse::<FilterKind>()
+            .map_err(|e| CliError::new(format!("--kind: {e}")))?,
+        None => FilterKind::Lowpass,
+    };
+    let order: usize = options.require("order")?;
+    let sample_rate_hz: f64 = options.require("fs")?;
+    let cutoff_text = options
+        .text("cutoff")
+        .ok_or_else(|| CliError::new("missing required option --cutoff"))?;
+    let values = cutoff_text
+        .split(',')
+        .map(|part| super::args::parse_value::<f64>("cutoff", part))
+        .collect::<Result<Vec<f64>, CliError>>()?;
+    let cutoff_hz = match values.as_slice() {
+        [f] => Cutoff::Single(*f),
+        [lower, upper] => Cutoff::Band(*lower, *upper),
+        _ => {
+            return Err(CliError::new(format!(
+                "--cutoff: expected one frequency or two separated by a comma, got {cutoff_text:?}"
+            )))
+        }
+    };
+    let spec = ButterworthSpec {
+        kind,
+        order,
+        cutoff_hz,
+        sample_rate_hz,
+    };
+    butter(&spec).map_err(|e| {
+        let option = match e {
+            DesignError::Order { .. } => "--order",
+            DesignError::SampleRate { .. } => "--fs",
+            _ => "--cutoff",
+        };
+        CliError::new(format!("{option}: {e}"))
+    })
+}
+
+/// `{"sos": [[…], …]}` with one section per line and every coefficient at full precision
+/// (serde_json prints the shortest decimal that reads back to the same f64).
+fn write_sos_json(out: &mut dyn Write, sos: &Sos) -> Result<(), CliError> {
+    let rows = sos.rows();
+    out.write_all(b"{\"sos\": [\n")?;
+    for (i, row) in rows.iter().enumerate() {
+        let text = serde_json::to_string(row)
+            .map_err(|e| CliError::new(format!("cannot write JSON: {e}")))?;
+        let separator = if i + 1 == rows.len() { "" } else { "," };
+        writeln!(out, "  {}{separator}", text.replace(',', ", "))?;
+    }
+    out.write_all(b"]}\n")?;
+    Ok(())
+}
+
+fn stream_error(e: StreamError) -> CliError {
+    match e {
+        StreamError::Io(e) => CliError::from(e),
+        other => CliError::new(format!("stdin: {other}")),
+    }
+}
+
+/// A temporary file removed when dropped (and at once where the system allows removing an open
+/// file, so a killed process leaves nothing behind).
+struct TempFile {
+    file: File,
+    path: PathBuf,
+}
+
+impl TempFile {
+    fn create(directory: &Path) -> Result<Self, CliError> {
+        static COUNTER: AtomicU64 = AtomicU64::new(0);
+        let nanos = std::time::SystemTime::now()
+            .duration_since(std::time::UNIX_EPOCH)
+            .map(|d| d.subsec_nanos())
+            .unwrap_or(0);
+        let path = directory.join(format!(
+            "cutlab-zero-phase-{}-{nanos}-{}.f64",
+            std::process::id(),
+            COUNTER.fetch_add(1, Ordering::Relaxed)
+        ));
+        let file = OpenOptions::new()
+            .read(true)
+            .write(true)
+            .create_new(true)
+            .open(&path)
+            .map_err(|e| {
+                CliError::new(format!(
+                    "--temp-dir: cannot create a temporary file in {}: {e}",
+                    directory.display()
+                ))
+            })?;
+        #[cfg(unix)]
+        let _ = fs::remove_file(&path);
+        Ok(Self { file, path })
+    }
+}
+
+impl Drop for TempFile {
+    fn drop(&mut self) {
+        // Already gone on Unix; elsewhere it can only go once closed, which happens after this.
+        let _ = fs::remove_file(&self.path);
+    }
+}

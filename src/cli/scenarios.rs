@@ -1,0 +1,229 @@
+//! `cutlab scenarios`: the papers' experiments, listed or run open-loop.
+//!
+//! Without `--run` it lists every preset with its source and key parameters. With
+//! `--run NAME` it runs that preset's machine at a fixed override and prints its signals as CSV
+//! (one row every `--every` samples), or with `--summary` one JSON object of peaks and means.
+
+use serde::Serialize;
+
+use super::{help_text_for, wants_help, write_json, CliError, Io, OptionSpec, Options};
+use crate::machine::{Machine, OverrideCommand};
+use crate::plant::signals::{csv_header, csv_row};
+use crate::plant::{Plant, Preset};
+
+const OPTIONS: &[OptionSpec] = &[
+    OptionSpec::flag("json", "Print the list as JSON"),
+    OptionSpec::value(
+        "run",
+        "NAME",
+        "Run this preset open-loop and print its signals as CSV",
+    ),
+    OptionSpec::value("seed", "N", "Seed of the sensor noise (default 0)"),
+    OptionSpec::value(
+        "override",
+        "PCT",
+        "Override held for the whole run, % (default 100)",
+    ),
+    OptionSpec::value(
+        "every",
+        "N",
+        "Print every N-th sample (default 100: 10 ms at 10 kHz)",
+    ),
+    OptionSpec::value(
+        "max-s",
+        "S",
+        "Stop after S seconds of machine time (default: the end)",
+    ),
+    OptionSpec::flag(
+        "summary",
+        "With --run: print peaks and means as JSON instead of CSV",
+    ),
+];
+
+#[derive(Serialize)]
+struct RunSummary {
+    preset: &'static str,
+    seed: u64,
+    override_pct: f64,
+    samples: u64,
+    duration_s: f64,
+    finished: bool,
+    final_path_position_mm: f64,
+    peak_force_resultant_n: f64,
+    mean_force_resultant_n: f64,
+    peak_spindle_current_rms_a: f64,
+    peak_spindle_current_rms_after_3_s_a: f64,
+    peak_feed_current_rms_a: f64,
+    mean_feed_mm_min: f64,
+}
+
+fn preset_named(name: &str) -> Result<Preset, CliError> {
+    Preset::from_name(name).ok_or_else(|| {
+        CliError::new(format!(
+            "--run: unknown preset {name:?}; presets: {}",
+            Preset::ALL
+                .iter()
+                .map(|p| p.name())
+                .collect::<Vec<_>>()
+                .join(", ")
+        ))
+    })
+}
+
+/// Runs `cutlab scenarios`.
+pub fn run(args: &[String], io: &mut Io<'_>) -> Result<(), CliError> {
+    if wants_help(args) {
+        return help_text_for(
+            io,
+            "cutlab scenarios [--json] | cutlab scenarios --run NAME [--seed N] [--override PCT] \
+             [--every N] [--max-s S] [--summary]",
+            "List the papers' experiments (presets) with their sources, key parameters and every\n\
+             value cutlab chose where the paper is silent; or run one open-loop.",
+            OPTIONS,
+        );
+    }
+    let options = Options::parse(args, OPTIONS)?;
+    if let Some(extra) = options.positionals().first() {
+        return Err(CliError::new(format!("unexpected argument {extra:?}")));
+    }
+    match options.text("run") {
+        Some(name) => run_preset(preset_named(name)?, &options, io),
+        None => {
+            for only_with_run in ["seed", "override", "every", "max-s", "summary"] {
+                if options.text(only_with_run).is_some() {
+                    return Err(CliError::new(format!(
+                        "--{only_with_run} only applies with --run NAME"
+                    )));
+                }
+            }
+            list(&options, io)
+        }
+    }
+}
+
+fn list(options: &Options, io: &mut Io<'_>) -> Result<(), CliError> {
+    let summaries: Vec<_> = Preset::ALL.iter().map(|p| p.summary()).collect();
+    if options.flag("json") {
+        return write_json(io.stdout, &summaries);
+    }
+    for s in &summaries {
+        writeln!(io.stdout, "{} — {} ({})", s.name, s.label, s.source)?;
+        let mut facts = vec![format!("plant {}", s.plant)];
+        if let Some(t) = &s.tool {
+            facts.push(t.clone());
+        }
+        if let Some(m) = &s.material {
+            facts.push(m.clone());
+        }
+        if let Some(mode) = s.mode {
+            facts.push(mode.to_string());
+        }
+        if let Some(n) = s.spindle_rpm {
+            facts.push(format!("{n:.0} rpm"));
+        }
+        if let Some(f) = s.programmed_feed_mm_min {
+            facts.push(format!("{f:.0} mm/min"));
+        }
+        if let Some([lo, hi]) = s.depth_mm {
+            facts.push(if lo == hi {
+                format!("DOC {lo} mm")
+            } else {
+                format!("DOC {lo}-{hi} mm")
+            });
+        }
+        facts.push(format!("≈{:.0} s", s.nominal_duration_s));
+        facts.push(format!("override {}", s.override_mode));
+        if let Some(f) = s.target_force_n {
+            facts.push(format!("target {f:.0} N"));
+        }
+        if let Some(i) = s.target_spindle_current_a {
+            facts.push(format!("target {i:.0} A"));
+        }
+        writeln!(io.stdout, "    {}", facts.join(", "))?;
+        writeln!(io.stdout, "    chosen: {}", s.choices.join("; "))?;
+        writeln!(io.stdout)?;
+    }
+    Ok(())
+}
+
+fn run_preset(preset: Preset, options: &Options, io: &mut Io<'_>) -> Result<(), CliError> {
+    let seed: u64 = options.get_or("seed", 0)?;
+    let override_pct: f64 = options.get_or("override", 100.0)?;
+    if !(override_pct.is_finite() && (0.0..=255.0).contains(&override_pct)) {
+        return Err(CliError::new(format!(
+            "--override: must lie in [0, 255], got {override_pct}"
+        )));
+    }
+    let every: u64 = options.get_or("every", 100)?;
+    if every == 0 {
+        return Err(CliError::new("--every: must be at least 1"));
+    }
+    let max_s: f64 = options.get_or("max-s", f64::INFINITY)?;
+    if max_s.is_nan() || max_s <= 0.0 {
+        return Err(CliError::new(format!("--max-s: must be > 0, got {max_s}")));
+    }
+    let summary = options.flag("summary");
+    let mut machine = preset
+        .machine(seed)
+        .map_err(|e| CliError::new(format!("--run {}: {e}", preset.name())))?;
+    let max_samples = (max_s * machine.sample_rate_hz()).min(1e12) as u64;
+    let command = OverrideCommand {
+        override_pct,
+        feed_hold: false,
+    };
+    if !summary {
+        writeln!(io.stdout, "{}", csv_header())?;
+    }
+    let mut n = 0u64;
+    let mut stats = RunSummary {
+        preset: preset.name(),
+        seed,
+        override_pct,
+        samples: 0,
+        duration_s: 0.0,
+        finished: false,
+        final_path_position_mm: 0.0,
+        peak_force_resultant_n: 0.0,
+        mean_force_resultant_n: 0.0,
+        peak_spindle_current_rms_a: 0.0,
+        peak_spindle_current_rms_after_3_s_a: 0.0,
+        peak_feed_current_rms_a: 0.0,
+        mean_feed_mm_min: 0.0,
+    };
+    let (mut force_sum, mut feed_sum) = (0.0, 0.0);
+    while n < max_samples && !machine.finished() {
+        machine.step(command);
+        n += 1;
+        let s = machine.signals();
+        if summary {
+            stats.peak_force_resultant_n = stats.peak_force_resultant_n.max(s.force_resultant_n);
+            stats.peak_spindle_current_rms_a = stats
+                .peak_spindle_current_rms_a
+                .max(s.spindle_current_rms_a);
+            if s.time_s > 3.0 {
+                stats.peak_spindle_current_rms_after_3_s_a = stats
+                    .peak_spindle_current_rms_after_3_s_a
+                    .max(s.spindle_current_rms_a);
+            }
+            stats.peak_feed_current_rms_a = stats.peak_feed_current_rms_a.max(s.feed_current_rms_a);
+            force_sum += s.force_resultant_n;
+            feed_sum += s.feed_mm_min;
+        } else if n.is_multiple_of(every) {
+            writeln!(io.stdout, "{}", csv_row(s))?;
+        }
+    }
+    if summary {
+        let s = machine.signals();
+        stats.samples = n;
+        stats.duration_s = s.time_s;
+        stats.finished = machine.finished();
+        stats.final_path_position_mm = s.path_position_mm;
+        stats.mean_force_resultant_n = force_sum / n.max(1) as f64;
+        stats.mean_feed_mm_min = feed_sum / n.max(1) as f64;
+        return write_json(io.stdout, &stats);
+    }
+    if !n.is_multiple_of(every) {
+        writeln!(io.stdout, "{}", csv_row(machine.signals()))?;
+    }
+    Ok(())
+}

@@ -1,0 +1,413 @@
+//! `cutlab sim` and `cutlab compare`: closed-loop runs on the papers' presets.
+
+use std::fmt::Write as _;
+
+use serde::Serialize;
+
+use super::{help_text_for, wants_help, write_json, CliError, Io, OptionSpec, Options};
+use crate::closed_loop::lab::{
+    apply_references, references, simulate, References, RunResult, RunSpec,
+};
+use crate::closed_loop::metrics::Metrics;
+use crate::closed_loop::runner::{Calibration, Feedback};
+use crate::closed_loop::trace::write_csv;
+use crate::control::registry::{ControllerConfig, ControllerKind};
+use crate::plant::Preset;
+
+/// Options shared by `sim` and `compare`.
+const RUN_OPTIONS: [OptionSpec; 7] = [
+    OptionSpec::value("scenario", "NAME", "Preset to run (see cutlab scenarios)"),
+    OptionSpec::value("seed", "N", "Seed of every noise source (default 1)"),
+    OptionSpec::value(
+        "target-n",
+        "N",
+        "Target force in newtons (default: the preset's)",
+    ),
+    OptionSpec::value(
+        "period-s",
+        "S",
+        "Control period in seconds (default: whole spindle revolutions, at least 40 ms)",
+    ),
+    OptionSpec::value(
+        "feedback",
+        "spindle|feed",
+        "Which motor current measures the force (default: the preset's)",
+    ),
+    OptionSpec::value(
+        "max-override",
+        "PCT",
+        "Highest override the safety envelope allows (default 150)",
+    ),
+    OptionSpec::flag(
+        "no-references",
+        "Skip the fixed-feed reference runs (no savings; faster)",
+    ),
+];
+
+fn sim_options() -> Vec<OptionSpec> {
+    let mut o = RUN_OPTIONS.to_vec();
+    o.extend([
+        OptionSpec::value("controller", "NAME", "Controller (see cutlab controllers)"),
+        OptionSpec::value(
+            "set",
+            "KEY=VALUE",
+            "Set a controller parameter (repeatable)",
+        ),
+        OptionSpec::value(
+            "csv",
+            "FILE",
+            "Write the trace as CSV (one row per control period)",
+        ),
+        OptionSpec::value(
+            "json",
+            "FILE",
+            "Write metrics, settings, calibration and events as JSON",
+        ),
+    ]);
+    o
+}
+
+fn compare_options() -> Vec<OptionSpec> {
+    let mut o = RUN_OPTIONS.to_vec();
+    o.extend([
+        OptionSpec::value(
+            "controllers",
+            "A,B,...",
+            "Controllers to compare; each NAME or NAME:key=value:key=value",
+        ),
+        OptionSpec::flag("json", "Print the metrics as JSON instead of a table"),
+    ]);
+    o
+}
+
+fn preset_option(options: &Options) -> Result<Preset, CliError> {
+    let name: String = options.require("scenario")?;
+    Preset::from_name(&name).ok_or_else(|| {
+        CliError::new(format!(
+            "--scenario: unknown preset {name:?}; presets: {}",
+            Preset::ALL
+                .iter()
+                .map(|p| p.name())
+                .collect::<Vec<_>>()
+                .join(", ")
+        ))
+    })
+}
+
+/// The run spec from the shared options, for a given controller.
+fn spec(options: &Options, controller: ControllerConfig) -> Result<RunSpec, CliError> {
+    let mut spec = RunSpec {
+        preset: preset_option(options)?,
+        controller,
+        seed: options.get_or("seed", 1)?,
+        settings: Default::default(),
+    };
+    let s = &mut spec.settings;
+    s.target_force_n = options.get("target-n")?;
+    s.control_period_s = options.get("period-s")?;
+    s.max_override_pct = options.get("max-override")?;
+    if let Some(v) = s.target_force_n {
+        if !(v.is_finite() && v > 0.0) {
+            return Err(CliError::new(format!(
+                "--target-n: must be positive, got {v}"
+            )));
+        }
+    }
+    if let Some(v) = s.control_period_s {
+        if !(v.is_finite() && v > 0.0 && v <= 10.0) {
+            return Err(CliError::new(format!(
+                "--period-s: must lie in (0, 10] s, got {v}"
+            )));
+        }
+    }
+    if let Some(text) = options.text("feedback") {
+        s.feedback = Some(
+            Feedback::ALL
+                .into_iter()
+                .find(|f| f.name() == text.trim())
+                .ok_or_else(|| {
+                    CliError::new(format!("--feedback: {text:?} is not one of spindle, feed"))
+                })?,
+        );
+    }
+    Ok(spec)
+}
+
+/// Parses `NAME` or `NAME:key=value:key=value`.
+pub fn controller_with_settings(text: &str) -> Result<ControllerConfig, CliError> {
+    let mut parts = text.split(':');
+    let name = parts.next().unwrap_or_default();
+    let kind: ControllerKind = name.parse().map_err(|e| CliError::new(format!("{e}")))?;
+    let mut config = ControllerConfig::new(kind);
+    for assignment in parts {
+        config
+            .set_text(assignment)
+            .map_err(|e| CliError::new(format!("{text}: {e}")))?;
+    }
+    Ok(config)
+}
+
+fn run_one(
+    spec: &RunSpec,
+    with_references: bool,
+) -> Result<(RunResult, Option<References>), CliError> {
+    let mut result = simulate(spec).map_err(|e| CliError::new(e.to_string()))?;
+    let refs = if with_references {
+        let r = references(spec).map_err(|e| CliError::new(e.to_string()))?;
+        apply_references(&mut result, &r);
+        Some(r)
+    } else {
+        None
+    };
+    Ok((result, refs))
+}
+
+#[derive(Serialize)]
+struct SimReport<'a> {
+    scenario: &'static str,
+    controller: &'a ControllerConfig,
+    seed: u64,
+    target_force_n: f64,
+    force_limit_n: f64,
+    control_period_s: f64,
+    feedback: Feedback,
+    metrics: &'a Metrics,
+    references: Option<References>,
+    calibration: &'a Calibration,
+    events: Vec<EventLine>,
+}
+
+#[derive(Serialize)]
+struct EventLine {
+    time_s: f64,
+    event: String,
+}
+
+/// Runs `cutlab sim`.
+pub fn run_sim(args: &[String], io: &mut Io<'_>) -> Result<(), CliError> {
+    let options_spec = sim_options();
+    if wants_help(args) {
+        return help_text_for(
+            io,
+            "cutlab sim --scenario NAME --controller NAME [--set key=value]... [--seed S] \
+             [--csv FILE] [--json FILE]",
+            "Run one closed loop on a preset: a teach cut calibrates the current-to-force model,\n\
+             then the controller holds the force through the safety envelope. Prints the\n\
+             metrics; --csv and --json write the trace and the full report.",
+            &options_spec,
+        );
+    }
+    let options = Options::parse(args, &options_spec)?;
+    let kind: ControllerKind = options
+        .require::<String>("controller")?
+        .parse()
+        .map_err(|e| CliError::new(format!("--controller: {e}")))?;
+    let mut controller = ControllerConfig::new(kind);
+    for assignment in options.all("set") {
+        controller
+            .set_text(assignment)
+            .map_err(|e| CliError::new(format!("--set: {e}")))?;
+    }
+    let spec = spec(&options, controller)?;
+    let (result, refs) = run_one(&spec, !options.flag("no-references"))?;
+    if let Some(path) = options.text("csv") {
+        let mut file = std::fs::File::create(path)
+            .map_err(|e| CliError::new(format!("--csv: cannot create {path:?}: {e}")))?;
+        write_csv(&result.trace, &mut file)
+            .map_err(|e| CliError::new(format!("--csv: cannot write {path:?}: {e}")))?;
+    }
+    if let Some(path) = options.text("json") {
+        let report = SimReport {
+            scenario: spec.preset.name(),
+            controller: &spec.controller,
+            seed: spec.seed,
+            target_force_n: result.settings.target_force_n,
+            force_limit_n: result.settings.force_limit_n,
+            control_period_s: result.settings.control_period_s,
+            feedback: result.settings.feedback,
+            metrics: &result.metrics,
+            references: refs,
+            calibration: &result.calibration,
+            events: result
+                .trace
+                .events
+                .iter()
+                .map(|e| EventLine {
+                    time_s: e.time_s(),
+                    event: e.describe(),
+                })
+                .collect(),
+        };
+        let mut file = std::fs::File::create(path)
+            .map_err(|e| CliError::new(format!("--json: cannot create {path:?}: {e}")))?;
+        write_json(&mut file, &report)?;
+    }
+    let table = metrics_table(&[(spec.controller.kind().name().to_string(), &result)]);
+    io.stdout.write_all(table.as_bytes())?;
+    Ok(())
+}
+
+#[derive(Serialize)]
+struct CompareEntry<'a> {
+    controller: &'a ControllerConfig,
+    metrics: &'a Metrics,
+}
+
+/// Runs `cutlab compare`.
+pub fn run_compare(args: &[String], io: &mut Io<'_>) -> Result<(), CliError> {
+    let options_spec = compare_options();
+    if wants_help(args) {
+        return help_text_for(
+            io,
+            "cutlab compare --scenario NAME --controllers A,B,... [--json]",
+            "Run several controllers (or tunings: pi:kp=0.5) on one preset with the same seed and\n\
+             print their metrics side by side; * marks the best value of each row.",
+            &options_spec,
+        );
+    }
+    let options = Options::parse(args, &options_spec)?;
+    let list: String = options.require("controllers")?;
+    let configs = list
+        .split(',')
+        .filter(|s| !s.trim().is_empty())
+        .map(|s| controller_with_settings(s.trim()))
+        .collect::<Result<Vec<_>, _>>()?;
+    if configs.is_empty() {
+        return Err(CliError::new("--controllers: name at least one controller"));
+    }
+    let with_references = !options.flag("no-references");
+    let base = spec(&options, ControllerConfig::new(ControllerKind::Fixed))?;
+    let refs = if with_references {
+        Some(references(&base).map_err(|e| CliError::new(e.to_string()))?)
+    } else {
+        None
+    };
+    let mut results = Vec::new();
+    for (text, config) in list
+        .split(',')
+        .filter(|s| !s.trim().is_empty())
+        .zip(configs)
+    {
+        let mut s = base.clone();
+        s.controller = config.clone();
+        let mut result = simulate(&s).map_err(|e| CliError::new(e.to_string()))?;
+        if let Some(r) = &refs {
+            apply_references(&mut result, r);
+        }
+        results.push((text.trim().to_string(), config, result));
+    }
+    if options.flag("json") {
+        let entries: Vec<CompareEntry> = results
+            .iter()
+            .map(|(_, config, r)| CompareEntry {
+                controller: config,
+                metrics: &r.metrics,
+            })
+            .collect();
+        return write_json(io.stdout, &entries);
+    }
+    let refs_line = refs.map(|r| {
+        format!(
+            "references: programmed feed {:.1} s; safest fixed override {:.0} % → {:.1} s\n",
+            r.programmed_cycle_time_s, r.safe_fixed_override_pct, r.safe_fixed_cycle_time_s
+        )
+    });
+    let borrowed: Vec<(String, &RunResult)> =
+        results.iter().map(|(n, _, r)| (n.clone(), r)).collect();
+    io.stdout
+        .write_all(format!("scenario {}, seed {}\n", base.preset.name(), base.seed).as_bytes())?;
+    if let Some(line) = refs_line {
+        io.stdout.write_all(line.as_bytes())?;
+    }
+    io.stdout.write_all(metrics_table(&borrowed).as_bytes())?;
+    Ok(())
+}
+
+/// Which way is better for a metric.
+#[derive(Clone, Copy, PartialEq)]
+enum Better {
+    Lower,
+    Higher,
+    Neither,
+}
+
+/// A table of metrics, one column per run; `*` marks the best value of each row.
+fn metrics_table(runs: &[(String, &RunResult)]) -> String {
+    type Getter = fn(&RunResult) -> Option<f64>;
+    let rows: [(&str, Better, Getter); 13] = [
+        ("target force (N)", Better::Neither, |r| {
+            Some(r.settings.target_force_n)
+        }),
+        ("cycle time (s)", Better::Lower, |r| {
+            Some(r.metrics.cycle_time_s)
+        }),
+        ("saving vs programmed (%)", Better::Higher, |r| {
+            r.metrics.saving_vs_programmed_pct
+        }),
+        ("saving vs safe fixed (%)", Better::Higher, |r| {
+            r.metrics.saving_vs_safe_fixed_pct
+        }),
+        ("force IAE (N·s)", Better::Lower, |r| {
+            Some(r.metrics.force_iae_n_s)
+        }),
+        ("force RMS error (N)", Better::Lower, |r| {
+            Some(r.metrics.force_rms_error_n)
+        }),
+        ("mean |error| (%)", Better::Lower, |r| {
+            Some(r.metrics.force_mean_abs_error_pct)
+        }),
+        ("peak force (N)", Better::Lower, |r| {
+            Some(r.metrics.peak_force_n)
+        }),
+        ("time above limit (s)", Better::Lower, |r| {
+            Some(r.metrics.time_above_limit_s)
+        }),
+        ("max overshoot (%)", Better::Lower, |r| {
+            Some(r.metrics.max_overshoot_pct)
+        }),
+        ("max settling time (s)", Better::Lower, |r| {
+            r.metrics.max_settling_time_s
+        }),
+        ("override changes", Better::Lower, |r| {
+            Some(r.metrics.override_changes as f64)
+        }),
+        ("mean removal (mm³/s)", Better::Higher, |r| {
+            Some(r.metrics.mean_material_removal_mm3_s)
+        }),
+    ];
+    let label_width = rows.iter().map(|r| r.0.chars().count()).max().unwrap_or(0);
+    let col_width = runs
+        .iter()
+        .map(|(n, _)| n.chars().count())
+        .max()
+        .unwrap_or(0)
+        .max(10);
+    let mut out = String::new();
+    let _ = write!(out, "{:label_width$}", "");
+    for (name, _) in runs {
+        let _ = write!(out, "  {name:>col_width$}");
+    }
+    out.push('\n');
+    for (label, better, get) in rows {
+        let values: Vec<Option<f64>> = runs.iter().map(|(_, r)| get(r)).collect();
+        let best = match better {
+            Better::Neither => None,
+            _ if runs.len() < 2 => None,
+            Better::Lower => values.iter().flatten().cloned().reduce(f64::min),
+            Better::Higher => values.iter().flatten().cloned().reduce(f64::max),
+        };
+        let _ = write!(out, "{label:label_width$}");
+        for v in values {
+            let cell = match v {
+                Some(v) if v.is_finite() => {
+                    let mark = if best == Some(v) { "*" } else { " " };
+                    format!("{v:.1}{mark}")
+                }
+                _ => "—".to_string(),
+            };
+            let _ = write!(out, "  {cell:>col_width$}");
+        }
+        out.push('\n');
+    }
+    out
+}

@@ -1,0 +1,437 @@
+//! A closed-loop run on one of the papers' presets: the defaults, the teach cut, the run, its
+//! metrics and the reference runs the savings are measured against. The CLI and the browser both
+//! call this, so a run is the same wherever it is made.
+
+use serde::Serialize;
+
+use super::metrics::{compute, with_savings, Metrics, MetricsConfig};
+use super::runner::{Calibration, ClosedLoop, Feedback, LoopError, LoopSettings, TeachCut};
+use super::trace::Trace;
+use crate::control::registry::{ControllerConfig, ControllerKind, RunContext};
+use crate::plant::cnc::OverrideMode;
+use crate::plant::presets::PlantKind;
+use crate::plant::Preset;
+use crate::safety::{EnvelopeConfig, OverrideResolution};
+
+/// Everything that defines a run; the same spec and seed give the same trace.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RunSpec {
+    /// The experiment.
+    pub preset: Preset,
+    /// The controller and its parameters.
+    pub controller: ControllerConfig,
+    /// Seed of every noise source.
+    pub seed: u64,
+    /// Overrides of the preset's default settings.
+    pub settings: SettingsOverrides,
+}
+
+/// Settings a user may change; `None` keeps the preset's default.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct SettingsOverrides {
+    /// Which current measures the force.
+    pub feedback: Option<Feedback>,
+    /// Target force.
+    pub target_force_n: Option<f64>,
+    /// Control period.
+    pub control_period_s: Option<f64>,
+    /// Spindle current low-pass cut-off.
+    pub spindle_lowpass_hz: Option<f64>,
+    /// Feed current low-pass cut-off.
+    pub feed_lowpass_hz: Option<f64>,
+    /// Order of the low-passes.
+    pub lowpass_order: Option<usize>,
+    /// Lowest override.
+    pub min_override_pct: Option<f64>,
+    /// Highest override.
+    pub max_override_pct: Option<f64>,
+    /// Override rate limit.
+    pub max_rate_pct_per_s: Option<f64>,
+    /// Override held until the envelope arms.
+    pub arming_override_pct: Option<f64>,
+}
+
+impl RunSpec {
+    /// A run of `preset` with `controller` at its defaults and seed 1.
+    pub fn new(preset: Preset, controller: ControllerKind) -> Self {
+        Self {
+            preset,
+            controller: ControllerConfig::new(controller),
+            seed: 1,
+            settings: SettingsOverrides::default(),
+        }
+    }
+}
+
+/// A finished run.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RunResult {
+    /// The settings the run used.
+    pub settings: LoopSettings,
+    /// The teach cut's calibration.
+    pub calibration: Calibration,
+    /// The trace.
+    pub trace: Trace,
+    /// The metrics (savings filled when reference runs were made).
+    pub metrics: Metrics,
+}
+
+/// The shortest control period; a mill's period is a whole number of spindle revolutions at
+/// least this long, so the period mean removes the tooth-passing ripple.
+const MIN_CONTROL_PERIOD_S: f64 = 0.04;
+/// A loop without a spindle to synchronise with uses this period.
+const DEFAULT_CONTROL_PERIOD_S: f64 = 0.05;
+
+/// The feedback path a preset measures force with by default: the brake bench has only a feed
+/// drive; everything else uses the spindle, as paper 003 and paper 002 do.
+pub fn default_feedback(preset: Preset) -> Feedback {
+    match preset.plant_kind() {
+        PlantKind::BrakeBench => Feedback::FeedCurrent,
+        _ => Feedback::SpindleCurrent,
+    }
+}
+
+fn envelope_resolution(mode: &OverrideMode) -> OverrideResolution {
+    match mode {
+        OverrideMode::Dial(table) => {
+            let mut positions = table.positions();
+            positions.sort_by(f64::total_cmp);
+            positions.dedup();
+            OverrideResolution::Dial(positions)
+        }
+        OverrideMode::WholePercent => OverrideResolution::WholePercent,
+        OverrideMode::Continuous => OverrideResolution::Continuous,
+    }
+}
+
+/// The preset's default settings (the target is filled after the teach cut when the preset has
+/// none of its own).
+pub fn default_settings(spec: &RunSpec) -> Result<LoopSettings, LoopError> {
+    let preset = spec.preset;
+    let o = &spec.settings;
+    let summary = preset.summary();
+    let feedback = o.feedback.unwrap_or_else(|| default_feedback(preset));
+    let period = o
+        .control_period_s
+        .unwrap_or_else(|| match summary.spindle_rpm {
+            Some(rpm) if rpm > 0.0 && feedback == Feedback::SpindleCurrent => {
+                let revolution_s = 60.0 / rpm;
+                (MIN_CONTROL_PERIOD_S / revolution_s).ceil() * revolution_s
+            }
+            _ => DEFAULT_CONTROL_PERIOD_S,
+        });
+    let target = o
+        .target_force_n
+        .or(preset.target_force_n())
+        .unwrap_or(f64::NAN);
+    let mut envelope = EnvelopeConfig::for_target(1.0);
+    envelope.resolution = envelope_resolution(&preset.override_mode());
+    if let Some(v) = o.min_override_pct {
+        envelope.min_override_pct = v;
+    }
+    if let Some(v) = o.max_override_pct {
+        envelope.max_override_pct = v;
+    }
+    if let Some(v) = o.max_rate_pct_per_s {
+        envelope.max_rate_pct_per_s = v;
+    }
+    if let Some(v) = o.arming_override_pct {
+        envelope.arming_override_pct = v;
+    }
+    let mut settings = LoopSettings {
+        feedback,
+        control_period_s: period,
+        spindle_lowpass_hz: o.spindle_lowpass_hz.unwrap_or(260.0),
+        feed_lowpass_hz: o.feed_lowpass_hz.unwrap_or(50.0),
+        lowpass_order: o.lowpass_order.unwrap_or(4),
+        target_force_n: f64::NAN,
+        force_limit_n: f64::NAN,
+        envelope,
+        max_duration_s: 3.0 * summary.nominal_duration_s.max(1.0) + 10.0,
+        cross_check_tolerance: 0.3,
+    };
+    if !(period.is_finite() && period > 0.0) {
+        return Err(LoopError::Setting(format!(
+            "control period must be positive, not {period} s"
+        )));
+    }
+    set_target(&mut settings, target);
+    Ok(settings)
+}
+
+/// The metrics' force limit, as a multiple of the target.
+const FORCE_LIMIT_FACTOR: f64 = 1.2;
+/// The overload alarm's hard limit, as a multiple of the target: a tool-breakage limit well above
+/// the target, so a fixed-feed baseline through a deep step still completes for the comparison.
+const OVERLOAD_FACTOR: f64 = 3.0;
+
+/// Sets the target and the limits that follow from it (NaN leaves them unset).
+fn set_target(settings: &mut LoopSettings, target_force_n: f64) {
+    settings.target_force_n = target_force_n;
+    settings.force_limit_n = FORCE_LIMIT_FACTOR * target_force_n;
+    settings.envelope.overload_limit_n = OVERLOAD_FACTOR * target_force_n;
+}
+
+/// Sets the target (and what derives from it) once the teach cut is known: the preset's own
+/// force target, else its current target through the calibrated model (paper 002's 25 A), else
+/// 80 % of the force the program gives at 100 % override.
+fn settle_target(spec: &RunSpec, settings: &mut LoopSettings, calibration: &Calibration) {
+    if settings.target_force_n.is_finite() {
+        return;
+    }
+    let summary = spec.preset.summary();
+    let from_current = spec.preset.target_spindle_current_a().map(|current_a| {
+        calibration.estimator.force_for_current_n(
+            current_a,
+            summary.spindle_rpm.unwrap_or(0.0),
+            summary.programmed_feed_mm_min.unwrap_or(0.0),
+        )
+    });
+    let target = from_current
+        .filter(|f| f.is_finite() && *f > 0.0)
+        .unwrap_or(0.8 * calibration.median_force_at_full_override_n);
+    set_target(settings, target);
+}
+
+/// A run in progress: first the teach cut, then the closed loop. Advancing in chunks lets a
+/// browser show progress and cancel between frames; [`simulate`] runs it to the end at once.
+pub struct LabRun {
+    spec: RunSpec,
+    settings: LoopSettings,
+    nominal_duration_s: f64,
+    stage: Stage,
+}
+
+enum Stage {
+    Teaching(Box<TeachCut>),
+    Running {
+        run: Box<ClosedLoop>,
+        calibration: Calibration,
+    },
+    Done(Box<RunResult>),
+    /// Between stages, or after the result was taken.
+    Empty,
+}
+
+/// What a run is doing, for a progress bar.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Progress {
+    /// "teach cut", "closed loop" or "done".
+    pub stage: &'static str,
+    /// Rough fraction of the work done, 0–1 (the teach cut counts as the first half).
+    pub fraction: f64,
+}
+
+impl LabRun {
+    /// Starts a run: settings from the preset and the spec, and the teach cut's machine (seeded
+    /// apart from the run, like a separate pass over another part).
+    pub fn new(spec: &RunSpec) -> Result<Self, LoopError> {
+        let settings = default_settings(spec)?;
+        let teach_machine = spec
+            .preset
+            .machine(spec.seed.wrapping_add(TEACH_SEED_OFFSET))
+            .map_err(|e| LoopError::Setting(e.to_string()))?;
+        Ok(Self {
+            nominal_duration_s: spec.preset.summary().nominal_duration_s.max(1.0),
+            stage: Stage::Teaching(Box::new(TeachCut::new(Box::new(teach_machine), &settings)?)),
+            settings,
+            spec: spec.clone(),
+        })
+    }
+
+    /// Runs at most `periods` control periods of whichever stage is under way; returns true once
+    /// the run is complete.
+    pub fn advance(&mut self, periods: usize) -> Result<bool, LoopError> {
+        match std::mem::replace(&mut self.stage, Stage::Empty) {
+            Stage::Teaching(mut teach) => {
+                if teach.advance(periods) {
+                    let calibration = teach.calibration()?;
+                    let run = self.start_loop(&calibration)?;
+                    self.stage = Stage::Running {
+                        run: Box::new(run),
+                        calibration,
+                    };
+                } else {
+                    self.stage = Stage::Teaching(teach);
+                }
+                Ok(false)
+            }
+            Stage::Running {
+                mut run,
+                calibration,
+            } => {
+                if run.advance(periods) {
+                    let settings = run.settings().clone();
+                    let trace = run.into_trace();
+                    let metrics = compute(&trace, &metrics_config(&settings));
+                    self.stage = Stage::Done(Box::new(RunResult {
+                        settings,
+                        calibration,
+                        trace,
+                        metrics,
+                    }));
+                    Ok(true)
+                } else {
+                    self.stage = Stage::Running { run, calibration };
+                    Ok(false)
+                }
+            }
+            done @ Stage::Done(_) => {
+                self.stage = done;
+                Ok(true)
+            }
+            Stage::Empty => Ok(true),
+        }
+    }
+
+    fn start_loop(&mut self, calibration: &Calibration) -> Result<ClosedLoop, LoopError> {
+        let mut settings = self.settings.clone();
+        settle_target(&self.spec, &mut settings, calibration);
+        if !(settings.target_force_n.is_finite() && settings.target_force_n > 0.0) {
+            return Err(LoopError::Setting(
+                "no force target: the preset has none and the teach cut found no cutting".into(),
+            ));
+        }
+        // A phase current beyond twice anything the teach cut saw (its overrides reach 140 %) is
+        // a sensor fault, whatever the machine's size.
+        if calibration.max_phase_current_a > 0.0 {
+            settings.envelope.max_current_a = 2.0 * calibration.max_phase_current_a;
+        }
+        let controller = self
+            .spec
+            .controller
+            .build(&RunContext {
+                target_force_n: settings.target_force_n,
+                control_period_s: settings.control_period_s,
+            })
+            .map_err(|e| LoopError::Setting(e.to_string()))?;
+        let machine = self
+            .spec
+            .preset
+            .machine(self.spec.seed)
+            .map_err(|e| LoopError::Setting(e.to_string()))?;
+        ClosedLoop::new(
+            Box::new(machine),
+            controller,
+            calibration.estimator.clone(),
+            settings,
+        )
+    }
+
+    /// What the run is doing.
+    pub fn progress(&self) -> Progress {
+        let fraction = |elapsed_s: f64| (elapsed_s / self.nominal_duration_s).clamp(0.0, 1.0);
+        match &self.stage {
+            Stage::Teaching(t) => Progress {
+                stage: "teach cut",
+                fraction: 0.5 * fraction(t.elapsed_s()),
+            },
+            Stage::Running { run, .. } => Progress {
+                stage: "closed loop",
+                fraction: 0.5 + 0.5 * fraction(run.elapsed_s()),
+            },
+            Stage::Done(_) | Stage::Empty => Progress {
+                stage: "done",
+                fraction: 1.0,
+            },
+        }
+    }
+
+    /// The trace so far, once the closed loop has started.
+    pub fn trace(&self) -> Option<&Trace> {
+        match &self.stage {
+            Stage::Running { run, .. } => Some(run.trace()),
+            Stage::Done(r) => Some(&r.trace),
+            _ => None,
+        }
+    }
+
+    /// The result, once complete.
+    pub fn into_result(self) -> Option<RunResult> {
+        match self.stage {
+            Stage::Done(r) => Some(*r),
+            _ => None,
+        }
+    }
+}
+
+/// The teach cut's seed is the run's plus this, so its noise differs from the run's.
+const TEACH_SEED_OFFSET: u64 = 0x7EAC;
+
+/// The metrics settings for a run's settings.
+pub fn metrics_config(settings: &LoopSettings) -> MetricsConfig {
+    MetricsConfig {
+        force_limit_n: settings.force_limit_n,
+        settling_band_pct: 10.0,
+        depth_step_mm: 0.2,
+    }
+}
+
+/// Runs `spec` to the end, without reference runs.
+pub fn simulate(spec: &RunSpec) -> Result<RunResult, LoopError> {
+    let mut run = LabRun::new(spec)?;
+    while !run.advance(10_000)? {}
+    run.into_result()
+        .ok_or_else(|| LoopError::Setting("the run ended without a result".into()))
+}
+
+/// The reference runs of the savings.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct References {
+    /// Cycle time at the programmed feed (fixed 100 %).
+    pub programmed_cycle_time_s: f64,
+    /// The highest fixed override whose peak regulated force stays under the force limit.
+    pub safe_fixed_override_pct: f64,
+    /// Cycle time at that override.
+    pub safe_fixed_cycle_time_s: f64,
+}
+
+/// Runs the fixed-feed references for `spec`'s preset and settings: 100 %, and a bisection for
+/// the highest fixed override that keeps the peak force under the limit (to 1 %).
+pub fn references(spec: &RunSpec) -> Result<References, LoopError> {
+    let fixed = |pct: f64| -> Result<RunResult, LoopError> {
+        let mut s = spec.clone();
+        s.controller = ControllerConfig::new(ControllerKind::Fixed);
+        s.controller
+            .set("override_pct", pct)
+            .map_err(|e| LoopError::Setting(e.to_string()))?;
+        // The references are the program run at one override from start to end, not bounded by
+        // the envelope's override band.
+        s.settings.min_override_pct = Some(0.0);
+        s.settings.max_override_pct = Some(255.0);
+        s.settings.arming_override_pct = Some(pct);
+        simulate(&s)
+    };
+    let programmed = fixed(100.0)?;
+    let limit = programmed.settings.force_limit_n;
+    let (mut low, mut high) = (1.0_f64, 250.0_f64);
+    let mut best: Option<RunResult> = None;
+    while high - low > 1.0 {
+        let middle = ((low + high) / 2.0).round();
+        let run = fixed(middle)?;
+        if run.metrics.peak_force_n <= limit && run.trace.completed {
+            low = middle;
+            best = Some(run);
+        } else {
+            high = middle;
+        }
+    }
+    let best = match best {
+        Some(b) => b,
+        None => fixed(low)?,
+    };
+    Ok(References {
+        programmed_cycle_time_s: programmed.metrics.cycle_time_s,
+        safe_fixed_override_pct: low,
+        safe_fixed_cycle_time_s: best.metrics.cycle_time_s,
+    })
+}
+
+/// Fills a result's savings from the references.
+pub fn apply_references(result: &mut RunResult, references: &References) {
+    result.metrics = with_savings(
+        result.metrics.clone(),
+        Some(references.programmed_cycle_time_s),
+        Some(references.safe_fixed_cycle_time_s),
+    );
+}

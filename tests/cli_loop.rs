@@ -1,0 +1,177 @@
+//! `cutlab sim`, `cutlab compare` and `cutlab calibrate` end to end, in-process.
+#![cfg(feature = "cli")]
+// Test code: unwrapping and panicking on a broken expectation is the point.
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
+
+use cutlab::cli::{run, Io};
+
+fn cutlab(args: &[&str]) -> (Result<(), String>, String) {
+    let args: Vec<String> = args.iter().map(|s| s.to_string()).collect();
+    let mut input: &[u8] = &[];
+    let mut output = Vec::new();
+    let result = run(
+        &args,
+        &mut Io {
+            stdin: &mut input,
+            stdout: &mut output,
+        },
+    );
+    (
+        result.map_err(|e| e.to_string()),
+        String::from_utf8_lossy(&output).into_owned(),
+    )
+}
+
+/// A fresh scratch directory for one test.
+fn scratch(name: &str) -> std::path::PathBuf {
+    let dir = std::env::temp_dir().join(format!("cutlab-cli-{name}-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+#[test]
+fn sim_writes_the_trace_csv_and_the_metrics_json_and_calibrate_reads_the_csv_back() {
+    let dir = scratch("sim");
+    let csv = dir.join("run.csv");
+    let json = dir.join("run.json");
+    let (result, out) = cutlab(&[
+        "sim",
+        "--scenario",
+        "maneerat-doc-1",
+        "--controller",
+        "pi",
+        "--set",
+        "kp=0.4",
+        "--seed",
+        "3",
+        "--no-references",
+        "--csv",
+        csv.to_str().unwrap(),
+        "--json",
+        json.to_str().unwrap(),
+    ]);
+    result.unwrap();
+    assert!(out.contains("force IAE (N·s)"), "{out}");
+
+    let text = std::fs::read_to_string(&csv).unwrap();
+    let header = text.lines().next().unwrap();
+    for column in [
+        "time_s",
+        "depth_mm",
+        "feed_mm_min",
+        "override_pct",
+        "force_n",
+        "force_est_n",
+        "spindle_current_rms_a",
+        "feed_current_rms_a",
+    ] {
+        assert!(header.split(',').any(|c| c == column), "missing {column}");
+    }
+
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    assert_eq!(report["scenario"], "maneerat-doc-1");
+    assert_eq!(report["controller"]["params"]["kp"], 0.4);
+    assert_eq!(report["target_force_n"], 150.0);
+    for key in [
+        "cycle_time_s",
+        "force_iae_n_s",
+        "peak_force_n",
+        "time_above_limit_s",
+    ] {
+        assert!(report["metrics"][key].is_number(), "metrics.{key}");
+    }
+
+    // A controlled run holds the load nearly constant, which calibrates poorly; a teach cut at
+    // fixed feed through the depth steps spans the loads.
+    let teach = dir.join("teach.csv");
+    let (result, _) = cutlab(&[
+        "sim",
+        "--scenario",
+        "kim-step-doc",
+        "--controller",
+        "fixed",
+        "--no-references",
+        "--csv",
+        teach.to_str().unwrap(),
+    ]);
+    result.unwrap();
+    let csv = teach;
+    let (result, out) = cutlab(&["calibrate", csv.to_str().unwrap()]);
+    result.unwrap();
+    assert!(out.contains("spindle current → force"), "{out}");
+    let (result, out) = cutlab(&["calibrate", csv.to_str().unwrap(), "--json"]);
+    result.unwrap();
+    let fitted: serde_json::Value = serde_json::from_str(&out).unwrap();
+    let row = &fitted["spindle"]["rows"][0];
+    assert!(row["quality"]["r_squared"].as_f64().unwrap() > 0.9, "{row}");
+    std::fs::remove_dir_all(dir).ok();
+}
+
+#[test]
+fn compare_marks_the_best_value_of_each_row() {
+    let (result, out) = cutlab(&[
+        "compare",
+        "--scenario",
+        "maneerat-doc-1",
+        "--controllers",
+        "fixed,pi:kp=0.5",
+        "--no-references",
+    ]);
+    result.unwrap();
+    assert!(out.contains("pi:kp=0.5"), "{out}");
+    let iae = out.lines().find(|l| l.starts_with("force IAE")).unwrap();
+    assert_eq!(iae.matches('*').count(), 1, "{iae}");
+}
+
+#[test]
+fn bad_input_gives_one_line_that_names_it() {
+    let cases: [(&[&str], &str); 5] = [
+        (
+            &["sim", "--scenario", "nowhere", "--controller", "pi"],
+            "--scenario: unknown preset",
+        ),
+        (
+            &[
+                "sim",
+                "--scenario",
+                "maneerat-doc-1",
+                "--controller",
+                "warp",
+            ],
+            "--controller: unknown controller",
+        ),
+        (
+            &[
+                "sim",
+                "--scenario",
+                "maneerat-doc-1",
+                "--controller",
+                "pi",
+                "--set",
+                "kp=-2",
+            ],
+            "--set: kp = -2",
+        ),
+        (
+            &[
+                "compare",
+                "--scenario",
+                "maneerat-doc-1",
+                "--controllers",
+                "pi:ki=3",
+            ],
+            "pi:ki=3: controller \"pi\" has no parameter \"ki\"",
+        ),
+        (
+            &["calibrate", "/nonexistent/log.csv"],
+            "/nonexistent/log.csv: cannot read",
+        ),
+    ];
+    for (args, expected) in cases {
+        let (result, _) = cutlab(args);
+        let message = result.unwrap_err();
+        assert!(message.starts_with(expected), "{args:?}: {message}");
+        assert!(!message.contains('\n'));
+    }
+}

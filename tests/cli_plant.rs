@@ -1,0 +1,198 @@
+//! `cutlab force` and `cutlab scenarios`, driven in-process.
+#![cfg(feature = "cli")]
+// Helpers outside #[test] functions unwrap too: a failed parse is a failed test.
+#![allow(clippy::unwrap_used)]
+
+use cutlab::cli::{run, Io};
+use cutlab::plant::Preset;
+
+/// Runs the CLI in-process; returns (result, stdout).
+fn cutlab(args: &[&str]) -> (Result<(), String>, String) {
+    let args: Vec<String> = args.iter().map(|s| s.to_string()).collect();
+    let mut input: &[u8] = b"";
+    let mut output = Vec::new();
+    let result = run(
+        &args,
+        &mut Io {
+            stdin: &mut input,
+            stdout: &mut output,
+        },
+    );
+    (
+        result.map_err(|e| e.to_string()),
+        String::from_utf8(output).unwrap(),
+    )
+}
+
+fn json(args: &[&str]) -> serde_json::Value {
+    let (result, out) = cutlab(args);
+    assert!(result.is_ok(), "{result:?}");
+    serde_json::from_str(&out).unwrap()
+}
+
+const SLOT: &[&str] = &[
+    "force",
+    "--diameter-mm",
+    "20",
+    "--teeth",
+    "2",
+    "--helix-deg",
+    "30",
+    "--axial-depth-mm",
+    "3",
+    "--radial-width-mm",
+    "20",
+    "--mode",
+    "slot",
+    "--feed-per-tooth-mm",
+    "0.1",
+    "--rpm",
+    "1000",
+];
+
+#[test]
+fn force_prints_simulated_means_that_equal_the_closed_form() {
+    let mut args = SLOT.to_vec();
+    args.extend(["--material", "sm45c"]);
+    let v = json(&args);
+    for key in [
+        "mean_fx_n",
+        "mean_fy_n",
+        "mean_fz_n",
+        "mean_torque_nm",
+        "mean_power_w",
+    ] {
+        let got = v[key].as_f64().unwrap();
+        let want = v["closed_form"][key].as_f64().unwrap();
+        assert!(
+            (got - want).abs() < 1e-3 * want.abs(),
+            "{key}: {got} vs {want}"
+        );
+    }
+    // tests/reference/plant/mean_forces.csv, first row (the same cut).
+    assert!((v["mean_fy_n"].as_f64().unwrap() - 396.845).abs() < 0.4);
+    let peak = v["peak_resultant_n"].as_f64().unwrap();
+    assert!(peak > v["mean_resultant_n"].as_f64().unwrap());
+    assert_eq!(v["feed_mm_min"].as_f64().unwrap(), 200.0);
+    let power = v["mean_power_w"].as_f64().unwrap();
+    let torque = v["mean_torque_nm"].as_f64().unwrap();
+    assert!((power - torque * 1000.0 * std::f64::consts::TAU / 60.0).abs() < 1e-9);
+}
+
+#[test]
+fn force_takes_explicit_coefficients() {
+    let mut args = SLOT.to_vec();
+    args.extend([
+        "--ktc", "2200", "--krc", "790", "--kac", "440", "--kte", "35", "--kre", "45", "--kae", "3",
+    ]);
+    let explicit = json(&args);
+    let mut args = SLOT.to_vec();
+    args.extend(["--material", "sm45c"]);
+    let named = json(&args);
+    assert_eq!(explicit["mean_fx_n"], named["mean_fx_n"]);
+    assert!(explicit["material"].is_null());
+}
+
+#[test]
+fn force_errors_are_one_line_and_name_the_option() {
+    let with = |extra: &[&'static str]| {
+        let mut args = SLOT.to_vec();
+        args.extend(extra.iter().copied());
+        cutlab(&args).0.unwrap_err()
+    };
+    let cases: &[(&[&str], &str)] = &[
+        (&["--material", "brass"], "--material"),
+        (&["--material", "composite"], "--material"),
+        (
+            &["--material", "sm45c", "--ktc", "1"],
+            "--material and --ktc",
+        ),
+        (&["--ktc", "2200"], "--krc"),
+        (&["--material", "sm45c", "--mode", "sideways"], "--mode"),
+        (&["--material", "sm45c", "--rpm", "-5"], "--rpm"),
+        (&["--material", "sm45c", "--teeth", "40"], "--teeth"),
+        (&["--material", "sm45c", "--helix-deg", "80"], "--helix-deg"),
+        (
+            &["--material", "sm45c", "--axial-depth-mm", "abc"],
+            "--axial-depth-mm",
+        ),
+        (
+            &["--material", "sm45c", "--runout-um", "5000"],
+            "--runout-um",
+        ),
+    ];
+    for (extra, option) in cases {
+        let e = with(extra);
+        assert!(e.contains(option), "{extra:?}: {e}");
+        assert!(!e.contains('\n'), "{e}");
+    }
+    let (result, _) = cutlab(&["force", "--teeth", "2"]);
+    assert_eq!(result.unwrap_err(), "missing required option --diameter-mm");
+}
+
+#[test]
+fn scenarios_lists_every_preset_with_its_source() {
+    let (result, table) = cutlab(&["scenarios"]);
+    assert!(result.is_ok());
+    for p in Preset::ALL {
+        assert!(
+            table.contains(p.name()) && table.contains(p.source()),
+            "{}",
+            p.name()
+        );
+    }
+    let v = json(&["scenarios", "--json"]);
+    let list = v.as_array().unwrap();
+    assert_eq!(list.len(), Preset::ALL.len());
+    for item in list {
+        assert!(item["source"].as_str().unwrap().starts_with("paper 00"));
+        assert!(item["nominal_duration_s"].as_f64().unwrap() > 0.0);
+        assert!(!item["choices"].as_array().unwrap().is_empty());
+    }
+    assert_eq!(list[0]["spindle_rpm"].as_f64(), Some(1000.0));
+}
+
+#[test]
+fn every_preset_runs_from_the_cli() {
+    for p in Preset::ALL {
+        let (result, csv) = cutlab(&[
+            "scenarios",
+            "--run",
+            p.name(),
+            "--max-s",
+            "0.05",
+            "--every",
+            "100",
+        ]);
+        assert!(result.is_ok(), "{}: {result:?}", p.name());
+        let lines: Vec<&str> = csv.lines().collect();
+        assert_eq!(lines.len(), 1 + 5, "{}: header and five rows", p.name());
+        assert!(lines[0].starts_with("time [s],"));
+        let v = json(&[
+            "scenarios",
+            "--run",
+            p.name(),
+            "--max-s",
+            "0.05",
+            "--summary",
+            "--seed",
+            "3",
+        ]);
+        assert_eq!(v["samples"].as_u64(), Some(500));
+        assert_eq!(v["preset"].as_str(), Some(p.name()));
+    }
+}
+
+#[test]
+fn scenarios_errors_name_the_option() {
+    let (result, _) = cutlab(&["scenarios", "--run", "nope"]);
+    let e = result.unwrap_err();
+    assert!(
+        e.starts_with("--run: unknown preset \"nope\"") && e.contains("kim-step-doc"),
+        "{e}"
+    );
+    let (result, _) = cutlab(&["scenarios", "--run", "kim-step-doc", "--override", "300"]);
+    assert!(result.unwrap_err().starts_with("--override"));
+    let (result, _) = cutlab(&["scenarios", "--seed", "3"]);
+    assert_eq!(result.unwrap_err(), "--seed only applies with --run NAME");
+}

@@ -1,0 +1,206 @@
+//! The closed loop on the papers' presets: every controller runs inside the safety envelope, the
+//! metrics agree with a recomputation from the CSV trace, runs are deterministic, and the papers'
+//! findings show up where the model can show them.
+// Test code: unwrapping and panicking on a broken expectation is the point.
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
+
+#[cfg(target_arch = "wasm32")]
+use wasm_bindgen_test::wasm_bindgen_test as test;
+
+use cutlab::closed_loop::lab::{simulate, RunResult, RunSpec};
+use cutlab::closed_loop::trace::write_csv;
+use cutlab::control::registry::ControllerKind;
+use cutlab::plant::Preset;
+
+fn run(preset: Preset, controller: ControllerKind) -> RunResult {
+    simulate(&RunSpec::new(preset, controller))
+        .unwrap_or_else(|e| panic!("{} with {}: {e}", preset.name(), controller.name()))
+}
+
+/// The presets and controllers checked: all of them natively; under wasm (slower, and the same
+/// code) one mill, the bond graph and the bench.
+fn matrix() -> Vec<(Preset, ControllerKind)> {
+    let presets: Vec<Preset> = if cfg!(target_arch = "wasm32") {
+        vec![
+            Preset::ManeeratDoc2,
+            Preset::LiuCurrentStep,
+            Preset::WangBrakeBench,
+        ]
+    } else {
+        Preset::ALL.to_vec()
+    };
+    presets
+        .into_iter()
+        .flat_map(|p| ControllerKind::ALL.into_iter().map(move |k| (p, k)))
+        .collect()
+}
+
+#[test]
+fn every_controller_runs_on_every_preset_inside_the_envelope() {
+    for (preset, kind) in matrix() {
+        let r = run(preset, kind);
+        let who = format!("{} / {}", preset.name(), kind.name());
+        assert!(
+            r.trace.completed,
+            "{who}: the program did not run to its end"
+        );
+        assert!(!r.trace.rows.is_empty(), "{who}: empty trace");
+        let e = &r.settings.envelope;
+        let step = e.resolution.step_pct();
+        let dt = r.settings.control_period_s;
+        let mut previous: Option<f64> = None;
+        for row in &r.trace.rows {
+            let u = row.override_pct;
+            assert!(
+                u.is_finite(),
+                "{who}: non-finite override at {} s",
+                row.time_s
+            );
+            assert!(
+                u >= e.min_override_pct && u <= e.max_override_pct,
+                "{who}: override {u} outside the envelope at {} s",
+                row.time_s
+            );
+            if let Some(p) = previous {
+                assert!(
+                    (u - p).abs() <= e.max_rate_pct_per_s * dt + step + 1e-9,
+                    "{who}: override jumped {p} → {u} at {} s",
+                    row.time_s
+                );
+            }
+            previous = Some(u);
+        }
+        let m = &r.metrics;
+        for (name, v) in [
+            ("cycle time", m.cycle_time_s),
+            ("IAE", m.force_iae_n_s),
+            ("peak force", m.peak_force_n),
+            ("total variation", m.override_total_variation_pct),
+        ] {
+            assert!(v.is_finite() && v >= 0.0, "{who}: {name} = {v}");
+        }
+    }
+}
+
+/// Parses one numeric column of the CSV.
+fn column(csv: &str, name: &str) -> Vec<f64> {
+    let mut lines = csv.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let index = header.iter().position(|h| *h == name).unwrap();
+    lines
+        .map(|l| l.split(',').nth(index).unwrap().parse::<f64>().unwrap())
+        .collect()
+}
+
+#[test]
+fn metrics_equal_a_recomputation_from_the_csv_trace() {
+    let r = run(Preset::KimStepDoc, ControllerKind::Threshold);
+    let mut csv = Vec::new();
+    write_csv(&r.trace, &mut csv).unwrap();
+    let csv = String::from_utf8(csv).unwrap();
+    let time = column(&csv, "time_s");
+    let force = column(&csv, "force_n");
+    let target = column(&csv, "target_force_n");
+    let depth = column(&csv, "depth_mm");
+    let width = column(&csv, "width_mm");
+    let armed = column(&csv, "armed");
+    let over = column(&csv, "override_pct");
+    let mrr = column(&csv, "material_removal_mm3_s");
+    let limit = r.settings.force_limit_n;
+
+    // Each row stands for the interval since the previous one.
+    let (mut iae, mut above, mut removed, mut controlled) = (0.0, 0.0, 0.0, 0.0);
+    for i in 1..time.len() {
+        let dt = time[i] - time[i - 1];
+        removed += mrr[i] * dt;
+        if force[i] > limit {
+            above += dt;
+        }
+        if armed[i] == 1.0 && depth[i] > 0.0 && width[i] > 0.0 {
+            iae += (force[i] - target[i]).abs() * dt;
+            controlled += dt;
+        }
+    }
+    let changes = over.windows(2).filter(|w| w[1] != w[0]).count();
+    let peak = force.iter().cloned().fold(0.0, f64::max);
+    let m = &r.metrics;
+    let close = |a: f64, b: f64| (a - b).abs() <= 1e-9 * b.abs().max(1.0);
+    assert!(close(m.force_iae_n_s, iae), "{} vs {iae}", m.force_iae_n_s);
+    assert!(close(m.controlled_cutting_time_s, controlled));
+    assert!(close(m.time_above_limit_s, above));
+    assert!(close(m.removed_volume_mm3, removed));
+    assert!(close(m.peak_force_n, peak));
+    assert_eq!(m.override_changes, changes);
+    assert!(close(m.cycle_time_s, time[time.len() - 1] - time[0]));
+}
+
+#[test]
+fn the_same_seed_gives_the_same_trace_and_another_seed_does_not() {
+    let spec = RunSpec::new(Preset::ManeeratDoc1, ControllerKind::Pi);
+    let a = simulate(&spec).unwrap();
+    let b = simulate(&spec).unwrap();
+    assert_eq!(a.trace, b.trace);
+    let mut other = spec.clone();
+    other.seed = 2;
+    let c = simulate(&other).unwrap();
+    assert_ne!(a.trace.rows, c.trace.rows);
+}
+
+/// Mean |F − target| / target over the armed cut.
+fn mean_error_pct(r: &RunResult) -> f64 {
+    r.metrics.force_mean_abs_error_pct
+}
+
+#[test]
+fn feedback_holds_the_force_closer_to_target_than_fixed_feed_across_depth_steps() {
+    // Paper 003, Fig. 10: the DOC steps 1 → 5 mm; fixed feed lets the force follow the depth,
+    // the threshold controller holds it near the target.
+    let fixed = run(Preset::KimStepDoc, ControllerKind::Fixed);
+    let threshold = run(Preset::KimStepDoc, ControllerKind::Threshold);
+    assert!(
+        mean_error_pct(&threshold) < 0.3 * mean_error_pct(&fixed),
+        "threshold {:.1} % vs fixed {:.1} %",
+        mean_error_pct(&threshold),
+        mean_error_pct(&fixed)
+    );
+    assert!(threshold.metrics.peak_force_n < fixed.metrics.peak_force_n);
+    assert!(threshold.metrics.time_above_limit_s < 0.1 * fixed.metrics.time_above_limit_s);
+}
+
+#[test]
+fn feedback_holds_the_force_across_the_material_change() {
+    // Paper 003, Fig. 11: SM45C then aluminium on a taper; controlled feed speeds up in aluminium
+    // and finishes sooner than the fixed 160 mm/min.
+    let fixed = run(Preset::KimMaterialTaper, ControllerKind::Fixed);
+    let threshold = run(Preset::KimMaterialTaper, ControllerKind::Threshold);
+    assert!(mean_error_pct(&threshold) < 0.5 * mean_error_pct(&fixed));
+    assert!(threshold.metrics.cycle_time_s < fixed.metrics.cycle_time_s);
+}
+
+#[test]
+fn adaptive_control_converges_to_the_papers_targets() {
+    // Paper 001, Fig. 7–9: 150, 200 and 320 N at DOC 1, 2 and 4 mm.
+    for (preset, target) in [
+        (Preset::ManeeratDoc1, 150.0),
+        (Preset::ManeeratDoc2, 200.0),
+        (Preset::ManeeratDoc4, 320.0),
+    ] {
+        let r = run(preset, ControllerKind::Mrac);
+        assert_eq!(r.settings.target_force_n, target);
+        // The second half of the controlled cut, short of the tool's exit.
+        let cutting: Vec<f64> = r
+            .trace
+            .rows
+            .iter()
+            .filter(|row| row.armed && row.depth_mm > 0.0)
+            .map(|row| row.force_n)
+            .collect();
+        let tail = &cutting[cutting.len() / 2..cutting.len() * 9 / 10];
+        let mean = tail.iter().sum::<f64>() / tail.len() as f64;
+        assert!(
+            (mean - target).abs() < 0.05 * target,
+            "{}: converged to {mean:.1} N, target {target} N",
+            preset.name()
+        );
+    }
+}
