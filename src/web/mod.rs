@@ -1,2 +1,23 @@
-//! The Leptos browser app.
-pub fn start() {}
+//! The Leptos browser app: a thin layer that shows and steers the core.
+//!
+//! Pages hold form state as text (so a half-typed value is never lost), parse it into the core's
+//! validated types with `Result`, show each error beside the field that caused it, and draw what
+//! the core computed with [`crate::charts`] on a canvas. No page computes anything itself.
+//!
+//! | module | what it holds |
+//! |---|---|
+//! | `app` | the shell: header, navigation, the current page |
+//! | `route` | the page registry and the URL hash that selects a page |
+//! | `components` | form fields and the canvas chart |
+//! | `pages` | one module per section of the lab |
+
+mod app;
+mod components;
+mod pages;
+mod route;
+
+/// Mounts the lab on the page's `<body>`; called once by the `cutlab-web` binary.
+pub fn start() {
+    console_error_panic_hook::set_once();
+    leptos::mount::mount_to_body(app::App);
+}

@@ -1,0 +1,8 @@
+//! Reusable pieces of the UI.
+
+pub mod chart;
+pub mod download;
+pub mod fields;
+pub mod run_form;
+pub mod run_view;
+pub mod runner;

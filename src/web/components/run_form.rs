@@ -1,0 +1,343 @@
+//! The forms that define a run: the scenario (preset, seed, target, override limit) and a
+//! controller with its parameters. Both keep the typed text and turn it into the core's validated
+//! types, with one message per field; both read from and write to the URL query.
+
+use std::collections::BTreeMap;
+
+use leptos::prelude::*;
+
+use crate::closed_loop::lab::SettingsOverrides;
+use crate::control::registry::{ControllerConfig, ControllerKind};
+use crate::plant::Preset;
+use crate::web::components::fields::{parse_count, parse_number, NumberField, SelectField};
+
+/// Text of the scenario fields.
+#[derive(Clone, Copy)]
+pub struct ScenarioForm {
+    /// Preset name.
+    pub preset: RwSignal<String>,
+    /// Seed.
+    pub seed: RwSignal<String>,
+    /// Target force; blank keeps the preset's.
+    pub target: RwSignal<String>,
+    /// Highest override the envelope allows.
+    pub max_override: RwSignal<String>,
+}
+
+/// A parsed scenario, or the message of each field that did not parse.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ScenarioChoice {
+    /// The preset.
+    pub preset: Preset,
+    /// The seed.
+    pub seed: u64,
+    /// Setting overrides.
+    pub settings: SettingsOverrides,
+}
+
+impl ScenarioForm {
+    /// A form with the defaults, then whatever `query` says.
+    pub fn new(query: &[(String, String)]) -> Self {
+        let get = |key: &str, default: &str| {
+            query
+                .iter()
+                .find(|(k, _)| k == key)
+                .map_or(default.to_string(), |(_, v)| v.clone())
+        };
+        Self {
+            preset: RwSignal::new(get("preset", Preset::KimStepDoc.name())),
+            seed: RwSignal::new(get("seed", "1")),
+            target: RwSignal::new(get("target", "")),
+            max_override: RwSignal::new(get("max_override", "150")),
+        }
+    }
+
+    /// The query pairs that reproduce this form.
+    pub fn query(&self) -> Vec<(String, String)> {
+        let mut q = vec![
+            ("preset".to_string(), self.preset.get()),
+            ("seed".to_string(), self.seed.get()),
+        ];
+        if !self.target.get().trim().is_empty() {
+            q.push(("target".into(), self.target.get()));
+        }
+        q.push(("max_override".into(), self.max_override.get()));
+        q
+    }
+
+    /// Parses the fields; errors are keyed by field name.
+    pub fn parse(&self) -> Result<ScenarioChoice, BTreeMap<&'static str, String>> {
+        let mut errors = BTreeMap::new();
+        let preset = Preset::from_name(&self.preset.get());
+        if preset.is_none() {
+            errors.insert("preset", "choose a preset".to_string());
+        }
+        let seed = parse_count(&self.seed.get())
+            .map(|s| s as u64)
+            .map_err(|e| errors.insert("seed", e))
+            .ok();
+        let target_text = self.target.get();
+        let target = if target_text.trim().is_empty() {
+            Some(None)
+        } else {
+            match parse_number(&target_text) {
+                Ok(v) if v > 0.0 => Some(Some(v)),
+                Ok(v) => {
+                    errors.insert("target", format!("the target must be positive, not {v} N"));
+                    None
+                }
+                Err(e) => {
+                    errors.insert("target", e);
+                    None
+                }
+            }
+        };
+        let max_override = match parse_number(&self.max_override.get()) {
+            Ok(v) if (20.0..=255.0).contains(&v) => Some(v),
+            Ok(v) => {
+                errors.insert("max_override", format!("{v} % is outside 20–255 %"));
+                None
+            }
+            Err(e) => {
+                errors.insert("max_override", e);
+                None
+            }
+        };
+        match (preset, seed, target, max_override) {
+            (Some(preset), Some(seed), Some(target), Some(max)) if errors.is_empty() => {
+                Ok(ScenarioChoice {
+                    preset,
+                    seed,
+                    settings: SettingsOverrides {
+                        target_force_n: target,
+                        max_override_pct: Some(max),
+                        ..SettingsOverrides::default()
+                    },
+                })
+            }
+            _ => Err(errors),
+        }
+    }
+}
+
+/// The scenario fields.
+#[component]
+pub fn ScenarioFields(form: ScenarioForm) -> impl IntoView {
+    let errors = Memo::new(move |_| form.parse().err().unwrap_or_default());
+    let error =
+        move |key: &'static str| Signal::derive(move || errors.with(|e| e.get(key).cloned()));
+    let summary = move || {
+        Preset::from_name(&form.preset.get()).map(|p| {
+            let s = p.summary();
+            let mut parts = vec![p.source().to_string()];
+            if let Some(t) = s.tool {
+                parts.push(t);
+            }
+            if let Some(m) = s.material {
+                parts.push(m);
+            }
+            if let Some(rpm) = s.spindle_rpm {
+                parts.push(format!("{rpm:.0} rpm"));
+            }
+            if let Some(f) = s.programmed_feed_mm_min {
+                parts.push(format!("{f:.0} mm/min"));
+            }
+            if let Some(t) = s.target_force_n {
+                parts.push(format!("target {t:.0} N"));
+            }
+            parts.join(" · ")
+        })
+    };
+    view! {
+        <fieldset>
+            <legend>"Scenario"</legend>
+            <SelectField
+                id="preset"
+                label="Preset"
+                options=Preset::ALL.iter().map(|p| (p.name(), p.label())).collect()
+                value=form.preset
+            />
+            <p class="hint">{summary}</p>
+            <NumberField id="seed" label="Seed" value=form.seed error=error("seed") step="1" />
+            <NumberField
+                id="target"
+                label="Target force (blank: preset's)"
+                unit="N"
+                value=form.target
+                error=error("target")
+            />
+            <NumberField
+                id="max-override"
+                label="Highest override"
+                unit="%"
+                value=form.max_override
+                error=error("max_override")
+            />
+        </fieldset>
+    }
+}
+
+/// Text of a controller choice and its parameters; the text of every controller's parameters is
+/// kept, so switching away and back loses nothing.
+#[derive(Clone, Copy)]
+pub struct ControllerForm {
+    /// Controller name.
+    pub kind: RwSignal<String>,
+    /// Parameter text by (controller, key).
+    pub values: RwSignal<BTreeMap<(String, String), String>>,
+    /// Prefix of element ids, so several forms can share a page.
+    pub id_prefix: &'static str,
+}
+
+impl ControllerForm {
+    /// A form for `default_kind`, then whatever `query` says (`controller=pi&kp=0.4`); query keys
+    /// are prefixed with `prefix` (e.g. `a.kp`) when several forms share a page.
+    pub fn new(
+        id_prefix: &'static str,
+        default_kind: ControllerKind,
+        query: &[(String, String)],
+        query_prefix: &str,
+    ) -> Self {
+        let get = |key: &str| {
+            query
+                .iter()
+                .find(|(k, _)| k == &format!("{query_prefix}{key}"))
+                .map(|(_, v)| v.clone())
+        };
+        let kind = get("controller")
+            .filter(|k| k.parse::<ControllerKind>().is_ok())
+            .unwrap_or_else(|| default_kind.name().to_string());
+        let mut values = BTreeMap::new();
+        for k in ControllerKind::ALL {
+            for p in k.params() {
+                values.insert(
+                    (k.name().to_string(), p.key.to_string()),
+                    p.default.to_string(),
+                );
+            }
+        }
+        if let Ok(k) = kind.parse::<ControllerKind>() {
+            for p in k.params() {
+                if let Some(v) = get(p.key) {
+                    values.insert((k.name().to_string(), p.key.to_string()), v);
+                }
+            }
+        }
+        Self {
+            kind: RwSignal::new(kind),
+            values: RwSignal::new(values),
+            id_prefix,
+        }
+    }
+
+    /// Query pairs for the chosen controller and its non-default parameters.
+    pub fn query(&self, query_prefix: &str) -> Vec<(String, String)> {
+        let kind = self.kind.get();
+        let mut q = vec![(format!("{query_prefix}controller"), kind.clone())];
+        if let Ok(k) = kind.parse::<ControllerKind>() {
+            self.values.with(|v| {
+                for p in k.params() {
+                    if let Some(text) = v.get(&(kind.clone(), p.key.to_string())) {
+                        if text.trim() != p.default.to_string() {
+                            q.push((format!("{query_prefix}{}", p.key), text.clone()));
+                        }
+                    }
+                }
+            });
+        }
+        q
+    }
+
+    /// Parses the chosen controller's parameters; errors keyed by parameter.
+    pub fn parse(&self) -> Result<ControllerConfig, BTreeMap<String, String>> {
+        let kind_text = self.kind.get();
+        let Ok(kind) = kind_text.parse::<ControllerKind>() else {
+            return Err(BTreeMap::from([(
+                "controller".to_string(),
+                "choose a controller".to_string(),
+            )]));
+        };
+        let mut config = ControllerConfig::new(kind);
+        let mut errors = BTreeMap::new();
+        self.values.with(|v| {
+            for p in kind.params() {
+                let text = v
+                    .get(&(kind_text.clone(), p.key.to_string()))
+                    .cloned()
+                    .unwrap_or_default();
+                match parse_number(&text) {
+                    Ok(value) => {
+                        if let Err(e) = config.set(p.key, value) {
+                            errors.insert(p.key.to_string(), e.to_string());
+                        }
+                    }
+                    Err(e) => {
+                        errors.insert(p.key.to_string(), e);
+                    }
+                }
+            }
+        });
+        if errors.is_empty() {
+            Ok(config)
+        } else {
+            Err(errors)
+        }
+    }
+}
+
+/// The controller select and its parameter fields.
+#[component]
+pub fn ControllerFields(
+    form: ControllerForm,
+    /// Legend of the fieldset.
+    #[prop(default = "Controller")]
+    legend: &'static str,
+) -> impl IntoView {
+    let errors = Memo::new(move |_| form.parse().err().unwrap_or_default());
+    let select_id = format!("{}controller", form.id_prefix);
+    let fields = move || {
+        let kind_text = form.kind.get();
+        let Ok(kind) = kind_text.parse::<ControllerKind>() else {
+            return ().into_any();
+        };
+        view! {
+            <p class="hint">{kind.source()}</p>
+            {kind
+                .params()
+                .iter()
+                .map(|p| {
+                    let key = (kind_text.clone(), p.key.to_string());
+                    let text = RwSignal::new(
+                        form.values.with_untracked(|v| v.get(&key).cloned().unwrap_or_default()),
+                    );
+                    let key_for_effect = key.clone();
+                    Effect::new(move |_| {
+                        let t = text.get();
+                        form.values.update(|v| {
+                            v.insert(key_for_effect.clone(), t);
+                        });
+                    });
+                    let param_key = p.key.to_string();
+                    let error = Signal::derive(move || errors.with(|e| e.get(&param_key).cloned()));
+                    let id = format!("{}{}", form.id_prefix, p.key);
+                    view! {
+                        <NumberField id=id label=p.label.to_string() unit=p.unit value=text error=error />
+                    }
+                })
+                .collect_view()}
+        }
+        .into_any()
+    };
+    view! {
+        <fieldset>
+            <legend>{legend}</legend>
+            <SelectField
+                id=select_id
+                label="Controller"
+                options=ControllerKind::ALL.iter().map(|k| (k.name(), k.label())).collect()
+                value=form.kind
+            />
+            {fields}
+        </fieldset>
+    }
+}

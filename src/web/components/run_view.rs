@@ -1,0 +1,353 @@
+//! Charts, metrics table and event log of closed-loop runs, shared by Simulate and Compare.
+
+use std::ops::Range;
+use std::sync::Arc;
+
+use leptos::prelude::*;
+
+use crate::charts::{Axis, LineChart, Series, PALETTE};
+use crate::closed_loop::lab::RunResult;
+use crate::closed_loop::metrics::Metrics;
+use crate::web::components::chart::ChartCanvas;
+
+/// A run with the name it is shown under.
+pub type NamedRun = (String, Arc<RunResult>);
+
+fn series_of(
+    run: &RunResult,
+    value: impl Fn(&crate::closed_loop::trace::TraceRow) -> f64,
+) -> Vec<(f64, f64)> {
+    run.trace
+        .rows
+        .iter()
+        .map(|r| (r.time_s, value(r)))
+        .collect()
+}
+
+fn time_chart(y_label: &str) -> LineChart {
+    LineChart::new(Axis::linear("time (s)"), Axis::linear(y_label))
+}
+
+/// The charts of one or more runs: force, current, override, feed, depth. With one run every
+/// signal of it is drawn; with several, the main signal of each run is overlaid.
+pub fn run_charts(runs: &[NamedRun]) -> [LineChart; 5] {
+    let mut force = time_chart("force (N)");
+    let mut current = time_chart("current (A)");
+    let mut override_pct = time_chart("feed override (%)");
+    let mut feed = time_chart("feed (mm/min)");
+    let mut depth = time_chart("depth of cut (mm)");
+    let single = runs.len() == 1;
+    for (k, (name, run)) in runs.iter().enumerate() {
+        let color = PALETTE[k % PALETTE.len()];
+        let label = |what: &str| {
+            if single {
+                what.to_string()
+            } else {
+                format!("{name}: {what}")
+            }
+        };
+        force.series.push(Series::new(
+            label("true force"),
+            color,
+            series_of(run, |r| r.force_n),
+        ));
+        if single {
+            force.series.push(Series::new(
+                "estimated from current",
+                PALETTE[1],
+                series_of(run, |r| r.force_est_n),
+            ));
+            if run
+                .trace
+                .rows
+                .iter()
+                .any(|r| r.force_power_law_n.is_finite() && r.force_power_law_n > 0.0)
+            {
+                force.series.push(
+                    Series::new(
+                        "power law (sensorless)",
+                        PALETTE[4],
+                        series_of(run, |r| r.force_power_law_n),
+                    )
+                    .dashed(),
+                );
+            }
+            current.series.push(Series::new(
+                "spindle RMS",
+                PALETTE[0],
+                series_of(run, |r| r.spindle_current_rms_a),
+            ));
+            current.series.push(Series::new(
+                "feed RMS",
+                PALETTE[2],
+                series_of(run, |r| r.feed_current_rms_a),
+            ));
+            current.series.push(Series::new(
+                "feed i_u max (raw)",
+                PALETTE[3],
+                series_of(run, |r| r.feed_current_u_max_a),
+            ));
+            current.series.push(Series::new(
+                "feed i_u min (raw)",
+                PALETTE[3],
+                series_of(run, |r| r.feed_current_u_min_a),
+            ));
+            override_pct.series.push(
+                Series::new(
+                    "requested",
+                    PALETTE[5],
+                    series_of(run, |r| r.requested_override_pct),
+                )
+                .dashed(),
+            );
+            override_pct.series.push(Series::new(
+                "commanded (after the envelope)",
+                PALETTE[0],
+                series_of(run, |r| r.override_pct),
+            ));
+            feed.series.push(
+                Series::new(
+                    "programmed",
+                    PALETTE[7],
+                    series_of(run, |r| r.programmed_feed_mm_min),
+                )
+                .dashed(),
+            );
+        } else {
+            current.series.push(Series::new(
+                label("spindle RMS"),
+                color,
+                series_of(run, |r| r.spindle_current_rms_a),
+            ));
+            override_pct.series.push(Series::new(
+                label("override"),
+                color,
+                series_of(run, |r| r.override_pct),
+            ));
+        }
+        feed.series.push(Series::new(
+            label("actual"),
+            color,
+            series_of(run, |r| r.feed_mm_min),
+        ));
+        if single || k == 0 {
+            depth.series.push(Series::new(
+                "axial depth",
+                PALETTE[0],
+                series_of(run, |r| r.depth_mm),
+            ));
+        }
+    }
+    let end = runs
+        .iter()
+        .filter_map(|(_, r)| r.trace.rows.last().map(|row| row.time_s))
+        .fold(0.0, f64::max);
+    if let Some((_, first)) = runs.first() {
+        let limits = [
+            ("target", first.settings.target_force_n),
+            ("limit", first.settings.force_limit_n),
+        ];
+        for (name, value) in limits {
+            force
+                .series
+                .push(Series::new(name, PALETTE[7], vec![(0.0, value), (end, value)]).dashed());
+        }
+    }
+    let mut charts = [force, current, override_pct, feed, depth];
+    for c in &mut charts {
+        c.fit();
+        // One time axis for every chart, whichever run lasted longest.
+        if end > 0.0 {
+            c.x.range = 0.0..end;
+        }
+    }
+    charts
+}
+
+/// The five linked charts of one or more runs.
+#[component]
+pub fn RunCharts(
+    /// The runs to draw.
+    #[prop(into)]
+    runs: Signal<Vec<NamedRun>>,
+) -> impl IntoView {
+    let x_view = RwSignal::new(None::<Range<f64>>);
+    let charts = Memo::new(move |_| runs.with(|r| run_charts(r)));
+    let chart = move |i: usize| Signal::derive(move || charts.with(|c| c[i].clone()));
+    view! {
+        <div class="charts">
+            <ChartCanvas label="Cutting force" chart=chart(0) height_px=240 x_view=x_view />
+            <ChartCanvas label="Motor current" chart=chart(1) height_px=190 x_view=x_view />
+            <ChartCanvas label="Feed override" chart=chart(2) height_px=170 x_view=x_view />
+            <ChartCanvas label="Feed rate" chart=chart(3) height_px=170 x_view=x_view />
+            <ChartCanvas label="Depth of cut" chart=chart(4) height_px=140 x_view=x_view />
+        </div>
+    }
+}
+
+/// Which way is better for a metric.
+#[derive(Clone, Copy, PartialEq)]
+enum Better {
+    Lower,
+    Higher,
+    Neither,
+}
+
+type MetricGetter = fn(&RunResult) -> Option<f64>;
+
+const METRIC_ROWS: [(&str, &str, Better, MetricGetter); 14] = [
+    ("Target force", "N", Better::Neither, |r| {
+        Some(r.settings.target_force_n)
+    }),
+    ("Cycle time", "s", Better::Lower, |r| {
+        Some(r.metrics.cycle_time_s)
+    }),
+    ("Saving vs programmed feed", "%", Better::Higher, |r| {
+        r.metrics.saving_vs_programmed_pct
+    }),
+    ("Saving vs safe fixed feed", "%", Better::Higher, |r| {
+        r.metrics.saving_vs_safe_fixed_pct
+    }),
+    ("Force IAE", "N·s", Better::Lower, |r| {
+        Some(r.metrics.force_iae_n_s)
+    }),
+    ("Force RMS error", "N", Better::Lower, |r| {
+        Some(r.metrics.force_rms_error_n)
+    }),
+    ("Mean |error|", "%", Better::Lower, |r| {
+        Some(r.metrics.force_mean_abs_error_pct)
+    }),
+    ("Peak force", "N", Better::Lower, |r| {
+        Some(r.metrics.peak_force_n)
+    }),
+    ("Time above limit", "s", Better::Lower, |r| {
+        Some(r.metrics.time_above_limit_s)
+    }),
+    (
+        "Max overshoot after a depth step",
+        "%",
+        Better::Lower,
+        |r| Some(r.metrics.max_overshoot_pct),
+    ),
+    ("Max settling time", "s", Better::Lower, |r| {
+        r.metrics.max_settling_time_s
+    }),
+    ("Override changes", "", Better::Lower, |r| {
+        Some(r.metrics.override_changes as f64)
+    }),
+    ("Override total variation", "%", Better::Lower, |r| {
+        Some(r.metrics.override_total_variation_pct)
+    }),
+    ("Mean removal rate", "mm³/s", Better::Higher, |r| {
+        Some(r.metrics.mean_material_removal_mm3_s)
+    }),
+];
+
+fn format_metric(v: Option<f64>) -> String {
+    match v {
+        Some(v) if v.is_finite() => {
+            if v.fract() == 0.0 || v.abs() >= 100.0 {
+                format!("{v:.0}")
+            } else {
+                format!("{v:.2}")
+            }
+        }
+        _ => "—".to_string(),
+    }
+}
+
+/// The metrics of the runs as a table; with several runs the best value of each row is marked.
+#[component]
+pub fn MetricsTable(
+    /// The runs.
+    #[prop(into)]
+    runs: Signal<Vec<NamedRun>>,
+) -> impl IntoView {
+    move || {
+        let runs = runs.get();
+        if runs.is_empty() {
+            return None;
+        }
+        let several = runs.len() > 1;
+        Some(view! {
+            <table class="metrics">
+                <caption>"Metrics of the run" {several.then_some("s (best marked ★)")}</caption>
+                <thead>
+                    <tr>
+                        <th scope="col">"Metric"</th>
+                        {runs.iter().map(|(n, _)| view! { <th scope="col">{n.clone()}</th> }).collect_view()}
+                    </tr>
+                </thead>
+                <tbody>
+                    {METRIC_ROWS
+                        .iter()
+                        .map(|(label, unit, better, get)| {
+                            let values: Vec<Option<f64>> = runs.iter().map(|(_, r)| get(r)).collect();
+                            let best = match better {
+                                _ if !several => None,
+                                Better::Neither => None,
+                                Better::Lower => values.iter().flatten().cloned().filter(|v| v.is_finite()).reduce(f64::min),
+                                Better::Higher => values.iter().flatten().cloned().filter(|v| v.is_finite()).reduce(f64::max),
+                            };
+                            let head = if unit.is_empty() { label.to_string() } else { format!("{label} ({unit})") };
+                            view! {
+                                <tr>
+                                    <th scope="row">{head}</th>
+                                    {values
+                                        .into_iter()
+                                        .map(|v| {
+                                            let is_best = best.is_some() && v == best;
+                                            view! {
+                                                <td class:best=is_best>
+                                                    {format_metric(v)}
+                                                    {is_best.then(|| view! { <span class="best-mark" aria-label="best">" ★"</span> })}
+                                                </td>
+                                            }
+                                        })
+                                        .collect_view()}
+                                </tr>
+                            }
+                        })
+                        .collect_view()}
+                </tbody>
+            </table>
+        })
+    }
+}
+
+/// The safety events of a run.
+#[component]
+pub fn EventLog(
+    /// The run.
+    #[prop(into)]
+    run: Signal<Option<Arc<RunResult>>>,
+) -> impl IntoView {
+    move || {
+        run.get().map(|r| {
+            let events = r.trace.events.clone();
+            view! {
+                <section class="event-log" aria-labelledby="events-title">
+                    <h2 id="events-title">"Event log"</h2>
+                    {if events.is_empty() {
+                        view! { <p class="hint">"No events."</p> }.into_any()
+                    } else {
+                        view! {
+                            <ol>
+                                {events
+                                    .iter()
+                                    .map(|e| view! { <li><span class="event-time">{format!("{:.2} s", e.time_s())}</span>" "{e.describe()}</li> })
+                                    .collect_view()}
+                            </ol>
+                        }
+                        .into_any()
+                    }}
+                </section>
+            }
+        })
+    }
+}
+
+/// Metrics as JSON and the trace as CSV, for the export buttons.
+pub fn metrics_json(metrics: &Metrics) -> String {
+    serde_json::to_string_pretty(metrics).unwrap_or_else(|e| format!("{{\"error\": \"{e}\"}}"))
+}

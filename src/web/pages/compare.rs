@@ -1,0 +1,205 @@
+//! Compare: one scenario, two to four controller variants, overlaid and side by side.
+
+use std::time::Duration;
+
+use leptos::prelude::*;
+
+use crate::closed_loop::lab::RunSpec;
+use crate::control::registry::ControllerKind;
+use crate::plant::Preset;
+use crate::web::components::run_form::{
+    ControllerFields, ControllerForm, ScenarioFields, ScenarioForm,
+};
+use crate::web::components::run_view::{MetricsTable, NamedRun, RunCharts};
+use crate::web::components::runner::{RunProgress, RunStatus, Runner};
+use crate::web::route::{query_params, replace_query, Page};
+
+const RERUN_DELAY: Duration = Duration::from_millis(350);
+const VARIANT_PREFIXES: [&str; 4] = ["a.", "b.", "c.", "d."];
+const VARIANT_NAMES: [&str; 4] = ["A", "B", "C", "D"];
+
+/// A comparison the papers make, one click away.
+struct PaperComparison {
+    label: &'static str,
+    preset: Preset,
+    controllers: &'static [ControllerKind],
+}
+
+const PAPER_COMPARISONS: [PaperComparison; 4] = [
+    PaperComparison {
+        label: "Paper 003: fixed feed vs threshold control over DOC steps",
+        preset: Preset::KimStepDoc,
+        controllers: &[ControllerKind::Fixed, ControllerKind::Threshold],
+    },
+    PaperComparison {
+        label: "Paper 003: across the material change",
+        preset: Preset::KimMaterialTaper,
+        controllers: &[ControllerKind::Fixed, ControllerKind::Threshold],
+    },
+    PaperComparison {
+        label: "Paper 001: adaptive control at DOC 4 mm",
+        preset: Preset::ManeeratDoc4,
+        controllers: &[
+            ControllerKind::Fixed,
+            ControllerKind::Mrac,
+            ControllerKind::Pi,
+        ],
+    },
+    PaperComparison {
+        label: "Paper 000 vs 003: restriction vs threshold vs PI",
+        preset: Preset::KimCircularTaper,
+        controllers: &[
+            ControllerKind::Restriction,
+            ControllerKind::Threshold,
+            ControllerKind::Pi,
+        ],
+    },
+];
+
+/// The Compare page.
+#[component]
+pub fn ComparePage() -> impl IntoView {
+    let query = query_params(&window().location().hash().unwrap_or_default());
+    let scenario = ScenarioForm::new(&query);
+    let defaults = [
+        ControllerKind::Fixed,
+        ControllerKind::Threshold,
+        ControllerKind::Pi,
+        ControllerKind::Mrac,
+    ];
+    let forms: [ControllerForm; 4] = std::array::from_fn(|i| {
+        ControllerForm::new(
+            ["cmp-a-", "cmp-b-", "cmp-c-", "cmp-d-"][i],
+            defaults[i],
+            &query,
+            VARIANT_PREFIXES[i],
+        )
+    });
+    let initial_count = query
+        .iter()
+        .find(|(k, _)| k == "variants")
+        .and_then(|(_, v)| v.parse::<usize>().ok())
+        .unwrap_or(2)
+        .clamp(2, 4);
+    let count = RwSignal::new(initial_count);
+    let runner = Runner::new();
+    let status = runner.status;
+
+    let specs = Memo::new(move |_| {
+        let s = scenario.parse().ok()?;
+        forms[..count.get()]
+            .iter()
+            .map(|f| {
+                f.parse().ok().map(|c| RunSpec {
+                    preset: s.preset,
+                    controller: c,
+                    seed: s.seed,
+                    settings: s.settings,
+                })
+            })
+            .collect::<Option<Vec<_>>>()
+    });
+
+    let edits = StoredValue::new(0u64);
+    let runner_for_effect = runner.clone();
+    let runner_for_cleanup = runner.clone();
+    on_cleanup(move || runner_for_cleanup.cancel());
+    Effect::new(move |_| {
+        let mut q = scenario.query();
+        q.push(("variants".into(), count.get().to_string()));
+        for (form, prefix) in forms.iter().zip(VARIANT_PREFIXES).take(count.get()) {
+            q.extend(form.query(prefix));
+        }
+        replace_query(Page::Compare, &q);
+        let Some(specs) = specs.get() else {
+            return;
+        };
+        edits.update_value(|n| *n += 1);
+        let mine = edits.get_value();
+        let runner = runner_for_effect.clone();
+        set_timeout(
+            move || {
+                // `try_`: the page may have been left before the delay ran out.
+                if edits.try_get_value() == Some(mine) {
+                    runner.start(specs);
+                }
+            },
+            RERUN_DELAY,
+        );
+    });
+
+    let results = Memo::new(move |previous: Option<&Vec<NamedRun>>| match status.get() {
+        RunStatus::Done(results) => results
+            .into_iter()
+            .enumerate()
+            .map(|(i, r)| {
+                let label = forms[i].kind.get_untracked();
+                (format!("{}: {label}", VARIANT_NAMES[i]), r)
+            })
+            .collect(),
+        _ => previous.cloned().unwrap_or_default(),
+    });
+    let runs = Signal::derive(move || results.get());
+
+    view! {
+        <section class="page" aria-labelledby="compare-title">
+            <h1 id="compare-title">"Compare controllers"</h1>
+            <p class="lede">
+                "One scenario and seed, two to four controllers or tunings. The traces are overlaid "
+                "on linked time axes and the metrics table marks the best value of each row."
+            </p>
+            <div class="layout-two">
+                <form class="panel" aria-label="Comparison settings" on:submit=|ev| ev.prevent_default()>
+                    <fieldset>
+                        <legend>"The papers' comparisons"</legend>
+                        <div class="preset-row">
+                            {PAPER_COMPARISONS
+                                .iter()
+                                .map(|c| {
+                                    view! {
+                                        <button
+                                            type="button"
+                                            class="preset"
+                                            on:click=move |_| {
+                                                scenario.preset.set(c.preset.name().to_string());
+                                                scenario.target.set(String::new());
+                                                count.set(c.controllers.len().clamp(2, 4));
+                                                for (form, kind) in forms.iter().zip(c.controllers) {
+                                                    form.kind.set(kind.name().to_string());
+                                                }
+                                            }
+                                        >
+                                            {c.label}
+                                        </button>
+                                    }
+                                })
+                                .collect_view()}
+                        </div>
+                    </fieldset>
+                    <ScenarioFields form=scenario />
+                    {move || {
+                        (0..count.get())
+                            .map(|i| {
+                                let legend = ["Variant A", "Variant B", "Variant C", "Variant D"][i];
+                                view! { <ControllerFields form=forms[i] legend=legend /> }
+                            })
+                            .collect_view()
+                    }}
+                    <div class="button-row">
+                        <button type="button" on:click=move |_| count.update(|c| *c = (*c + 1).min(4)) disabled=move || { count.get() >= 4 }>
+                            "Add a variant"
+                        </button>
+                        <button type="button" on:click=move |_| count.update(|c| *c = (*c - 1).max(2)) disabled=move || { count.get() <= 2 }>
+                            "Remove the last variant"
+                        </button>
+                    </div>
+                    <RunProgress runner=runner.clone() />
+                </form>
+                <div class="results">
+                    <RunCharts runs=runs />
+                    <MetricsTable runs=runs />
+                </div>
+            </div>
+        </section>
+    }
+}

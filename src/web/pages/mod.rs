@@ -1,0 +1,6 @@
+//! One module per section of the lab.
+
+pub mod compare;
+pub mod learn;
+pub mod signal_chain;
+pub mod simulate;

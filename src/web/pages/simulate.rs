@@ -1,0 +1,176 @@
+//! Simulate: one closed loop on a preset, re-run whenever a setting changes.
+
+use std::sync::Arc;
+use std::time::Duration;
+
+use leptos::prelude::*;
+
+use crate::closed_loop::lab::RunSpec;
+use crate::closed_loop::trace::write_csv;
+use crate::control::registry::ControllerKind;
+use crate::web::components::download::download_text;
+use crate::web::components::run_form::{
+    ControllerFields, ControllerForm, ScenarioFields, ScenarioForm,
+};
+use crate::web::components::run_view::{metrics_json, EventLog, MetricsTable, NamedRun, RunCharts};
+use crate::web::components::runner::{RunProgress, RunStatus, Runner};
+use crate::web::route::{query_params, replace_query, Page};
+
+/// Wait after the last edit before re-running, so typing "150" does not start three runs.
+const RERUN_DELAY: Duration = Duration::from_millis(350);
+
+/// The Simulate page.
+#[component]
+pub fn SimulatePage() -> impl IntoView {
+    let query = query_params(&window().location().hash().unwrap_or_default());
+    let scenario = ScenarioForm::new(&query);
+    let controller = ControllerForm::new("sim-", ControllerKind::Threshold, &query, "");
+    let runner = Runner::new();
+    let status = runner.status;
+
+    let spec = Memo::new(move |_| {
+        let s = scenario.parse().ok()?;
+        let c = controller.parse().ok()?;
+        Some(RunSpec {
+            preset: s.preset,
+            controller: c,
+            seed: s.seed,
+            settings: s.settings,
+        })
+    });
+
+    // Keep the URL in step with the form, and re-run (debounced) when a valid spec changes.
+    let edits = StoredValue::new(0u64);
+    let runner_for_effect = runner.clone();
+    let runner_for_cleanup = runner.clone();
+    on_cleanup(move || runner_for_cleanup.cancel());
+    Effect::new(move |_| {
+        let mut q = scenario.query();
+        q.extend(controller.query(""));
+        replace_query(Page::Simulate, &q);
+        let Some(spec) = spec.get() else {
+            return;
+        };
+        edits.update_value(|n| *n += 1);
+        let mine = edits.get_value();
+        let runner = runner_for_effect.clone();
+        set_timeout(
+            move || {
+                // `try_`: the page may have been left before the delay ran out.
+                if edits.try_get_value() == Some(mine) {
+                    runner.start(vec![spec]);
+                }
+            },
+            RERUN_DELAY,
+        );
+    });
+
+    // The last finished run stays on screen while the next one computes.
+    let result = Memo::new(
+        move |previous: Option<&Option<Arc<_>>>| match status.get() {
+            RunStatus::Done(mut results) => results.pop(),
+            _ => previous.cloned().flatten(),
+        },
+    );
+    let runs = Signal::derive(move || {
+        result
+            .get()
+            .map(|r| {
+                let name = spec
+                    .with_untracked(|s| s.as_ref().map(|s| s.controller.kind().label().to_string()))
+                    .unwrap_or_else(|| "run".into());
+                vec![(name, r) as NamedRun]
+            })
+            .unwrap_or_default()
+    });
+    let (export_error, set_export_error) = signal(None::<String>);
+    let export_csv = move |_| {
+        if let Some(r) = result.get_untracked() {
+            let mut bytes = Vec::new();
+            let outcome = write_csv(&r.trace, &mut bytes)
+                .map_err(|e| e.to_string())
+                .and_then(|()| {
+                    download_text(
+                        "cutlab-trace.csv",
+                        "text/csv",
+                        &String::from_utf8_lossy(&bytes),
+                    )
+                });
+            set_export_error.set(outcome.err());
+        }
+    };
+    let export_metrics = move |_| {
+        if let Some(r) = result.get_untracked() {
+            set_export_error.set(
+                download_text(
+                    "cutlab-metrics.json",
+                    "application/json",
+                    &metrics_json(&r.metrics),
+                )
+                .err(),
+            );
+        }
+    };
+    let export_config = move |_| {
+        let config = spec.get_untracked().map(|s| {
+            serde_json::json!({
+                "preset": s.preset.name(),
+                "seed": s.seed,
+                "controller": s.controller,
+                "target_force_n": s.settings.target_force_n,
+                "max_override_pct": s.settings.max_override_pct,
+                "link": window().location().href().unwrap_or_default(),
+            })
+        });
+        if let Some(c) = config {
+            let text = serde_json::to_string_pretty(&c).unwrap_or_default();
+            set_export_error
+                .set(download_text("cutlab-config.json", "application/json", &text).err());
+        }
+    };
+    let runner_for_button = runner.clone();
+    let run_now = move |_| {
+        if let Some(s) = spec.get_untracked() {
+            runner_for_button.start(vec![s]);
+        }
+    };
+
+    view! {
+        <section class="page" aria-labelledby="simulate-title">
+            <h1 id="simulate-title">"Simulate a closed loop"</h1>
+            <p class="lede">
+                "Pick one of the papers' experiments and a controller. A teach cut first calibrates "
+                "the current-to-force model; then the controller holds the force through the "
+                "safety envelope while the simulated machine cuts. Every change re-runs."
+            </p>
+            <div class="layout-two">
+                <form class="panel" aria-label="Run settings" on:submit=|ev| ev.prevent_default()>
+                    <ScenarioFields form=scenario />
+                    <ControllerFields form=controller />
+                    <div class="button-row">
+                        <button type="button" class="primary" on:click=run_now>"Run"</button>
+                    </div>
+                    <RunProgress runner=runner.clone() />
+                    <fieldset>
+                        <legend>"Export"</legend>
+                        <div class="button-row">
+                            <button type="button" on:click=export_csv disabled=move || result.get().is_none()>
+                                "Trace (CSV)"
+                            </button>
+                            <button type="button" on:click=export_metrics disabled=move || result.get().is_none()>
+                                "Metrics (JSON)"
+                            </button>
+                            <button type="button" on:click=export_config>"Configuration (JSON)"</button>
+                        </div>
+                        {move || export_error.get().map(|e| view! { <p class="run-error" role="alert">{e}</p> })}
+                    </fieldset>
+                </form>
+                <div class="results">
+                    <RunCharts runs=runs />
+                    <MetricsTable runs=runs />
+                    <EventLog run=Signal::derive(move || result.get()) />
+                </div>
+            </div>
+        </section>
+    }
+}

@@ -1,0 +1,98 @@
+// Shared set-up for the browser tests: serves the release build in dist/ on a free loopback port,
+// drives Debian's Chromium through playwright-core, and records every console error and uncaught
+// exception so each test can fail on them.
+import { createServer } from 'node:http';
+import { readFile, mkdir } from 'node:fs/promises';
+import { createRequire } from 'node:module';
+import { extname, join, normalize, dirname } from 'node:path';
+import { fileURLToPath } from 'node:url';
+
+const here = dirname(fileURLToPath(import.meta.url));
+export const root = join(here, '..', '..');
+const require = createRequire(join(root, 'scripts', 'node', 'package.json'));
+const { chromium } = require('playwright-core');
+
+const dist = join(root, 'dist');
+export const artifacts = join(root, 'artifacts', 'browser');
+
+const types = {
+  '.html': 'text/html; charset=utf-8',
+  '.js': 'text/javascript; charset=utf-8',
+  '.wasm': 'application/wasm',
+  '.css': 'text/css; charset=utf-8',
+  '.svg': 'image/svg+xml',
+  '.json': 'application/json',
+  '.csv': 'text/csv; charset=utf-8',
+  '.txt': 'text/plain; charset=utf-8',
+  '.fll': 'text/plain; charset=utf-8',
+};
+
+/** Serves dist/ on 127.0.0.1 at a free port; resolves to { url, close }. */
+export async function serveDist() {
+  const server = createServer(async (req, res) => {
+    try {
+      const path = decodeURIComponent(new URL(req.url, 'http://x').pathname);
+      const file = normalize(join(dist, path.endsWith('/') ? path + 'index.html' : path));
+      if (!file.startsWith(dist)) throw new Error('outside dist');
+      const body = await readFile(file);
+      res.writeHead(200, { 'content-type': types[extname(file)] ?? 'application/octet-stream' });
+      res.end(body);
+    } catch {
+      res.writeHead(404, { 'content-type': 'text/plain' });
+      res.end('not found');
+    }
+  });
+  await new Promise((resolve) => server.listen(0, '127.0.0.1', resolve));
+  const { port } = server.address();
+  return { url: `http://127.0.0.1:${port}/`, close: () => new Promise((r) => server.close(r)) };
+}
+
+/** Launches headless Chromium with the flags this closed network needs. */
+export async function launchBrowser() {
+  return chromium.launch({
+    executablePath: '/usr/bin/chromium',
+    args: [
+      '--headless', '--no-sandbox', '--disable-gpu', '--disable-quic', '--no-first-run',
+      '--disable-background-networking', '--disable-component-update', '--disable-sync',
+    ],
+  });
+}
+
+/**
+ * Opens the lab at `hash` in a fresh page of `browser`; returns { page, problems }, where
+ * `problems` collects console errors and uncaught exceptions for the test to assert empty.
+ */
+export async function openLab(browser, baseUrl, hash = '', viewport = { width: 1280, height: 720 }) {
+  const context = await browser.newContext({ viewport, deviceScaleFactor: 1 });
+  const page = await context.newPage();
+  const problems = [];
+  page.on('console', (msg) => {
+    if (msg.type() === 'error') problems.push(`console error: ${msg.text()}`);
+  });
+  page.on('pageerror', (err) => problems.push(`uncaught exception: ${err.message}`));
+  await page.goto(baseUrl + hash);
+  // The app is mounted once the navigation landmark exists.
+  await page.getByRole('navigation', { name: 'Lab sections' }).waitFor();
+  return { page, problems, context };
+}
+
+/** The canvas's pixels as a data URL, to detect a redraw. */
+export async function canvasPixels(locator) {
+  return locator.evaluate((canvas) => canvas.toDataURL());
+}
+
+/** Waits until the canvas shows something other than `before` (no fixed sleeps). */
+export async function waitForRedraw(locator, before, timeout = 10_000) {
+  const handle = await locator.elementHandle();
+  await locator.page().waitForFunction(
+    ([canvas, old]) => canvas.toDataURL() !== old,
+    [handle, before],
+    { timeout },
+  );
+}
+
+/** Saves a screenshot under artifacts/browser/ (git-ignored). */
+export async function screenshot(page, name) {
+  await mkdir(artifacts, { recursive: true });
+  await page.screenshot({ path: join(artifacts, `${name}.png`), fullPage: true });
+}

@@ -1,0 +1,114 @@
+// The Simulate page: run a preset, change a parameter and see it re-run, explore a chart, export.
+import { test, before, after } from 'node:test';
+import assert from 'node:assert/strict';
+import { readFile } from 'node:fs/promises';
+import { serveDist, launchBrowser, openLab, canvasPixels, waitForRedraw, screenshot } from './harness.mjs';
+
+let server;
+let browser;
+before(async () => {
+  server = await serveDist();
+  browser = await launchBrowser();
+});
+after(async () => {
+  await browser?.close();
+  await server?.close();
+});
+
+const RUN_TIMEOUT = 60_000;
+
+/** Waits until a run has finished and the metrics table shows a cycle time. */
+async function waitForResult(page) {
+  const table = page.getByRole('table', { name: /Metrics of the run/ });
+  await table.getByRole('row', { name: /Cycle time/ }).getByRole('cell').first().waitFor({ timeout: RUN_TIMEOUT });
+  await page.getByRole('status').filter({ hasText: 'Running' }).waitFor({ state: 'detached', timeout: RUN_TIMEOUT });
+  return table;
+}
+
+test('a run shows force, current, override, feed and depth charts, metrics and events', async () => {
+  const { page, problems, context } = await openLab(browser, server.url, '#/simulate?preset=maneerat-doc-1&controller=pi');
+  const table = await waitForResult(page);
+  for (const name of ['Cutting force', 'Motor current', 'Feed override', 'Feed rate', 'Depth of cut']) {
+    await page.getByRole('img', { name }).waitFor();
+  }
+  const cycle = await table.getByRole('row', { name: /Cycle time/ }).textContent();
+  assert.match(cycle, /\d/);
+  await page.getByRole('heading', { name: 'Event log' }).waitFor();
+  await page.getByText(/armed: the controller now sets the override/).waitFor();
+  await screenshot(page, 'simulate');
+  assert.deepEqual(problems, []);
+  await context.close();
+});
+
+test('changing a controller parameter re-runs and redraws, and the URL keeps the setting', async () => {
+  const { page, problems, context } = await openLab(browser, server.url, '#/simulate?preset=maneerat-doc-1&controller=pi');
+  await waitForResult(page);
+  const force = page.getByRole('img', { name: 'Cutting force' });
+  const before = await canvasPixels(force);
+  await page.getByLabel('K_p (% per %)').fill('1.5');
+  await waitForRedraw(force, before, RUN_TIMEOUT);
+  assert.match(page.url(), /kp=1\.5/);
+  // A bad value is explained beside the field and the last result stays.
+  const ki = page.getByLabel('K_i (% per %·s)');
+  await ki.fill('-4');
+  await page.getByText(/ki_per_s = -4 is outside/).waitFor();
+  assert.equal(await ki.getAttribute('aria-invalid'), 'true');
+  await page.getByRole('table', { name: /Metrics of the run/ }).waitFor();
+  assert.deepEqual(problems, []);
+  await context.close();
+});
+
+test('a chart zooms with the wheel and the keyboard, resets, and toggles series', async () => {
+  const { page, problems, context } = await openLab(browser, server.url, '#/simulate?preset=maneerat-doc-1&controller=threshold');
+  await waitForResult(page);
+  const force = page.getByRole('img', { name: 'Cutting force' });
+  const box = await force.boundingBox();
+  const before = await canvasPixels(force);
+  await page.mouse.move(box.x + box.width / 2, box.y + box.height / 2);
+  await page.mouse.wheel(0, -400);
+  await waitForRedraw(force, before);
+  // Linked axes: every chart offers the reset now.
+  const resets = page.getByRole('button', { name: 'Reset zoom' });
+  assert.equal(await resets.count(), 5);
+  // The hover readout shows the time under the pointer.
+  await page.getByText(/time \(s\): \d/).first().waitFor();
+  await page.mouse.dblclick(box.x + box.width / 2, box.y + box.height / 2);
+  await resets.first().waitFor({ state: 'detached' });
+  // Keyboard: focus the chart, + zooms in, 0 resets.
+  await force.focus();
+  await page.keyboard.press('+');
+  await resets.first().waitFor();
+  await page.keyboard.press('0');
+  await resets.first().waitFor({ state: 'detached' });
+  // The legend is a set of toggle buttons.
+  const estimated = page.getByRole('button', { name: 'estimated from current' });
+  assert.equal(await estimated.getAttribute('aria-pressed'), 'true');
+  const shown = await canvasPixels(force);
+  await estimated.click();
+  assert.equal(await estimated.getAttribute('aria-pressed'), 'false');
+  await waitForRedraw(force, shown);
+  assert.deepEqual(problems, []);
+  await context.close();
+});
+
+test('the trace exports as CSV and the configuration as JSON', async () => {
+  const { page, problems, context } = await openLab(browser, server.url, '#/simulate?preset=maneerat-doc-1&controller=fixed');
+  await waitForResult(page);
+  const [csv] = await Promise.all([
+    page.waitForEvent('download'),
+    page.getByRole('button', { name: 'Trace (CSV)' }).click(),
+  ]);
+  assert.equal(csv.suggestedFilename(), 'cutlab-trace.csv');
+  const text = await readFile(await csv.path(), 'utf8');
+  assert.match(text.split('\n')[0], /^time_s,depth_mm,/);
+  assert.ok(text.split('\n').length > 100);
+  const [config] = await Promise.all([
+    page.waitForEvent('download'),
+    page.getByRole('button', { name: 'Configuration (JSON)' }).click(),
+  ]);
+  const json = JSON.parse(await readFile(await config.path(), 'utf8'));
+  assert.equal(json.preset, 'maneerat-doc-1');
+  assert.equal(json.controller.kind, 'fixed');
+  assert.deepEqual(problems, []);
+  await context.close();
+});
