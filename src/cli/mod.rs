@@ -9,6 +9,7 @@ pub mod calibrate;
 pub mod controllers;
 pub mod filter;
 pub mod force;
+pub mod fuzzy;
 pub mod scenarios;
 pub mod sim;
 pub mod spectrum;
@@ -61,6 +62,11 @@ pub const COMMANDS: &[Command] = &[
         name: "force",
         about: "Mean and peak milling forces of one cut (mechanistic model, whole revolutions)",
         run: force::run,
+    },
+    Command {
+        name: "fuzzy",
+        about: "Evaluate a fuzzy engine from an FLL file, or export paper 002's engine as FLL",
+        run: fuzzy::run,
     },
     Command {
         name: "scenarios",

@@ -8,6 +8,9 @@ use std::str::FromStr;
 use serde::{Deserialize, Serialize};
 
 use super::fixed::FixedFeed;
+use super::fuzzy::controller::{FuzzyController, FuzzyParams};
+use super::fuzzy::engine::Defuzzifier;
+use super::fuzzy::rules::{RuleBase, RuleTable};
 use super::law::Controller;
 use super::mrac::{ModelReferenceAdaptive, MracParams};
 use super::pi::{PiController, PiParams};
@@ -228,6 +231,37 @@ const MRAC_PARAMS: &[ParamSpec] = &[
     ),
 ];
 
+const FUZZY_PARAMS: &[ParamSpec] = &[
+    param(
+        "error_range_pct",
+        "Error range",
+        "% of target",
+        100.0,
+        1.0,
+        1000.0,
+        "|E| that saturates the error input (paper 002: 25 A of 25 A, k_e = 6/25)",
+    ),
+    param(
+        "change_range_pct",
+        "Error-change range",
+        "% of target",
+        200.0,
+        1.0,
+        2000.0,
+        "|EC| per control period that saturates the change input (paper 002: k_ec = 3/25)",
+    ),
+    param(
+        "output_range_pct",
+        "Output range",
+        "%",
+        20.0,
+        0.1,
+        255.0,
+        "override change per period at |U| = 6 (paper 002's k_u = 250 of 1500 mm/min is 100 %, \
+         which chatters at cutlab's 40–60 ms periods; the paper's period is not stated)",
+    ),
+];
+
 /// Every controller of the lab.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
@@ -242,14 +276,20 @@ pub enum ControllerKind {
     Pi,
     /// Paper 001's Lyapunov model-reference adaptive control.
     Mrac,
+    /// Paper 002's fuzzy controller with the experience-based (MacVicar-Whelan) rules.
+    FuzzyExperience,
+    /// Paper 002's fuzzy controller with the dynamics-based rules of Table 4.
+    FuzzyDynamics,
 }
 
 impl ControllerKind {
     /// Every controller, in the order the lab lists them.
-    pub const ALL: [ControllerKind; 5] = [
+    pub const ALL: [ControllerKind; 7] = [
         ControllerKind::Fixed,
         ControllerKind::Restriction,
         ControllerKind::Threshold,
+        ControllerKind::FuzzyExperience,
+        ControllerKind::FuzzyDynamics,
         ControllerKind::Pi,
         ControllerKind::Mrac,
     ];
@@ -262,6 +302,8 @@ impl ControllerKind {
             ControllerKind::Threshold => "threshold",
             ControllerKind::Pi => "pi",
             ControllerKind::Mrac => "mrac",
+            ControllerKind::FuzzyExperience => "fuzzy-experience",
+            ControllerKind::FuzzyDynamics => "fuzzy-dynamics",
         }
     }
 
@@ -273,6 +315,8 @@ impl ControllerKind {
             ControllerKind::Threshold => "Threshold-proportional",
             ControllerKind::Pi => "PI with anti-windup",
             ControllerKind::Mrac => "Lyapunov adaptive (MRAC)",
+            ControllerKind::FuzzyExperience => "Fuzzy, experience rules",
+            ControllerKind::FuzzyDynamics => "Fuzzy, dynamics rules",
         }
     }
 
@@ -284,6 +328,10 @@ impl ControllerKind {
             ControllerKind::Threshold => "Kim, Kwon, Chu (paper 003), §8, Fig. 9",
             ControllerKind::Pi => "textbook; back-calculation anti-windup per Åström & Hägglund",
             ControllerKind::Mrac => "Maneerat, Khaengsarigid, Pasaya (paper 001), §3, eq 5–10",
+            ControllerKind::FuzzyExperience => {
+                "Liu, Wang, Wang (paper 002), §4; MacVicar-Whelan rule table"
+            }
+            ControllerKind::FuzzyDynamics => "Liu, Wang, Wang (paper 002), §4, Table 4 (repaired)",
         }
     }
 
@@ -295,6 +343,7 @@ impl ControllerKind {
             ControllerKind::Threshold => THRESHOLD_PARAMS,
             ControllerKind::Pi => PI_PARAMS,
             ControllerKind::Mrac => MRAC_PARAMS,
+            ControllerKind::FuzzyExperience | ControllerKind::FuzzyDynamics => FUZZY_PARAMS,
         }
     }
 }
@@ -344,6 +393,8 @@ impl std::error::Error for ParamError {}
 pub struct ControllerConfig {
     kind: ControllerKind,
     values: Vec<f64>,
+    /// A user's rule table for the fuzzy controllers (the kind's built-in table when `None`).
+    rule_table: Option<RuleTable>,
 }
 
 /// The serialised form: `{"kind": "pi", "params": {"kp": 0.3, ...}}`; missing parameters take
@@ -353,6 +404,8 @@ struct ControllerConfigText {
     kind: ControllerKind,
     #[serde(default)]
     params: std::collections::BTreeMap<String, f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    rule_table: Option<RuleTable>,
 }
 
 impl TryFrom<ControllerConfigText> for ControllerConfig {
@@ -362,6 +415,9 @@ impl TryFrom<ControllerConfigText> for ControllerConfig {
         let mut config = ControllerConfig::new(text.kind);
         for (key, value) in text.params {
             config.set(&key, value)?;
+        }
+        if let Some(table) = text.rule_table {
+            config.set_rule_table(table)?;
         }
         Ok(config)
     }
@@ -378,6 +434,7 @@ impl From<ControllerConfig> for ControllerConfigText {
                 .zip(&config.values)
                 .map(|(p, v)| (p.key.to_string(), *v))
                 .collect(),
+            rule_table: config.rule_table,
         }
     }
 }
@@ -397,7 +454,33 @@ impl ControllerConfig {
         Self {
             kind,
             values: kind.params().iter().map(|p| p.default).collect(),
+            rule_table: None,
         }
+    }
+
+    /// Uses a user's 7×7 rule table (levels −3…3) for a fuzzy controller.
+    pub fn set_rule_table(&mut self, table: RuleTable) -> Result<(), ParamError> {
+        if !matches!(
+            self.kind,
+            ControllerKind::FuzzyExperience | ControllerKind::FuzzyDynamics
+        ) {
+            return Err(ParamError(format!(
+                "controller \"{}\" has no rule table",
+                self.kind
+            )));
+        }
+        if table.iter().flatten().any(|l| !(-3..=3).contains(l)) {
+            return Err(ParamError(
+                "rule table entries must be levels from -3 (NB) to 3 (PB)".to_string(),
+            ));
+        }
+        self.rule_table = Some(table);
+        Ok(())
+    }
+
+    /// The user's rule table, if one is set.
+    pub fn rule_table(&self) -> Option<&RuleTable> {
+        self.rule_table.as_ref()
     }
 
     /// Which controller.
@@ -500,6 +583,26 @@ impl ControllerConfig {
                 tracking_time_s: v("tracking_time_s"),
                 initial_override_pct: v("initial_override_pct"),
             })),
+            ControllerKind::FuzzyExperience | ControllerKind::FuzzyDynamics => {
+                let base = if self.kind == ControllerKind::FuzzyExperience {
+                    RuleBase::Experience
+                } else {
+                    RuleBase::Dynamics
+                };
+                let table = self.rule_table.unwrap_or_else(|| base.table());
+                Box::new(
+                    FuzzyController::new(
+                        &table,
+                        FuzzyParams {
+                            error_range_pct: v("error_range_pct"),
+                            change_range_pct: v("change_range_pct"),
+                            output_range_pct: v("output_range_pct"),
+                            defuzzifier: Defuzzifier::WeightedAverage,
+                        },
+                    )
+                    .map_err(|e| ParamError(e.to_string()))?,
+                )
+            }
             ControllerKind::Mrac => {
                 if v("min_beta_pct") >= v("max_beta_pct") {
                     return Err(ParamError(

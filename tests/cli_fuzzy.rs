@@ -1,0 +1,74 @@
+//! `cutlab fuzzy export` and `cutlab fuzzy eval`, in-process.
+#![cfg(feature = "cli")]
+// Test code: unwrapping and panicking on a broken expectation is the point.
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
+
+use cutlab::cli::{run, Io};
+
+fn cutlab(args: &[&str], stdin: &str) -> (Result<(), String>, String) {
+    let args: Vec<String> = args.iter().map(|s| s.to_string()).collect();
+    let mut input = stdin.as_bytes();
+    let mut output = Vec::new();
+    let result = run(
+        &args,
+        &mut Io {
+            stdin: &mut input,
+            stdout: &mut output,
+        },
+    );
+    (
+        result.map_err(|e| e.to_string()),
+        String::from_utf8_lossy(&output).into_owned(),
+    )
+}
+
+#[test]
+fn exported_engine_evaluates_line_by_line_at_full_precision() {
+    let dir = std::env::temp_dir().join(format!("cutlab-fuzzy-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("dynamics.fll");
+    let (result, fll) = cutlab(&["fuzzy", "export", "--rules", "dynamics"], "");
+    result.unwrap();
+    assert!(fll.contains("rule: if E is NB and EC is NB then U is NB"));
+    std::fs::write(&path, &fll).unwrap();
+    let (result, out) = cutlab(
+        &["fuzzy", "eval", "--fll", path.to_str().unwrap()],
+        "# E EC\n0 0\n6 6\n\n2.5 -1.3\n",
+    );
+    result.unwrap();
+    let values: Vec<f64> = out.lines().map(|l| l.parse().unwrap()).collect();
+    assert_eq!(values.len(), 3);
+    assert!(values[0].abs() < 1e-12);
+    // Fully PB: the centroid of the right-angled PB triangle (4, 6, 6) is 16/3.
+    assert!((values[1] - 16.0 / 3.0).abs() < 1e-12);
+    // Debian's fuzzylite 6 at resolution 10⁶ gives 0.755600815 for (2.5, -1.3).
+    assert!((values[2] - 0.755_600_815).abs() < 1e-8);
+
+    let (result, _) = cutlab(
+        &["fuzzy", "eval", "--fll", path.to_str().unwrap()],
+        "1 2\n1 two\n",
+    );
+    assert_eq!(
+        result.unwrap_err(),
+        "stdin line 2: cannot parse \"two\" as a number"
+    );
+    let (result, _) = cutlab(&["fuzzy", "eval", "--fll", path.to_str().unwrap()], "1\n");
+    assert!(result
+        .unwrap_err()
+        .starts_with("stdin line 1: 1 values, the engine has 2 inputs"));
+
+    let broken = dir.join("broken.fll");
+    std::fs::write(
+        &broken,
+        fll.replace("term: PB Triangle 4 6 6", "term: PB Gaussian 6 1"),
+    )
+    .unwrap();
+    let (result, _) = cutlab(&["fuzzy", "eval", "--fll", broken.to_str().unwrap()], "");
+    let message = result.unwrap_err();
+    assert!(message.contains(": line "), "{message}");
+    assert!(
+        message.contains("shape Gaussian is not supported"),
+        "{message}"
+    );
+    std::fs::remove_dir_all(dir).ok();
+}
