@@ -187,12 +187,9 @@ fn repaired_table_4_reproduces_table_5_dynamics_lines() {
 #[test]
 fn experience_table_is_the_diagonal_and_close_to_table_5_experience_lines() {
     let table = RuleBase::Experience.table();
-    for e in 0..7 {
-        for ec in 0..7 {
-            assert_eq!(
-                i32::from(table[e][ec]),
-                (e as i32 + ec as i32 - 6).clamp(-3, 3)
-            );
+    for (e, row) in table.iter().enumerate() {
+        for (ec, level) in row.iter().enumerate() {
+            assert_eq!(i32::from(*level), (e as i32 + ec as i32 - 6).clamp(-3, 3));
         }
     }
     // The paper does not print its experience table; the classic diagonal agrees with most of
