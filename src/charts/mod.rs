@@ -262,6 +262,31 @@ fn drawable_runs(
         .filter(|run| !run.is_empty())
 }
 
+/// A short axis label: plain decimals for ordinary magnitudes, `1e-7` style for very small or
+/// large ones (plotters' default prints every digit of a logarithmic axis's ticks).
+///
+/// ```
+/// use cutlab::charts::tick_label;
+/// assert_eq!(tick_label(&0.5), "0.5");
+/// assert_eq!(tick_label(&1500.0), "1500");
+/// assert_eq!(tick_label(&1e-7), "1e-7");
+/// assert_eq!(tick_label(&2.5e6), "2.5e6");
+/// ```
+pub fn tick_label(v: &f64) -> String {
+    let v = *v;
+    let magnitude = v.abs();
+    if v == 0.0 {
+        "0".to_string()
+    } else if !(1e-3..1e5).contains(&magnitude) {
+        let text = format!("{v:.1e}");
+        text.replace(".0e", "e")
+    } else {
+        let text = format!("{v:.4}");
+        let text = text.trim_end_matches('0').trim_end_matches('.');
+        text.to_string()
+    }
+}
+
 /// Visual settings that depend on the output device.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ChartStyle {
@@ -385,6 +410,8 @@ where
         .bold_line_style(RGBColor(214, 220, 228))
         .x_labels(8)
         .y_labels(6)
+        .x_label_formatter(&tick_label)
+        .y_label_formatter(&tick_label)
         .draw()?;
 
     let width = style.px(1.6);

@@ -78,6 +78,13 @@ pub fn visible(
     }
     if shown.series.iter().all(|s| s.points.is_empty()) {
         shown.y.range = y_fixed;
+    } else {
+        // A range the chart set on purpose (e.g. a −200 dB floor) bounds the fitted one.
+        let start = shown.y.range.start.max(y_fixed.start);
+        let end = shown.y.range.end.min(y_fixed.end);
+        if start < end {
+            shown.y.range = start..end;
+        }
     }
     shown
 }
