@@ -445,6 +445,100 @@ where
     })
 }
 
+/// Values on a regular grid, drawn as coloured cells: a control surface U(E, EC).
+#[derive(Debug, Clone, PartialEq)]
+pub struct HeatMap {
+    /// Horizontal axis (label and range of the grid).
+    pub x: Axis,
+    /// Vertical axis.
+    pub y: Axis,
+    /// Columns of the grid.
+    pub nx: usize,
+    /// Rows of the grid.
+    pub ny: usize,
+    /// `values[j * nx + i]` at column i, row j (row 0 at the bottom).
+    pub values: Vec<f64>,
+    /// The value range the colours span.
+    pub value_range: Range<f64>,
+}
+
+/// A diverging blue–white–orange colour for `t` in [0, 1] (readable by colour-blind people).
+pub fn diverging_color(t: f64) -> Rgb {
+    let t = if t.is_finite() {
+        t.clamp(0.0, 1.0)
+    } else {
+        0.5
+    };
+    let (lo, mid, hi) = (
+        (33.0, 102.0, 172.0),
+        (247.0, 247.0, 247.0),
+        (230.0, 97.0, 1.0),
+    );
+    let (a, b, u) = if t < 0.5 {
+        (lo, mid, t / 0.5)
+    } else {
+        (mid, hi, (t - 0.5) / 0.5)
+    };
+    let mix = |p: f64, q: f64| (p + (q - p) * u).round() as u8;
+    Rgb(mix(a.0, b.0), mix(a.1, b.1), mix(a.2, b.2))
+}
+
+/// Draws `map` on `area`; cells outside the value range take the end colours.
+pub fn draw_heat_map<DB: DrawingBackend>(
+    area: &DrawingArea<DB, Shift>,
+    map: &HeatMap,
+    style: ChartStyle,
+) -> DrawResult<DB> {
+    area.fill(&WHITE)?;
+    let x = sanitized(&map.x);
+    let y = sanitized(&map.y);
+    let font = ("sans-serif", f64::from(style.px(13.0)));
+    let small_font = ("sans-serif", f64::from(style.px(12.0)));
+    let mut ctx = ChartBuilder::on(area)
+        .margin(style.px(8.0))
+        .x_label_area_size(style.px(40.0))
+        .y_label_area_size(style.px(52.0))
+        .build_cartesian_2d(x.range.clone(), y.range.clone())?;
+    ctx.configure_mesh()
+        .disable_mesh()
+        .x_desc(x.label.as_str())
+        .y_desc(y.label.as_str())
+        .label_style(small_font)
+        .axis_desc_style(font)
+        .x_label_formatter(&tick_label)
+        .y_label_formatter(&tick_label)
+        .draw()?;
+    let (nx, ny) = (map.nx.max(1), map.ny.max(1));
+    let dx = (x.range.end - x.range.start) / nx as f64;
+    let dy = (y.range.end - y.range.start) / ny as f64;
+    let span = map.value_range.end - map.value_range.start;
+    ctx.draw_series((0..ny).flat_map(|j| {
+        (0..nx).map(move |i| {
+            let v = map.values.get(j * nx + i).copied().unwrap_or(f64::NAN);
+            let t = if span > 0.0 {
+                (v - map.value_range.start) / span
+            } else {
+                0.5
+            };
+            let x0 = x.range.start + i as f64 * dx;
+            let y0 = y.range.start + j as f64 * dy;
+            Rectangle::new(
+                [(x0, y0), (x0 + dx, y0 + dy)],
+                diverging_color(t).plotters().filled(),
+            )
+        })
+    }))?;
+    let (x_px, y_px) = ctx.plotting_area().get_pixel_range();
+    Ok(PlotGeometry {
+        x_px,
+        y_px,
+        x_range: x.range,
+        y_range: y.range,
+        x_scale: Scale::Linear,
+        y_scale: Scale::Linear,
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -535,6 +629,37 @@ mod tests {
         assert_eq!(chart.y.range, 2.5..3.5);
         chart.x.range = f64::NAN..1.0;
         render(&chart);
+    }
+
+    #[test]
+    fn heat_maps_draw_one_cell_per_value_in_diverging_colours() {
+        let map = HeatMap {
+            x: Axis {
+                label: "E".into(),
+                range: -6.0..6.0,
+                scale: Scale::Linear,
+            },
+            y: Axis {
+                label: "EC".into(),
+                range: -6.0..6.0,
+                scale: Scale::Linear,
+            },
+            nx: 3,
+            ny: 2,
+            values: vec![-6.0, 0.0, 6.0, -3.0, 3.0, f64::NAN],
+            value_range: -6.0..6.0,
+        };
+        let mut svg = String::new();
+        {
+            let area = SVGBackend::with_string(&mut svg, (300, 300)).into_drawing_area();
+            draw_heat_map(&area, &map, ChartStyle::default()).unwrap();
+            area.present().unwrap();
+        }
+        assert_eq!(diverging_color(0.0), Rgb(33, 102, 172));
+        assert_eq!(diverging_color(0.5), Rgb(247, 247, 247));
+        assert_eq!(diverging_color(1.0), Rgb(230, 97, 1));
+        assert!(svg.contains("#2166AC"), "lowest value's colour missing");
+        assert!(svg.contains("#E66101"), "highest value's colour missing");
     }
 
     #[test]

@@ -44,6 +44,7 @@ pub fn App() -> impl IntoView {
                 Page::Learn => view! { <pages::learn::LearnPage /> }.into_any(),
                 Page::Simulate => view! { <pages::simulate::SimulatePage /> }.into_any(),
                 Page::Compare => view! { <pages::compare::ComparePage /> }.into_any(),
+                Page::Fuzzy => view! { <pages::fuzzy::FuzzyPage /> }.into_any(),
             }}
         </main>
         <footer class="site-footer">

@@ -12,15 +12,18 @@ pub enum Page {
     Simulate,
     /// Compare controllers on one preset.
     Compare,
+    /// Edit paper 002's fuzzy rules and see the control surface.
+    Fuzzy,
     /// The guided path through the ideas.
     Learn,
 }
 
 impl Page {
     /// Every page, in navigation order.
-    pub const ALL: [Page; 4] = [
+    pub const ALL: [Page; 5] = [
         Page::Simulate,
         Page::Compare,
+        Page::Fuzzy,
         Page::SignalChain,
         Page::Learn,
     ];
@@ -34,6 +37,7 @@ impl Page {
             Page::SignalChain => "signal",
             Page::Simulate => "simulate",
             Page::Compare => "compare",
+            Page::Fuzzy => "fuzzy",
             Page::Learn => "learn",
         }
     }
@@ -44,6 +48,7 @@ impl Page {
             Page::SignalChain => "Signal chain",
             Page::Simulate => "Simulate",
             Page::Compare => "Compare",
+            Page::Fuzzy => "Fuzzy rules",
             Page::Learn => "Learn",
         }
     }

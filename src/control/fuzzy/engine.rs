@@ -160,6 +160,19 @@ pub struct Engine {
     pieces: Vec<(f64, f64)>,
 }
 
+/// Two engines are equal when they define the same inference; scratch space and remembered
+/// outputs do not count.
+impl PartialEq for Engine {
+    fn eq(&self, other: &Self) -> bool {
+        self.name == other.name
+            && self.inputs == other.inputs
+            && self.outputs == other.outputs
+            && self.rules == other.rules
+            && self.conjunction == other.conjunction
+            && self.implication == other.implication
+    }
+}
+
 impl Engine {
     /// Builds an engine, checking every index, range and weight.
     pub fn new(

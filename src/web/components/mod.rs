@@ -3,6 +3,7 @@
 pub mod chart;
 pub mod download;
 pub mod fields;
+pub mod heat_map;
 pub mod run_form;
 pub mod run_view;
 pub mod runner;

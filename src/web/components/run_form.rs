@@ -7,6 +7,7 @@ use std::collections::BTreeMap;
 use leptos::prelude::*;
 
 use crate::closed_loop::lab::SettingsOverrides;
+use crate::control::fuzzy::rules::RuleTable;
 use crate::control::registry::{ControllerConfig, ControllerKind};
 use crate::plant::Preset;
 use crate::web::components::fields::{parse_count, parse_number, NumberField, SelectField};
@@ -187,6 +188,37 @@ pub struct ControllerForm {
     pub values: RwSignal<BTreeMap<(String, String), String>>,
     /// Prefix of element ids, so several forms can share a page.
     pub id_prefix: &'static str,
+    /// A rule table from the Fuzzy rules page, used by the fuzzy controllers.
+    pub rule_table: RwSignal<Option<RuleTable>>,
+}
+
+/// A rule table as 49 digits 0–6 (level + 3), row by row, for URLs.
+pub fn encode_rule_table(table: &RuleTable) -> String {
+    table
+        .iter()
+        .flatten()
+        .map(|l| char::from(b'0' + (l + 3).clamp(0, 6) as u8))
+        .collect()
+}
+
+/// The table of [`encode_rule_table`]'s text, if it is one.
+pub fn decode_rule_table(text: &str) -> Option<RuleTable> {
+    let digits: Vec<i8> = text
+        .chars()
+        .map(|c| c.to_digit(10).filter(|d| *d <= 6).map(|d| d as i8 - 3))
+        .collect::<Option<_>>()?;
+    if digits.len() != 49 {
+        return None;
+    }
+    let mut table = [[0i8; 7]; 7];
+    for (cell, d) in table.iter_mut().flatten().zip(digits) {
+        *cell = d;
+    }
+    Some(table)
+}
+
+fn is_fuzzy(kind: &str) -> bool {
+    kind.starts_with("fuzzy")
 }
 
 impl ControllerForm {
@@ -223,10 +255,12 @@ impl ControllerForm {
                 }
             }
         }
+        let rule_table = get("rules").and_then(|t| decode_rule_table(&t));
         Self {
             kind: RwSignal::new(kind),
             values: RwSignal::new(values),
             id_prefix,
+            rule_table: RwSignal::new(rule_table),
         }
     }
 
@@ -234,6 +268,9 @@ impl ControllerForm {
     pub fn query(&self, query_prefix: &str) -> Vec<(String, String)> {
         let kind = self.kind.get();
         let mut q = vec![(format!("{query_prefix}controller"), kind.clone())];
+        if let Some(table) = self.rule_table.get().filter(|_| is_fuzzy(&kind)) {
+            q.push((format!("{query_prefix}rules"), encode_rule_table(&table)));
+        }
         if let Ok(k) = kind.parse::<ControllerKind>() {
             self.values.with(|v| {
                 for p in k.params() {
@@ -277,6 +314,11 @@ impl ControllerForm {
                 }
             }
         });
+        if let Some(table) = self.rule_table.get().filter(|_| is_fuzzy(&kind_text)) {
+            if let Err(e) = config.set_rule_table(table) {
+                errors.insert("rules".to_string(), e.to_string());
+            }
+        }
         if errors.is_empty() {
             Ok(config)
         } else {
@@ -300,8 +342,20 @@ pub fn ControllerFields(
         let Ok(kind) = kind_text.parse::<ControllerKind>() else {
             return ().into_any();
         };
+        let custom_rules = form.rule_table.get().is_some() && is_fuzzy(&kind_text);
         view! {
             <p class="hint">{kind.source()}</p>
+            {custom_rules
+                .then(|| {
+                    view! {
+                        <p class="hint">
+                            "Using the rule table edited on the Fuzzy rules page. "
+                            <button type="button" on:click=move |_| form.rule_table.set(None)>
+                                "Use the built-in table"
+                            </button>
+                        </p>
+                    }
+                })}
             {kind
                 .params()
                 .iter()

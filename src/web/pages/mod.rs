@@ -1,6 +1,7 @@
 //! One module per section of the lab.
 
 pub mod compare;
+pub mod fuzzy;
 pub mod learn;
 pub mod signal_chain;
 pub mod simulate;

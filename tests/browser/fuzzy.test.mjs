@@ -1,0 +1,80 @@
+// The Fuzzy rules page: edit the table, see the surface change, inspect firing rules, FLL in and out.
+import { test, before, after } from 'node:test';
+import assert from 'node:assert/strict';
+import { readFile } from 'node:fs/promises';
+import { serveDist, launchBrowser, openLab, canvasPixels, waitForRedraw, screenshot } from './harness.mjs';
+
+let server;
+let browser;
+before(async () => {
+  server = await serveDist();
+  browser = await launchBrowser();
+});
+after(async () => {
+  await browser?.close();
+  await server?.close();
+});
+
+test('editing a rule cell changes the control surface and the link', async () => {
+  const { page, problems, context } = await openLab(browser, server.url, '#/fuzzy');
+  await page.getByRole('button', { name: 'Experience-based (MacVicar-Whelan)' }).click();
+  const surface = page.getByRole('img', { name: 'Control surface U(E, EC)' });
+  await surface.waitFor();
+  const cell = page.getByLabel('Output when E is PB and EC is PB');
+  assert.equal(await cell.inputValue(), 'PB');
+  const before = await canvasPixels(surface);
+  await cell.selectOption('NB');
+  await waitForRedraw(surface, before);
+  assert.equal(await cell.inputValue(), 'NB');
+  assert.match(page.url(), /rules=\d{48}0/);
+  // Keyboard: the cells are native selects.
+  await cell.focus();
+  await page.keyboard.press('ArrowDown');
+  assert.equal(await cell.inputValue(), 'NM');
+  await screenshot(page, 'fuzzy');
+  assert.deepEqual(problems, []);
+  await context.close();
+});
+
+test('the rule viewer lists the rules that fire for a chosen point', async () => {
+  const { page, problems, context } = await openLab(browser, server.url, '#/fuzzy');
+  await page.getByRole('button', { name: 'Dynamics-based (paper 002, Table 4)' }).click();
+  await page.getByLabel('E (scaled)', { exact: true }).fill('2');
+  await page.getByLabel('EC (scaled)', { exact: true }).fill('-2');
+  const firing = page.getByRole('list', { name: 'Firing rules' });
+  await firing.getByText('if E is PS and EC is NS then U is ZO').waitFor();
+  await page.getByRole('status').filter({ hasText: 'U = 0.000' }).waitFor();
+  // Clicking the surface picks a point.
+  const surface = page.getByRole('img', { name: 'Control surface U(E, EC)' });
+  const box = await surface.boundingBox();
+  await page.mouse.click(box.x + box.width * 0.8, box.y + box.height * 0.3);
+  assert.notEqual(await page.getByLabel('E (scaled)', { exact: true }).inputValue(), '2');
+  assert.deepEqual(problems, []);
+  await context.close();
+});
+
+test('FLL exports, a broken FLL is explained by line, and a run supplies a moment', async () => {
+  const { page, problems, context } = await openLab(browser, server.url, '#/fuzzy');
+  const [download] = await Promise.all([
+    page.waitForEvent('download'),
+    page.getByRole('button', { name: 'Export FLL' }).click(),
+  ]);
+  const fll = await readFile(await download.path(), 'utf8');
+  assert.match(fll, /RuleBlock: rules/);
+  const text = page.getByLabel('FLL text');
+  await text.fill(fll.replace('term: PB Triangle 4 6 6', 'term: PB Bell 4 6 6'));
+  await page.getByRole('button', { name: 'Import FLL' }).click();
+  await page.getByText(/The FLL could not be read: line \d+: term PB: shape Bell is not supported/).waitFor();
+  await text.fill(fll);
+  await page.getByRole('button', { name: 'Import FLL' }).click();
+  await page.getByText(/could not be read/).waitFor({ state: 'detached' });
+  // A simulated run with this table; the slider picks a moment's E and EC.
+  await page.getByLabel('Preset', { exact: true }).selectOption('maneerat-doc-1');
+  await page.getByRole('button', { name: 'Run with this table' }).click();
+  const slider = page.getByLabel(/Moment:/);
+  await slider.waitFor({ timeout: 60_000 });
+  await slider.fill('150');
+  await page.getByLabel(/Moment: \d+\.\d\d s/).waitFor();
+  assert.deepEqual(problems, []);
+  await context.close();
+});
