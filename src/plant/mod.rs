@@ -43,6 +43,7 @@
 //! | [`bench`] | paper 000's brake test bench, a `Machine` |
 //! | [`reduced`] | paper 001's and paper 002's reduced plants, each a `Machine` |
 //! | [`presets`] | the papers' experiments as named, seeded machines |
+//! | [`recording`] | open-loop runs summarised per block for plotting, and the brake bench's load steps |
 //! | [`signals`] | every internal signal of a sample, with units, for plots and CSV |
 //! | [`dynamics`] | exactly discretised first- and second-order lags |
 //!
@@ -67,6 +68,7 @@ pub mod materials;
 pub mod mechanics;
 pub mod power_law;
 pub mod presets;
+pub mod recording;
 pub mod reduced;
 pub mod scenario;
 pub mod sensors;

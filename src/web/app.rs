@@ -45,6 +45,7 @@ pub fn App() -> impl IntoView {
                 Page::Simulate => view! { <pages::simulate::SimulatePage /> }.into_any(),
                 Page::Compare => view! { <pages::compare::ComparePage /> }.into_any(),
                 Page::Fuzzy => view! { <pages::fuzzy::FuzzyPage /> }.into_any(),
+                Page::Plant => view! { <pages::plant::PlantPage /> }.into_any(),
             }}
         </main>
         <footer class="site-footer">

@@ -14,16 +14,19 @@ pub enum Page {
     Compare,
     /// Edit paper 002's fuzzy rules and see the control surface.
     Fuzzy,
+    /// The simulated machine on its own.
+    Plant,
     /// The guided path through the ideas.
     Learn,
 }
 
 impl Page {
     /// Every page, in navigation order.
-    pub const ALL: [Page; 5] = [
+    pub const ALL: [Page; 6] = [
         Page::Simulate,
         Page::Compare,
         Page::Fuzzy,
+        Page::Plant,
         Page::SignalChain,
         Page::Learn,
     ];
@@ -38,6 +41,7 @@ impl Page {
             Page::Simulate => "simulate",
             Page::Compare => "compare",
             Page::Fuzzy => "fuzzy",
+            Page::Plant => "plant",
             Page::Learn => "learn",
         }
     }
@@ -49,6 +53,7 @@ impl Page {
             Page::Simulate => "Simulate",
             Page::Compare => "Compare",
             Page::Fuzzy => "Fuzzy rules",
+            Page::Plant => "Machine",
             Page::Learn => "Learn",
         }
     }

@@ -1,10 +1,11 @@
-//! Runs closed-loop simulations in the browser without freezing the page.
+//! Runs long computations in the browser without freezing the page.
 //!
-//! A [`LabRun`] advances a few control periods at a time; between chunks the browser gets control
-//! back (a zero-delay timeout), so input, painting and the Cancel button stay responsive. The
-//! chunk size adapts so each chunk takes about [`CHUNK_BUDGET_MS`], well under the 100 ms a
-//! person notices. Starting a new run or cancelling bumps a generation counter; a pump that sees
-//! a newer generation stops, so a stale run never overwrites a fresh result.
+//! A [`Job`] advances a little at a time; between chunks the browser gets control back (a
+//! zero-delay timeout), so input, painting and the Cancel button stay responsive. The chunk size
+//! adapts so each chunk takes about [`CHUNK_BUDGET_MS`], well under the 100 ms a person notices.
+//! Starting a new job or cancelling bumps a generation counter; a pump that sees a newer
+//! generation stops, so a stale job never overwrites a fresh result, and a job whose page was left
+//! ends quietly.
 
 use std::cell::RefCell;
 use std::rc::Rc;
@@ -19,39 +20,55 @@ use crate::closed_loop::lab::{LabRun, RunResult, RunSpec};
 /// Target duration of one chunk of work.
 pub const CHUNK_BUDGET_MS: f64 = 30.0;
 
-/// What the runner is doing.
+/// Work that can be done in pieces.
+pub trait Job {
+    /// What the finished job gives.
+    type Output;
+    /// Does at most `budget` units of work; returns true once done.
+    fn advance(&mut self, budget: usize) -> Result<bool, String>;
+    /// A label of the current stage and the fraction done, 0–1.
+    fn progress(&self) -> (String, f64);
+    /// The result, once done.
+    fn finish(&mut self) -> Result<Self::Output, String>;
+}
+
+/// What a runner is doing.
 #[derive(Debug, Clone, PartialEq)]
-pub enum RunStatus {
+pub enum RunStatus<T> {
     /// Nothing started yet.
     Idle,
-    /// Working on run `index` of `total`.
+    /// Working.
     Running {
-        /// Which run (0-based).
-        index: usize,
-        /// How many runs.
-        total: usize,
-        /// "teach cut" or "closed loop".
-        stage: &'static str,
-        /// Overall fraction done, 0–1.
+        /// What it is doing.
+        stage: String,
+        /// Fraction done, 0–1.
         fraction: f64,
     },
-    /// Every run finished.
-    Done(Vec<Arc<RunResult>>),
-    /// A run could not be set up or failed; the message says why.
+    /// Finished.
+    Done(T),
+    /// The job could not be done; the message says why.
     Failed(String),
     /// The user cancelled.
     Cancelled,
 }
 
-/// Drives runs and publishes their status.
-#[derive(Clone)]
-pub struct Runner {
+/// Drives jobs and publishes their status.
+pub struct Runner<T: Send + Sync + 'static> {
     /// The status, for the page to show.
-    pub status: RwSignal<RunStatus>,
+    pub status: RwSignal<RunStatus<T>>,
     generation: Arc<AtomicU64>,
 }
 
-impl Runner {
+impl<T: Send + Sync + 'static> Clone for Runner<T> {
+    fn clone(&self) -> Self {
+        Self {
+            status: self.status,
+            generation: self.generation.clone(),
+        }
+    }
+}
+
+impl<T: Clone + Send + Sync + 'static> Runner<T> {
     /// A runner with nothing started.
     pub fn new() -> Self {
         Self {
@@ -71,37 +88,25 @@ impl Runner {
         }
     }
 
-    /// Starts `specs` one after the other, replacing anything running.
-    pub fn start(&self, specs: Vec<RunSpec>) {
+    /// Starts `job`, replacing anything running.
+    pub fn start(&self, job: impl Job<Output = T> + 'static) {
         let generation = self.generation.fetch_add(1, Ordering::SeqCst) + 1;
-        let total = specs.len();
-        let job = Rc::new(RefCell::new(Job {
-            specs,
-            current: None,
-            results: Vec::with_capacity(total),
-            periods_per_chunk: 4,
-        }));
-        let _ = self.status.try_set(RunStatus::Running {
-            index: 0,
-            total,
-            stage: "teach cut",
-            fraction: 0.0,
-        });
-        pump(job, self.status, self.generation.clone(), generation);
+        let (stage, fraction) = job.progress();
+        let _ = self.status.try_set(RunStatus::Running { stage, fraction });
+        let state = Rc::new(RefCell::new(Pumped { job, budget: 1 }));
+        pump(state, self.status, self.generation.clone(), generation);
     }
 }
 
-impl Default for Runner {
+impl<T: Clone + Send + Sync + 'static> Default for Runner<T> {
     fn default() -> Self {
         Self::new()
     }
 }
 
-struct Job {
-    specs: Vec<RunSpec>,
-    current: Option<LabRun>,
-    results: Vec<Arc<RunResult>>,
-    periods_per_chunk: usize,
+struct Pumped<J> {
+    job: J,
+    budget: usize,
 }
 
 fn now_ms() -> f64 {
@@ -109,102 +114,121 @@ fn now_ms() -> f64 {
 }
 
 /// Does one chunk of work, publishes progress, and schedules the next chunk.
-fn pump(job: Rc<RefCell<Job>>, status: RwSignal<RunStatus>, generation: Arc<AtomicU64>, mine: u64) {
+fn pump<J: Job + 'static>(
+    state: Rc<RefCell<Pumped<J>>>,
+    status: RwSignal<RunStatus<J::Output>>,
+    generation: Arc<AtomicU64>,
+    mine: u64,
+) where
+    J::Output: Send + Sync + 'static,
+{
     if generation.load(Ordering::SeqCst) != mine {
         return;
     }
-    let outcome = {
-        let mut job = job.borrow_mut();
-        step(&mut job)
-    };
-    match outcome {
-        // The page may have been left meanwhile: a disposed status ends the job quietly.
-        Step::Progress(next) => {
-            if status.try_set(next).is_none() {
-                let (job, generation) = (job.clone(), generation.clone());
-                set_timeout(move || pump(job, status, generation, mine), Duration::ZERO);
+    let next = {
+        let mut s = state.borrow_mut();
+        let started = now_ms();
+        let budget = s.budget;
+        match s.job.advance(budget) {
+            Err(e) => RunStatus::Failed(e),
+            Ok(true) => match s.job.finish() {
+                Ok(out) => RunStatus::Done(out),
+                Err(e) => RunStatus::Failed(e),
+            },
+            Ok(false) => {
+                // Aim each chunk at the budget; never less than one unit, never more than 4×.
+                let elapsed = (now_ms() - started).max(0.1);
+                let b = s.budget as f64;
+                s.budget = (b * CHUNK_BUDGET_MS / elapsed)
+                    .clamp(b / 4.0, b * 4.0)
+                    .round()
+                    .clamp(1.0, 1e9) as usize;
+                let (stage, fraction) = s.job.progress();
+                RunStatus::Running { stage, fraction }
             }
         }
-        Step::Finished(results) => {
-            let _ = status.try_set(RunStatus::Done(results));
-        }
-        Step::Failed(message) => {
-            let _ = status.try_set(RunStatus::Failed(message));
+    };
+    let running = matches!(next, RunStatus::Running { .. });
+    // The page may have been left meanwhile: a disposed status ends the job quietly.
+    if status.try_set(next).is_none() && running {
+        set_timeout(
+            move || pump(state, status, generation, mine),
+            Duration::ZERO,
+        );
+    }
+}
+
+/// Closed-loop runs one after another (Simulate and Compare).
+pub struct LabRuns {
+    specs: Vec<RunSpec>,
+    current: Option<LabRun>,
+    results: Vec<Arc<RunResult>>,
+}
+
+impl LabRuns {
+    /// The runs of `specs`, in order.
+    pub fn new(specs: Vec<RunSpec>) -> Self {
+        Self {
+            results: Vec::with_capacity(specs.len()),
+            specs,
+            current: None,
         }
     }
 }
 
-enum Step {
-    Progress(RunStatus),
-    Finished(Vec<Arc<RunResult>>),
-    Failed(String),
-}
+impl Job for LabRuns {
+    type Output = Vec<Arc<RunResult>>;
 
-fn step(job: &mut Job) -> Step {
-    let total = job.specs.len();
-    let index = job.results.len();
-    if index >= total {
-        return Step::Finished(std::mem::take(&mut job.results));
-    }
-    if job.current.is_none() {
-        match LabRun::new(&job.specs[index]) {
-            Ok(run) => job.current = Some(run),
-            Err(e) => return Step::Failed(e.to_string()),
+    fn advance(&mut self, budget: usize) -> Result<bool, String> {
+        let index = self.results.len();
+        let Some(spec) = self.specs.get(index) else {
+            return Ok(true);
+        };
+        if self.current.is_none() {
+            self.current = Some(LabRun::new(spec).map_err(|e| e.to_string())?);
         }
-    }
-    let Some(run) = job.current.as_mut() else {
-        return Step::Failed("internal: no run".into());
-    };
-    let started = now_ms();
-    let done = match run.advance(job.periods_per_chunk) {
-        Ok(done) => done,
-        Err(e) => return Step::Failed(e.to_string()),
-    };
-    // Aim each chunk at the budget; never less than one period, never a jump of more than 4×.
-    let elapsed = (now_ms() - started).max(0.1);
-    let scaled = (job.periods_per_chunk as f64 * CHUNK_BUDGET_MS / elapsed).clamp(
-        job.periods_per_chunk as f64 / 4.0,
-        job.periods_per_chunk as f64 * 4.0,
-    );
-    job.periods_per_chunk = scaled.round().clamp(1.0, 100_000.0) as usize;
-    let progress = run.progress();
-    if done {
-        if let Some(result) = job.current.take().and_then(LabRun::into_result) {
-            job.results.push(Arc::new(result));
+        let Some(run) = self.current.as_mut() else {
+            return Ok(true);
+        };
+        if run.advance(budget).map_err(|e| e.to_string())? {
+            if let Some(result) = self.current.take().and_then(LabRun::into_result) {
+                self.results.push(Arc::new(result));
+            }
         }
-        if job.results.len() >= total {
-            return Step::Finished(std::mem::take(&mut job.results));
-        }
+        Ok(self.results.len() >= self.specs.len())
     }
-    Step::Progress(RunStatus::Running {
-        index,
-        total,
-        stage: progress.stage,
-        fraction: (index as f64 + progress.fraction) / total as f64,
-    })
+
+    fn progress(&self) -> (String, f64) {
+        let total = self.specs.len().max(1);
+        let index = self.results.len();
+        let (stage, part) = self.current.as_ref().map_or(("teach cut", 0.0), |r| {
+            let p = r.progress();
+            (p.stage, p.fraction)
+        });
+        let label = if total > 1 {
+            format!("Run {} of {total}: {stage}", (index + 1).min(total))
+        } else {
+            format!("Running: {stage}")
+        };
+        (label, (index as f64 + part) / total as f64)
+    }
+
+    fn finish(&mut self) -> Result<Self::Output, String> {
+        Ok(std::mem::take(&mut self.results))
+    }
 }
 
 /// A progress bar with the stage and a Cancel button, shown while running.
 #[component]
-pub fn RunProgress(runner: Runner) -> impl IntoView {
+pub fn RunProgress<T: Clone + Send + Sync + 'static>(runner: Runner<T>) -> impl IntoView {
     let status = runner.status;
     move || {
         match status.get() {
-        RunStatus::Running {
-            index,
-            total,
-            stage,
-            fraction,
-        } => {
+        RunStatus::Running { stage, fraction } => {
             let runner = runner.clone();
-            let label = if total > 1 {
-                format!("Run {} of {total}: {stage}", index + 1)
-            } else {
-                format!("Running: {stage}")
-            };
             view! {
                 <div class="run-progress" role="status">
-                    <label for="run-progress-bar">{label}</label>
+                    <label for="run-progress-bar">{stage}</label>
                     <progress id="run-progress-bar" max="1" value=fraction.to_string()></progress>
                     <button type="button" on:click=move |_| runner.cancel()>"Cancel"</button>
                 </div>

@@ -1,17 +1,18 @@
 //! Compare: one scenario, two to four controller variants, overlaid and side by side.
 
+use std::sync::Arc;
 use std::time::Duration;
 
 use leptos::prelude::*;
 
-use crate::closed_loop::lab::RunSpec;
+use crate::closed_loop::lab::{RunResult, RunSpec};
 use crate::control::registry::ControllerKind;
 use crate::plant::Preset;
 use crate::web::components::run_form::{
     ControllerFields, ControllerForm, ScenarioFields, ScenarioForm,
 };
 use crate::web::components::run_view::{MetricsTable, NamedRun, RunCharts};
-use crate::web::components::runner::{RunProgress, RunStatus, Runner};
+use crate::web::components::runner::{LabRuns, RunProgress, RunStatus, Runner};
 use crate::web::route::{query_params, replace_query, Page};
 
 const RERUN_DELAY: Duration = Duration::from_millis(350);
@@ -82,7 +83,7 @@ pub fn ComparePage() -> impl IntoView {
         .unwrap_or(2)
         .clamp(2, 4);
     let count = RwSignal::new(initial_count);
-    let runner = Runner::new();
+    let runner = Runner::<Vec<Arc<RunResult>>>::new();
     let status = runner.status;
 
     let specs = Memo::new(move |_| {
@@ -121,7 +122,7 @@ pub fn ComparePage() -> impl IntoView {
             move || {
                 // `try_`: the page may have been left before the delay ran out.
                 if edits.try_get_value() == Some(mine) {
-                    runner.start(specs);
+                    runner.start(LabRuns::new(specs));
                 }
             },
             RERUN_DELAY,

@@ -20,7 +20,7 @@ use crate::web::components::download::download_text;
 use crate::web::components::fields::{parse_number, NumberField, SelectField};
 use crate::web::components::heat_map::HeatMapCanvas;
 use crate::web::components::run_form::{decode_rule_table, encode_rule_table};
-use crate::web::components::runner::{RunProgress, RunStatus, Runner};
+use crate::web::components::runner::{LabRuns, RunProgress, RunStatus, Runner};
 use crate::web::route::{query_params, replace_query, Page};
 
 /// Grid points per axis of the control surface.
@@ -261,7 +261,7 @@ pub fn FuzzyPage() -> impl IntoView {
     };
 
     // A simulated run with this table, to pick a moment from.
-    let runner = Runner::new();
+    let runner = Runner::<Vec<Arc<RunResult>>>::new();
     let status = runner.status;
     let run_preset = RwSignal::new(Preset::LiuCurrentStep.name().to_string());
     let run_result =
@@ -281,12 +281,12 @@ pub fn FuzzyPage() -> impl IntoView {
         if controller.set_rule_table(table.get_untracked()).is_err() {
             return;
         }
-        runner_for_button.start(vec![RunSpec {
+        runner_for_button.start(LabRuns::new(vec![RunSpec {
             preset,
             controller,
             seed: 1,
             settings: Default::default(),
-        }]);
+        }]));
     };
     Effect::new(move |_| {
         let index = moment.get();

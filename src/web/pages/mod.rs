@@ -3,5 +3,6 @@
 pub mod compare;
 pub mod fuzzy;
 pub mod learn;
+pub mod plant;
 pub mod signal_chain;
 pub mod simulate;

@@ -5,7 +5,7 @@ use std::time::Duration;
 
 use leptos::prelude::*;
 
-use crate::closed_loop::lab::RunSpec;
+use crate::closed_loop::lab::{RunResult, RunSpec};
 use crate::closed_loop::trace::write_csv;
 use crate::control::registry::ControllerKind;
 use crate::web::components::download::download_text;
@@ -13,7 +13,7 @@ use crate::web::components::run_form::{
     ControllerFields, ControllerForm, ScenarioFields, ScenarioForm,
 };
 use crate::web::components::run_view::{metrics_json, EventLog, MetricsTable, NamedRun, RunCharts};
-use crate::web::components::runner::{RunProgress, RunStatus, Runner};
+use crate::web::components::runner::{LabRuns, RunProgress, RunStatus, Runner};
 use crate::web::route::{query_params, replace_query, Page};
 
 /// Wait after the last edit before re-running, so typing "150" does not start three runs.
@@ -25,7 +25,7 @@ pub fn SimulatePage() -> impl IntoView {
     let query = query_params(&window().location().hash().unwrap_or_default());
     let scenario = ScenarioForm::new(&query);
     let controller = ControllerForm::new("sim-", ControllerKind::Threshold, &query, "");
-    let runner = Runner::new();
+    let runner = Runner::<Vec<Arc<RunResult>>>::new();
     let status = runner.status;
 
     let spec = Memo::new(move |_| {
@@ -58,7 +58,7 @@ pub fn SimulatePage() -> impl IntoView {
             move || {
                 // `try_`: the page may have been left before the delay ran out.
                 if edits.try_get_value() == Some(mine) {
-                    runner.start(vec![spec]);
+                    runner.start(LabRuns::new(vec![spec]));
                 }
             },
             RERUN_DELAY,
@@ -131,7 +131,7 @@ pub fn SimulatePage() -> impl IntoView {
     let runner_for_button = runner.clone();
     let run_now = move |_| {
         if let Some(s) = spec.get_untracked() {
-            runner_for_button.start(vec![s]);
+            runner_for_button.start(LabRuns::new(vec![s]));
         }
     };
 
