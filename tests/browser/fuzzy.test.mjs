@@ -32,6 +32,10 @@ test('editing a rule cell changes the control surface and the link', async () =>
   await page.keyboard.press('ArrowDown');
   assert.equal(await cell.inputValue(), 'NM');
   await screenshot(page, 'fuzzy');
+  // The edited table goes to the Simulate page with the link.
+  await page.getByRole('link', { name: 'Simulate with this table' }).click();
+  await page.getByText('Using the rule table edited on the Fuzzy rules page.').waitFor();
+  assert.equal(await page.getByLabel('Controller', { exact: true }).inputValue(), 'fuzzy-dynamics');
   assert.deepEqual(problems, []);
   await context.close();
 });

@@ -54,6 +54,15 @@ test('changing a controller parameter re-runs and redraws, and the URL keeps the
   await page.getByText(/ki_per_s = -4 is outside/).waitFor();
   assert.equal(await ki.getAttribute('aria-invalid'), 'true');
   await page.getByRole('table', { name: /Metrics of the run/ }).waitFor();
+  await ki.fill('1');
+  // Signal-chain settings are checked the same way, and re-run the loop.
+  const order = page.getByLabel('Current filter order');
+  await order.fill('0');
+  await page.getByText('order 0 is outside 1–20').waitFor();
+  const shown = await canvasPixels(force);
+  await order.fill('8');
+  await waitForRedraw(force, shown, RUN_TIMEOUT);
+  assert.match(page.url(), /filter_order=8/);
   assert.deepEqual(problems, []);
   await context.close();
 });

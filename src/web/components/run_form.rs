@@ -23,6 +23,14 @@ pub struct ScenarioForm {
     pub target: RwSignal<String>,
     /// Highest override the envelope allows.
     pub max_override: RwSignal<String>,
+    /// Control period; blank keeps the preset's (whole spindle revolutions).
+    pub period: RwSignal<String>,
+    /// Order of the current low-pass filters.
+    pub filter_order: RwSignal<String>,
+    /// Spindle current low-pass cut-off.
+    pub spindle_cutoff: RwSignal<String>,
+    /// Feed current low-pass cut-off.
+    pub feed_cutoff: RwSignal<String>,
 }
 
 /// A parsed scenario, or the message of each field that did not parse.
@@ -50,6 +58,10 @@ impl ScenarioForm {
             seed: RwSignal::new(get("seed", "1")),
             target: RwSignal::new(get("target", "")),
             max_override: RwSignal::new(get("max_override", "150")),
+            period: RwSignal::new(get("period", "")),
+            filter_order: RwSignal::new(get("filter_order", "4")),
+            spindle_cutoff: RwSignal::new(get("spindle_cutoff", "260")),
+            feed_cutoff: RwSignal::new(get("feed_cutoff", "50")),
         }
     }
 
@@ -63,6 +75,17 @@ impl ScenarioForm {
             q.push(("target".into(), self.target.get()));
         }
         q.push(("max_override".into(), self.max_override.get()));
+        for (key, signal, default) in [
+            ("period", self.period, ""),
+            ("filter_order", self.filter_order, "4"),
+            ("spindle_cutoff", self.spindle_cutoff, "260"),
+            ("feed_cutoff", self.feed_cutoff, "50"),
+        ] {
+            let text = signal.get();
+            if text.trim() != default {
+                q.push((key.into(), text));
+            }
+        }
         q
     }
 
@@ -104,6 +127,50 @@ impl ScenarioForm {
                 None
             }
         };
+        let period_text = self.period.get();
+        let period = if period_text.trim().is_empty() {
+            None
+        } else {
+            match parse_number(&period_text) {
+                Ok(v) if (0.001..=2.0).contains(&v) => Some(v),
+                Ok(v) => {
+                    errors.insert("period", format!("{v} s is outside 0.001–2 s"));
+                    None
+                }
+                Err(e) => {
+                    errors.insert("period", e);
+                    None
+                }
+            }
+        };
+        let order = match parse_count(&self.filter_order.get()) {
+            Ok(v) if (1..=20).contains(&v) => Some(v),
+            Ok(v) => {
+                errors.insert("filter_order", format!("order {v} is outside 1–20"));
+                None
+            }
+            Err(e) => {
+                errors.insert("filter_order", e);
+                None
+            }
+        };
+        // The sensors sample at 10 kHz: a cut-off must stay below 5 kHz (the core checks again).
+        let mut cutoff = |key: &'static str, text: String| match parse_number(&text) {
+            Ok(v) if v > 0.0 && v < 5000.0 => Some(v),
+            Ok(v) => {
+                errors.insert(
+                    key,
+                    format!("{v} Hz must lie between 0 and the 5000 Hz Nyquist frequency"),
+                );
+                None
+            }
+            Err(e) => {
+                errors.insert(key, e);
+                None
+            }
+        };
+        let spindle_cutoff = cutoff("spindle_cutoff", self.spindle_cutoff.get());
+        let feed_cutoff = cutoff("feed_cutoff", self.feed_cutoff.get());
         match (preset, seed, target, max_override) {
             (Some(preset), Some(seed), Some(target), Some(max)) if errors.is_empty() => {
                 Ok(ScenarioChoice {
@@ -112,6 +179,10 @@ impl ScenarioForm {
                     settings: SettingsOverrides {
                         target_force_n: target,
                         max_override_pct: Some(max),
+                        control_period_s: period,
+                        lowpass_order: order,
+                        spindle_lowpass_hz: spindle_cutoff,
+                        feed_lowpass_hz: feed_cutoff,
                         ..SettingsOverrides::default()
                     },
                 })
@@ -173,6 +244,37 @@ pub fn ScenarioFields(form: ScenarioForm) -> impl IntoView {
                 unit="%"
                 value=form.max_override
                 error=error("max_override")
+            />
+        </fieldset>
+        <fieldset>
+            <legend>"Signal chain"</legend>
+            <NumberField
+                id="period"
+                label="Control period (blank: whole revolutions ≥ 40 ms)"
+                unit="s"
+                value=form.period
+                error=error("period")
+            />
+            <NumberField
+                id="filter-order"
+                label="Current filter order"
+                value=form.filter_order
+                error=error("filter_order")
+                step="1"
+            />
+            <NumberField
+                id="spindle-cutoff"
+                label="Spindle current cut-off"
+                unit="Hz"
+                value=form.spindle_cutoff
+                error=error("spindle_cutoff")
+            />
+            <NumberField
+                id="feed-cutoff"
+                label="Feed current cut-off"
+                unit="Hz"
+                value=form.feed_cutoff
+                error=error("feed_cutoff")
             />
         </fieldset>
     }
