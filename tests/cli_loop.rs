@@ -126,7 +126,32 @@ fn compare_marks_the_best_value_of_each_row() {
 
 #[test]
 fn bad_input_gives_one_line_that_names_it() {
-    let cases: [(&[&str], &str); 5] = [
+    let cases: [(&[&str], &str); 7] = [
+        (
+            &[
+                "sim",
+                "--scenario",
+                "kim-step-doc",
+                "--controller",
+                "pi",
+                "--material",
+                "unobtainium",
+            ],
+            "--material: unknown material \"unobtainium\"",
+        ),
+        (
+            &[
+                "sim",
+                "--scenario",
+                "kim-step-doc",
+                "--controller",
+                "pi",
+                "--rpm",
+                "-5",
+                "--no-references",
+            ],
+            "--rpm: must be positive, got -5",
+        ),
         (
             &["sim", "--scenario", "nowhere", "--controller", "pi"],
             "--scenario: unknown preset",

@@ -12,10 +12,32 @@ use crate::closed_loop::metrics::Metrics;
 use crate::closed_loop::runner::{Calibration, Feedback};
 use crate::closed_loop::trace::write_csv;
 use crate::control::registry::{ControllerConfig, ControllerKind};
+use crate::plant::materials::Material;
 use crate::plant::Preset;
 
 /// Options shared by `sim` and `compare`.
-const RUN_OPTIONS: [OptionSpec; 7] = [
+const RUN_OPTIONS: [OptionSpec; 12] = [
+    OptionSpec::value(
+        "material",
+        "NAME",
+        "Work material of the whole part (mill presets; see cutlab force --help)",
+    ),
+    OptionSpec::value("rpm", "N", "Spindle speed of every block (mill presets)"),
+    OptionSpec::value(
+        "feed-mm-min",
+        "F",
+        "Programmed feed of every block (mill presets)",
+    ),
+    OptionSpec::value(
+        "depth-scale",
+        "K",
+        "Factor on the axial depth profile (mill presets)",
+    ),
+    OptionSpec::value(
+        "noise-a",
+        "A",
+        "Hall-sensor noise, standard deviation (mill presets)",
+    ),
     OptionSpec::value("scenario", "NAME", "Preset to run (see cutlab scenarios)"),
     OptionSpec::value("seed", "N", "Seed of every noise source (default 1)"),
     OptionSpec::value(
@@ -101,6 +123,7 @@ fn spec(options: &Options, controller: ControllerConfig) -> Result<RunSpec, CliE
         controller,
         seed: options.get_or("seed", 1)?,
         settings: Default::default(),
+        plant: Default::default(),
     };
     let s = &mut spec.settings;
     s.target_force_n = options.get("target-n")?;
@@ -119,6 +142,37 @@ fn spec(options: &Options, controller: ControllerConfig) -> Result<RunSpec, CliE
                 "--period-s: must lie in (0, 10] s, got {v}"
             )));
         }
+    }
+    let positive = |name: &str, allow_zero: bool| -> Result<Option<f64>, CliError> {
+        match options.get::<f64>(name)? {
+            Some(v) if v.is_finite() && (v > 0.0 || (allow_zero && v == 0.0)) => Ok(Some(v)),
+            Some(v) => Err(CliError::new(format!(
+                "--{name}: must be {}, got {v}",
+                if allow_zero {
+                    "zero or positive"
+                } else {
+                    "positive"
+                }
+            ))),
+            None => Ok(None),
+        }
+    };
+    let p = &mut spec.plant;
+    p.spindle_rpm = positive("rpm", false)?;
+    p.programmed_feed_mm_min = positive("feed-mm-min", false)?;
+    p.depth_scale = positive("depth-scale", false)?;
+    p.sensor_noise_a = positive("noise-a", true)?;
+    if let Some(name) = options.text("material") {
+        p.material = Some(Material::from_name(name).ok_or_else(|| {
+            CliError::new(format!(
+                "--material: unknown material {name:?}; materials: {}",
+                Material::ALL
+                    .iter()
+                    .map(|m| m.name())
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            ))
+        })?);
     }
     if let Some(text) = options.text("feedback") {
         s.feedback = Some(

@@ -9,6 +9,7 @@ use super::runner::{Calibration, ClosedLoop, Feedback, LoopError, LoopSettings, 
 use super::trace::Trace;
 use crate::control::registry::{ControllerConfig, ControllerKind, RunContext};
 use crate::plant::cnc::OverrideMode;
+use crate::plant::presets::PlantEdits;
 use crate::plant::presets::PlantKind;
 use crate::plant::Preset;
 use crate::safety::{EnvelopeConfig, OverrideResolution};
@@ -24,6 +25,8 @@ pub struct RunSpec {
     pub seed: u64,
     /// Overrides of the preset's default settings.
     pub settings: SettingsOverrides,
+    /// Changes to the preset's machine and cut (mill presets).
+    pub plant: PlantEdits,
 }
 
 /// Settings a user may change; `None` keeps the preset's default.
@@ -59,6 +62,7 @@ impl RunSpec {
             controller: ControllerConfig::new(controller),
             seed: 1,
             settings: SettingsOverrides::default(),
+            plant: PlantEdits::default(),
         }
     }
 }
@@ -229,7 +233,7 @@ impl LabRun {
         let settings = default_settings(spec)?;
         let teach_machine = spec
             .preset
-            .machine(spec.seed.wrapping_add(TEACH_SEED_OFFSET))
+            .machine_with(spec.seed.wrapping_add(TEACH_SEED_OFFSET), &spec.plant)
             .map_err(|e| LoopError::Setting(e.to_string()))?;
         Ok(Self {
             nominal_duration_s: spec.preset.summary().nominal_duration_s.max(1.0),
@@ -308,7 +312,7 @@ impl LabRun {
         let machine = self
             .spec
             .preset
-            .machine(self.spec.seed)
+            .machine_with(self.spec.seed, &self.spec.plant)
             .map_err(|e| LoopError::Setting(e.to_string()))?;
         ClosedLoop::new(
             Box::new(machine),

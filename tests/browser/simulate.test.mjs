@@ -63,6 +63,13 @@ test('changing a controller parameter re-runs and redraws, and the URL keeps the
   await order.fill('8');
   await waitForRedraw(force, shown, RUN_TIMEOUT);
   assert.match(page.url(), /filter_order=8/);
+  // The machine and cut can be edited too: another material re-runs with other forces.
+  const again = await canvasPixels(force);
+  await page.getByLabel('Work material').selectOption({ label: 'Aluminium (7050-T7451)' });
+  await waitForRedraw(force, again, RUN_TIMEOUT);
+  assert.match(page.url(), /material=/);
+  await page.getByLabel('Spindle speed (rpm)').fill('10');
+  await page.getByText('10 rpm is outside 50–20000 rpm').waitFor();
   assert.deepEqual(problems, []);
   await context.close();
 });

@@ -9,6 +9,8 @@ use leptos::prelude::*;
 use crate::closed_loop::lab::SettingsOverrides;
 use crate::control::fuzzy::rules::RuleTable;
 use crate::control::registry::{ControllerConfig, ControllerKind};
+use crate::plant::materials::Material;
+use crate::plant::presets::PlantEdits;
 use crate::plant::Preset;
 use crate::web::components::fields::{parse_count, parse_number, NumberField, SelectField};
 
@@ -31,7 +33,32 @@ pub struct ScenarioForm {
     pub spindle_cutoff: RwSignal<String>,
     /// Feed current low-pass cut-off.
     pub feed_cutoff: RwSignal<String>,
+    /// Work material; blank keeps the preset's.
+    pub material: RwSignal<String>,
+    /// Spindle speed; blank keeps the preset's.
+    pub rpm: RwSignal<String>,
+    /// Programmed feed; blank keeps the preset's.
+    pub feed: RwSignal<String>,
+    /// Factor on the depth profile.
+    pub depth_scale: RwSignal<String>,
+    /// Cutter diameter; blank keeps the preset's.
+    pub diameter: RwSignal<String>,
+    /// Number of teeth; blank keeps the preset's.
+    pub teeth: RwSignal<String>,
+    /// Hall-sensor noise; blank keeps the preset's.
+    pub noise: RwSignal<String>,
 }
+
+/// The plant-edit fields: (query key, default text).
+const PLANT_KEYS: [&str; 7] = [
+    "material",
+    "rpm",
+    "feed",
+    "depth_scale",
+    "diameter",
+    "teeth",
+    "noise",
+];
 
 /// A parsed scenario, or the message of each field that did not parse.
 #[derive(Debug, Clone, PartialEq)]
@@ -42,6 +69,8 @@ pub struct ScenarioChoice {
     pub seed: u64,
     /// Setting overrides.
     pub settings: SettingsOverrides,
+    /// Machine and cut edits.
+    pub plant: PlantEdits,
 }
 
 impl ScenarioForm {
@@ -62,6 +91,13 @@ impl ScenarioForm {
             filter_order: RwSignal::new(get("filter_order", "4")),
             spindle_cutoff: RwSignal::new(get("spindle_cutoff", "260")),
             feed_cutoff: RwSignal::new(get("feed_cutoff", "50")),
+            material: RwSignal::new(get("material", "")),
+            rpm: RwSignal::new(get("rpm", "")),
+            feed: RwSignal::new(get("feed", "")),
+            depth_scale: RwSignal::new(get("depth_scale", "1")),
+            diameter: RwSignal::new(get("diameter", "")),
+            teeth: RwSignal::new(get("teeth", "")),
+            noise: RwSignal::new(get("noise", "")),
         }
     }
 
@@ -86,7 +122,60 @@ impl ScenarioForm {
                 q.push((key.into(), text));
             }
         }
+        for (key, signal) in PLANT_KEYS.iter().zip(self.plant_signals()) {
+            let text = signal.get();
+            let default = if *key == "depth_scale" { "1" } else { "" };
+            if text.trim() != default {
+                q.push((key.to_string(), text));
+            }
+        }
         q
+    }
+
+    fn plant_signals(&self) -> [RwSignal<String>; 7] {
+        [
+            self.material,
+            self.rpm,
+            self.feed,
+            self.depth_scale,
+            self.diameter,
+            self.teeth,
+            self.noise,
+        ]
+    }
+
+    /// Parses the plant edits; blank fields keep the preset's values.
+    fn parse_plant(&self, errors: &mut BTreeMap<&'static str, String>) -> PlantEdits {
+        let mut optional = |key: &'static str, text: String, min: f64, max: f64, unit: &str| {
+            if text.trim().is_empty() {
+                return None;
+            }
+            match parse_number(&text) {
+                Ok(v) if (min..=max).contains(&v) => Some(v),
+                Ok(v) => {
+                    errors.insert(key, format!("{v} {unit} is outside {min}–{max} {unit}"));
+                    None
+                }
+                Err(e) => {
+                    errors.insert(key, e);
+                    None
+                }
+            }
+        };
+        let edits = PlantEdits {
+            material: Material::from_name(&self.material.get()),
+            spindle_rpm: optional("rpm", self.rpm.get(), 50.0, 20_000.0, "rpm"),
+            programmed_feed_mm_min: optional("feed", self.feed.get(), 1.0, 20_000.0, "mm/min"),
+            depth_scale: optional("depth_scale", self.depth_scale.get(), 0.05, 5.0, "×"),
+            tool_diameter_mm: optional("diameter", self.diameter.get(), 0.5, 100.0, "mm"),
+            teeth: optional("teeth", self.teeth.get(), 1.0, 12.0, "teeth")
+                .map(|z| z.round() as u32),
+            sensor_noise_a: optional("noise", self.noise.get(), 0.0, 5.0, "A"),
+        };
+        PlantEdits {
+            depth_scale: edits.depth_scale.filter(|k| *k != 1.0),
+            ..edits
+        }
     }
 
     /// Parses the fields; errors are keyed by field name.
@@ -171,6 +260,7 @@ impl ScenarioForm {
         };
         let spindle_cutoff = cutoff("spindle_cutoff", self.spindle_cutoff.get());
         let feed_cutoff = cutoff("feed_cutoff", self.feed_cutoff.get());
+        let plant = self.parse_plant(&mut errors);
         match (preset, seed, target, max_override) {
             (Some(preset), Some(seed), Some(target), Some(max)) if errors.is_empty() => {
                 Ok(ScenarioChoice {
@@ -185,6 +275,7 @@ impl ScenarioForm {
                         feed_lowpass_hz: feed_cutoff,
                         ..SettingsOverrides::default()
                     },
+                    plant,
                 })
             }
             _ => Err(errors),
@@ -245,6 +336,25 @@ pub fn ScenarioFields(form: ScenarioForm) -> impl IntoView {
                 value=form.max_override
                 error=error("max_override")
             />
+        </fieldset>
+        <fieldset hidden=move || {
+            Preset::from_name(&form.preset.get()).is_none_or(|p| p.scenario().is_none())
+        }>
+            <legend>"Machine and cut (blank: the preset's)"</legend>
+            <SelectField
+                id="material"
+                label="Work material"
+                options=std::iter::once(("", "The preset's"))
+                    .chain(Material::ALL.iter().map(|m| (m.name(), m.label())))
+                    .collect()
+                value=form.material
+            />
+            <NumberField id="rpm" label="Spindle speed" unit="rpm" value=form.rpm error=error("rpm") />
+            <NumberField id="feed" label="Programmed feed" unit="mm/min" value=form.feed error=error("feed") />
+            <NumberField id="depth-scale" label="Depth of cut ×" value=form.depth_scale error=error("depth_scale") />
+            <NumberField id="diameter" label="Tool diameter" unit="mm" value=form.diameter error=error("diameter") />
+            <NumberField id="teeth" label="Teeth" value=form.teeth error=error("teeth") step="1" />
+            <NumberField id="noise" label="Sensor noise" unit="A" value=form.noise error=error("noise") />
         </fieldset>
         <fieldset>
             <legend>"Signal chain"</legend>

@@ -96,6 +96,7 @@ pub fn ComparePage() -> impl IntoView {
                     controller: c,
                     seed: s.seed,
                     settings: s.settings,
+                    plant: s.plant,
                 })
             })
             .collect::<Option<Vec<_>>>()

@@ -286,6 +286,7 @@ pub fn FuzzyPage() -> impl IntoView {
             controller,
             seed: 1,
             settings: Default::default(),
+            plant: Default::default(),
         }]));
     };
     Effect::new(move |_| {

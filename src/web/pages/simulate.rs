@@ -36,6 +36,7 @@ pub fn SimulatePage() -> impl IntoView {
             controller: c,
             seed: s.seed,
             settings: s.settings,
+            plant: s.plant,
         })
     });
 
