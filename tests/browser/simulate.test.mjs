@@ -125,6 +125,13 @@ test('the trace exports as CSV and the configuration as JSON', async () => {
   const json = JSON.parse(await readFile(await config.path(), 'utf8'));
   assert.equal(json.preset, 'maneerat-doc-1');
   assert.equal(json.controller.kind, 'fixed');
+  const [png] = await Promise.all([
+    page.waitForEvent('download'),
+    page.getByRole('button', { name: 'Save Cutting force as PNG' }).click(),
+  ]);
+  assert.equal(png.suggestedFilename(), 'cutting-force.png');
+  const bytes = await readFile(await png.path());
+  assert.deepEqual([...bytes.subarray(1, 4)], [0x50, 0x4e, 0x47]); // "PNG"
   assert.deepEqual(problems, []);
   await context.close();
 });

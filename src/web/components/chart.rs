@@ -17,6 +17,7 @@ use plotters_canvas::CanvasBackend;
 
 use crate::charts::view::{nearest, pan, visible, zoom};
 use crate::charts::{draw_line_chart, ChartStyle, LineChart, PlotGeometry};
+use crate::web::components::download::{download_canvas_png, png_name};
 
 /// Formats a readout value with a sensible number of digits.
 fn readout(value: f64) -> String {
@@ -269,6 +270,19 @@ pub fn ChartCanvas(
                                 .collect_view()
                         })
                 }}
+                <button
+                    type="button"
+                    class="chart-reset"
+                    aria-label=format!("Save {label} as PNG")
+                    on:click=move |_| {
+                        if let Some(canvas) = canvas_ref.get_untracked() {
+                            let result = download_canvas_png(&canvas, &png_name(label));
+                            set_draw_error.set(result.err());
+                        }
+                    }
+                >
+                    "PNG"
+                </button>
                 {move || {
                     x_view
                         .get()

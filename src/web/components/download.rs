@@ -24,3 +24,42 @@ pub fn download_text(file_name: &str, mime: &str, text: &str) -> Result<(), Stri
     let _ = web_sys::Url::revoke_object_url(&url);
     Ok(())
 }
+
+/// Offers a canvas's pixels as a PNG download named `file_name`.
+pub fn download_canvas_png(
+    canvas: &web_sys::HtmlCanvasElement,
+    file_name: &str,
+) -> Result<(), String> {
+    let url = canvas
+        .to_data_url_with_type("image/png")
+        .map_err(|_| format!("could not save {file_name}: the canvas gave no image"))?;
+    let anchor: web_sys::HtmlAnchorElement = leptos::prelude::document()
+        .create_element("a")
+        .map_err(|_| format!("could not save {file_name}"))?
+        .dyn_into()
+        .map_err(|_| format!("could not save {file_name}"))?;
+    anchor.set_href(&url);
+    anchor.set_download(file_name);
+    anchor.click();
+    Ok(())
+}
+
+/// A file name from a chart's label: "Cutting force" → "cutting-force.png".
+pub fn png_name(label: &str) -> String {
+    let slug: String = label
+        .chars()
+        .map(|c| {
+            if c.is_ascii_alphanumeric() {
+                c.to_ascii_lowercase()
+            } else {
+                '-'
+            }
+        })
+        .collect();
+    let slug = slug
+        .split('-')
+        .filter(|p| !p.is_empty())
+        .collect::<Vec<_>>()
+        .join("-");
+    format!("{slug}.png")
+}
