@@ -21,6 +21,11 @@ test('the lessons show the papers\' equations and link into the lab', async () =
   assert.ok((await page.locator('math').count()) >= 5);
   await page.getByRole('link', { name: 'Try it: Design the filter' }).click();
   await page.getByRole('heading', { level: 1, name: /Signal chain/ }).waitFor();
+  await page.goBack();
+  await page.getByRole('link', { name: 'Try it: Fixed feed against threshold control' }).click();
+  const table = page.getByRole('table', { name: /Metrics of the runs/ });
+  await table.getByRole('columnheader', { name: 'B: threshold' }).waitFor({ timeout: 60_000 });
+  assert.equal(await page.getByLabel('Preset', { exact: true }).inputValue(), 'kim-step-doc');
   assert.deepEqual(problems, []);
   await context.close();
 });

@@ -39,7 +39,7 @@ const LESSONS: &[Lesson] = &[
                 r#"<math display="block"><msub><mi>T</mi><mi>m</mi></msub><mo>=</mo><mfrac><mn>3</mn><mn>2</mn></mfrac><mi>p</mi><msub><mi>λ</mi><mi>m</mi></msub><msub><mi>i</mi><mi>q</mi></msub></math>"#,
             ),
         ],
-        try_it: &[],
+        try_it: &[("The brake bench: current against load", "#/plant?preset=wang-brake-bench")],
     },
     Lesson {
         id: "signal-chain",
@@ -84,7 +84,7 @@ const LESSONS: &[Lesson] = &[
                 r#"<math display="block"><msub><mi>F</mi><mrow><mi>c</mi><mo>,</mo><mi>max</mi></mrow></msub><mo>=</mo><mfrac><msqrt><mrow><mn>1</mn><mo>+</mo><msup><mi>r</mi><mn>2</mn></msup></mrow></msqrt><mi>R</mi></mfrac><msub><mi>T</mi><mrow><mi>c</mi><mo>,</mo><mi>max</mi></mrow></msub></math>"#,
             ),
         ],
-        try_it: &[],
+        try_it: &[("Forces of a depth-step cut", "#/plant?preset=kim-step-doc")],
     },
     Lesson {
         id: "controllers",
@@ -110,7 +110,7 @@ const LESSONS: &[Lesson] = &[
             "Sliding variable and adaptive law (paper 001, eq 5)",
             r#"<math display="block"><mi>E</mi><mo>=</mo><mfrac><mrow><mi>d</mi><mover><mi>F</mi><mo>~</mo></mover></mrow><mrow><mi>d</mi><mi>t</mi></mrow></mfrac><mo>+</mo><mi>λ</mi><mover><mi>F</mi><mo>~</mo></mover><mo>,</mo><mspace width="1em"/><msub><mi>f</mi><mi>r</mi></msub><mo>=</mo><mover><mi>β</mi><mo>^</mo></mover><msub><mi>F</mi><mi>d</mi></msub><mo>−</mo><msub><mi>K</mi><mi>d</mi></msub><mi>E</mi><mo>,</mo><mspace width="1em"/><mover><mover><mi>β</mi><mo>^</mo></mover><mo>˙</mo></mover><mo>=</mo><mo>−</mo><msub><mi>γ</mi><mn>3</mn></msub><msub><mi>F</mi><mi>d</mi></msub><mi>E</mi></math>"#,
         )],
-        try_it: &[],
+        try_it: &[("Fixed feed against threshold control", "#/compare?preset=kim-step-doc&variants=2&a.controller=fixed&b.controller=threshold"), ("Adaptive control at 320 N", "#/simulate?preset=maneerat-doc-4&controller=mrac"), ("Edit the fuzzy rules", "#/fuzzy")],
     },
 ];
 
