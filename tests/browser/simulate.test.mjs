@@ -135,3 +135,26 @@ test('the trace exports as CSV and the configuration as JSON', async () => {
   assert.deepEqual(problems, []);
   await context.close();
 });
+
+test('a long run shows progress, keeps the page responsive, and can be cancelled', async () => {
+  const { page, problems, context } = await openLab(browser, server.url, '#/simulate?preset=kim-circular-taper&controller=pi');
+  // Long tasks (main-thread work over 50 ms) during the run, measured by the browser itself.
+  await page.evaluate(() => {
+    window.cutlabLongTasks = [];
+    new PerformanceObserver((list) => {
+      for (const entry of list.getEntries()) window.cutlabLongTasks.push(entry.duration);
+    }).observe({ type: 'longtask' });
+  });
+  await waitForResult(page);
+  const longest = Math.max(0, ...(await page.evaluate(() => window.cutlabLongTasks)));
+  assert.ok(longest < 100, `the page froze for ${longest} ms`);
+  // Start another run and cancel it while it computes.
+  await page.getByLabel('Seed').fill('2');
+  const progress = page.getByRole('progressbar');
+  await progress.waitFor({ timeout: RUN_TIMEOUT });
+  await page.getByRole('button', { name: 'Cancel' }).click();
+  await page.getByText(/^Cancelled\./).waitFor();
+  await progress.waitFor({ state: 'detached' });
+  assert.deepEqual(problems, []);
+  await context.close();
+});
