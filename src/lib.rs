@@ -15,12 +15,17 @@
 //!
 //! ## Modules
 //!
+//! In the order a sample travels:
+//!
 //! | module | what it holds |
 //! |---|---|
-//! | [`signal`] | Butterworth design (second-order sections), biquad-cascade filtering, zero-phase filtering, RMS, Clarke/Park, spectra, min/max decimation |
-//! | [`machine`] | the one interface between the closed loop and a machine: simulated, replayed or real |
 //! | [`plant`] | the simulated machine: milling mechanics, feed and spindle drives, motor currents, sensors, the FANUC-style CNC, scenarios and the papers' presets |
+//! | [`machine`] | the one interface between the closed loop and a machine: simulated, replayed or real |
+//! | [`signal`] | Butterworth design (second-order sections), biquad-cascade filtering, zero-phase filtering, RMS, Clarke/Park, spectra, min/max decimation |
+//! | [`estimation`] | current → force: paper 000's feed-drive and paper 003's spindle models, F/V speed identification, teach-cut calibration by least squares |
+//! | [`control`] | the controller interface and registry: fixed feed, current restriction, threshold-proportional, fuzzy (a Mamdani engine with FLL), PI with anti-windup, Lyapunov MRAC |
 //! | [`safety`] | the safety envelope after every controller: limits, rate limit, quantisation, arming, sensor faults, overload |
+//! | [`closed_loop`] | the one loop that wires them: teach cut, signal chain, trace, metrics, and the preset runs the CLI and the browser share |
 //! | [`rng`] | the seeded random source every simulation draws from |
 //! | [`math`] | transcendental functions that give the same bits natively and in wasm |
 //! | `cli` | the `cutlab` command line (feature `cli`) |
