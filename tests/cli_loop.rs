@@ -3,23 +3,10 @@
 // Test code: unwrapping and panicking on a broken expectation is the point.
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
 
-use cutlab::cli::{run, Io};
+mod common;
 
 fn cutlab(args: &[&str]) -> (Result<(), String>, String) {
-    let args: Vec<String> = args.iter().map(|s| s.to_string()).collect();
-    let mut input: &[u8] = &[];
-    let mut output = Vec::new();
-    let result = run(
-        &args,
-        &mut Io {
-            stdin: &mut input,
-            stdout: &mut output,
-        },
-    );
-    (
-        result.map_err(|e| e.to_string()),
-        String::from_utf8_lossy(&output).into_owned(),
-    )
+    common::cutlab_text(args, "")
 }
 
 /// A fresh scratch directory for one test.

@@ -3,25 +3,11 @@
 // Helpers outside #[test] functions unwrap too: a failed parse is a failed test.
 #![allow(clippy::unwrap_used)]
 
-use cutlab::cli::{run, Io};
+mod common;
 use cutlab::plant::Preset;
 
-/// Runs the CLI in-process; returns (result, stdout).
 fn cutlab(args: &[&str]) -> (Result<(), String>, String) {
-    let args: Vec<String> = args.iter().map(|s| s.to_string()).collect();
-    let mut input: &[u8] = b"";
-    let mut output = Vec::new();
-    let result = run(
-        &args,
-        &mut Io {
-            stdin: &mut input,
-            stdout: &mut output,
-        },
-    );
-    (
-        result.map_err(|e| e.to_string()),
-        String::from_utf8(output).unwrap(),
-    )
+    common::cutlab_text(args, "")
 }
 
 fn json(args: &[&str]) -> serde_json::Value {

@@ -4,7 +4,7 @@
 // Helpers outside #[test] functions are test code too: a failed unwrap is a failed test.
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
 
-use cutlab::cli::{run, Io};
+mod common;
 use cutlab::signal::butterworth::{butter, ButterworthSpec, Cutoff, FilterKind};
 use cutlab::signal::filter::SosFilterBank;
 use cutlab::signal::filtfilt::filtfilt_interleaved;
@@ -13,19 +13,8 @@ use serde_json::Value;
 
 const DESIGN: &str = include_str!("reference/signal/design.json");
 
-/// Runs the CLI in-process on raw stdin bytes; returns (result, stdout bytes).
 fn cutlab(args: &[&str], stdin: &[u8]) -> (Result<(), String>, Vec<u8>) {
-    let args: Vec<String> = args.iter().map(|s| s.to_string()).collect();
-    let mut input = stdin;
-    let mut output = Vec::new();
-    let result = run(
-        &args,
-        &mut Io {
-            stdin: &mut input,
-            stdout: &mut output,
-        },
-    );
-    (result.map_err(|e| e.to_string()), output)
+    common::cutlab_bytes(args, stdin)
 }
 
 fn error_of(args: &[&str], stdin: &[u8]) -> String {
