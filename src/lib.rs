@@ -26,6 +26,7 @@
 //! | [`control`] | the controller interface and registry: fixed feed, current restriction, threshold-proportional, fuzzy (a Mamdani engine with FLL), PI with anti-windup, Lyapunov MRAC |
 //! | [`safety`] | the safety envelope after every controller: limits, rate limit, quantisation, arming, sensor faults, overload |
 //! | [`closed_loop`] | the one loop that wires them: teach cut, signal chain, trace, metrics, and the preset runs the CLI and the browser share |
+//! | [`input`] | numbers typed into forms, parsed with messages for the field |
 //! | [`rng`] | the seeded random source every simulation draws from |
 //! | [`math`] | transcendental functions that give the same bits natively and in wasm |
 //! | `cli` | the `cutlab` command line (feature `cli`) |
@@ -42,6 +43,7 @@
 pub mod closed_loop;
 pub mod control;
 pub mod estimation;
+pub mod input;
 pub mod machine;
 pub mod math;
 pub mod plant;
