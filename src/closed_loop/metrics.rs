@@ -201,6 +201,70 @@ pub fn with_savings(
     metrics
 }
 
+/// The metrics as CSV: a header `metric,value` and one row per scalar metric, units in the names
+/// (the per-step responses are summarised by their maxima).
+///
+/// ```
+/// use cutlab::closed_loop::metrics::{compute, metrics_csv, MetricsConfig};
+/// use cutlab::closed_loop::trace::Trace;
+/// let m = compute(&Trace::default(), &MetricsConfig { force_limit_n: 1.0,
+///     settling_band_pct: 5.0, depth_step_mm: 0.2 });
+/// let csv = metrics_csv(&m);
+/// assert!(csv.starts_with("metric,value\ncycle_time_s,0\n"));
+/// ```
+pub fn metrics_csv(metrics: &Metrics) -> String {
+    let value = |v: Option<f64>| v.map_or(String::new(), |v| v.to_string());
+    let rows: [(&str, Option<f64>); 18] = [
+        ("cycle_time_s", Some(metrics.cycle_time_s)),
+        ("completed", Some(f64::from(u8::from(metrics.completed)))),
+        (
+            "controlled_cutting_time_s",
+            Some(metrics.controlled_cutting_time_s),
+        ),
+        ("force_iae_n_s", Some(metrics.force_iae_n_s)),
+        ("force_rms_error_n", Some(metrics.force_rms_error_n)),
+        (
+            "force_mean_abs_error_pct",
+            Some(metrics.force_mean_abs_error_pct),
+        ),
+        ("peak_force_n", Some(metrics.peak_force_n)),
+        ("time_above_limit_s", Some(metrics.time_above_limit_s)),
+        ("max_overshoot_pct", Some(metrics.max_overshoot_pct)),
+        ("max_settling_time_s", metrics.max_settling_time_s),
+        ("depth_steps", Some(metrics.steps.len() as f64)),
+        (
+            "override_total_variation_pct",
+            Some(metrics.override_total_variation_pct),
+        ),
+        ("override_changes", Some(metrics.override_changes as f64)),
+        ("removed_volume_mm3", Some(metrics.removed_volume_mm3)),
+        (
+            "mean_material_removal_mm3_s",
+            Some(metrics.mean_material_removal_mm3_s),
+        ),
+        ("saving_vs_programmed_pct", metrics.saving_vs_programmed_pct),
+        ("saving_vs_safe_fixed_pct", metrics.saving_vs_safe_fixed_pct),
+        (
+            "steps_settled",
+            Some(
+                metrics
+                    .steps
+                    .iter()
+                    .filter(|s| s.settling_time_s.is_some())
+                    .count() as f64,
+            ),
+        ),
+    ];
+    let mut out = String::from("metric,value\n");
+    for (name, v) in rows {
+        out.push_str(name);
+        out.push(',');
+        out.push_str(&value(v));
+        out.push('\n');
+    }
+    out
+}
+
 /// Finds the depth steps and measures the force's response to each.
 fn step_responses(rows: &[TraceRow], config: &MetricsConfig) -> Vec<StepResponse> {
     let step_indices: Vec<usize> = (1..rows.len())

@@ -118,6 +118,12 @@ test('the trace exports as CSV and the configuration as JSON', async () => {
   const text = await readFile(await csv.path(), 'utf8');
   assert.match(text.split('\n')[0], /^time_s,depth_mm,/);
   assert.ok(text.split('\n').length > 100);
+  const [metrics] = await Promise.all([
+    page.waitForEvent('download'),
+    page.getByRole('button', { name: 'Metrics (CSV)' }).click(),
+  ]);
+  const metricsText = await readFile(await metrics.path(), 'utf8');
+  assert.match(metricsText, /^metric,value\ncycle_time_s,\d/);
   const [config] = await Promise.all([
     page.waitForEvent('download'),
     page.getByRole('button', { name: 'Configuration (JSON)' }).click(),

@@ -6,6 +6,7 @@ use std::time::Duration;
 use leptos::prelude::*;
 
 use crate::closed_loop::lab::{RunResult, RunSpec};
+use crate::closed_loop::metrics::metrics_csv;
 use crate::closed_loop::trace::write_csv;
 use crate::control::registry::ControllerKind;
 use crate::web::components::download::download_text;
@@ -112,6 +113,13 @@ pub fn SimulatePage() -> impl IntoView {
             );
         }
     };
+    let export_metrics_csv = move |_| {
+        if let Some(r) = result.get_untracked() {
+            set_export_error.set(
+                download_text("cutlab-metrics.csv", "text/csv", &metrics_csv(&r.metrics)).err(),
+            );
+        }
+    };
     let export_config = move |_| {
         let config = spec.get_untracked().map(|s| {
             serde_json::json!({
@@ -157,6 +165,9 @@ pub fn SimulatePage() -> impl IntoView {
                         <div class="button-row">
                             <button type="button" on:click=export_csv disabled=move || result.get().is_none()>
                                 "Trace (CSV)"
+                            </button>
+                            <button type="button" on:click=export_metrics_csv disabled=move || result.get().is_none()>
+                                "Metrics (CSV)"
                             </button>
                             <button type="button" on:click=export_metrics disabled=move || result.get().is_none()>
                                 "Metrics (JSON)"
