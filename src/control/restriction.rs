@@ -71,3 +71,34 @@ impl Controller for CurrentRestriction {
 
     fn reset(&mut self) {}
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn input(force_n: f64) -> ControlInput {
+        ControlInput {
+            time_s: 10.0,
+            dt_s: 0.1,
+            force_n,
+            target_force_n: 300.0,
+            programmed_feed_mm_min: 100.0,
+            applied_override_pct: 70.0,
+            time_since_spindle_start_s: 10.0,
+        }
+    }
+
+    #[test]
+    fn steps_from_the_applied_override_and_holds_in_the_band_or_on_nan() {
+        let mut c = CurrentRestriction::new(RestrictionParams {
+            upper_limit_n: 330.0,
+            lower_limit_n: 270.0,
+            step_pct: 10.0,
+        });
+        assert_eq!(c.step(&input(200.0)), 80.0);
+        assert_eq!(c.step(&input(400.0)), 60.0);
+        assert_eq!(c.step(&input(330.0)), 70.0);
+        assert_eq!(c.step(&input(f64::NAN)), 70.0);
+        assert_eq!(c.terms()[0].value, 330.0);
+    }
+}

@@ -89,3 +89,52 @@ impl Controller for ThresholdProportional {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn input(force_n: f64, since_start_s: f64) -> ControlInput {
+        ControlInput {
+            time_s: 10.0,
+            dt_s: 0.1,
+            force_n,
+            target_force_n: 200.0,
+            programmed_feed_mm_min: 100.0,
+            applied_override_pct: 80.0,
+            time_since_spindle_start_s: since_start_s,
+        }
+    }
+
+    fn controller() -> ThresholdProportional {
+        ThresholdProportional::new(ThresholdParams {
+            gap_pct: 10.0,
+            kp: 0.5,
+            ignore_after_start_s: 3.0,
+        })
+    }
+
+    #[test]
+    fn holds_inside_the_band_and_corrects_in_proportion_outside() {
+        let mut c = controller();
+        // Band: 190–210 N.
+        assert_eq!(c.step(&input(205.0, 10.0)), 80.0);
+        // 30 N below 190 N is 15 % of the target: +7.5 points.
+        assert!((c.step(&input(160.0, 10.0)) - 87.5).abs() < 1e-12);
+        // Twice the excess, twice the correction.
+        assert!((c.step(&input(270.0, 10.0)) - (80.0 - 15.0)).abs() < 1e-12);
+    }
+
+    #[test]
+    fn ignores_the_current_right_after_spindle_start() {
+        let mut c = controller();
+        assert_eq!(c.step(&input(1000.0, 2.9)), 80.0);
+        assert!(c.step(&input(1000.0, 3.0)) < 80.0);
+    }
+
+    #[test]
+    fn a_non_finite_force_holds() {
+        let mut c = controller();
+        assert_eq!(c.step(&input(f64::NAN, 10.0)), 80.0);
+    }
+}
