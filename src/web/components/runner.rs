@@ -69,11 +69,16 @@ impl<T: Send + Sync + 'static> Clone for Runner<T> {
 }
 
 impl<T: Clone + Send + Sync + 'static> Runner<T> {
-    /// A runner with nothing started.
+    /// A runner with nothing started; whatever it runs stops when the page that made it is left.
     pub fn new() -> Self {
+        let generation = Arc::new(AtomicU64::new(0));
+        let on_leave = generation.clone();
+        on_cleanup(move || {
+            on_leave.fetch_add(1, Ordering::SeqCst);
+        });
         Self {
             status: RwSignal::new(RunStatus::Idle),
-            generation: Arc::new(AtomicU64::new(0)),
+            generation,
         }
     }
 
@@ -154,6 +159,39 @@ fn pump<J: Job + 'static>(
         set_timeout(
             move || pump(state, status, generation, mine),
             Duration::ZERO,
+        );
+    }
+}
+
+/// Runs an action a moment after the last request, dropping earlier ones: typing "150" into a
+/// field starts one run, not three. Requests still pending when the page is left are dropped.
+#[derive(Clone, Copy)]
+pub struct Debounce {
+    latest: StoredValue<u64>,
+    delay: Duration,
+}
+
+impl Debounce {
+    /// Waits `delay` after the last request.
+    pub fn new(delay: Duration) -> Self {
+        Self {
+            latest: StoredValue::new(0),
+            delay,
+        }
+    }
+
+    /// Requests `action`; it runs unless another request comes within the delay.
+    pub fn request(&self, action: impl FnOnce() + 'static) {
+        self.latest.update_value(|n| *n += 1);
+        let mine = self.latest.get_value();
+        let latest = self.latest;
+        set_timeout(
+            move || {
+                if latest.try_get_value() == Some(mine) {
+                    action();
+                }
+            },
+            self.delay,
         );
     }
 }

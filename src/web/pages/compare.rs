@@ -12,7 +12,7 @@ use crate::web::components::run_form::{
     ControllerFields, ControllerForm, ScenarioFields, ScenarioForm,
 };
 use crate::web::components::run_view::{MetricsTable, NamedRun, RunCharts};
-use crate::web::components::runner::{LabRuns, RunProgress, RunStatus, Runner};
+use crate::web::components::runner::{Debounce, LabRuns, RunProgress, RunStatus, Runner};
 use crate::web::route::{query_params, replace_query, Page};
 
 const RERUN_DELAY: Duration = Duration::from_millis(350);
@@ -102,10 +102,8 @@ pub fn ComparePage() -> impl IntoView {
             .collect::<Option<Vec<_>>>()
     });
 
-    let edits = StoredValue::new(0u64);
+    let debounce = Debounce::new(RERUN_DELAY);
     let runner_for_effect = runner.clone();
-    let runner_for_cleanup = runner.clone();
-    on_cleanup(move || runner_for_cleanup.cancel());
     Effect::new(move |_| {
         let mut q = scenario.query();
         q.push(("variants".into(), count.get().to_string()));
@@ -116,18 +114,8 @@ pub fn ComparePage() -> impl IntoView {
         let Some(specs) = specs.get() else {
             return;
         };
-        edits.update_value(|n| *n += 1);
-        let mine = edits.get_value();
         let runner = runner_for_effect.clone();
-        set_timeout(
-            move || {
-                // `try_`: the page may have been left before the delay ran out.
-                if edits.try_get_value() == Some(mine) {
-                    runner.start(LabRuns::new(specs));
-                }
-            },
-            RERUN_DELAY,
-        );
+        debounce.request(move || runner.start(LabRuns::new(specs)));
     });
 
     let results = Memo::new(move |previous: Option<&Vec<NamedRun>>| match status.get() {

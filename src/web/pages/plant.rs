@@ -15,8 +15,11 @@ use crate::plant::Preset;
 use crate::signal::spectrum::{amplitude_spectrum, Window};
 use crate::web::components::chart::ChartCanvas;
 use crate::web::components::fields::{parse_number, NumberField, SelectField};
-use crate::web::components::runner::{Job, RunProgress, RunStatus, Runner};
+use crate::web::components::runner::{Debounce, Job, RunProgress, RunStatus, Runner};
 use crate::web::route::{query_params, replace_query, Page};
+
+/// Wait after the last edit before re-running.
+const RERUN_DELAY: Duration = Duration::from_millis(300);
 
 /// Samples summarised per plotted row: 5 ms at 10 kHz.
 const BLOCK_SAMPLES: usize = 50;
@@ -256,10 +259,8 @@ pub fn PlantPage() -> impl IntoView {
     });
     let runner = Runner::<Arc<Recording>>::new();
     let status = runner.status;
-    let edits = StoredValue::new(0u64);
+    let debounce = Debounce::new(RERUN_DELAY);
     let runner_for_effect = runner.clone();
-    let runner_for_cleanup = runner.clone();
-    on_cleanup(move || runner_for_cleanup.cancel());
     Effect::new(move |_| {
         let name = preset.get();
         let text = override_text.get();
@@ -276,29 +277,19 @@ pub fn PlantPage() -> impl IntoView {
         if !(0.0..=255.0).contains(&pct) {
             return;
         }
-        edits.update_value(|n| *n += 1);
-        let mine = edits.get_value();
         let runner = runner_for_effect.clone();
-        set_timeout(
-            move || {
-                if edits.try_get_value() != Some(mine) {
-                    return;
-                }
-                match p.machine(1) {
-                    Ok(machine) => {
-                        let max_s = p.summary().nominal_duration_s * 3.0 + 10.0;
-                        runner.start(PlantJob {
-                            preset: p,
-                            run: OpenLoopRun::new(machine, pct, BLOCK_SAMPLES, max_s),
-                        });
-                    }
-                    Err(e) => {
-                        let _ = runner.status.try_set(RunStatus::Failed(e.to_string()));
-                    }
-                }
-            },
-            Duration::from_millis(300),
-        );
+        debounce.request(move || match p.machine(1) {
+            Ok(machine) => {
+                let max_s = p.summary().nominal_duration_s * 3.0 + 10.0;
+                runner.start(PlantJob {
+                    preset: p,
+                    run: OpenLoopRun::new(machine, pct, BLOCK_SAMPLES, max_s),
+                });
+            }
+            Err(e) => {
+                let _ = runner.status.try_set(RunStatus::Failed(e.to_string()));
+            }
+        });
     });
     let recording =
         Memo::new(

@@ -14,7 +14,7 @@ use crate::web::components::run_form::{
     ControllerFields, ControllerForm, ScenarioFields, ScenarioForm,
 };
 use crate::web::components::run_view::{metrics_json, EventLog, MetricsTable, NamedRun, RunCharts};
-use crate::web::components::runner::{LabRuns, RunProgress, RunStatus, Runner};
+use crate::web::components::runner::{Debounce, LabRuns, RunProgress, RunStatus, Runner};
 use crate::web::route::{query_params, replace_query, Page};
 
 /// Wait after the last edit before re-running, so typing "150" does not start three runs.
@@ -42,10 +42,8 @@ pub fn SimulatePage() -> impl IntoView {
     });
 
     // Keep the URL in step with the form, and re-run (debounced) when a valid spec changes.
-    let edits = StoredValue::new(0u64);
+    let debounce = Debounce::new(RERUN_DELAY);
     let runner_for_effect = runner.clone();
-    let runner_for_cleanup = runner.clone();
-    on_cleanup(move || runner_for_cleanup.cancel());
     Effect::new(move |_| {
         let mut q = scenario.query();
         q.extend(controller.query(""));
@@ -53,18 +51,8 @@ pub fn SimulatePage() -> impl IntoView {
         let Some(spec) = spec.get() else {
             return;
         };
-        edits.update_value(|n| *n += 1);
-        let mine = edits.get_value();
         let runner = runner_for_effect.clone();
-        set_timeout(
-            move || {
-                // `try_`: the page may have been left before the delay ran out.
-                if edits.try_get_value() == Some(mine) {
-                    runner.start(LabRuns::new(vec![spec]));
-                }
-            },
-            RERUN_DELAY,
-        );
+        debounce.request(move || runner.start(LabRuns::new(vec![spec])));
     });
 
     // The last finished run stays on screen while the next one computes.
