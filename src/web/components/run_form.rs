@@ -337,6 +337,16 @@ pub fn ScenarioFields(form: ScenarioForm) -> impl IntoView {
                 error=error("max_override")
             />
         </fieldset>
+    }
+}
+
+/// The machine, cut and signal-chain fields of a scenario form (shown after the controller).
+#[component]
+pub fn MachineAndSignalFields(form: ScenarioForm) -> impl IntoView {
+    let errors = Memo::new(move |_| form.parse().err().unwrap_or_default());
+    let error =
+        move |key: &'static str| Signal::derive(move || errors.with(|e| e.get(key).cloned()));
+    view! {
         <fieldset hidden=move || {
             Preset::from_name(&form.preset.get()).is_none_or(|p| p.scenario().is_none())
         }>

@@ -52,10 +52,12 @@ pub fn run_charts(runs: &[NamedRun]) -> [LineChart; 5] {
             series_of(run, |r| r.force_n),
         ));
         if single {
+            // Before arming the estimate reads the spindle's starting current, thousands of
+            // newtons of nothing; the chart leaves it out (the CSV keeps it).
             force.series.push(Series::new(
                 "estimated from current",
                 PALETTE[1],
-                series_of(run, |r| r.force_est_n),
+                series_of(run, |r| if r.armed { r.force_est_n } else { f64::NAN }),
             ));
             if run
                 .trace

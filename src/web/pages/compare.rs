@@ -9,7 +9,7 @@ use crate::closed_loop::lab::{RunResult, RunSpec};
 use crate::control::registry::ControllerKind;
 use crate::plant::Preset;
 use crate::web::components::run_form::{
-    ControllerFields, ControllerForm, ScenarioFields, ScenarioForm,
+    ControllerFields, ControllerForm, MachineAndSignalFields, ScenarioFields, ScenarioForm,
 };
 use crate::web::components::run_view::{MetricsTable, NamedRun, RunCharts};
 use crate::web::components::runner::{Debounce, LabRuns, RunProgress, RunStatus, Runner};
@@ -175,6 +175,7 @@ pub fn ComparePage() -> impl IntoView {
                             })
                             .collect_view()
                     }}
+                    <MachineAndSignalFields form=scenario />
                     <div class="button-row">
                         <button type="button" on:click=move |_| count.update(|c| *c = (*c + 1).min(4)) disabled=move || { count.get() >= 4 }>
                             "Add a variant"

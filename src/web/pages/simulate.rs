@@ -11,7 +11,7 @@ use crate::closed_loop::trace::write_csv;
 use crate::control::registry::ControllerKind;
 use crate::web::components::download::download_text;
 use crate::web::components::run_form::{
-    ControllerFields, ControllerForm, ScenarioFields, ScenarioForm,
+    ControllerFields, ControllerForm, MachineAndSignalFields, ScenarioFields, ScenarioForm,
 };
 use crate::web::components::run_view::{metrics_json, EventLog, MetricsTable, NamedRun, RunCharts};
 use crate::web::components::runner::{Debounce, LabRuns, RunProgress, RunStatus, Runner};
@@ -144,6 +144,7 @@ pub fn SimulatePage() -> impl IntoView {
                 <form class="panel" aria-label="Run settings" on:submit=|ev| ev.prevent_default()>
                     <ScenarioFields form=scenario />
                     <ControllerFields form=controller />
+                    <MachineAndSignalFields form=scenario />
                     <div class="button-row">
                         <button type="button" class="primary" on:click=run_now>"Run"</button>
                     </div>
