@@ -133,21 +133,35 @@ fn pump<J: Job + 'static>(
     let next = {
         let mut s = state.borrow_mut();
         let started = now_ms();
-        let budget = s.budget;
-        match s.job.advance(budget) {
-            Err(e) => RunStatus::Failed(e),
-            Ok(true) => match s.job.finish() {
+        // Work in small steps until the chunk's time is used up: the cost of a step can jump
+        // (a run enters the cut and the force model wakes up), and checking the clock between
+        // steps keeps the chunk near its budget whatever the step costs.
+        let outcome = loop {
+            let step_started = now_ms();
+            let budget = s.budget;
+            match s.job.advance(budget) {
+                Err(e) => break Some(Err(e)),
+                Ok(true) => break Some(Ok(())),
+                Ok(false) => {}
+            }
+            // Aim each step at an eighth of the chunk; grow at most 2× at a time.
+            let elapsed = (now_ms() - step_started).max(0.05);
+            let b = budget as f64;
+            s.budget = (b * CHUNK_BUDGET_MS / 8.0 / elapsed)
+                .clamp(b / 4.0, b * 2.0)
+                .round()
+                .clamp(1.0, 1e9) as usize;
+            if now_ms() - started >= CHUNK_BUDGET_MS {
+                break None;
+            }
+        };
+        match outcome {
+            Some(Err(e)) => RunStatus::Failed(e),
+            Some(Ok(())) => match s.job.finish() {
                 Ok(out) => RunStatus::Done(out),
                 Err(e) => RunStatus::Failed(e),
             },
-            Ok(false) => {
-                // Aim each chunk at the budget; never less than one unit, never more than 4×.
-                let elapsed = (now_ms() - started).max(0.1);
-                let b = s.budget as f64;
-                s.budget = (b * CHUNK_BUDGET_MS / elapsed)
-                    .clamp(b / 4.0, b * 4.0)
-                    .round()
-                    .clamp(1.0, 1e9) as usize;
+            None => {
                 let (stage, fraction) = s.job.progress();
                 RunStatus::Running { stage, fraction }
             }
