@@ -7,7 +7,7 @@
 #[cfg(target_arch = "wasm32")]
 use wasm_bindgen_test::wasm_bindgen_test as test;
 
-use cutlab::closed_loop::lab::{simulate, RunResult, RunSpec};
+use cutlab::closed_loop::lab::{simulate, LabRun, RunResult, RunSpec};
 use cutlab::closed_loop::trace::write_csv;
 use cutlab::control::registry::ControllerKind;
 use cutlab::plant::Preset;
@@ -203,4 +203,51 @@ fn adaptive_control_converges_to_the_papers_targets() {
             preset.name()
         );
     }
+}
+
+#[test]
+fn a_run_given_the_teach_cuts_calibration_equals_one_that_teaches_itself() {
+    let spec = RunSpec::new(Preset::ManeeratDoc1, ControllerKind::Pi);
+    let taught = simulate(&spec).unwrap();
+    let mut run = LabRun::calibrated(&spec, taught.calibration.clone()).unwrap();
+    while !run.advance(1000).unwrap() {}
+    let reused = run.into_result().unwrap();
+    assert_eq!(reused.trace, taught.trace);
+    assert_eq!(reused.metrics, taught.metrics);
+}
+
+/// Natively only: a bisection is ten runs.
+#[cfg(not(target_arch = "wasm32"))]
+#[test]
+fn the_reference_search_finds_the_highest_safe_fixed_override_in_pieces_or_at_once() {
+    use cutlab::closed_loop::lab::{fixed_feed_spec, references, ReferenceSearch};
+    let spec = RunSpec::new(Preset::ManeeratDoc1, ControllerKind::Threshold);
+    let whole = references(&spec).unwrap();
+
+    // In small pieces, as the browser runs it: the same answer, progress never going back.
+    let mut search = ReferenceSearch::new(&spec).unwrap();
+    let mut last = 0.0;
+    let pieces = loop {
+        let (_, fraction) = search.progress();
+        assert!((last..=1.0).contains(&fraction), "{fraction} after {last}");
+        last = fraction;
+        if let Some(found) = search.advance(37).unwrap() {
+            break found;
+        }
+    };
+    assert_eq!(pieces, whole);
+
+    // The answer: fixed at that override the peak force stays under the limit; 1 % more and it
+    // does not; the cycle times are those of the fixed runs.
+    let fixed = |pct: f64| simulate(&fixed_feed_spec(&spec, pct).unwrap()).unwrap();
+    let safe = fixed(whole.safe_fixed_override_pct);
+    let limit = safe.settings.force_limit_n;
+    assert!(safe.metrics.peak_force_n <= limit);
+    assert_eq!(safe.metrics.cycle_time_s, whole.safe_fixed_cycle_time_s);
+    let faster = fixed(whole.safe_fixed_override_pct + 1.0);
+    assert!(faster.metrics.peak_force_n > limit || !faster.trace.completed);
+    assert_eq!(
+        fixed(100.0).metrics.cycle_time_s,
+        whole.programmed_cycle_time_s
+    );
 }

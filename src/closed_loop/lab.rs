@@ -70,6 +70,8 @@ impl RunSpec {
 /// A finished run.
 #[derive(Debug, Clone, PartialEq)]
 pub struct RunResult {
+    /// What was run.
+    pub spec: RunSpec,
     /// The settings the run used.
     pub settings: LoopSettings,
     /// The teach cut's calibration.
@@ -203,6 +205,8 @@ pub struct LabRun {
     spec: RunSpec,
     settings: LoopSettings,
     nominal_duration_s: f64,
+    /// True when the run was given a calibration and has no teach cut of its own.
+    calibrated: bool,
     stage: Stage,
 }
 
@@ -237,10 +241,30 @@ impl LabRun {
             .map_err(|e| LoopError::Setting(e.to_string()))?;
         Ok(Self {
             nominal_duration_s: spec.preset.summary().nominal_duration_s.max(1.0),
+            calibrated: false,
             stage: Stage::Teaching(Box::new(TeachCut::new(Box::new(teach_machine), &settings)?)),
             settings,
             spec: spec.clone(),
         })
+    }
+
+    /// Starts a run that skips the teach cut and uses `calibration`, made by an earlier run of a
+    /// spec with the same preset, seed, machine and signal chain (the teach cut depends on those
+    /// alone, so the result is the same as [`LabRun::new`]'s, for less work).
+    pub fn calibrated(spec: &RunSpec, calibration: Calibration) -> Result<Self, LoopError> {
+        let mut run = Self {
+            nominal_duration_s: spec.preset.summary().nominal_duration_s.max(1.0),
+            calibrated: true,
+            stage: Stage::Empty,
+            settings: default_settings(spec)?,
+            spec: spec.clone(),
+        };
+        let closed_loop = run.start_loop(&calibration)?;
+        run.stage = Stage::Running {
+            run: Box::new(closed_loop),
+            calibration,
+        };
+        Ok(run)
     }
 
     /// Runs at most `periods` control periods of whichever stage is under way; returns true once
@@ -269,6 +293,7 @@ impl LabRun {
                     let trace = run.into_trace();
                     let metrics = compute(&trace, &metrics_config(&settings));
                     self.stage = Stage::Done(Box::new(RunResult {
+                        spec: self.spec.clone(),
                         settings,
                         calibration,
                         trace,
@@ -329,6 +354,10 @@ impl LabRun {
             Stage::Teaching(t) => Progress {
                 stage: "teach cut",
                 fraction: 0.5 * fraction(t.elapsed_s()),
+            },
+            Stage::Running { run, .. } if self.calibrated => Progress {
+                stage: "closed loop",
+                fraction: fraction(run.elapsed_s()),
             },
             Stage::Running { run, .. } => Progress {
                 stage: "closed loop",
@@ -393,42 +422,164 @@ pub struct References {
 /// Runs the fixed-feed references for `spec`'s preset and settings: 100 %, and a bisection for
 /// the highest fixed override that keeps the peak force under the limit (to 1 %).
 pub fn references(spec: &RunSpec) -> Result<References, LoopError> {
-    let fixed = |pct: f64| -> Result<RunResult, LoopError> {
-        let mut s = spec.clone();
-        s.controller = ControllerConfig::new(ControllerKind::Fixed);
-        s.controller
-            .set("override_pct", pct)
-            .map_err(|e| LoopError::Setting(e.to_string()))?;
-        // The references are the program run at one override from start to end, not bounded by
-        // the envelope's override band.
-        s.settings.min_override_pct = Some(0.0);
-        s.settings.max_override_pct = Some(255.0);
-        s.settings.arming_override_pct = Some(pct);
-        simulate(&s)
-    };
-    let programmed = fixed(100.0)?;
-    let limit = programmed.settings.force_limit_n;
-    let (mut low, mut high) = (1.0_f64, 250.0_f64);
-    let mut best: Option<RunResult> = None;
-    while high - low > 1.0 {
-        let middle = ((low + high) / 2.0).round();
-        let run = fixed(middle)?;
-        if run.metrics.peak_force_n <= limit && run.trace.completed {
-            low = middle;
-            best = Some(run);
-        } else {
-            high = middle;
+    let mut search = ReferenceSearch::new(spec)?;
+    loop {
+        if let Some(found) = search.advance(10_000)? {
+            return Ok(found);
         }
     }
-    let best = match best {
-        Some(b) => b,
-        None => fixed(low)?,
-    };
-    Ok(References {
-        programmed_cycle_time_s: programmed.metrics.cycle_time_s,
-        safe_fixed_override_pct: low,
-        safe_fixed_cycle_time_s: best.metrics.cycle_time_s,
-    })
+}
+
+/// The bisection's bracket of fixed overrides, percent.
+const REFERENCE_BRACKET_PCT: (f64, f64) = (1.0, 250.0);
+
+/// The reference runs of [`references`], done a piece at a time so a browser can show progress
+/// and stay responsive: the programmed feed at 100 %, then a bisection over fixed overrides.
+/// The teach cut is made once, by the first run; the others reuse its calibration (they differ
+/// from it only in controller and override band, which the teach cut does not depend on).
+pub struct ReferenceSearch {
+    spec: RunSpec,
+    run: LabRun,
+    /// The fixed override of `run`, percent, and whether it is a bisection step.
+    running: (f64, RunKind),
+    calibration: Option<Calibration>,
+    programmed_cycle_time_s: f64,
+    force_limit_n: f64,
+    low_pct: f64,
+    high_pct: f64,
+    best_cycle_time_s: Option<f64>,
+    runs_done: usize,
+    found: Option<References>,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum RunKind {
+    Programmed,
+    Bisection,
+    /// No bisection step stayed under the limit: the cycle time at the lowest override.
+    Lowest,
+}
+
+impl ReferenceSearch {
+    /// Runs a bisection needs from the bracket down to 1 %, plus the programmed-feed run.
+    const EXPECTED_RUNS: usize = 9;
+
+    /// Starts with the programmed-feed run.
+    pub fn new(spec: &RunSpec) -> Result<Self, LoopError> {
+        let (low_pct, high_pct) = REFERENCE_BRACKET_PCT;
+        Ok(Self {
+            run: LabRun::new(&fixed_feed_spec(spec, 100.0)?)?,
+            running: (100.0, RunKind::Programmed),
+            spec: spec.clone(),
+            calibration: None,
+            programmed_cycle_time_s: f64::NAN,
+            force_limit_n: f64::NAN,
+            low_pct,
+            high_pct,
+            best_cycle_time_s: None,
+            runs_done: 0,
+            found: None,
+        })
+    }
+
+    /// Does at most `periods` control periods of work; returns the references once found.
+    pub fn advance(&mut self, periods: usize) -> Result<Option<References>, LoopError> {
+        if self.found.is_some() {
+            return Ok(self.found);
+        }
+        if !self.run.advance(periods)? {
+            return Ok(None);
+        }
+        let placeholder = Stage::Empty;
+        let finished = std::mem::replace(&mut self.run.stage, placeholder);
+        let Stage::Done(result) = finished else {
+            return Err(LoopError::Setting(
+                "a reference run ended without a result".into(),
+            ));
+        };
+        self.runs_done += 1;
+        let (pct, kind) = self.running;
+        match kind {
+            RunKind::Programmed => {
+                self.programmed_cycle_time_s = result.metrics.cycle_time_s;
+                self.force_limit_n = result.settings.force_limit_n;
+                self.calibration = Some(result.calibration);
+            }
+            RunKind::Bisection => {
+                if result.metrics.peak_force_n <= self.force_limit_n && result.trace.completed {
+                    self.low_pct = pct;
+                    self.best_cycle_time_s = Some(result.metrics.cycle_time_s);
+                } else {
+                    self.high_pct = pct;
+                }
+            }
+            RunKind::Lowest => self.best_cycle_time_s = Some(result.metrics.cycle_time_s),
+        }
+        let next = if self.high_pct - self.low_pct > 1.0 {
+            Some((
+                ((self.low_pct + self.high_pct) / 2.0).round(),
+                RunKind::Bisection,
+            ))
+        } else if self.best_cycle_time_s.is_none() && kind != RunKind::Lowest {
+            Some((self.low_pct, RunKind::Lowest))
+        } else {
+            None
+        };
+        match (next, self.best_cycle_time_s) {
+            (Some((pct, kind)), _) => {
+                let spec = fixed_feed_spec(&self.spec, pct)?;
+                self.run = match &self.calibration {
+                    Some(c) => LabRun::calibrated(&spec, c.clone())?,
+                    None => LabRun::new(&spec)?,
+                };
+                self.running = (pct, kind);
+                Ok(None)
+            }
+            (None, Some(best)) => {
+                self.found = Some(References {
+                    programmed_cycle_time_s: self.programmed_cycle_time_s,
+                    safe_fixed_override_pct: self.low_pct,
+                    safe_fixed_cycle_time_s: best,
+                });
+                Ok(self.found)
+            }
+            (None, None) => Err(LoopError::Setting(
+                "the reference runs found no cycle time".into(),
+            )),
+        }
+    }
+
+    /// The references, once found.
+    pub fn found(&self) -> Option<References> {
+        self.found
+    }
+
+    /// What the search is doing (the fixed override of the current run) and the rough fraction
+    /// done, 0–1.
+    pub fn progress(&self) -> (String, f64) {
+        let expected = Self::EXPECTED_RUNS.max(self.runs_done + 1);
+        let label = format!(
+            "Reference run {} of about {expected}: fixed feed at {:.0} %",
+            self.runs_done + 1,
+            self.running.0
+        );
+        let fraction = (self.runs_done as f64 + self.run.progress().fraction) / expected as f64;
+        (label, fraction.clamp(0.0, 1.0))
+    }
+}
+
+/// `spec` at a fixed override from start to end, not bounded by the envelope's override band:
+/// the program as a machinist would run it without adaptive control.
+pub fn fixed_feed_spec(spec: &RunSpec, override_pct: f64) -> Result<RunSpec, LoopError> {
+    let mut s = spec.clone();
+    s.controller = ControllerConfig::new(ControllerKind::Fixed);
+    s.controller
+        .set("override_pct", override_pct)
+        .map_err(|e| LoopError::Setting(e.to_string()))?;
+    s.settings.min_override_pct = Some(0.0);
+    s.settings.max_override_pct = Some(255.0);
+    s.settings.arming_override_pct = Some(override_pct);
+    Ok(s)
 }
 
 /// Fills a result's savings from the references.

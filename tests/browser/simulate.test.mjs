@@ -33,6 +33,11 @@ test('a run shows force, current, override, feed and depth charts, metrics and e
   }
   const cycle = await table.getByRole('row', { name: /Cycle time/ }).textContent();
   assert.match(cycle, /\d/);
+  // The savings fill in once the reference runs at fixed feed are done, in the background.
+  for (const name of ['Saving vs programmed feed (%)', 'Saving vs safe fixed feed (%)']) {
+    const row = table.getByRole('row').filter({ has: page.getByRole('rowheader', { name }) });
+    await row.filter({ hasText: /\d\s*$/ }).waitFor({ timeout: RUN_TIMEOUT });
+  }
   await page.getByRole('heading', { name: 'Event log' }).waitFor();
   await page.getByText(/armed: the controller now sets the override/).waitFor();
   await screenshot(page, 'simulate');

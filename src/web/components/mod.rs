@@ -7,3 +7,4 @@ pub mod heat_map;
 pub mod run_form;
 pub mod run_view;
 pub mod runner;
+pub mod savings;

@@ -82,6 +82,22 @@ impl<T: Clone + Send + Sync + 'static> Runner<T> {
         }
     }
 
+    /// The output of the last job that finished; it stays while the next one runs.
+    ///
+    /// A signal set on completion rather than a memo of the status: outputs hold NaN where a
+    /// quantity is undefined, so an output compared with itself reads as changed, and a memo
+    /// would wake every chart on every progress tick.
+    pub fn finished(&self) -> ReadSignal<Option<T>> {
+        let (finished, set_finished) = signal(None::<T>);
+        let status = self.status;
+        Effect::new(move |_| {
+            if let RunStatus::Done(output) = status.get() {
+                set_finished.set(Some(output));
+            }
+        });
+        finished
+    }
+
     /// Cancels whatever is running.
     pub fn cancel(&self) {
         self.generation.fetch_add(1, Ordering::SeqCst);
@@ -272,7 +288,18 @@ impl Job for LabRuns {
 
 /// A progress bar with the stage and a Cancel button, shown while running.
 #[component]
-pub fn RunProgress<T: Clone + Send + Sync + 'static>(runner: Runner<T>) -> impl IntoView {
+pub fn RunProgress<T: Clone + Send + Sync + 'static>(
+    runner: Runner<T>,
+    /// The progress bar's element id (unique on the page).
+    #[prop(default = "run-progress-bar")]
+    id: &'static str,
+    /// Say nothing after a cancel (for background work the page cancels itself).
+    #[prop(optional)]
+    quiet_cancel: bool,
+    /// What a failure message starts with.
+    #[prop(default = "The run could not be made")]
+    failure: &'static str,
+) -> impl IntoView {
     let status = runner.status;
     move || {
         match status.get() {
@@ -280,17 +307,18 @@ pub fn RunProgress<T: Clone + Send + Sync + 'static>(runner: Runner<T>) -> impl 
             let runner = runner.clone();
             view! {
                 <div class="run-progress" role="status">
-                    <label for="run-progress-bar">{stage}</label>
-                    <progress id="run-progress-bar" max="1" value=fraction.to_string()></progress>
+                    <label for=id>{stage}</label>
+                    <progress id=id max="1" value=fraction.to_string()></progress>
                     <button type="button" on:click=move |_| runner.cancel()>"Cancel"</button>
                 </div>
             }
             .into_any()
         }
         RunStatus::Failed(message) => view! {
-            <p class="run-error" role="alert">{format!("The run could not be made: {message}")}</p>
+            <p class="run-error" role="alert">{format!("{failure}: {message}")}</p>
         }
         .into_any(),
+        RunStatus::Cancelled if quiet_cancel => ().into_any(),
         RunStatus::Cancelled => view! {
             <p class="hint" role="status">"Cancelled. Change a setting or press Run to start again."</p>
         }

@@ -12,7 +12,8 @@ use crate::web::components::run_form::{
     ControllerFields, ControllerForm, MachineAndSignalFields, ScenarioFields, ScenarioForm,
 };
 use crate::web::components::run_view::{MetricsTable, NamedRun, RunCharts};
-use crate::web::components::runner::{Debounce, LabRuns, RunProgress, RunStatus, Runner};
+use crate::web::components::runner::{Debounce, LabRuns, RunProgress, Runner};
+use crate::web::components::savings::Savings;
 use crate::web::route::{query_params, replace_query, Page};
 
 const RERUN_DELAY: Duration = Duration::from_millis(350);
@@ -84,7 +85,7 @@ pub fn ComparePage() -> impl IntoView {
         .clamp(2, 4);
     let count = RwSignal::new(initial_count);
     let runner = Runner::<Vec<Arc<RunResult>>>::new();
-    let status = runner.status;
+    let savings = Savings::new();
 
     let specs = Memo::new(move |_| {
         let s = scenario.parse().ok()?;
@@ -103,6 +104,7 @@ pub fn ComparePage() -> impl IntoView {
     });
 
     let debounce = Debounce::new(RERUN_DELAY);
+    let savings_for_edits = savings.clone();
     let runner_for_effect = runner.clone();
     Effect::new(move |_| {
         let mut q = scenario.query();
@@ -114,22 +116,36 @@ pub fn ComparePage() -> impl IntoView {
         let Some(specs) = specs.get() else {
             return;
         };
+        if let Some(first) = specs.first() {
+            savings_for_edits.keep_only(first);
+        }
         let runner = runner_for_effect.clone();
         debounce.request(move || runner.start(LabRuns::new(specs)));
     });
 
-    let results = Memo::new(move |previous: Option<&Vec<NamedRun>>| match status.get() {
-        RunStatus::Done(results) => results
+    let done = runner.finished();
+    let results = Memo::new(move |_| {
+        done.get()
+            .unwrap_or_default()
             .into_iter()
             .enumerate()
             .map(|(i, r)| {
                 let label = forms[i].kind.get_untracked();
                 (format!("{}: {label}", VARIANT_NAMES[i]), r)
             })
-            .collect(),
-        _ => previous.cloned().unwrap_or_default(),
+            .collect::<Vec<NamedRun>>()
     });
-    let runs = Signal::derive(move || results.get());
+    // Every variant shares the scenario, so one set of reference runs serves them all.
+    let savings_for_effect = savings.clone();
+    Effect::new(move |_| {
+        results.with(|runs| {
+            if let Some((_, first)) = runs.first() {
+                savings_for_effect.request(&first.spec);
+            }
+        });
+    });
+    let savings_for_runs = savings.clone();
+    let runs = Signal::derive(move || savings_for_runs.apply_all(results.get()));
 
     view! {
         <section class="page" aria-labelledby="compare-title">
@@ -188,6 +204,7 @@ pub fn ComparePage() -> impl IntoView {
                 </form>
                 <div class="results">
                     <RunCharts runs=runs />
+                    {savings.progress()}
                     <MetricsTable runs=runs />
                 </div>
             </div>

@@ -20,7 +20,7 @@ use crate::web::components::download::download_text;
 use crate::web::components::fields::{parse_number, NumberField, SelectField};
 use crate::web::components::heat_map::HeatMapCanvas;
 use crate::web::components::run_form::{decode_rule_table, encode_rule_table};
-use crate::web::components::runner::{LabRuns, RunProgress, RunStatus, Runner};
+use crate::web::components::runner::{LabRuns, RunProgress, Runner};
 use crate::web::route::{query_params, replace_query, Page};
 
 /// Grid points per axis of the control surface.
@@ -262,15 +262,9 @@ pub fn FuzzyPage() -> impl IntoView {
 
     // A simulated run with this table, to pick a moment from.
     let runner = Runner::<Vec<Arc<RunResult>>>::new();
-    let status = runner.status;
     let run_preset = RwSignal::new(Preset::LiuCurrentStep.name().to_string());
-    let run_result =
-        Memo::new(
-            move |previous: Option<&Option<Arc<RunResult>>>| match status.get() {
-                RunStatus::Done(mut r) => r.pop(),
-                _ => previous.cloned().flatten(),
-            },
-        );
+    let done = runner.finished();
+    let run_result = Memo::new(move |_| done.get().and_then(|mut runs| runs.pop()));
     let moment = RwSignal::new(0usize);
     let runner_for_button = runner.clone();
     let start_run = move |_| {

@@ -258,7 +258,6 @@ pub fn PlantPage() -> impl IntoView {
         Err(e) => Some(e),
     });
     let runner = Runner::<Arc<Recording>>::new();
-    let status = runner.status;
     let debounce = Debounce::new(RERUN_DELAY);
     let runner_for_effect = runner.clone();
     Effect::new(move |_| {
@@ -291,13 +290,7 @@ pub fn PlantPage() -> impl IntoView {
             }
         });
     });
-    let recording =
-        Memo::new(
-            move |previous: Option<&Option<Arc<Recording>>>| match status.get() {
-                RunStatus::Done(r) => Some(r),
-                _ => previous.cloned().flatten(),
-            },
-        );
+    let recording = runner.finished();
     let charts = Memo::new(move |_| {
         recording
             .get()

@@ -14,7 +14,8 @@ use crate::web::components::run_form::{
     ControllerFields, ControllerForm, MachineAndSignalFields, ScenarioFields, ScenarioForm,
 };
 use crate::web::components::run_view::{metrics_json, EventLog, MetricsTable, NamedRun, RunCharts};
-use crate::web::components::runner::{Debounce, LabRuns, RunProgress, RunStatus, Runner};
+use crate::web::components::runner::{Debounce, LabRuns, RunProgress, Runner};
+use crate::web::components::savings::Savings;
 use crate::web::route::{query_params, replace_query, Page};
 
 /// Wait after the last edit before re-running, so typing "150" does not start three runs.
@@ -27,7 +28,7 @@ pub fn SimulatePage() -> impl IntoView {
     let scenario = ScenarioForm::new(&query);
     let controller = ControllerForm::new("sim-", ControllerKind::Threshold, &query, "");
     let runner = Runner::<Vec<Arc<RunResult>>>::new();
-    let status = runner.status;
+    let savings = Savings::new();
 
     let spec = Memo::new(move |_| {
         let s = scenario.parse().ok()?;
@@ -43,6 +44,7 @@ pub fn SimulatePage() -> impl IntoView {
 
     // Keep the URL in step with the form, and re-run (debounced) when a valid spec changes.
     let debounce = Debounce::new(RERUN_DELAY);
+    let savings_for_edits = savings.clone();
     let runner_for_effect = runner.clone();
     Effect::new(move |_| {
         let mut q = scenario.query();
@@ -51,17 +53,23 @@ pub fn SimulatePage() -> impl IntoView {
         let Some(spec) = spec.get() else {
             return;
         };
+        savings_for_edits.keep_only(&spec);
         let runner = runner_for_effect.clone();
         debounce.request(move || runner.start(LabRuns::new(vec![spec])));
     });
 
-    // The last finished run stays on screen while the next one computes.
-    let result = Memo::new(
-        move |previous: Option<&Option<Arc<_>>>| match status.get() {
-            RunStatus::Done(mut results) => results.pop(),
-            _ => previous.cloned().flatten(),
-        },
-    );
+    // The last finished run stays on screen while the next one computes; its savings fill in
+    // when the reference runs of its scenario are done.
+    let done = runner.finished();
+    let finished = Memo::new(move |_| done.get().and_then(|mut runs| runs.pop()));
+    let savings_for_effect = savings.clone();
+    Effect::new(move |_| {
+        if let Some(r) = finished.get() {
+            savings_for_effect.request(&r.spec);
+        }
+    });
+    let savings_for_result = savings.clone();
+    let result = Memo::new(move |_| finished.get().map(|r| savings_for_result.apply(r)));
     let runs = Signal::derive(move || {
         result
             .get()
@@ -168,6 +176,7 @@ pub fn SimulatePage() -> impl IntoView {
                 </form>
                 <div class="results">
                     <RunCharts runs=runs />
+                    {savings.progress()}
                     <MetricsTable runs=runs />
                     <EventLog run=Signal::derive(move || result.get()) />
                 </div>

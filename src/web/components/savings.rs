@@ -1,0 +1,158 @@
+//! The savings rows of the metrics tables. A saving compares a run's cycle time with reference
+//! runs at a fixed feed (the programmed feed, and the fastest fixed feed that keeps the force
+//! under the limit), which take about ten runs. They depend on the scenario, not on the
+//! controller, so they run in the background after a result is shown, once per scenario, and
+//! the answers of the last few scenarios are kept: retuning a controller never waits for them.
+
+use std::sync::Arc;
+
+use leptos::prelude::*;
+
+use crate::closed_loop::lab::{
+    apply_references, fixed_feed_spec, ReferenceSearch, References, RunResult, RunSpec,
+};
+use crate::web::components::run_view::NamedRun;
+use crate::web::components::runner::{Job, RunProgress, RunStatus, Runner};
+
+/// Scenarios whose references are kept.
+const KEPT: usize = 8;
+
+/// The reference runs as a browser job.
+struct ReferenceRuns(ReferenceSearch);
+
+impl Job for ReferenceRuns {
+    type Output = References;
+
+    fn advance(&mut self, budget: usize) -> Result<bool, String> {
+        self.0
+            .advance(budget)
+            .map(|found| found.is_some())
+            .map_err(|e| e.to_string())
+    }
+
+    fn progress(&self) -> (String, f64) {
+        let (stage, fraction) = self.0.progress();
+        (format!("Savings: {stage}"), fraction)
+    }
+
+    fn finish(&mut self) -> Result<References, String> {
+        self.0
+            .found()
+            .ok_or_else(|| "the reference runs ended without an answer".into())
+    }
+}
+
+/// The scenario of `spec`: everything the reference runs depend on, i.e. all but the controller.
+fn scenario_of(spec: &RunSpec) -> Option<RunSpec> {
+    fixed_feed_spec(spec, 100.0).ok()
+}
+
+/// Reference runs for the savings, made on request and remembered per scenario.
+#[derive(Clone)]
+pub struct Savings {
+    runner: Runner<References>,
+    /// The scenario of the search under way or last started.
+    started: StoredValue<Option<RunSpec>>,
+    /// Known references, newest last.
+    known: RwSignal<Vec<(RunSpec, References)>>,
+}
+
+impl Savings {
+    /// Nothing known yet; a search under way stops when the page is left.
+    pub fn new() -> Self {
+        let runner = Runner::<References>::new();
+        let started = StoredValue::new(None::<RunSpec>);
+        let known = RwSignal::new(Vec::<(RunSpec, References)>::new());
+        let status = runner.status;
+        Effect::new(move |_| {
+            if let RunStatus::Done(found) = status.get() {
+                if let Some(scenario) = started.get_value() {
+                    known.update(|k| {
+                        k.retain(|(s, _)| *s != scenario);
+                        k.push((scenario, found));
+                        let excess = k.len().saturating_sub(KEPT);
+                        k.drain(..excess);
+                    });
+                }
+            }
+        });
+        Self {
+            runner,
+            started,
+            known,
+        }
+    }
+
+    fn lookup(&self, scenario: &RunSpec) -> Option<References> {
+        self.known
+            .with(|k| k.iter().find(|(s, _)| s == scenario).map(|(_, r)| *r))
+    }
+
+    /// Starts the reference runs for the scenario of `spec`, unless they are known or under way.
+    pub fn request(&self, spec: &RunSpec) {
+        let Some(scenario) = scenario_of(spec) else {
+            return;
+        };
+        let known = self
+            .known
+            .with_untracked(|k| k.iter().any(|(s, _)| *s == scenario));
+        if known {
+            return;
+        }
+        let running = matches!(
+            self.runner.status.get_untracked(),
+            RunStatus::Running { .. }
+        );
+        if running && self.started.get_value().as_ref() == Some(&scenario) {
+            return;
+        }
+        match ReferenceSearch::new(&scenario) {
+            Ok(search) => {
+                self.started.set_value(Some(scenario));
+                self.runner.start(ReferenceRuns(search));
+            }
+            // The run itself reports what is wrong with the spec.
+            Err(_) => self.runner.cancel(),
+        }
+    }
+
+    /// Stops a search for another scenario than `spec`'s, so it does not slow the new run.
+    pub fn keep_only(&self, spec: &RunSpec) {
+        let scenario = scenario_of(spec);
+        if self.started.get_value() != scenario {
+            self.runner.cancel();
+        }
+    }
+
+    /// `run` with its savings filled if the references of its scenario are known.
+    pub fn apply(&self, run: Arc<RunResult>) -> Arc<RunResult> {
+        let known = scenario_of(&run.spec).and_then(|s| self.lookup(&s));
+        match known {
+            Some(references) => {
+                let mut with: RunResult = (*run).clone();
+                apply_references(&mut with, &references);
+                Arc::new(with)
+            }
+            None => run,
+        }
+    }
+
+    /// [`apply`](Self::apply) to each of `runs`.
+    pub fn apply_all(&self, runs: Vec<NamedRun>) -> Vec<NamedRun> {
+        runs.into_iter()
+            .map(|(name, run)| (name, self.apply(run)))
+            .collect()
+    }
+
+    /// The search's progress bar (with Cancel) while it runs.
+    pub fn progress(&self) -> impl IntoView {
+        view! { <RunProgress runner=self.runner.clone() id="savings-progress" quiet_cancel=true
+        failure="The savings could not be computed" /> }
+    }
+}
+
+impl Default for Savings {
+    fn default() -> Self {
+        Self::new()
+    }
+}
