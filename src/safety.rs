@@ -94,7 +94,9 @@ pub struct EnvelopeConfig {
     pub max_rate_pct_per_s: f64,
     /// The machine's override positions.
     pub resolution: OverrideResolution,
-    /// Time after spindle start before the controller is listened to.
+    /// What starts the arming delay.
+    pub arming_trigger: ArmingTrigger,
+    /// Time after the trigger before the controller is listened to.
     pub arming_delay_s: f64,
     /// Override commanded until armed.
     pub arming_override_pct: f64,
@@ -115,6 +117,19 @@ pub struct EnvelopeConfig {
     pub overload_time_s: f64,
 }
 
+/// What the arming delay counts from. While the trigger is off, the envelope is disarmed and
+/// commands the arming override.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum ArmingTrigger {
+    /// The spindle starting (paper 003 ignores the current for 3 s after it: the starting
+    /// current of the spindle motor would read as a huge force).
+    #[default]
+    SpindleStart,
+    /// The program commanding feed motion, for a machine without a spindle (paper 000's brake
+    /// bench, where the feed drive is the motor under test).
+    ProgrammedFeed,
+}
+
 impl EnvelopeConfig {
     /// Defaults for a force target: override 10–150 % at up to 100 %/s on FANUC's 16-position
     /// dial (0, 10, …, 150 %), arming 3 s after spindle start (paper 003), overload at 1.5 × target
@@ -125,6 +140,7 @@ impl EnvelopeConfig {
             max_override_pct: 150.0,
             max_rate_pct_per_s: 100.0,
             resolution: OverrideResolution::Dial((0..16).map(|i| 10.0 * f64::from(i)).collect()),
+            arming_trigger: ArmingTrigger::SpindleStart,
             arming_delay_s: 3.0,
             arming_override_pct: 100.0,
             max_current_a: 100.0,
@@ -245,6 +261,8 @@ pub struct SafetyEnvelope {
     previous_sample: Option<SensorSample>,
     unchanged_s: f64,
     overload_s: f64,
+    /// How long the programmed feed has been non-zero (for [`ArmingTrigger::ProgrammedFeed`]).
+    programmed_feed_s: f64,
     events: Vec<SafetyEvent>,
 }
 
@@ -337,6 +355,7 @@ impl SafetyEnvelope {
             previous_sample: None,
             unchanged_s: 0.0,
             overload_s: 0.0,
+            programmed_feed_s: 0.0,
             events: Vec::with_capacity(EVENT_CAPACITY),
             config,
         };
@@ -387,6 +406,14 @@ impl SafetyEnvelope {
         sink.append(&mut self.events);
     }
 
+    /// Whether the arming trigger is on in `sample`.
+    fn triggered(&self, sample: &SensorSample) -> bool {
+        match self.config.arming_trigger {
+            ArmingTrigger::SpindleStart => sample.spindle_running,
+            ArmingTrigger::ProgrammedFeed => sample.programmed_feed_mm_min > 0.0,
+        }
+    }
+
     /// Watches one sensor sample for faults. Call for every sample, before [`Self::command`].
     pub fn observe(&mut self, sample: &SensorSample) {
         let currents = sample
@@ -409,7 +436,7 @@ impl SafetyEnvelope {
             }
             let unchanged = previous.feed_phase_currents_a == sample.feed_phase_currents_a
                 && previous.spindle_phase_currents_a == sample.spindle_phase_currents_a;
-            let moving = sample.feed_mm_min.abs() > 0.0 && sample.spindle_running;
+            let moving = sample.feed_mm_min.abs() > 0.0 && self.triggered(sample);
             self.unchanged_s = if unchanged && moving {
                 self.unchanged_s + self.sample_period_s
             } else {
@@ -423,6 +450,11 @@ impl SafetyEnvelope {
             }
         }
         self.previous_sample = Some(*sample);
+        self.programmed_feed_s = if sample.programmed_feed_mm_min > 0.0 {
+            self.programmed_feed_s + self.sample_period_s
+        } else {
+            0.0
+        };
         let time_s = sample.time_s;
         match (self.fault, fault) {
             (None, Some(f)) => {
@@ -458,12 +490,16 @@ impl SafetyEnvelope {
             0.0
         };
 
-        let armed_now = sample.spindle_running
-            && sample.time_since_spindle_start_s >= self.config.arming_delay_s;
+        let triggered = self.triggered(sample);
+        let since_trigger_s = match self.config.arming_trigger {
+            ArmingTrigger::SpindleStart => sample.time_since_spindle_start_s,
+            ArmingTrigger::ProgrammedFeed => self.programmed_feed_s,
+        };
+        let armed_now = triggered && since_trigger_s >= self.config.arming_delay_s;
         if armed_now && !self.armed {
             self.armed = true;
             self.emit(SafetyEvent::Armed { time_s });
-        } else if !sample.spindle_running {
+        } else if !triggered {
             self.armed = false;
         }
 
@@ -538,6 +574,46 @@ mod tests {
         let mut events = Vec::new();
         env.drain_events(&mut events);
         assert_eq!(events, vec![SafetyEvent::Armed { time_s: 0.1 }]);
+    }
+
+    #[test]
+    fn without_a_spindle_arming_counts_from_the_programmed_feed() {
+        let mut config = EnvelopeConfig::for_target(300.0);
+        config.arming_trigger = ArmingTrigger::ProgrammedFeed;
+        config.arming_delay_s = 0.5;
+        let mut env = envelope(config);
+        // A bench: no spindle ever; the program feeds from the start; the feed motor's currents
+        // turn (constant ones would be a stuck sensor, which the envelope now watches for).
+        let bench = |time_s: f64, programmed_feed_mm_min: f64| {
+            let angle = 2.0 * std::f64::consts::PI * 50.0 * time_s;
+            SensorSample {
+                spindle_running: false,
+                spindle_phase_currents_a: [0.0; 3],
+                feed_phase_currents_a: [0.0, 2.0, 4.0].map(|k| (angle - k).sin()),
+                programmed_feed_mm_min,
+                ..running_sample(time_s)
+            }
+        };
+        let feed_for = |env: &mut SafetyEnvelope, from_s: f64, to_s: f64, feed: f64| {
+            let mut t = from_s;
+            while t < to_s - 1e-9 {
+                env.observe(&bench(t, feed));
+                t += 0.001;
+            }
+            env.command(40.0, 100.0, to_s, 0.1, &bench(to_s, feed))
+        };
+        assert_eq!(feed_for(&mut env, 0.0, 0.4, 500.0).override_pct, 100.0);
+        assert!(!env.armed());
+        feed_for(&mut env, 0.4, 0.6, 500.0);
+        assert!(env.armed());
+        // The program stops feeding: disarmed, and the delay starts again with the next move.
+        feed_for(&mut env, 0.6, 0.7, 0.0);
+        assert!(!env.armed());
+        feed_for(&mut env, 0.7, 1.0, 500.0);
+        assert!(!env.armed());
+        let mut events = Vec::new();
+        env.drain_events(&mut events);
+        assert_eq!(events, vec![SafetyEvent::Armed { time_s: 0.6 }]);
     }
 
     #[test]
@@ -666,6 +742,9 @@ mod tests {
             config.max_rate_pct_per_s = 5.0 + 200.0 * rng.uniform();
             config.arming_delay_s = 2.0 * rng.uniform();
             if rng.uniform() < 0.5 {
+                config.arming_trigger = ArmingTrigger::ProgrammedFeed;
+            }
+            if rng.uniform() < 0.5 {
                 config.fault_action = FaultAction::Fallback(config.min_override_pct);
             }
             let step = config.resolution.step_pct();
@@ -683,6 +762,11 @@ mod tests {
                     s.feed_phase_currents_a[0] = wild(&mut rng, 5.0);
                     s.spindle_running = rng.uniform() < 0.95;
                     s.time_since_spindle_start_s = wild(&mut rng, 3.0);
+                    s.programmed_feed_mm_min = if rng.uniform() < 0.9 {
+                        100.0
+                    } else {
+                        wild(&mut rng, 100.0)
+                    };
                     env.observe(&s);
                     t += if rng.uniform() < 0.01 { 0.05 } else { 0.001 };
                 }

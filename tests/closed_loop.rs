@@ -251,3 +251,33 @@ fn the_reference_search_finds_the_highest_safe_fixed_override_in_pieces_or_at_on
         whole.programmed_cycle_time_s
     );
 }
+
+#[test]
+fn on_the_brake_bench_restriction_steps_the_dial_down_under_load_and_back_up() {
+    // Paper 000's bench has no spindle: the envelope arms from the first feed motion, and the
+    // restriction law answers the brake's load steps (which no feed change can lower).
+    let r = run(Preset::WangBrakeBench, ControllerKind::Restriction);
+    assert!(r
+        .trace
+        .events
+        .iter()
+        .any(|e| matches!(e, cutlab::safety::SafetyEvent::Armed { .. })));
+    let override_at = |t: f64| {
+        r.trace
+            .rows
+            .iter()
+            .find(|row| row.time_s >= t)
+            .map(|row| row.override_pct)
+            .unwrap()
+    };
+    assert_eq!(override_at(1.0), 100.0, "held at the arming override");
+    let under_load = r
+        .trace
+        .rows
+        .iter()
+        .filter(|row| (25.0..45.0).contains(&row.time_s))
+        .map(|row| row.override_pct)
+        .fold(f64::INFINITY, f64::min);
+    assert!(under_load <= 20.0, "override {under_load} % at the heaviest load");
+    assert!(override_at(58.0) >= 100.0, "back up once the load falls");
+}

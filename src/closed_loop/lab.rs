@@ -12,7 +12,7 @@ use crate::plant::cnc::OverrideMode;
 use crate::plant::presets::PlantEdits;
 use crate::plant::presets::PlantKind;
 use crate::plant::Preset;
-use crate::safety::{EnvelopeConfig, OverrideResolution};
+use crate::safety::{ArmingTrigger, EnvelopeConfig, OverrideResolution};
 
 /// Everything that defines a run; the same spec and seed give the same trace.
 #[derive(Debug, Clone, PartialEq)]
@@ -132,6 +132,10 @@ pub fn default_settings(spec: &RunSpec) -> Result<LoopSettings, LoopError> {
         .unwrap_or(f64::NAN);
     let mut envelope = EnvelopeConfig::for_target(1.0);
     envelope.resolution = envelope_resolution(&preset.override_mode());
+    // The bench has no spindle: its "start" is the feed drive's.
+    if preset.plant_kind() == PlantKind::BrakeBench {
+        envelope.arming_trigger = ArmingTrigger::ProgrammedFeed;
+    }
     if let Some(v) = o.min_override_pct {
         envelope.min_override_pct = v;
     }

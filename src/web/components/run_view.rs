@@ -145,14 +145,15 @@ pub fn run_charts(runs: &[NamedRun]) -> [LineChart; 5] {
         .filter_map(|(_, r)| r.trace.rows.last().map(|row| row.time_s))
         .fold(0.0, f64::max);
     if let Some((_, first)) = runs.first() {
+        // Black for the target, vermilion for the limit: told apart without reading the legend.
         let limits = [
-            ("target", first.settings.target_force_n),
-            ("limit", first.settings.force_limit_n),
+            ("target", PALETTE[7], first.settings.target_force_n),
+            ("limit", PALETTE[5], first.settings.force_limit_n),
         ];
-        for (name, value) in limits {
+        for (name, colour, value) in limits {
             force
                 .series
-                .push(Series::new(name, PALETTE[7], vec![(0.0, value), (end, value)]).dashed());
+                .push(Series::new(name, colour, vec![(0.0, value), (end, value)]).dashed());
         }
     }
     let mut charts = [force, current, override_pct, feed, depth];
