@@ -278,6 +278,9 @@ fn on_the_brake_bench_restriction_steps_the_dial_down_under_load_and_back_up() {
         .filter(|row| (25.0..45.0).contains(&row.time_s))
         .map(|row| row.override_pct)
         .fold(f64::INFINITY, f64::min);
-    assert!(under_load <= 20.0, "override {under_load} % at the heaviest load");
+    assert!(
+        under_load <= 20.0,
+        "override {under_load} % at the heaviest load"
+    );
     assert!(override_at(58.0) >= 100.0, "back up once the load falls");
 }

@@ -22,6 +22,10 @@ test('a paper comparison runs its controllers side by side with the best values 
   for (const name of ['A: fixed', 'B: mrac', 'C: pi']) {
     await table.getByRole('columnheader', { name }).waitFor();
   }
+  // One set of reference runs serves every variant: each column gets its saving.
+  const saving = table.getByRole('row').filter({ has: page.getByRole('rowheader', { name: 'Saving vs safe fixed feed (%)' }) });
+  await saving.filter({ hasText: /\d\s*$/ }).waitFor({ timeout: 120_000 });
+  assert.equal((await saving.getByRole('cell').allTextContents()).filter((t) => /\d/.test(t)).length, 3);
   const stars = await table.getByLabel('best').count();
   assert.ok(stars >= 5, `only ${stars} best marks`);
   assert.equal(await page.getByLabel('Preset', { exact: true }).inputValue(), 'maneerat-doc-4');
