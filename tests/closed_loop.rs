@@ -168,6 +168,35 @@ fn feedback_holds_the_force_closer_to_target_than_fixed_feed_across_depth_steps(
 }
 
 #[test]
+fn the_depth_steps_of_the_program_are_the_steps_measured() {
+    // Each of kim-step-doc's steps into the cut (0 → 1 → … → 5 mm) once, however the control
+    // period splits it; leaving the cut is not a step.
+    for controller in [ControllerKind::Fixed, ControllerKind::Threshold] {
+        let m = run(Preset::KimStepDoc, controller).metrics;
+        let depths: Vec<(f64, f64)> = m
+            .steps
+            .iter()
+            .map(|s| (s.depth_before_mm, s.depth_after_mm))
+            .collect();
+        assert_eq!(
+            depths,
+            [(0.0, 1.0), (1.0, 2.0), (2.0, 3.0), (3.0, 4.0), (4.0, 5.0)],
+            "{controller:?}"
+        );
+    }
+    // The fixed feed never brings the force into the ±10 % band after any step (the target is
+    // the force at 2.5 mm); the threshold law does after every step it can reach: at 1 mm even
+    // the envelope's 150 % ceiling leaves the force under the band.
+    let fixed = run(Preset::KimStepDoc, ControllerKind::Fixed).metrics;
+    assert_eq!(fixed.steps_not_settled, 5);
+    assert_eq!(fixed.max_settling_time_s, None);
+    let threshold = run(Preset::KimStepDoc, ControllerKind::Threshold).metrics;
+    assert_eq!(threshold.steps_not_settled, 1);
+    assert!(threshold.steps[0].settling_time_s.is_none());
+    assert!(threshold.max_settling_time_s.is_some_and(|t| t < 2.0));
+}
+
+#[test]
 fn feedback_holds_the_force_across_the_material_change() {
     // Paper 003, Fig. 11: SM45C then aluminium on a taper; controlled feed speeds up in aluminium
     // and finishes sooner than the fixed 160 mm/min.

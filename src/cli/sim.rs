@@ -388,7 +388,7 @@ enum Better {
 /// A table of metrics, one column per run; `*` marks the best value of each row.
 fn metrics_table(runs: &[(String, &RunResult)]) -> String {
     type Getter = fn(&RunResult) -> Option<f64>;
-    let rows: [(&str, Better, Getter); 13] = [
+    let rows: [(&str, Better, Getter); 14] = [
         ("target force (N)", Better::Neither, |r| {
             Some(r.settings.target_force_n)
         }),
@@ -421,6 +421,9 @@ fn metrics_table(runs: &[(String, &RunResult)]) -> String {
         }),
         ("max settling time (s)", Better::Lower, |r| {
             r.metrics.max_settling_time_s
+        }),
+        ("steps never settled", Better::Lower, |r| {
+            Some(r.metrics.steps_not_settled as f64)
         }),
         ("override changes", Better::Lower, |r| {
             Some(r.metrics.override_changes as f64)

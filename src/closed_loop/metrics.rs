@@ -16,7 +16,7 @@ pub struct MetricsConfig {
     pub force_limit_n: f64,
     /// Half-width of the settling band around the target, percent of target.
     pub settling_band_pct: f64,
-    /// A depth change larger than this between two control periods is a step.
+    /// A depth change larger than this between two control periods is a step (or part of one).
     pub depth_step_mm: f64,
 }
 
@@ -57,8 +57,10 @@ pub struct Metrics {
     pub time_above_limit_s: f64,
     /// Largest overshoot over all depth steps, percent of target.
     pub max_overshoot_pct: f64,
-    /// Longest settling time over the depth steps that settled.
+    /// Longest settling time over the depth steps that settled; `None` if none did.
     pub max_settling_time_s: Option<f64>,
+    /// Number of depth steps after which the force never stayed inside the settling band.
+    pub steps_not_settled: usize,
     /// Each depth step's response.
     pub steps: Vec<StepResponse>,
     /// Total variation of the commanded override, Σ|Δu|.
@@ -140,6 +142,9 @@ pub fn compute(trace: &Trace, config: &MetricsConfig) -> Metrics {
 
     let steps = step_responses(rows, config);
     let max_overshoot_pct = steps.iter().map(|s| s.overshoot_pct).fold(0.0, f64::max);
+    let steps_not_settled = steps.iter().filter(|s| s.settling_time_s.is_none()).count();
+    // Over the steps that settled; the ones that did not are counted apart, so a run that never
+    // holds the force shows no settling time rather than a flattering one.
     let max_settling_time_s = steps
         .iter()
         .filter_map(|s| s.settling_time_s)
@@ -174,6 +179,7 @@ pub fn compute(trace: &Trace, config: &MetricsConfig) -> Metrics {
         time_above_limit_s: above_s,
         max_overshoot_pct,
         max_settling_time_s,
+        steps_not_settled,
         steps,
         override_total_variation_pct: total_variation,
         override_changes: changes,
@@ -244,16 +250,7 @@ pub fn metrics_csv(metrics: &Metrics) -> String {
         ),
         ("saving_vs_programmed_pct", metrics.saving_vs_programmed_pct),
         ("saving_vs_safe_fixed_pct", metrics.saving_vs_safe_fixed_pct),
-        (
-            "steps_settled",
-            Some(
-                metrics
-                    .steps
-                    .iter()
-                    .filter(|s| s.settling_time_s.is_some())
-                    .count() as f64,
-            ),
-        ),
+        ("steps_not_settled", Some(metrics.steps_not_settled as f64)),
     ];
     let mut out = String::from("metric,value\n");
     for (name, v) in rows {
@@ -265,44 +262,93 @@ pub fn metrics_csv(metrics: &Metrics) -> String {
     out
 }
 
-/// Finds the depth steps and measures the force's response to each.
+/// Whether the machine is slowing the path down by itself (a corner, the end of the program): the
+/// feed is more than 20 % under what the override asks for. (Following an override change lags by
+/// a few percent at most: the envelope's rate limit keeps each change small.) NaN fields (a log
+/// without them) say no.
+fn path_slowdown(row: &TraceRow) -> bool {
+    let asked = row.programmed_feed_mm_min * row.applied_override_pct / 100.0;
+    asked > 0.0 && row.feed_mm_min < 0.8 * asked
+}
+
+/// Groups the rows where the depth changes by more than the step threshold into steps, as
+/// (first row, last row) of each. The depth of a row is its period's, so a step inside a period
+/// shows as a partial change on one row and the rest on the next: the neighbours of a large
+/// change that move the same way belong to it.
+fn depth_step_spans(rows: &[TraceRow], threshold_mm: f64) -> Vec<(usize, usize)> {
+    let change = |i: usize| rows[i].depth_mm - rows[i - 1].depth_mm;
+    let large = |i: usize| change(i).is_finite() && change(i).abs() > threshold_mm;
+    let same_way = |i: usize, j: usize| change(i) * change(j) > 0.0;
+    let mut spans: Vec<(usize, usize)> = Vec::new();
+    for i in (1..rows.len()).filter(|&i| large(i)) {
+        match spans.last_mut() {
+            Some((_, last)) if *last + 1 >= i => *last = i,
+            _ => {
+                let first = if i >= 2 && same_way(i - 1, i) {
+                    i - 1
+                } else {
+                    i
+                };
+                spans.push((first, i));
+            }
+        }
+        if let Some((_, last)) = spans.last_mut() {
+            if i + 1 < rows.len() && !large(i + 1) && same_way(i, i + 1) {
+                *last = i + 1;
+            }
+        }
+    }
+    spans
+}
+
+/// Finds the depth steps into the cut and measures the force's response to each, up to the next
+/// step or to the first moment the machine slows the path by itself (a corner, the end of the
+/// program), whichever comes first: what follows is a new disturbance, not this step's response.
+///
+/// Steps out of the cut (to zero depth) are not responses to measure, and neither are steps with
+/// no armed cutting row in their window: the controller was not in charge.
 fn step_responses(rows: &[TraceRow], config: &MetricsConfig) -> Vec<StepResponse> {
-    let step_indices: Vec<usize> = (1..rows.len())
-        .filter(|&i| {
-            let change = rows[i].depth_mm - rows[i - 1].depth_mm;
-            change.is_finite() && change.abs() > config.depth_step_mm
-        })
-        .collect();
-    step_indices
+    let spans = depth_step_spans(rows, config.depth_step_mm);
+    spans
         .iter()
         .enumerate()
-        .map(|(k, &start)| {
-            let end = step_indices.get(k + 1).copied().unwrap_or(rows.len());
-            let window = &rows[start..end];
+        .filter_map(|(k, &(start, last))| {
+            let next_step = spans.get(k + 1).map_or(rows.len(), |next| next.0);
+            let end = (last + 1..next_step)
+                .find(|&i| path_slowdown(&rows[i]))
+                .unwrap_or(next_step);
+            let depth_after_mm = rows[last].depth_mm;
+            if depth_after_mm <= 0.0 {
+                return None;
+            }
             let t0 = rows[start].time_s;
-            let target = rows[start].target_force_n;
-            let band = target * config.settling_band_pct / 100.0;
-            let overshoot = window
+            let controlled: Vec<&TraceRow> = rows[start..end]
                 .iter()
                 .filter(|r| controlled_cut(r))
+                .collect();
+            if controlled.is_empty() {
+                return None;
+            }
+            let overshoot = controlled
+                .iter()
                 .map(|r| 100.0 * (r.force_n - r.target_force_n) / r.target_force_n)
                 .fold(0.0, f64::max);
-            // Settled from the row after the last one outside the band (if any row remains).
-            let last_outside = window
-                .iter()
-                .rposition(|r| !(r.force_n - r.target_force_n).abs().le(&band));
-            let settling_time_s = match last_outside {
-                None => Some(0.0),
-                Some(i) if i + 1 < window.len() => Some(window[i + 1].time_s - t0),
-                Some(_) => None,
+            let inside = |r: &TraceRow| {
+                (r.force_n - r.target_force_n).abs()
+                    <= r.target_force_n * config.settling_band_pct / 100.0
             };
-            StepResponse {
+            // Settled from the row after the last one outside the band, if any row remains.
+            let settling_time_s = match controlled.iter().rposition(|r| !inside(r)) {
+                None => Some(controlled[0].time_s - t0),
+                Some(i) => controlled.get(i + 1).map(|r| r.time_s - t0),
+            };
+            Some(StepResponse {
                 time_s: t0,
                 depth_before_mm: rows[start - 1].depth_mm,
-                depth_after_mm: rows[start].depth_mm,
+                depth_after_mm,
                 overshoot_pct: overshoot,
                 settling_time_s,
-            }
+            })
         })
         .collect()
 }
@@ -360,6 +406,49 @@ mod tests {
         assert!((s.overshoot_pct - 50.0).abs() < 1e-9);
         // Inside ±5 N from 145 − 50·(t − 1) ≤ 105, i.e. t ≥ 1.9 s.
         assert!((s.settling_time_s.unwrap() - 0.9).abs() < 1e-9, "{s:?}");
+    }
+
+    #[test]
+    fn a_step_split_across_two_periods_is_one_step() {
+        let mut trace = step_trace();
+        // The depth changed half-way through the period that ends at t = 1.0 s.
+        trace.rows[10].depth_mm = 1.5;
+        let m = compute(&trace, &config());
+        assert_eq!(m.steps.len(), 1, "{:?}", m.steps);
+        let s = m.steps[0];
+        assert_eq!((s.depth_before_mm, s.depth_after_mm), (1.0, 2.0));
+        assert!((s.time_s - 1.0).abs() < 1e-9);
+        assert!((s.settling_time_s.unwrap() - 0.9).abs() < 1e-9, "{s:?}");
+    }
+
+    #[test]
+    fn leaving_the_cut_is_not_a_step() {
+        let mut trace = step_trace();
+        for r in &mut trace.rows[25..] {
+            r.depth_mm = 0.0;
+            r.force_n = 0.0;
+        }
+        let m = compute(&trace, &config());
+        assert_eq!(m.steps.len(), 1, "{:?}", m.steps);
+        assert_eq!(m.steps_not_settled, 0);
+    }
+
+    #[test]
+    fn a_step_that_never_settles_is_counted_apart() {
+        let mut trace = step_trace();
+        // A second step at 2.5 s after which the force stays 30 % above the target.
+        for r in &mut trace.rows[25..] {
+            r.depth_mm = 3.0;
+            r.force_n = 130.0;
+        }
+        let m = compute(&trace, &config());
+        assert_eq!(m.steps.len(), 2);
+        assert_eq!(m.steps[1].settling_time_s, None);
+        assert_eq!(m.steps_not_settled, 1);
+        assert!((m.max_settling_time_s.unwrap() - 0.9).abs() < 1e-9);
+        assert!((m.max_overshoot_pct - 50.0).abs() < 1e-9);
+        // The first step's window ends where the second begins.
+        assert!((m.steps[0].settling_time_s.unwrap() - 0.9).abs() < 1e-9);
     }
 
     #[test]

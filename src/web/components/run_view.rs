@@ -198,7 +198,7 @@ enum Better {
 
 type MetricGetter = fn(&RunResult) -> Option<f64>;
 
-const METRIC_ROWS: [(&str, &str, Better, MetricGetter); 14] = [
+const METRIC_ROWS: [(&str, &str, Better, MetricGetter); 15] = [
     ("Target force", "N", Better::Neither, |r| {
         Some(r.settings.target_force_n)
     }),
@@ -234,6 +234,9 @@ const METRIC_ROWS: [(&str, &str, Better, MetricGetter); 14] = [
     ),
     ("Max settling time", "s", Better::Lower, |r| {
         r.metrics.max_settling_time_s
+    }),
+    ("Depth steps never settled", "", Better::Lower, |r| {
+        Some(r.metrics.steps_not_settled as f64)
     }),
     ("Override changes", "", Better::Lower, |r| {
         Some(r.metrics.override_changes as f64)
