@@ -25,7 +25,7 @@
 //! | [`estimation`] | current → force: paper 000's feed-drive and paper 003's spindle models, F/V speed identification, teach-cut calibration by least squares |
 //! | [`control`] | the controller interface and registry: fixed feed, current restriction, threshold-proportional, fuzzy (a Mamdani engine with FLL), PI with anti-windup, Lyapunov MRAC |
 //! | [`safety`] | the safety envelope after every controller: limits, rate limit, quantisation, arming, sensor faults, overload |
-//! | [`closed_loop`] | the one loop that wires them: teach cut, signal chain, trace, metrics, and the preset runs the CLI and the browser share |
+//! | [`closed_loop`] | the one loop that wires them: teach cut, signal chain, trace, metrics and the table of them, and the preset runs the CLI and the browser share |
 //! | [`input`] | numbers typed into forms, parsed with messages for the field |
 //! | [`rng`] | the seeded random source every simulation draws from |
 //! | [`math`] | transcendental functions that give the same bits natively and in wasm |

@@ -38,7 +38,7 @@ fn sim_writes_the_trace_csv_and_the_metrics_json_and_calibrate_reads_the_csv_bac
         json.to_str().unwrap(),
     ]);
     result.unwrap();
-    assert!(out.contains("force IAE (N·s)"), "{out}");
+    assert!(out.contains("Force IAE (N·s)"), "{out}");
 
     let text = std::fs::read_to_string(&csv).unwrap();
     let header = text.lines().next().unwrap();
@@ -107,7 +107,7 @@ fn compare_marks_the_best_value_of_each_row() {
     ]);
     result.unwrap();
     assert!(out.contains("pi:kp=0.5"), "{out}");
-    let iae = out.lines().find(|l| l.starts_with("force IAE")).unwrap();
+    let iae = out.lines().find(|l| l.starts_with("Force IAE")).unwrap();
     assert_eq!(iae.matches('*').count(), 1, "{iae}");
 }
 

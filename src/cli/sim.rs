@@ -10,6 +10,7 @@ use crate::closed_loop::lab::{
 };
 use crate::closed_loop::metrics::Metrics;
 use crate::closed_loop::runner::{Calibration, Feedback};
+use crate::closed_loop::summary::{best, METRIC_ROWS};
 use crate::closed_loop::trace::write_csv;
 use crate::control::registry::{ControllerConfig, ControllerKind};
 use crate::plant::materials::Material;
@@ -377,62 +378,20 @@ pub fn run_compare(args: &[String], io: &mut Io<'_>) -> Result<(), CliError> {
     Ok(())
 }
 
-/// Which way is better for a metric.
-#[derive(Clone, Copy, PartialEq)]
-enum Better {
-    Lower,
-    Higher,
-    Neither,
-}
-
 /// A table of metrics, one column per run; `*` marks the best value of each row.
 fn metrics_table(runs: &[(String, &RunResult)]) -> String {
-    type Getter = fn(&RunResult) -> Option<f64>;
-    let rows: [(&str, Better, Getter); 14] = [
-        ("target force (N)", Better::Neither, |r| {
-            Some(r.settings.target_force_n)
-        }),
-        ("cycle time (s)", Better::Lower, |r| {
-            Some(r.metrics.cycle_time_s)
-        }),
-        ("saving vs programmed (%)", Better::Higher, |r| {
-            r.metrics.saving_vs_programmed_pct
-        }),
-        ("saving vs safe fixed (%)", Better::Higher, |r| {
-            r.metrics.saving_vs_safe_fixed_pct
-        }),
-        ("force IAE (N·s)", Better::Lower, |r| {
-            Some(r.metrics.force_iae_n_s)
-        }),
-        ("force RMS error (N)", Better::Lower, |r| {
-            Some(r.metrics.force_rms_error_n)
-        }),
-        ("mean |error| (%)", Better::Lower, |r| {
-            Some(r.metrics.force_mean_abs_error_pct)
-        }),
-        ("peak force (N)", Better::Lower, |r| {
-            Some(r.metrics.peak_force_n)
-        }),
-        ("time above limit (s)", Better::Lower, |r| {
-            Some(r.metrics.time_above_limit_s)
-        }),
-        ("max overshoot (%)", Better::Lower, |r| {
-            Some(r.metrics.max_overshoot_pct)
-        }),
-        ("max settling time (s)", Better::Lower, |r| {
-            r.metrics.max_settling_time_s
-        }),
-        ("steps never settled", Better::Lower, |r| {
-            Some(r.metrics.steps_not_settled as f64)
-        }),
-        ("override changes", Better::Lower, |r| {
-            Some(r.metrics.override_changes as f64)
-        }),
-        ("mean removal (mm³/s)", Better::Higher, |r| {
-            Some(r.metrics.mean_material_removal_mm3_s)
-        }),
-    ];
-    let label_width = rows.iter().map(|r| r.0.chars().count()).max().unwrap_or(0);
+    let shown = |v: f64| {
+        if v.fract() == 0.0 {
+            format!("{v:.0}")
+        } else {
+            format!("{v:.1}")
+        }
+    };
+    let label_width = METRIC_ROWS
+        .iter()
+        .map(|row| row.heading().chars().count())
+        .max()
+        .unwrap_or(0);
     let col_width = runs
         .iter()
         .map(|(n, _)| n.chars().count())
@@ -445,20 +404,14 @@ fn metrics_table(runs: &[(String, &RunResult)]) -> String {
         let _ = write!(out, "  {name:>col_width$}");
     }
     out.push('\n');
-    for (label, better, get) in rows {
-        let values: Vec<Option<f64>> = runs.iter().map(|(_, r)| get(r)).collect();
-        let best = match better {
-            Better::Neither => None,
-            _ if runs.len() < 2 => None,
-            Better::Lower => values.iter().flatten().cloned().reduce(f64::min),
-            Better::Higher => values.iter().flatten().cloned().reduce(f64::max),
-        };
-        let _ = write!(out, "{label:label_width$}");
-        for v in values {
+    for row in &METRIC_ROWS {
+        let values: Vec<Option<f64>> = runs.iter().map(|(_, r)| (row.value)(r)).collect();
+        let marks = best(&values, row.better, shown);
+        let _ = write!(out, "{:label_width$}", row.heading());
+        for (v, is_best) in values.into_iter().zip(marks) {
             let cell = match v {
                 Some(v) if v.is_finite() => {
-                    let mark = if best == Some(v) { "*" } else { " " };
-                    format!("{v:.1}{mark}")
+                    format!("{}{}", shown(v), if is_best { "*" } else { " " })
                 }
                 _ => "—".to_string(),
             };

@@ -5,4 +5,5 @@ pub mod chain;
 pub mod lab;
 pub mod metrics;
 pub mod runner;
+pub mod summary;
 pub mod trace;

@@ -8,6 +8,7 @@ use leptos::prelude::*;
 use crate::charts::{Axis, LineChart, Series, PALETTE};
 use crate::closed_loop::lab::RunResult;
 use crate::closed_loop::metrics::Metrics;
+use crate::closed_loop::summary::{best, METRIC_ROWS};
 use crate::web::components::chart::ChartCanvas;
 
 /// A run with the name it is shown under.
@@ -188,67 +189,6 @@ pub fn RunCharts(
     }
 }
 
-/// Which way is better for a metric.
-#[derive(Clone, Copy, PartialEq)]
-enum Better {
-    Lower,
-    Higher,
-    Neither,
-}
-
-type MetricGetter = fn(&RunResult) -> Option<f64>;
-
-const METRIC_ROWS: [(&str, &str, Better, MetricGetter); 15] = [
-    ("Target force", "N", Better::Neither, |r| {
-        Some(r.settings.target_force_n)
-    }),
-    ("Cycle time", "s", Better::Lower, |r| {
-        Some(r.metrics.cycle_time_s)
-    }),
-    ("Saving vs programmed feed", "%", Better::Higher, |r| {
-        r.metrics.saving_vs_programmed_pct
-    }),
-    ("Saving vs safe fixed feed", "%", Better::Higher, |r| {
-        r.metrics.saving_vs_safe_fixed_pct
-    }),
-    ("Force IAE", "N·s", Better::Lower, |r| {
-        Some(r.metrics.force_iae_n_s)
-    }),
-    ("Force RMS error", "N", Better::Lower, |r| {
-        Some(r.metrics.force_rms_error_n)
-    }),
-    ("Mean |error|", "%", Better::Lower, |r| {
-        Some(r.metrics.force_mean_abs_error_pct)
-    }),
-    ("Peak force", "N", Better::Lower, |r| {
-        Some(r.metrics.peak_force_n)
-    }),
-    ("Time above limit", "s", Better::Lower, |r| {
-        Some(r.metrics.time_above_limit_s)
-    }),
-    (
-        "Max overshoot after a depth step",
-        "%",
-        Better::Lower,
-        |r| Some(r.metrics.max_overshoot_pct),
-    ),
-    ("Max settling time", "s", Better::Lower, |r| {
-        r.metrics.max_settling_time_s
-    }),
-    ("Depth steps never settled", "", Better::Lower, |r| {
-        Some(r.metrics.steps_not_settled as f64)
-    }),
-    ("Override changes", "", Better::Lower, |r| {
-        Some(r.metrics.override_changes as f64)
-    }),
-    ("Override total variation", "%", Better::Lower, |r| {
-        Some(r.metrics.override_total_variation_pct)
-    }),
-    ("Mean removal rate", "mm³/s", Better::Higher, |r| {
-        Some(r.metrics.mean_material_removal_mm3_s)
-    }),
-];
-
 fn format_metric(v: Option<f64>) -> String {
     match v {
         Some(v) if v.is_finite() => {
@@ -287,22 +227,16 @@ pub fn MetricsTable(
                 <tbody>
                     {METRIC_ROWS
                         .iter()
-                        .map(|(label, unit, better, get)| {
-                            let values: Vec<Option<f64>> = runs.iter().map(|(_, r)| get(r)).collect();
-                            let best = match better {
-                                _ if !several => None,
-                                Better::Neither => None,
-                                Better::Lower => values.iter().flatten().cloned().filter(|v| v.is_finite()).reduce(f64::min),
-                                Better::Higher => values.iter().flatten().cloned().filter(|v| v.is_finite()).reduce(f64::max),
-                            };
-                            let head = if unit.is_empty() { label.to_string() } else { format!("{label} ({unit})") };
+                        .map(|row| {
+                            let values: Vec<Option<f64>> = runs.iter().map(|(_, r)| (row.value)(r)).collect();
+                            let marks = best(&values, row.better, |v| format_metric(Some(v)));
                             view! {
                                 <tr>
-                                    <th scope="row">{head}</th>
+                                    <th scope="row">{row.heading()}</th>
                                     {values
                                         .into_iter()
-                                        .map(|v| {
-                                            let is_best = best.is_some() && v == best;
+                                        .zip(marks)
+                                        .map(|(v, is_best)| {
                                             view! {
                                                 <td class:best=is_best>
                                                     {format_metric(v)}

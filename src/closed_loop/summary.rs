@@ -1,0 +1,167 @@
+//! The metrics table both front ends show: which metrics, in which order, with their units, which
+//! way is better, and which runs have the best value of a row.
+
+use super::lab::RunResult;
+
+/// Which way is better for a metric.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Better {
+    Lower,
+    Higher,
+    /// A setting shown for reference (the target), not a result to rank.
+    Neither,
+}
+
+/// One row of the metrics table.
+#[derive(Clone, Copy)]
+pub struct MetricRow {
+    /// What the row shows, capitalised, without the unit.
+    pub label: &'static str,
+    /// The unit, empty for counts.
+    pub unit: &'static str,
+    pub better: Better,
+    /// The row's value for a run; `None` where it does not exist (no reference runs yet, no step
+    /// that settled).
+    pub value: fn(&RunResult) -> Option<f64>,
+}
+
+impl MetricRow {
+    /// The label with its unit in brackets, as a row heading.
+    pub fn heading(&self) -> String {
+        if self.unit.is_empty() {
+            self.label.to_string()
+        } else {
+            format!("{} ({})", self.label, self.unit)
+        }
+    }
+}
+
+const fn row(
+    label: &'static str,
+    unit: &'static str,
+    better: Better,
+    value: fn(&RunResult) -> Option<f64>,
+) -> MetricRow {
+    MetricRow {
+        label,
+        unit,
+        better,
+        value,
+    }
+}
+
+/// The rows, in the order shown.
+pub const METRIC_ROWS: [MetricRow; 15] = [
+    row("Target force", "N", Better::Neither, |r| {
+        Some(r.settings.target_force_n)
+    }),
+    row("Cycle time", "s", Better::Lower, |r| {
+        Some(r.metrics.cycle_time_s)
+    }),
+    row("Saving vs programmed feed", "%", Better::Higher, |r| {
+        r.metrics.saving_vs_programmed_pct
+    }),
+    row("Saving vs safe fixed feed", "%", Better::Higher, |r| {
+        r.metrics.saving_vs_safe_fixed_pct
+    }),
+    row("Force IAE", "N·s", Better::Lower, |r| {
+        Some(r.metrics.force_iae_n_s)
+    }),
+    row("Force RMS error", "N", Better::Lower, |r| {
+        Some(r.metrics.force_rms_error_n)
+    }),
+    row("Mean |error|", "%", Better::Lower, |r| {
+        Some(r.metrics.force_mean_abs_error_pct)
+    }),
+    row("Peak force", "N", Better::Lower, |r| {
+        Some(r.metrics.peak_force_n)
+    }),
+    row("Time above limit", "s", Better::Lower, |r| {
+        Some(r.metrics.time_above_limit_s)
+    }),
+    row(
+        "Max overshoot after a depth step",
+        "%",
+        Better::Lower,
+        |r| Some(r.metrics.max_overshoot_pct),
+    ),
+    row("Max settling time", "s", Better::Lower, |r| {
+        r.metrics.max_settling_time_s
+    }),
+    row("Depth steps never settled", "", Better::Lower, |r| {
+        Some(r.metrics.steps_not_settled as f64)
+    }),
+    row("Override changes", "", Better::Lower, |r| {
+        Some(r.metrics.override_changes as f64)
+    }),
+    row("Override total variation", "%", Better::Lower, |r| {
+        Some(r.metrics.override_total_variation_pct)
+    }),
+    row("Mean removal rate", "mm³/s", Better::Higher, |r| {
+        Some(r.metrics.mean_material_removal_mm3_s)
+    }),
+];
+
+/// Which of `values` are the best, judged as they are shown (`shown` formats a value): values
+/// that print alike are marked alike, so a reader never sees two equal numbers of which only one
+/// is "best". Nothing is marked with fewer than two runs, for [`Better::Neither`], or where no
+/// value is finite.
+///
+/// ```
+/// use cutlab::closed_loop::summary::{best, Better};
+/// let shown = |v: f64| format!("{v:.1}");
+/// let marks = best(&[Some(2.04), Some(2.0), None, Some(3.0)], Better::Lower, shown);
+/// assert_eq!(marks, [true, true, false, false]);
+/// ```
+pub fn best(values: &[Option<f64>], better: Better, shown: impl Fn(f64) -> String) -> Vec<bool> {
+    let finite = || values.iter().flatten().copied().filter(|v| v.is_finite());
+    let extreme = match better {
+        _ if values.len() < 2 => None,
+        Better::Neither => None,
+        Better::Lower => finite().reduce(f64::min),
+        Better::Higher => finite().reduce(f64::max),
+    };
+    let Some(extreme) = extreme.map(&shown) else {
+        return vec![false; values.len()];
+    };
+    values
+        .iter()
+        .map(|v| v.is_some_and(|v| v.is_finite() && shown(v) == extreme))
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn shown(v: f64) -> String {
+        format!("{v:.0}")
+    }
+
+    #[test]
+    fn the_best_follows_the_direction_of_the_row() {
+        let values = [Some(3.0), Some(1.0), Some(2.0)];
+        assert_eq!(best(&values, Better::Lower, shown), [false, true, false]);
+        assert_eq!(best(&values, Better::Higher, shown), [true, false, false]);
+        assert_eq!(best(&values, Better::Neither, shown), [false, false, false]);
+    }
+
+    #[test]
+    fn one_run_or_no_finite_value_marks_nothing() {
+        assert_eq!(best(&[Some(1.0)], Better::Lower, shown), [false]);
+        assert_eq!(
+            best(&[None, Some(f64::NAN)], Better::Lower, shown),
+            [false, false]
+        );
+    }
+
+    #[test]
+    fn values_that_print_alike_are_marked_alike() {
+        let marks = best(
+            &[Some(631.4), Some(630.9), Some(640.0)],
+            Better::Lower,
+            shown,
+        );
+        assert_eq!(marks, [true, true, false]);
+    }
+}
