@@ -274,17 +274,19 @@ fn path_slowdown(row: &TraceRow) -> bool {
 /// Groups the rows where the depth changes by more than the step threshold into steps, as
 /// (first row, last row) of each. The depth of a row is its period's, so a step inside a period
 /// shows as a partial change on one row and the rest on the next: the neighbours of a large
-/// change that move the same way belong to it.
+/// change that move the same way by more than a tenth of the threshold belong to it (less is a
+/// taper's slope, or a part too small to matter).
 fn depth_step_spans(rows: &[TraceRow], threshold_mm: f64) -> Vec<(usize, usize)> {
     let change = |i: usize| rows[i].depth_mm - rows[i - 1].depth_mm;
     let large = |i: usize| change(i).is_finite() && change(i).abs() > threshold_mm;
-    let same_way = |i: usize, j: usize| change(i) * change(j) > 0.0;
+    let part_of =
+        |i: usize, j: usize| change(i) * change(j) > 0.0 && change(i).abs() > 0.1 * threshold_mm;
     let mut spans: Vec<(usize, usize)> = Vec::new();
     for i in (1..rows.len()).filter(|&i| large(i)) {
         match spans.last_mut() {
             Some((_, last)) if *last + 1 >= i => *last = i,
             _ => {
-                let first = if i >= 2 && same_way(i - 1, i) {
+                let first = if i >= 2 && part_of(i - 1, i) {
                     i - 1
                 } else {
                     i
@@ -293,7 +295,7 @@ fn depth_step_spans(rows: &[TraceRow], threshold_mm: f64) -> Vec<(usize, usize)>
             }
         }
         if let Some((_, last)) = spans.last_mut() {
-            if i + 1 < rows.len() && !large(i + 1) && same_way(i, i + 1) {
+            if i + 1 < rows.len() && !large(i + 1) && part_of(i + 1, i) {
                 *last = i + 1;
             }
         }
@@ -419,6 +421,18 @@ mod tests {
         assert_eq!((s.depth_before_mm, s.depth_after_mm), (1.0, 2.0));
         assert!((s.time_s - 1.0).abs() < 1e-9);
         assert!((s.settling_time_s.unwrap() - 0.9).abs() < 1e-9, "{s:?}");
+    }
+
+    #[test]
+    fn a_step_on_a_taper_starts_where_the_depth_jumps() {
+        let mut trace = step_trace();
+        for (i, r) in trace.rows.iter_mut().enumerate() {
+            r.depth_mm += 0.001 * i as f64;
+        }
+        let m = compute(&trace, &config());
+        assert_eq!(m.steps.len(), 1, "{:?}", m.steps);
+        assert!((m.steps[0].time_s - 1.0).abs() < 1e-9, "{:?}", m.steps[0]);
+        assert!((m.steps[0].depth_after_mm - 2.010).abs() < 1e-9);
     }
 
     #[test]
