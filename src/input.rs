@@ -4,14 +4,31 @@
 //! shown beside the field.
 
 /// Parses a decimal number typed by a person: surrounding space is ignored and a decimal comma is
-/// accepted, since many of our users' locales write `2,5`.
+/// accepted, since many of our users' locales write `2,5`; a comma that could as well be a
+/// thousands separator (`1,500`) is refused with a message rather than guessed.
 ///
 /// ```
 /// assert_eq!(cutlab::input::parse_number(" 2,5 "), Ok(2.5));
 /// assert!(cutlab::input::parse_number("inf").is_err());
 /// ```
 pub fn parse_number(text: &str) -> Result<f64, String> {
-    let cleaned = text.trim().replace(',', ".");
+    let typed = text.trim();
+    if let Some((whole, fraction)) = typed.split_once(',') {
+        // "1,500" is 1.5 in a decimal-comma locale and 1500 with a thousands separator: a guess
+        // either way could run a feed a thousand times off, so ask. "0,125" is unambiguous.
+        let looks_like_thousands = fraction.len() == 3
+            && fraction.bytes().all(|b| b.is_ascii_digit())
+            && !whole
+                .trim_start_matches(['-', '+'])
+                .trim_start_matches('0')
+                .is_empty();
+        if looks_like_thousands {
+            return Err(format!(
+                "\"{typed}\" is ambiguous: write it without a thousands separator, or with a decimal point"
+            ));
+        }
+    }
+    let cleaned = typed.replace(',', ".");
     if cleaned.is_empty() {
         return Err("enter a number".to_string());
     }
@@ -37,6 +54,23 @@ pub fn parse_count(text: &str) -> Result<usize, String> {
         .map_err(|_| format!("\"{cleaned}\" is not a whole number"))
 }
 
+/// Parses a simulation seed: any whole number from 0 to 2⁶⁴ − 1, the same range natively and in
+/// the browser (where `usize` is 32 bits).
+///
+/// ```
+/// assert_eq!(cutlab::input::parse_seed("18446744073709551615"), Ok(u64::MAX));
+/// assert!(cutlab::input::parse_seed("-1").is_err());
+/// ```
+pub fn parse_seed(text: &str) -> Result<u64, String> {
+    let cleaned = text.trim();
+    if cleaned.is_empty() {
+        return Err("enter a whole number".to_string());
+    }
+    cleaned
+        .parse::<u64>()
+        .map_err(|_| format!("\"{cleaned}\" is not a whole number from 0 to 18446744073709551615"))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -51,6 +85,11 @@ mod tests {
             Err("\"abc\" is not a number".to_string())
         );
         assert!(parse_number("inf").is_err());
+        assert_eq!(parse_number("0,125"), Ok(0.125));
+        assert_eq!(parse_number("1,25"), Ok(1.25));
+        assert!(parse_number("1,500").unwrap_err().contains("ambiguous"));
+        assert!(parse_number("-2,000").unwrap_err().contains("ambiguous"));
+        assert!(parse_number("1,000,000").is_err());
         assert_eq!(parse_count("10"), Ok(10));
         assert!(parse_count("-1").is_err());
         assert!(parse_count("2.5").is_err());

@@ -65,3 +65,56 @@ fn controllers_json_lists_every_controller_with_parameter_units() {
     assert!(result.is_ok());
     assert!(table.contains("ki_per_s"));
 }
+
+/// The real process: a bad argument or a bad value ends in one stderr line and a failure exit,
+/// never a panic (exit 101) or an abort.
+#[cfg(unix)]
+#[test]
+fn the_binary_turns_hostile_arguments_into_one_line_errors() {
+    use std::ffi::OsStr;
+    use std::os::unix::ffi::OsStrExt;
+    use std::process::Command;
+
+    let run = |args: &[&OsStr]| {
+        let out = Command::new(env!("CARGO_BIN_EXE_cutlab"))
+            .args(args)
+            .output()
+            .unwrap();
+        (
+            out.status.code(),
+            String::from_utf8_lossy(&out.stderr).into_owned(),
+        )
+    };
+    let not_utf8 = OsStr::from_bytes(b"\xff");
+    let cases: [&[&OsStr]; 3] = [
+        &[
+            "filter".as_ref(),
+            "design".as_ref(),
+            "--order".as_ref(),
+            "2".as_ref(),
+            "--cutoff".as_ref(),
+            not_utf8,
+            "--fs".as_ref(),
+            "1000".as_ref(),
+        ],
+        &[
+            "filter".as_ref(),
+            "apply".as_ref(),
+            "--order".as_ref(),
+            "2".as_ref(),
+            "--cutoff".as_ref(),
+            "10".as_ref(),
+            "--fs".as_ref(),
+            "1000".as_ref(),
+            "--channels".as_ref(),
+            "4611686018427387904".as_ref(),
+        ],
+        &["--version".as_ref(), "extra".as_ref()],
+    ];
+    for args in cases {
+        let (code, stderr) = run(args);
+        assert_eq!(code, Some(1), "{args:?}: {stderr}");
+        assert!(stderr.starts_with("cutlab: error: "), "{stderr}");
+        assert_eq!(stderr.lines().count(), 1, "{stderr}");
+    }
+}

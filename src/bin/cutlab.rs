@@ -5,7 +5,21 @@ use std::io::{self, Write};
 use std::process::ExitCode;
 
 fn main() -> ExitCode {
-    let args: Vec<String> = std::env::args().skip(1).collect();
+    // args_os: an argument that is not UTF-8 (a Latin-1 file name) is an error, not a panic.
+    let args: Result<Vec<String>, _> = std::env::args_os()
+        .skip(1)
+        .map(|a| a.into_string())
+        .collect();
+    let args = match args {
+        Ok(args) => args,
+        Err(bad) => {
+            let _ = writeln!(
+                io::stderr(),
+                "cutlab: error: argument {bad:?} is not valid UTF-8"
+            );
+            return ExitCode::FAILURE;
+        }
+    };
     let stdin = io::stdin();
     let mut stdin = stdin.lock();
     let stdout = io::stdout();

@@ -105,25 +105,30 @@ fn window<'a>(points: &'a [(f64, f64)], range: Option<&Range<f64>>) -> &'a [(f64
     &points[start.min(end)..end]
 }
 
-/// The point of `series` whose x is nearest to `x` (series sorted by x), if any.
+/// The finite point of `series` whose x is nearest to `x` (series sorted by x), if any; a gap
+/// (non-finite y) is never a readout.
 ///
 /// ```
 /// use cutlab::charts::{view::nearest, Series, PALETTE};
 /// let s = Series::new("s", PALETTE[0], vec![(0.0, 1.0), (1.0, 2.0), (2.0, 3.0)]);
 /// assert_eq!(nearest(&s, 1.4), Some((1.0, 2.0)));
 /// assert_eq!(nearest(&s, 9.0), Some((2.0, 3.0)));
+/// let gappy = Series::new("g", PALETTE[0], vec![(0.0, 1.0), (1.0, f64::NAN), (2.0, 3.0)]);
+/// assert_eq!(nearest(&gappy, 1.2), Some((2.0, 3.0)));
 /// ```
 pub fn nearest(series: &Series, x: f64) -> Option<(f64, f64)> {
     let points = &series.points;
     if points.is_empty() || !x.is_finite() {
         return None;
     }
+    let finite = |p: &&(f64, f64)| p.0.is_finite() && p.1.is_finite();
     let i = points.partition_point(|p| p.0 < x);
-    let candidates = [i.checked_sub(1), (i < points.len()).then_some(i)];
-    candidates
+    let before = points[..i].iter().rev().find(finite);
+    let after = points[i..].iter().find(finite);
+    [before, after]
         .into_iter()
         .flatten()
-        .map(|k| points[k])
+        .copied()
         .min_by(|a, b| (a.0 - x).abs().total_cmp(&(b.0 - x).abs()))
 }
 

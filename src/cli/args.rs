@@ -17,6 +17,9 @@ pub struct OptionSpec {
     pub value: Option<&'static str>,
     /// One line of help, units included.
     pub help: &'static str,
+    /// Whether the option may be given more than once (each value kept, in order). Any other
+    /// option given twice is an error: silently keeping one of two values hides a typo.
+    pub repeatable: bool,
 }
 
 impl OptionSpec {
@@ -26,6 +29,17 @@ impl OptionSpec {
             name,
             value: Some(value),
             help,
+            repeatable: false,
+        }
+    }
+
+    /// An option that takes a value and may be given any number of times.
+    pub const fn repeatable(name: &'static str, value: &'static str, help: &'static str) -> Self {
+        Self {
+            name,
+            value: Some(value),
+            help,
+            repeatable: true,
         }
     }
 
@@ -35,6 +49,7 @@ impl OptionSpec {
             name,
             value: None,
             help,
+            repeatable: false,
         }
     }
 }
@@ -112,7 +127,14 @@ impl Options {
                     CliError::new(format!("--{name} needs a value ({placeholder})"))
                 })?,
             };
-            options.values.entry(spec.name).or_default().push(value);
+            let values = options.values.entry(spec.name).or_default();
+            if let Some(first) = values.first().filter(|_| !spec.repeatable) {
+                return Err(CliError::new(match spec.value {
+                    Some(_) => format!("--{name} is given twice ({first:?}, then {value:?})"),
+                    None => format!("--{name} is given twice"),
+                }));
+            }
+            values.push(value);
         }
         Ok(options)
     }
@@ -203,7 +225,7 @@ mod tests {
 
     const SPECS: &[OptionSpec] = &[
         OptionSpec::value("order", "N", "filter order"),
-        OptionSpec::value("set", "KEY=VALUE", "repeatable"),
+        OptionSpec::repeatable("set", "KEY=VALUE", "repeatable"),
         OptionSpec::flag("json", "print JSON"),
     ];
 
@@ -230,6 +252,14 @@ mod tests {
         assert!(o.flag("json"));
         assert_eq!(o.all("set"), ["a=1", "b=2"]);
         assert_eq!(o.positionals(), ["file.csv"]);
+    }
+
+    #[test]
+    fn an_option_given_twice_is_an_error_unless_repeatable() {
+        let e = Options::parse(&strings(&["--order", "2", "--order=3"]), SPECS).unwrap_err();
+        assert_eq!(e.0, r#"--order is given twice ("2", then "3")"#);
+        let e = Options::parse(&strings(&["--json", "--json"]), SPECS).unwrap_err();
+        assert_eq!(e.0, "--json is given twice");
     }
 
     #[test]

@@ -11,7 +11,7 @@ use std::sync::atomic::{AtomicU64, Ordering};
 
 use super::{help_text_for, wants_help, CliError, Io, OptionSpec, Options};
 use crate::signal::butterworth::{butter, ButterworthSpec, Cutoff, DesignError, FilterKind};
-use crate::signal::filtfilt::{filter_stream, filtfilt_stream, StreamError};
+use crate::signal::filtfilt::{filter_stream, filtfilt_stream, StreamError, MAX_STREAM_CHANNELS};
 use crate::signal::sos::Sos;
 
 const DESIGN_OPTIONS: &[OptionSpec] = &[
@@ -135,6 +135,11 @@ fn apply(args: &[String], io: &mut Io<'_>) -> Result<(), CliError> {
     let channels: usize = options.get_or("channels", 1)?;
     if channels == 0 {
         return Err(CliError::new("--channels: must be at least 1"));
+    }
+    if channels > MAX_STREAM_CHANNELS {
+        return Err(CliError::new(format!(
+            "--channels: at most {MAX_STREAM_CHANNELS}, got {channels}"
+        )));
     }
     if options.flag("zero-phase") {
         let directory = options

@@ -120,6 +120,11 @@ pub fn run(args: &[String], io: &mut Io<'_>) -> Result<(), CliError> {
             Ok(())
         }
         "--version" | "-V" => {
+            if let Some(extra) = args.get(1) {
+                return Err(CliError::new(format!(
+                    "{first} takes no arguments, got {extra:?}"
+                )));
+            }
             writeln!(io.stdout, "{}", version_line())?;
             Ok(())
         }

@@ -71,7 +71,7 @@ fn sim_options() -> Vec<OptionSpec> {
     let mut o = RUN_OPTIONS.to_vec();
     o.extend([
         OptionSpec::value("controller", "NAME", "Controller (see cutlab controllers)"),
-        OptionSpec::value(
+        OptionSpec::repeatable(
             "set",
             "KEY=VALUE",
             "Set a controller parameter (repeatable)",

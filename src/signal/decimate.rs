@@ -6,12 +6,13 @@
 //! largest value, in their original order, so the envelope drawn is exactly the envelope of the
 //! data.
 //!
-//! Non-finite values (NaN, ±∞) are skipped: a bucket of only non-finite values contributes
-//! nothing, and the chart shows a gap rather than a spike to infinity.
+//! Non-finite values (NaN, ±∞) are gaps (a disarmed estimator, a missing sample): they are never
+//! an extreme, but a bucket that holds one keeps its first one in place, so the chart breaks the
+//! line there instead of drawing straight across the missing span or to infinity.
 
 /// The indices [`min_max`] keeps: for each of `buckets` equal index ranges, the index of its
-/// smallest and of its largest finite value, ascending (once if they coincide). With no more
-/// than `2 · buckets` values, every index of a finite value.
+/// smallest and of its largest finite value (once if they coincide) and of its first non-finite
+/// value if it has one, ascending. With no more than `2 · buckets` values, every index.
 ///
 /// ```
 /// use cutlab::signal::decimate::min_max_indices;
@@ -23,7 +24,7 @@ pub fn min_max_indices(values: &[f64], buckets: usize) -> Vec<usize> {
     let buckets = buckets.max(1);
     let n = values.len();
     if n <= 2 * buckets {
-        return (0..n).filter(|&i| values[i].is_finite()).collect();
+        return (0..n).collect();
     }
     let mut kept = Vec::with_capacity(2 * buckets);
     for b in 0..buckets {
@@ -32,8 +33,10 @@ pub fn min_max_indices(values: &[f64], buckets: usize) -> Vec<usize> {
         let end = (b + 1) * n / buckets;
         let mut min: Option<usize> = None;
         let mut max: Option<usize> = None;
+        let mut gap: Option<usize> = None;
         for (i, &v) in values.iter().enumerate().take(end).skip(start) {
             if !v.is_finite() {
+                gap = gap.or(Some(i));
                 continue;
             }
             if min.is_none_or(|m| v < values[m]) {
@@ -43,21 +46,22 @@ pub fn min_max_indices(values: &[f64], buckets: usize) -> Vec<usize> {
                 max = Some(i);
             }
         }
-        match (min, max) {
-            (Some(lo), Some(hi)) if lo == hi => kept.push(lo),
-            (Some(lo), Some(hi)) => {
-                kept.push(lo.min(hi));
-                kept.push(lo.max(hi));
+        let mut chosen = [min, max, gap];
+        chosen.sort_unstable();
+        let bucket_start = kept.len();
+        for i in chosen.into_iter().flatten() {
+            if kept.len() == bucket_start || kept.last() != Some(&i) {
+                kept.push(i);
             }
-            _ => {}
         }
     }
     kept
 }
 
 /// Reduces `points` (x, y), ordered by x, to at most `max_points` (at least 2) by keeping each
-/// bucket's minimum and maximum y in order. Series no longer than `max_points` come back whole
-/// (without non-finite y).
+/// bucket's minimum and maximum y in order, plus one non-finite point per bucket that has a gap
+/// (so a gappy series may keep up to half as many again). Series no longer than `max_points`
+/// come back whole.
 ///
 /// ```
 /// use cutlab::signal::decimate::min_max;
@@ -101,11 +105,38 @@ mod tests {
     }
 
     #[test]
-    fn non_finite_values_are_skipped() {
-        let values = [f64::NAN, 1.0, f64::INFINITY, -2.0, f64::NAN, f64::NAN];
-        assert_eq!(min_max_indices(&values, 3), [1, 3]);
+    fn non_finite_values_are_kept_as_gaps_but_never_as_extremes() {
+        let values = [f64::NAN, 1.0, f64::INFINITY, -2.0, f64::NAN, f64::NAN, 7.0];
+        // Buckets [NaN, 1], [∞, -2], [NaN, NaN, 7].
+        assert_eq!(min_max_indices(&values, 3), [0, 1, 2, 3, 4, 6]);
         let short = [(0.0, 1.0), (1.0, f64::NAN), (2.0, 3.0)];
-        assert_eq!(min_max(&short, 10), [(0.0, 1.0), (2.0, 3.0)]);
+        let kept = min_max(&short, 10);
+        assert_eq!(kept.len(), 3);
+        assert!(kept[1].1.is_nan(), "the gap must survive");
+    }
+
+    #[test]
+    fn a_gap_in_a_long_series_survives_decimation() {
+        // A series disarmed in the middle third: the decimated line must break there.
+        let n = 90_000;
+        let values: Vec<f64> = (0..n)
+            .map(|i| {
+                if (n / 3..2 * n / 3).contains(&i) {
+                    f64::NAN
+                } else {
+                    (i as f64 * 0.001).sin()
+                }
+            })
+            .collect();
+        let kept = min_max_indices(&values, 100);
+        assert!(kept.windows(2).all(|w| w[0] < w[1]));
+        assert!(kept.len() <= 3 * 100);
+        let first_gap = kept.iter().position(|&i| values[i].is_nan());
+        assert!(first_gap.is_some_and(|k| kept[k] == n / 3), "{kept:?}");
+        assert!(kept
+            .iter()
+            .filter(|&&i| values[i].is_finite())
+            .all(|&i| !(n / 3..2 * n / 3).contains(&i)));
     }
 
     #[test]

@@ -31,6 +31,11 @@ use super::sos::Sos;
 /// Frames read, filtered and written at a time by the stream forms.
 const STREAM_BLOCK_FRAMES: usize = 8192;
 
+/// The most interleaved channels the stream forms take. Their buffers grow with the channel
+/// count (64 KiB per channel); 256 covers any drive's currents and keeps a mistyped count an
+/// error instead of an allocation failure.
+pub const MAX_STREAM_CHANNELS: usize = 256;
+
 /// Why zero-phase filtering of a log was refused.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub enum FiltfiltError {
@@ -188,6 +193,20 @@ pub enum StreamError {
     },
     /// The channel count is zero.
     NoChannels,
+    /// More channels than [`MAX_STREAM_CHANNELS`].
+    TooManyChannels(usize),
+    /// A sample is NaN or infinite: it would make the filter's state non-finite for the rest of
+    /// the stream, so the stream stops there.
+    NonFinite {
+        /// The frame (0-based) holding the sample.
+        frame: u64,
+        /// Its channel (0-based).
+        channel: usize,
+        /// Channels per frame.
+        channels: usize,
+        /// The value read.
+        value: f64,
+    },
 }
 
 impl fmt::Display for StreamError {
@@ -214,6 +233,21 @@ impl fmt::Display for StreamError {
                  padding of scipy's sosfiltfilt for this filter), got {samples}"
             ),
             Self::NoChannels => f.write_str("the number of channels must be at least 1"),
+            Self::TooManyChannels(channels) => write!(
+                f,
+                "{channels} channels is more than the {MAX_STREAM_CHANNELS} a stream can take"
+            ),
+            Self::NonFinite {
+                frame,
+                channel,
+                channels,
+                value,
+            } => write!(
+                f,
+                "sample {value} at frame {frame}, channel {channel} (byte offset {}) is not a \
+                 finite number: filtering stops there, since it would corrupt every later output",
+                (frame * *channels as u64 + *channel as u64) * 8
+            ),
         }
     }
 }
@@ -233,18 +267,26 @@ struct FrameReader<'a, R: Read + ?Sized> {
     pending: usize,
     total_bytes: u64,
     frame_bytes: usize,
+    frames_read: u64,
 }
 
 impl<'a, R: Read + ?Sized> FrameReader<'a, R> {
-    fn new(input: &'a mut R, channels: usize) -> Self {
+    fn new(input: &'a mut R, channels: usize) -> Result<Self, StreamError> {
+        if channels == 0 {
+            return Err(StreamError::NoChannels);
+        }
+        if channels > MAX_STREAM_CHANNELS {
+            return Err(StreamError::TooManyChannels(channels));
+        }
         let frame_bytes = 8 * channels;
-        Self {
+        Ok(Self {
             input,
             bytes: vec![0; STREAM_BLOCK_FRAMES * frame_bytes],
             pending: 0,
             total_bytes: 0,
             frame_bytes,
-        }
+            frames_read: 0,
+        })
     }
 
     /// Fills `out` (cleared first) with up to a block of whole frames; an empty `out` means the
@@ -276,6 +318,16 @@ impl<'a, R: Read + ?Sized> FrameReader<'a, R> {
         out.extend(samples.iter().map(|b| f64::from_le_bytes(*b)));
         self.bytes.copy_within(whole..self.pending, 0);
         self.pending -= whole;
+        let channels = self.frame_bytes / 8;
+        if let Some(at) = out.iter().position(|v| !v.is_finite()) {
+            return Err(StreamError::NonFinite {
+                frame: self.frames_read + (at / channels) as u64,
+                channel: at % channels,
+                channels,
+                value: out[at],
+            });
+        }
+        self.frames_read += (out.len() / channels) as u64;
         Ok(())
     }
 }
@@ -309,8 +361,8 @@ pub fn filter_stream(
     input: &mut (impl Read + ?Sized),
     output: &mut (impl Write + ?Sized),
 ) -> Result<u64, StreamError> {
+    let mut reader = FrameReader::new(input, channels)?;
     let mut bank = SosFilterBank::new(sos, channels).map_err(|_| StreamError::NoChannels)?;
-    let mut reader = FrameReader::new(input, channels);
     let mut block = Vec::with_capacity(STREAM_BLOCK_FRAMES * channels);
     let mut bytes = Vec::with_capacity(STREAM_BLOCK_FRAMES * channels * 8);
     let mut frames = 0u64;
@@ -352,9 +404,9 @@ pub fn filtfilt_stream<S: Read + Write + Seek + ?Sized>(
     scratch: &mut S,
 ) -> Result<u64, StreamError> {
     let c = channels;
+    let mut reader = FrameReader::new(input, c)?;
     let mut bank = SosFilterBank::new(sos, c).map_err(|_| StreamError::NoChannels)?;
     let padlen = sos.filtfilt_padlen();
-    let mut reader = FrameReader::new(input, c);
     let mut block = Vec::with_capacity(STREAM_BLOCK_FRAMES * c);
     let mut bytes = Vec::with_capacity((STREAM_BLOCK_FRAMES + padlen + 1) * c * 8);
 
@@ -561,6 +613,33 @@ mod tests {
                 channels: 2
             })
         );
+    }
+
+    #[test]
+    fn non_finite_samples_and_absurd_channel_counts_are_refused_with_where() {
+        let sos = sos();
+        // Frame 9000 lies in the second block, so the frame count must carry across blocks.
+        let mut x = vec![0.5; 3 * 10_000];
+        x[3 * 9000 + 2] = f64::NAN;
+        let e = filter_stream(&sos, 3, &mut bytes(&x).as_slice(), &mut Vec::new()).unwrap_err();
+        assert!(
+            e.to_string()
+                .starts_with("sample NaN at frame 9000, channel 2 (byte offset 216016)"),
+            "{e}"
+        );
+        let e = filtfilt_stream(
+            &sos,
+            1,
+            &mut bytes(&[1.0, f64::INFINITY]).as_slice(),
+            &mut Vec::new(),
+            &mut Cursor::new(Vec::new()),
+        )
+        .unwrap_err();
+        assert!(e.to_string().contains("frame 1, channel 0"), "{e}");
+        let e = filter_stream(&sos, 1 << 40, &mut [0u8; 0].as_slice(), &mut Vec::new());
+        assert!(matches!(e, Err(StreamError::TooManyChannels(_))));
+        let e = filter_stream(&sos, 0, &mut [0u8; 0].as_slice(), &mut Vec::new());
+        assert!(matches!(e, Err(StreamError::NoChannels)));
     }
 
     #[test]

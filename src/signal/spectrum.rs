@@ -85,6 +85,11 @@ impl Window {
     /// assert!(w.iter().zip(expected).all(|(a, b)| (a - b).abs() < 1e-15));
     /// ```
     pub fn coefficients(self, len: usize) -> Vec<f64> {
+        // As scipy.signal.get_window: a one-point window of any kind is [1], not the cosine
+        // sum's value at zero (0 for Hann), which would make a one-sample segment's PSD 0/0.
+        if len <= 1 {
+            return vec![1.0; len];
+        }
         let cosine_sum = |a: &[f64]| -> Vec<f64> {
             (0..len)
                 .map(|n| {
@@ -689,6 +694,19 @@ mod tests {
         assert!(welch(&[], 10.0, 8).is_err());
         assert!(welch(&[1.0], 10.0, 0).is_err());
         assert!(welch(&[1.0], 0.0, 8).is_err());
+    }
+
+    #[test]
+    fn one_sample_segments_give_zero_power_like_scipy() {
+        // scipy.signal.welch([3.0, 1.0, 2.0], fs=10, nperseg=1) == ([0.], [0.]): a one-point
+        // window is [1] and the segment minus its mean is 0, not 0/0.
+        assert_eq!(Window::Hann.coefficients(1), [1.0]);
+        assert_eq!(Window::FlatTop.coefficients(1), [1.0]);
+        let p = welch(&[3.0, 1.0, 2.0], 10.0, 1).unwrap();
+        assert_eq!(
+            (p.freq_hz.as_slice(), p.psd.as_slice()),
+            (&[0.0][..], &[0.0][..])
+        );
     }
 
     #[test]

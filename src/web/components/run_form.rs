@@ -12,7 +12,9 @@ use crate::control::registry::{ControllerConfig, ControllerKind};
 use crate::plant::materials::Material;
 use crate::plant::presets::PlantEdits;
 use crate::plant::Preset;
-use crate::web::components::fields::{parse_count, parse_number, NumberField, SelectField};
+use crate::web::components::fields::{
+    parse_count, parse_number, parse_seed, NumberField, SelectField,
+};
 
 /// Text of the scenario fields.
 #[derive(Clone, Copy)]
@@ -185,8 +187,7 @@ impl ScenarioForm {
         if preset.is_none() {
             errors.insert("preset", "choose a preset".to_string());
         }
-        let seed = parse_count(&self.seed.get())
-            .map(|s| s as u64)
+        let seed = parse_seed(&self.seed.get())
             .map_err(|e| errors.insert("seed", e))
             .ok();
         let target_text = self.target.get();
