@@ -373,6 +373,16 @@ impl SafetyEnvelope {
         self.output_pct
     }
 
+    /// Time since the start the arming waits for: the spindle's, or with
+    /// [`ArmingTrigger::ProgrammedFeed`] (a bench without a spindle) the first programmed feed
+    /// motion's. Controllers that ignore a starting transient use this clock too.
+    pub fn time_since_start_s(&self, sample: &SensorSample) -> f64 {
+        match self.config.arming_trigger {
+            ArmingTrigger::SpindleStart => sample.time_since_spindle_start_s,
+            ArmingTrigger::ProgrammedFeed => self.programmed_feed_s,
+        }
+    }
+
     /// Whether the controller is in charge.
     pub fn armed(&self) -> bool {
         self.armed
@@ -491,10 +501,7 @@ impl SafetyEnvelope {
         };
 
         let triggered = self.triggered(sample);
-        let since_trigger_s = match self.config.arming_trigger {
-            ArmingTrigger::SpindleStart => sample.time_since_spindle_start_s,
-            ArmingTrigger::ProgrammedFeed => self.programmed_feed_s,
-        };
+        let since_trigger_s = self.time_since_start_s(sample);
         let armed_now = triggered && since_trigger_s >= self.config.arming_delay_s;
         if armed_now && !self.armed {
             self.armed = true;

@@ -187,3 +187,87 @@ fn bad_input_gives_one_line_that_names_it() {
         assert!(!message.contains('\n'));
     }
 }
+
+/// A saved configuration (what the browser's "Configuration (JSON)" export writes) runs the same
+/// loops as the options that describe them.
+#[test]
+fn a_saved_configuration_reproduces_the_runs_it_describes() {
+    use cutlab::closed_loop::config::RunConfiguration;
+    use cutlab::closed_loop::lab::RunSpec;
+    use cutlab::control::registry::{ControllerConfig, ControllerKind};
+    use cutlab::plant::Preset;
+
+    let dir = scratch("config");
+    let mut tuned = ControllerConfig::new(ControllerKind::Pi);
+    tuned.set_text("kp=0.5").unwrap();
+    let mut fixed = RunSpec::new(Preset::ManeeratDoc1, ControllerKind::Fixed);
+    fixed.seed = 7;
+    fixed.plant.spindle_rpm = Some(2800.0);
+    let pi = RunSpec {
+        controller: tuned,
+        ..fixed.clone()
+    };
+    let write = |name: &str, runs: Vec<RunSpec>| {
+        let path = dir.join(name);
+        std::fs::write(&path, RunConfiguration::new(runs, None).to_json()).unwrap();
+        path.to_string_lossy().into_owned()
+    };
+    let one = write("one.json", vec![pi.clone()]);
+    let both = write("both.json", vec![fixed.clone(), pi.clone()]);
+    let common = [
+        "--scenario",
+        "maneerat-doc-1",
+        "--seed",
+        "7",
+        "--rpm",
+        "2800",
+        "--no-references",
+    ];
+
+    let (result, from_file) = cutlab(&["sim", "--config", &one, "--no-references"]);
+    result.unwrap();
+    let mut args = vec!["sim", "--controller", "pi", "--set", "kp=0.5"];
+    args.extend(common);
+    let (result, from_options) = cutlab(&args);
+    result.unwrap();
+    assert_eq!(from_file, from_options);
+
+    let (result, from_file) = cutlab(&["compare", "--config", &both, "--no-references"]);
+    result.unwrap();
+    let mut args = vec!["compare", "--controllers", "fixed,pi:kp=0.5"];
+    args.extend(common);
+    let (result, from_options) = cutlab(&args);
+    result.unwrap();
+    // Same numbers; only the column headings (the controllers' names) differ.
+    let rows = |out: &str| out.lines().skip(2).map(str::to_string).collect::<Vec<_>>();
+    assert_eq!(rows(&from_file), rows(&from_options));
+    assert!(
+        from_file.starts_with("scenario maneerat-doc-1, seed 7"),
+        "{from_file}"
+    );
+
+    let mut other_seed = pi.clone();
+    other_seed.seed = 8;
+    let mixed = write("mixed.json", vec![fixed, other_seed]);
+    let not_json = dir.join("not.json");
+    std::fs::write(&not_json, "preset=kim-step-doc").unwrap();
+    let not_json = not_json.to_string_lossy().into_owned();
+    let cases: [(&[&str], &str); 4] = [
+        (
+            &["sim", "--config", &one, "--scenario", "kim-step-doc"],
+            "--scenario cannot be given with --config",
+        ),
+        (&["sim", "--config", &both], "--config holds 2 runs"),
+        (&["compare", "--config", &mixed], "run 2 differs from run 1"),
+        (
+            &["sim", "--config", &not_json],
+            "not a cutlab configuration",
+        ),
+    ];
+    for (args, expected) in cases {
+        let message = cutlab(args).0.unwrap_err();
+        assert!(message.contains(expected), "{args:?}: {message}");
+        assert!(!message.contains('\n'), "{message}");
+    }
+    std::fs::remove_dir_all(dir).ok();
+}

@@ -313,3 +313,44 @@ fn on_the_brake_bench_restriction_steps_the_dial_down_under_load_and_back_up() {
     );
     assert!(override_at(58.0) >= 100.0, "back up once the load falls");
 }
+
+#[test]
+fn on_the_brake_bench_threshold_control_starts_once_the_feed_has_run_its_ignore_time() {
+    // The bench has no spindle, so "current ignored for 3 s after the spindle starts" (paper 003)
+    // runs on the clock the envelope arms by: the first feed motion. On a spindle clock that never
+    // starts, the law would ignore the current for the whole run.
+    let r = run(Preset::WangBrakeBench, ControllerKind::Threshold);
+    assert!(
+        r.metrics.override_changes > 5,
+        "{}",
+        r.metrics.override_changes
+    );
+    let first_change = r
+        .trace
+        .rows
+        .windows(2)
+        .find(|w| w[1].override_pct != w[0].override_pct)
+        .map(|w| w[1].time_s)
+        .unwrap();
+    assert!(
+        first_change >= 3.0,
+        "changed at {first_change} s, inside the ignore time"
+    );
+}
+
+#[test]
+fn a_run_stopped_by_the_overload_alarm_has_no_cycle_time_to_win_with() {
+    use cutlab::closed_loop::summary::METRIC_ROWS;
+    // A target far below the force of the cut: fixed feed trips the overload alarm (3 × target).
+    let mut spec = RunSpec::new(Preset::ManeeratDoc1, ControllerKind::Fixed);
+    spec.settings.target_force_n = Some(40.0);
+    let r = simulate(&spec).unwrap();
+    assert!(!r.metrics.completed);
+    let value = |label: &str| {
+        let row = METRIC_ROWS.iter().find(|row| row.label == label).unwrap();
+        (row.value)(&r)
+    };
+    assert_eq!(value("Program finished"), Some(0.0));
+    assert_eq!(value("Cycle time"), None);
+    assert_eq!(value("Saving vs programmed feed"), None);
+}

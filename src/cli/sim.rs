@@ -5,6 +5,7 @@ use std::fmt::Write as _;
 use serde::Serialize;
 
 use super::{help_text_for, wants_help, write_json, CliError, Io, OptionSpec, Options};
+use crate::closed_loop::config::RunConfiguration;
 use crate::closed_loop::lab::{
     apply_references, references, simulate, References, RunResult, RunSpec,
 };
@@ -86,8 +87,48 @@ fn sim_options() -> Vec<OptionSpec> {
             "FILE",
             "Write metrics, settings, calibration and events as JSON",
         ),
+        CONFIG_OPTION,
     ]);
     o
+}
+
+/// `--config`: the runs saved by the browser's "Configuration (JSON)" export.
+const CONFIG_OPTION: OptionSpec = OptionSpec::value(
+    "config",
+    "FILE",
+    "Run what a saved configuration (the browser's Configuration JSON export) holds, instead of \
+     --scenario, --controller and the other run options",
+);
+
+/// The runs of `--config FILE`, if given; `defining` are the options it replaces, which may not
+/// be given with it (two sources for one setting would leave a person guessing which won).
+fn runs_from_config(
+    options: &Options,
+    defining: &[&str],
+) -> Result<Option<Vec<RunSpec>>, CliError> {
+    let Some(path) = options.text("config") else {
+        return Ok(None);
+    };
+    if let Some(clash) = defining.iter().find(|name| options.flag(name)) {
+        return Err(CliError::new(format!(
+            "--{clash} cannot be given with --config: the file defines the runs"
+        )));
+    }
+    let text = std::fs::read_to_string(path)
+        .map_err(|e| CliError::new(format!("--config: cannot read {path:?}: {e}")))?;
+    let config = RunConfiguration::from_json(&text)
+        .map_err(|e| CliError::new(format!("--config {path}: {e}")))?;
+    Ok(Some(config.runs))
+}
+
+/// The options that define a run (everything but outputs and `--no-references`).
+fn run_defining_options(extra: &[&'static str]) -> Vec<&'static str> {
+    RUN_OPTIONS
+        .iter()
+        .map(|o| o.name)
+        .filter(|name| *name != "no-references")
+        .chain(extra.iter().copied())
+        .collect()
 }
 
 fn compare_options() -> Vec<OptionSpec> {
@@ -99,6 +140,7 @@ fn compare_options() -> Vec<OptionSpec> {
             "Controllers to compare; each NAME or NAME:key=value:key=value",
         ),
         OptionSpec::flag("json", "Print the metrics as JSON instead of a table"),
+        CONFIG_OPTION,
     ]);
     o
 }
@@ -244,8 +286,8 @@ pub fn run_sim(args: &[String], io: &mut Io<'_>) -> Result<(), CliError> {
     if wants_help(args) {
         return help_text_for(
             io,
-            "cutlab sim --scenario NAME --controller NAME [--set key=value]... [--seed S] \
-             [--csv FILE] [--json FILE]",
+            "cutlab sim (--scenario NAME --controller NAME [--set key=value]... [--seed S] | \
+             --config FILE) [--csv FILE] [--json FILE]",
             "Run one closed loop on a preset: a teach cut calibrates the current-to-force model,\n\
              then the controller holds the force through the safety envelope. Prints the\n\
              metrics; --csv and --json write the trace and the full report.",
@@ -253,17 +295,28 @@ pub fn run_sim(args: &[String], io: &mut Io<'_>) -> Result<(), CliError> {
         );
     }
     let options = Options::parse(args, &options_spec)?;
-    let kind: ControllerKind = options
-        .require::<String>("controller")?
-        .parse()
-        .map_err(|e| CliError::new(format!("--controller: {e}")))?;
-    let mut controller = ControllerConfig::new(kind);
-    for assignment in options.all("set") {
-        controller
-            .set_text(assignment)
-            .map_err(|e| CliError::new(format!("--set: {e}")))?;
-    }
-    let spec = spec(&options, controller)?;
+    let spec = match runs_from_config(&options, &run_defining_options(&["controller", "set"]))? {
+        Some(mut runs) if runs.len() == 1 => runs.remove(0),
+        Some(runs) => {
+            return Err(CliError::new(format!(
+                "--config holds {} runs; cutlab sim runs one (use cutlab compare --config)",
+                runs.len()
+            )))
+        }
+        None => {
+            let kind: ControllerKind = options
+                .require::<String>("controller")?
+                .parse()
+                .map_err(|e| CliError::new(format!("--controller: {e}")))?;
+            let mut controller = ControllerConfig::new(kind);
+            for assignment in options.all("set") {
+                controller
+                    .set_text(assignment)
+                    .map_err(|e| CliError::new(format!("--set: {e}")))?;
+            }
+            spec(&options, controller)?
+        }
+    };
     let (result, refs) = run_one(&spec, !options.flag("no-references"))?;
     if let Some(path) = options.text("csv") {
         let mut file = std::fs::File::create(path)
@@ -314,42 +367,46 @@ pub fn run_compare(args: &[String], io: &mut Io<'_>) -> Result<(), CliError> {
     if wants_help(args) {
         return help_text_for(
             io,
-            "cutlab compare --scenario NAME --controllers A,B,... [--json]",
+            "cutlab compare (--scenario NAME --controllers A,B,... | --config FILE) [--json]",
             "Run several controllers (or tunings: pi:kp=0.5) on one preset with the same seed and\n\
              print their metrics side by side; * marks the best value of each row.",
             &options_spec,
         );
     }
     let options = Options::parse(args, &options_spec)?;
-    let list: String = options.require("controllers")?;
-    let configs = list
-        .split(',')
-        .filter(|s| !s.trim().is_empty())
-        .map(|s| controller_with_settings(s.trim()))
-        .collect::<Result<Vec<_>, _>>()?;
-    if configs.is_empty() {
-        return Err(CliError::new("--controllers: name at least one controller"));
-    }
+    let (base, named) = match runs_from_config(&options, &run_defining_options(&["controllers"]))? {
+        Some(runs) => one_scenario(runs)?,
+        None => {
+            let list: String = options.require("controllers")?;
+            let named = list
+                .split(',')
+                .filter(|s| !s.trim().is_empty())
+                .map(|s| Ok((s.trim().to_string(), controller_with_settings(s.trim())?)))
+                .collect::<Result<Vec<_>, CliError>>()?;
+            if named.is_empty() {
+                return Err(CliError::new("--controllers: name at least one controller"));
+            }
+            (
+                spec(&options, ControllerConfig::new(ControllerKind::Fixed))?,
+                named,
+            )
+        }
+    };
     let with_references = !options.flag("no-references");
-    let base = spec(&options, ControllerConfig::new(ControllerKind::Fixed))?;
     let refs = if with_references {
         Some(references(&base).map_err(|e| CliError::new(e.to_string()))?)
     } else {
         None
     };
     let mut results = Vec::new();
-    for (text, config) in list
-        .split(',')
-        .filter(|s| !s.trim().is_empty())
-        .zip(configs)
-    {
+    for (name, config) in named {
         let mut s = base.clone();
         s.controller = config.clone();
-        let mut result = simulate(&s).map_err(|e| CliError::new(e.to_string()))?;
+        let mut result = simulate(&s).map_err(|e| CliError::new(format!("{name}: {e}")))?;
         if let Some(r) = &refs {
             apply_references(&mut result, r);
         }
-        results.push((text.trim().to_string(), config, result));
+        results.push((name, config, result));
     }
     if options.flag("json") {
         let entries: Vec<CompareEntry> = results
@@ -376,6 +433,42 @@ pub fn run_compare(args: &[String], io: &mut Io<'_>) -> Result<(), CliError> {
     }
     io.stdout.write_all(metrics_table(&borrowed).as_bytes())?;
     Ok(())
+}
+
+/// Splits a saved comparison into its scenario (with the fixed-feed controller, for the
+/// references) and its named controllers. Every run must share the scenario: one set of reference
+/// runs measures every variant's saving.
+fn one_scenario(
+    runs: Vec<RunSpec>,
+) -> Result<(RunSpec, Vec<(String, ControllerConfig)>), CliError> {
+    let Some(mut base) = runs.first().cloned() else {
+        return Err(CliError::new("--config: the file holds no runs"));
+    };
+    base.controller = ControllerConfig::new(ControllerKind::Fixed);
+    let mut named: Vec<(String, ControllerConfig)> = Vec::new();
+    for (i, run) in runs.into_iter().enumerate() {
+        let mut scenario = run.clone();
+        scenario.controller = base.controller.clone();
+        if scenario != base {
+            return Err(CliError::new(format!(
+                "--config: run {} differs from run 1 in its preset, seed, settings or machine; a \
+                 comparison runs one scenario (run the others with cutlab sim --config)",
+                i + 1
+            )));
+        }
+        let kind = run.controller.kind().name();
+        let same_kind = named
+            .iter()
+            .filter(|(_, c)| c.kind() == run.controller.kind())
+            .count();
+        let name = if same_kind == 0 {
+            kind.to_string()
+        } else {
+            format!("{kind} ({})", same_kind + 1)
+        };
+        named.push((name, run.controller));
+    }
+    Ok((base, named))
 }
 
 /// A table of metrics, one column per run; `*` marks the best value of each row.
@@ -409,12 +502,7 @@ fn metrics_table(runs: &[(String, &RunResult)]) -> String {
         let marks = best(&values, row.better, shown);
         let _ = write!(out, "{:label_width$}", row.heading());
         for (v, is_best) in values.into_iter().zip(marks) {
-            let cell = match v {
-                Some(v) if v.is_finite() => {
-                    format!("{}{}", shown(v), if is_best { "*" } else { " " })
-                }
-                _ => "—".to_string(),
-            };
+            let cell = format!("{}{}", row.show(v, shown), if is_best { "*" } else { " " });
             let _ = write!(out, "  {cell:>col_width$}");
         }
         out.push('\n');

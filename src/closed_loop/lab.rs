@@ -2,7 +2,7 @@
 //! metrics and the reference runs the savings are measured against. The CLI and the browser both
 //! call this, so a run is the same wherever it is made.
 
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 use super::metrics::{compute, with_savings, Metrics, MetricsConfig};
 use super::runner::{Calibration, ClosedLoop, Feedback, LoopError, LoopSettings, TeachCut};
@@ -14,8 +14,10 @@ use crate::plant::presets::PlantKind;
 use crate::plant::Preset;
 use crate::safety::{ArmingTrigger, EnvelopeConfig, OverrideResolution};
 
-/// Everything that defines a run; the same spec and seed give the same trace.
-#[derive(Debug, Clone, PartialEq)]
+/// Everything that defines a run; the same spec and seed give the same trace. Its JSON form is
+/// what a saved configuration holds ([`super::config`]).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct RunSpec {
     /// The experiment.
     pub preset: Preset,
@@ -24,33 +26,47 @@ pub struct RunSpec {
     /// Seed of every noise source.
     pub seed: u64,
     /// Overrides of the preset's default settings.
+    #[serde(default)]
     pub settings: SettingsOverrides,
     /// Changes to the preset's machine and cut (mill presets).
+    #[serde(default)]
     pub plant: PlantEdits,
 }
 
-/// Settings a user may change; `None` keeps the preset's default.
-#[derive(Debug, Clone, Copy, PartialEq, Default)]
+/// Settings a user may change; `None` keeps the preset's default (and is left out of the
+/// serialised form).
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
 pub struct SettingsOverrides {
     /// Which current measures the force.
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub feedback: Option<Feedback>,
     /// Target force.
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub target_force_n: Option<f64>,
     /// Control period.
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub control_period_s: Option<f64>,
     /// Spindle current low-pass cut-off.
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub spindle_lowpass_hz: Option<f64>,
     /// Feed current low-pass cut-off.
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub feed_lowpass_hz: Option<f64>,
     /// Order of the low-passes.
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub lowpass_order: Option<usize>,
     /// Lowest override.
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub min_override_pct: Option<f64>,
     /// Highest override.
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub max_override_pct: Option<f64>,
     /// Override rate limit.
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub max_rate_pct_per_s: Option<f64>,
     /// Override held until the envelope arms.
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub arming_override_pct: Option<f64>,
 }
 

@@ -7,7 +7,7 @@
 
 use serde::Serialize;
 
-use super::trace::{Trace, TraceRow};
+use super::trace::{csv_field, Trace, TraceRow};
 
 /// Settings of the metrics.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -219,8 +219,47 @@ pub fn with_savings(
 /// assert!(csv.starts_with("metric,value\ncycle_time_s,0\n"));
 /// ```
 pub fn metrics_csv(metrics: &Metrics) -> String {
+    metrics_csv_columns(&[("value", metrics)])
+}
+
+/// The metrics of several runs as CSV: a `metric` column, then one column per run headed by its
+/// name; an empty cell is a metric the run does not have.
+///
+/// ```
+/// use cutlab::closed_loop::metrics::{compute, metrics_csv_columns, MetricsConfig};
+/// use cutlab::closed_loop::trace::Trace;
+/// let m = compute(&Trace::default(), &MetricsConfig { force_limit_n: 1.0,
+///     settling_band_pct: 5.0, depth_step_mm: 0.2 });
+/// let csv = metrics_csv_columns(&[("A: fixed", &m), ("B: pi, kp 0.5", &m)]);
+/// assert!(csv.starts_with("metric,A: fixed,\"B: pi, kp 0.5\"\ncycle_time_s,0,0\n"));
+/// ```
+pub fn metrics_csv_columns(runs: &[(&str, &Metrics)]) -> String {
     let value = |v: Option<f64>| v.map_or(String::new(), |v| v.to_string());
-    let rows: [(&str, Option<f64>); 18] = [
+    let table: Vec<[(&str, Option<f64>); 18]> =
+        runs.iter().map(|(_, m)| metric_values(m)).collect();
+    let mut out = String::from("metric");
+    for (name, _) in runs {
+        out.push(',');
+        out.push_str(&csv_field(name));
+    }
+    out.push('\n');
+    let Some(first) = table.first() else {
+        return out;
+    };
+    for (row, (name, _)) in first.iter().enumerate() {
+        out.push_str(name);
+        for values in &table {
+            out.push(',');
+            out.push_str(&value(values[row].1));
+        }
+        out.push('\n');
+    }
+    out
+}
+
+/// Every metric as (CSV name, value), in the CSV's order.
+fn metric_values(metrics: &Metrics) -> [(&'static str, Option<f64>); 18] {
+    [
         ("cycle_time_s", Some(metrics.cycle_time_s)),
         ("completed", Some(f64::from(u8::from(metrics.completed)))),
         (
@@ -251,15 +290,7 @@ pub fn metrics_csv(metrics: &Metrics) -> String {
         ("saving_vs_programmed_pct", metrics.saving_vs_programmed_pct),
         ("saving_vs_safe_fixed_pct", metrics.saving_vs_safe_fixed_pct),
         ("steps_not_settled", Some(metrics.steps_not_settled as f64)),
-    ];
-    let mut out = String::from("metric,value\n");
-    for (name, v) in rows {
-        out.push_str(name);
-        out.push(',');
-        out.push_str(&value(v));
-        out.push('\n');
-    }
-    out
+    ]
 }
 
 /// Whether the machine is slowing the path down by itself (a corner, the end of the program): the

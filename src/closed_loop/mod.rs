@@ -2,6 +2,7 @@
 //! → override, recorded as a trace and judged by metrics.
 
 pub mod chain;
+pub mod config;
 pub mod lab;
 pub mod metrics;
 pub mod runner;

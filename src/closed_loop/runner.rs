@@ -20,7 +20,7 @@
 
 use std::fmt;
 
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 use super::chain::{PeriodSummary, SignalChain};
 use super::trace::{Trace, TraceRow};
@@ -33,12 +33,14 @@ use crate::safety::{EnvelopeConfig, EnvelopeError, SafetyEnvelope};
 use crate::signal::butterworth::{butter, ButterworthSpec, Cutoff, DesignError, FilterKind};
 
 /// Which motor current the force is measured from.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum Feedback {
     /// Spindle current → mean cutting force (paper 003; independent of the feed direction).
+    #[serde(alias = "spindle")]
     SpindleCurrent,
     /// Feed-drive current → feed force (paper 000).
+    #[serde(alias = "feed")]
     FeedCurrent,
 }
 
@@ -544,7 +546,7 @@ impl ClosedLoop {
             target_force_n: self.settings.target_force_n,
             programmed_feed_mm_min: last.programmed_feed_mm_min,
             applied_override_pct: last.applied_override_pct,
-            time_since_spindle_start_s: last.time_since_spindle_start_s,
+            time_since_start_s: self.envelope.time_since_start_s(&last),
         };
         let armed = self.envelope.armed();
         // The controller runs only while armed: before that its output would be ignored, and an

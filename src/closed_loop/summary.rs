@@ -20,12 +20,24 @@ pub struct MetricRow {
     /// The unit, empty for counts.
     pub unit: &'static str,
     pub better: Better,
+    /// A yes/no row: 1 is shown as "yes", 0 as "no".
+    pub yes_no: bool,
     /// The row's value for a run; `None` where it does not exist (no reference runs yet, no step
     /// that settled).
     pub value: fn(&RunResult) -> Option<f64>,
 }
 
 impl MetricRow {
+    /// How a front end shows `value` of this row: yes/no rows as words, others through
+    /// `number`, a missing value as "—".
+    pub fn show(&self, value: Option<f64>, number: impl Fn(f64) -> String) -> String {
+        match value {
+            Some(v) if self.yes_no => if v > 0.5 { "yes" } else { "no" }.to_string(),
+            Some(v) if v.is_finite() => number(v),
+            _ => "—".to_string(),
+        }
+    }
+
     /// The label with its unit in brackets, as a row heading.
     pub fn heading(&self) -> String {
         if self.unit.is_empty() {
@@ -46,32 +58,50 @@ const fn row(
         label,
         unit,
         better,
+        yes_no: false,
         value,
     }
 }
 
+/// A value that exists only for a run that finished its program: a run stopped by the overload
+/// alarm is "faster" only because it stopped.
+fn if_finished(r: &RunResult, value: Option<f64>) -> Option<f64> {
+    value.filter(|_| r.metrics.completed)
+}
+
+/// A force-error value, which exists only where the controller held a cut.
+fn if_controlled(r: &RunResult, value: f64) -> Option<f64> {
+    (r.metrics.controlled_cutting_time_s > 0.0).then_some(value)
+}
+
 /// The rows, in the order shown.
-pub const METRIC_ROWS: [MetricRow; 15] = [
+pub const METRIC_ROWS: [MetricRow; 16] = [
     row("Target force", "N", Better::Neither, |r| {
         Some(r.settings.target_force_n)
     }),
+    MetricRow {
+        yes_no: true,
+        ..row("Program finished", "", Better::Higher, |r| {
+            Some(f64::from(u8::from(r.metrics.completed)))
+        })
+    },
     row("Cycle time", "s", Better::Lower, |r| {
-        Some(r.metrics.cycle_time_s)
+        if_finished(r, Some(r.metrics.cycle_time_s))
     }),
     row("Saving vs programmed feed", "%", Better::Higher, |r| {
-        r.metrics.saving_vs_programmed_pct
+        if_finished(r, r.metrics.saving_vs_programmed_pct)
     }),
     row("Saving vs safe fixed feed", "%", Better::Higher, |r| {
-        r.metrics.saving_vs_safe_fixed_pct
+        if_finished(r, r.metrics.saving_vs_safe_fixed_pct)
     }),
     row("Force IAE", "N·s", Better::Lower, |r| {
-        Some(r.metrics.force_iae_n_s)
+        if_controlled(r, r.metrics.force_iae_n_s)
     }),
     row("Force RMS error", "N", Better::Lower, |r| {
-        Some(r.metrics.force_rms_error_n)
+        if_controlled(r, r.metrics.force_rms_error_n)
     }),
     row("Mean |error|", "%", Better::Lower, |r| {
-        Some(r.metrics.force_mean_abs_error_pct)
+        if_controlled(r, r.metrics.force_mean_abs_error_pct)
     }),
     row("Peak force", "N", Better::Lower, |r| {
         Some(r.metrics.peak_force_n)
@@ -83,13 +113,13 @@ pub const METRIC_ROWS: [MetricRow; 15] = [
         "Max overshoot after a depth step",
         "%",
         Better::Lower,
-        |r| Some(r.metrics.max_overshoot_pct),
+        |r| (!r.metrics.steps.is_empty()).then_some(r.metrics.max_overshoot_pct),
     ),
     row("Max settling time", "s", Better::Lower, |r| {
         r.metrics.max_settling_time_s
     }),
     row("Depth steps never settled", "", Better::Lower, |r| {
-        Some(r.metrics.steps_not_settled as f64)
+        (!r.metrics.steps.is_empty()).then_some(r.metrics.steps_not_settled as f64)
     }),
     row("Override changes", "", Better::Lower, |r| {
         Some(r.metrics.override_changes as f64)
@@ -98,14 +128,14 @@ pub const METRIC_ROWS: [MetricRow; 15] = [
         Some(r.metrics.override_total_variation_pct)
     }),
     row("Mean removal rate", "mm³/s", Better::Higher, |r| {
-        Some(r.metrics.mean_material_removal_mm3_s)
+        (r.metrics.removed_volume_mm3 > 0.0).then_some(r.metrics.mean_material_removal_mm3_s)
     }),
 ];
 
 /// Which of `values` are the best, judged as they are shown (`shown` formats a value): values
 /// that print alike are marked alike, so a reader never sees two equal numbers of which only one
-/// is "best". Nothing is marked with fewer than two runs, for [`Better::Neither`], or where no
-/// value is finite.
+/// is "best". Nothing is marked with fewer than two runs, for [`Better::Neither`], where no
+/// value is finite, or where every value ties (nothing is better than anything).
 ///
 /// ```
 /// use cutlab::closed_loop::summary::{best, Better};
@@ -124,10 +154,14 @@ pub fn best(values: &[Option<f64>], better: Better, shown: impl Fn(f64) -> Strin
     let Some(extreme) = extreme.map(&shown) else {
         return vec![false; values.len()];
     };
-    values
+    let marks: Vec<bool> = values
         .iter()
         .map(|v| v.is_some_and(|v| v.is_finite() && shown(v) == extreme))
-        .collect()
+        .collect();
+    if marks.iter().filter(|m| **m).count() == finite().count() {
+        return vec![false; values.len()];
+    }
+    marks
 }
 
 #[cfg(test)]
@@ -151,6 +185,16 @@ mod tests {
         assert_eq!(best(&[Some(1.0)], Better::Lower, shown), [false]);
         assert_eq!(
             best(&[None, Some(f64::NAN)], Better::Lower, shown),
+            [false, false]
+        );
+    }
+
+    #[test]
+    fn a_row_where_every_run_ties_marks_nothing() {
+        let values = [Some(0.0), Some(0.0), None];
+        assert_eq!(best(&values, Better::Lower, shown), [false, false, false]);
+        assert_eq!(
+            best(&[Some(0.2), Some(0.4)], Better::Lower, shown),
             [false, false]
         );
     }

@@ -110,46 +110,61 @@ pub const CSV_COLUMNS: [&str; 17] = [
     "material_removal_mm3_s",
 ];
 
+/// The state flags [`write_csv`] writes after the values and terms, as 0/1.
+pub const CSV_FLAG_COLUMNS: [&str; 5] = [
+    "armed",
+    "sensor_fault",
+    "feed_hold",
+    "estimate_in_range",
+    "cross_check_disagrees",
+];
+
+fn csv_values(r: &TraceRow) -> [f64; CSV_COLUMNS.len()] {
+    [
+        r.time_s,
+        r.depth_mm,
+        r.width_mm,
+        r.path_position_mm,
+        r.programmed_feed_mm_min,
+        r.feed_mm_min,
+        r.requested_override_pct,
+        r.override_pct,
+        r.applied_override_pct,
+        r.force_n,
+        r.force_est_n,
+        r.force_power_law_n,
+        r.target_force_n,
+        r.spindle_current_rms_a,
+        r.feed_current_rms_a,
+        r.spindle_speed_rpm,
+        r.material_removal_mm3_s,
+    ]
+}
+
+fn csv_flags(r: &TraceRow) -> impl Iterator<Item = String> {
+    [
+        r.armed,
+        r.sensor_fault,
+        r.feed_hold,
+        r.estimate_in_range,
+        r.cross_check_disagrees,
+    ]
+    .into_iter()
+    .map(|b| u8::from(b).to_string())
+}
+
 /// Writes the trace as CSV with a header: the [`CSV_COLUMNS`], the controller's terms, and the
-/// state flags. Numbers are written at full precision (shortest round-trip form).
+/// [`CSV_FLAG_COLUMNS`]. Numbers are written at full precision (shortest round-trip form).
 pub fn write_csv(trace: &Trace, out: &mut dyn std::io::Write) -> std::io::Result<()> {
     let mut header: Vec<String> = CSV_COLUMNS.iter().map(|c| c.to_string()).collect();
     for (name, unit) in &trace.term_names {
         header.push(csv_term_header(name, unit));
     }
-    header.extend(
-        [
-            "armed",
-            "sensor_fault",
-            "feed_hold",
-            "estimate_in_range",
-            "cross_check_disagrees",
-        ]
-        .map(String::from),
-    );
+    header.extend(CSV_FLAG_COLUMNS.map(String::from));
     writeln!(out, "{}", header.join(","))?;
     let width = trace.term_names.len();
     for (i, r) in trace.rows.iter().enumerate() {
-        let values = [
-            r.time_s,
-            r.depth_mm,
-            r.width_mm,
-            r.path_position_mm,
-            r.programmed_feed_mm_min,
-            r.feed_mm_min,
-            r.requested_override_pct,
-            r.override_pct,
-            r.applied_override_pct,
-            r.force_n,
-            r.force_est_n,
-            r.force_power_law_n,
-            r.target_force_n,
-            r.spindle_current_rms_a,
-            r.feed_current_rms_a,
-            r.spindle_speed_rpm,
-            r.material_removal_mm3_s,
-        ];
-        let mut line: Vec<String> = values.iter().map(|v| v.to_string()).collect();
+        let mut line: Vec<String> = csv_values(r).iter().map(|v| v.to_string()).collect();
         line.extend(
             trace
                 .terms
@@ -158,19 +173,49 @@ pub fn write_csv(trace: &Trace, out: &mut dyn std::io::Write) -> std::io::Result
                 .take(width)
                 .map(|v| v.to_string()),
         );
-        line.extend(
-            [
-                r.armed,
-                r.sensor_fault,
-                r.feed_hold,
-                r.estimate_in_range,
-                r.cross_check_disagrees,
-            ]
-            .map(|b| u8::from(b).to_string()),
-        );
+        line.extend(csv_flags(r));
         writeln!(out, "{}", line.join(","))?;
     }
     Ok(())
+}
+
+/// Writes several runs' traces as one CSV, a first `run` column naming each row's run: the
+/// [`CSV_COLUMNS`] and [`CSV_FLAG_COLUMNS`] of every run, one after the other. The controllers'
+/// terms are left out, since each controller has its own (one run's [`write_csv`] has them).
+///
+/// ```
+/// use cutlab::closed_loop::trace::{write_csv_runs, Trace};
+/// let mut out = Vec::new();
+/// write_csv_runs(&[("A: fixed", &Trace::default())], &mut out).unwrap();
+/// assert!(String::from_utf8(out).unwrap().starts_with("run,time_s,depth_mm,"));
+/// ```
+pub fn write_csv_runs(
+    runs: &[(&str, &Trace)],
+    out: &mut dyn std::io::Write,
+) -> std::io::Result<()> {
+    let mut header = vec!["run"];
+    header.extend(CSV_COLUMNS);
+    header.extend(CSV_FLAG_COLUMNS);
+    writeln!(out, "{}", header.join(","))?;
+    for (name, trace) in runs {
+        let name = csv_field(name);
+        for r in &trace.rows {
+            let mut line = vec![name.clone()];
+            line.extend(csv_values(r).iter().map(|v| v.to_string()));
+            line.extend(csv_flags(r));
+            writeln!(out, "{}", line.join(","))?;
+        }
+    }
+    Ok(())
+}
+
+/// A text field quoted as RFC 4180 wants when it holds a comma, a quote or a line break.
+pub fn csv_field(text: &str) -> String {
+    if text.contains([',', '"', '\n', '\r']) {
+        format!("\"{}\"", text.replace('"', "\"\""))
+    } else {
+        text.to_string()
+    }
 }
 
 /// A CSV-safe column name for a controller term: ASCII, lower case, with the unit.

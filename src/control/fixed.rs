@@ -9,7 +9,7 @@ use super::law::{ControlInput, Controller, Term};
 /// use cutlab::control::law::{Controller, ControlInput};
 /// let mut c = FixedFeed::new(80.0);
 /// let input = ControlInput { time_s: 0.0, dt_s: 0.1, force_n: 500.0, target_force_n: 300.0,
-///     programmed_feed_mm_min: 200.0, applied_override_pct: 100.0, time_since_spindle_start_s: 5.0 };
+///     programmed_feed_mm_min: 200.0, applied_override_pct: 100.0, time_since_start_s: 5.0 };
 /// assert_eq!(c.step(&input), 80.0);
 /// ```
 #[derive(Debug, Clone)]

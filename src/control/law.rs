@@ -28,8 +28,10 @@ pub struct ControlInput {
     pub programmed_feed_mm_min: f64,
     /// The override the machine applies now, after the envelope and the machine's quantisation.
     pub applied_override_pct: f64,
-    /// Time since the spindle last started.
-    pub time_since_spindle_start_s: f64,
+    /// Time since the drive last started: the spindle on a mill (paper 003's "current ignored
+    /// for 3 s after the spindle starts"), the feed on a bench without a spindle. The same clock
+    /// the safety envelope's arming delay runs on ([`crate::safety::SafetyEnvelope::time_since_start_s`]).
+    pub time_since_start_s: f64,
 }
 
 /// One internal value of a controller, for plotting beside the force and override.

@@ -79,7 +79,7 @@ impl FilteredDerivative {
 ///     gamma_beta_pct_per_s: 50.0, gamma_dynamics_pct_per_s: 0.0, initial_beta_pct: 100.0,
 ///     min_beta_pct: 5.0, max_beta_pct: 255.0, derivative_time_s: 0.2 });
 /// let input = ControlInput { time_s: 0.0, dt_s: 0.1, force_n: 300.0, target_force_n: 300.0,
-///     programmed_feed_mm_min: 200.0, applied_override_pct: 100.0, time_since_spindle_start_s: 5.0 };
+///     programmed_feed_mm_min: 200.0, applied_override_pct: 100.0, time_since_start_s: 5.0 };
 /// // On target with no error the request is β̂ = 100 %.
 /// assert!((c.step(&input) - 100.0).abs() < 1e-12);
 /// ```
@@ -203,7 +203,7 @@ mod tests {
                 target_force_n: target,
                 programmed_feed_mm_min: 200.0,
                 applied_override_pct: applied,
-                time_since_spindle_start_s: 10.0,
+                time_since_start_s: 10.0,
             });
             applied = request.clamp(0.0, 255.0);
             force += (1.0 - (-dt / tau).exp()) * (gain_n_per_pct * applied - force);

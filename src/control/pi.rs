@@ -37,7 +37,7 @@ pub struct PiParams {
 /// let mut c = PiController::new(PiParams { kp: 0.5, ki_per_s: 1.0, tracking_time_s: 0.5,
 ///     initial_override_pct: 100.0 });
 /// let input = ControlInput { time_s: 0.0, dt_s: 0.1, force_n: 330.0, target_force_n: 300.0,
-///     programmed_feed_mm_min: 200.0, applied_override_pct: 100.0, time_since_spindle_start_s: 5.0 };
+///     programmed_feed_mm_min: 200.0, applied_override_pct: 100.0, time_since_start_s: 5.0 };
 /// // e = −0.1: P = −5 %, I = 1.0 · 100 · (−0.1) · 0.1 s = −1 %.
 /// assert!((c.step(&input) - 94.0).abs() < 1e-12);
 /// ```
@@ -116,7 +116,7 @@ mod tests {
             target_force_n: 100.0,
             programmed_feed_mm_min: 100.0,
             applied_override_pct: applied,
-            time_since_spindle_start_s: 10.0,
+            time_since_start_s: 10.0,
         }
     }
 

@@ -649,7 +649,7 @@ mod tests {
                 target_force_n: 300.0,
                 programmed_feed_mm_min: 200.0,
                 applied_override_pct: 100.0,
-                time_since_spindle_start_s: 10.0,
+                time_since_start_s: 10.0,
             });
             // On target at 100 % every controller's request is 100 %.
             assert!((out - 100.0).abs() < 1e-9, "{kind}: {out}");

@@ -28,7 +28,7 @@ pub struct RestrictionParams {
 /// let mut c = CurrentRestriction::new(RestrictionParams {
 ///     upper_limit_n: 330.0, lower_limit_n: 270.0, step_pct: 10.0 });
 /// let mut input = ControlInput { time_s: 0.0, dt_s: 0.1, force_n: 400.0, target_force_n: 300.0,
-///     programmed_feed_mm_min: 200.0, applied_override_pct: 100.0, time_since_spindle_start_s: 5.0 };
+///     programmed_feed_mm_min: 200.0, applied_override_pct: 100.0, time_since_start_s: 5.0 };
 /// assert_eq!(c.step(&input), 90.0);
 /// input.force_n = 300.0;
 /// assert_eq!(c.step(&input), 100.0);
@@ -84,7 +84,7 @@ mod tests {
             target_force_n: 300.0,
             programmed_feed_mm_min: 100.0,
             applied_override_pct: 70.0,
-            time_since_spindle_start_s: 10.0,
+            time_since_start_s: 10.0,
         }
     }
 

@@ -32,7 +32,7 @@ pub struct ThresholdParams {
 /// use cutlab::control::law::{Controller, ControlInput};
 /// let mut c = ThresholdProportional::new(ThresholdParams { gap_pct: 10.0, kp: 0.5, ignore_after_start_s: 3.0 });
 /// let input = ControlInput { time_s: 10.0, dt_s: 0.1, force_n: 345.0, target_force_n: 300.0,
-///     programmed_feed_mm_min: 200.0, applied_override_pct: 100.0, time_since_spindle_start_s: 10.0 };
+///     programmed_feed_mm_min: 200.0, applied_override_pct: 100.0, time_since_start_s: 10.0 };
 /// // The maximum threshold is 315 N; 30 N = 10 % of the target over it lowers the override by 5.
 /// assert!((c.step(&input) - 95.0).abs() < 1e-12);
 /// ```
@@ -64,7 +64,7 @@ impl Controller for ThresholdProportional {
         let max_n = input.target_force_n + half_gap_n;
         let min_n = input.target_force_n - half_gap_n;
         let percent_of_target = 100.0 / input.target_force_n;
-        let change_pct = if input.time_since_spindle_start_s < p.ignore_after_start_s {
+        let change_pct = if input.time_since_start_s < p.ignore_after_start_s {
             0.0
         } else if input.force_n > max_n {
             -p.kp * (input.force_n - max_n) * percent_of_target
@@ -102,7 +102,7 @@ mod tests {
             target_force_n: 200.0,
             programmed_feed_mm_min: 100.0,
             applied_override_pct: 80.0,
-            time_since_spindle_start_s: since_start_s,
+            time_since_start_s: since_start_s,
         }
     }
 

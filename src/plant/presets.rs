@@ -12,7 +12,7 @@
 //! Every value a paper leaves out is chosen and listed in [`Preset::choices`] (and in
 //! docs/plant.md). Each preset's machine takes a seed: the same seed gives the same run.
 
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 use super::bench::{BrakeBench, BrakeBenchConfig};
 use super::cnc::{CncConfig, OverrideMode};
@@ -26,9 +26,9 @@ use super::{Plant, PlantError};
 use crate::machine::{Machine, MachineStep, OverrideCommand};
 use crate::math;
 
-/// A named experiment.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize)]
-#[serde(rename_all = "kebab-case")]
+/// A named experiment. Serialised by its [`name`](Preset::name), e.g. `"maneerat-doc-1"`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(into = "&'static str", try_from = "String")]
 pub enum Preset {
     /// Paper 003 Fig. 10.
     KimStepDoc,
@@ -145,6 +145,21 @@ const MANEERAT_TOOL: (f64, u32, f64) = (10.0, 4, 30.0);
 const MANEERAT_FEED_MM_MIN: f64 = 900.0;
 const MANEERAT_WIDTH_MM: f64 = 3.0;
 
+impl From<Preset> for &'static str {
+    fn from(preset: Preset) -> Self {
+        preset.name()
+    }
+}
+
+impl TryFrom<String> for Preset {
+    type Error = String;
+
+    fn try_from(name: String) -> Result<Self, Self::Error> {
+        Preset::from_name(&name)
+            .ok_or_else(|| format!("unknown preset {name:?}; presets: {}", Preset::names()))
+    }
+}
+
 impl Preset {
     /// Every preset.
     pub const ALL: [Preset; 8] = [
@@ -210,6 +225,11 @@ impl Preset {
     pub fn from_name(name: &str) -> Option<Self> {
         let n = name.trim();
         Self::ALL.into_iter().find(|p| p.name() == n)
+    }
+
+    /// Every preset's name, comma separated, for error messages.
+    pub fn names() -> String {
+        Self::ALL.map(Preset::name).join(", ")
     }
 
     /// The plant it runs on.
@@ -743,22 +763,31 @@ fn mean_resultant_n(p: &MillParameters, depth_mm: f64, material: Material) -> f6
     math::hypot(f.fx_n, f.fy_n)
 }
 
-/// Changes a user makes to a mill preset; `None` keeps the preset's value.
-#[derive(Debug, Clone, Copy, PartialEq, Default)]
+/// Changes a user makes to a mill preset; `None` keeps the preset's value (and is left out of
+/// the serialised form).
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
 pub struct PlantEdits {
     /// Work material of every region.
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub material: Option<Material>,
     /// Spindle speed of every block.
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub spindle_rpm: Option<f64>,
     /// Programmed feed of every block.
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub programmed_feed_mm_min: Option<f64>,
     /// Factor on the axial depth profile.
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub depth_scale: Option<f64>,
     /// Cutter diameter.
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub tool_diameter_mm: Option<f64>,
     /// Number of teeth.
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub teeth: Option<u32>,
     /// Standard deviation of the Hall sensors' noise, both channels.
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub sensor_noise_a: Option<f64>,
 }
 

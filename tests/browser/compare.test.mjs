@@ -1,7 +1,22 @@
 // The Compare page: one click on a paper's comparison runs it; the table marks the best values.
 import { test, before, after } from 'node:test';
 import assert from 'node:assert/strict';
+import { readFile } from 'node:fs/promises';
 import { serveDist, launchBrowser, openLab, screenshot } from './harness.mjs';
+
+const RUN_TIMEOUT = 120_000;
+
+/** Clicks `button` and returns the text of the file it downloads. */
+async function downloadText(page, button) {
+  const [download] = await Promise.all([
+    page.waitForEvent('download'),
+    page.getByRole('button', { name: button }).click(),
+  ]);
+  return { name: download.suggestedFilename(), text: await readFile(await download.path(), 'utf8') };
+}
+
+/** The metrics CSV without the savings rows, which fill in later from background runs. */
+const withoutSavings = (csv) => csv.split('\n').filter((line) => !line.startsWith('saving_')).join('\n');
 
 let server;
 let browser;
@@ -43,6 +58,55 @@ test('variants can be added and removed', async () => {
   await page.getByRole('button', { name: 'Remove the last variant' }).click();
   await page.getByRole('group', { name: 'Variant C' }).waitFor({ state: 'detached' });
   assert.equal(await page.getByRole('button', { name: 'Remove the last variant' }).isDisabled(), true);
+  assert.deepEqual(problems, []);
+  await context.close();
+});
+
+test('a comparison exports traces, metrics and its configuration, and its link reproduces it', async () => {
+  const hash = '#/compare?preset=maneerat-doc-1&seed=3&variants=2&a.controller=fixed&b.controller=pi&b.kp=0.5';
+  // A high-DPI screen: the charts' backing store is in device pixels, so lines stay crisp.
+  const { page, problems, context } = await openLab(browser, server.url, hash, { width: 1280, height: 720 }, 2);
+  const table = page.getByRole('table', { name: /Metrics of the runs/ });
+  await table.getByRole('columnheader', { name: 'B: pi' }).waitFor({ timeout: RUN_TIMEOUT });
+  await page.getByRole('status').filter({ hasText: 'Running' }).waitFor({ state: 'detached', timeout: RUN_TIMEOUT });
+  const force = page.getByRole('img', { name: /Cutting force/ });
+  const size = await force.evaluate((c) => [c.width, c.clientWidth]);
+  assert.ok(Math.abs(size[0] - 2 * size[1]) <= 2, `backing ${size[0]} px for ${size[1]} CSS px`);
+
+  const traces = await downloadText(page, 'Traces (CSV)');
+  assert.equal(traces.name, 'cutlab-compare-traces.csv');
+  const lines = traces.text.trim().split('\n');
+  assert.match(lines[0], /^run,time_s,depth_mm,/);
+  assert.ok(lines.some((l) => l.startsWith('A: fixed,')) && lines.some((l) => l.startsWith('B: pi,')));
+  const metrics = await downloadText(page, 'Metrics (CSV)');
+  assert.match(metrics.text, /^metric,A: fixed,B: pi\ncycle_time_s,[\d.]+,[\d.]+\n/);
+  const config = JSON.parse((await downloadText(page, 'Configuration (JSON)')).text);
+  assert.equal(config.format, 'cutlab-runs');
+  assert.deepEqual(config.runs.map((r) => r.controller.kind), ['fixed', 'pi']);
+  assert.equal(config.runs[1].controller.params.kp, 0.5);
+  assert.ok(config.runs.every((r) => r.seed === 3 && r.preset === 'maneerat-doc-1'));
+
+  // The saved link, opened afresh, gives the same numbers.
+  const again = await openLab(browser, config.link, '');
+  await again.page.getByRole('table', { name: /Metrics of the runs/ }).getByRole('columnheader', { name: 'B: pi' }).waitFor({ timeout: RUN_TIMEOUT });
+  await again.page.getByRole('status').filter({ hasText: 'Running' }).waitFor({ state: 'detached', timeout: RUN_TIMEOUT });
+  const metricsAgain = await downloadText(again.page, 'Metrics (CSV)');
+  assert.equal(withoutSavings(metricsAgain.text), withoutSavings(metrics.text));
+  assert.deepEqual(again.problems, []);
+  await again.context.close();
+  assert.deepEqual(problems, []);
+  await context.close();
+});
+
+test("the fuzzy rule bases' comparison starts from the paper's own settings", async () => {
+  const { page, problems, context } = await openLab(browser, server.url, '#/compare?preset=kim-step-doc&rpm=1200&a.controller=pi&a.kp=0.9');
+  await page.getByRole('button', { name: 'Paper 002: experience-based vs dynamics-based fuzzy rules' }).click();
+  const table = page.getByRole('table', { name: /Metrics of the runs/ });
+  await table.getByRole('columnheader', { name: 'B: fuzzy-dynamics' }).waitFor({ timeout: RUN_TIMEOUT });
+  await table.getByRole('columnheader', { name: 'A: fuzzy-experience' }).waitFor();
+  assert.equal(await page.getByLabel('Preset', { exact: true }).inputValue(), 'liu-current-step');
+  // Edits made for another experiment are gone from the link.
+  assert.doesNotMatch(page.url(), /rpm=|kp=/);
   assert.deepEqual(problems, []);
   await context.close();
 });

@@ -59,11 +59,12 @@ export async function launchBrowser() {
 }
 
 /**
- * Opens the lab at `hash` in a fresh page of `browser`; returns { page, problems }, where
+ * Opens the lab at `hash` in a fresh page of `browser` (a high-DPI screen with
+ * `deviceScaleFactor` 2); returns { page, problems, context }, where
  * `problems` collects console errors and uncaught exceptions for the test to assert empty.
  */
-export async function openLab(browser, baseUrl, hash = '', viewport = { width: 1280, height: 720 }) {
-  const context = await browser.newContext({ viewport, deviceScaleFactor: 1 });
+export async function openLab(browser, baseUrl, hash = '', viewport = { width: 1280, height: 720 }, deviceScaleFactor = 1) {
+  const context = await browser.newContext({ viewport, deviceScaleFactor });
   const page = await context.newPage();
   const problems = [];
   page.on('console', (msg) => {

@@ -133,9 +133,14 @@ test('the trace exports as CSV and the configuration as JSON', async () => {
     page.waitForEvent('download'),
     page.getByRole('button', { name: 'Configuration (JSON)' }).click(),
   ]);
+  // The file `cutlab sim --config` reads: the whole run, every controller parameter written out.
   const json = JSON.parse(await readFile(await config.path(), 'utf8'));
-  assert.equal(json.preset, 'maneerat-doc-1');
-  assert.equal(json.controller.kind, 'fixed');
+  assert.equal(json.format, 'cutlab-runs');
+  assert.equal(json.runs.length, 1);
+  assert.equal(json.runs[0].preset, 'maneerat-doc-1');
+  assert.equal(json.runs[0].controller.kind, 'fixed');
+  assert.equal(json.runs[0].seed, 1);
+  assert.match(json.link, /#\/simulate\?preset=maneerat-doc-1/);
   const [png] = await Promise.all([
     page.waitForEvent('download'),
     page.getByRole('button', { name: 'Save Cutting force as PNG' }).click(),

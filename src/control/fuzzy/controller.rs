@@ -46,7 +46,7 @@ pub struct FuzzyParams {
 ///     error_range_pct: 100.0, change_range_pct: 200.0, output_range_pct: 100.0,
 ///     defuzzifier: Defuzzifier::WeightedAverage }).unwrap();
 /// let input = ControlInput { time_s: 10.0, dt_s: 0.05, force_n: 300.0, target_force_n: 300.0,
-///     programmed_feed_mm_min: 1500.0, applied_override_pct: 100.0, time_since_spindle_start_s: 10.0 };
+///     programmed_feed_mm_min: 1500.0, applied_override_pct: 100.0, time_since_start_s: 10.0 };
 /// assert_eq!(c.step(&input), 100.0); // on target: ZO, ZO → ZO
 /// ```
 #[derive(Debug, Clone)]

@@ -2,6 +2,9 @@
 
 use wasm_bindgen::JsCast;
 
+use crate::closed_loop::config::RunConfiguration;
+use crate::closed_loop::lab::RunSpec;
+
 /// Offers `text` as a download named `file_name`. Returns a message if the browser refused.
 pub fn download_text(file_name: &str, mime: &str, text: &str) -> Result<(), String> {
     let fail = |what: &str| format!("could not save {file_name}: {what}");
@@ -23,6 +26,14 @@ pub fn download_text(file_name: &str, mime: &str, text: &str) -> Result<(), Stri
     anchor.click();
     let _ = web_sys::Url::revoke_object_url(&url);
     Ok(())
+}
+
+/// Offers `runs` as `cutlab-config.json`, with the page's link: the file `cutlab sim --config`
+/// and `cutlab compare --config` run again in a terminal.
+pub fn download_configuration(runs: Vec<RunSpec>) -> Result<(), String> {
+    let link = leptos::prelude::window().location().href().ok();
+    let text = RunConfiguration::new(runs, link).to_json();
+    download_text("cutlab-config.json", "application/json", &text)
 }
 
 /// Offers a canvas's pixels as a PNG download named `file_name`.

@@ -52,6 +52,9 @@ pub struct ScenarioForm {
 }
 
 /// The plant-edit fields: (query key, default text).
+/// The preset a fresh form shows.
+const DEFAULT_PRESET: &str = "kim-step-doc";
+
 const PLANT_KEYS: [&str; 7] = [
     "material",
     "rpm",
@@ -78,72 +81,72 @@ pub struct ScenarioChoice {
 impl ScenarioForm {
     /// A form with the defaults, then whatever `query` says.
     pub fn new(query: &[(String, String)]) -> Self {
-        let get = |key: &str, default: &str| {
-            query
-                .iter()
-                .find(|(k, _)| k == key)
-                .map_or(default.to_string(), |(_, v)| v.clone())
+        let blank = || RwSignal::new(String::new());
+        let form = Self {
+            preset: blank(),
+            seed: blank(),
+            target: blank(),
+            max_override: blank(),
+            period: blank(),
+            filter_order: blank(),
+            spindle_cutoff: blank(),
+            feed_cutoff: blank(),
+            material: blank(),
+            rpm: blank(),
+            feed: blank(),
+            depth_scale: blank(),
+            diameter: blank(),
+            teeth: blank(),
+            noise: blank(),
         };
-        Self {
-            preset: RwSignal::new(get("preset", Preset::KimStepDoc.name())),
-            seed: RwSignal::new(get("seed", "1")),
-            target: RwSignal::new(get("target", "")),
-            max_override: RwSignal::new(get("max_override", "150")),
-            period: RwSignal::new(get("period", "")),
-            filter_order: RwSignal::new(get("filter_order", "4")),
-            spindle_cutoff: RwSignal::new(get("spindle_cutoff", "260")),
-            feed_cutoff: RwSignal::new(get("feed_cutoff", "50")),
-            material: RwSignal::new(get("material", "")),
-            rpm: RwSignal::new(get("rpm", "")),
-            feed: RwSignal::new(get("feed", "")),
-            depth_scale: RwSignal::new(get("depth_scale", "1")),
-            diameter: RwSignal::new(get("diameter", "")),
-            teeth: RwSignal::new(get("teeth", "")),
-            noise: RwSignal::new(get("noise", "")),
+        for (key, signal, default) in form.fields() {
+            let typed = query.iter().find(|(k, _)| k == key).map(|(_, v)| v.clone());
+            signal.set(typed.unwrap_or_else(|| default.to_string()));
         }
+        form
     }
 
-    /// The query pairs that reproduce this form.
-    pub fn query(&self) -> Vec<(String, String)> {
-        let mut q = vec![
-            ("preset".to_string(), self.preset.get()),
-            ("seed".to_string(), self.seed.get()),
-        ];
-        if !self.target.get().trim().is_empty() {
-            q.push(("target".into(), self.target.get()));
-        }
-        q.push(("max_override".into(), self.max_override.get()));
-        for (key, signal, default) in [
+    /// Every field with its query key and default text. Blank keeps the preset's value; the
+    /// preset, seed and override limit are always written to the query.
+    fn fields(&self) -> [(&'static str, RwSignal<String>, &'static str); 15] {
+        [
+            ("preset", self.preset, DEFAULT_PRESET),
+            ("seed", self.seed, "1"),
+            ("target", self.target, ""),
+            ("max_override", self.max_override, "150"),
             ("period", self.period, ""),
             ("filter_order", self.filter_order, "4"),
             ("spindle_cutoff", self.spindle_cutoff, "260"),
             ("feed_cutoff", self.feed_cutoff, "50"),
-        ] {
-            let text = signal.get();
-            if text.trim() != default {
-                q.push((key.into(), text));
-            }
-        }
-        for (key, signal) in PLANT_KEYS.iter().zip(self.plant_signals()) {
-            let text = signal.get();
-            let default = if *key == "depth_scale" { "1" } else { "" };
-            if text.trim() != default {
-                q.push((key.to_string(), text));
-            }
-        }
-        q
+            (PLANT_KEYS[0], self.material, ""),
+            (PLANT_KEYS[1], self.rpm, ""),
+            (PLANT_KEYS[2], self.feed, ""),
+            (PLANT_KEYS[3], self.depth_scale, "1"),
+            (PLANT_KEYS[4], self.diameter, ""),
+            (PLANT_KEYS[5], self.teeth, ""),
+            (PLANT_KEYS[6], self.noise, ""),
+        ]
     }
 
-    fn plant_signals(&self) -> [RwSignal<String>; 7] {
-        [
-            self.material,
-            self.rpm,
-            self.feed,
-            self.depth_scale,
-            self.diameter,
-            self.teeth,
-            self.noise,
-        ]
+    /// Every field back to its default, on `preset`: a one-click experiment starts from the
+    /// paper's own values, not from edits made for another preset.
+    pub fn reset_to(&self, preset: Preset) {
+        for (_, signal, default) in self.fields() {
+            signal.set(default.to_string());
+        }
+        self.preset.set(preset.name().to_string());
+    }
+
+    /// The query pairs that reproduce this form.
+    pub fn query(&self) -> Vec<(String, String)> {
+        self.fields()
+            .into_iter()
+            .filter_map(|(key, signal, default)| {
+                let text = signal.get();
+                let always = matches!(key, "preset" | "seed" | "max_override");
+                (always || text.trim() != default).then(|| (key.to_string(), text))
+            })
+            .collect()
     }
 
     /// Parses the plant edits; blank fields keep the preset's values.
@@ -261,7 +264,12 @@ impl ScenarioForm {
         };
         let spindle_cutoff = cutoff("spindle_cutoff", self.spindle_cutoff.get());
         let feed_cutoff = cutoff("feed_cutoff", self.feed_cutoff.get());
-        let plant = self.parse_plant(&mut errors);
+        // The machine fields are hidden for presets without a mill; what they hold then must
+        // neither block the run nor change it.
+        let plant = match preset {
+            Some(p) if p.scenario().is_some() => self.parse_plant(&mut errors),
+            _ => PlantEdits::default(),
+        };
         match (preset, seed, target, max_override) {
             (Some(preset), Some(seed), Some(target), Some(max)) if errors.is_empty() => {
                 Ok(ScenarioChoice {
@@ -485,6 +493,20 @@ impl ControllerForm {
             id_prefix,
             rule_table: RwSignal::new(rule_table),
         }
+    }
+
+    /// `kind` with its default parameters and built-in rules.
+    pub fn reset_to(&self, kind: ControllerKind) {
+        self.kind.set(kind.name().to_string());
+        self.values.update(|values| {
+            for p in kind.params() {
+                values.insert(
+                    (kind.name().to_string(), p.key.to_string()),
+                    p.default.to_string(),
+                );
+            }
+        });
+        self.rule_table.set(None);
     }
 
     /// Query pairs for the chosen controller and its non-default parameters.

@@ -189,16 +189,11 @@ pub fn RunCharts(
     }
 }
 
-fn format_metric(v: Option<f64>) -> String {
-    match v {
-        Some(v) if v.is_finite() => {
-            if v.fract() == 0.0 || v.abs() >= 100.0 {
-                format!("{v:.0}")
-            } else {
-                format!("{v:.2}")
-            }
-        }
-        _ => "—".to_string(),
+fn format_number(v: f64) -> String {
+    if v.fract() == 0.0 || v.abs() >= 100.0 {
+        format!("{v:.0}")
+    } else {
+        format!("{v:.2}")
     }
 }
 
@@ -229,7 +224,7 @@ pub fn MetricsTable(
                         .iter()
                         .map(|row| {
                             let values: Vec<Option<f64>> = runs.iter().map(|(_, r)| (row.value)(r)).collect();
-                            let marks = best(&values, row.better, |v| format_metric(Some(v)));
+                            let marks = best(&values, row.better, format_number);
                             view! {
                                 <tr>
                                     <th scope="row">{row.heading()}</th>
@@ -239,7 +234,7 @@ pub fn MetricsTable(
                                         .map(|(v, is_best)| {
                                             view! {
                                                 <td class:best=is_best>
-                                                    {format_metric(v)}
+                                                    {row.show(v, format_number)}
                                                     {is_best.then(|| view! { <span class="best-mark" aria-label="best">" ★"</span> })}
                                                 </td>
                                             }

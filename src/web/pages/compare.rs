@@ -6,8 +6,11 @@ use std::time::Duration;
 use leptos::prelude::*;
 
 use crate::closed_loop::lab::{RunResult, RunSpec};
+use crate::closed_loop::metrics::metrics_csv_columns;
+use crate::closed_loop::trace::write_csv_runs;
 use crate::control::registry::ControllerKind;
 use crate::plant::Preset;
+use crate::web::components::download::{download_configuration, download_text};
 use crate::web::components::run_form::{
     ControllerFields, ControllerForm, MachineAndSignalFields, ScenarioFields, ScenarioForm,
 };
@@ -27,7 +30,7 @@ struct PaperComparison {
     controllers: &'static [ControllerKind],
 }
 
-const PAPER_COMPARISONS: [PaperComparison; 4] = [
+const PAPER_COMPARISONS: [PaperComparison; 5] = [
     PaperComparison {
         label: "Paper 003: fixed feed vs threshold control over DOC steps",
         preset: Preset::KimStepDoc,
@@ -37,6 +40,14 @@ const PAPER_COMPARISONS: [PaperComparison; 4] = [
         label: "Paper 003: across the material change",
         preset: Preset::KimMaterialTaper,
         controllers: &[ControllerKind::Fixed, ControllerKind::Threshold],
+    },
+    PaperComparison {
+        label: "Paper 002: experience-based vs dynamics-based fuzzy rules",
+        preset: Preset::LiuCurrentStep,
+        controllers: &[
+            ControllerKind::FuzzyExperience,
+            ControllerKind::FuzzyDynamics,
+        ],
     },
     PaperComparison {
         label: "Paper 001: adaptive control at DOC 4 mm",
@@ -129,10 +140,8 @@ pub fn ComparePage() -> impl IntoView {
             .unwrap_or_default()
             .into_iter()
             .enumerate()
-            .map(|(i, r)| {
-                let label = forms[i].kind.get_untracked();
-                (format!("{}: {label}", VARIANT_NAMES[i]), r)
-            })
+            .zip(VARIANT_NAMES)
+            .map(|((_, r), variant)| (format!("{variant}: {}", r.spec.controller.kind().name()), r))
             .collect::<Vec<NamedRun>>()
     });
     // Every variant shares the scenario, so one set of reference runs serves them all.
@@ -146,6 +155,48 @@ pub fn ComparePage() -> impl IntoView {
     });
     let savings_for_runs = savings.clone();
     let runs = Signal::derive(move || savings_for_runs.apply_all(results.get()));
+
+    let (export_error, set_export_error) = signal(None::<String>);
+    let export_traces = move |_| {
+        let shown = runs.get_untracked();
+        let named: Vec<(&str, &crate::closed_loop::trace::Trace)> =
+            shown.iter().map(|(n, r)| (n.as_str(), &r.trace)).collect();
+        let mut bytes = Vec::new();
+        let outcome = write_csv_runs(&named, &mut bytes)
+            .map_err(|e| e.to_string())
+            .and_then(|()| {
+                download_text(
+                    "cutlab-compare-traces.csv",
+                    "text/csv",
+                    &String::from_utf8_lossy(&bytes),
+                )
+            });
+        set_export_error.set(outcome.err());
+    };
+    let export_metrics = move |_| {
+        let shown = runs.get_untracked();
+        let named: Vec<(&str, &crate::closed_loop::metrics::Metrics)> = shown
+            .iter()
+            .map(|(n, r)| (n.as_str(), &r.metrics))
+            .collect();
+        set_export_error.set(
+            download_text(
+                "cutlab-compare-metrics.csv",
+                "text/csv",
+                &metrics_csv_columns(&named),
+            )
+            .err(),
+        );
+    };
+    let export_config = move |_| {
+        set_export_error.set(
+            specs
+                .get_untracked()
+                .ok_or_else(|| "fix the settings marked above first".to_string())
+                .and_then(download_configuration)
+                .err(),
+        );
+    };
 
     view! {
         <section class="page" aria-labelledby="compare-title">
@@ -167,11 +218,10 @@ pub fn ComparePage() -> impl IntoView {
                                             type="button"
                                             class="preset"
                                             on:click=move |_| {
-                                                scenario.preset.set(c.preset.name().to_string());
-                                                scenario.target.set(String::new());
+                                                scenario.reset_to(c.preset);
                                                 count.set(c.controllers.len().clamp(2, 4));
                                                 for (form, kind) in forms.iter().zip(c.controllers) {
-                                                    form.kind.set(kind.name().to_string());
+                                                    form.reset_to(*kind);
                                                 }
                                             }
                                         >
@@ -201,6 +251,21 @@ pub fn ComparePage() -> impl IntoView {
                         </button>
                     </div>
                     <RunProgress runner=runner.clone() />
+                    <fieldset>
+                        <legend>"Export"</legend>
+                        <div class="button-row">
+                            <button type="button" on:click=export_traces disabled=move || runs.with(Vec::is_empty)>
+                                "Traces (CSV)"
+                            </button>
+                            <button type="button" on:click=export_metrics disabled=move || runs.with(Vec::is_empty)>
+                                "Metrics (CSV)"
+                            </button>
+                            <button type="button" on:click=export_config disabled=move || specs.get().is_none()>
+                                "Configuration (JSON)"
+                            </button>
+                        </div>
+                        {move || export_error.get().map(|e| view! { <p class="run-error" role="alert">{e}</p> })}
+                    </fieldset>
                 </form>
                 <div class="results">
                     <RunCharts runs=runs />

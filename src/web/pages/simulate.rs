@@ -9,7 +9,7 @@ use crate::closed_loop::lab::{RunResult, RunSpec};
 use crate::closed_loop::metrics::metrics_csv;
 use crate::closed_loop::trace::write_csv;
 use crate::control::registry::ControllerKind;
-use crate::web::components::download::download_text;
+use crate::web::components::download::{download_configuration, download_text};
 use crate::web::components::run_form::{
     ControllerFields, ControllerForm, MachineAndSignalFields, ScenarioFields, ScenarioForm,
 };
@@ -73,12 +73,7 @@ pub fn SimulatePage() -> impl IntoView {
     let runs = Signal::derive(move || {
         result
             .get()
-            .map(|r| {
-                let name = spec
-                    .with_untracked(|s| s.as_ref().map(|s| s.controller.kind().label().to_string()))
-                    .unwrap_or_else(|| "run".into());
-                vec![(name, r) as NamedRun]
-            })
+            .map(|r| vec![(r.spec.controller.kind().label().to_string(), r) as NamedRun])
             .unwrap_or_default()
     });
     let (export_error, set_export_error) = signal(None::<String>);
@@ -117,21 +112,12 @@ pub fn SimulatePage() -> impl IntoView {
         }
     };
     let export_config = move |_| {
-        let config = spec.get_untracked().map(|s| {
-            serde_json::json!({
-                "preset": s.preset.name(),
-                "seed": s.seed,
-                "controller": s.controller,
-                "target_force_n": s.settings.target_force_n,
-                "max_override_pct": s.settings.max_override_pct,
-                "link": window().location().href().unwrap_or_default(),
-            })
-        });
-        if let Some(c) = config {
-            let text = serde_json::to_string_pretty(&c).unwrap_or_default();
-            set_export_error
-                .set(download_text("cutlab-config.json", "application/json", &text).err());
-        }
+        set_export_error.set(
+            spec.get_untracked()
+                .ok_or_else(|| "fix the settings marked above first".to_string())
+                .and_then(|s| download_configuration(vec![s]))
+                .err(),
+        );
     };
     let runner_for_button = runner.clone();
     let run_now = move |_| {
@@ -169,7 +155,9 @@ pub fn SimulatePage() -> impl IntoView {
                             <button type="button" on:click=export_metrics disabled=move || result.get().is_none()>
                                 "Metrics (JSON)"
                             </button>
-                            <button type="button" on:click=export_config>"Configuration (JSON)"</button>
+                            <button type="button" on:click=export_config disabled=move || spec.get().is_none()>
+                                "Configuration (JSON)"
+                            </button>
                         </div>
                         {move || export_error.get().map(|e| view! { <p class="run-error" role="alert">{e}</p> })}
                     </fieldset>

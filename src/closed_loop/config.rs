@@ -1,0 +1,221 @@
+//! A saved configuration: the runs a page made, as JSON a person can read, keep beside a report
+//! and run again — in the browser (its link) or in a terminal (`cutlab sim --config FILE`,
+//! `cutlab compare --config FILE`).
+//!
+//! ```json
+//! {
+//!   "format": "cutlab-runs",
+//!   "version": 1,
+//!   "link": "http://127.0.0.1:8080/#/simulate?preset=kim-step-doc&…",
+//!   "runs": [
+//!     { "preset": "kim-step-doc", "controller": { "kind": "threshold", "params": { … } },
+//!       "seed": 1, "settings": { "target_force_n": 600.0 }, "plant": { "spindle_rpm": 1200.0 } }
+//!   ]
+//! }
+//! ```
+//!
+//! Each run is a [`RunSpec`]: settings and machine edits left out keep the preset's values, and
+//! every controller parameter is written out, so a later change of a default does not change what
+//! a saved file means. Unknown fields are errors, not silently ignored: a misspelt
+//! `"target_force"` would otherwise run at the preset's target.
+
+use std::fmt;
+
+use serde::{Deserialize, Serialize};
+
+use super::lab::RunSpec;
+
+/// The `format` every saved configuration carries.
+pub const FORMAT: &str = "cutlab-runs";
+/// The version this build writes and reads.
+pub const VERSION: u32 = 1;
+
+/// Runs saved together.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RunConfiguration {
+    /// Always [`FORMAT`]: tells a cutlab configuration from any other JSON.
+    pub format: String,
+    /// Always [`VERSION`] for files this build writes.
+    pub version: u32,
+    /// The page link that reproduces the runs in the browser, when saved from one.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub link: Option<String>,
+    /// The runs, in the order the page showed them.
+    pub runs: Vec<RunSpec>,
+}
+
+/// Why a saved configuration could not be read.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct ConfigError(pub String);
+
+impl fmt::Display for ConfigError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(&self.0)
+    }
+}
+
+impl std::error::Error for ConfigError {}
+
+impl RunConfiguration {
+    /// A configuration of `runs`, saved from `link` if any.
+    pub fn new(runs: Vec<RunSpec>, link: Option<String>) -> Self {
+        Self {
+            format: FORMAT.to_string(),
+            version: VERSION,
+            link,
+            runs,
+        }
+    }
+
+    /// Pretty-printed JSON.
+    pub fn to_json(&self) -> String {
+        // Serialising plain structs of numbers and strings cannot fail; a non-finite number
+        // becomes null, which reading then refuses with its place.
+        serde_json::to_string_pretty(self).unwrap_or_default()
+    }
+
+    /// Reads a configuration, naming the line and column of anything wrong.
+    ///
+    /// ```
+    /// use cutlab::closed_loop::config::RunConfiguration;
+    /// use cutlab::closed_loop::lab::RunSpec;
+    /// use cutlab::control::registry::ControllerKind;
+    /// use cutlab::plant::Preset;
+    /// let saved = RunConfiguration::new(vec![RunSpec::new(Preset::ManeeratDoc1, ControllerKind::Pi)], None);
+    /// assert_eq!(RunConfiguration::from_json(&saved.to_json()), Ok(saved));
+    /// let e = RunConfiguration::from_json(r#"{"format": "cutlab-runs", "version": 1, "runs": [
+    ///     {"preset": "kim-step-dock", "controller": {"kind": "pi"}, "seed": 1}]}"#).unwrap_err();
+    /// assert!(e.to_string().contains("unknown preset \"kim-step-dock\""), "{e}");
+    /// assert!(e.to_string().contains("line 2"), "{e}");
+    /// ```
+    pub fn from_json(text: &str) -> Result<Self, ConfigError> {
+        // The envelope first, so a file of another kind gets a message about that rather than
+        // about its first field.
+        #[derive(Deserialize)]
+        struct Envelope {
+            format: Option<String>,
+            version: Option<serde_json::Value>,
+        }
+        let envelope: Envelope = serde_json::from_str(text)
+            .map_err(|e| ConfigError(format!("not a cutlab configuration: {e}")))?;
+        if envelope.format.as_deref() != Some(FORMAT) {
+            return Err(ConfigError(format!(
+                "not a cutlab configuration: \"format\" must be \"{FORMAT}\", found {}",
+                envelope
+                    .format
+                    .map_or("nothing".to_string(), |f| format!("{f:?}"))
+            )));
+        }
+        match envelope
+            .version
+            .as_ref()
+            .and_then(serde_json::Value::as_u64)
+        {
+            Some(v) if v == u64::from(VERSION) => {}
+            Some(v) if v > u64::from(VERSION) => {
+                return Err(ConfigError(format!(
+                    "this configuration is version {v}, written by a newer cutlab; this one reads \
+                     version {VERSION}"
+                )))
+            }
+            _ => {
+                return Err(ConfigError(format!(
+                    "\"version\" must be {VERSION}, found {}",
+                    envelope
+                        .version
+                        .map_or("nothing".to_string(), |v| v.to_string())
+                )))
+            }
+        }
+        let config: Self = serde_json::from_str(text).map_err(|e| ConfigError(e.to_string()))?;
+        if config.runs.is_empty() {
+            return Err(ConfigError("\"runs\" is empty: nothing to run".into()));
+        }
+        Ok(config)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::control::registry::{ControllerConfig, ControllerKind};
+    use crate::plant::materials::Material;
+    use crate::plant::Preset;
+
+    fn edited_spec() -> RunSpec {
+        let mut controller = ControllerConfig::new(ControllerKind::Pi);
+        controller.set_text("kp=0.25").unwrap();
+        let mut spec = RunSpec::new(Preset::KimMaterialTaper, ControllerKind::Pi);
+        spec.controller = controller;
+        spec.seed = u64::MAX;
+        spec.settings.target_force_n = Some(612.5);
+        spec.settings.lowpass_order = Some(6);
+        spec.plant.material = Some(Material::Gc30);
+        spec.plant.teeth = Some(4);
+        spec
+    }
+
+    #[test]
+    fn every_field_survives_the_round_trip() {
+        let saved = RunConfiguration::new(
+            vec![
+                edited_spec(),
+                RunSpec::new(Preset::WangBrakeBench, ControllerKind::Fixed),
+            ],
+            Some("http://127.0.0.1:8080/#/compare?preset=kim-material-taper".into()),
+        );
+        let text = saved.to_json();
+        assert_eq!(RunConfiguration::from_json(&text), Ok(saved));
+        // Names a person reads, not Rust's variant names.
+        assert!(
+            text.contains("\"preset\": \"kim-material-taper\""),
+            "{text}"
+        );
+        assert!(text.contains("\"material\": \"gc30\""), "{text}");
+        // Settings left at the preset's default are left out.
+        assert!(!text.contains("control_period_s"), "{text}");
+    }
+
+    #[test]
+    fn mistakes_are_errors_that_say_what_and_where() {
+        let cases = [
+            ("[]", "not a cutlab configuration"),
+            (
+                r#"{"format": "fll", "version": 1, "runs": []}"#,
+                "\"format\" must be",
+            ),
+            (
+                r#"{"format": "cutlab-runs", "version": 9, "runs": []}"#,
+                "newer cutlab",
+            ),
+            (
+                r#"{"format": "cutlab-runs", "runs": []}"#,
+                "\"version\" must be 1",
+            ),
+            (
+                r#"{"format": "cutlab-runs", "version": 1, "runs": []}"#,
+                "nothing to run",
+            ),
+            (
+                r#"{"format": "cutlab-runs", "version": 1, "runs": [{"preset": "kim-step-doc",
+                 "controller": {"kind": "pi"}, "seed": 1, "settings": {"target_force": 5}}]}"#,
+                "unknown field `target_force`",
+            ),
+            (
+                r#"{"format": "cutlab-runs", "version": 1, "runs": [{"preset": "kim-step-doc",
+                 "controller": {"kind": "pi", "params": {"kp": -4}}, "seed": 1}]}"#,
+                "kp",
+            ),
+            (
+                r#"{"format": "cutlab-runs", "version": 1, "runs": [{"preset": "kim-step-doc",
+                 "controller": {"kind": "pi"}, "seed": -1}]}"#,
+                "line 2",
+            ),
+        ];
+        for (text, expected) in cases {
+            let e = RunConfiguration::from_json(text).unwrap_err().to_string();
+            assert!(e.contains(expected), "{text}\n→ {e}");
+        }
+    }
+}
