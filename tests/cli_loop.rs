@@ -113,7 +113,7 @@ fn compare_marks_the_best_value_of_each_row() {
 
 #[test]
 fn bad_input_gives_one_line_that_names_it() {
-    let cases: [(&[&str], &str); 7] = [
+    let cases: [(&[&str], &str); 12] = [
         (
             &[
                 "sim",
@@ -178,6 +178,55 @@ fn bad_input_gives_one_line_that_names_it() {
         (
             &["calibrate", "/nonexistent/log.csv"],
             "/nonexistent/log.csv: cannot read",
+        ),
+        (
+            &["calibrate", "log.csv", "--gear-change-rpm", "-5"],
+            "--gear-change-rpm: must be a positive speed",
+        ),
+        (
+            &[
+                "sim",
+                "--scenario",
+                "kim-step-doc",
+                "--controller",
+                "pi",
+                "extra",
+            ],
+            "unexpected argument \"extra\"",
+        ),
+        (
+            &[
+                "compare",
+                "--scenario",
+                "kim-step-doc",
+                "--controllers",
+                "pi,,mrac",
+            ],
+            "--controllers: entry 2 of \"pi,,mrac\" is empty",
+        ),
+        (
+            &[
+                "sim",
+                "--scenario",
+                "kim-step-doc",
+                "--controller",
+                "pi",
+                "--max-override",
+                "1e6",
+            ],
+            "highest override 1000000 % is more than this machine applies (255 %)",
+        ),
+        (
+            &[
+                "sim",
+                "--scenario",
+                "liu-current-step",
+                "--controller",
+                "pi",
+                "--material",
+                "aluminium",
+            ],
+            "plant: machine and cut edits apply to the mill presets",
         ),
     ];
     for (args, expected) in cases {

@@ -81,9 +81,17 @@ fn force_takes_explicit_coefficients() {
 
 #[test]
 fn force_errors_are_one_line_and_name_the_option() {
+    // SLOT with `extra`'s options: a value for an option SLOT has replaces SLOT's (an option
+    // given twice is an error of its own).
     let with = |extra: &[&'static str]| {
         let mut args = SLOT.to_vec();
-        args.extend(extra.iter().copied());
+        let mut rest = extra.iter().copied();
+        while let Some(arg) = rest.next() {
+            match args.iter().position(|a| *a == arg) {
+                Some(i) => args[i + 1] = rest.next().unwrap(),
+                None => args.push(arg),
+            }
+        }
         cutlab(&args).0.unwrap_err()
     };
     let cases: &[(&[&str], &str)] = &[
@@ -106,10 +114,22 @@ fn force_errors_are_one_line_and_name_the_option() {
             &["--material", "sm45c", "--runout-um", "5000"],
             "--runout-um",
         ),
+        (
+            &[
+                "--material",
+                "sm45c",
+                "--helix-deg",
+                "60",
+                "--axial-depth-mm",
+                "1e6",
+            ],
+            "--axial-depth-mm: 1000000 mm is deeper than",
+        ),
     ];
     for (extra, option) in cases {
         let e = with(extra);
         assert!(e.contains(option), "{extra:?}: {e}");
+        assert!(!e.contains("given twice"), "{e}");
         assert!(!e.contains('\n'), "{e}");
     }
     let (result, _) = cutlab(&["force", "--teeth", "2"]);

@@ -329,3 +329,21 @@ fn paper_000_hall_sensor_reads_through_its_500_ohm_burden() {
     assert_close("u", r[0], 3.0, tol);
     assert_close("w = −(u + v)", r[2], -(r[0] + r[1]), 1e-12);
 }
+
+#[test]
+fn the_estimator_and_the_drive_agree_on_the_gear_at_the_change_speed() {
+    use cutlab::estimation::speed::in_high_speed_range;
+    let c = SpindleDriveConfig::default();
+    for rpm in [
+        c.gear_change_rpm - 0.1,
+        c.gear_change_rpm,
+        c.gear_change_rpm + 0.1,
+    ] {
+        let drive_high_speed = c.gear_for(rpm) == SpindleGear::Low;
+        assert_eq!(
+            in_high_speed_range(rpm, c.gear_change_rpm),
+            drive_high_speed,
+            "{rpm} rpm"
+        );
+    }
+}

@@ -162,6 +162,20 @@ impl Options {
         &self.positionals
     }
 
+    /// An error naming the first positional argument, for commands that take none; `hint` (if
+    /// not empty) says where such input goes instead.
+    pub fn reject_positionals(&self, hint: &str) -> Result<(), CliError> {
+        match self.positionals.first() {
+            Some(extra) if hint.is_empty() => {
+                Err(CliError::new(format!("unexpected argument {extra:?}")))
+            }
+            Some(extra) => Err(CliError::new(format!(
+                "unexpected argument {extra:?} ({hint})"
+            ))),
+            None => Ok(()),
+        }
+    }
+
     /// The value of `--name` parsed as `T`, or `None` if absent.
     pub fn get<T: FromStr>(&self, name: &str) -> Result<Option<T>, CliError> {
         self.text(name)

@@ -43,6 +43,13 @@ impl Table {
             .split(',')
             .map(|h| h.trim().trim_matches('"').to_string())
             .collect();
+        for (i, name) in header.iter().enumerate() {
+            if header[..i].contains(name) {
+                return Err(CliError::new(format!(
+                    "{file}: line 1: column {name:?} appears twice; which one to fit is ambiguous"
+                )));
+            }
+        }
         let mut columns = vec![Vec::new(); header.len()];
         for (index, line) in lines {
             let cells: Vec<&str> = line.split(',').collect();
@@ -114,6 +121,11 @@ pub fn run(args: &[String], io: &mut Io<'_>) -> Result<(), CliError> {
         return Err(CliError::new("name exactly one CSV file to calibrate from"));
     };
     let gear_change_rpm: f64 = options.get_or("gear-change-rpm", GEAR_CHANGE_RPM)?;
+    if !(gear_change_rpm.is_finite() && gear_change_rpm > 0.0) {
+        return Err(CliError::new(format!(
+            "--gear-change-rpm: must be a positive speed, got {gear_change_rpm}"
+        )));
+    }
     let text = std::fs::read_to_string(file)
         .map_err(|e| CliError::new(format!("{file}: cannot read: {e}")))?;
     let table = Table::parse(&text, file)?;

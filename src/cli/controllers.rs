@@ -27,9 +27,7 @@ pub fn run(args: &[String], io: &mut Io<'_>) -> Result<(), CliError> {
         );
     }
     let options = Options::parse(args, OPTIONS)?;
-    if let Some(extra) = options.positionals().first() {
-        return Err(CliError::new(format!("unexpected argument {extra:?}")));
-    }
+    options.reject_positionals("")?;
     if options.flag("json") {
         let listing: Vec<ControllerListing> = ControllerKind::ALL
             .iter()

@@ -115,7 +115,7 @@ fn design(args: &[String], io: &mut Io<'_>) -> Result<(), CliError> {
         );
     }
     let options = Options::parse(args, DESIGN_OPTIONS)?;
-    reject_positionals(&options)?;
+    options.reject_positionals("samples come on stdin")?;
     let sos = design_from(&options)?;
     write_sos_json(io.stdout, &sos)
 }
@@ -130,7 +130,7 @@ fn apply(args: &[String], io: &mut Io<'_>) -> Result<(), CliError> {
         );
     }
     let options = Options::parse(args, APPLY_OPTIONS)?;
-    reject_positionals(&options)?;
+    options.reject_positionals("samples come on stdin")?;
     let sos = design_from(&options)?;
     let channels: usize = options.get_or("channels", 1)?;
     if channels == 0 {
@@ -159,15 +159,6 @@ fn apply(args: &[String], io: &mut Io<'_>) -> Result<(), CliError> {
     }
     io.stdout.flush()?;
     Ok(())
-}
-
-fn reject_positionals(options: &Options) -> Result<(), CliError> {
-    match options.positionals().first() {
-        Some(extra) => Err(CliError::new(format!(
-            "unexpected argument {extra:?} (samples come on stdin)"
-        ))),
-        None => Ok(()),
-    }
 }
 
 /// The design the options describe; errors name the option.

@@ -6,7 +6,7 @@ use serde::Serialize;
 use super::{help_text_for, wants_help, write_json, CliError, Io, OptionSpec, Options};
 use crate::plant::materials::{CuttingCoefficients, Material};
 use crate::plant::mechanics::{
-    mean_forces, Cutter, Immersion, MillingForceModel, MillingMode, ToolForces,
+    mean_forces, Cutter, Immersion, MillingForceModel, MillingMode, ToolForces, MAX_EDGE_TURNS,
 };
 use crate::plant::PlantError;
 
@@ -205,9 +205,7 @@ pub fn run(args: &[String], io: &mut Io<'_>) -> Result<(), CliError> {
         );
     }
     let options = Options::parse(args, OPTIONS)?;
-    if let Some(extra) = options.positionals().first() {
-        return Err(CliError::new(format!("unexpected argument {extra:?}")));
-    }
+    options.reject_positionals("")?;
     let diameter_mm = positive_option(&options, "diameter-mm")?;
     let teeth: u32 = options.require("teeth")?;
     let helix_deg: f64 = options.get_or("helix-deg", 0.0)?;
@@ -217,6 +215,16 @@ pub fn run(args: &[String], io: &mut Io<'_>) -> Result<(), CliError> {
         .and_then(|c| c.with_runout(runout_um * 1e-3, runout_deg))
         .map_err(option_error)?;
     let axial_depth_mm = positive_option(&options, "axial-depth-mm")?;
+    if axial_depth_mm > cutter.max_axial_depth_mm() {
+        return Err(CliError::new(format!(
+            "--axial-depth-mm: {axial_depth_mm} mm is deeper than a {} mm cutter with a {}° helix \
+             can be modelled (at most {:.0} mm, where the edge wraps {} turns)",
+            cutter.diameter_mm,
+            cutter.helix_deg,
+            cutter.max_axial_depth_mm(),
+            MAX_EDGE_TURNS - 2.0
+        )));
+    }
     let mode_text: String = options.require("mode")?;
     let mode = MillingMode::from_name(&mode_text).ok_or_else(|| {
         CliError::new(format!(

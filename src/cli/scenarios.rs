@@ -83,10 +83,11 @@ pub fn run(args: &[String], io: &mut Io<'_>) -> Result<(), CliError> {
         );
     }
     let options = Options::parse(args, OPTIONS)?;
-    if let Some(extra) = options.positionals().first() {
-        return Err(CliError::new(format!("unexpected argument {extra:?}")));
-    }
+    options.reject_positionals("")?;
     match options.text("run") {
+        Some(_) if options.flag("json") => Err(CliError::new(
+            "--json lists the presets; with --run the samples are CSV (use --summary for totals)",
+        )),
         Some(name) => run_preset(preset_named(name)?, &options, io),
         None => {
             for only_with_run in ["seed", "override", "every", "max-s", "summary"] {

@@ -295,6 +295,7 @@ pub fn run_sim(args: &[String], io: &mut Io<'_>) -> Result<(), CliError> {
         );
     }
     let options = Options::parse(args, &options_spec)?;
+    options.reject_positionals("")?;
     let spec = match runs_from_config(&options, &run_defining_options(&["controller", "set"]))? {
         Some(mut runs) if runs.len() == 1 => runs.remove(0),
         Some(runs) => {
@@ -374,18 +375,22 @@ pub fn run_compare(args: &[String], io: &mut Io<'_>) -> Result<(), CliError> {
         );
     }
     let options = Options::parse(args, &options_spec)?;
+    options.reject_positionals("")?;
     let (base, named) = match runs_from_config(&options, &run_defining_options(&["controllers"]))? {
         Some(runs) => one_scenario(runs)?,
         None => {
             let list: String = options.require("controllers")?;
             let named = list
                 .split(',')
-                .filter(|s| !s.trim().is_empty())
-                .map(|s| Ok((s.trim().to_string(), controller_with_settings(s.trim())?)))
+                .enumerate()
+                .map(|(i, s)| match s.trim() {
+                    "" => Err(CliError::new(format!(
+                        "--controllers: entry {} of {list:?} is empty",
+                        i + 1
+                    ))),
+                    s => Ok((s.to_string(), controller_with_settings(s)?)),
+                })
                 .collect::<Result<Vec<_>, CliError>>()?;
-            if named.is_empty() {
-                return Err(CliError::new("--controllers: name at least one controller"));
-            }
             (
                 spec(&options, ControllerConfig::new(ControllerKind::Fixed))?,
                 named,

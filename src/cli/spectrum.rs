@@ -37,11 +37,7 @@ pub fn run(args: &[String], io: &mut Io<'_>) -> Result<(), CliError> {
         );
     }
     let options = Options::parse(args, OPTIONS)?;
-    if let Some(extra) = options.positionals().first() {
-        return Err(CliError::new(format!(
-            "unexpected argument {extra:?} (samples come on stdin)"
-        )));
-    }
+    options.reject_positionals("samples come on stdin")?;
     let sample_rate_hz: f64 = options.require("fs")?;
     if !(sample_rate_hz.is_finite() && sample_rate_hz > 0.0) {
         return Err(CliError::new(format!(

@@ -8,7 +8,7 @@ use super::metrics::{compute, with_savings, Metrics, MetricsConfig};
 use super::runner::{Calibration, ClosedLoop, Feedback, LoopError, LoopSettings, TeachCut};
 use super::trace::Trace;
 use crate::control::registry::{ControllerConfig, ControllerKind, RunContext};
-use crate::plant::cnc::OverrideMode;
+use crate::plant::cnc::{OverrideMode, MAX_OVERRIDE_PCT};
 use crate::plant::presets::PlantEdits;
 use crate::plant::presets::PlantKind;
 use crate::plant::Preset;
@@ -156,6 +156,16 @@ pub fn default_settings(spec: &RunSpec) -> Result<LoopSettings, LoopError> {
         envelope.min_override_pct = v;
     }
     if let Some(v) = o.max_override_pct {
+        // Above what the machine can apply, the trace would record overrides it never ran.
+        let machine_max = match preset.override_mode() {
+            OverrideMode::Dial(table) => table.positions().into_iter().fold(0.0, f64::max),
+            OverrideMode::WholePercent | OverrideMode::Continuous => MAX_OVERRIDE_PCT,
+        };
+        if !(v <= machine_max) {
+            return Err(LoopError::Setting(format!(
+                "highest override {v} % is more than this machine applies ({machine_max} %)"
+            )));
+        }
         envelope.max_override_pct = v;
     }
     if let Some(v) = o.max_rate_pct_per_s {

@@ -21,6 +21,7 @@
 use serde::Serialize;
 
 use super::least_squares::{fit, Fit, FitError};
+use super::speed::in_high_speed_range;
 
 /// A force estimate and whether its inputs lie inside the calibrated range.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
@@ -208,7 +209,8 @@ impl SpindleCurrentModel {
             let mut end = start + 1;
             while end < order.len()
                 && speed_rpm[order[end]] <= base * (1.0 + SPEED_CLUSTER_TOLERANCE)
-                && (base > gear_change_rpm) == (speed_rpm[order[end]] > gear_change_rpm)
+                && in_high_speed_range(base, gear_change_rpm)
+                    == in_high_speed_range(speed_rpm[order[end]], gear_change_rpm)
             {
                 end += 1;
             }
@@ -251,11 +253,11 @@ impl SpindleCurrentModel {
     /// the same gear, held constant beyond the outermost row. The flag says whether the speed
     /// lies between calibrated rows.
     pub fn line_at(&self, speed_rpm: f64) -> (f64, f64, bool) {
-        let high_range = speed_rpm > self.gear_change_rpm;
+        let high_range = in_high_speed_range(speed_rpm, self.gear_change_rpm);
         let same_gear: Vec<&SpindleSpeedRow> = self
             .rows
             .iter()
-            .filter(|r| (r.speed_rpm > self.gear_change_rpm) == high_range)
+            .filter(|r| in_high_speed_range(r.speed_rpm, self.gear_change_rpm) == high_range)
             .collect();
         let Some(first) = same_gear.first() else {
             // No row in this gear: extrapolate from the nearest row of the other one.

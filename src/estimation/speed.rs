@@ -42,7 +42,7 @@ impl FvSpeedModel {
             if !(p.is_finite() && n.is_finite() && v.is_finite()) || n.abs() < 1.0 {
                 continue;
             }
-            let range = usize::from(p.abs() > gear_change_rpm);
+            let range = usize::from(in_high_speed_range(*p, gear_change_rpm));
             sums[range].0 += n.abs() * v;
             sums[range].1 += n * n;
         }
@@ -57,7 +57,7 @@ impl FvSpeedModel {
     /// The spindle speed for an F/V voltage, in the gear range of the programmed speed. Falls back
     /// to the programmed speed when the range was never calibrated.
     pub fn speed_rpm(&self, fv_voltage_v: f64, programmed_rpm: f64) -> f64 {
-        let slope = if programmed_rpm.abs() > self.gear_change_rpm {
+        let slope = if in_high_speed_range(programmed_rpm, self.gear_change_rpm) {
             self.high_range_v_per_rpm
         } else {
             self.low_range_v_per_rpm
@@ -68,4 +68,17 @@ impl FvSpeedModel {
             programmed_rpm
         }
     }
+}
+
+/// Whether a spindle speed runs in the high-speed gear: at or above the gear-change speed, the
+/// convention of the simulated drive ([`crate::plant::spindle_drive::SpindleDriveConfig::gear_for`])
+/// and of paper 003's machine (900 rpm itself in the 1:1.157 gear).
+///
+/// ```
+/// use cutlab::estimation::speed::in_high_speed_range;
+/// assert!(in_high_speed_range(900.0, 900.0));
+/// assert!(!in_high_speed_range(899.9, 900.0));
+/// ```
+pub fn in_high_speed_range(speed_rpm: f64, gear_change_rpm: f64) -> bool {
+    speed_rpm.abs() >= gear_change_rpm
 }

@@ -69,6 +69,10 @@ use super::materials::CuttingCoefficients;
 use super::{finite, in_range, non_negative, positive, PlantError};
 use crate::math;
 
+/// The most turns of the cutter a helical edge may wrap within the cut (see
+/// [`Cutter::max_axial_depth_mm`]); a real flute wraps less than one.
+pub const MAX_EDGE_TURNS: f64 = 64.0;
+
 /// The most teeth a cutter may have (per-tooth state lives in fixed arrays).
 pub const MAX_TEETH: u32 = 16;
 
@@ -158,6 +162,25 @@ impl Cutter {
     /// Angle between neighbouring teeth, 2π/Z.
     pub fn tooth_pitch_rad(&self) -> f64 {
         TAU / f64::from(self.teeth)
+    }
+
+    /// The deepest cut the force model integrates exactly: a helical edge that wraps more than
+    /// [`MAX_EDGE_TURNS`] turns round the cutter is refused rather than cut short. Unbounded
+    /// for a straight cutter.
+    ///
+    /// ```
+    /// use cutlab::plant::mechanics::Cutter;
+    /// let c = Cutter::new(20.0, 2, 30.0).unwrap();
+    /// assert!(c.max_axial_depth_mm() > 6000.0); // far beyond any flute
+    /// assert!(Cutter::new(20.0, 2, 0.0).unwrap().max_axial_depth_mm().is_infinite());
+    /// ```
+    pub fn max_axial_depth_mm(&self) -> f64 {
+        let lag = self.helix_lag_rad_per_mm();
+        if lag > 0.0 {
+            (MAX_EDGE_TURNS - 2.0) * TAU / lag
+        } else {
+            f64::INFINITY
+        }
     }
 
     /// k_β = 2·tan β / D: how far the edge lags per millimetre of height.
@@ -490,7 +513,7 @@ impl MillingForceModel {
                 let k_max = ((bottom.rad - entry.rad) / TAU).floor();
                 let mut turn = k_min;
                 let mut guard = 0;
-                while turn <= k_max && guard < 64 {
+                while turn <= k_max && guard < MAX_EDGE_TURNS as u32 {
                     let lo_edge = entry.shifted(turn);
                     let hi_edge = exit.shifted(turn);
                     let lo = if lo_edge.rad > top.rad { lo_edge } else { top };

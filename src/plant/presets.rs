@@ -493,8 +493,8 @@ impl Preset {
     ///     assert!(s.truth.is_some() && m.sample_rate_hz() == 10_000.0);
     /// }
     /// ```
-    /// The preset's machine with a user's edits applied (mill presets only; the bench and the
-    /// bond graph ignore them). Edited values are checked like any configuration: an error names
+    /// The preset's machine with a user's edits applied (mill presets only: edits for the bench
+    /// or the bond graph are an error, not silently ignored). Edited values are checked like any configuration: an error names
     /// the field.
     ///
     /// ```
@@ -504,10 +504,22 @@ impl Preset {
     /// assert!(Preset::KimStepDoc.machine_with(1, &edits).is_ok());
     /// let bad = PlantEdits { spindle_rpm: Some(-5.0), ..PlantEdits::default() };
     /// assert!(Preset::KimStepDoc.machine_with(1, &bad).unwrap_err().to_string().contains("spindle"));
+    /// assert!(Preset::LiuCurrentStep.machine_with(1, &edits).is_err());
     /// ```
     pub fn machine_with(self, seed: u64, edits: &PlantEdits) -> Result<PresetMachine, PlantError> {
-        if self.plant_kind() != PlantKind::Mill || *edits == PlantEdits::default() {
+        if *edits == PlantEdits::default() {
             return self.machine(seed);
+        }
+        if self.plant_kind() != PlantKind::Mill {
+            // Ignoring them would run something other than what the user asked for.
+            return Err(PlantError::new(
+                "plant",
+                format!(
+                    "machine and cut edits apply to the mill presets; {} runs {}",
+                    self.name(),
+                    self.plant_kind().label()
+                ),
+            ));
         }
         let Some(mut spec) = self.scenario_spec() else {
             return self.machine(seed);

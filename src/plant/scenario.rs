@@ -376,6 +376,16 @@ impl Scenario {
             from = m.end_mm;
         }
         let depth = Profile::new(&spec.depth_mm, "depth_mm")?;
+        let deepest_mm = spec.depth_mm.iter().map(|p| p.1).fold(0.0, f64::max);
+        if deepest_mm > spec.cutter.max_axial_depth_mm() {
+            return Err(PlantError::new(
+                "depth_mm",
+                format!(
+                    "{deepest_mm} mm is deeper than this cutter's helix can be modelled ({:.0} mm)",
+                    spec.cutter.max_axial_depth_mm()
+                ),
+            ));
+        }
         let width = Profile::new(&spec.width_mm, "width_mm")?;
         let mut regions = Vec::new();
         let mut last_end = f64::NEG_INFINITY;

@@ -184,6 +184,47 @@ impl Engine {
         implication: Norm,
     ) -> Result<Self, FuzzyError> {
         let range_ok = |min: f64, max: f64| min.is_finite() && max.is_finite() && min < max;
+        if outputs.is_empty() {
+            return Err(FuzzyError::new(
+                "the engine has no output variable: there is nothing to infer",
+            ));
+        }
+        // A rule names variables and terms; two of the same name would make it ambiguous.
+        let mut names: Vec<&str> = Vec::new();
+        for name in inputs
+            .iter()
+            .map(|v| v.name.as_str())
+            .chain(outputs.iter().map(|v| v.name.as_str()))
+        {
+            if names.contains(&name) {
+                return Err(FuzzyError::new(format!(
+                    "two variables are named {name}: names must be unique"
+                )));
+            }
+            names.push(name);
+        }
+        let term_names = inputs
+            .iter()
+            .map(|v| {
+                (
+                    &v.name,
+                    v.terms.iter().map(|t| t.name.as_str()).collect::<Vec<_>>(),
+                )
+            })
+            .chain(
+                outputs
+                    .iter()
+                    .map(|v| (&v.name, v.terms.iter().map(|t| t.name.as_str()).collect())),
+            );
+        for (variable, terms) in term_names {
+            for (i, term) in terms.iter().enumerate() {
+                if terms[..i].contains(term) {
+                    return Err(FuzzyError::new(format!(
+                        "variable {variable} has two terms named {term}: names must be unique"
+                    )));
+                }
+            }
+        }
         for v in &inputs {
             if !range_ok(v.min, v.max) {
                 return Err(FuzzyError::new(format!(

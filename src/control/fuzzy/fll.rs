@@ -94,6 +94,7 @@ pub fn parse(text: &str) -> Result<Engine, FuzzyError> {
                 continue;
             }
             "InputVariable" => {
+                unique_variable(line_no, value, &inputs, &outputs)?;
                 inputs.push(InputVariable {
                     name: value.to_string(),
                     min: f64::NAN,
@@ -105,6 +106,7 @@ pub fn parse(text: &str) -> Result<Engine, FuzzyError> {
                 continue;
             }
             "OutputVariable" => {
+                unique_variable(line_no, value, &inputs, &outputs)?;
                 outputs.push(OutputVariable {
                     name: value.to_string(),
                     min: f64::NAN,
@@ -149,7 +151,16 @@ pub fn parse(text: &str) -> Result<Engine, FuzzyError> {
                     }
                     "range" => (v.min, v.max) = range(line_no, value)?,
                     "lock-range" => v.lock_range = boolean(line_no, value, key)?,
-                    "term" => v.terms.push(term(line_no, value)?),
+                    "term" => {
+                        let t = term(line_no, value)?;
+                        if v.terms.iter().any(|other| other.name == t.name) {
+                            return Err(error(
+                                line_no,
+                                format!("{} already has a term named {}", v.name, t.name),
+                            ));
+                        }
+                        v.terms.push(t);
+                    }
                     _ => {
                         return Err(error(
                             line_no,
@@ -179,7 +190,16 @@ pub fn parse(text: &str) -> Result<Engine, FuzzyError> {
                     "defuzzifier" => v.defuzzifier = defuzzifier(line_no, value)?,
                     "default" => v.default_value = number(line_no, value, "default")?,
                     "lock-previous" => v.lock_previous = boolean(line_no, value, key)?,
-                    "term" => v.terms.push(term(line_no, value)?),
+                    "term" => {
+                        let t = term(line_no, value)?;
+                        if v.terms.iter().any(|other| other.name == t.name) {
+                            return Err(error(
+                                line_no,
+                                format!("{} already has a term named {}", v.name, t.name),
+                            ));
+                        }
+                        v.terms.push(t);
+                    }
                     _ => {
                         return Err(error(
                             line_no,
@@ -251,6 +271,23 @@ fn range(line: usize, value: &str) -> Result<(f64, f64), FuzzyError> {
         ));
     };
     Ok((number(line, lo, "range")?, number(line, hi, "range")?))
+}
+
+/// An error if a variable is already named `name`: rules refer to variables by name.
+fn unique_variable(
+    line_no: usize,
+    name: &str,
+    inputs: &[InputVariable],
+    outputs: &[OutputVariable],
+) -> Result<(), FuzzyError> {
+    let taken = inputs.iter().any(|v| v.name == name) || outputs.iter().any(|v| v.name == name);
+    if taken {
+        return Err(error(
+            line_no,
+            format!("a variable named {name} already exists"),
+        ));
+    }
+    Ok(())
 }
 
 fn term(line: usize, value: &str) -> Result<Term, FuzzyError> {
@@ -548,5 +585,24 @@ mod tests {
             assert!(e.starts_with(&format!("line {line}:")), "{e}");
             assert!(e.contains(expected), "{e}");
         }
+    }
+
+    #[test]
+    fn empty_engines_and_repeated_names_are_errors() {
+        assert!(parse("")
+            .unwrap_err()
+            .to_string()
+            .contains("no output variable"));
+        let base =
+            write(&paper_002_engine(&RuleBase::Experience.table(), Defuzzifier::Centroid).unwrap());
+        let twice = base.replacen("term: NM ", "term: NB ", 1);
+        let e = parse(&twice).unwrap_err().to_string();
+        assert!(
+            e.starts_with("line ") && e.contains("E already has a term named NB"),
+            "{e}"
+        );
+        let same_name = base.replacen("InputVariable: EC", "InputVariable: E", 1);
+        let e = parse(&same_name).unwrap_err().to_string();
+        assert!(e.contains("a variable named E already exists"), "{e}");
     }
 }
