@@ -161,7 +161,7 @@ pub fn default_settings(spec: &RunSpec) -> Result<LoopSettings, LoopError> {
             OverrideMode::Dial(table) => table.positions().into_iter().fold(0.0, f64::max),
             OverrideMode::WholePercent | OverrideMode::Continuous => MAX_OVERRIDE_PCT,
         };
-        if !(v <= machine_max) {
+        if v.is_nan() || v > machine_max {
             return Err(LoopError::Setting(format!(
                 "highest override {v} % is more than this machine applies ({machine_max} %)"
             )));
