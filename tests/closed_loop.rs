@@ -354,3 +354,25 @@ fn a_run_stopped_by_the_overload_alarm_has_no_cycle_time_to_win_with() {
     assert_eq!(value("Cycle time"), None);
     assert_eq!(value("Saving vs programmed feed"), None);
 }
+
+/// Feed-current feedback on a mill (paper 000's path, on paper 003's machine): the preset's
+/// target, a mean resultant force, is converted to feed force by the ratio the teach cut saw; a
+/// down-milling cut, whose force pulls the table along, is refused with the reason.
+#[cfg(not(target_arch = "wasm32"))]
+#[test]
+fn feed_current_feedback_converts_the_target_and_refuses_down_milling() {
+    use cutlab::closed_loop::runner::Feedback;
+    let mut spec = RunSpec::new(Preset::KimStepDoc, ControllerKind::Threshold);
+    spec.settings.feedback = Some(Feedback::FeedCurrent);
+    let r = simulate(&spec).unwrap();
+    let resultant_target = Preset::KimStepDoc.target_force_n().unwrap();
+    let ratio = r.calibration.regulated_per_resultant;
+    assert!((0.2..0.9).contains(&ratio), "feed / resultant = {ratio}");
+    assert!((r.settings.target_force_n - resultant_target * ratio).abs() < 1e-9);
+    assert!(r.metrics.completed);
+
+    let mut down = RunSpec::new(Preset::ManeeratDoc1, ControllerKind::Threshold);
+    down.settings.feedback = Some(Feedback::FeedCurrent);
+    let e = simulate(&down).unwrap_err().to_string();
+    assert!(e.contains("down milling"), "{e}");
+}

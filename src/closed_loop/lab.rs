@@ -142,9 +142,13 @@ pub fn default_settings(spec: &RunSpec) -> Result<LoopSettings, LoopError> {
             }
             _ => DEFAULT_CONTROL_PERIOD_S,
         });
+    // A preset's target is a force of its own feedback path (a mill's mean resultant, the
+    // bench's feed force); for the other path it is converted after the teach cut.
     let target = o
         .target_force_n
-        .or(preset.target_force_n())
+        .or(preset
+            .target_force_n()
+            .filter(|_| feedback == default_feedback(preset)))
         .unwrap_or(f64::NAN);
     let mut envelope = EnvelopeConfig::for_target(1.0);
     envelope.resolution = envelope_resolution(&preset.override_mode());
@@ -209,21 +213,32 @@ fn set_target(settings: &mut LoopSettings, target_force_n: f64) {
 }
 
 /// Sets the target (and what derives from it) once the teach cut is known: the preset's own
-/// force target, else its current target through the calibrated model (paper 002's 25 A), else
-/// 80 % of the force the program gives at 100 % override.
+/// force target (a mill's resultant converted to feed force by the ratio the teach cut saw, when
+/// the feed current measures it), else its current target through the calibrated model (paper
+/// 002's 25 A), else 80 % of the force the program gives at 100 % override.
 fn settle_target(spec: &RunSpec, settings: &mut LoopSettings, calibration: &Calibration) {
     if settings.target_force_n.is_finite() {
         return;
     }
     let summary = spec.preset.summary();
-    let from_current = spec.preset.target_spindle_current_a().map(|current_a| {
-        calibration.estimator.force_for_current_n(
-            current_a,
-            summary.spindle_rpm.unwrap_or(0.0),
-            summary.programmed_feed_mm_min.unwrap_or(0.0),
-        )
-    });
-    let target = from_current
+    let converted = spec
+        .preset
+        .target_force_n()
+        .filter(|_| settings.feedback != default_feedback(spec.preset))
+        .map(|resultant_n| resultant_n * calibration.regulated_per_resultant);
+    let from_current = spec
+        .preset
+        .target_spindle_current_a()
+        .filter(|_| settings.feedback == Feedback::SpindleCurrent)
+        .map(|current_a| {
+            calibration.estimator.force_for_current_n(
+                current_a,
+                summary.spindle_rpm.unwrap_or(0.0),
+                summary.programmed_feed_mm_min.unwrap_or(0.0),
+            )
+        });
+    let target = converted
+        .or(from_current)
         .filter(|f| f.is_finite() && *f > 0.0)
         .unwrap_or(0.8 * calibration.median_force_at_full_override_n);
     set_target(settings, target);

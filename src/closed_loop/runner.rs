@@ -179,6 +179,9 @@ pub struct Calibration {
     pub estimator: Estimator,
     /// Median regulated force over the cutting periods of the teach cut at 100 % override.
     pub median_force_at_full_override_n: f64,
+    /// Median of regulated force ÷ mean resultant force over those periods: converts a
+    /// resultant-force target into the regulated force (1 for spindle feedback).
+    pub regulated_per_resultant: f64,
     /// Periods used for the fit.
     pub periods: usize,
     /// The largest phase current (feed or spindle, raw) seen during the teach cut.
@@ -246,6 +249,7 @@ struct TeachSamples {
     fv_voltage_v: Vec<f64>,
     feed_mm_min: Vec<f64>,
     full_override_forces_n: Vec<f64>,
+    full_override_ratios: Vec<f64>,
     max_phase_current_a: f64,
 }
 
@@ -341,6 +345,10 @@ impl TeachCut {
         }
         if command_pct == 100.0 {
             samples.full_override_forces_n.push(truth);
+            let ratio = truth / period.force_mean_resultant_n;
+            if ratio.is_finite() {
+                samples.full_override_ratios.push(ratio);
+            }
         }
         samples.current_a.push(match self.feedback {
             Feedback::SpindleCurrent => period.spindle_current_rms_a,
@@ -356,44 +364,52 @@ impl TeachCut {
     /// Fits the estimator to what was collected.
     pub fn calibration(&self) -> Result<Calibration, LoopError> {
         let s = &self.samples;
-        let estimator = match self.feedback {
-            Feedback::SpindleCurrent => {
-                let speed_model = FvSpeedModel::calibrate(
-                    &s.command_rpm,
-                    &s.speed_rpm,
-                    &s.fv_voltage_v,
-                    GEAR_CHANGE_RPM,
-                );
-                let identified: Vec<f64> = s
-                    .fv_voltage_v
-                    .iter()
-                    .zip(&s.command_rpm)
-                    .map(|(v, c)| speed_model.speed_rpm(*v, *c))
-                    .collect();
-                Estimator::Spindle {
-                    model: SpindleCurrentModel::calibrate(
-                        &s.current_a,
-                        &identified,
-                        &s.force_n,
+        let estimator =
+            match self.feedback {
+                Feedback::SpindleCurrent => {
+                    let speed_model = FvSpeedModel::calibrate(
+                        &s.command_rpm,
+                        &s.speed_rpm,
+                        &s.fv_voltage_v,
                         GEAR_CHANGE_RPM,
-                    )
-                    .map_err(LoopError::Calibration)?,
-                    speed: speed_model,
+                    );
+                    let identified: Vec<f64> = s
+                        .fv_voltage_v
+                        .iter()
+                        .zip(&s.command_rpm)
+                        .map(|(v, c)| speed_model.speed_rpm(*v, *c))
+                        .collect();
+                    Estimator::Spindle {
+                        model: SpindleCurrentModel::calibrate(
+                            &s.current_a,
+                            &identified,
+                            &s.force_n,
+                            GEAR_CHANGE_RPM,
+                        )
+                        .map_err(LoopError::Calibration)?,
+                        speed: speed_model,
+                    }
                 }
-            }
-            Feedback::FeedCurrent => Estimator::Feed {
-                model: FeedCurrentModel::calibrate(&s.current_a, &s.feed_mm_min, &s.force_n)
-                    .map_err(LoopError::Calibration)?,
-            },
+                Feedback::FeedCurrent if s.force_n.is_empty() => return Err(LoopError::Setting(
+                    "feed-current feedback needs a cut that loads the feed drive, and this one \
+                     never pushed back against the feed (in down milling the cutting force pulls \
+                     the table along); measure the force through the spindle current"
+                        .into(),
+                )),
+                Feedback::FeedCurrent => Estimator::Feed {
+                    model: FeedCurrentModel::calibrate(&s.current_a, &s.feed_mm_min, &s.force_n)
+                        .map_err(LoopError::Calibration)?,
+                },
+            };
+        let median = |values: &[f64]| {
+            let mut sorted = values.to_vec();
+            sorted.sort_by(f64::total_cmp);
+            sorted.get(sorted.len() / 2).copied().unwrap_or(f64::NAN)
         };
-        let mut forces = s.full_override_forces_n.clone();
-        forces.sort_by(f64::total_cmp);
         Ok(Calibration {
             estimator,
-            median_force_at_full_override_n: forces
-                .get(forces.len() / 2)
-                .copied()
-                .unwrap_or(f64::NAN),
+            median_force_at_full_override_n: median(&s.full_override_forces_n),
+            regulated_per_resultant: median(&s.full_override_ratios),
             periods: s.force_n.len(),
             max_phase_current_a: s.max_phase_current_a,
         })
