@@ -92,6 +92,24 @@ fn sim_writes_the_trace_csv_and_the_metrics_json_and_calibrate_reads_the_csv_bac
     let fitted: serde_json::Value = serde_json::from_str(&out).unwrap();
     let row = &fitted["spindle"]["rows"][0];
     assert!(row["quality"]["r_squared"].as_f64().unwrap() > 0.9, "{row}");
+
+    // The log's sampling is reported, and a dropped row is found by its line (kim-step-doc's
+    // control period is three revolutions at 1000 rpm, 60 ms).
+    let text = std::fs::read_to_string(&csv).unwrap();
+    let mut lines: Vec<&str> = text.lines().collect();
+    let dropped_time: f64 = lines[41].split(',').next().unwrap().parse().unwrap();
+    lines.remove(40); // file line 41
+    let gappy = dir.join("gappy.csv");
+    std::fs::write(&gappy, lines.join("\n")).unwrap();
+    let (result, out) = cutlab(&["calibrate", gappy.to_str().unwrap()]);
+    result.unwrap();
+    assert!(
+        out.contains(&format!(
+            "time steps: uneven: the step to line 41 (time_s {dropped_time}) is 0.120000 s, the \
+             median step 0.060000 s"
+        )),
+        "{out}"
+    );
     std::fs::remove_dir_all(dir).ok();
 }
 

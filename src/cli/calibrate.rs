@@ -14,6 +14,7 @@ use serde::Serialize;
 use super::{help_text_for, wants_help, write_json, CliError, Io, OptionSpec, Options};
 use crate::closed_loop::runner::GEAR_CHANGE_RPM;
 use crate::estimation::current_force::{FeedCurrentModel, SpindleCurrentModel};
+use crate::signal::spectrum::{uniform_sample_rate_hz, SpectrumError, TIME_STEP_TOLERANCE};
 
 const OPTIONS: &[OptionSpec] = &[
     OptionSpec::flag("json", "Print the fitted models as JSON"),
@@ -28,6 +29,8 @@ const OPTIONS: &[OptionSpec] = &[
 struct Table {
     header: Vec<String>,
     columns: Vec<Vec<f64>>,
+    /// The file line (from 1) of each data row: blank lines are skipped.
+    row_lines: Vec<usize>,
 }
 
 impl Table {
@@ -36,7 +39,7 @@ impl Table {
             .lines()
             .enumerate()
             .filter(|(_, l)| !l.trim().is_empty());
-        let Some((_, header_line)) = lines.next() else {
+        let Some((header_index, header_line)) = lines.next() else {
             return Err(CliError::new(format!("{file}: the file is empty")));
         };
         let header: Vec<String> = header_line
@@ -46,12 +49,15 @@ impl Table {
         for (i, name) in header.iter().enumerate() {
             if header[..i].contains(name) {
                 return Err(CliError::new(format!(
-                    "{file}: line 1: column {name:?} appears twice; which one to fit is ambiguous"
+                    "{file}: line {}: column {name:?} appears twice; which one to fit is ambiguous",
+                    header_index + 1
                 )));
             }
         }
         let mut columns = vec![Vec::new(); header.len()];
+        let mut row_lines = Vec::new();
         for (index, line) in lines {
+            row_lines.push(index + 1);
             let cells: Vec<&str> = line.split(',').collect();
             if cells.len() != header.len() {
                 return Err(CliError::new(format!(
@@ -72,7 +78,16 @@ impl Table {
                 column.push(value);
             }
         }
-        Ok(Self { header, columns })
+        Ok(Self {
+            header,
+            columns,
+            row_lines,
+        })
+    }
+
+    /// The file line of data row `row` (from 0).
+    fn line_of_row(&self, row: usize) -> usize {
+        self.row_lines.get(row).copied().unwrap_or(0)
     }
 
     fn column(&self, name: &str) -> Option<&[f64]> {
@@ -87,6 +102,9 @@ impl Table {
 struct Report {
     file: String,
     rows_with_force: usize,
+    /// The log's sampling, from its `time_s` column: even steps and their rate, or where the
+    /// steps are uneven (the fit itself does not need even steps, but a reader of the log does).
+    time_steps: Option<String>,
     spindle: Option<SpindleCurrentModel>,
     spindle_error: Option<String>,
     feed: Option<FeedCurrentModel>,
@@ -137,9 +155,28 @@ pub fn run(args: &[String], io: &mut Io<'_>) -> Result<(), CliError> {
     })?;
     let rows_with_force = force.iter().filter(|f| f.is_finite() && **f > 0.0).count();
 
+    let time_steps = table.column("time_s").map(|times| {
+        match uniform_sample_rate_hz(times, TIME_STEP_TOLERANCE) {
+            Ok(rate_hz) => format!("even, {:.6} s ({rate_hz:.4} Hz)", 1.0 / rate_hz),
+            // The error counts time stamps from 0; say where in the file (data from line 2).
+            Err(SpectrumError::UnevenTimeSteps {
+                index,
+                step_s,
+                median_step_s,
+                ..
+            }) => format!(
+                "uneven: the step to line {} (time_s {}) is {step_s:.6} s, the median step \
+                 {median_step_s:.6} s (a short last row is a period the program ended in)",
+                table.line_of_row(index),
+                times[index]
+            ),
+            Err(e) => format!("not usable: {e}"),
+        }
+    });
     let mut report = Report {
         file: file.clone(),
         rows_with_force,
+        time_steps,
         spindle: None,
         spindle_error: None,
         feed: None,
@@ -185,6 +222,9 @@ pub fn run(args: &[String], io: &mut Io<'_>) -> Result<(), CliError> {
         return write_json(io.stdout, &report);
     }
     let mut out = format!("{file}: {rows_with_force} rows with force\n");
+    if let Some(steps) = &report.time_steps {
+        let _ = writeln!(out, "time steps: {steps}");
+    }
     if let Some(m) = &report.spindle {
         out.push_str("spindle current → force (paper 003), per speed:\n");
         for r in &m.rows {

@@ -53,6 +53,17 @@ test('the rule viewer lists the rules that fire for a chosen point', async () =>
   const box = await surface.boundingBox();
   await page.mouse.click(box.x + box.width * 0.8, box.y + box.height * 0.3);
   assert.notEqual(await page.getByLabel('E (scaled)', { exact: true }).inputValue(), '2');
+  // By keyboard: focus the map, move the cursor two cells left and one down, pick with Enter.
+  await surface.focus();
+  await page.keyboard.press('Home');
+  await page.getByText('Cursor: E = 0.00, EC = 0.00').waitFor();
+  for (const key of ['ArrowLeft', 'ArrowLeft', 'ArrowDown']) await page.keyboard.press(key);
+  const readout = await page.getByText(/^Cursor: E = /).textContent();
+  const [, cursorE, cursorEc] = readout.match(/E = (-?[\d.]+), EC = (-?[\d.]+)/);
+  assert.ok(Number(cursorE) < 0 && Number(cursorEc) < 0, readout);
+  await page.keyboard.press('Enter');
+  assert.equal(Number(await page.getByLabel('E (scaled)', { exact: true }).inputValue()), Number(cursorE));
+  assert.equal(Number(await page.getByLabel('EC (scaled)', { exact: true }).inputValue()), Number(cursorEc));
   assert.deepEqual(problems, []);
   await context.close();
 });
@@ -69,16 +80,30 @@ test('FLL exports, a broken FLL is explained by line, and a run supplies a momen
   await text.fill(fll.replace('term: PB Triangle 4 6 6', 'term: PB Bell 4 6 6'));
   await page.getByRole('button', { name: 'Import FLL' }).click();
   await page.getByText(/The FLL could not be read: line \d+: term PB: shape Bell is not supported/).waitFor();
-  await text.fill(fll);
+  // A file that changes one rule changes that cell of the table.
+  const cell = page.getByLabel('Output when E is NB and EC is NB');
+  const before = await cell.inputValue();
+  const changedTo = before === 'PB' ? 'NB' : 'PB';
+  const ruleLine = fll.split('\n').find((l) => /rule: if E is NB and EC is NB then U is/.test(l));
+  await text.fill(fll.replace(ruleLine, ruleLine.replace(/U is \w+/, `U is ${changedTo}`)));
   await page.getByRole('button', { name: 'Import FLL' }).click();
   await page.getByText(/could not be read/).waitFor({ state: 'detached' });
+  assert.equal(await cell.inputValue(), changedTo);
+  await text.fill(fll);
+  await page.getByRole('button', { name: 'Import FLL' }).click();
+  assert.equal(await cell.inputValue(), before);
   // A simulated run with this table; the slider picks a moment's E and EC.
   await page.getByLabel('Preset', { exact: true }).selectOption('maneerat-doc-1');
   await page.getByRole('button', { name: 'Run with this table' }).click();
   const slider = page.getByLabel(/Moment:/);
   await slider.waitFor({ timeout: 60_000 });
+  const trace = page.getByRole('img', { name: 'E and EC of the run' });
+  await trace.waitFor();
+  const drawn = await canvasPixels(trace);
   await slider.fill('150');
   await page.getByLabel(/Moment: \d+\.\d\d s/).waitFor();
+  // The picked moment moves on the trace.
+  await waitForRedraw(trace, drawn);
   assert.deepEqual(problems, []);
   await context.close();
 });

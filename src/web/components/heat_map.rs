@@ -1,4 +1,5 @@
-//! A heat map on a canvas; clicking a cell reports its data coordinates.
+//! A heat map on a canvas; clicking a cell, or moving a keyboard cursor over the grid and
+//! pressing Enter, reports its data coordinates.
 
 use leptos::prelude::*;
 use plotters::prelude::IntoDrawingArea;
@@ -6,8 +7,9 @@ use plotters_canvas::CanvasBackend;
 
 use crate::charts::{draw_heat_map, ChartStyle, HeatMap, PlotGeometry};
 
-/// A heat map drawn with plotters; `on_pick` receives the (x, y) of a click or of Enter on the
-/// focused canvas (the centre of the map).
+/// A heat map drawn with plotters; `on_pick` receives the (x, y) of a click, or of the keyboard
+/// cursor when Enter or Space is pressed on the focused map (the arrow keys move the cursor one
+/// cell, Home returns it to the centre; its position is read out beside the map).
 #[component]
 pub fn HeatMapCanvas(
     /// Accessible name.
@@ -25,6 +27,42 @@ pub fn HeatMapCanvas(
     let geometry = StoredValue::new(None::<PlotGeometry>);
     let ratio = StoredValue::new(1.0_f64);
     let (draw_error, set_draw_error) = signal(None::<String>);
+    // The keyboard cursor as a fraction of each axis's range, at the centre of a cell.
+    let cursor = RwSignal::new((0.5_f64, 0.5_f64));
+    let cursor_point = move || {
+        map.with(|m| {
+            let at = |axis: &crate::charts::Axis, t: f64| {
+                axis.range.start + t * (axis.range.end - axis.range.start)
+            };
+            (at(&m.x, cursor.get().0), at(&m.y, cursor.get().1))
+        })
+    };
+    let on_key = move |ev: leptos::ev::KeyboardEvent| {
+        let (nx, ny) = map.with(|m| (m.nx.max(1) as f64, m.ny.max(1) as f64));
+        let step = |t: f64, cells: f64, by: f64| {
+            // Snap to cell centres so repeated presses land on every cell exactly once.
+            let cell = ((t * cells - 0.5).round() + by).clamp(0.0, cells - 1.0);
+            (cell + 0.5) / cells
+        };
+        let (fx, fy) = cursor.get_untracked();
+        let moved = match ev.key().as_str() {
+            "ArrowLeft" => Some((step(fx, nx, -1.0), fy)),
+            "ArrowRight" => Some((step(fx, nx, 1.0), fy)),
+            "ArrowDown" => Some((fx, step(fy, ny, -1.0))),
+            "ArrowUp" => Some((fx, step(fy, ny, 1.0))),
+            "Home" => Some((0.5, 0.5)),
+            "Enter" | " " => {
+                on_pick.run(cursor_point());
+                ev.prevent_default();
+                return;
+            }
+            _ => None,
+        };
+        if let Some(p) = moved {
+            cursor.set(p);
+            ev.prevent_default();
+        }
+    };
     Effect::new(move |_| {
         let map = map.get();
         let Some(canvas) = canvas_ref.get() else {
@@ -67,9 +105,11 @@ pub fn HeatMapCanvas(
             <canvas
                 node_ref=canvas_ref
                 role="img"
-                aria-label=label
+                aria-label=format!("{label}: arrow keys move a cursor over the map, Enter picks it")
+                tabindex="0"
                 style=format!("height: {height_px}px; cursor: pointer")
                 on:click=pick
+                on:keydown=on_key
             >
                 {label}
             </canvas>
@@ -77,6 +117,12 @@ pub fn HeatMapCanvas(
                 <span class="chart-title">{label}</span>
                 <span class="colour-scale" aria-hidden="true"></span>
                 {move || map.with(|m| format!("{:.1} … {:.1}", m.value_range.start, m.value_range.end))}
+                <span class="cursor-readout" aria-live="polite">
+                    {move || {
+                        let (x, y) = cursor_point();
+                        map.with(|m| format!("Cursor: {} = {x:.2}, {} = {y:.2}", m.x.label, m.y.label))
+                    }}
+                </span>
                 {move || draw_error.get().map(|e| view! { <span class="chart-error" role="alert">{e}</span> })}
             </figcaption>
         </figure>

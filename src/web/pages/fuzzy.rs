@@ -298,6 +298,39 @@ pub fn FuzzyPage() -> impl IntoView {
         });
     });
 
+    // The run's E and EC over time, with the picked moment marked: the moment is picked on the
+    // trace, not on a bare slider.
+    let moment_chart = Signal::derive(move || {
+        let mut chart = LineChart::new(Axis::linear("time (s)"), Axis::linear("scaled input"));
+        run_result.with(|r| {
+            let Some(r) = r else {
+                return;
+            };
+            let times: Vec<f64> = r.trace.rows.iter().map(|row| row.time_s).collect();
+            for (index, colour) in [(0, PALETTE[0]), (1, PALETTE[1])] {
+                let Some((name, _)) = r.trace.term_names.get(index) else {
+                    continue;
+                };
+                let points = times
+                    .iter()
+                    .copied()
+                    .zip(r.trace.term_series(index))
+                    .collect();
+                chart.series.push(Series::new(*name, colour, points));
+            }
+            chart.fit();
+            if let Some(&t) = times.get(moment.get()) {
+                let (lo, hi) = (chart.y.range.start, chart.y.range.end);
+                chart.series.push(Series::new(
+                    "picked moment",
+                    PALETTE[3],
+                    vec![(t, lo), (t, hi)],
+                ));
+            }
+        });
+        chart
+    });
+
     let export = move |_| {
         let text = engine.with(|e| e.as_ref().ok().map(|e| fll::write(e)));
         if let Some(text) = text {
@@ -307,11 +340,24 @@ pub fn FuzzyPage() -> impl IntoView {
     let import = move |_| match fll::parse(&fll_text.get_untracked()) {
         Ok(engine) => {
             set_fll_error.set(None);
-            if let Some(t) = table_of(&engine) {
-                table.set(t);
-                source.set(Source::Table);
-            } else {
-                source.set(Source::Imported(Arc::new(engine)));
+            // The page shows the file's own defuzzifier; changing it afterwards is a choice.
+            if let Some(output) = engine.outputs().first() {
+                defuzzifier.set(output.defuzzifier.name().to_string());
+            }
+            // Into the editable table only if the file is exactly paper 002's engine with some
+            // table (same ranges, terms, operators and weights): anything else is kept whole.
+            let as_table = table_of(&engine).filter(|t| {
+                engine.outputs().first().is_some_and(|output| {
+                    paper_002_engine(t, output.defuzzifier)
+                        .is_ok_and(|paper| fll::write(&paper) == fll::write(&engine))
+                })
+            });
+            match as_table {
+                Some(t) => {
+                    table.set(t);
+                    source.set(Source::Table);
+                }
+                None => source.set(Source::Imported(Arc::new(engine))),
             }
         }
         Err(e) => set_fll_error.set(Some(format!("The FLL could not be read: {e}"))),
@@ -510,6 +556,10 @@ pub fn FuzzyPage() -> impl IntoView {
                             options=Preset::ALL.iter().map(|p| (p.name(), p.label())).collect()
                             value=run_preset
                         />
+                        <p class="hint">
+                            "The run uses the fuzzy controller with this table and paper 002's "
+                            "weighted-average defuzzification, whatever the viewer's choice."
+                        </p>
                         <div class="button-row">
                             <button type="button" on:click=start_run>"Run with this table"</button>
                         </div>
@@ -580,6 +630,11 @@ pub fn FuzzyPage() -> impl IntoView {
                             ec_text.set(format!("{y:.2}"));
                         })
                     />
+                    {move || {
+                        run_result
+                            .with(|r| r.is_some())
+                            .then(|| view! { <ChartCanvas label="E and EC of the run" chart=moment_chart height_px=180 /> })
+                    }}
                     <ChartCanvas label="Membership functions of E" chart=chart_of(Some(0)) height_px=180 />
                     <ChartCanvas label="Membership functions of EC" chart=chart_of(Some(1)) height_px=180 />
                     <ChartCanvas label="Membership functions of U" chart=chart_of(None) height_px=180 />
