@@ -1,0 +1,72 @@
+//! "Allocation-free per step" — the plant's, the filters' and the fuzzy engine's promise —
+//! checked by counting: `allocation_counter::measure` counts the heap allocations of this thread
+//! while the closure runs, and stepping after construction must make none.
+#![cfg(not(target_arch = "wasm32"))]
+// Test code: unwrapping and panicking on a broken expectation is the point.
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
+
+use cutlab::control::fuzzy::engine::Defuzzifier;
+use cutlab::control::fuzzy::rules::{paper_002_engine, RuleBase};
+use cutlab::machine::{Machine, OverrideCommand};
+use cutlab::plant::Preset;
+use cutlab::signal::butterworth::{butter, ButterworthSpec, Cutoff, FilterKind};
+use cutlab::signal::filter::SosFilterBank;
+
+#[test]
+fn the_counter_sees_an_allocation() {
+    // Without this, a zero count could mean a counter that is not installed.
+    let info = allocation_counter::measure(|| {
+        std::hint::black_box(vec![1u8; 64]);
+    });
+    assert!(info.count_total >= 1);
+}
+
+#[test]
+fn stepping_every_preset_machine_allocates_nothing() {
+    let command = OverrideCommand {
+        override_pct: 100.0,
+        feed_hold: false,
+    };
+    for preset in Preset::ALL {
+        let mut machine = preset.machine(7).unwrap();
+        // Past the spindle start and into the cut.
+        for _ in 0..20_000 {
+            machine.step(command);
+        }
+        let info = allocation_counter::measure(|| {
+            for _ in 0..50_000 {
+                std::hint::black_box(machine.step(command));
+            }
+        });
+        assert_eq!(
+            info.count_total,
+            0,
+            "{}: {} allocations in 50 000 steps",
+            preset.name(),
+            info.count_total
+        );
+    }
+}
+
+#[test]
+fn filtering_and_fuzzy_inference_allocate_nothing() {
+    let sos = butter(&ButterworthSpec {
+        kind: FilterKind::Lowpass,
+        order: 10,
+        cutoff_hz: Cutoff::Single(50.0),
+        sample_rate_hz: 10_000.0,
+    })
+    .unwrap();
+    let mut bank = SosFilterBank::new(&sos, 3).unwrap();
+    let mut block = vec![0.25; 3 * 4096];
+    let mut engine = paper_002_engine(&RuleBase::Dynamics.table(), Defuzzifier::Centroid).unwrap();
+    let mut out = [0.0];
+    let info = allocation_counter::measure(|| {
+        bank.process_slice(&mut block);
+        for i in 0..1000 {
+            let e = -6.0 + 12.0 * f64::from(i) / 1000.0;
+            engine.evaluate(&[e, -0.5 * e], &mut out);
+        }
+    });
+    assert_eq!(info.count_total, 0);
+}

@@ -1,0 +1,49 @@
+//! The sample files under www/data (served with the lab, named in its README) still load and
+//! still mean what the README says; scripts/sample-data regenerates them.
+#![cfg(feature = "cli")]
+// Test code: unwrapping and panicking on a broken expectation is the point.
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
+
+mod common;
+
+use cutlab::closed_loop::config::RunConfiguration;
+use cutlab::control::fuzzy::fll;
+use cutlab::control::fuzzy::rules::{paper_002_engine, RuleBase};
+
+const DATA: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/www/data/");
+
+fn read(name: &str) -> String {
+    std::fs::read_to_string(format!("{DATA}{name}")).unwrap()
+}
+
+#[test]
+fn the_fll_files_are_paper_002s_engines_as_exported_today() {
+    for (file, base) in [
+        ("paper-002-experience.fll", RuleBase::Experience),
+        ("paper-002-dynamics.fll", RuleBase::Dynamics),
+    ] {
+        let saved = fll::parse(&read(file)).unwrap();
+        let engine = paper_002_engine(&base.table(), saved.outputs()[0].defuzzifier).unwrap();
+        assert_eq!(fll::write(&saved), fll::write(&engine), "{file} is stale");
+    }
+}
+
+#[test]
+fn the_saved_comparison_and_the_teach_cut_log_load() {
+    let config = RunConfiguration::from_json(&read("paper-002-fuzzy-comparison.json")).unwrap();
+    let kinds: Vec<&str> = config
+        .runs
+        .iter()
+        .map(|r| r.controller.kind().name())
+        .collect();
+    assert_eq!(kinds, ["fuzzy-experience", "fuzzy-dynamics"]);
+
+    let path = format!("{DATA}kim-step-doc-teach-cut.csv");
+    let (result, out) = common::cutlab_text(&["calibrate", &path, "--json"], "");
+    result.unwrap();
+    let fitted: serde_json::Value = serde_json::from_str(&out).unwrap();
+    let r2 = fitted["spindle"]["rows"][0]["quality"]["r_squared"]
+        .as_f64()
+        .unwrap();
+    assert!(r2 > 0.95, "R² {r2}");
+}
