@@ -47,3 +47,68 @@ fn the_saved_comparison_and_the_teach_cut_log_load() {
         .unwrap();
     assert!(r2 > 0.95, "R² {r2}");
 }
+
+/// Calibration without a dynamometer: the forces modelled from the log's feed, speed, depth and
+/// width give the line the measured forces give (the simulated mill's mean force is the
+/// mechanistic model's, so here the two must agree closely).
+#[test]
+fn modelled_forces_calibrate_like_measured_ones() {
+    let path = format!("{DATA}kim-step-doc-teach-cut.csv");
+    let sensitivity = |extra: &[&str]| {
+        let mut args = vec!["calibrate", path.as_str(), "--json"];
+        args.extend(extra);
+        let (result, out) = common::cutlab_text(&args, "");
+        result.unwrap();
+        let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+        (
+            v["spindle"]["rows"][0]["sensitivity_a_per_n"]
+                .as_f64()
+                .unwrap(),
+            v,
+        )
+    };
+    let (measured, _) = sensitivity(&[]);
+    let (modelled, report) = sensitivity(&[
+        "--material",
+        "sm45c",
+        "--diameter-mm",
+        "20",
+        "--teeth",
+        "2",
+        "--mode",
+        "slot",
+    ]);
+    assert!(
+        (modelled / measured - 1.0).abs() < 0.01,
+        "{modelled} vs {measured}"
+    );
+    assert!(report["force_source"]
+        .as_str()
+        .unwrap()
+        .starts_with("the mechanistic model (material sm45c"));
+    assert!(
+        report["model_vs_measured_pct"].as_f64().unwrap() < 2.0,
+        "{report}"
+    );
+
+    for (args, expected) in [
+        (
+            vec!["calibrate", path.as_str(), "--teeth", "2"],
+            "--teeth only applies with --material",
+        ),
+        (
+            vec![
+                "calibrate",
+                path.as_str(),
+                "--material",
+                "sm45c",
+                "--teeth",
+                "2",
+            ],
+            "missing required option --diameter-mm",
+        ),
+    ] {
+        let message = common::cutlab_text(&args, "").0.unwrap_err();
+        assert!(message.contains(expected), "{message}");
+    }
+}
