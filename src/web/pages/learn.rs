@@ -6,13 +6,39 @@
 
 use leptos::prelude::*;
 
+use crate::control::fuzzy::rules::RuleBase;
+use crate::web::components::run_form::encode_rule_table;
+use crate::web::route::{hash_with_query, Page};
+
 /// One step of the guided path.
 struct Lesson {
     id: &'static str,
     title: &'static str,
     paragraphs: &'static [&'static str],
+    /// `(caption, MathML)`.
     equations: &'static [(&'static str, &'static str)],
-    try_it: &'static [(&'static str, &'static str)],
+    /// `(link text, where it leads)`.
+    try_it: &'static [(&'static str, TryIt)],
+}
+
+/// Where a "try it" link leads: always a page preset to what the lesson talks about.
+enum TryIt {
+    /// A hash with its query, e.g. `#/signal?preset=wang-10th-5hz`.
+    Hash(&'static str),
+    /// The Fuzzy rules page showing one of paper 002's built-in rule tables.
+    FuzzyRules(RuleBase),
+}
+
+impl TryIt {
+    fn href(&self) -> String {
+        match self {
+            TryIt::Hash(hash) => hash.to_string(),
+            TryIt::FuzzyRules(base) => hash_with_query(
+                Page::Fuzzy,
+                &[("rules".to_string(), encode_rule_table(&base.table()))],
+            ),
+        }
+    }
 }
 
 const LESSONS: &[Lesson] = &[
@@ -39,7 +65,10 @@ const LESSONS: &[Lesson] = &[
                 r#"<math display="block"><msub><mi>T</mi><mi>m</mi></msub><mo>=</mo><mfrac><mn>3</mn><mn>2</mn></mfrac><mi>p</mi><msub><mi>λ</mi><mi>m</mi></msub><msub><mi>i</mi><mi>q</mi></msub></math>"#,
             ),
         ],
-        try_it: &[("The brake bench: current against load", "#/plant?preset=wang-brake-bench")],
+        try_it: &[(
+            "The brake bench: current against load",
+            TryIt::Hash("#/plant?preset=wang-brake-bench"),
+        )],
     },
     Lesson {
         id: "signal-chain",
@@ -59,7 +88,16 @@ const LESSONS: &[Lesson] = &[
             "Three-phase RMS current (paper 003, eq 7)",
             r#"<math display="block"><msub><mi>I</mi><mi>rms</mi></msub><mo>=</mo><msqrt><mfrac><mrow><msubsup><mi>I</mi><mi>u</mi><mn>2</mn></msubsup><mo>+</mo><msubsup><mi>I</mi><mi>v</mi><mn>2</mn></msubsup><mo>+</mo><msubsup><mi>I</mi><mi>w</mi><mn>2</mn></msubsup></mrow><mn>3</mn></mfrac></msqrt></math>"#,
         )],
-        try_it: &[("Design the filter", "#/signal")],
+        try_it: &[
+            (
+                "Paper 000's 10th-order Butterworth low-pass",
+                TryIt::Hash("#/signal?preset=wang-10th-5hz"),
+            ),
+            (
+                "Paper 003's spindle-current filter",
+                TryIt::Hash("#/signal?preset=kim-spindle-260hz"),
+            ),
+        ],
     },
     Lesson {
         id: "cutting-force",
@@ -84,7 +122,10 @@ const LESSONS: &[Lesson] = &[
                 r#"<math display="block"><msub><mi>F</mi><mrow><mi>c</mi><mo>,</mo><mi>max</mi></mrow></msub><mo>=</mo><mfrac><msqrt><mrow><mn>1</mn><mo>+</mo><msup><mi>r</mi><mn>2</mn></msup></mrow></msqrt><mi>R</mi></mfrac><msub><mi>T</mi><mrow><mi>c</mi><mo>,</mo><mi>max</mi></mrow></msub></math>"#,
             ),
         ],
-        try_it: &[("Forces of a depth-step cut", "#/plant?preset=kim-step-doc")],
+        try_it: &[(
+            "Forces of a depth-step cut",
+            TryIt::Hash("#/plant?preset=kim-step-doc"),
+        )],
     },
     Lesson {
         id: "controllers",
@@ -99,6 +140,10 @@ const LESSONS: &[Lesson] = &[
             "Fuzzy (Liu et al.): the error E and its change EC are sorted into seven sets each, \
              49 rules give a feed change. Rules from experience react hard; rules shaped by the \
              machine's dynamics react softer and settle faster.",
+            "PI with anti-windup (the textbook baseline, not from the papers): a proportional and \
+             an integral term on the relative force error. When the safety envelope clamps, \
+             rate-limits or quantises the request, back-calculation pulls the integral toward \
+             what was actually applied instead of letting it wind up.",
             "Lyapunov adaptive (Maneerat et al.): a sliding variable combines the force error and \
              its rate; an adaptive gain learns which feed gives the target force, so the loop \
              holds it without knowing the material in advance.",
@@ -106,11 +151,79 @@ const LESSONS: &[Lesson] = &[
              limit, the machine's dial positions, an arming delay after spindle start, sensor-fault \
              detection and an overload feed hold.",
         ],
-        equations: &[(
-            "Sliding variable and adaptive law (paper 001, eq 5)",
-            r#"<math display="block"><mi>E</mi><mo>=</mo><mfrac><mrow><mi>d</mi><mover><mi>F</mi><mo>~</mo></mover></mrow><mrow><mi>d</mi><mi>t</mi></mrow></mfrac><mo>+</mo><mi>λ</mi><mover><mi>F</mi><mo>~</mo></mover><mo>,</mo><mspace width="1em"/><msub><mi>f</mi><mi>r</mi></msub><mo>=</mo><mover><mi>β</mi><mo>^</mo></mover><msub><mi>F</mi><mi>d</mi></msub><mo>−</mo><msub><mi>K</mi><mi>d</mi></msub><mi>E</mi><mo>,</mo><mspace width="1em"/><mover><mover><mi>β</mi><mo>^</mo></mover><mo>˙</mo></mover><mo>=</mo><mo>−</mo><msub><mi>γ</mi><mn>3</mn></msub><msub><mi>F</mi><mi>d</mi></msub><mi>E</mi></math>"#,
-        )],
-        try_it: &[("Fixed feed against threshold control", "#/compare?preset=kim-step-doc&variants=2&a.controller=fixed&b.controller=threshold"), ("Adaptive control at 320 N", "#/simulate?preset=maneerat-doc-4&controller=mrac"), ("Edit the fuzzy rules", "#/fuzzy")],
+        equations: &[
+            (
+                "Current restriction (paper 000, §1 and §5): one step Δ of the override dial (10 %) \
+                 down above the band, up below it, from the override u_a the machine applied; b is \
+                 the band's width relative to the target F_t",
+                r#"<math display="block"><mi>u</mi><mo>←</mo><mrow><mo>{</mo><mtable columnalign="left left"><mtr><mtd><msub><mi>u</mi><mi>a</mi></msub><mo>−</mo><mi>Δ</mi></mtd><mtd><mtext>if</mtext><mspace width="0.5em"/><mi>F</mi><mo>&gt;</mo><msub><mi>F</mi><mi>t</mi></msub><mo>(</mo><mn>1</mn><mo>+</mo><mi>b</mi><mo>/</mo><mn>2</mn><mo>)</mo></mtd></mtr><mtr><mtd><msub><mi>u</mi><mi>a</mi></msub><mo>+</mo><mi>Δ</mi></mtd><mtd><mtext>if</mtext><mspace width="0.5em"/><mi>F</mi><mo>&lt;</mo><msub><mi>F</mi><mi>t</mi></msub><mo>(</mo><mn>1</mn><mo>−</mo><mi>b</mi><mo>/</mo><mn>2</mn><mo>)</mo></mtd></mtr><mtr><mtd><msub><mi>u</mi><mi>a</mi></msub></mtd><mtd><mtext>otherwise</mtext></mtd></mtr></mtable></mrow></math>"#,
+            ),
+            (
+                "Threshold-proportional control (paper 003, §8 and Fig. 9): the step is K_p times the \
+                 excess beyond the band, in percent of the target F_t; g is the band's width \
+                 relative to F_t, and the override also holds for 3 s after spindle start",
+                r#"<math display="block"><mi>u</mi><mo>←</mo><mrow><mo>{</mo><mtable columnalign="left left"><mtr><mtd><msub><mi>u</mi><mi>a</mi></msub><mo>−</mo><msub><mi>K</mi><mi>p</mi></msub><mo>·</mo><mn>100</mn><mo>·</mo><mfrac><mrow><mi>F</mi><mo>−</mo><msub><mi>F</mi><mi>max</mi></msub></mrow><msub><mi>F</mi><mi>t</mi></msub></mfrac></mtd><mtd><mtext>if</mtext><mspace width="0.5em"/><mi>F</mi><mo>&gt;</mo><msub><mi>F</mi><mi>max</mi></msub></mtd></mtr><mtr><mtd><msub><mi>u</mi><mi>a</mi></msub><mo>+</mo><msub><mi>K</mi><mi>p</mi></msub><mo>·</mo><mn>100</mn><mo>·</mo><mfrac><mrow><msub><mi>F</mi><mi>min</mi></msub><mo>−</mo><mi>F</mi></mrow><msub><mi>F</mi><mi>t</mi></msub></mfrac></mtd><mtd><mtext>if</mtext><mspace width="0.5em"/><mi>F</mi><mo>&lt;</mo><msub><mi>F</mi><mi>min</mi></msub></mtd></mtr><mtr><mtd><msub><mi>u</mi><mi>a</mi></msub></mtd><mtd><mtext>otherwise</mtext></mtd></mtr></mtable></mrow><mo>,</mo><mspace width="1em"/><msub><mi>F</mi><mrow><mi>max</mi><mo>,</mo><mi>min</mi></mrow></msub><mo>=</mo><msub><mi>F</mi><mi>t</mi></msub><mo>(</mo><mn>1</mn><mo>±</mo><mi>g</mi><mo>/</mo><mn>2</mn><mo>)</mo></math>"#,
+            ),
+            (
+                "Incremental fuzzy feed law (paper 002, eq 6): k_e and k_ec scale E and EC onto the \
+                 universe [−6, 6] (saturated there), k_u scales the fuzzy output U to a feed change; \
+                 a_f(i) is the feed the machine applied, as an override",
+                r#"<math display="block"><mtable columnalign="left"><mtr><mtd><mi>E</mi><mo>(</mo><mi>i</mi><mo>)</mo><mo>=</mo><msub><mi>F</mi><mi>t</mi></msub><mo>−</mo><mi>F</mi><mo>(</mo><mi>i</mi><mo>)</mo><mo>,</mo><mspace width="1em"/><mi>EC</mi><mo>(</mo><mi>i</mi><mo>)</mo><mo>=</mo><mi>E</mi><mo>(</mo><mi>i</mi><mo>)</mo><mo>−</mo><mi>E</mi><mo>(</mo><mi>i</mi><mo>−</mo><mn>1</mn><mo>)</mo><mo>,</mo></mtd></mtr><mtr><mtd><msub><mi>a</mi><mi>f</mi></msub><mo>(</mo><mi>i</mi><mo>+</mo><mn>1</mn><mo>)</mo><mo>=</mo><msub><mi>a</mi><mi>f</mi></msub><mo>(</mo><mi>i</mi><mo>)</mo><mo>+</mo><mi>Δ</mi><msub><mi>a</mi><mi>f</mi></msub><mo>,</mo><mspace width="1em"/><mi>Δ</mi><msub><mi>a</mi><mi>f</mi></msub><mo>=</mo><msub><mi>k</mi><mi>u</mi></msub><mi>U</mi><mo>(</mo><msub><mi>k</mi><mi>e</mi></msub><mi>E</mi><mo>(</mo><mi>i</mi><mo>)</mo><mo>,</mo><msub><mi>k</mi><mi>ec</mi></msub><mi>EC</mi><mo>(</mo><mi>i</mi><mo>)</mo><mo>)</mo></mtd></mtr></mtable></math>"#,
+            ),
+            (
+                "Weighted-average defuzzification (paper 002, eq 7; what the closed loop uses) over \
+                 the 49 rules j: H_j is rule j's activation, the minimum of its two memberships, and Δa_fj \
+                 the centre of its output term",
+                r#"<math display="block"><mi>U</mi><mo>=</mo><mfrac><mrow><munder><mo>∑</mo><mi>j</mi></munder><mi>Δ</mi><msub><mi>a</mi><mrow><mi>f</mi><mi>j</mi></mrow></msub><msub><mi>H</mi><mi>j</mi></msub></mrow><mrow><munder><mo>∑</mo><mi>j</mi></munder><msub><mi>H</mi><mi>j</mi></msub></mrow></mfrac></math>"#,
+            ),
+            (
+                "Centroid defuzzification (a choice on the Fuzzy rules page, computed exactly): each \
+                 rule clips its output term μ_j at H_j, and the maximum of them is the output set μ_U",
+                r#"<math display="block"><mi>U</mi><mo>=</mo><mfrac><mrow><mo>∫</mo><mi>u</mi><msub><mi>μ</mi><mi>U</mi></msub><mo>(</mo><mi>u</mi><mo>)</mo><mrow><mi>d</mi><mi>u</mi></mrow></mrow><mrow><mo>∫</mo><msub><mi>μ</mi><mi>U</mi></msub><mo>(</mo><mi>u</mi><mo>)</mo><mrow><mi>d</mi><mi>u</mi></mrow></mrow></mfrac><mo>,</mo><mspace width="1em"/><msub><mi>μ</mi><mi>U</mi></msub><mo>(</mo><mi>u</mi><mo>)</mo><mo>=</mo><munder><mi>max</mi><mi>j</mi></munder><mi>min</mi><mo>(</mo><msub><mi>H</mi><mi>j</mi></msub><mo>,</mo><msub><mi>μ</mi><mi>j</mi></msub><mo>(</mo><mi>u</mi><mo>)</mo><mo>)</mo></math>"#,
+            ),
+            (
+                "PI with back-calculation anti-windup (Åström & Hägglund), stepped once per control \
+                 period T: what the envelope and the machine took from the last request, \
+                 u_a(i) − u_req(i−1), pulls the integral back with time constant T_t",
+                r#"<math display="block"><mtable columnalign="left"><mtr><mtd><mi>e</mi><mo>(</mo><mi>i</mi><mo>)</mo><mo>=</mo><mfrac><mrow><msub><mi>F</mi><mi>t</mi></msub><mo>−</mo><mi>F</mi><mo>(</mo><mi>i</mi><mo>)</mo></mrow><msub><mi>F</mi><mi>t</mi></msub></mfrac><mo>,</mo><mspace width="1em"/><msub><mi>u</mi><mi>req</mi></msub><mo>(</mo><mi>i</mi><mo>)</mo><mo>=</mo><msub><mi>u</mi><mn>0</mn></msub><mo>+</mo><msub><mi>K</mi><mi>p</mi></msub><mo>·</mo><mn>100</mn><mo>·</mo><mi>e</mi><mo>(</mo><mi>i</mi><mo>)</mo><mo>+</mo><mi>I</mi><mo>(</mo><mi>i</mi><mo>)</mo><mo>,</mo></mtd></mtr><mtr><mtd><mi>I</mi><mo>(</mo><mi>i</mi><mo>)</mo><mo>=</mo><mi>I</mi><mo>(</mo><mi>i</mi><mo>−</mo><mn>1</mn><mo>)</mo><mo>+</mo><mi>T</mi><mrow><mo>[</mo><msub><mi>K</mi><mi>i</mi></msub><mo>·</mo><mn>100</mn><mo>·</mo><mi>e</mi><mo>(</mo><mi>i</mi><mo>)</mo><mo>+</mo><mfrac><mrow><msub><mi>u</mi><mi>a</mi></msub><mo>(</mo><mi>i</mi><mo>)</mo><mo>−</mo><msub><mi>u</mi><mi>req</mi></msub><mo>(</mo><mi>i</mi><mo>−</mo><mn>1</mn><mo>)</mo></mrow><msub><mi>T</mi><mi>t</mi></msub></mfrac><mo>]</mo></mrow></mtd></mtr></mtable></math>"#,
+            ),
+            (
+                "Sliding variable and adaptive law (paper 001, eq 5)",
+                r#"<math display="block"><mi>E</mi><mo>=</mo><mfrac><mrow><mi>d</mi><mover><mi>F</mi><mo>~</mo></mover></mrow><mrow><mi>d</mi><mi>t</mi></mrow></mfrac><mo>+</mo><mi>λ</mi><mover><mi>F</mi><mo>~</mo></mover><mo>,</mo><mspace width="1em"/><msub><mi>f</mi><mi>r</mi></msub><mo>=</mo><mover><mi>β</mi><mo>^</mo></mover><msub><mi>F</mi><mi>d</mi></msub><mo>−</mo><msub><mi>K</mi><mi>d</mi></msub><mi>E</mi><mo>,</mo><mspace width="1em"/><mover><mover><mi>β</mi><mo>^</mo></mover><mo>˙</mo></mover><mo>=</mo><mo>−</mo><msub><mi>γ</mi><mn>3</mn></msub><msub><mi>F</mi><mi>d</mi></msub><mi>E</mi></math>"#,
+            ),
+        ],
+        try_it: &[
+            (
+                "Current restriction against threshold control",
+                TryIt::Hash(
+                    "#/compare?preset=kim-step-doc&variants=2&a.controller=restriction&b.controller=threshold",
+                ),
+            ),
+            (
+                "Fixed feed against threshold control",
+                TryIt::Hash(
+                    "#/compare?preset=kim-step-doc&variants=2&a.controller=fixed&b.controller=threshold",
+                ),
+            ),
+            (
+                "Edit the dynamics-based fuzzy rules",
+                TryIt::FuzzyRules(RuleBase::Dynamics),
+            ),
+            (
+                "Experience-based against dynamics-based fuzzy rules",
+                TryIt::Hash(
+                    "#/compare?preset=liu-current-step&variants=2&a.controller=fuzzy-experience&b.controller=fuzzy-dynamics",
+                ),
+            ),
+            (
+                "PI with anti-windup over depth steps",
+                TryIt::Hash("#/simulate?preset=kim-step-doc&controller=pi"),
+            ),
+            (
+                "Adaptive control at 320 N",
+                TryIt::Hash("#/simulate?preset=maneerat-doc-4&controller=mrac"),
+            ),
+        ],
     },
 ];
 
@@ -170,8 +283,8 @@ pub fn LearnPage() -> impl IntoView {
                                             {l
                                                 .try_it
                                                 .iter()
-                                                .map(|(text, href)| {
-                                                    view! { <a class="button-link" href=*href>{"Try it: "}{*text}</a> }
+                                                .map(|(text, target)| {
+                                                    view! { <a class="button-link" href=target.href()>{"Try it: "}{*text}</a> }
                                                 })
                                                 .collect_view()}
                                         </p>

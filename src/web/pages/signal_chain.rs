@@ -1,21 +1,32 @@
 //! Signal chain: design the Butterworth low-pass that cleans the motor current, and see what it
 //! does to magnitude and phase.
+//!
+//! The form lives in the URL query (`#/signal?preset=wang-10th-5hz`,
+//! `#/signal?kind=bandpass&cutoff=40&upper=400`; defaults are left out), so a link reproduces the
+//! design and the Learn page can open a paper's filter.
+
+use std::sync::Arc;
 
 use leptos::prelude::*;
 
 use crate::charts::{Axis, LineChart, Scale, Series, PALETTE};
 use crate::machine::{Machine, OverrideCommand};
+use crate::plant::presets::PresetMachine;
 use crate::plant::Preset;
 use crate::signal::butterworth::{butter, ButterworthSpec, Cutoff, FilterKind};
 use crate::signal::filter::SosFilterBank;
 use crate::signal::rms::three_phase_rms;
 use crate::signal::sos::Sos;
-use crate::signal::spectrum::{amplitude_spectrum, find_peaks, Window};
+use crate::signal::spectrum::{amplitude_spectrum, find_peaks, AmplitudeSpectrum, Window};
 use crate::web::components::chart::ChartCanvas;
 use crate::web::components::fields::{parse_count, parse_number, NumberField, SelectField};
+use crate::web::components::runner::{Job, RunProgress, RunStatus, Runner};
+use crate::web::route::{query_params, replace_query, Page};
 
 /// A filter the papers use, one click away.
 struct FilterPreset {
+    /// The name in the URL: `#/signal?preset=wang-10th-5hz`.
+    name: &'static str,
     label: &'static str,
     kind: FilterKind,
     order: usize,
@@ -23,8 +34,9 @@ struct FilterPreset {
     sample_rate_hz: f64,
 }
 
-const PRESETS: [FilterPreset; 3] = [
+static PRESETS: [FilterPreset; 3] = [
     FilterPreset {
+        name: "wang-10th-5hz",
         label: "Wang et al.: 10th-order low-pass, 5 Hz",
         kind: FilterKind::Lowpass,
         order: 10,
@@ -32,6 +44,7 @@ const PRESETS: [FilterPreset; 3] = [
         sample_rate_hz: 10_000.0,
     },
     FilterPreset {
+        name: "kim-feed-50hz",
         label: "Kim et al.: feed motor, 50 Hz",
         kind: FilterKind::Lowpass,
         order: 2,
@@ -39,6 +52,7 @@ const PRESETS: [FilterPreset; 3] = [
         sample_rate_hz: 10_000.0,
     },
     FilterPreset {
+        name: "kim-spindle-260hz",
         label: "Kim et al.: spindle motor, 260 Hz",
         kind: FilterKind::Lowpass,
         order: 2,
@@ -46,6 +60,107 @@ const PRESETS: [FilterPreset; 3] = [
         sample_rate_hz: 10_000.0,
     },
 ];
+
+/// The form as typed, which is also what the URL query holds.
+#[derive(Debug, Clone, PartialEq)]
+struct FormText {
+    /// A [`FilterKind::name`].
+    kind: String,
+    order: String,
+    cutoff: String,
+    upper: String,
+    rate: String,
+}
+
+impl Default for FormText {
+    fn default() -> Self {
+        Self {
+            kind: FilterKind::Lowpass.name().to_string(),
+            order: "10".to_string(),
+            cutoff: "50".to_string(),
+            upper: "200".to_string(),
+            rate: "10000".to_string(),
+        }
+    }
+}
+
+impl FormText {
+    /// The fields with their query keys, in the order they are written.
+    fn fields(&self) -> [(&'static str, &String); 5] {
+        [
+            ("kind", &self.kind),
+            ("order", &self.order),
+            ("cutoff", &self.cutoff),
+            ("upper", &self.upper),
+            ("rate", &self.rate),
+        ]
+    }
+
+    /// This text with `preset`'s kind, order, cut-off and sample rate; the upper cut-off, which
+    /// no preset uses, keeps its text.
+    fn with_preset(self, preset: &FilterPreset) -> Self {
+        Self {
+            kind: preset.kind.name().to_string(),
+            order: preset.order.to_string(),
+            cutoff: preset.cutoff_hz.to_string(),
+            rate: preset.sample_rate_hz.to_string(),
+            ..self
+        }
+    }
+
+    /// The preset whose values the form holds, exactly as that preset's button fills them in.
+    fn preset(&self) -> Option<&'static FilterPreset> {
+        PRESETS
+            .iter()
+            .find(|p| self.clone().with_preset(p) == *self)
+    }
+
+    /// The form a URL query describes: the defaults, then the named preset, then each field's
+    /// own key. An unknown preset and a kind that is not a filter kind are ignored (the select
+    /// could not show it); numbers are kept as typed, so their field explains what is wrong.
+    fn from_query(query: &[(String, String)]) -> Self {
+        let value = |key: &str| query.iter().find(|(k, _)| k == key).map(|(_, v)| v);
+        let mut text = Self::default();
+        if let Some(preset) = value("preset").and_then(|n| PRESETS.iter().find(|p| p.name == n)) {
+            text = text.with_preset(preset);
+        }
+        if let Some(kind) = value("kind").and_then(|k| k.parse::<FilterKind>().ok()) {
+            text.kind = kind.name().to_string();
+        }
+        for (key, field) in [
+            ("order", &mut text.order),
+            ("cutoff", &mut text.cutoff),
+            ("upper", &mut text.upper),
+            ("rate", &mut text.rate),
+        ] {
+            if let Some(typed) = value(key) {
+                field.clone_from(typed);
+            }
+        }
+        text
+    }
+
+    /// The URL query of this form: the preset's name when the form holds one, else every field
+    /// whose text differs from its default. The upper cut-off, which no preset sets, is written
+    /// whenever it differs from its default, also while it is hidden, so its text survives.
+    fn query(&self) -> Vec<(String, String)> {
+        let defaults = Self::default();
+        let preset = self.preset();
+        let mut query: Vec<(String, String)> = preset
+            .map(|p| ("preset".to_string(), p.name.to_string()))
+            .into_iter()
+            .collect();
+        query.extend(
+            self.fields()
+                .into_iter()
+                .zip(defaults.fields())
+                .filter(|((key, _), _)| preset.is_none() || *key == "upper")
+                .filter(|((_, text), (_, default))| text.trim() != default.as_str())
+                .map(|((key, text), _)| (key.to_string(), text.clone())),
+        );
+        query
+    }
+}
 
 /// Number of frequencies at which the response is evaluated, log-spaced.
 const RESPONSE_POINTS: usize = 600;
@@ -60,17 +175,20 @@ struct FilterForm {
     rate_error: Option<String>,
 }
 
-fn parse_form(kind: &str, order: &str, cutoff: &str, upper: &str, rate: &str) -> FilterForm {
-    let kind = kind.parse::<FilterKind>().unwrap_or(FilterKind::Lowpass);
-    let band = matches!(kind, FilterKind::Bandpass | FilterKind::Bandstop);
-    let order = parse_count(order);
-    let cutoff = parse_number(cutoff);
+fn parse_form(text: &FormText) -> FilterForm {
+    let kind = text
+        .kind
+        .parse::<FilterKind>()
+        .unwrap_or(FilterKind::Lowpass);
+    let band = kind.is_band();
+    let order = parse_count(&text.order);
+    let cutoff = parse_number(&text.cutoff);
     let upper = if band {
-        parse_number(upper).map(Some)
+        parse_number(&text.upper).map(Some)
     } else {
         Ok(None)
     };
-    let rate = parse_number(rate);
+    let rate = parse_number(&text.rate);
     let mut form = FilterForm {
         design: None,
         order_error: order.as_ref().err().cloned(),
@@ -167,6 +285,8 @@ struct PhaseRecording {
     time_s: Vec<f64>,
     /// Interleaved i_u, i_v, i_w.
     phases_a: Vec<f64>,
+    /// The spectrum of the raw i_u, which no filter design changes: made once, by the job.
+    raw_spectrum: Option<AmplitudeSpectrum>,
 }
 
 /// The bench is recorded from this time (a loaded step, after the drive has settled) …
@@ -174,25 +294,84 @@ const RECORD_FROM_S: f64 = 9.0;
 /// … for this long: long enough to resolve paper 000's 4 Hz peak to 0.25 Hz.
 const RECORD_FOR_S: f64 = 4.0;
 
-fn record_bench() -> Option<PhaseRecording> {
-    let mut machine = Preset::WangBrakeBench.machine(1).ok()?;
-    let rate = machine.sample_rate_hz();
-    let skip = (RECORD_FROM_S * rate) as usize;
-    let keep = (RECORD_FOR_S * rate) as usize;
-    let mut time_s = Vec::with_capacity(keep);
-    let mut phases_a = Vec::with_capacity(3 * keep);
-    for i in 0..skip + keep {
-        let step = machine.step(OverrideCommand::default());
-        if i >= skip {
-            time_s.push(step.sensors.time_s);
-            phases_a.extend_from_slice(&step.sensors.feed_phase_currents_a);
-        }
+/// Records the bench in pieces: 130 000 samples take over half a second in the browser, so the
+/// page runs them through a [`Runner`] instead of freezing while it opens.
+struct BenchRecording {
+    machine: PresetMachine,
+    skip: usize,
+    total: usize,
+    done: usize,
+    recording: PhaseRecording,
+}
+
+impl BenchRecording {
+    fn new() -> Result<Self, String> {
+        let machine = Preset::WangBrakeBench
+            .machine(1)
+            .map_err(|e| e.to_string())?;
+        let rate = machine.sample_rate_hz();
+        let skip = (RECORD_FROM_S * rate) as usize;
+        let keep = (RECORD_FOR_S * rate) as usize;
+        Ok(Self {
+            machine,
+            skip,
+            total: skip + keep,
+            done: 0,
+            recording: PhaseRecording {
+                sample_rate_hz: rate,
+                time_s: Vec::with_capacity(keep),
+                phases_a: Vec::with_capacity(3 * keep),
+                raw_spectrum: None,
+            },
+        })
     }
-    Some(PhaseRecording {
-        sample_rate_hz: rate,
-        time_s,
-        phases_a,
-    })
+}
+
+impl Job for BenchRecording {
+    type Output = Arc<PhaseRecording>;
+
+    fn advance(&mut self, budget: usize) -> Result<bool, String> {
+        if self.recording.raw_spectrum.is_some() {
+            return Ok(true);
+        }
+        if self.done >= self.total {
+            // A chunk of its own, apart from the last samples and from the charts that the
+            // finished recording sets off, so no one task holds them all.
+            let u: Vec<f64> = self.recording.phases_a.iter().step_by(3).copied().collect();
+            let spectrum = amplitude_spectrum(&u, self.recording.sample_rate_hz, Window::Hann)
+                .map_err(|e| e.to_string())?;
+            self.recording.raw_spectrum = Some(spectrum);
+            return Ok(false);
+        }
+        let end = (self.done + budget.max(1)).min(self.total);
+        for i in self.done..end {
+            let step = self.machine.step(OverrideCommand::default());
+            if i >= self.skip {
+                self.recording.time_s.push(step.sensors.time_s);
+                self.recording
+                    .phases_a
+                    .extend_from_slice(&step.sensors.feed_phase_currents_a);
+            }
+        }
+        self.done = end;
+        Ok(false)
+    }
+
+    fn progress(&self) -> (String, f64) {
+        (
+            "simulating the brake bench".into(),
+            self.done as f64 / self.total.max(1) as f64,
+        )
+    }
+
+    fn finish(&mut self) -> Result<Self::Output, String> {
+        Ok(Arc::new(PhaseRecording {
+            sample_rate_hz: self.recording.sample_rate_hz,
+            time_s: std::mem::take(&mut self.recording.time_s),
+            phases_a: std::mem::take(&mut self.recording.phases_a),
+            raw_spectrum: self.recording.raw_spectrum.take(),
+        }))
+    }
 }
 
 /// Phase current before and after the filter, three-phase RMS of both, and both spectra.
@@ -247,9 +426,8 @@ fn current_charts(
         .push(Series::new("filtered", PALETTE[0], rms(&filtered)));
     rms_chart.fit();
 
-    let u_raw: Vec<f64> = recording.phases_a.iter().step_by(3).copied().collect();
     let u_filtered: Vec<f64> = filtered.iter().step_by(3).copied().collect();
-    let raw = amplitude_spectrum(&u_raw, recording.sample_rate_hz, Window::Hann).ok()?;
+    let raw = recording.raw_spectrum.as_ref()?;
     let after = amplitude_spectrum(&u_filtered, recording.sample_rate_hz, Window::Hann).ok()?;
     let shown = |s: &crate::signal::spectrum::AmplitudeSpectrum| -> Vec<(f64, f64)> {
         s.freq_hz
@@ -262,7 +440,7 @@ fn current_charts(
     let mut spectrum = LineChart::new(Axis::log("frequency (Hz)"), Axis::log("amplitude (A)"));
     spectrum
         .series
-        .push(Series::new("raw", PALETTE[4], shown(&raw)));
+        .push(Series::new("raw", PALETTE[4], shown(raw)));
     spectrum
         .series
         .push(Series::new("filtered", PALETTE[0], shown(&after)));
@@ -283,26 +461,31 @@ fn current_charts(
 /// The signal-chain page.
 #[component]
 pub fn SignalChainPage() -> impl IntoView {
-    let kind = RwSignal::new(FilterKind::Lowpass.name().to_string());
-    let order = RwSignal::new("10".to_string());
-    let cutoff = RwSignal::new("50".to_string());
-    let upper = RwSignal::new("200".to_string());
-    let rate = RwSignal::new("10000".to_string());
+    let initial = FormText::from_query(&query_params(
+        &window().location().hash().unwrap_or_default(),
+    ));
+    let kind = RwSignal::new(initial.kind);
+    let order = RwSignal::new(initial.order);
+    let cutoff = RwSignal::new(initial.cutoff);
+    let upper = RwSignal::new(initial.upper);
+    let rate = RwSignal::new(initial.rate);
 
-    let form = Memo::new(move |_| {
-        parse_form(
-            &kind.get(),
-            &order.get(),
-            &cutoff.get(),
-            &upper.get(),
-            &rate.get(),
-        )
+    let text = Memo::new(move |_| FormText {
+        kind: kind.get(),
+        order: order.get(),
+        cutoff: cutoff.get(),
+        upper: upper.get(),
+        rate: rate.get(),
     });
+    // Keep the URL in step with the form, so a link reproduces the design.
+    Effect::new(move |_| replace_query(Page::SignalChain, &text.with(FormText::query)));
+    let chosen_preset = Memo::new(move |_| text.with(|t| t.preset().map(|p| p.name)));
+
+    let form = Memo::new(move |_| text.with(parse_form));
     let is_band = Signal::derive(move || {
-        matches!(
-            kind.get().parse::<FilterKind>(),
-            Ok(FilterKind::Bandpass | FilterKind::Bandstop)
-        )
+        kind.get()
+            .parse::<FilterKind>()
+            .is_ok_and(FilterKind::is_band)
     });
     // The last valid design stays on screen while the user types an invalid value.
     let charts = Memo::new(move |previous: Option<&Option<(LineChart, LineChart)>>| {
@@ -325,14 +508,20 @@ pub fn SignalChainPage() -> impl IntoView {
                 LineChart::new(Axis::log("frequency (Hz)"), Axis::linear("phase (°)"))
             })
     });
-    // The bench recording is made once; the filter is re-applied whenever the design changes.
-    let recording = StoredValue::new_local(record_bench());
+    // The bench recording is made once, in pieces; the filter is re-applied whenever the design
+    // changes.
+    let bench = Runner::<Arc<PhaseRecording>>::new();
+    match BenchRecording::new() {
+        Ok(job) => bench.start(job),
+        Err(e) => bench.status.set(RunStatus::Failed(e)),
+    }
+    let recording = bench.finished();
     let currents = Memo::new(
         move |previous: Option<&Option<(LineChart, LineChart, LineChart, String)>>| {
             let design = form.with(|f| f.design.clone());
             match design {
                 Some((_, sos)) => {
-                    recording.with_value(|r| r.as_ref().and_then(|r| current_charts(r, &sos)))
+                    recording.with(|r| r.as_ref().and_then(|r| current_charts(r, &sos)))
                 }
                 None => previous.cloned().flatten(),
             }
@@ -375,16 +564,20 @@ pub fn SignalChainPage() -> impl IntoView {
                             {PRESETS
                                 .iter()
                                 .map(|p| {
-                                    let (k, o, c, r) = (p.kind, p.order, p.cutoff_hz, p.sample_rate_hz);
+                                    let name = p.name;
                                     view! {
                                         <button
                                             type="button"
                                             class="preset"
+                                            aria-pressed=move || {
+                                                if chosen_preset.get() == Some(name) { "true" } else { "false" }
+                                            }
                                             on:click=move |_| {
-                                                kind.set(k.name().to_string());
-                                                order.set(o.to_string());
-                                                cutoff.set(c.to_string());
-                                                rate.set(r.to_string());
+                                                let filled = text.get_untracked().with_preset(p);
+                                                kind.set(filled.kind);
+                                                order.set(filled.order);
+                                                cutoff.set(filled.cutoff);
+                                                rate.set(filled.rate);
                                             }
                                         >
                                             {p.label}
@@ -449,6 +642,7 @@ pub fn SignalChainPage() -> impl IntoView {
                 "above. The three-phase RMS of a balanced set is steady — the amplitude over √2 — "
                 "and the spectrum shows the 4 Hz supply frequency that paper 000 found rising with load."
             </p>
+            <RunProgress runner=bench.clone() id="bench-progress" />
             <p class="hint" aria-live="polite">{peak_text}</p>
             <div class="charts">
                 <ChartCanvas label="Phase current before and after filtering" chart=current_chart(0) />
