@@ -8,9 +8,10 @@ use std::time::Duration;
 
 use leptos::prelude::*;
 
-use crate::charts::{Axis, LineChart, Series, PALETTE};
+use crate::charts::{Axis, LineChart, Rgb, Series, PALETTE};
 use crate::estimation::least_squares::fit;
-use crate::plant::recording::{BlockRow, LoadStep, OpenLoopRun};
+use crate::machine::Machine;
+use crate::plant::recording::{BlockRow, OpenLoopRun};
 use crate::plant::Preset;
 use crate::signal::spectrum::{amplitude_spectrum, Window};
 use crate::web::components::chart::ChartCanvas;
@@ -24,24 +25,83 @@ const RERUN_DELAY: Duration = Duration::from_millis(300);
 /// Samples summarised per plotted row: 5 ms at 10 kHz.
 const BLOCK_SAMPLES: usize = 50;
 
+/// Spectra are drawn up to this frequency: the bench's 4 Hz electrical frequency and its first
+/// harmonics (paper 000 Fig. 9).
+const SPECTRUM_MAX_HZ: f64 = 20.0;
+
+/// A load step needs at least this many settled samples (0.1 s at 10 kHz) to count; shorter
+/// "steps" are the brake's torque following the feed as it starts or stops.
+const MIN_STEP_SAMPLES: usize = 1000;
+
+/// One brake-bench load step as the page shows it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct StepSummary {
+    /// Brake torque during the step.
+    brake_torque_nm: f64,
+    /// Mean RMS feed current over its settled part.
+    feed_rms_a: f64,
+    /// Amplitude spectrum of the phase current i_u up to [`SPECTRUM_MAX_HZ`]: (Hz, A).
+    spectrum: Vec<(f64, f64)>,
+}
+
 /// A finished open-loop recording.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Recording {
     preset: Preset,
     rows: Vec<BlockRow>,
-    steps: Vec<LoadStep>,
+    steps: Vec<StepSummary>,
 }
 
 struct PlantJob {
     preset: Preset,
     run: OpenLoopRun,
+    sample_rate_hz: f64,
+    /// The summaries of the load steps that have ended. Each step's spectrum is taken as soon as
+    /// the next step begins, so the work is spread over the run's chunks instead of holding the
+    /// page for all steps at the end.
+    steps: Vec<StepSummary>,
+    /// How many of the run's load steps have been summarised (or skipped as too short).
+    steps_seen: usize,
+}
+
+impl PlantJob {
+    /// Summarises the load steps up to (not including) `ended`.
+    fn summarise_steps(&mut self, ended: usize) {
+        let ended = ended.min(self.run.load_steps().len());
+        for step in &self.run.load_steps()[self.steps_seen.min(ended)..ended] {
+            if step.feed_iu_a.len() < MIN_STEP_SAMPLES {
+                continue;
+            }
+            // Cannot fail: the step has more than one sample and the rate is the plant's.
+            let spectrum = amplitude_spectrum(&step.feed_iu_a, self.sample_rate_hz, Window::Hann)
+                .map(|sp| {
+                    sp.freq_hz
+                        .iter()
+                        .zip(&sp.amplitude)
+                        .take_while(|(f, _)| **f <= SPECTRUM_MAX_HZ)
+                        .map(|(f, a)| (*f, *a))
+                        .collect()
+                })
+                .unwrap_or_default();
+            self.steps.push(StepSummary {
+                brake_torque_nm: step.brake_torque_nm,
+                feed_rms_a: step.feed_rms_a,
+                spectrum,
+            });
+        }
+        self.steps_seen = self.steps_seen.max(ended);
+    }
 }
 
 impl Job for PlantJob {
     type Output = Arc<Recording>;
 
     fn advance(&mut self, budget: usize) -> Result<bool, String> {
-        Ok(self.run.advance(budget.max(1000)))
+        let done = self.run.advance(budget.max(1000));
+        // A step has ended once the next one has begun; the last one when the run ends.
+        let steps = self.run.load_steps().len();
+        self.summarise_steps(if done { steps } else { steps.saturating_sub(1) });
+        Ok(done)
     }
 
     fn progress(&self) -> (String, f64) {
@@ -49,10 +109,11 @@ impl Job for PlantJob {
     }
 
     fn finish(&mut self) -> Result<Self::Output, String> {
+        self.summarise_steps(self.run.load_steps().len());
         Ok(Arc::new(Recording {
             preset: self.preset,
             rows: self.run.rows().to_vec(),
-            steps: self.run.load_steps().to_vec(),
+            steps: std::mem::take(&mut self.steps),
         }))
     }
 }
@@ -173,37 +234,78 @@ fn recording_charts(rec: &Recording) -> Vec<(&'static str, LineChart)> {
     charts
 }
 
+/// A colour for a load, `fraction` = load / largest load: light green at no load to dark violet
+/// at the largest (viridis, which stays readable for colour-blind readers, without its pale
+/// yellow end that would vanish on white). The same load has the same colour in every chart.
+fn load_colour(fraction: f64) -> Rgb {
+    const STOPS: [(f64, f64, f64); 4] = [
+        (94.0, 201.0, 98.0),
+        (33.0, 145.0, 140.0),
+        (59.0, 82.0, 139.0),
+        (68.0, 1.0, 84.0),
+    ];
+    let t = if fraction.is_finite() {
+        fraction.clamp(0.0, 1.0) * (STOPS.len() - 1) as f64
+    } else {
+        0.0
+    };
+    let i = (t.floor() as usize).min(STOPS.len() - 2);
+    let u = t - i as f64;
+    let (a, b) = (STOPS[i], STOPS[i + 1]);
+    let mix = |p: f64, q: f64| (p + (q - p) * u).round() as u8;
+    Rgb(mix(a.0, b.0), mix(a.1, b.1), mix(a.2, b.2))
+}
+
+/// The bench's charts: the spectrum of every load step (loading steps in one chart, unloading
+/// steps in another, so neither holds more than about ten lines), RMS current against brake
+/// torque with the fitted line, and the fit as text.
+#[derive(Debug, Clone, PartialEq)]
+struct BenchCharts {
+    loading: LineChart,
+    unloading: LineChart,
+    line: LineChart,
+    text: String,
+}
+
 /// Paper 000's bench: spectra at the load steps, and RMS current against brake torque with the
 /// fitted line.
-fn bench_charts(rec: &Recording) -> Option<(LineChart, LineChart, String)> {
-    let steps: Vec<&LoadStep> = rec
-        .steps
-        .iter()
-        .filter(|s| s.feed_iu_a.len() > 1000)
-        .collect();
+fn bench_charts(rec: &Recording) -> Option<BenchCharts> {
+    let steps = &rec.steps;
     if steps.is_empty() {
         return None;
     }
-    let mut spectra = LineChart::new(
-        Axis::linear("frequency (Hz)"),
-        Axis::linear("amplitude of i_u (A)"),
-    );
-    let shown: Vec<&&LoadStep> = steps.iter().step_by((steps.len() / 5).max(1)).collect();
-    for (k, s) in shown.iter().enumerate() {
-        if let Ok(sp) = amplitude_spectrum(&s.feed_iu_a, 10_000.0, Window::Hann) {
-            spectra.series.push(Series::new(
-                format!("{:.2} N·m", s.brake_torque_nm),
-                PALETTE[k % PALETTE.len()],
-                sp.freq_hz
-                    .iter()
-                    .zip(&sp.amplitude)
-                    .filter(|(f, _)| **f <= 20.0)
-                    .map(|(f, a)| (*f, *a))
-                    .collect(),
-            ));
-        }
+    let spectrum_chart = || {
+        LineChart::new(
+            Axis::linear("frequency (Hz)"),
+            Axis::linear("amplitude of i_u (A)"),
+        )
+    };
+    let (mut loading, mut unloading) = (spectrum_chart(), spectrum_chart());
+    let largest_nm = steps.iter().map(|s| s.brake_torque_nm).fold(0.0, f64::max);
+    let mut previous_nm = f64::NEG_INFINITY;
+    for s in steps {
+        // A step is loading when its torque is at least the previous step's.
+        let chart = if s.brake_torque_nm >= previous_nm {
+            &mut loading
+        } else {
+            &mut unloading
+        };
+        previous_nm = s.brake_torque_nm;
+        chart.series.push(Series::new(
+            format!("{:.2} N·m", s.brake_torque_nm),
+            load_colour(s.brake_torque_nm / largest_nm),
+            s.spectrum.clone(),
+        ));
     }
-    spectra.fit();
+    // One amplitude scale for both, so loading and unloading at a similar torque compare by eye.
+    loading.fit();
+    unloading.fit();
+    if !unloading.series.is_empty() {
+        let (a, b) = (&loading.y.range, &unloading.y.range);
+        let shared = a.start.min(b.start)..a.end.max(b.end);
+        loading.y.range = shared.clone();
+        unloading.y.range = shared;
+    }
     let torque: Vec<f64> = steps.iter().map(|s| s.brake_torque_nm).collect();
     let rms: Vec<f64> = steps.iter().map(|s| s.feed_rms_a).collect();
     let mut line = LineChart::new(
@@ -219,25 +321,30 @@ fn bench_charts(rec: &Recording) -> Option<(LineChart, LineChart, String)> {
     let text = match fit(&[("idle current", &ones), ("torque", &torque)], &rms) {
         Ok(f) => {
             let (a, b) = (f.coefficients[0], f.coefficients[1]);
-            let t_max = torque.iter().cloned().fold(0.0, f64::max);
             line.series.push(
                 Series::new(
                     "least-squares line",
                     PALETTE[5],
-                    vec![(0.0, a), (t_max, a + b * t_max)],
+                    vec![(0.0, a), (largest_nm, a + b * largest_nm)],
                 )
                 .dashed(),
             );
             format!(
-                "RMS current = {a:.3} A + {b:.3} A/(N·m) × torque (R² = {:.4}): linear, with an idle \
-                 current that is not zero, as paper 000's Fig. 11 shows.",
+                "RMS current = {a:.3} A + {b:.3} A/(N·m) × torque over {} load steps (R² = {:.4}): \
+                 linear, with an idle current that is not zero, as paper 000's Fig. 11 shows.",
+                steps.len(),
                 f.r_squared
             )
         }
-        Err(e) => format!("No line could be fitted: {e}"),
+        Err(e) => format!("No line could be fitted to {} load steps: {e}", steps.len()),
     };
     line.fit();
-    Some((spectra, line, text))
+    Some(BenchCharts {
+        loading,
+        unloading,
+        line,
+        text,
+    })
 }
 
 /// The Plant page.
@@ -280,9 +387,13 @@ pub fn PlantPage() -> impl IntoView {
         debounce.request(move || match p.machine(1) {
             Ok(machine) => {
                 let max_s = p.summary().nominal_duration_s * 3.0 + 10.0;
+                let sample_rate_hz = machine.sample_rate_hz();
                 runner.start(PlantJob {
                     preset: p,
                     run: OpenLoopRun::new(machine, pct, BLOCK_SAMPLES, max_s),
+                    sample_rate_hz,
+                    steps: Vec::new(),
+                    steps_seen: 0,
                 });
             }
             Err(e) => {
@@ -366,10 +477,17 @@ pub fn PlantPage() -> impl IntoView {
                     {move || {
                         bench
                             .get()
-                            .map(|(spectra, line, text)| {
+                            .map(|BenchCharts { loading, unloading, line, text }| {
+                                // A run cut short by its time limit may end before the brake is unloaded.
+                                let unloading = (!unloading.series.is_empty()).then(|| {
+                                    view! {
+                                        <ChartCanvas label="Spectrum of the phase current at each unloading step" chart=Signal::derive(move || unloading.clone()) />
+                                    }
+                                });
                                 view! {
                                     <h2>"Paper 000's bench: current against load"</h2>
-                                    <ChartCanvas label="Spectrum of the phase current at load steps" chart=Signal::derive(move || spectra.clone()) />
+                                    <ChartCanvas label="Spectrum of the phase current at each loading step" chart=Signal::derive(move || loading.clone()) />
+                                    {unloading}
                                     <p class="hint" role="status">{text}</p>
                                     <ChartCanvas label="RMS current against brake torque" chart=Signal::derive(move || line.clone()) />
                                 }
