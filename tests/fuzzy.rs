@@ -7,12 +7,14 @@ use wasm_bindgen_test::wasm_bindgen_test as test;
 
 use cutlab::control::fuzzy::engine::{Defuzzifier, Norm};
 use cutlab::control::fuzzy::fll::{parse, write};
+use cutlab::control::fuzzy::membership::Shape;
 use cutlab::control::fuzzy::rules::{paper_002_engine, RuleBase, RuleTable, TABLE_4_AS_PRINTED};
 use cutlab::rng::Rng;
 use serde_json::Value;
 
 const REFERENCE: &str = include_str!("reference/fuzzy/reference.json");
 const TABLE_5: &str = include_str!("reference/fuzzy/table5.json");
+const ENGINES: &str = include_str!("reference/fuzzy/engines.json");
 
 fn numbers(v: &Value) -> Vec<f64> {
     v.as_array()
@@ -263,4 +265,202 @@ fn experience_surface_rises_with_error_and_error_change() {
             );
         }
     }
+}
+
+/// One engine of `engines.json`, by name.
+fn reference_engine(name: &str) -> Value {
+    let all: Value = serde_json::from_str(ENGINES).unwrap();
+    all["engines"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|e| e["name"] == name)
+        .unwrap_or_else(|| panic!("engines.json has no engine {name}"))
+        .clone()
+}
+
+/// How far a reference of `engines.json` may lie from cutlab's exact value, for output `k`.
+///
+/// **Centroid.** Both tools integrate a sampled aggregate in a way that is exact on every straight
+/// piece of it: fuzzylite by the midpoint rule on `resolution` cells of width h = W/resolution,
+/// scikit-fuzzy by trapezoids between samples `universe_step` apart. The aggregate is piecewise
+/// linear, so only a cell holding a kink (a term's vertex, a clip corner, a crossing) is in
+/// error, by at most |Δslope|·h²/8 in area, at most W from the centroid: the centroid is off by
+/// at most S·h²·W / (8·A), with S the aggregate's total change of slope and A its area (the
+/// script records the largest S and the smallest A over the points, per output). Each tool adds
+/// its n = W/h cells in one running sum, whose rounding moves the centroid by at most
+/// 2·n·ε·max|x|. The tolerance is twice both bounds together, plus the 12 decimals fuzzylite
+/// prints: 1e-9 to 2e-8 for both tools here (the two error sources are balanced at the
+/// resolutions the script uses), where the largest error observed is about 1e-10 (the bounds
+/// put every kink at its worst place in its cell).
+///
+/// **Mean of maximum.** fuzzylite samples cell midpoints, so it finds each end of the highest
+/// plateau within h/2, and it counts as "equal to the maximum" anything within its machine
+/// epsilon of 1e-6, which moves an end by up to 1e-6/s on an edge of slope s: h/2 + 1e-6/s_min,
+/// with s_min the gentlest edge of an output term (2e-6 to 1.5e-5 here; largest error observed
+/// 7e-6).
+///
+/// **Weighted average** (eq 7): closed form on both sides, 1e-12.
+fn engine_tolerance(engine: &Value, case: &Value, k: usize) -> f64 {
+    let range = numbers(&engine["output_ranges"][k]);
+    let (lo, hi) = (range[0], range[1]);
+    let width = hi - lo;
+    let step = match case["resolution"].as_f64() {
+        Some(cells) => width / cells,
+        None => case["universe_step"].as_f64().unwrap_or(0.0),
+    };
+    match case["defuzzifier"].as_str().unwrap() {
+        "centroid" => {
+            let slope_change = engine["max_slope_change_sum"][k].as_f64().unwrap();
+            let area = engine["min_area"][k].as_f64().unwrap();
+            let cells = width / step;
+            let discretisation = slope_change * step * step * width / (8.0 * area);
+            let rounding = 2.0 * cells * f64::EPSILON * lo.abs().max(hi.abs());
+            2.0 * (discretisation + rounding) + 1e-12
+        }
+        "mean-of-maximum" => {
+            let slope = engine["gentlest_edge_slope"][k].as_f64().unwrap();
+            step / 2.0 + 1e-6 / slope + 1e-12
+        }
+        _ => 1e-12,
+    }
+}
+
+/// Builds cutlab's engine from each case's FLL text (the text fuzzylite read) with cutlab's FLL
+/// parser, evaluates it at every point and compares every output with the reference. Returns
+/// the parsed engines and the number of comparisons.
+fn compare_with_references(name: &str) -> (Vec<cutlab::control::fuzzy::engine::Engine>, usize) {
+    let engine = reference_engine(name);
+    let points: Vec<Vec<f64>> = engine["points"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(numbers)
+        .collect();
+    let outputs = engine["outputs"].as_array().unwrap().len();
+    let mut engines = Vec::new();
+    let mut checked = 0;
+    for case in engine["cases"].as_array().unwrap() {
+        let tool = case["tool"].as_str().unwrap();
+        let defuzzifier = case["defuzzifier"].as_str().unwrap();
+        let mut ours = parse(case["fll"].as_str().unwrap()).unwrap();
+        assert_eq!(ours.outputs().len(), outputs, "{name}: outputs");
+        if defuzzifier == "mean-of-maximum" {
+            // Where the highest level of the aggregate is reached on two separate intervals,
+            // fuzzylite 6 averages the first interval only; no reference point is such a place.
+            for k in 0..outputs {
+                assert!(
+                    engine["separate_maxima"][k].as_array().unwrap().is_empty(),
+                    "{name}: points with separate maxima: {}",
+                    engine["separate_maxima"][k]
+                );
+            }
+        }
+        let mut out = vec![0.0; outputs];
+        for (point, expected) in points.iter().zip(case["outputs"].as_array().unwrap()) {
+            ours.evaluate(point, &mut out);
+            for (k, (value, expected)) in out.iter().zip(numbers(expected)).enumerate() {
+                let tol = engine_tolerance(&engine, case, k);
+                assert!(
+                    tol <= 3e-5,
+                    "{name}: {defuzzifier} tolerance {tol} from {tool} is too loose to mean much"
+                );
+                assert!(
+                    (value - expected).abs() <= tol,
+                    "{name} / {defuzzifier} vs {tool}, output {} at {point:?}: {value} vs \
+                     {expected} (tolerance {tol:e})",
+                    engine["outputs"][k]
+                );
+                checked += 1;
+            }
+        }
+        engines.push(ours);
+    }
+    (engines, checked)
+}
+
+#[test]
+fn product_conjunction_matches_fuzzylite_scikit_fuzzy_and_eq_7() {
+    let mut checked = 0;
+    for (name, implication) in [
+        ("paper002-experience-product-and", Norm::Minimum),
+        ("paper002-dynamics-product-and", Norm::Minimum),
+        (
+            "paper002-dynamics-product-and-product",
+            Norm::AlgebraicProduct,
+        ),
+    ] {
+        let (engines, count) = compare_with_references(name);
+        for e in &engines {
+            assert_eq!(e.conjunction(), Norm::AlgebraicProduct, "{name}");
+            assert_eq!(e.implication(), implication, "{name}");
+        }
+        checked += count;
+    }
+    // 67 points: two engines with four references, one with two.
+    assert_eq!(checked, 67 * 10);
+    // The references tell the conjunctions apart: with AND = min the same engine lands far from
+    // them at many points.
+    let reference = reference_engine("paper002-dynamics-product-and");
+    let case = &reference["cases"][0];
+    let mut min_and = parse(
+        &case["fll"]
+            .as_str()
+            .unwrap()
+            .replace("conjunction: AlgebraicProduct", "conjunction: Minimum"),
+    )
+    .unwrap();
+    let apart = reference["points"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .zip(case["outputs"].as_array().unwrap())
+        .filter(|(p, expected)| {
+            let mut out = [0.0];
+            min_and.evaluate(&numbers(p), &mut out);
+            (out[0] - numbers(expected)[0]).abs() > 1e-3
+        })
+        .count();
+    assert!(
+        apart > 20,
+        "AND = min is within 1e-3 of AND = product at all but {apart} points"
+    );
+}
+
+#[test]
+fn trapezoid_and_shoulder_terms_match_fuzzylite_scikit_fuzzy_and_eq_7() {
+    let mut checked = 0;
+    for name in ["shapes", "shapes-product"] {
+        let (engines, count) = compare_with_references(name);
+        for e in &engines {
+            let shapes = &e.outputs()[0].terms;
+            assert!(shapes
+                .iter()
+                .any(|t| matches!(t.shape, Shape::Trapezoid { .. })));
+            assert!(shapes
+                .iter()
+                .any(|t| matches!(t.shape, Shape::Ramp { start, end } if start > end)));
+            assert!(shapes
+                .iter()
+                .any(|t| matches!(t.shape, Shape::Ramp { start, end } if start < end)));
+            assert!(
+                e.rules().iter().any(|r| r.weight < 1.0),
+                "{name}: weighted rules"
+            );
+        }
+        checked += count;
+    }
+    // 65 points: min/min with four references, product/product with two.
+    assert_eq!(checked, 65 * 6);
+}
+
+#[test]
+fn two_output_engine_matches_fuzzylite_scikit_fuzzy_and_eq_7() {
+    let (engines, checked) = compare_with_references("two-outputs");
+    for e in &engines {
+        assert_eq!(e.outputs().len(), 2);
+        assert!(e.rules().iter().all(|r| r.consequents.len() == 2));
+    }
+    // 65 points, two outputs, four references.
+    assert_eq!(checked, 65 * 2 * 4);
 }

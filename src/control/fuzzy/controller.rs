@@ -4,10 +4,17 @@
 //!
 //! ```text
 //! E(i)  = F_target − F(i)              (paper: I_ref − I)
-//! EC(i) = E(i) − E(i−1)
+//! EC(i) = E(i) − E(i−1)                (0 on the first step and after a reset)
 //! U     = fuzzy(k_e·E, k_ec·EC)        (inputs saturated to the universe [−6, 6])
 //! a_f(i+1) = a_f(i) + k_u·U
 //! ```
+//!
+//! E is in newtons, positive when the cut is lighter than the target; EC is in newtons too,
+//! positive when the cut is getting lighter. In cutlab's units
+//! k_e = 6 / (F_target · error_range_pct / 100) and k_ec = 6 / (F_target · change_range_pct / 100),
+//! both from the target of the current step, and k_u = output_range_pct / 6 percentage points of
+//! override per unit of U. Since U lies in [−6, 6], one step changes the override by at most
+//! `output_range_pct`; the override itself is limited by the safety envelope, not here.
 //!
 //! Paper 002 regulates the spindle current with k_e = 6/25 A⁻¹ and k_ec = 3/25 A⁻¹ for
 //! I_ref = 25 A, and k_u = 250 mm/min for a 1500 mm/min feed: an error of the whole reference
@@ -56,6 +63,8 @@ pub struct FuzzyController {
     previous_error_n: Option<f64>,
     output: [f64; 1],
     terms: [Term; 4],
+    /// The last step was held (a non-finite force): nothing was inferred, nothing fired.
+    held: bool,
 }
 
 impl FuzzyController {
@@ -72,6 +81,7 @@ impl FuzzyController {
                 Term::new("U", ""),
                 Term::new("Δ override", "%"),
             ],
+            held: false,
         })
     }
 
@@ -86,8 +96,15 @@ impl Controller for FuzzyController {
     fn step(&mut self, input: &ControlInput) -> f64 {
         let error_n = input.target_force_n - input.force_n;
         if !error_n.is_finite() {
+            // What is plotted for a held period is what happened: no inputs, no increment.
+            self.held = true;
+            for t in &mut self.terms[..3] {
+                t.value = f64::NAN;
+            }
+            self.terms[3].value = 0.0;
             return input.applied_override_pct;
         }
+        self.held = false;
         let change_n = error_n - self.previous_error_n.unwrap_or(error_n);
         self.previous_error_n = Some(error_n);
         let p = self.params;
@@ -110,14 +127,336 @@ impl Controller for FuzzyController {
     }
 
     fn rule_activations(&self) -> Option<&[f64]> {
-        Some(self.engine.activations())
+        (!self.held).then(|| self.engine.activations())
     }
 
     fn reset(&mut self) {
         self.previous_error_n = None;
+        self.held = false;
         self.engine.reset();
         for t in &mut self.terms {
             t.value = 0.0;
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    //! The law checked against hand calculations.
+    //!
+    //! Every case uses a target of 300 N and the paper's scalings unless it says otherwise:
+    //! k_e = 6 / (300 N · 100 %) = 0.02 N⁻¹, k_ec = 6 / (300 N · 200 %) = 0.01 N⁻¹ and
+    //! k_u = 100 % / 6 = 16.67 percentage points per unit of U. With the weighted average (eq 7)
+    //! and the experience table (U level = sat(E level + EC level)), U is worked out by hand from
+    //! the seven triangles of [`super::super::rules::seven_terms`] (peaks 2 apart, so an input on a
+    //! peak belongs to one set only and an input halfway between two belongs 0.5 to each).
+
+    use super::*;
+    use crate::control::fuzzy::rules::RuleBase;
+    use crate::rng::Rng;
+
+    const TARGET_N: f64 = 300.0;
+    const TOL: f64 = 1e-12;
+
+    fn params(error: f64, change: f64, output: f64) -> FuzzyParams {
+        FuzzyParams {
+            error_range_pct: error,
+            change_range_pct: change,
+            output_range_pct: output,
+            defuzzifier: Defuzzifier::WeightedAverage,
+        }
+    }
+
+    fn paper() -> FuzzyParams {
+        params(100.0, 200.0, 100.0)
+    }
+
+    fn controller(p: FuzzyParams) -> FuzzyController {
+        FuzzyController::new(&RuleBase::Experience.table(), p).unwrap()
+    }
+
+    fn input(force_n: f64, applied_override_pct: f64) -> ControlInput {
+        ControlInput {
+            time_s: 10.0,
+            dt_s: 0.05,
+            force_n,
+            target_force_n: TARGET_N,
+            programmed_feed_mm_min: 1500.0,
+            applied_override_pct,
+            time_since_start_s: 10.0,
+        }
+    }
+
+    /// (E scaled, EC scaled, U, Δ override %) after the latest step.
+    fn terms(c: &FuzzyController) -> [f64; 4] {
+        let t = c.terms();
+        [t[0].value, t[1].value, t[2].value, t[3].value]
+    }
+
+    fn assert_close(actual: f64, expected: f64, what: &str) {
+        assert!(
+            (actual - expected).abs() <= TOL * (1.0 + expected.abs()),
+            "{what}: {actual} vs {expected}"
+        );
+    }
+
+    fn assert_terms(c: &FuzzyController, expected: [f64; 4], step: &str) {
+        for ((actual, expected), name) in terms(c)
+            .into_iter()
+            .zip(expected)
+            .zip(["E", "EC", "U", "Δ"])
+        {
+            assert_close(actual, expected, &format!("{step}: {name}"));
+        }
+    }
+
+    #[test]
+    fn the_error_is_target_minus_force_in_newtons_scaled_by_k_e() {
+        // 250 N on a 300 N target: the cut is light, E = +50 N, k_e·E = 0.02 · 50 = 1 (ZO 0.5,
+        // PS 0.5). The first step has no earlier error, so EC = 0 (ZO). Rules ZO,ZO → ZO (0) and
+        // PS,ZO → PS (2), each at 0.5: U = 1, Δ = 1/6 · 100 % = 16.67 %, and the feed rises.
+        let mut c = controller(paper());
+        let request = c.step(&input(250.0, 100.0));
+        assert_terms(&c, [1.0, 0.0, 1.0, 100.0 / 6.0], "light cut");
+        assert_close(request, 100.0 + 100.0 / 6.0, "request");
+        // 350 N: a heavy cut, E = −50 N → −1, U = −1, and the feed falls by the same amount.
+        let mut c = controller(paper());
+        let request = c.step(&input(350.0, 100.0));
+        assert_terms(&c, [-1.0, 0.0, -1.0, -100.0 / 6.0], "heavy cut");
+        assert_close(request, 100.0 - 100.0 / 6.0, "request");
+    }
+
+    #[test]
+    fn the_change_of_error_is_the_difference_of_successive_errors_scaled_by_k_ec() {
+        let mut c = controller(paper());
+        // E = 0.
+        c.step(&input(300.0, 100.0));
+        // E = 100 N → 2 (PS); EC = 100 N − 0 N = 100 N → 0.01 · 100 = 1 (ZO 0.5, PS 0.5).
+        // PS,ZO → PS (2) and PS,PS → PM (4), each at 0.5: U = 3, Δ = 50 %.
+        c.step(&input(200.0, 100.0));
+        assert_terms(&c, [2.0, 1.0, 3.0, 50.0], "error grows");
+        // The error falls back to 0: EC = 0 − 100 N → −1 (NS 0.5, ZO 0.5). ZO,NS → NS (−2) and
+        // ZO,ZO → ZO (0): U = −1.
+        c.step(&input(300.0, 100.0));
+        assert_terms(&c, [0.0, -1.0, -1.0, -100.0 / 6.0], "error shrinks");
+        // EC is a difference of errors in newtons, so a change of target counts, and each input is
+        // scaled by the target of its own step: target 400 N at the same 300 N force gives
+        // E = 100 N · 6/400 N = 1.5 and EC = (100 N − 0 N) · 6/800 N = 0.75.
+        let mut c = controller(paper());
+        c.step(&input(300.0, 100.0));
+        c.step(&ControlInput {
+            target_force_n: 400.0,
+            ..input(300.0, 100.0)
+        });
+        assert_close(terms(&c)[0], 1.5, "E after a target change");
+        assert_close(terms(&c)[1], 0.75, "EC after a target change");
+    }
+
+    #[test]
+    fn the_override_integrates_the_increments_from_the_applied_value() {
+        // a_f(i+1) = a_f(i) + Δa_f(i) over five periods, each Δ worked out by hand:
+        //   300 N: E 0, EC 0                  → U 0                              Δ 0
+        //   200 N: E 2, EC 1                  → U 3                              Δ 50
+        //   200 N: E 2, EC 0                  → PS,ZO → PS: U 2                  Δ 33.33
+        //   300 N: E 0, EC −1                 → U −1                             Δ −16.67
+        //   250 N: E 1 (ZO .5, PS .5), EC 0.5 (ZO .75, PS .25); AND = min gives
+        //          ZO,ZO .5 → 0, ZO,PS .25 → 2, PS,ZO .5 → 2, PS,PS .25 → 4:
+        //          U = (0.5 + 1 + 1) / 1.5 = 5/3                                 Δ 27.78
+        // (AND = product would give U = 1.5 in the last period.)
+        let forces = [300.0, 200.0, 200.0, 300.0, 250.0];
+        let increments = [0.0, 50.0, 100.0 / 3.0, -100.0 / 6.0, 250.0 / 9.0];
+        let mut c = controller(paper());
+        let mut applied = 100.0;
+        let mut expected = 100.0;
+        for (k, (force, delta)) in forces.into_iter().zip(increments).enumerate() {
+            let request = c.step(&input(force, applied));
+            expected += delta;
+            assert_close(terms(&c)[3], delta, &format!("Δ at period {k}"));
+            assert_close(request, expected, &format!("a_f at period {k}"));
+            applied = request;
+        }
+        assert_close(
+            expected,
+            100.0 + 50.0 + 100.0 / 3.0 - 100.0 / 6.0 + 250.0 / 9.0,
+            "sum",
+        );
+        // The increment is added to what the machine applied, not to the last request: with the
+        // envelope holding the override at 120 %, E = 2, EC = 0 asks for 120 + 33.33 %.
+        let mut c = controller(paper());
+        c.step(&input(200.0, 100.0));
+        let request = c.step(&input(200.0, 120.0));
+        assert_close(request, 120.0 + 100.0 / 3.0, "from the applied override");
+    }
+
+    #[test]
+    fn k_u_scales_the_increment_and_k_e_k_ec_scale_the_inputs() {
+        let forces = [300.0, 200.0, 200.0, 300.0, 250.0];
+        let run = |p: FuzzyParams| -> Vec<[f64; 4]> {
+            let mut c = controller(p);
+            forces
+                .iter()
+                .map(|f| {
+                    c.step(&input(*f, 100.0));
+                    terms(&c)
+                })
+                .collect()
+        };
+        let base = run(paper());
+        // Doubling k_u (the output range) doubles every Δa_f and leaves E, EC and U alone.
+        for (single, double) in base.iter().zip(run(params(100.0, 200.0, 200.0))) {
+            assert_close(double[3], 2.0 * single[3], "Δ with twice k_u");
+            assert_eq!(&double[..3], &single[..3]);
+        }
+        // A doubled error range halves k_e: at 200 N, E = 100 N · 6/600 N = 1 instead of 2, with
+        // EC = 1: ZO,ZO → 0, ZO,PS → 2, PS,ZO → 2, PS,PS → 4, all at 0.5: U = 2, Δ = 33.33 %.
+        let wide_error = run(params(200.0, 200.0, 100.0));
+        assert_close(wide_error[1][0], 1.0, "E with half k_e");
+        assert_close(wide_error[1][1], 1.0, "EC with half k_e");
+        assert_close(wide_error[1][3], 100.0 / 3.0, "Δ with half k_e");
+        // A doubled change range halves k_ec: EC = 100 N · 6/1200 N = 0.5 (ZO .75, PS .25) with
+        // E = 2 (PS): PS,ZO .75 → 2 and PS,PS .25 → 4: U = 2.5, Δ = 41.67 %.
+        let wide_change = run(params(100.0, 400.0, 100.0));
+        assert_close(wide_change[1][0], 2.0, "E with half k_ec");
+        assert_close(wide_change[1][1], 0.5, "EC with half k_ec");
+        assert_close(wide_change[1][3], 250.0 / 6.0, "Δ with half k_ec");
+    }
+
+    #[test]
+    fn inputs_beyond_the_universe_saturate_at_its_edge() {
+        // An error of exactly the error range (300 N at 0 N) is E = 6: PB with EC = 0 (ZO) gives
+        // PB (centre 6), the whole output range. Ten times the range gives the same E and output.
+        let request_at = |forces: &[f64]| -> (f64, [f64; 4]) {
+            let mut c = controller(paper());
+            let mut request = f64::NAN;
+            for f in forces {
+                request = c.step(&input(*f, 100.0));
+            }
+            (request, terms(&c))
+        };
+        for (edge, beyond, e, u) in [(0.0, -2700.0, 6.0, 6.0), (600.0, 3300.0, -6.0, -6.0)] {
+            let (at_edge, edge_terms) = request_at(&[edge]);
+            let (past_edge, past_terms) = request_at(&[beyond]);
+            assert_terms_eq(edge_terms, [e, 0.0, u, 100.0 * u / 6.0]);
+            assert_terms_eq(past_terms, [e, 0.0, u, 100.0 * u / 6.0]);
+            assert_eq!(at_edge, past_edge);
+        }
+        // The change of error saturates the same way: from 300 N, a jump to −300 N is E = 600 N
+        // and EC = 600 N, exactly the change range (6); a jump to −6000 N is 63 times as much.
+        let (at_edge, edge_terms) = request_at(&[300.0, -300.0]);
+        let (past_edge, past_terms) = request_at(&[300.0, -6000.0]);
+        assert_terms_eq(edge_terms, [6.0, 6.0, 6.0, 100.0]);
+        assert_terms_eq(past_terms, [6.0, 6.0, 6.0, 100.0]);
+        assert_eq!(at_edge, past_edge);
+    }
+
+    fn assert_terms_eq(actual: [f64; 4], expected: [f64; 4]) {
+        for (a, e) in actual.into_iter().zip(expected) {
+            assert_close(a, e, &format!("{actual:?} vs {expected:?}"));
+        }
+    }
+
+    #[test]
+    fn the_increment_never_exceeds_the_output_range() {
+        // U lies in the output universe [−6, 6], so |Δa_f| ≤ the output range whatever the force;
+        // the override itself is the safety envelope's to limit (see `law`). The bound is reached
+        // at the saturated corners with eq 7 and approached but not reached with the centroid.
+        let mut rng = Rng::seed_from(11);
+        for base in RuleBase::ALL {
+            for defuzzifier in Defuzzifier::ALL {
+                let p = FuzzyParams {
+                    defuzzifier,
+                    ..params(100.0, 200.0, 37.0)
+                };
+                let mut c = FuzzyController::new(&base.table(), p).unwrap();
+                let mut largest: f64 = 0.0;
+                for k in 0..2000 {
+                    let force = match k % 5 {
+                        0 => TARGET_N + 1e6 * (rng.uniform() - 0.5),
+                        1 => [0.0, 600.0, -1e9, 1e9][(k / 5) % 4],
+                        _ => TARGET_N * 2.0 * rng.uniform(),
+                    };
+                    let applied = 255.0 * rng.uniform();
+                    let request = c.step(&input(force, applied));
+                    let delta = request - applied;
+                    assert!(
+                        delta.abs() <= 37.0 + 1e-9,
+                        "{base:?}/{defuzzifier:?}: Δ {delta} at {force} N"
+                    );
+                    largest = largest.max(delta.abs());
+                }
+                if defuzzifier == Defuzzifier::WeightedAverage {
+                    assert_close(largest, 37.0, &format!("{base:?}: largest Δ"));
+                } else {
+                    assert!(largest > 0.5 * 37.0, "{base:?}/{defuzzifier:?}: {largest}");
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn the_exposed_terms_and_activations_are_the_values_the_law_used() {
+        let mut rng = Rng::seed_from(5);
+        for defuzzifier in Defuzzifier::ALL {
+            let p = FuzzyParams {
+                defuzzifier,
+                ..params(80.0, 150.0, 60.0)
+            };
+            let mut c = FuzzyController::new(&RuleBase::Dynamics.table(), p).unwrap();
+            let mut previous_error_n = None;
+            for _ in 0..300 {
+                let target = 100.0 + 400.0 * rng.uniform();
+                let force = target * (0.5 + rng.uniform());
+                let applied = 50.0 + 100.0 * rng.uniform();
+                let request = c.step(&ControlInput {
+                    target_force_n: target,
+                    ..input(force, applied)
+                });
+                // Recomputed from the documented law, independently of the controller's state.
+                let error_n = target - force;
+                let change_n = error_n - previous_error_n.unwrap_or(error_n);
+                previous_error_n = Some(error_n);
+                let e = (6.0 / (target * 0.8) * error_n).clamp(-6.0, 6.0);
+                let ec = (6.0 / (target * 1.5) * change_n).clamp(-6.0, 6.0);
+                let [te, tec, tu, tdelta] = terms(&c);
+                assert_close(te, e, "E term");
+                assert_close(tec, ec, "EC term");
+                // The engine evaluated at the exposed inputs gives, bit for bit, the exposed U
+                // and the exposed rule activations.
+                let mut engine = c.engine().clone();
+                let mut u = [0.0];
+                engine.evaluate(&[te, tec], &mut u);
+                assert_eq!(tu.to_bits(), u[0].to_bits(), "U term");
+                assert_close(tdelta, u[0] / 6.0 * 60.0, "Δ term");
+                assert_eq!(
+                    (request - applied).to_bits(),
+                    ((applied + tdelta) - applied).to_bits()
+                );
+                assert_close(request - applied, tdelta, "Δ applied");
+                assert_eq!(c.rule_activations(), Some(engine.activations()));
+            }
+        }
+    }
+
+    #[test]
+    fn a_non_finite_force_holds_the_override_and_the_error_history() {
+        let mut c = controller(paper());
+        c.step(&input(300.0, 100.0)); // E = 0
+        for bad in [f64::NAN, f64::INFINITY, f64::NEG_INFINITY] {
+            assert_eq!(c.step(&input(bad, 123.0)), 123.0);
+            // The plot of a held period shows no inputs, no increment and no rule firing.
+            let held = terms(&c);
+            assert!(held[..3].iter().all(|v| v.is_nan()), "{held:?}");
+            assert_eq!(held[3], 0.0);
+            assert!(c.rule_activations().is_none());
+        }
+        // EC is measured from the last finite error (0 N), not from the held periods.
+        c.step(&input(200.0, 100.0));
+        assert_terms(&c, [2.0, 1.0, 3.0, 50.0], "after the hold");
+        // After a reset the first step has no earlier error again: EC = 0.
+        c.reset();
+        assert_eq!(terms(&c), [0.0; 4]);
+        // (Without the reset, 250 N after 200 N would be EC = 50 N − 100 N → −0.5.)
+        c.step(&input(250.0, 100.0));
+        assert_terms(&c, [1.0, 0.0, 1.0, 100.0 / 6.0], "after a reset");
     }
 }

@@ -11,8 +11,10 @@
 //!   form. No sampling: fuzzylite and scikit-fuzzy approach this value as their resolution grows.
 //! * **Weighted average**, paper 002 eq 7: U = Σᵢ Δa_fi·Hᵢ / Σᵢ Hᵢ over the rules, with Hᵢ the
 //!   activation of rule i and Δa_fi the centre of its output term ([`Shape::centre`]).
-//! * **Mean of maximum**, as fuzzylite defines it: the midpoint between the smallest and the
-//!   largest x at which the aggregate reaches its maximum.
+//! * **Mean of maximum**, as fuzzylite defines it: the midpoint of the first (leftmost) interval
+//!   on which the aggregate reaches its maximum. Where the maximum is reached on two separate
+//!   intervals this is not scikit-fuzzy's `mom` (the mean of every maximising x), which can fall
+//!   where the aggregate is 0.
 //!
 //! When no rule fires (every activation 0, e.g. for NaN inputs) the output is the previous output
 //! if `lock_previous` is set and there is one, else the variable's `default_value` (0 unless an
@@ -488,8 +490,12 @@ impl Engine {
         };
         match var.defuzzifier {
             Defuzzifier::MeanOfMaximum => {
+                // Left to right, as fuzzylite scans: a higher value starts a new plateau, an
+                // equal one extends the current plateau, and once the aggregate dips below the
+                // maximum a later equal plateau no longer counts — the first one wins.
                 let mut best = 0.0;
                 let (mut smallest, mut largest) = (f64::NAN, f64::NAN);
+                let mut on_plateau = false;
                 for w in bp.windows(2) {
                     let (x0, x1) = (w[0], w[1]);
                     if x1 <= x0 {
@@ -501,9 +507,13 @@ impl Engine {
                             best = mu;
                             smallest = x;
                             largest = x;
+                            on_plateau = true;
                         } else if (mu - best).abs() <= 1e-12 && mu > 0.0 {
-                            smallest = smallest.min(x);
-                            largest = largest.max(x);
+                            if on_plateau {
+                                largest = largest.max(x);
+                            }
+                        } else {
+                            on_plateau = false;
                         }
                     }
                 }
@@ -645,6 +655,10 @@ mod tests {
         e.evaluate(&[0.25], &mut out);
         // "small" clipped at 0.75: plateau from 1.5 to 3.0.
         assert!((out[0] - 2.25).abs() < 1e-9, "{}", out[0]);
+        // Both rules at 0.5: two separate plateaus at the same height. fuzzylite 6 takes the
+        // first (small's, 1 to 4), not the midpoint of both (1 to 9), which would be 5.
+        e.evaluate(&[0.5], &mut out);
+        assert!((out[0] - 2.5).abs() < 1e-9, "{}", out[0]);
     }
 
     #[test]

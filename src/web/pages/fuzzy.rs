@@ -290,7 +290,10 @@ pub fn FuzzyPage() -> impl IntoView {
                 let width = r.trace.term_names.len();
                 let e = r.trace.terms.get(index * width).copied();
                 let ec = r.trace.terms.get(index * width + 1).copied();
-                if let (Some(e), Some(ec)) = (e, ec) {
+                // A held period (no force) has no inputs to show: the viewer keeps its point.
+                if let (Some(e), Some(ec)) =
+                    (e.filter(|v| v.is_finite()), ec.filter(|v| v.is_finite()))
+                {
                     e_text.set(format!("{e:.3}"));
                     ec_text.set(format!("{ec:.3}"));
                 }
