@@ -91,6 +91,14 @@ test('a chart zooms with the wheel and the keyboard, resets, and toggles series'
   // Linked axes: every chart offers the reset now.
   const resets = page.getByRole('button', { name: 'Reset zoom' });
   assert.equal(await resets.count(), 5);
+  // Dragging pans the zoomed view, and the linked charts pan with it.
+  const depth = page.getByRole('img', { name: 'Depth of cut' });
+  const depthBefore = await canvasPixels(depth);
+  await page.mouse.move(box.x + box.width * 0.6, box.y + box.height / 2);
+  await page.mouse.down();
+  await page.mouse.move(box.x + box.width * 0.3, box.y + box.height / 2, { steps: 6 });
+  await page.mouse.up();
+  await waitForRedraw(depth, depthBefore);
   // The hover readout shows the time under the pointer.
   await page.getByText(/time \(s\): \d/).first().waitFor();
   await page.mouse.dblclick(box.x + box.width / 2, box.y + box.height / 2);
@@ -171,6 +179,19 @@ test('a long run shows progress, keeps the page responsive, and can be cancelled
   await page.getByRole('button', { name: 'Cancel' }).click();
   await page.getByText(/^Cancelled\./).waitFor();
   await progress.waitFor({ state: 'detached' });
+  assert.deepEqual(problems, []);
+  await context.close();
+});
+
+test('the page lays out on a wide monitor without overflow', async () => {
+  const { page, problems, context } = await openLab(browser, server.url, '#/simulate?preset=maneerat-doc-1&controller=pi', { width: 2560, height: 1440 });
+  await waitForResult(page);
+  const widths = await page.evaluate(() => [document.documentElement.scrollWidth, window.innerWidth]);
+  assert.ok(widths[0] <= widths[1], `page ${widths[0]} px wide in a ${widths[1]} px window`);
+  // The charts use the room: wider than on a laptop screen.
+  const force = await page.getByRole('img', { name: 'Cutting force' }).boundingBox();
+  assert.ok(force.width > 900, `force chart ${force.width} px wide`);
+  await screenshot(page, 'simulate-wide');
   assert.deepEqual(problems, []);
   await context.close();
 });
