@@ -106,10 +106,13 @@ fn metrics_equal_a_recomputation_from_the_csv_trace() {
     let armed = column(&csv, "armed");
     let over = column(&csv, "override_pct");
     let mrr = column(&csv, "material_removal_mm3_s");
+    let in_range = column(&csv, "estimate_in_range");
+    let disagrees = column(&csv, "cross_check_disagrees");
     let limit = r.settings.force_limit_n;
 
     // Each row stands for the interval since the previous one.
     let (mut iae, mut above, mut removed, mut controlled) = (0.0, 0.0, 0.0, 0.0);
+    let (mut squared, mut relative, mut outside, mut disagreeing) = (0.0, 0.0, 0.0, 0.0);
     for i in 1..time.len() {
         let dt = time[i] - time[i - 1];
         removed += mrr[i] * dt;
@@ -117,11 +120,22 @@ fn metrics_equal_a_recomputation_from_the_csv_trace() {
             above += dt;
         }
         if armed[i] == 1.0 && depth[i] > 0.0 && width[i] > 0.0 {
-            iae += (force[i] - target[i]).abs() * dt;
+            let error = force[i] - target[i];
+            iae += error.abs() * dt;
+            squared += error * error * dt;
+            relative += (error / target[i]).abs() * dt;
             controlled += dt;
+            if in_range[i] == 0.0 {
+                outside += dt;
+            }
+            if disagrees[i] == 1.0 {
+                disagreeing += dt;
+            }
         }
     }
     let changes = over.windows(2).filter(|w| w[1] != w[0]).count();
+    let variation: f64 = over.windows(2).map(|w| (w[1] - w[0]).abs()).sum();
+    let cycle = time[time.len() - 1] - time[0];
     let peak = force.iter().cloned().fold(0.0, f64::max);
     let m = &r.metrics;
     let close = |a: f64, b: f64| (a - b).abs() <= 1e-9 * b.abs().max(1.0);
@@ -131,7 +145,16 @@ fn metrics_equal_a_recomputation_from_the_csv_trace() {
     assert!(close(m.removed_volume_mm3, removed));
     assert!(close(m.peak_force_n, peak));
     assert_eq!(m.override_changes, changes);
-    assert!(close(m.cycle_time_s, time[time.len() - 1] - time[0]));
+    assert!(close(m.cycle_time_s, cycle));
+    assert!(close(m.force_rms_error_n, (squared / controlled).sqrt()));
+    assert!(close(
+        m.force_mean_abs_error_pct,
+        100.0 * relative / controlled
+    ));
+    assert!(close(m.override_total_variation_pct, variation));
+    assert!(close(m.mean_material_removal_mm3_s, removed / cycle));
+    assert!(close(m.time_outside_calibration_s, outside));
+    assert!(close(m.time_cross_check_disagrees_s, disagreeing));
 }
 
 #[test]

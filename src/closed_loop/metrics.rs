@@ -55,6 +55,12 @@ pub struct Metrics {
     pub peak_force_n: f64,
     /// Time with the force above the force limit.
     pub time_above_limit_s: f64,
+    /// Controlled cutting time with the current or speed outside the range the estimator was
+    /// calibrated over: its force estimate is an extrapolation there.
+    pub time_outside_calibration_s: f64,
+    /// Controlled cutting time where the current-based estimate and paper 004's power law
+    /// disagree by more than the cross-check tolerance.
+    pub time_cross_check_disagrees_s: f64,
     /// Largest overshoot over all depth steps, percent of target.
     pub max_overshoot_pct: f64,
     /// Longest settling time over the depth steps that settled; `None` if none did.
@@ -118,6 +124,8 @@ pub fn compute(trace: &Trace, config: &MetricsConfig) -> Metrics {
     let mut squared = 0.0;
     let mut relative = 0.0;
     let mut above_s = 0.0;
+    let mut outside_s = 0.0;
+    let mut disagree_s = 0.0;
     let mut removed = 0.0;
     for (dt, r) in durations(rows) {
         if r.material_removal_mm3_s.is_finite() {
@@ -129,6 +137,12 @@ pub fn compute(trace: &Trace, config: &MetricsConfig) -> Metrics {
         if controlled_cut(r) {
             let error = r.force_n - r.target_force_n;
             controlled_s += dt;
+            if !r.estimate_in_range {
+                outside_s += dt;
+            }
+            if r.cross_check_disagrees {
+                disagree_s += dt;
+            }
             iae += error.abs() * dt;
             squared += error * error * dt;
             relative += (error / r.target_force_n).abs() * dt;
@@ -177,6 +191,8 @@ pub fn compute(trace: &Trace, config: &MetricsConfig) -> Metrics {
         },
         peak_force_n,
         time_above_limit_s: above_s,
+        time_outside_calibration_s: outside_s,
+        time_cross_check_disagrees_s: disagree_s,
         max_overshoot_pct,
         max_settling_time_s,
         steps_not_settled,
@@ -235,7 +251,7 @@ pub fn metrics_csv(metrics: &Metrics) -> String {
 /// ```
 pub fn metrics_csv_columns(runs: &[(&str, &Metrics)]) -> String {
     let value = |v: Option<f64>| v.map_or(String::new(), |v| v.to_string());
-    let table: Vec<[(&str, Option<f64>); 18]> =
+    let table: Vec<[(&str, Option<f64>); 20]> =
         runs.iter().map(|(_, m)| metric_values(m)).collect();
     let mut out = String::from("metric");
     for (name, _) in runs {
@@ -258,7 +274,7 @@ pub fn metrics_csv_columns(runs: &[(&str, &Metrics)]) -> String {
 }
 
 /// Every metric as (CSV name, value), in the CSV's order.
-fn metric_values(metrics: &Metrics) -> [(&'static str, Option<f64>); 18] {
+fn metric_values(metrics: &Metrics) -> [(&'static str, Option<f64>); 20] {
     [
         ("cycle_time_s", Some(metrics.cycle_time_s)),
         ("completed", Some(f64::from(u8::from(metrics.completed)))),
@@ -274,6 +290,14 @@ fn metric_values(metrics: &Metrics) -> [(&'static str, Option<f64>); 18] {
         ),
         ("peak_force_n", Some(metrics.peak_force_n)),
         ("time_above_limit_s", Some(metrics.time_above_limit_s)),
+        (
+            "time_outside_calibration_s",
+            Some(metrics.time_outside_calibration_s),
+        ),
+        (
+            "time_cross_check_disagrees_s",
+            Some(metrics.time_cross_check_disagrees_s),
+        ),
         ("max_overshoot_pct", Some(metrics.max_overshoot_pct)),
         ("max_settling_time_s", metrics.max_settling_time_s),
         ("depth_steps", Some(metrics.steps.len() as f64)),

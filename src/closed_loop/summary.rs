@@ -75,7 +75,7 @@ fn if_controlled(r: &RunResult, value: f64) -> Option<f64> {
 }
 
 /// The rows, in the order shown.
-pub const METRIC_ROWS: [MetricRow; 16] = [
+pub const METRIC_ROWS: [MetricRow; 18] = [
     row("Target force", "N", Better::Neither, |r| {
         Some(r.settings.target_force_n)
     }),
@@ -109,6 +109,18 @@ pub const METRIC_ROWS: [MetricRow; 16] = [
     row("Time above limit", "s", Better::Lower, |r| {
         Some(r.metrics.time_above_limit_s)
     }),
+    row(
+        "Time outside the calibrated range",
+        "s",
+        Better::Lower,
+        |r| if_controlled(r, r.metrics.time_outside_calibration_s),
+    ),
+    row(
+        "Time the power-law check disagrees",
+        "s",
+        Better::Lower,
+        |r| if_controlled(r, r.metrics.time_cross_check_disagrees_s),
+    ),
     row(
         "Max overshoot after a depth step",
         "%",
