@@ -636,7 +636,7 @@ mod tests {
         )
         .unwrap_err();
         assert!(e.to_string().contains("frame 1, channel 0"), "{e}");
-        let e = filter_stream(&sos, 1 << 40, &mut [0u8; 0].as_slice(), &mut Vec::new());
+        let e = filter_stream(&sos, usize::MAX, &mut [0u8; 0].as_slice(), &mut Vec::new());
         assert!(matches!(e, Err(StreamError::TooManyChannels(_))));
         let e = filter_stream(&sos, 0, &mut [0u8; 0].as_slice(), &mut Vec::new());
         assert!(matches!(e, Err(StreamError::NoChannels)));
