@@ -45,13 +45,7 @@ pub fn parse_number(text: &str) -> Result<f64, String> {
 /// assert!(cutlab::input::parse_count("2.5").is_err());
 /// ```
 pub fn parse_count(text: &str) -> Result<usize, String> {
-    let cleaned = text.trim();
-    if cleaned.is_empty() {
-        return Err("enter a whole number".to_string());
-    }
-    cleaned
-        .parse::<usize>()
-        .map_err(|_| format!("\"{cleaned}\" is not a whole number"))
+    parse_whole(text, "")
 }
 
 /// Parses a simulation seed: any whole number from 0 to 2⁶⁴ − 1, the same range natively and in
@@ -62,13 +56,18 @@ pub fn parse_count(text: &str) -> Result<usize, String> {
 /// assert!(cutlab::input::parse_seed("-1").is_err());
 /// ```
 pub fn parse_seed(text: &str) -> Result<u64, String> {
+    parse_whole(text, " from 0 to 18446744073709551615")
+}
+
+/// A whole number of type `T`; `range` (e.g. " from 0 to 9") completes the error message.
+fn parse_whole<T: std::str::FromStr>(text: &str, range: &str) -> Result<T, String> {
     let cleaned = text.trim();
     if cleaned.is_empty() {
         return Err("enter a whole number".to_string());
     }
     cleaned
-        .parse::<u64>()
-        .map_err(|_| format!("\"{cleaned}\" is not a whole number from 0 to 18446744073709551615"))
+        .parse::<T>()
+        .map_err(|_| format!("\"{cleaned}\" is not a whole number{range}"))
 }
 
 #[cfg(test)]

@@ -24,7 +24,7 @@ use crate::closed_loop::runner::GEAR_CHANGE_RPM;
 use crate::estimation::current_force::{FeedCurrentModel, SpindleCurrentModel};
 use crate::estimation::cut_forces::CutGeometry;
 use crate::plant::materials::Material;
-use crate::plant::mechanics::{Cutter, MillingMode};
+use crate::plant::mechanics::{Cutter, MillingMode, ToolForces};
 use crate::signal::spectrum::{uniform_sample_rate_hz, SpectrumError, TIME_STEP_TOLERANCE};
 
 const OPTIONS: &[OptionSpec] = &[
@@ -142,12 +142,16 @@ fn forces(
         column("width_mm")?,
     );
     let rows = 0..feed.len();
-    let resultant_n: Vec<f64> = rows
-        .clone()
-        .map(|i| geometry.mean_force_n(feed[i], speed[i], depth[i], width[i]))
+    let modelled: Vec<Option<ToolForces>> = rows
+        .map(|i| geometry.mean_forces(feed[i], speed[i], depth[i], width[i]))
         .collect();
-    let feed_n = rows
-        .map(|i| geometry.mean_feed_force_n(feed[i], speed[i], depth[i], width[i]))
+    let resultant_n: Vec<f64> = modelled
+        .iter()
+        .map(|f| f.map_or(f64::NAN, |f| f.resultant_n()))
+        .collect();
+    let feed_n = modelled
+        .iter()
+        .map(|f| f.map_or(f64::NAN, |f| -f.fx_n))
         .collect();
     let model_vs_measured_pct = measured.and_then(|measured| {
         let pairs: Vec<(f64, f64)> = resultant_n

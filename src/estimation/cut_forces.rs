@@ -23,8 +23,11 @@ pub struct CutGeometry {
 }
 
 impl CutGeometry {
-    /// The mean cutting force |F̄| of a row: `NaN` where the row cannot say (non-finite values,
-    /// no spindle speed), 0 in air (no depth, no width or no feed).
+    /// The mean forces of a row over a revolution: `None` where the row cannot say (non-finite
+    /// values, no spindle speed), zero in air (no depth, no width or no feed). The spindle model
+    /// is fitted against `resultant_n()` (the force the controllers regulate), the feed model
+    /// against −F̄ₓ, the force the feed drive pushes against (negative in down milling, where the
+    /// cut pulls the table along).
     ///
     /// ```
     /// use cutlab::estimation::cut_forces::CutGeometry;
@@ -36,36 +39,14 @@ impl CutGeometry {
     ///     coefficients: Material::Sm45c.coefficients(),
     /// };
     /// // 200 mm/min at 1000 rpm with two teeth is 0.1 mm per tooth.
-    /// let f = cut.mean_force_n(200.0, 1000.0, 2.0, 20.0);
+    /// let f = cut.mean_forces(200.0, 1000.0, 2.0, 20.0).unwrap().resultant_n();
     /// assert!(f > 0.0);
-    /// assert!((cut.mean_force_n(400.0, 2000.0, 2.0, 20.0) - f).abs() < 1e-9); // same chip
-    /// assert_eq!(cut.mean_force_n(200.0, 1000.0, 0.0, 20.0), 0.0);
+    /// let same_chip = cut.mean_forces(400.0, 2000.0, 2.0, 20.0).unwrap().resultant_n();
+    /// assert!((same_chip - f).abs() < 1e-9);
+    /// assert_eq!(cut.mean_forces(200.0, 1000.0, 0.0, 20.0).unwrap().resultant_n(), 0.0);
+    /// assert!(cut.mean_forces(200.0, 0.0, 2.0, 20.0).is_none());
     /// ```
-    pub fn mean_force_n(
-        &self,
-        feed_mm_min: f64,
-        spindle_rpm: f64,
-        depth_mm: f64,
-        width_mm: f64,
-    ) -> f64 {
-        self.mean_forces(feed_mm_min, spindle_rpm, depth_mm, width_mm)
-            .map_or(f64::NAN, |f| f.resultant_n())
-    }
-
-    /// The mean force the feed drive pushes against, −F̄ₓ (the simulated plant's feed force):
-    /// negative in down milling, where the cut pulls the table along.
-    pub fn mean_feed_force_n(
-        &self,
-        feed_mm_min: f64,
-        spindle_rpm: f64,
-        depth_mm: f64,
-        width_mm: f64,
-    ) -> f64 {
-        self.mean_forces(feed_mm_min, spindle_rpm, depth_mm, width_mm)
-            .map_or(f64::NAN, |f| -f.fx_n)
-    }
-
-    fn mean_forces(
+    pub fn mean_forces(
         &self,
         feed_mm_min: f64,
         spindle_rpm: f64,

@@ -92,6 +92,20 @@ export async function waitForRedraw(locator, before, timeout = 10_000) {
   );
 }
 
+/**
+ * Starts recording the page's long tasks (main-thread work over 50 ms, as the browser itself
+ * measures them); the returned function gives the longest so far, in ms (0 if none).
+ */
+export async function watchLongTasks(page) {
+  await page.evaluate(() => {
+    window.cutlabLongTasks = [];
+    new PerformanceObserver((list) => {
+      for (const entry of list.getEntries()) window.cutlabLongTasks.push(entry.duration);
+    }).observe({ type: 'longtask' });
+  });
+  return async () => Math.max(0, ...(await page.evaluate(() => window.cutlabLongTasks)));
+}
+
 /** Saves a screenshot under artifacts/browser/ (git-ignored). */
 export async function screenshot(page, name) {
   await mkdir(artifacts, { recursive: true });

@@ -2,7 +2,7 @@
 // find the design in the URL.
 import { test, before, after } from 'node:test';
 import assert from 'node:assert/strict';
-import { serveDist, launchBrowser, openLab, canvasPixels, waitForRedraw, screenshot } from './harness.mjs';
+import { serveDist, launchBrowser, openLab, canvasPixels, waitForRedraw, screenshot, watchLongTasks } from './harness.mjs';
 
 let server;
 let browser;
@@ -133,12 +133,7 @@ test('the signal chain simulates the bench current in pieces, without freezing t
   const { page, problems, context } = await openLab(browser, server.url, '#/signal');
   // Long tasks (main-thread work over 50 ms), measured by the browser from the moment the page
   // is up, while it simulates 13 s of the brake bench and analyses it.
-  await page.evaluate(() => {
-    window.cutlabLongTasks = [];
-    new PerformanceObserver((list) => {
-      for (const entry of list.getEntries()) window.cutlabLongTasks.push(entry.duration);
-    }).observe({ type: 'longtask' });
-  });
+  const longestTask = await watchLongTasks(page);
   for (const name of ['Phase current before and after filtering', 'Three-phase RMS current', 'Amplitude spectrum of i_u']) {
     await page.getByRole('img', { name }).waitFor();
   }
@@ -147,7 +142,7 @@ test('the signal chain simulates the bench current in pieces, without freezing t
   // A new design re-filters the recording.
   await page.getByLabel('Order').fill('4');
   await page.getByText('2 second-order sections').waitFor();
-  const longest = Math.max(0, ...(await page.evaluate(() => window.cutlabLongTasks)));
+  const longest = await longestTask();
   assert.ok(longest < 100, `the page froze for ${longest} ms`);
   assert.deepEqual(problems, []);
   await context.close();

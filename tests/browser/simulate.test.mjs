@@ -2,7 +2,7 @@
 import { test, before, after } from 'node:test';
 import assert from 'node:assert/strict';
 import { readFile } from 'node:fs/promises';
-import { serveDist, launchBrowser, openLab, canvasPixels, waitForRedraw, screenshot } from './harness.mjs';
+import { serveDist, launchBrowser, openLab, canvasPixels, waitForRedraw, screenshot, watchLongTasks } from './harness.mjs';
 
 let server;
 let browser;
@@ -163,14 +163,9 @@ test('the trace exports as CSV and the configuration as JSON', async () => {
 test('a long run shows progress, keeps the page responsive, and can be cancelled', async () => {
   const { page, problems, context } = await openLab(browser, server.url, '#/simulate?preset=kim-circular-taper&controller=pi');
   // Long tasks (main-thread work over 50 ms) during the run, measured by the browser itself.
-  await page.evaluate(() => {
-    window.cutlabLongTasks = [];
-    new PerformanceObserver((list) => {
-      for (const entry of list.getEntries()) window.cutlabLongTasks.push(entry.duration);
-    }).observe({ type: 'longtask' });
-  });
+  const longestTask = await watchLongTasks(page);
   await waitForResult(page);
-  const longest = Math.max(0, ...(await page.evaluate(() => window.cutlabLongTasks)));
+  const longest = await longestTask();
   assert.ok(longest < 100, `the page froze for ${longest} ms`);
   // Start another run and cancel it while it computes.
   await page.getByLabel('Seed').fill('2');

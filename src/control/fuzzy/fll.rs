@@ -151,16 +151,7 @@ pub fn parse(text: &str) -> Result<Engine, FuzzyError> {
                     }
                     "range" => (v.min, v.max) = range(line_no, value)?,
                     "lock-range" => v.lock_range = boolean(line_no, value, key)?,
-                    "term" => {
-                        let t = term(line_no, value)?;
-                        if v.terms.iter().any(|other| other.name == t.name) {
-                            return Err(error(
-                                line_no,
-                                format!("{} already has a term named {}", v.name, t.name),
-                            ));
-                        }
-                        v.terms.push(t);
-                    }
+                    "term" => add_term(line_no, value, &v.name, &mut v.terms)?,
                     _ => {
                         return Err(error(
                             line_no,
@@ -190,16 +181,7 @@ pub fn parse(text: &str) -> Result<Engine, FuzzyError> {
                     "defuzzifier" => v.defuzzifier = defuzzifier(line_no, value)?,
                     "default" => v.default_value = number(line_no, value, "default")?,
                     "lock-previous" => v.lock_previous = boolean(line_no, value, key)?,
-                    "term" => {
-                        let t = term(line_no, value)?;
-                        if v.terms.iter().any(|other| other.name == t.name) {
-                            return Err(error(
-                                line_no,
-                                format!("{} already has a term named {}", v.name, t.name),
-                            ));
-                        }
-                        v.terms.push(t);
-                    }
+                    "term" => add_term(line_no, value, &v.name, &mut v.terms)?,
                     _ => {
                         return Err(error(
                             line_no,
@@ -271,6 +253,25 @@ fn range(line: usize, value: &str) -> Result<(f64, f64), FuzzyError> {
         ));
     };
     Ok((number(line, lo, "range")?, number(line, hi, "range")?))
+}
+
+/// Parses a `term:` line of variable `variable` and adds it to `terms`; a second term of the same
+/// name is an error, since rules refer to terms by name.
+fn add_term(
+    line_no: usize,
+    value: &str,
+    variable: &str,
+    terms: &mut Vec<Term>,
+) -> Result<(), FuzzyError> {
+    let t = term(line_no, value)?;
+    if terms.iter().any(|other| other.name == t.name) {
+        return Err(error(
+            line_no,
+            format!("{variable} already has a term named {}", t.name),
+        ));
+    }
+    terms.push(t);
+    Ok(())
 }
 
 /// An error if a variable is already named `name`: rules refer to variables by name.

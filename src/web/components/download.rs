@@ -28,6 +28,17 @@ pub fn download_text(file_name: &str, mime: &str, text: &str) -> Result<(), Stri
     Ok(())
 }
 
+/// Offers what `write` writes (a CSV writer of the core) as a download named `file_name`.
+pub fn download_written(
+    file_name: &str,
+    mime: &str,
+    write: impl FnOnce(&mut Vec<u8>) -> std::io::Result<()>,
+) -> Result<(), String> {
+    let mut bytes = Vec::new();
+    write(&mut bytes).map_err(|e| format!("could not save {file_name}: {e}"))?;
+    download_text(file_name, mime, &String::from_utf8_lossy(&bytes))
+}
+
 /// Offers `runs` as `cutlab-config.json`, with the page's link: the file `cutlab sim --config`
 /// and `cutlab compare --config` run again in a terminal.
 pub fn download_configuration(runs: Vec<RunSpec>) -> Result<(), String> {

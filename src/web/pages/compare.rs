@@ -10,7 +10,7 @@ use crate::closed_loop::metrics::metrics_csv_columns;
 use crate::closed_loop::trace::write_csv_runs;
 use crate::control::registry::ControllerKind;
 use crate::plant::Preset;
-use crate::web::components::download::{download_configuration, download_text};
+use crate::web::components::download::{download_configuration, download_text, download_written};
 use crate::web::components::run_form::{
     ControllerFields, ControllerForm, MachineAndSignalFields, ScenarioFields, ScenarioForm,
 };
@@ -161,16 +161,9 @@ pub fn ComparePage() -> impl IntoView {
         let shown = runs.get_untracked();
         let named: Vec<(&str, &crate::closed_loop::trace::Trace)> =
             shown.iter().map(|(n, r)| (n.as_str(), &r.trace)).collect();
-        let mut bytes = Vec::new();
-        let outcome = write_csv_runs(&named, &mut bytes)
-            .map_err(|e| e.to_string())
-            .and_then(|()| {
-                download_text(
-                    "cutlab-compare-traces.csv",
-                    "text/csv",
-                    &String::from_utf8_lossy(&bytes),
-                )
-            });
+        let outcome = download_written("cutlab-compare-traces.csv", "text/csv", |out| {
+            write_csv_runs(&named, out)
+        });
         set_export_error.set(outcome.err());
     };
     let export_metrics = move |_| {

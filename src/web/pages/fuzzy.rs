@@ -303,34 +303,44 @@ pub fn FuzzyPage() -> impl IntoView {
 
     // The run's E and EC over time, with the picked moment marked: the moment is picked on the
     // trace, not on a bare slider.
-    let moment_chart = Signal::derive(move || {
+    // The traces are built once per run; moving the slider only moves the marker.
+    let trace_chart = Memo::new(move |_| {
         let mut chart = LineChart::new(Axis::linear("time (s)"), Axis::linear("scaled input"));
         run_result.with(|r| {
             let Some(r) = r else {
                 return;
             };
-            let times: Vec<f64> = r.trace.rows.iter().map(|row| row.time_s).collect();
             for (index, colour) in [(0, PALETTE[0]), (1, PALETTE[1])] {
                 let Some((name, _)) = r.trace.term_names.get(index) else {
                     continue;
                 };
-                let points = times
+                let points = r
+                    .trace
+                    .rows
                     .iter()
-                    .copied()
+                    .map(|row| row.time_s)
                     .zip(r.trace.term_series(index))
                     .collect();
                 chart.series.push(Series::new(*name, colour, points));
             }
             chart.fit();
-            if let Some(&t) = times.get(moment.get()) {
-                let (lo, hi) = (chart.y.range.start, chart.y.range.end);
-                chart.series.push(Series::new(
-                    "picked moment",
-                    PALETTE[3],
-                    vec![(t, lo), (t, hi)],
-                ));
-            }
         });
+        chart
+    });
+    let moment_chart = Signal::derive(move || {
+        let mut chart = trace_chart.get();
+        let time = run_result.with(|r| {
+            r.as_ref()
+                .and_then(|r| r.trace.rows.get(moment.get()).map(|row| row.time_s))
+        });
+        if let Some(t) = time {
+            let (lo, hi) = (chart.y.range.start, chart.y.range.end);
+            chart.series.push(Series::new(
+                "picked moment",
+                PALETTE[3],
+                vec![(t, lo), (t, hi)],
+            ));
+        }
         chart
     });
 

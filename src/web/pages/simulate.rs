@@ -9,7 +9,7 @@ use crate::closed_loop::lab::{RunResult, RunSpec};
 use crate::closed_loop::metrics::metrics_csv;
 use crate::closed_loop::trace::write_csv;
 use crate::control::registry::ControllerKind;
-use crate::web::components::download::{download_configuration, download_text};
+use crate::web::components::download::{download_configuration, download_text, download_written};
 use crate::web::components::run_form::{
     ControllerFields, ControllerForm, MachineAndSignalFields, ScenarioFields, ScenarioForm,
 };
@@ -79,16 +79,9 @@ pub fn SimulatePage() -> impl IntoView {
     let (export_error, set_export_error) = signal(None::<String>);
     let export_csv = move |_| {
         if let Some(r) = result.get_untracked() {
-            let mut bytes = Vec::new();
-            let outcome = write_csv(&r.trace, &mut bytes)
-                .map_err(|e| e.to_string())
-                .and_then(|()| {
-                    download_text(
-                        "cutlab-trace.csv",
-                        "text/csv",
-                        &String::from_utf8_lossy(&bytes),
-                    )
-                });
+            let outcome = download_written("cutlab-trace.csv", "text/csv", |out| {
+                write_csv(&r.trace, out)
+            });
             set_export_error.set(outcome.err());
         }
     };
