@@ -29,6 +29,7 @@
 //! | [`input`] | numbers typed into forms, parsed with messages for the field |
 //! | [`rng`] | the seeded random source every simulation draws from |
 //! | [`math`] | transcendental functions that give the same bits natively and in wasm |
+//! | [`work`] | long computations done in pieces: the one interface the browser slices and the CLI runs to the end |
 //! | `cli` | the `cutlab` command line (feature `cli`) |
 //! | `charts` | plotters drawing functions over any `DrawingArea` (feature `charts`, part of `web`) |
 //! | `web` | the Leptos browser app (feature `web`) |
@@ -50,6 +51,7 @@ pub mod plant;
 pub mod rng;
 pub mod safety;
 pub mod signal;
+pub mod work;
 
 #[cfg(feature = "cli")]
 pub mod cli;

@@ -1,0 +1,130 @@
+//! Long computations done in pieces: one interface for the teach cut, the closed loop, a lab run,
+//! the reference search and an open-loop recording.
+//!
+//! A browser cannot block its only thread for the seconds a full cut takes, and a real machine
+//! delivers its samples as they come. So every long job in cutlab is a [`Work`]: it advances by a
+//! budget of units (control periods for a loop, periods or samples for a recording), says how far
+//! it has got, and hands over its output once done. The browser's runner slices any `Work` across
+//! frames with a progress bar and a Cancel button; the command line and the tests call
+//! [`Work::run_to_end`].
+
+use std::fmt;
+
+/// How far a piece of work has got, for a progress bar.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Progress {
+    /// What it is doing now, for a person ("Teach cut", "Closed loop", "Reference run 2 of 9 …").
+    pub stage: String,
+    /// Rough fraction of the whole done, 0–1.
+    pub fraction: f64,
+}
+
+impl Progress {
+    /// `stage` at `fraction` (clamped to 0–1; NaN reads as 0).
+    pub fn new(stage: impl Into<String>, fraction: f64) -> Self {
+        Self {
+            stage: stage.into(),
+            fraction: if fraction.is_nan() {
+                0.0
+            } else {
+                fraction.clamp(0.0, 1.0)
+            },
+        }
+    }
+}
+
+/// Work that can be done a piece at a time.
+///
+/// `advance` may be called any number of times with any budget; calling it after the work is
+/// done does nothing and returns `Ok(true)`. The output is the same whatever budgets were used:
+/// a budget only says where the work may pause.
+pub trait Work {
+    /// What the finished work gives.
+    type Output;
+    /// Why it could not be done; shown to a person as is.
+    type Error: fmt::Display;
+
+    /// Does at most `budget` units of work; returns true once done.
+    fn advance(&mut self, budget: usize) -> Result<bool, Self::Error>;
+
+    /// What it is doing and how far it has got.
+    fn progress(&self) -> Progress;
+
+    /// The output, once [`Work::advance`] has returned true. Called before that, or a second
+    /// time, it returns an error.
+    fn finish(&mut self) -> Result<Self::Output, Self::Error>;
+
+    /// Does all the work at once.
+    fn run_to_end(mut self) -> Result<Self::Output, Self::Error>
+    where
+        Self: Sized,
+    {
+        while !self.advance(RUN_TO_END_BUDGET)? {}
+        self.finish()
+    }
+}
+
+/// The budget [`Work::run_to_end`] advances by: large, since nothing waits between pieces.
+const RUN_TO_END_BUDGET: usize = 10_000;
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Counts to a number, `budget` at a time.
+    struct CountTo {
+        target: usize,
+        count: usize,
+        taken: bool,
+    }
+
+    impl Work for CountTo {
+        type Output = usize;
+        type Error = String;
+
+        fn advance(&mut self, budget: usize) -> Result<bool, String> {
+            self.count = (self.count + budget).min(self.target);
+            Ok(self.count == self.target)
+        }
+
+        fn progress(&self) -> Progress {
+            Progress::new("counting", self.count as f64 / self.target as f64)
+        }
+
+        fn finish(&mut self) -> Result<usize, String> {
+            if self.count < self.target || self.taken {
+                return Err("not done".into());
+            }
+            self.taken = true;
+            Ok(self.count)
+        }
+    }
+
+    #[test]
+    fn run_to_end_gives_the_output_and_finish_refuses_early_or_twice() {
+        let work = CountTo {
+            target: 25_000,
+            count: 0,
+            taken: false,
+        };
+        assert_eq!(work.run_to_end(), Ok(25_000));
+        let mut early = CountTo {
+            target: 3,
+            count: 0,
+            taken: false,
+        };
+        assert!(early.finish().is_err());
+        assert_eq!(early.advance(2), Ok(false));
+        assert!((early.progress().fraction - 2.0 / 3.0).abs() < 1e-12);
+        assert_eq!(early.advance(2), Ok(true));
+        assert_eq!(early.finish(), Ok(3));
+        assert!(early.finish().is_err());
+    }
+
+    #[test]
+    fn progress_is_clamped_and_nan_reads_as_nothing_done() {
+        assert_eq!(Progress::new("x", 1.5).fraction, 1.0);
+        assert_eq!(Progress::new("x", -0.5).fraction, 0.0);
+        assert_eq!(Progress::new("x", f64::NAN).fraction, 0.0);
+    }
+}
