@@ -98,6 +98,17 @@ pub struct PlantTruth {
     pub spindle_current_rms_a: f64,
 }
 
+/// A dynamometer's reading of the cutting force on the tool, in the machine frame.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct DynamometerReading {
+    /// Force along x.
+    pub force_x_n: f64,
+    /// Force along y.
+    pub force_y_n: f64,
+    /// Component along the feed direction (the force the feed drive pushes against).
+    pub feed_force_n: f64,
+}
+
 /// One step's result.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct MachineStep {
@@ -124,6 +135,13 @@ pub trait Machine {
     /// conditions (paper 004's power law), if the machine knows them. The closed loop shows it
     /// beside the current-based estimate and flags when they disagree.
     fn sensorless_force_n(&self) -> Option<f64> {
+        None
+    }
+
+    /// A force sensor's reading at the latest sample, if the machine has one (a dynamometer under
+    /// the part, or a log's force columns). A teach cut can calibrate against it
+    /// ([`crate::closed_loop::runner::TeachForce::Dynamometer`]).
+    fn dynamometer_force_n(&self) -> Option<DynamometerReading> {
         None
     }
 }

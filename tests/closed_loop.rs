@@ -11,6 +11,7 @@ use cutlab::closed_loop::lab::{simulate, LabRun, RunResult, RunSpec};
 use cutlab::closed_loop::trace::write_csv;
 use cutlab::control::registry::ControllerKind;
 use cutlab::plant::Preset;
+use cutlab::work::Work;
 
 fn run(preset: Preset, controller: ControllerKind) -> RunResult {
     simulate(&RunSpec::new(preset, controller))
@@ -280,11 +281,11 @@ fn the_reference_search_finds_the_highest_safe_fixed_override_in_pieces_or_at_on
     let mut search = ReferenceSearch::new(&spec).unwrap();
     let mut last = 0.0;
     let pieces = loop {
-        let (_, fraction) = search.progress();
+        let fraction = search.progress().fraction;
         assert!((last..=1.0).contains(&fraction), "{fraction} after {last}");
         last = fraction;
-        if let Some(found) = search.advance(37).unwrap() {
-            break found;
+        if search.advance(37).unwrap() {
+            break search.finish().unwrap();
         }
     };
     assert_eq!(pieces, whole);

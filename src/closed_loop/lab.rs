@@ -4,15 +4,20 @@
 
 use serde::{Deserialize, Serialize};
 
+use super::definition::{check_spec, machine_max_override_pct};
 use super::metrics::{compute, with_savings, Metrics, MetricsConfig};
-use super::runner::{Calibration, ClosedLoop, Feedback, LoopError, LoopSettings, TeachCut};
+use super::runner::{
+    Calibration, ClosedLoop, Feedback, LoopError, LoopSettings, OnMachine, TeachCut, TeachForce,
+};
 use super::trace::Trace;
 use crate::control::registry::{ControllerConfig, ControllerKind, RunContext};
-use crate::plant::cnc::{OverrideMode, MAX_OVERRIDE_PCT};
+use crate::machine::Machine;
+use crate::plant::cnc::OverrideMode;
 use crate::plant::presets::PlantEdits;
 use crate::plant::presets::PlantKind;
 use crate::plant::Preset;
 use crate::safety::{ArmingTrigger, EnvelopeConfig, OverrideResolution};
+use crate::work::{Progress, Work};
 
 /// Everything that defines a run; the same spec and seed give the same trace. Its JSON form is
 /// what a saved configuration holds ([`super::config`]).
@@ -126,9 +131,11 @@ fn envelope_resolution(mode: &OverrideMode) -> OverrideResolution {
     }
 }
 
-/// The preset's default settings (the target is filled after the teach cut when the preset has
-/// none of its own).
+/// The preset's default settings with the spec's changes (the target is filled after the teach
+/// cut when the preset has none of its own). Every setting the spec holds is checked against the
+/// run definition ([`super::definition`]) first.
 pub fn default_settings(spec: &RunSpec) -> Result<LoopSettings, LoopError> {
+    check_spec(spec).map_err(LoopError::Setting)?;
     let preset = spec.preset;
     let o = &spec.settings;
     let summary = preset.summary();
@@ -160,16 +167,6 @@ pub fn default_settings(spec: &RunSpec) -> Result<LoopSettings, LoopError> {
         envelope.min_override_pct = v;
     }
     if let Some(v) = o.max_override_pct {
-        // Above what the machine can apply, the trace would record overrides it never ran.
-        let machine_max = match preset.override_mode() {
-            OverrideMode::Dial(table) => table.positions().into_iter().fold(0.0, f64::max),
-            OverrideMode::WholePercent | OverrideMode::Continuous => MAX_OVERRIDE_PCT,
-        };
-        if v.is_nan() || v > machine_max {
-            return Err(LoopError::Setting(format!(
-                "highest override {v} % is more than this machine applies ({machine_max} %)"
-            )));
-        }
         envelope.max_override_pct = v;
     }
     if let Some(v) = o.max_rate_pct_per_s {
@@ -190,11 +187,6 @@ pub fn default_settings(spec: &RunSpec) -> Result<LoopSettings, LoopError> {
         max_duration_s: 3.0 * summary.nominal_duration_s.max(1.0) + 10.0,
         cross_check_tolerance: 0.3,
     };
-    if !(period.is_finite() && period > 0.0) {
-        return Err(LoopError::Setting(format!(
-            "control period must be positive, not {period} s"
-        )));
-    }
     set_target(&mut settings, target);
     Ok(settings)
 }
@@ -244,6 +236,37 @@ fn settle_target(spec: &RunSpec, settings: &mut LoopSettings, calibration: &Cali
     set_target(settings, target);
 }
 
+/// The machines a run uses: a simulation makes a fresh pass for the teach cut and another for the
+/// run (differently seeded, like two parts); a real machine or a replayed log does both in turn.
+pub enum RunMachines {
+    /// One machine for the teach cut, another for the closed loop.
+    Separate {
+        /// Runs the teach cut.
+        teach: Box<dyn Machine>,
+        /// Runs the closed loop.
+        run: Box<dyn Machine>,
+    },
+    /// One machine that does the teach cut and then the closed loop.
+    Shared(Box<dyn Machine>),
+}
+
+impl RunMachines {
+    /// The preset's machines for `spec`: the teach cut seeded apart from the run.
+    pub fn for_preset(spec: &RunSpec) -> Result<Self, LoopError> {
+        let machine = |seed| -> Result<Box<dyn Machine>, LoopError> {
+            Ok(Box::new(
+                spec.preset
+                    .machine_with(seed, &spec.plant)
+                    .map_err(LoopError::Machine)?,
+            ))
+        };
+        Ok(RunMachines::Separate {
+            teach: machine(spec.seed.wrapping_add(TEACH_SEED_OFFSET))?,
+            run: machine(spec.seed)?,
+        })
+    }
+}
+
 /// A run in progress: first the teach cut, then the closed loop. Advancing in chunks lets a
 /// browser show progress and cancel between frames; [`simulate`] runs it to the end at once.
 pub struct LabRun {
@@ -256,7 +279,11 @@ pub struct LabRun {
 }
 
 enum Stage {
-    Teaching(Box<TeachCut>),
+    Teaching {
+        teach: Box<OnMachine<TeachCut>>,
+        /// The closed loop's machine, when it is not the teach cut's.
+        run_machine: Option<Box<dyn Machine>>,
+    },
     Running {
         run: Box<ClosedLoop>,
         calibration: Calibration,
@@ -266,28 +293,34 @@ enum Stage {
     Empty,
 }
 
-/// What a run is doing, for a progress bar.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Progress {
-    /// "teach cut", "closed loop" or "done".
-    pub stage: &'static str,
-    /// Rough fraction of the work done, 0–1 (the teach cut counts as the first half).
-    pub fraction: f64,
-}
-
 impl LabRun {
-    /// Starts a run: settings from the preset and the spec, and the teach cut's machine (seeded
-    /// apart from the run, like a separate pass over another part).
+    /// Starts a run of `spec` on its preset's simulated machine, calibrated by a teach cut that
+    /// takes its force from the simulation's truth.
     pub fn new(spec: &RunSpec) -> Result<Self, LoopError> {
+        let machines = RunMachines::for_preset(spec)?;
+        Self::on_machines(spec, machines, TeachForce::SimulationTruth)
+    }
+
+    /// Starts a run of `spec`'s controller and settings on any machine: the teach cut runs on
+    /// `machines` with its force from `teach_force`, then the closed loop. The preset gives the
+    /// defaults of every setting the spec leaves out.
+    pub fn on_machines(
+        spec: &RunSpec,
+        machines: RunMachines,
+        teach_force: TeachForce,
+    ) -> Result<Self, LoopError> {
         let settings = default_settings(spec)?;
-        let teach_machine = spec
-            .preset
-            .machine_with(spec.seed.wrapping_add(TEACH_SEED_OFFSET), &spec.plant)
-            .map_err(|e| LoopError::Setting(e.to_string()))?;
+        let (teach_machine, run_machine) = match machines {
+            RunMachines::Separate { teach, run } => (teach, Some(run)),
+            RunMachines::Shared(machine) => (machine, None),
+        };
         Ok(Self {
             nominal_duration_s: spec.preset.summary().nominal_duration_s.max(1.0),
             calibrated: false,
-            stage: Stage::Teaching(Box::new(TeachCut::new(Box::new(teach_machine), &settings)?)),
+            stage: Stage::Teaching {
+                teach: Box::new(OnMachine::teach_cut(teach_machine, &settings, teach_force)?),
+                run_machine,
+            },
             settings,
             spec: spec.clone(),
         })
@@ -297,6 +330,11 @@ impl LabRun {
     /// spec with the same preset, seed, machine and signal chain (the teach cut depends on those
     /// alone, so the result is the same as [`LabRun::new`]'s, for less work).
     pub fn calibrated(spec: &RunSpec, calibration: Calibration) -> Result<Self, LoopError> {
+        let machine: Box<dyn Machine> = Box::new(
+            spec.preset
+                .machine_with(spec.seed, &spec.plant)
+                .map_err(LoopError::Machine)?,
+        );
         let mut run = Self {
             nominal_duration_s: spec.preset.summary().nominal_duration_s.max(1.0),
             calibrated: true,
@@ -304,7 +342,7 @@ impl LabRun {
             settings: default_settings(spec)?,
             spec: spec.clone(),
         };
-        let closed_loop = run.start_loop(&calibration)?;
+        let closed_loop = run.start_loop(machine, &calibration)?;
         run.stage = Stage::Running {
             run: Box::new(closed_loop),
             calibration,
@@ -312,20 +350,72 @@ impl LabRun {
         Ok(run)
     }
 
-    /// Runs at most `periods` control periods of whichever stage is under way; returns true once
-    /// the run is complete.
-    pub fn advance(&mut self, periods: usize) -> Result<bool, LoopError> {
+    fn start_loop(
+        &mut self,
+        machine: Box<dyn Machine>,
+        calibration: &Calibration,
+    ) -> Result<ClosedLoop, LoopError> {
+        let mut settings = self.settings.clone();
+        settle_target(&self.spec, &mut settings, calibration);
+        if !(settings.target_force_n.is_finite() && settings.target_force_n > 0.0) {
+            return Err(LoopError::NoTarget);
+        }
+        // A phase current beyond twice anything the teach cut saw (its overrides reach 140 %) is
+        // a sensor fault, whatever the machine's size.
+        if calibration.max_phase_current_a > 0.0 {
+            settings.envelope.max_current_a = 2.0 * calibration.max_phase_current_a;
+        }
+        let controller = self
+            .spec
+            .controller
+            .build(&RunContext {
+                target_force_n: settings.target_force_n,
+                control_period_s: settings.control_period_s,
+            })
+            .map_err(LoopError::Controller)?;
+        ClosedLoop::new(machine, controller, calibration.estimator.clone(), settings)
+    }
+
+    /// The trace so far, once the closed loop has started.
+    pub fn trace(&self) -> Option<&Trace> {
+        match &self.stage {
+            Stage::Running { run, .. } => Some(run.trace()),
+            Stage::Done(r) => Some(&r.trace),
+            _ => None,
+        }
+    }
+
+    /// The result, once complete.
+    pub fn into_result(self) -> Option<RunResult> {
+        match self.stage {
+            Stage::Done(r) => Some(*r),
+            _ => None,
+        }
+    }
+}
+
+impl Work for LabRun {
+    type Output = RunResult;
+    type Error = LoopError;
+
+    /// Runs at most `periods` control periods of whichever stage is under way.
+    fn advance(&mut self, periods: usize) -> Result<bool, LoopError> {
         match std::mem::replace(&mut self.stage, Stage::Empty) {
-            Stage::Teaching(mut teach) => {
-                if teach.advance(periods) {
+            Stage::Teaching {
+                mut teach,
+                run_machine,
+            } => {
+                if teach.advance(periods)? {
                     let calibration = teach.calibration()?;
-                    let run = self.start_loop(&calibration)?;
+                    let (teach_machine, _) = teach.into_parts();
+                    let machine = run_machine.unwrap_or(teach_machine);
+                    let run = self.start_loop(machine, &calibration)?;
                     self.stage = Stage::Running {
                         run: Box::new(run),
                         calibration,
                     };
                 } else {
-                    self.stage = Stage::Teaching(teach);
+                    self.stage = Stage::Teaching { teach, run_machine };
                 }
                 Ok(false)
             }
@@ -333,7 +423,7 @@ impl LabRun {
                 mut run,
                 calibration,
             } => {
-                if run.advance(periods) {
+                if run.advance(periods)? {
                     let settings = run.settings().clone();
                     let trace = run.into_trace();
                     let metrics = compute(&trace, &metrics_config(&settings));
@@ -358,77 +448,30 @@ impl LabRun {
         }
     }
 
-    fn start_loop(&mut self, calibration: &Calibration) -> Result<ClosedLoop, LoopError> {
-        let mut settings = self.settings.clone();
-        settle_target(&self.spec, &mut settings, calibration);
-        if !(settings.target_force_n.is_finite() && settings.target_force_n > 0.0) {
-            return Err(LoopError::Setting(
-                "no force target: the preset has none and the teach cut found no cutting".into(),
-            ));
-        }
-        // A phase current beyond twice anything the teach cut saw (its overrides reach 140 %) is
-        // a sensor fault, whatever the machine's size.
-        if calibration.max_phase_current_a > 0.0 {
-            settings.envelope.max_current_a = 2.0 * calibration.max_phase_current_a;
-        }
-        let controller = self
-            .spec
-            .controller
-            .build(&RunContext {
-                target_force_n: settings.target_force_n,
-                control_period_s: settings.control_period_s,
-            })
-            .map_err(|e| LoopError::Setting(e.to_string()))?;
-        let machine = self
-            .spec
-            .preset
-            .machine_with(self.spec.seed, &self.spec.plant)
-            .map_err(|e| LoopError::Setting(e.to_string()))?;
-        ClosedLoop::new(
-            Box::new(machine),
-            controller,
-            calibration.estimator.clone(),
-            settings,
-        )
-    }
-
-    /// What the run is doing.
-    pub fn progress(&self) -> Progress {
+    /// "teach cut", "closed loop" or "done", with the teach cut counted as the first half.
+    fn progress(&self) -> Progress {
         let fraction = |elapsed_s: f64| (elapsed_s / self.nominal_duration_s).clamp(0.0, 1.0);
         match &self.stage {
-            Stage::Teaching(t) => Progress {
-                stage: "teach cut",
-                fraction: 0.5 * fraction(t.elapsed_s()),
-            },
-            Stage::Running { run, .. } if self.calibrated => Progress {
-                stage: "closed loop",
-                fraction: fraction(run.elapsed_s()),
-            },
-            Stage::Running { run, .. } => Progress {
-                stage: "closed loop",
-                fraction: 0.5 + 0.5 * fraction(run.elapsed_s()),
-            },
-            Stage::Done(_) | Stage::Empty => Progress {
-                stage: "done",
-                fraction: 1.0,
-            },
+            Stage::Teaching { teach, .. } => {
+                Progress::new("teach cut", 0.5 * fraction(teach.elapsed_s()))
+            }
+            Stage::Running { run, .. } if self.calibrated => {
+                Progress::new("closed loop", fraction(run.elapsed_s()))
+            }
+            Stage::Running { run, .. } => {
+                Progress::new("closed loop", 0.5 + 0.5 * fraction(run.elapsed_s()))
+            }
+            Stage::Done(_) | Stage::Empty => Progress::new("done", 1.0),
         }
     }
 
-    /// The trace so far, once the closed loop has started.
-    pub fn trace(&self) -> Option<&Trace> {
-        match &self.stage {
-            Stage::Running { run, .. } => Some(run.trace()),
-            Stage::Done(r) => Some(&r.trace),
-            _ => None,
-        }
-    }
-
-    /// The result, once complete.
-    pub fn into_result(self) -> Option<RunResult> {
-        match self.stage {
-            Stage::Done(r) => Some(*r),
-            _ => None,
+    fn finish(&mut self) -> Result<RunResult, LoopError> {
+        match std::mem::replace(&mut self.stage, Stage::Empty) {
+            Stage::Done(result) => Ok(*result),
+            other => {
+                self.stage = other;
+                Err(LoopError::NotFinished)
+            }
         }
     }
 }
@@ -447,10 +490,7 @@ pub fn metrics_config(settings: &LoopSettings) -> MetricsConfig {
 
 /// Runs `spec` to the end, without reference runs.
 pub fn simulate(spec: &RunSpec) -> Result<RunResult, LoopError> {
-    let mut run = LabRun::new(spec)?;
-    while !run.advance(10_000)? {}
-    run.into_result()
-        .ok_or_else(|| LoopError::Setting("the run ended without a result".into()))
+    LabRun::new(spec)?.run_to_end()
 }
 
 /// The reference runs of the savings.
@@ -467,12 +507,7 @@ pub struct References {
 /// Runs the fixed-feed references for `spec`'s preset and settings: 100 %, and a bisection for
 /// the highest fixed override that keeps the peak force under the limit (to 1 %).
 pub fn references(spec: &RunSpec) -> Result<References, LoopError> {
-    let mut search = ReferenceSearch::new(spec)?;
-    loop {
-        if let Some(found) = search.advance(10_000)? {
-            return Ok(found);
-        }
-    }
+    ReferenceSearch::new(spec)?.run_to_end()
 }
 
 /// The bisection's bracket of fixed overrides, percent.
@@ -511,7 +546,9 @@ impl ReferenceSearch {
 
     /// Starts with the programmed-feed run.
     pub fn new(spec: &RunSpec) -> Result<Self, LoopError> {
-        let (low_pct, high_pct) = REFERENCE_BRACKET_PCT;
+        let (low_pct, bracket_high_pct) = REFERENCE_BRACKET_PCT;
+        // A dial that stops at 150 % cannot run a fixed 250 %.
+        let high_pct = bracket_high_pct.min(machine_max_override_pct(spec.preset));
         Ok(Self {
             run: LabRun::new(&fixed_feed_spec(spec, 100.0)?)?,
             running: (100.0, RunKind::Programmed),
@@ -527,21 +564,25 @@ impl ReferenceSearch {
         })
     }
 
-    /// Does at most `periods` control periods of work; returns the references once found.
-    pub fn advance(&mut self, periods: usize) -> Result<Option<References>, LoopError> {
+    /// The references, once found.
+    pub fn found(&self) -> Option<References> {
+        self.found
+    }
+}
+
+impl Work for ReferenceSearch {
+    type Output = References;
+    type Error = LoopError;
+
+    /// Does at most `periods` control periods of work.
+    fn advance(&mut self, periods: usize) -> Result<bool, LoopError> {
         if self.found.is_some() {
-            return Ok(self.found);
+            return Ok(true);
         }
         if !self.run.advance(periods)? {
-            return Ok(None);
+            return Ok(false);
         }
-        let placeholder = Stage::Empty;
-        let finished = std::mem::replace(&mut self.run.stage, placeholder);
-        let Stage::Done(result) = finished else {
-            return Err(LoopError::Setting(
-                "a reference run ended without a result".into(),
-            ));
-        };
+        let result = self.run.finish()?;
         self.runs_done += 1;
         let (pct, kind) = self.running;
         match kind {
@@ -578,7 +619,7 @@ impl ReferenceSearch {
                     None => LabRun::new(&spec)?,
                 };
                 self.running = (pct, kind);
-                Ok(None)
+                Ok(false)
             }
             (None, Some(best)) => {
                 self.found = Some(References {
@@ -586,30 +627,26 @@ impl ReferenceSearch {
                     safe_fixed_override_pct: self.low_pct,
                     safe_fixed_cycle_time_s: best,
                 });
-                Ok(self.found)
+                Ok(true)
             }
-            (None, None) => Err(LoopError::Setting(
-                "the reference runs found no cycle time".into(),
-            )),
+            (None, None) => Err(LoopError::NoReference),
         }
     }
 
-    /// The references, once found.
-    pub fn found(&self) -> Option<References> {
-        self.found
-    }
-
-    /// What the search is doing (the fixed override of the current run) and the rough fraction
-    /// done, 0–1.
-    pub fn progress(&self) -> (String, f64) {
+    /// The fixed override of the current run and the rough fraction done.
+    fn progress(&self) -> Progress {
         let expected = Self::EXPECTED_RUNS.max(self.runs_done + 1);
         let label = format!(
-            "Reference run {} of about {expected}: fixed feed at {:.0} %",
+            "Savings: reference run {} of about {expected}, fixed feed at {:.0} %",
             self.runs_done + 1,
             self.running.0
         );
         let fraction = (self.runs_done as f64 + self.run.progress().fraction) / expected as f64;
-        (label, fraction.clamp(0.0, 1.0))
+        Progress::new(label, fraction)
+    }
+
+    fn finish(&mut self) -> Result<References, LoopError> {
+        self.found.ok_or(LoopError::NotFinished)
     }
 }
 
@@ -620,9 +657,9 @@ pub fn fixed_feed_spec(spec: &RunSpec, override_pct: f64) -> Result<RunSpec, Loo
     s.controller = ControllerConfig::new(ControllerKind::Fixed);
     s.controller
         .set("override_pct", override_pct)
-        .map_err(|e| LoopError::Setting(e.to_string()))?;
+        .map_err(LoopError::Controller)?;
     s.settings.min_override_pct = Some(0.0);
-    s.settings.max_override_pct = Some(255.0);
+    s.settings.max_override_pct = Some(machine_max_override_pct(spec.preset));
     s.settings.arming_override_pct = Some(override_pct);
     Ok(s)
 }
@@ -634,4 +671,98 @@ pub fn apply_references(result: &mut RunResult, references: &References) {
         Some(references.programmed_cycle_time_s),
         Some(references.safe_fixed_cycle_time_s),
     );
+}
+
+/// Makes the machines of each run of a batch.
+pub type MachineFactory = Box<dyn Fn(&RunSpec) -> Result<RunMachines, LoopError>>;
+
+/// Closed-loop runs one after another: the Simulate page's run, the Compare page's variants.
+/// Each run gets its machines from a factory (the preset's simulation unless told otherwise), so
+/// a comparison can run on any machine that can be made more than once, such as a replayed log.
+pub struct LabRuns {
+    specs: Vec<RunSpec>,
+    machines: MachineFactory,
+    teach_force: TeachForce,
+    current: Option<LabRun>,
+    results: Vec<std::sync::Arc<RunResult>>,
+}
+
+impl LabRuns {
+    /// The runs of `specs`, in order, on their presets' simulated machines.
+    pub fn new(specs: Vec<RunSpec>) -> Self {
+        Self::on_machines(
+            specs,
+            Box::new(RunMachines::for_preset),
+            TeachForce::SimulationTruth,
+        )
+    }
+
+    /// The runs of `specs`, in order, each on machines made by `machines` and calibrated with
+    /// the teach-cut force from `teach_force`.
+    pub fn on_machines(
+        specs: Vec<RunSpec>,
+        machines: MachineFactory,
+        teach_force: TeachForce,
+    ) -> Self {
+        Self {
+            results: Vec::with_capacity(specs.len()),
+            specs,
+            machines,
+            teach_force,
+            current: None,
+        }
+    }
+}
+
+impl Work for LabRuns {
+    type Output = Vec<std::sync::Arc<RunResult>>;
+    type Error = LoopError;
+
+    fn advance(&mut self, budget: usize) -> Result<bool, LoopError> {
+        let Some(spec) = self.specs.get(self.results.len()) else {
+            return Ok(true);
+        };
+        let run = match &mut self.current {
+            Some(run) => run,
+            None => {
+                let machines = (self.machines)(spec)?;
+                self.current.insert(LabRun::on_machines(
+                    spec,
+                    machines,
+                    self.teach_force.clone(),
+                )?)
+            }
+        };
+        if run.advance(budget)? {
+            let result = run.finish()?;
+            self.results.push(std::sync::Arc::new(result));
+            self.current = None;
+        }
+        Ok(self.results.len() >= self.specs.len())
+    }
+
+    fn progress(&self) -> Progress {
+        let total = self.specs.len().max(1);
+        let index = self.results.len();
+        let (stage, part) = self
+            .current
+            .as_ref()
+            .map_or(("teach cut".to_string(), 0.0), |r| {
+                let p = r.progress();
+                (p.stage, p.fraction)
+            });
+        let label = if total > 1 {
+            format!("Run {} of {total}: {stage}", (index + 1).min(total))
+        } else {
+            format!("Running: {stage}")
+        };
+        Progress::new(label, (index as f64 + part) / total as f64)
+    }
+
+    fn finish(&mut self) -> Result<Self::Output, LoopError> {
+        if self.results.len() < self.specs.len() {
+            return Err(LoopError::NotFinished);
+        }
+        Ok(std::mem::take(&mut self.results))
+    }
 }

@@ -3,6 +3,7 @@
 
 pub mod chain;
 pub mod config;
+pub mod definition;
 pub mod lab;
 pub mod metrics;
 pub mod runner;

@@ -23,14 +23,19 @@ use std::fmt;
 use serde::{Deserialize, Serialize};
 
 use super::chain::{PeriodSummary, SignalChain};
+use super::definition::SettingError;
 use super::trace::{Trace, TraceRow};
 use crate::control::law::{ControlInput, Controller};
+use crate::control::registry::ParamError;
 use crate::estimation::current_force::{FeedCurrentModel, ForceEstimate, SpindleCurrentModel};
+use crate::estimation::cut_forces::CutGeometry;
 use crate::estimation::least_squares::FitError;
 use crate::estimation::speed::FvSpeedModel;
-use crate::machine::{Machine, OverrideCommand, SensorSample};
+use crate::machine::{DynamometerReading, Machine, MachineStep, OverrideCommand, SensorSample};
+use crate::plant::PlantError;
 use crate::safety::{EnvelopeConfig, EnvelopeError, SafetyEnvelope};
 use crate::signal::butterworth::{butter, ButterworthSpec, Cutoff, DesignError, FilterKind};
+use crate::work::{Progress, Work};
 
 /// Which motor current the force is measured from.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
@@ -100,26 +105,71 @@ pub struct LoopSettings {
     pub cross_check_tolerance: f64,
 }
 
-/// Why a loop could not be set up.
+/// Why a loop could not be set up or run. Each variant says what is wrong in its own terms, so the
+/// page can put the message beside the control that caused it.
 #[derive(Debug, Clone, PartialEq)]
 pub enum LoopError {
+    /// A run setting is out of range or does not parse; names the setting.
+    Setting(SettingError),
     /// A low-pass design failed.
     Filter(DesignError),
     /// The safety settings are inconsistent.
     Envelope(EnvelopeError),
+    /// The controller's parameters do not build a controller.
+    Controller(ParamError),
+    /// The machine (a preset with edits) could not be built.
+    Machine(PlantError),
     /// The teach cut did not give a usable model.
     Calibration(FitError),
-    /// A setting is out of range; the text names it.
-    Setting(String),
+    /// Feed-current feedback on a cut that never loads the feed drive.
+    NoFeedLoad,
+    /// The control period is below one sample or absurdly long at this sample rate.
+    ControlPeriod {
+        /// The period asked for.
+        period_s: f64,
+        /// The machine's sample rate.
+        sample_rate_hz: f64,
+    },
+    /// No force target: the preset has none and the teach cut found no cutting.
+    NoTarget,
+    /// The run's time limit is not a positive duration.
+    TimeLimit(f64),
+    /// A reference run (fixed feed) ended without a cycle time.
+    NoReference,
+    /// `finish` was asked for before the work was done, or twice.
+    NotFinished,
 }
 
 impl fmt::Display for LoopError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
+            LoopError::Setting(e) => write!(f, "{e}"),
             LoopError::Filter(e) => write!(f, "current filter: {e}"),
             LoopError::Envelope(e) => write!(f, "safety envelope: {e}"),
+            LoopError::Controller(e) => write!(f, "controller: {e}"),
+            LoopError::Machine(e) => write!(f, "{e}"),
             LoopError::Calibration(e) => write!(f, "calibration (teach cut): {e}"),
-            LoopError::Setting(e) => f.write_str(e),
+            LoopError::NoFeedLoad => f.write_str(
+                "feed-current feedback needs a cut that loads the feed drive, and this one never \
+                 pushed back against the feed (in down milling the cutting force pulls the table \
+                 along); measure the force through the spindle current",
+            ),
+            LoopError::ControlPeriod {
+                period_s,
+                sample_rate_hz,
+            } => write!(
+                f,
+                "control period {period_s} s must be at least one sample and at most 10⁷ samples \
+                 at {sample_rate_hz} Hz"
+            ),
+            LoopError::NoTarget => f.write_str(
+                "no force target: the preset has none and the teach cut found no cutting",
+            ),
+            LoopError::TimeLimit(s) => {
+                write!(f, "the run's time limit must be positive, not {s} s")
+            }
+            LoopError::NoReference => f.write_str("the reference runs found no cycle time"),
+            LoopError::NotFinished => f.write_str("the run has not ended yet"),
         }
     }
 }
@@ -225,18 +275,102 @@ fn chain_for(settings: &LoopSettings, sample_rate_hz: f64) -> Result<SignalChain
         settings.lowpass_order,
         sample_rate_hz,
     )?;
-    SignalChain::new(&spindle, &feed).map_err(|e| LoopError::Setting(e.to_string()))
+    // Three phases per drive: the bank always has channels.
+    SignalChain::new(&spindle, &feed)
+        .map_err(|_| LoopError::Filter(DesignError::Order { order: 0 }))
 }
 
 fn samples_per_period(settings: &LoopSettings, sample_rate_hz: f64) -> Result<usize, LoopError> {
     let n = (settings.control_period_s * sample_rate_hz).round();
     if !(1.0..=1e7).contains(&n) {
-        return Err(LoopError::Setting(format!(
-            "control period {} s must be at least one sample and at most 10⁷ samples",
-            settings.control_period_s
-        )));
+        return Err(LoopError::ControlPeriod {
+            period_s: settings.control_period_s,
+            sample_rate_hz,
+        });
     }
     Ok(n as usize)
+}
+
+/// Where a teach cut takes the force that the current is fitted against.
+///
+/// A simulation knows the true force; a shop has either a dynamometer under the part or the
+/// mechanistic model of the cut it programmed (the same model `cutlab calibrate --material` uses),
+/// so a real teach cut calibrates without any simulation truth.
+#[derive(Debug, Clone, PartialEq)]
+pub enum TeachForce {
+    /// The plant's truth (simulation only): each sample's [`crate::machine::PlantTruth`].
+    SimulationTruth,
+    /// A force sensor: each sample's [`Machine::dynamometer_force_n`].
+    Dynamometer,
+    /// The mean force of the programmed cut, modelled from the period's feed and spindle speed.
+    CutModel {
+        /// Cutter, milling mode and the material's coefficients.
+        geometry: CutGeometry,
+        /// Axial depth of the teach cut.
+        depth_mm: f64,
+        /// Radial width of the teach cut.
+        width_mm: f64,
+    },
+}
+
+impl TeachForce {
+    /// Name for the command line and URLs.
+    pub fn name(&self) -> &'static str {
+        match self {
+            TeachForce::SimulationTruth => "truth",
+            TeachForce::Dynamometer => "dynamometer",
+            TeachForce::CutModel { .. } => "cut-model",
+        }
+    }
+}
+
+/// One sensor sample as a loop takes it: the machine's step and what the machine adds beside it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LoopSample<'a> {
+    /// What the sensors read (and the truth, if simulated).
+    pub step: &'a MachineStep,
+    /// The power-law estimate of [`Machine::sensorless_force_n`], when the machine offers one.
+    /// Only a period's last sample needs it ([`SampleLoop::next_sample_ends_period`]).
+    pub sensorless_force_n: Option<f64>,
+    /// A dynamometer's reading, when the machine has one.
+    pub dynamometer: Option<DynamometerReading>,
+}
+
+/// A loop that takes sensor samples as they come and answers with an override command at the end
+/// of each control period.
+///
+/// This is the shape a real machine needs: WebSerial delivers samples when they arrive and a log
+/// is read in chunks, so the loop is pushed, never pulls. [`OnMachine`] is the thin adapter that
+/// pulls samples from a [`Machine`] (the simulation) and pushes them here; replay and hardware
+/// push theirs directly. The teach cut and the closed loop are both sample loops.
+pub trait SampleLoop {
+    /// What the finished loop gives.
+    type Output;
+
+    /// Takes one sample. At the end of a control period it returns the command for the samples
+    /// that follow; in between, `None` (the command in force is [`SampleLoop::command`]).
+    fn push(&mut self, sample: &LoopSample<'_>) -> Option<OverrideCommand>;
+
+    /// The override command in force.
+    fn command(&self) -> OverrideCommand;
+
+    /// Whether the next pushed sample is the last of its control period.
+    fn next_sample_ends_period(&self) -> bool;
+
+    /// The machine says its program (or log) has ended; the loop ends at once.
+    fn end_of_program(&mut self);
+
+    /// Whether the loop has ended (program over, time limit, or its own reason).
+    fn finished(&self) -> bool;
+
+    /// Machine time of the latest period's end.
+    fn elapsed_s(&self) -> f64;
+
+    /// What a person reads on a progress bar.
+    fn stage(&self) -> &'static str;
+
+    /// The output, once finished (or early, for what is there so far when the run is stopped).
+    fn finish(&mut self) -> Result<Self::Output, LoopError>;
 }
 
 /// The (current, force, …) pairs a teach cut collects, one per usable control period.
@@ -253,154 +387,177 @@ struct TeachSamples {
     max_phase_current_a: f64,
 }
 
-/// A teach cut in progress: the machine open-loop through the teach-cut override schedule, one
-/// control period per step, so a browser can run it across frames.
+/// Sums of a period's dynamometer readings.
+#[derive(Debug, Clone, Copy, Default)]
+struct DynamometerSums {
+    samples: usize,
+    force_x_n: f64,
+    force_y_n: f64,
+    feed_force_n: f64,
+}
+
+/// A teach cut: the machine open-loop through the teach-cut override schedule
+/// ([`TEACH_OVERRIDES_PCT`]), each control period summarised by the loop's own signal chain and
+/// paired with the force from a [`TeachForce`] source; [`SampleLoop::finish`] fits the estimator.
 pub struct TeachCut {
-    machine: Box<dyn Machine>,
     feedback: Feedback,
+    force_source: TeachForce,
     max_duration_s: f64,
     chain: SignalChain,
     samples_per_period: usize,
+    samples_in_period: usize,
+    last: SensorSample,
+    dynamometer: DynamometerSums,
     samples: TeachSamples,
     time_s: f64,
+    command: OverrideCommand,
+    done: bool,
 }
 
 impl TeachCut {
-    /// A teach cut of `machine` with the signal chain and feedback path of `settings`.
-    pub fn new(machine: Box<dyn Machine>, settings: &LoopSettings) -> Result<Self, LoopError> {
-        let rate = machine.sample_rate_hz();
+    /// A teach cut at `sample_rate_hz` with the signal chain and feedback path of `settings`,
+    /// taking its force from `force_source`.
+    pub fn new(
+        sample_rate_hz: f64,
+        settings: &LoopSettings,
+        force_source: TeachForce,
+    ) -> Result<Self, LoopError> {
         Ok(Self {
-            chain: chain_for(settings, rate)?,
-            samples_per_period: samples_per_period(settings, rate)?,
+            chain: chain_for(settings, sample_rate_hz)?,
+            samples_per_period: samples_per_period(settings, sample_rate_hz)?,
+            samples_in_period: 0,
             feedback: settings.feedback,
+            force_source,
             max_duration_s: settings.max_duration_s,
-            machine,
+            last: SensorSample::default(),
+            dynamometer: DynamometerSums::default(),
             samples: TeachSamples::default(),
             time_s: 0.0,
+            command: Self::command_at(0.0),
+            done: false,
         })
     }
 
-    /// Machine time so far.
-    pub fn elapsed_s(&self) -> f64 {
-        self.time_s
-    }
-
-    /// Whether the program (or the time limit) has ended.
-    pub fn finished(&self) -> bool {
-        self.machine.finished() || self.time_s >= self.max_duration_s
-    }
-
-    /// Runs at most `periods` control periods; returns true once the teach cut has ended.
-    pub fn advance(&mut self, periods: usize) -> bool {
-        for _ in 0..periods {
-            if self.finished() {
-                break;
-            }
-            self.period();
+    /// The override the schedule holds at machine time `time_s`.
+    fn command_at(time_s: f64) -> OverrideCommand {
+        let step_index = (time_s / TEACH_STEP_S) as usize % TEACH_OVERRIDES_PCT.len();
+        OverrideCommand {
+            override_pct: TEACH_OVERRIDES_PCT[step_index],
+            feed_hold: false,
         }
-        self.finished()
     }
 
-    fn period(&mut self) {
-        let step_index = (self.time_s / TEACH_STEP_S) as usize % TEACH_OVERRIDES_PCT.len();
-        let command_pct = TEACH_OVERRIDES_PCT[step_index];
-        let samples = &mut self.samples;
-        let mut last = SensorSample::default();
-        for _ in 0..self.samples_per_period {
-            let step = self.machine.step(OverrideCommand {
-                override_pct: command_pct,
-                feed_hold: false,
-            });
-            self.chain.push(&step);
-            last = step.sensors;
-            for i in last
-                .feed_phase_currents_a
-                .iter()
-                .chain(&last.spindle_phase_currents_a)
-            {
-                if i.is_finite() {
-                    samples.max_phase_current_a = samples.max_phase_current_a.max(i.abs());
+    /// The period's force from the chosen source (NaN when the source has nothing to say).
+    fn period_force_n(&self, period: &PeriodSummary) -> f64 {
+        match &self.force_source {
+            TeachForce::SimulationTruth => self.feedback.regulated_truth_n(period),
+            TeachForce::Dynamometer => {
+                let d = &self.dynamometer;
+                let n = d.samples as f64;
+                match (d.samples, self.feedback) {
+                    (0, _) => f64::NAN,
+                    (_, Feedback::SpindleCurrent) => {
+                        crate::math::hypot(d.force_x_n / n, d.force_y_n / n)
+                    }
+                    (_, Feedback::FeedCurrent) => d.feed_force_n / n,
                 }
             }
+            TeachForce::CutModel {
+                geometry,
+                depth_mm,
+                width_mm,
+            } => geometry
+                .mean_forces(
+                    period.feed_mm_min,
+                    period.spindle_speed_rpm,
+                    *depth_mm,
+                    *width_mm,
+                )
+                .map_or(f64::NAN, |f| match self.feedback {
+                    Feedback::SpindleCurrent => f.resultant_n(),
+                    Feedback::FeedCurrent => -f.fx_n,
+                }),
         }
+    }
+
+    /// Files one ended period's (current, force) pair, if the period is usable.
+    fn end_period(&mut self, command_pct: f64) {
         let period = self.chain.finish_period();
-        // A machine that produced no sample (already finished) ends the teach cut.
-        self.time_s = if period.samples == 0 {
-            self.max_duration_s
-        } else {
-            period.end_time_s
-        };
+        self.samples_in_period = 0;
+        self.time_s = period.end_time_s;
+        let force_n = self.period_force_n(&period);
+        self.dynamometer = DynamometerSums::default();
+        let last = self.last;
         let spindle_settled =
             last.time_since_spindle_start_s >= TEACH_SETTLE_S || !last.spindle_running;
         // The drives need a moment after each override change (the spindle's bandwidth is below
         // 5 Hz), and air cuts are left out: the line is fitted where it is used, in the cut.
         let since_change_s = self.time_s % TEACH_STEP_S;
-        let truth = self.feedback.regulated_truth_n(&period);
-        if !spindle_settled
+        let samples = &mut self.samples;
+        let skipped = !spindle_settled
             || since_change_s < TEACH_SETTLE_AFTER_CHANGE_S
-            || !(truth.is_finite() && truth > 0.0)
-            || period.feed_mm_min.abs() < 1e-6
-        {
-            return;
-        }
-        if command_pct == 100.0 {
-            samples.full_override_forces_n.push(truth);
-            let ratio = truth / period.force_mean_resultant_n;
-            if ratio.is_finite() {
-                samples.full_override_ratios.push(ratio);
+            || !(force_n.is_finite() && force_n > 0.0)
+            || period.feed_mm_min.abs() < 1e-6;
+        if !skipped {
+            if command_pct == 100.0 {
+                samples.full_override_forces_n.push(force_n);
+                let ratio = force_n / period.force_mean_resultant_n;
+                if ratio.is_finite() {
+                    samples.full_override_ratios.push(ratio);
+                }
             }
+            samples.current_a.push(match self.feedback {
+                Feedback::SpindleCurrent => period.spindle_current_rms_a,
+                Feedback::FeedCurrent => period.feed_current_rms_a,
+            });
+            samples.force_n.push(force_n);
+            samples.speed_rpm.push(period.spindle_speed_rpm);
+            samples.command_rpm.push(period.spindle_command_rpm);
+            samples.fv_voltage_v.push(period.spindle_fv_voltage_v);
+            samples.feed_mm_min.push(period.feed_mm_min);
         }
-        samples.current_a.push(match self.feedback {
-            Feedback::SpindleCurrent => period.spindle_current_rms_a,
-            Feedback::FeedCurrent => period.feed_current_rms_a,
-        });
-        samples.force_n.push(truth);
-        samples.speed_rpm.push(period.spindle_speed_rpm);
-        samples.command_rpm.push(period.spindle_command_rpm);
-        samples.fv_voltage_v.push(period.spindle_fv_voltage_v);
-        samples.feed_mm_min.push(period.feed_mm_min);
+        if self.time_s >= self.max_duration_s {
+            self.done = true;
+        }
+        self.command = Self::command_at(self.time_s);
     }
 
     /// Fits the estimator to what was collected.
     pub fn calibration(&self) -> Result<Calibration, LoopError> {
         let s = &self.samples;
-        let estimator =
-            match self.feedback {
-                Feedback::SpindleCurrent => {
-                    let speed_model = FvSpeedModel::calibrate(
-                        &s.command_rpm,
-                        &s.speed_rpm,
-                        &s.fv_voltage_v,
+        let estimator = match self.feedback {
+            Feedback::SpindleCurrent => {
+                let speed_model = FvSpeedModel::calibrate(
+                    &s.command_rpm,
+                    &s.speed_rpm,
+                    &s.fv_voltage_v,
+                    GEAR_CHANGE_RPM,
+                );
+                let identified: Vec<f64> = s
+                    .fv_voltage_v
+                    .iter()
+                    .zip(&s.command_rpm)
+                    .map(|(v, c)| speed_model.speed_rpm(*v, *c))
+                    .collect();
+                Estimator::Spindle {
+                    model: SpindleCurrentModel::calibrate(
+                        &s.current_a,
+                        &identified,
+                        &s.force_n,
                         GEAR_CHANGE_RPM,
-                    );
-                    let identified: Vec<f64> = s
-                        .fv_voltage_v
-                        .iter()
-                        .zip(&s.command_rpm)
-                        .map(|(v, c)| speed_model.speed_rpm(*v, *c))
-                        .collect();
-                    Estimator::Spindle {
-                        model: SpindleCurrentModel::calibrate(
-                            &s.current_a,
-                            &identified,
-                            &s.force_n,
-                            GEAR_CHANGE_RPM,
-                        )
-                        .map_err(LoopError::Calibration)?,
-                        speed: speed_model,
-                    }
+                    )
+                    .map_err(LoopError::Calibration)?,
+                    speed: speed_model,
                 }
-                Feedback::FeedCurrent if s.force_n.is_empty() => return Err(LoopError::Setting(
-                    "feed-current feedback needs a cut that loads the feed drive, and this one \
-                     never pushed back against the feed (in down milling the cutting force pulls \
-                     the table along); measure the force through the spindle current"
-                        .into(),
-                )),
-                Feedback::FeedCurrent => Estimator::Feed {
-                    model: FeedCurrentModel::calibrate(&s.current_a, &s.feed_mm_min, &s.force_n)
-                        .map_err(LoopError::Calibration)?,
-                },
-            };
+            }
+            Feedback::FeedCurrent if s.force_n.is_empty() => {
+                return Err(LoopError::NoFeedLoad);
+            }
+            Feedback::FeedCurrent => Estimator::Feed {
+                model: FeedCurrentModel::calibrate(&s.current_a, &s.feed_mm_min, &s.force_n)
+                    .map_err(LoopError::Calibration)?,
+            },
+        };
         let median = |values: &[f64]| {
             let mut sorted = values.to_vec();
             sorted.sort_by(f64::total_cmp);
@@ -416,58 +573,120 @@ impl TeachCut {
     }
 }
 
-/// Runs a whole teach cut of `machine` and fits the estimator for `settings.feedback`.
+impl SampleLoop for TeachCut {
+    type Output = Calibration;
+
+    fn push(&mut self, sample: &LoopSample<'_>) -> Option<OverrideCommand> {
+        if self.done {
+            return None;
+        }
+        let sensors = &sample.step.sensors;
+        self.chain.push(sample.step);
+        for i in sensors
+            .feed_phase_currents_a
+            .iter()
+            .chain(&sensors.spindle_phase_currents_a)
+        {
+            if i.is_finite() {
+                self.samples.max_phase_current_a = self.samples.max_phase_current_a.max(i.abs());
+            }
+        }
+        if let Some(d) = sample.dynamometer {
+            let sums = &mut self.dynamometer;
+            sums.samples += 1;
+            sums.force_x_n += d.force_x_n;
+            sums.force_y_n += d.force_y_n;
+            sums.feed_force_n += d.feed_force_n;
+        }
+        self.last = *sensors;
+        self.samples_in_period += 1;
+        if self.samples_in_period < self.samples_per_period {
+            return None;
+        }
+        self.end_period(self.command.override_pct);
+        Some(self.command)
+    }
+
+    fn command(&self) -> OverrideCommand {
+        self.command
+    }
+
+    fn next_sample_ends_period(&self) -> bool {
+        self.samples_in_period + 1 >= self.samples_per_period
+    }
+
+    fn end_of_program(&mut self) {
+        self.done = true;
+    }
+
+    fn finished(&self) -> bool {
+        self.done
+    }
+
+    fn elapsed_s(&self) -> f64 {
+        self.time_s
+    }
+
+    fn stage(&self) -> &'static str {
+        "teach cut"
+    }
+
+    fn finish(&mut self) -> Result<Calibration, LoopError> {
+        self.calibration()
+    }
+}
+
+/// Runs a whole teach cut of `machine` with the simulation's truth as the force and fits the
+/// estimator for `settings.feedback`.
 pub fn teach_cut(
     machine: Box<dyn Machine>,
     settings: &LoopSettings,
 ) -> Result<Calibration, LoopError> {
-    let mut teach = TeachCut::new(machine, settings)?;
-    while !teach.advance(1000) {}
-    teach.calibration()
+    OnMachine::teach_cut(machine, settings, TeachForce::SimulationTruth)?.run_to_end()
 }
 
 /// The spindle gear change of paper 003's machining centre.
 pub const GEAR_CHANGE_RPM: f64 = 900.0;
 
-/// A running closed loop.
-pub struct ClosedLoop {
-    machine: Box<dyn Machine>,
+/// The closed loop without a machine: sensor samples in, override commands out.
+///
+/// Every sample passes the safety envelope's observation (stuck or implausible currents, the
+/// arming clock) and the signal chain; at each control period's end the estimator turns the
+/// period's current into a force, the controller asks for an override, the envelope limits it,
+/// and one [`TraceRow`] is recorded. Nothing allocates per sample beyond the trace's reserve.
+pub struct FeedbackLoop {
     controller: Box<dyn Controller>,
     estimator: Estimator,
     settings: LoopSettings,
     chain: SignalChain,
     envelope: SafetyEnvelope,
     samples_per_period: usize,
+    samples_in_period: usize,
+    last: SensorSample,
     command: OverrideCommand,
     last_request_pct: f64,
     trace: Trace,
     done: bool,
 }
 
-impl ClosedLoop {
-    /// Wires `machine`, `controller` and `estimator` with `settings`.
+impl FeedbackLoop {
+    /// Wires `controller` and `estimator` with `settings` for samples at `sample_rate_hz`.
     pub fn new(
-        machine: Box<dyn Machine>,
+        sample_rate_hz: f64,
         controller: Box<dyn Controller>,
         estimator: Estimator,
         settings: LoopSettings,
     ) -> Result<Self, LoopError> {
         if !(settings.target_force_n.is_finite() && settings.target_force_n > 0.0) {
-            return Err(LoopError::Setting(format!(
-                "target force must be positive, not {} N",
-                settings.target_force_n
-            )));
+            return Err(LoopError::NoTarget);
         }
         if !(settings.max_duration_s.is_finite() && settings.max_duration_s > 0.0) {
-            return Err(LoopError::Setting(
-                "the run's time limit must be positive".into(),
-            ));
+            return Err(LoopError::TimeLimit(settings.max_duration_s));
         }
-        let rate = machine.sample_rate_hz();
-        let chain = chain_for(&settings, rate)?;
-        let samples_per_period = samples_per_period(&settings, rate)?;
-        let envelope =
-            SafetyEnvelope::new(settings.envelope.clone(), rate).map_err(LoopError::Envelope)?;
+        let chain = chain_for(&settings, sample_rate_hz)?;
+        let samples_per_period = samples_per_period(&settings, sample_rate_hz)?;
+        let envelope = SafetyEnvelope::new(settings.envelope.clone(), sample_rate_hz)
+            .map_err(LoopError::Envelope)?;
         let command = OverrideCommand {
             override_pct: envelope.output_pct(),
             feed_hold: false,
@@ -479,12 +698,13 @@ impl ClosedLoop {
             .map(|t| (t.name, t.unit))
             .collect();
         Ok(Self {
-            machine,
             controller,
             estimator,
             chain,
             envelope,
             samples_per_period,
+            samples_in_period: 0,
+            last: SensorSample::default(),
             command,
             last_request_pct: command.override_pct,
             trace: Trace {
@@ -507,52 +727,11 @@ impl ClosedLoop {
         &self.trace
     }
 
-    /// The trace, ending the loop.
-    pub fn into_trace(self) -> Trace {
-        self.trace
-    }
-
-    /// Whether the run has ended (program finished, time limit, or feed hold with the axes at
-    /// rest).
-    pub fn finished(&self) -> bool {
-        self.done
-    }
-
-    /// Progress as a fraction of the time limit (the program usually ends before it).
-    pub fn elapsed_s(&self) -> f64 {
-        self.trace.rows.last().map_or(0.0, |r| r.time_s)
-    }
-
-    /// Runs at most `periods` control periods; returns true once the run has ended.
-    pub fn advance(&mut self, periods: usize) -> bool {
-        for _ in 0..periods {
-            if self.done {
-                break;
-            }
-            self.period();
-        }
-        self.done
-    }
-
-    /// Runs to the end.
-    pub fn run(mut self) -> Trace {
-        while !self.advance(1000) {}
-        self.trace
-    }
-
-    fn period(&mut self) {
-        let mut last = SensorSample::default();
-        let mut sensorless_n = f64::NAN;
-        for _ in 0..self.samples_per_period {
-            let step = self.machine.step(self.command);
-            self.envelope.observe(&step.sensors);
-            self.chain.push(&step);
-            last = step.sensors;
-        }
-        if let Some(f) = self.machine.sensorless_force_n() {
-            sensorless_n = f;
-        }
+    /// Ends a control period: estimate, control, limit, record.
+    fn end_period(&mut self, sensorless_n: f64) {
+        let last = self.last;
         let period = self.chain.finish_period();
+        self.samples_in_period = 0;
         let estimate = self.estimator.estimate(&period);
         let dt_s = self.settings.control_period_s;
         let input = ControlInput {
@@ -618,12 +797,199 @@ impl ClosedLoop {
             ),
         });
         let held_at_rest = self.command.feed_hold && period.feed_mm_min.abs() < 1e-9;
-        if self.machine.finished() || held_at_rest {
-            self.trace.completed = self.machine.finished();
-            self.done = true;
-        } else if period.end_time_s >= self.settings.max_duration_s || period.samples == 0 {
+        if held_at_rest || period.end_time_s >= self.settings.max_duration_s {
             self.done = true;
         }
+    }
+}
+
+impl SampleLoop for FeedbackLoop {
+    type Output = Trace;
+
+    fn push(&mut self, sample: &LoopSample<'_>) -> Option<OverrideCommand> {
+        if self.done {
+            return None;
+        }
+        self.envelope.observe(&sample.step.sensors);
+        self.chain.push(sample.step);
+        self.last = sample.step.sensors;
+        self.samples_in_period += 1;
+        if self.samples_in_period < self.samples_per_period {
+            return None;
+        }
+        self.end_period(sample.sensorless_force_n.unwrap_or(f64::NAN));
+        Some(self.command)
+    }
+
+    fn command(&self) -> OverrideCommand {
+        self.command
+    }
+
+    fn next_sample_ends_period(&self) -> bool {
+        self.samples_in_period + 1 >= self.samples_per_period
+    }
+
+    fn end_of_program(&mut self) {
+        self.trace.completed = true;
+        self.done = true;
+    }
+
+    fn finished(&self) -> bool {
+        self.done
+    }
+
+    fn elapsed_s(&self) -> f64 {
+        self.trace.rows.last().map_or(0.0, |r| r.time_s)
+    }
+
+    fn stage(&self) -> &'static str {
+        "closed loop"
+    }
+
+    fn finish(&mut self) -> Result<Trace, LoopError> {
+        Ok(std::mem::take(&mut self.trace))
+    }
+}
+
+/// A [`SampleLoop`] pulling its samples from a [`Machine`]: each sample period it steps the
+/// machine with the loop's command and pushes what the machine read. This is how a simulation
+/// (and a replayed log) drives the same loop a real machine pushes samples into.
+pub struct OnMachine<L> {
+    machine: Box<dyn Machine>,
+    sample_loop: L,
+}
+
+/// The closed loop on a machine.
+pub type ClosedLoop = OnMachine<FeedbackLoop>;
+
+impl<L: SampleLoop> OnMachine<L> {
+    /// `sample_loop` driven by `machine`.
+    pub fn new_with(machine: Box<dyn Machine>, sample_loop: L) -> Self {
+        Self {
+            machine,
+            sample_loop,
+        }
+    }
+
+    /// The loop.
+    pub fn sample_loop(&self) -> &L {
+        &self.sample_loop
+    }
+
+    /// Machine time of the latest period's end.
+    pub fn elapsed_s(&self) -> f64 {
+        self.sample_loop.elapsed_s()
+    }
+
+    /// Whether the loop has ended.
+    pub fn finished(&self) -> bool {
+        self.sample_loop.finished()
+    }
+
+    /// The machine back (a real machine does the teach cut and then the run), and the loop.
+    pub fn into_parts(self) -> (Box<dyn Machine>, L) {
+        (self.machine, self.sample_loop)
+    }
+
+    /// Runs one control period.
+    fn period(&mut self) {
+        let command = self.sample_loop.command();
+        loop {
+            let step = self.machine.step(command);
+            let ends = self.sample_loop.next_sample_ends_period();
+            let sample = LoopSample {
+                step: &step,
+                // The power law is evaluated once per period, where the loop reads it.
+                sensorless_force_n: if ends {
+                    self.machine.sensorless_force_n()
+                } else {
+                    None
+                },
+                dynamometer: self.machine.dynamometer_force_n(),
+            };
+            if self.sample_loop.push(&sample).is_some() || self.sample_loop.finished() {
+                break;
+            }
+        }
+        if self.machine.finished() {
+            self.sample_loop.end_of_program();
+        }
+    }
+}
+
+impl OnMachine<TeachCut> {
+    /// A teach cut of `machine` with the signal chain and feedback path of `settings`.
+    pub fn teach_cut(
+        machine: Box<dyn Machine>,
+        settings: &LoopSettings,
+        force_source: TeachForce,
+    ) -> Result<Self, LoopError> {
+        let teach = TeachCut::new(machine.sample_rate_hz(), settings, force_source)?;
+        Ok(Self::new_with(machine, teach))
+    }
+
+    /// Fits the estimator to what was collected so far.
+    pub fn calibration(&self) -> Result<Calibration, LoopError> {
+        self.sample_loop.calibration()
+    }
+}
+
+impl OnMachine<FeedbackLoop> {
+    /// Wires `machine`, `controller` and `estimator` with `settings`.
+    pub fn new(
+        machine: Box<dyn Machine>,
+        controller: Box<dyn Controller>,
+        estimator: Estimator,
+        settings: LoopSettings,
+    ) -> Result<Self, LoopError> {
+        let feedback_loop =
+            FeedbackLoop::new(machine.sample_rate_hz(), controller, estimator, settings)?;
+        Ok(Self::new_with(machine, feedback_loop))
+    }
+
+    /// The settings.
+    pub fn settings(&self) -> &LoopSettings {
+        self.sample_loop.settings()
+    }
+
+    /// The trace so far.
+    pub fn trace(&self) -> &Trace {
+        self.sample_loop.trace()
+    }
+
+    /// The trace, ending the loop.
+    pub fn into_trace(mut self) -> Trace {
+        std::mem::take(&mut self.sample_loop.trace)
+    }
+
+    /// Runs to the end.
+    pub fn run(self) -> Trace {
+        self.run_to_end().unwrap_or_default()
+    }
+}
+
+impl<L: SampleLoop> Work for OnMachine<L> {
+    type Output = L::Output;
+    type Error = LoopError;
+
+    /// Runs at most `periods` control periods.
+    fn advance(&mut self, periods: usize) -> Result<bool, LoopError> {
+        for _ in 0..periods {
+            if self.sample_loop.finished() {
+                break;
+            }
+            self.period();
+        }
+        Ok(self.sample_loop.finished())
+    }
+
+    fn progress(&self) -> Progress {
+        // The machine's own duration is unknown here; LabRun scales by the program's.
+        Progress::new(self.sample_loop.stage(), 0.0)
+    }
+
+    fn finish(&mut self) -> Result<L::Output, LoopError> {
+        self.sample_loop.finish()
     }
 }
 

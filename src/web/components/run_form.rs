@@ -6,64 +6,29 @@ use std::collections::BTreeMap;
 
 use leptos::prelude::*;
 
-use crate::closed_loop::lab::SettingsOverrides;
+use crate::closed_loop::definition::{RunSetting, SettingGroup, SettingKind, SettingValue};
+use crate::closed_loop::lab::{RunSpec, SettingsOverrides};
+use crate::closed_loop::runner::Feedback;
 use crate::control::fuzzy::rules::RuleTable;
 use crate::control::registry::{ControllerConfig, ControllerKind};
 use crate::plant::materials::Material;
 use crate::plant::presets::PlantEdits;
 use crate::plant::Preset;
-use crate::web::components::fields::{
-    parse_count, parse_number, parse_seed, NumberField, SelectField,
-};
+use crate::web::components::fields::{parse_number, NumberField, SelectField};
 
-/// Text of the scenario fields.
+/// Text of the scenario fields: the preset, and every setting of the run definition
+/// ([`RunSetting::ALL`]), each parsed and checked by the core's table, so the form accepts exactly
+/// what the command line and a saved configuration accept.
 #[derive(Clone, Copy)]
 pub struct ScenarioForm {
     /// Preset name.
     pub preset: RwSignal<String>,
-    /// Seed.
-    pub seed: RwSignal<String>,
-    /// Target force; blank keeps the preset's.
-    pub target: RwSignal<String>,
-    /// Highest override the envelope allows.
-    pub max_override: RwSignal<String>,
-    /// Control period; blank keeps the preset's (whole spindle revolutions).
-    pub period: RwSignal<String>,
-    /// Order of the current low-pass filters.
-    pub filter_order: RwSignal<String>,
-    /// Spindle current low-pass cut-off.
-    pub spindle_cutoff: RwSignal<String>,
-    /// Feed current low-pass cut-off.
-    pub feed_cutoff: RwSignal<String>,
-    /// Work material; blank keeps the preset's.
-    pub material: RwSignal<String>,
-    /// Spindle speed; blank keeps the preset's.
-    pub rpm: RwSignal<String>,
-    /// Programmed feed; blank keeps the preset's.
-    pub feed: RwSignal<String>,
-    /// Factor on the depth profile.
-    pub depth_scale: RwSignal<String>,
-    /// Cutter diameter; blank keeps the preset's.
-    pub diameter: RwSignal<String>,
-    /// Number of teeth; blank keeps the preset's.
-    pub teeth: RwSignal<String>,
-    /// Hall-sensor noise; blank keeps the preset's.
-    pub noise: RwSignal<String>,
+    /// The typed text of each setting, in the order of [`RunSetting::ALL`].
+    settings: [RwSignal<String>; RunSetting::ALL.len()],
 }
 
-/// The plant-edit fields: (query key, default text).
 /// The preset a fresh form shows.
 const DEFAULT_PRESET: &str = "kim-step-doc";
-
-const PLANT_KEYS: [&str; 7] = [
-    "material",
-    "rpm",
-    "feed",
-    "depth_scale",
-    "diameter",
-    "teeth",
-    "noise",
-];
 
 /// A parsed scenario, or the message of each field that did not parse.
 #[derive(Debug, Clone, PartialEq)]
@@ -78,226 +43,191 @@ pub struct ScenarioChoice {
     pub plant: PlantEdits,
 }
 
+/// The text a fresh form shows for `setting` (blank keeps the preset's value).
+fn shown_default(setting: RunSetting) -> &'static str {
+    match setting {
+        RunSetting::Seed => "1",
+        RunSetting::MaxOverride => "150",
+        RunSetting::FilterOrder => "4",
+        RunSetting::SpindleCutoff => "260",
+        RunSetting::FeedCutoff => "50",
+        RunSetting::DepthScale => "1",
+        _ => "",
+    }
+}
+
+/// Settings always written to the URL, so a shared link keeps them whatever the defaults become.
+fn always_in_query(setting: RunSetting) -> bool {
+    matches!(setting, RunSetting::Seed | RunSetting::MaxOverride)
+}
+
 impl ScenarioForm {
     /// A form with the defaults, then whatever `query` says.
     pub fn new(query: &[(String, String)]) -> Self {
-        let blank = || RwSignal::new(String::new());
-        let form = Self {
-            preset: blank(),
-            seed: blank(),
-            target: blank(),
-            max_override: blank(),
-            period: blank(),
-            filter_order: blank(),
-            spindle_cutoff: blank(),
-            feed_cutoff: blank(),
-            material: blank(),
-            rpm: blank(),
-            feed: blank(),
-            depth_scale: blank(),
-            diameter: blank(),
-            teeth: blank(),
-            noise: blank(),
-        };
-        for (key, signal, default) in form.fields() {
-            let typed = query.iter().find(|(k, _)| k == key).map(|(_, v)| v.clone());
-            signal.set(typed.unwrap_or_else(|| default.to_string()));
+        let typed = |key: &str| query.iter().find(|(k, _)| k == key).map(|(_, v)| v.clone());
+        Self {
+            preset: RwSignal::new(typed("preset").unwrap_or_else(|| DEFAULT_PRESET.to_string())),
+            settings: RunSetting::ALL.map(|setting| {
+                RwSignal::new(
+                    typed(setting.spec().query_key)
+                        .unwrap_or_else(|| shown_default(setting).to_string()),
+                )
+            }),
         }
-        form
     }
 
-    /// Every field with its query key and default text. Blank keeps the preset's value; the
-    /// preset, seed and override limit are always written to the query.
-    fn fields(&self) -> [(&'static str, RwSignal<String>, &'static str); 15] {
-        [
-            ("preset", self.preset, DEFAULT_PRESET),
-            ("seed", self.seed, "1"),
-            ("target", self.target, ""),
-            ("max_override", self.max_override, "150"),
-            ("period", self.period, ""),
-            ("filter_order", self.filter_order, "4"),
-            ("spindle_cutoff", self.spindle_cutoff, "260"),
-            ("feed_cutoff", self.feed_cutoff, "50"),
-            (PLANT_KEYS[0], self.material, ""),
-            (PLANT_KEYS[1], self.rpm, ""),
-            (PLANT_KEYS[2], self.feed, ""),
-            (PLANT_KEYS[3], self.depth_scale, "1"),
-            (PLANT_KEYS[4], self.diameter, ""),
-            (PLANT_KEYS[5], self.teeth, ""),
-            (PLANT_KEYS[6], self.noise, ""),
-        ]
+    /// The text signal of `setting`.
+    pub fn text(&self, setting: RunSetting) -> RwSignal<String> {
+        let index = RunSetting::ALL
+            .iter()
+            .position(|s| *s == setting)
+            .unwrap_or_default();
+        self.settings[index]
+    }
+
+    fn fields(&self) -> impl Iterator<Item = (RunSetting, RwSignal<String>)> + '_ {
+        RunSetting::ALL.into_iter().zip(self.settings)
     }
 
     /// Every field back to its default, on `preset`: a one-click experiment starts from the
     /// paper's own values, not from edits made for another preset.
     pub fn reset_to(&self, preset: Preset) {
-        for (_, signal, default) in self.fields() {
-            signal.set(default.to_string());
+        for (setting, text) in self.fields() {
+            text.set(shown_default(setting).to_string());
         }
         self.preset.set(preset.name().to_string());
     }
 
     /// The query pairs that reproduce this form.
     pub fn query(&self) -> Vec<(String, String)> {
-        self.fields()
-            .into_iter()
-            .filter_map(|(key, signal, default)| {
+        std::iter::once(("preset".to_string(), self.preset.get()))
+            .chain(self.fields().filter_map(|(setting, signal)| {
                 let text = signal.get();
-                let always = matches!(key, "preset" | "seed" | "max_override");
-                (always || text.trim() != default).then(|| (key.to_string(), text))
-            })
+                (always_in_query(setting) || text.trim() != shown_default(setting))
+                    .then(|| (setting.spec().query_key.to_string(), text))
+            }))
             .collect()
     }
 
-    /// Parses the plant edits; blank fields keep the preset's values.
-    fn parse_plant(&self, errors: &mut BTreeMap<&'static str, String>) -> PlantEdits {
-        let mut optional = |key: &'static str, text: String, min: f64, max: f64, unit: &str| {
-            if text.trim().is_empty() {
-                return None;
-            }
-            match parse_number(&text) {
-                Ok(v) if (min..=max).contains(&v) => Some(v),
-                Ok(v) => {
-                    errors.insert(key, format!("{v} {unit} is outside {min}–{max} {unit}"));
-                    None
-                }
-                Err(e) => {
-                    errors.insert(key, e);
-                    None
-                }
-            }
-        };
-        let edits = PlantEdits {
-            material: Material::from_name(&self.material.get()),
-            spindle_rpm: optional("rpm", self.rpm.get(), 50.0, 20_000.0, "rpm"),
-            programmed_feed_mm_min: optional("feed", self.feed.get(), 1.0, 20_000.0, "mm/min"),
-            depth_scale: optional("depth_scale", self.depth_scale.get(), 0.05, 5.0, "×"),
-            tool_diameter_mm: optional("diameter", self.diameter.get(), 0.5, 100.0, "mm"),
-            teeth: optional("teeth", self.teeth.get(), 1.0, 12.0, "teeth")
-                .map(|z| z.round() as u32),
-            sensor_noise_a: optional("noise", self.noise.get(), 0.0, 5.0, "A"),
-        };
-        PlantEdits {
-            depth_scale: edits.depth_scale.filter(|k| *k != 1.0),
-            ..edits
-        }
-    }
-
-    /// Parses the fields; errors are keyed by field name.
+    /// Parses the fields; errors are keyed by the setting's query key.
     pub fn parse(&self) -> Result<ScenarioChoice, BTreeMap<&'static str, String>> {
         let mut errors = BTreeMap::new();
-        let preset = Preset::from_name(&self.preset.get());
-        if preset.is_none() {
+        let Some(preset) = Preset::from_name(&self.preset.get()) else {
             errors.insert("preset", "choose a preset".to_string());
-        }
-        let seed = parse_seed(&self.seed.get())
-            .map_err(|e| errors.insert("seed", e))
-            .ok();
-        let target_text = self.target.get();
-        let target = if target_text.trim().is_empty() {
-            Some(None)
-        } else {
-            match parse_number(&target_text) {
-                Ok(v) if v > 0.0 => Some(Some(v)),
-                Ok(v) => {
-                    errors.insert("target", format!("the target must be positive, not {v} N"));
-                    None
-                }
-                Err(e) => {
-                    errors.insert("target", e);
-                    None
-                }
-            }
+            return Err(errors);
         };
-        let max_override = match parse_number(&self.max_override.get()) {
-            Ok(v) if (20.0..=255.0).contains(&v) => Some(v),
-            Ok(v) => {
-                errors.insert("max_override", format!("{v} % is outside 20–255 %"));
-                None
-            }
-            Err(e) => {
-                errors.insert("max_override", e);
-                None
-            }
-        };
-        let period_text = self.period.get();
-        let period = if period_text.trim().is_empty() {
-            None
-        } else {
-            match parse_number(&period_text) {
-                Ok(v) if (0.001..=2.0).contains(&v) => Some(v),
-                Ok(v) => {
-                    errors.insert("period", format!("{v} s is outside 0.001–2 s"));
-                    None
-                }
-                Err(e) => {
-                    errors.insert("period", e);
-                    None
-                }
-            }
-        };
-        let order = match parse_count(&self.filter_order.get()) {
-            Ok(v) if (1..=20).contains(&v) => Some(v),
-            Ok(v) => {
-                errors.insert("filter_order", format!("order {v} is outside 1–20"));
-                None
-            }
-            Err(e) => {
-                errors.insert("filter_order", e);
-                None
-            }
-        };
-        // The sensors sample at 10 kHz: a cut-off must stay below 5 kHz (the core checks again).
-        let mut cutoff = |key: &'static str, text: String| match parse_number(&text) {
-            Ok(v) if v > 0.0 && v < 5000.0 => Some(v),
-            Ok(v) => {
-                errors.insert(
-                    key,
-                    format!("{v} Hz must lie between 0 and the 5000 Hz Nyquist frequency"),
-                );
-                None
-            }
-            Err(e) => {
-                errors.insert(key, e);
-                None
-            }
-        };
-        let spindle_cutoff = cutoff("spindle_cutoff", self.spindle_cutoff.get());
-        let feed_cutoff = cutoff("feed_cutoff", self.feed_cutoff.get());
+        let mut spec = RunSpec::new(preset, ControllerKind::Fixed);
         // The machine fields are hidden for presets without a mill; what they hold then must
         // neither block the run nor change it.
-        let plant = match preset {
-            Some(p) if p.scenario().is_some() => self.parse_plant(&mut errors),
-            _ => PlantEdits::default(),
-        };
-        match (preset, seed, target, max_override) {
-            (Some(preset), Some(seed), Some(target), Some(max)) if errors.is_empty() => {
-                Ok(ScenarioChoice {
-                    preset,
-                    seed,
-                    settings: SettingsOverrides {
-                        target_force_n: target,
-                        max_override_pct: Some(max),
-                        control_period_s: period,
-                        lowpass_order: order,
-                        spindle_lowpass_hz: spindle_cutoff,
-                        feed_lowpass_hz: feed_cutoff,
-                        ..SettingsOverrides::default()
-                    },
-                    plant,
-                })
+        let has_mill = preset.scenario().is_some();
+        for (setting, text) in self.fields() {
+            if setting.spec().group == SettingGroup::Machine && !has_mill {
+                continue;
             }
-            _ => Err(errors),
+            let text = text.get();
+            if setting == RunSetting::Seed && text.trim().is_empty() {
+                errors.insert(setting.spec().query_key, "enter a seed".to_string());
+                continue;
+            }
+            match setting.parse(&text, preset) {
+                // A depth factor of 1 is the preset's own profile, not an edit.
+                Ok(Some(SettingValue::Number(k)))
+                    if setting == RunSetting::DepthScale && k == 1.0 => {}
+                Ok(value) => setting.apply(&mut spec, value),
+                Err(e) => {
+                    let message = match e.choices() {
+                        Some(choices) => format!("{}; choices: {choices}", e.problem),
+                        None => e.problem.to_string(),
+                    };
+                    errors.insert(setting.spec().query_key, message);
+                }
+            }
+        }
+        if !errors.is_empty() {
+            return Err(errors);
+        }
+        Ok(ScenarioChoice {
+            preset,
+            seed: spec.seed,
+            settings: spec.settings,
+            plant: spec.plant,
+        })
+    }
+}
+
+/// The form field of one setting: a select for named choices, a number field otherwise.
+fn setting_field(
+    form: ScenarioForm,
+    setting: RunSetting,
+    errors: Memo<BTreeMap<&'static str, String>>,
+) -> AnyView {
+    let spec = setting.spec();
+    let id = spec.query_key.replace('_', "-");
+    let value = form.text(setting);
+    let preset_s = "The preset's";
+    match spec.kind {
+        SettingKind::Material => view! {
+            <SelectField
+                id=id
+                label=spec.label
+                options=std::iter::once(("", preset_s))
+                    .chain(Material::ALL.iter().map(|m| (m.name(), m.label())))
+                    .collect()
+                value=value
+            />
+        }
+        .into_any(),
+        SettingKind::Feedback => view! {
+            <SelectField
+                id=id
+                label=spec.label
+                options=std::iter::once(("", preset_s))
+                    .chain(Feedback::ALL.iter().map(|f| (f.name(), f.label())))
+                    .collect()
+                value=value
+            />
+        }
+        .into_any(),
+        SettingKind::Count { .. } | SettingKind::Seed | SettingKind::Number { .. } => {
+            let key = spec.query_key;
+            let error = Signal::derive(move || errors.with(|e| e.get(key).cloned()));
+            let step = if matches!(spec.kind, SettingKind::Number { .. }) {
+                "any"
+            } else {
+                "1"
+            };
+            view! {
+                <NumberField
+                    id=id
+                    label=spec.label.to_string()
+                    unit=spec.unit
+                    value=value
+                    error=error
+                    step=step
+                />
+            }
+            .into_any()
         }
     }
+}
+
+/// The fields of one group of settings.
+fn group_fields(
+    form: ScenarioForm,
+    group: SettingGroup,
+    errors: Memo<BTreeMap<&'static str, String>>,
+) -> Vec<AnyView> {
+    RunSetting::ALL
+        .into_iter()
+        .filter(|s| s.spec().group == group)
+        .map(|s| setting_field(form, s, errors))
+        .collect()
 }
 
 /// The scenario fields.
 #[component]
 pub fn ScenarioFields(form: ScenarioForm) -> impl IntoView {
     let errors = Memo::new(move |_| form.parse().err().unwrap_or_default());
-    let error =
-        move |key: &'static str| Signal::derive(move || errors.with(|e| e.get(key).cloned()));
     let summary = move || {
         Preset::from_name(&form.preset.get()).map(|p| {
             let s = p.summary();
@@ -330,21 +260,7 @@ pub fn ScenarioFields(form: ScenarioForm) -> impl IntoView {
                 value=form.preset
             />
             <p class="hint">{summary}</p>
-            <NumberField id="seed" label="Seed" value=form.seed error=error("seed") step="1" />
-            <NumberField
-                id="target"
-                label="Target force (blank: preset's)"
-                unit="N"
-                value=form.target
-                error=error("target")
-            />
-            <NumberField
-                id="max-override"
-                label="Highest override"
-                unit="%"
-                value=form.max_override
-                error=error("max_override")
-            />
+            {group_fields(form, SettingGroup::Scenario, errors)}
         </fieldset>
     }
 }
@@ -353,58 +269,16 @@ pub fn ScenarioFields(form: ScenarioForm) -> impl IntoView {
 #[component]
 pub fn MachineAndSignalFields(form: ScenarioForm) -> impl IntoView {
     let errors = Memo::new(move |_| form.parse().err().unwrap_or_default());
-    let error =
-        move |key: &'static str| Signal::derive(move || errors.with(|e| e.get(key).cloned()));
     view! {
         <fieldset hidden=move || {
             Preset::from_name(&form.preset.get()).is_none_or(|p| p.scenario().is_none())
         }>
             <legend>"Machine and cut (blank: the preset's)"</legend>
-            <SelectField
-                id="material"
-                label="Work material"
-                options=std::iter::once(("", "The preset's"))
-                    .chain(Material::ALL.iter().map(|m| (m.name(), m.label())))
-                    .collect()
-                value=form.material
-            />
-            <NumberField id="rpm" label="Spindle speed" unit="rpm" value=form.rpm error=error("rpm") />
-            <NumberField id="feed" label="Programmed feed" unit="mm/min" value=form.feed error=error("feed") />
-            <NumberField id="depth-scale" label="Depth of cut ×" value=form.depth_scale error=error("depth_scale") />
-            <NumberField id="diameter" label="Tool diameter" unit="mm" value=form.diameter error=error("diameter") />
-            <NumberField id="teeth" label="Teeth" value=form.teeth error=error("teeth") step="1" />
-            <NumberField id="noise" label="Sensor noise" unit="A" value=form.noise error=error("noise") />
+            {group_fields(form, SettingGroup::Machine, errors)}
         </fieldset>
         <fieldset>
             <legend>"Signal chain"</legend>
-            <NumberField
-                id="period"
-                label="Control period (blank: whole revolutions ≥ 40 ms)"
-                unit="s"
-                value=form.period
-                error=error("period")
-            />
-            <NumberField
-                id="filter-order"
-                label="Current filter order"
-                value=form.filter_order
-                error=error("filter_order")
-                step="1"
-            />
-            <NumberField
-                id="spindle-cutoff"
-                label="Spindle current cut-off"
-                unit="Hz"
-                value=form.spindle_cutoff
-                error=error("spindle_cutoff")
-            />
-            <NumberField
-                id="feed-cutoff"
-                label="Feed current cut-off"
-                unit="Hz"
-                value=form.feed_cutoff
-                error=error("feed_cutoff")
-            />
+            {group_fields(form, SettingGroup::SignalChain, errors)}
         </fieldset>
     }
 }

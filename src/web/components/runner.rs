@@ -1,6 +1,6 @@
 //! Runs long computations in the browser without freezing the page.
 //!
-//! A [`Job`] advances a little at a time; between chunks the browser gets control back (a
+//! Any core [`Work`] advances a little at a time; between chunks the browser gets control back (a
 //! zero-delay timeout), so input, painting and the Cancel button stay responsive. The chunk size
 //! adapts so each chunk takes about [`CHUNK_BUDGET_MS`], well under the 100 ms a person notices.
 //! Starting a new job or cancelling bumps a generation counter; a pump that sees a newer
@@ -15,22 +15,10 @@ use std::time::Duration;
 
 use leptos::prelude::*;
 
-use crate::closed_loop::lab::{LabRun, RunResult, RunSpec};
+use crate::work::{Progress, Work};
 
 /// Target duration of one chunk of work.
 pub const CHUNK_BUDGET_MS: f64 = 30.0;
-
-/// Work that can be done in pieces.
-pub trait Job {
-    /// What the finished job gives.
-    type Output;
-    /// Does at most `budget` units of work; returns true once done.
-    fn advance(&mut self, budget: usize) -> Result<bool, String>;
-    /// A label of the current stage and the fraction done, 0–1.
-    fn progress(&self) -> (String, f64);
-    /// The result, once done.
-    fn finish(&mut self) -> Result<Self::Output, String>;
-}
 
 /// What a runner is doing.
 #[derive(Debug, Clone, PartialEq)]
@@ -110,9 +98,9 @@ impl<T: Clone + Send + Sync + 'static> Runner<T> {
     }
 
     /// Starts `job`, replacing anything running.
-    pub fn start(&self, job: impl Job<Output = T> + 'static) {
+    pub fn start(&self, job: impl Work<Output = T> + 'static) {
         let generation = self.generation.fetch_add(1, Ordering::SeqCst) + 1;
-        let (stage, fraction) = job.progress();
+        let Progress { stage, fraction } = job.progress();
         let _ = self.status.try_set(RunStatus::Running { stage, fraction });
         let state = Rc::new(RefCell::new(Pumped { job, budget: 1 }));
         pump(state, self.status, self.generation.clone(), generation);
@@ -135,7 +123,7 @@ fn now_ms() -> f64 {
 }
 
 /// Does one chunk of work, publishes progress, and schedules the next chunk.
-fn pump<J: Job + 'static>(
+fn pump<J: Work + 'static>(
     state: Rc<RefCell<Pumped<J>>>,
     status: RwSignal<RunStatus<J::Output>>,
     generation: Arc<AtomicU64>,
@@ -156,7 +144,7 @@ fn pump<J: Job + 'static>(
             let step_started = now_ms();
             let budget = s.budget;
             match s.job.advance(budget) {
-                Err(e) => break Some(Err(e)),
+                Err(e) => break Some(Err(e.to_string())),
                 Ok(true) => break Some(Ok(())),
                 Ok(false) => {}
             }
@@ -175,10 +163,10 @@ fn pump<J: Job + 'static>(
             Some(Err(e)) => RunStatus::Failed(e),
             Some(Ok(())) => match s.job.finish() {
                 Ok(out) => RunStatus::Done(out),
-                Err(e) => RunStatus::Failed(e),
+                Err(e) => RunStatus::Failed(e.to_string()),
             },
             None => {
-                let (stage, fraction) = s.job.progress();
+                let Progress { stage, fraction } = s.job.progress();
                 RunStatus::Running { stage, fraction }
             }
         }
@@ -223,66 +211,6 @@ impl Debounce {
             },
             self.delay,
         );
-    }
-}
-
-/// Closed-loop runs one after another (Simulate and Compare).
-pub struct LabRuns {
-    specs: Vec<RunSpec>,
-    current: Option<LabRun>,
-    results: Vec<Arc<RunResult>>,
-}
-
-impl LabRuns {
-    /// The runs of `specs`, in order.
-    pub fn new(specs: Vec<RunSpec>) -> Self {
-        Self {
-            results: Vec::with_capacity(specs.len()),
-            specs,
-            current: None,
-        }
-    }
-}
-
-impl Job for LabRuns {
-    type Output = Vec<Arc<RunResult>>;
-
-    fn advance(&mut self, budget: usize) -> Result<bool, String> {
-        let index = self.results.len();
-        let Some(spec) = self.specs.get(index) else {
-            return Ok(true);
-        };
-        if self.current.is_none() {
-            self.current = Some(LabRun::new(spec).map_err(|e| e.to_string())?);
-        }
-        let Some(run) = self.current.as_mut() else {
-            return Ok(true);
-        };
-        if run.advance(budget).map_err(|e| e.to_string())? {
-            if let Some(result) = self.current.take().and_then(LabRun::into_result) {
-                self.results.push(Arc::new(result));
-            }
-        }
-        Ok(self.results.len() >= self.specs.len())
-    }
-
-    fn progress(&self) -> (String, f64) {
-        let total = self.specs.len().max(1);
-        let index = self.results.len();
-        let (stage, part) = self.current.as_ref().map_or(("teach cut", 0.0), |r| {
-            let p = r.progress();
-            (p.stage, p.fraction)
-        });
-        let label = if total > 1 {
-            format!("Run {} of {total}: {stage}", (index + 1).min(total))
-        } else {
-            format!("Running: {stage}")
-        };
-        (label, (index as f64 + part) / total as f64)
-    }
-
-    fn finish(&mut self) -> Result<Self::Output, String> {
-        Ok(std::mem::take(&mut self.results))
     }
 }
 

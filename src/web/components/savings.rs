@@ -12,35 +12,10 @@ use crate::closed_loop::lab::{
     apply_references, fixed_feed_spec, ReferenceSearch, References, RunResult, RunSpec,
 };
 use crate::web::components::run_view::NamedRun;
-use crate::web::components::runner::{Job, RunProgress, RunStatus, Runner};
+use crate::web::components::runner::{RunProgress, RunStatus, Runner};
 
 /// Scenarios whose references are kept.
 const KEPT: usize = 8;
-
-/// The reference runs as a browser job.
-struct ReferenceRuns(ReferenceSearch);
-
-impl Job for ReferenceRuns {
-    type Output = References;
-
-    fn advance(&mut self, budget: usize) -> Result<bool, String> {
-        self.0
-            .advance(budget)
-            .map(|found| found.is_some())
-            .map_err(|e| e.to_string())
-    }
-
-    fn progress(&self) -> (String, f64) {
-        let (stage, fraction) = self.0.progress();
-        (format!("Savings: {stage}"), fraction)
-    }
-
-    fn finish(&mut self) -> Result<References, String> {
-        self.0
-            .found()
-            .ok_or_else(|| "the reference runs ended without an answer".into())
-    }
-}
 
 /// The scenario of `spec`: everything the reference runs depend on, i.e. all but the controller.
 fn scenario_of(spec: &RunSpec) -> Option<RunSpec> {
@@ -109,7 +84,7 @@ impl Savings {
         match ReferenceSearch::new(&scenario) {
             Ok(search) => {
                 self.started.set_value(Some(scenario));
-                self.runner.start(ReferenceRuns(search));
+                self.runner.start(search);
             }
             // The run itself reports what is wrong with the spec.
             Err(_) => self.runner.cancel(),

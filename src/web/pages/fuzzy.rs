@@ -7,6 +7,7 @@ use std::sync::Arc;
 use leptos::prelude::*;
 
 use crate::charts::{Axis, HeatMap, LineChart, Series, PALETTE};
+use crate::closed_loop::lab::LabRuns;
 use crate::closed_loop::lab::{RunResult, RunSpec};
 use crate::control::fuzzy::engine::{Defuzzifier, Engine};
 use crate::control::fuzzy::fll;
@@ -20,7 +21,7 @@ use crate::web::components::download::download_text;
 use crate::web::components::fields::{parse_number, NumberField, SelectField};
 use crate::web::components::heat_map::HeatMapCanvas;
 use crate::web::components::run_form::{decode_rule_table, encode_rule_table};
-use crate::web::components::runner::{LabRuns, RunProgress, Runner};
+use crate::web::components::runner::{RunProgress, Runner};
 use crate::web::route::{query_params, replace_query, Page};
 
 /// Grid points per axis of the control surface.

@@ -16,8 +16,9 @@ use crate::plant::Preset;
 use crate::signal::spectrum::{amplitude_spectrum, Window};
 use crate::web::components::chart::ChartCanvas;
 use crate::web::components::fields::{parse_number, NumberField, SelectField};
-use crate::web::components::runner::{Debounce, Job, RunProgress, RunStatus, Runner};
+use crate::web::components::runner::{Debounce, RunProgress, RunStatus, Runner};
 use crate::web::route::{query_params, replace_query, Page};
+use crate::work::{Progress, Work};
 
 /// Wait after the last edit before re-running.
 const RERUN_DELAY: Duration = Duration::from_millis(300);
@@ -93,8 +94,9 @@ impl PlantJob {
     }
 }
 
-impl Job for PlantJob {
+impl Work for PlantJob {
     type Output = Arc<Recording>;
+    type Error = String;
 
     fn advance(&mut self, budget: usize) -> Result<bool, String> {
         let done = self.run.advance(budget.max(1000));
@@ -104,8 +106,8 @@ impl Job for PlantJob {
         Ok(done)
     }
 
-    fn progress(&self) -> (String, f64) {
-        ("Simulating the machine".to_string(), self.run.fraction())
+    fn progress(&self) -> Progress {
+        Progress::new("Simulating the machine", self.run.fraction())
     }
 
     fn finish(&mut self) -> Result<Self::Output, String> {

@@ -20,8 +20,9 @@ use crate::signal::sos::Sos;
 use crate::signal::spectrum::{amplitude_spectrum, find_peaks, AmplitudeSpectrum, Window};
 use crate::web::components::chart::ChartCanvas;
 use crate::web::components::fields::{parse_count, parse_number, NumberField, SelectField};
-use crate::web::components::runner::{Job, RunProgress, RunStatus, Runner};
+use crate::web::components::runner::{RunProgress, RunStatus, Runner};
 use crate::web::route::{query_params, replace_query, Page};
+use crate::work::{Progress, Work};
 
 /// A filter the papers use, one click away.
 struct FilterPreset {
@@ -327,8 +328,9 @@ impl BenchRecording {
     }
 }
 
-impl Job for BenchRecording {
+impl Work for BenchRecording {
     type Output = Arc<PhaseRecording>;
+    type Error = String;
 
     fn advance(&mut self, budget: usize) -> Result<bool, String> {
         if self.recording.raw_spectrum.is_some() {
@@ -357,9 +359,9 @@ impl Job for BenchRecording {
         Ok(false)
     }
 
-    fn progress(&self) -> (String, f64) {
-        (
-            "simulating the brake bench".into(),
+    fn progress(&self) -> Progress {
+        Progress::new(
+            "simulating the brake bench",
             self.done as f64 / self.total.max(1) as f64,
         )
     }

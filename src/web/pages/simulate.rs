@@ -5,6 +5,7 @@ use std::time::Duration;
 
 use leptos::prelude::*;
 
+use crate::closed_loop::lab::LabRuns;
 use crate::closed_loop::lab::{RunResult, RunSpec};
 use crate::closed_loop::metrics::metrics_csv;
 use crate::closed_loop::trace::write_csv;
@@ -14,7 +15,7 @@ use crate::web::components::run_form::{
     ControllerFields, ControllerForm, MachineAndSignalFields, ScenarioFields, ScenarioForm,
 };
 use crate::web::components::run_view::{metrics_json, EventLog, MetricsTable, NamedRun, RunCharts};
-use crate::web::components::runner::{Debounce, LabRuns, RunProgress, Runner};
+use crate::web::components::runner::{Debounce, RunProgress, Runner};
 use crate::web::components::savings::Savings;
 use crate::web::route::{query_params, replace_query, Page};
 

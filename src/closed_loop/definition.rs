@@ -1,0 +1,814 @@
+//! The run definition: every setting a person may change about a run, described once.
+//!
+//! A run is a preset (the experiment), a controller with its parameters, a seed, and the settings
+//! below, each of which keeps the preset's value when left out. This table is the only place a
+//! setting's names, unit and accepted range are written: the browser's form fields, the command
+//! line's options (`cutlab sim --help`) and a saved configuration's JSON all parse and check
+//! through it, so a value one of them accepts the others accept too, with the same message.
+//!
+//! | setting | JSON field | URL key | option | unit | range |
+//! |---|---|---|---|---|---|
+//! | see [`RunSetting::ALL`] and `docs/run-definition.md` | | | | | |
+//!
+//! A range may depend on the preset: the highest override cannot exceed what the preset's
+//! machine applies (a 16-grade dial stops at 150 %, paper 003's override at 255 %).
+
+use std::fmt;
+
+use super::lab::RunSpec;
+use super::runner::Feedback;
+use crate::input::{parse_count, parse_number, parse_seed};
+use crate::plant::cnc::{OverrideMode, MAX_OVERRIDE_PCT};
+use crate::plant::materials::Material;
+use crate::plant::Preset;
+
+/// Which group of the form a setting belongs to.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum SettingGroup {
+    /// Seed, target, feedback and the safety envelope's override band.
+    Scenario,
+    /// Control period and the current filters.
+    SignalChain,
+    /// Changes to the preset's machine and cut (mill presets only).
+    Machine,
+}
+
+/// What kind of value a setting takes.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum SettingKind {
+    /// A decimal number in `min..=max` (in the setting's unit).
+    Number {
+        /// Smallest accepted value.
+        min: f64,
+        /// Largest accepted value.
+        max: f64,
+    },
+    /// A whole number in `min..=max`.
+    Count {
+        /// Smallest accepted value.
+        min: usize,
+        /// Largest accepted value.
+        max: usize,
+    },
+    /// A simulation seed, any whole number from 0 to 2⁶⁴ − 1.
+    Seed,
+    /// One of [`Feedback::ALL`] by name.
+    Feedback,
+    /// One of [`Material::ALL`] by name.
+    Material,
+}
+
+/// A setting's value, once parsed and checked.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum SettingValue {
+    /// A number in the setting's unit.
+    Number(f64),
+    /// A whole number.
+    Count(usize),
+    /// A seed.
+    Seed(u64),
+    /// A feedback path.
+    Feedback(Feedback),
+    /// A work material.
+    Material(Material),
+}
+
+/// Every setting of a run.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum RunSetting {
+    /// Seed of every noise source.
+    Seed,
+    /// Which motor current measures the force.
+    Feedback,
+    /// The force to hold.
+    TargetForce,
+    /// The lowest override the envelope allows.
+    MinOverride,
+    /// The highest override the envelope allows.
+    MaxOverride,
+    /// The envelope's override rate limit.
+    MaxRate,
+    /// The override held until the envelope arms.
+    ArmingOverride,
+    /// The controller's period.
+    ControlPeriod,
+    /// Order of both current low-passes.
+    FilterOrder,
+    /// Spindle current low-pass cut-off.
+    SpindleCutoff,
+    /// Feed current low-pass cut-off.
+    FeedCutoff,
+    /// Work material of the whole part.
+    Material,
+    /// Spindle speed of every block.
+    SpindleSpeed,
+    /// Programmed feed of every block.
+    ProgrammedFeed,
+    /// Factor on the axial depth profile.
+    DepthScale,
+    /// Cutter diameter.
+    ToolDiameter,
+    /// Number of teeth.
+    Teeth,
+    /// Hall-sensor noise.
+    SensorNoise,
+}
+
+/// Everything written about one setting.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SettingSpec {
+    /// Field name in a saved configuration's JSON (`settings.…` or `plant.…`).
+    pub json_field: &'static str,
+    /// Key in the page's URL query and the form's field.
+    pub query_key: &'static str,
+    /// Command-line option, without the leading dashes.
+    pub cli_option: &'static str,
+    /// Label of the form field.
+    pub label: &'static str,
+    /// Unit shown beside the value (empty for dimensionless).
+    pub unit: &'static str,
+    /// What the value is, for `--help` and the form's hint.
+    pub help: &'static str,
+    /// The value's kind and static range.
+    pub kind: SettingKind,
+    /// Where the form shows it.
+    pub group: SettingGroup,
+}
+
+const fn number(min: f64, max: f64) -> SettingKind {
+    SettingKind::Number { min, max }
+}
+
+impl RunSetting {
+    /// Every setting, in the order the form shows them.
+    pub const ALL: [RunSetting; 18] = [
+        RunSetting::Seed,
+        RunSetting::TargetForce,
+        RunSetting::Feedback,
+        RunSetting::MaxOverride,
+        RunSetting::MinOverride,
+        RunSetting::MaxRate,
+        RunSetting::ArmingOverride,
+        RunSetting::Material,
+        RunSetting::SpindleSpeed,
+        RunSetting::ProgrammedFeed,
+        RunSetting::DepthScale,
+        RunSetting::ToolDiameter,
+        RunSetting::Teeth,
+        RunSetting::SensorNoise,
+        RunSetting::ControlPeriod,
+        RunSetting::FilterOrder,
+        RunSetting::SpindleCutoff,
+        RunSetting::FeedCutoff,
+    ];
+
+    /// The setting's names, unit, range and help.
+    pub const fn spec(self) -> SettingSpec {
+        use SettingGroup::{Machine, Scenario, SignalChain};
+        let (json_field, query_key, cli_option, label, unit, kind, group, help) = match self {
+            RunSetting::Seed => (
+                "seed",
+                "seed",
+                "seed",
+                "Seed",
+                "",
+                SettingKind::Seed,
+                Scenario,
+                "seed of every noise source (default 1); the same seed gives the same trace",
+            ),
+            RunSetting::TargetForce => (
+                "target_force_n",
+                "target",
+                "target-n",
+                "Target force (blank: preset's)",
+                "N",
+                number(1.0, 100_000.0),
+                Scenario,
+                "the force to hold (default: the preset's)",
+            ),
+            RunSetting::Feedback => (
+                "feedback",
+                "feedback",
+                "feedback",
+                "Force measured from",
+                "",
+                SettingKind::Feedback,
+                Scenario,
+                "which motor current measures the force: spindle or feed (default: the preset's)",
+            ),
+            RunSetting::MaxOverride => (
+                "max_override_pct",
+                "max_override",
+                "max-override",
+                "Highest override",
+                "%",
+                number(20.0, MAX_OVERRIDE_PCT),
+                Scenario,
+                "highest override the safety envelope allows (default 150; at most what the \
+                 machine applies)",
+            ),
+            RunSetting::MinOverride => (
+                "min_override_pct",
+                "min_override",
+                "min-override",
+                "Lowest override",
+                "%",
+                number(0.0, MAX_OVERRIDE_PCT),
+                Scenario,
+                "lowest override the safety envelope allows (default 10)",
+            ),
+            RunSetting::MaxRate => (
+                "max_rate_pct_per_s",
+                "max_rate",
+                "max-rate-pct-s",
+                "Override rate limit",
+                "%/s",
+                number(1.0, 100_000.0),
+                Scenario,
+                "fastest change of the override the safety envelope allows (default 100 %/s)",
+            ),
+            RunSetting::ArmingOverride => (
+                "arming_override_pct",
+                "arming_override",
+                "arming-override",
+                "Override before arming",
+                "%",
+                number(0.0, MAX_OVERRIDE_PCT),
+                Scenario,
+                "override held until the envelope arms (default 100)",
+            ),
+            RunSetting::ControlPeriod => (
+                "control_period_s",
+                "period",
+                "period-s",
+                "Control period (blank: whole revolutions ≥ 40 ms)",
+                "s",
+                number(0.001, 2.0),
+                SignalChain,
+                "control period (default: whole spindle revolutions, at least 40 ms)",
+            ),
+            RunSetting::FilterOrder => (
+                "lowpass_order",
+                "filter_order",
+                "filter-order",
+                "Current filter order",
+                "",
+                SettingKind::Count { min: 1, max: 20 },
+                SignalChain,
+                "order of the Butterworth low-passes on the phase currents (default 4)",
+            ),
+            RunSetting::SpindleCutoff => (
+                "spindle_lowpass_hz",
+                "spindle_cutoff",
+                "spindle-cutoff-hz",
+                "Spindle current cut-off",
+                "Hz",
+                number(1.0, 4_999.0),
+                SignalChain,
+                "spindle current low-pass cut-off, below the 5 kHz Nyquist frequency (default 260)",
+            ),
+            RunSetting::FeedCutoff => (
+                "feed_lowpass_hz",
+                "feed_cutoff",
+                "feed-cutoff-hz",
+                "Feed current cut-off",
+                "Hz",
+                number(1.0, 4_999.0),
+                SignalChain,
+                "feed current low-pass cut-off, below the 5 kHz Nyquist frequency (default 50)",
+            ),
+            RunSetting::Material => (
+                "material",
+                "material",
+                "material",
+                "Work material",
+                "",
+                SettingKind::Material,
+                Machine,
+                "work material of the whole part (mill presets)",
+            ),
+            RunSetting::SpindleSpeed => (
+                "spindle_rpm",
+                "rpm",
+                "rpm",
+                "Spindle speed",
+                "rpm",
+                number(50.0, 20_000.0),
+                Machine,
+                "spindle speed of every block (mill presets)",
+            ),
+            RunSetting::ProgrammedFeed => (
+                "programmed_feed_mm_min",
+                "feed",
+                "feed-mm-min",
+                "Programmed feed",
+                "mm/min",
+                number(1.0, 20_000.0),
+                Machine,
+                "programmed feed of every block (mill presets)",
+            ),
+            RunSetting::DepthScale => (
+                "depth_scale",
+                "depth_scale",
+                "depth-scale",
+                "Depth of cut ×",
+                "×",
+                number(0.05, 5.0),
+                Machine,
+                "factor on the axial depth profile (mill presets)",
+            ),
+            RunSetting::ToolDiameter => (
+                "tool_diameter_mm",
+                "diameter",
+                "diameter-mm",
+                "Tool diameter",
+                "mm",
+                number(0.5, 100.0),
+                Machine,
+                "cutter diameter (mill presets)",
+            ),
+            RunSetting::Teeth => (
+                "teeth",
+                "teeth",
+                "teeth",
+                "Teeth",
+                "teeth",
+                SettingKind::Count { min: 1, max: 12 },
+                Machine,
+                "number of teeth of the cutter (mill presets)",
+            ),
+            RunSetting::SensorNoise => (
+                "sensor_noise_a",
+                "noise",
+                "noise-a",
+                "Sensor noise",
+                "A",
+                number(0.0, 5.0),
+                Machine,
+                "Hall-sensor noise, standard deviation (mill presets)",
+            ),
+        };
+        SettingSpec {
+            json_field,
+            query_key,
+            cli_option,
+            label,
+            unit,
+            help,
+            kind,
+            group,
+        }
+    }
+
+    /// The setting whose URL key is `key`.
+    pub fn from_query_key(key: &str) -> Option<RunSetting> {
+        Self::ALL.into_iter().find(|s| s.spec().query_key == key)
+    }
+
+    /// The setting whose command-line option is `option` (without dashes).
+    pub fn from_cli_option(option: &str) -> Option<RunSetting> {
+        Self::ALL
+            .into_iter()
+            .find(|s| s.spec().cli_option == option)
+    }
+
+    /// The accepted numeric range for `preset`: the static range, narrowed where the preset's
+    /// machine cannot follow (the highest override a dial or override input applies).
+    pub fn range(self, preset: Preset) -> Option<(f64, f64)> {
+        match self.spec().kind {
+            SettingKind::Number { min, max } if self == RunSetting::MaxOverride => {
+                Some((min, max.min(machine_max_override_pct(preset))))
+            }
+            SettingKind::Number { min, max } => Some((min, max)),
+            SettingKind::Count { min, max } => Some((min as f64, max as f64)),
+            SettingKind::Seed | SettingKind::Feedback | SettingKind::Material => None,
+        }
+    }
+
+    /// Parses what a person typed for this setting on `preset`; blank text keeps the preset's
+    /// value (`Ok(None)`).
+    ///
+    /// ```
+    /// use cutlab::closed_loop::definition::{RunSetting, SettingValue};
+    /// use cutlab::plant::Preset;
+    /// let preset = Preset::ALL[0];
+    /// let period = RunSetting::ControlPeriod;
+    /// assert_eq!(period.parse("0,05", preset), Ok(Some(SettingValue::Number(0.05))));
+    /// assert_eq!(period.parse("  ", preset), Ok(None));
+    /// let e = period.parse("5", preset).unwrap_err();
+    /// assert_eq!(e.problem.to_string(), "5 s is outside 0.001–2 s");
+    /// ```
+    pub fn parse(self, text: &str, preset: Preset) -> Result<Option<SettingValue>, SettingError> {
+        let text = text.trim();
+        if text.is_empty() {
+            return Ok(None);
+        }
+        let problem = |problem| SettingError {
+            setting: self,
+            problem,
+        };
+        let value = match self.spec().kind {
+            SettingKind::Number { .. } => {
+                SettingValue::Number(parse_number(text).map_err(|m| problem(Problem::Parse(m)))?)
+            }
+            SettingKind::Count { .. } => {
+                SettingValue::Count(parse_count(text).map_err(|m| problem(Problem::Parse(m)))?)
+            }
+            SettingKind::Seed => {
+                SettingValue::Seed(parse_seed(text).map_err(|m| problem(Problem::Parse(m)))?)
+            }
+            SettingKind::Feedback => SettingValue::Feedback(
+                Feedback::ALL
+                    .into_iter()
+                    .find(|f| f.name() == text)
+                    .ok_or_else(|| problem(Problem::Unknown(text.to_string())))?,
+            ),
+            SettingKind::Material => SettingValue::Material(
+                Material::from_name(text)
+                    .ok_or_else(|| problem(Problem::Unknown(text.to_string())))?,
+            ),
+        };
+        self.check(value, preset)?;
+        Ok(Some(value))
+    }
+
+    /// Checks a value against the range for `preset`.
+    pub fn check(self, value: SettingValue, preset: Preset) -> Result<(), SettingError> {
+        let Some((min, max)) = self.range(preset) else {
+            return Ok(());
+        };
+        let v = match value {
+            SettingValue::Number(v) => v,
+            SettingValue::Count(n) => n as f64,
+            _ => return Ok(()),
+        };
+        if v >= min && v <= max {
+            return Ok(());
+        }
+        let spec = self.spec();
+        let problem = if self == RunSetting::MaxOverride && v > max {
+            Problem::AboveMachine { value: v, max }
+        } else if v <= 0.0 && min > 0.0 && !spec.unit.is_empty() {
+            Problem::NotPositive(v)
+        } else if v < 0.0 && min == 0.0 {
+            Problem::Negative(v)
+        } else {
+            Problem::OutOfRange {
+                value: v,
+                min,
+                max,
+                unit: spec.unit,
+                noun: if spec.unit.is_empty() { spec.label } else { "" },
+            }
+        };
+        Err(SettingError {
+            setting: self,
+            problem,
+        })
+    }
+
+    /// The value `spec` holds for this setting, if it changes the preset's.
+    pub fn value_in(self, spec: &RunSpec) -> Option<SettingValue> {
+        let s = &spec.settings;
+        let p = &spec.plant;
+        let number = |v: Option<f64>| v.map(SettingValue::Number);
+        match self {
+            RunSetting::Seed => Some(SettingValue::Seed(spec.seed)),
+            RunSetting::Feedback => s.feedback.map(SettingValue::Feedback),
+            RunSetting::TargetForce => number(s.target_force_n),
+            RunSetting::MinOverride => number(s.min_override_pct),
+            RunSetting::MaxOverride => number(s.max_override_pct),
+            RunSetting::MaxRate => number(s.max_rate_pct_per_s),
+            RunSetting::ArmingOverride => number(s.arming_override_pct),
+            RunSetting::ControlPeriod => number(s.control_period_s),
+            RunSetting::FilterOrder => s.lowpass_order.map(SettingValue::Count),
+            RunSetting::SpindleCutoff => number(s.spindle_lowpass_hz),
+            RunSetting::FeedCutoff => number(s.feed_lowpass_hz),
+            RunSetting::Material => p.material.map(SettingValue::Material),
+            RunSetting::SpindleSpeed => number(p.spindle_rpm),
+            RunSetting::ProgrammedFeed => number(p.programmed_feed_mm_min),
+            RunSetting::DepthScale => number(p.depth_scale),
+            RunSetting::ToolDiameter => number(p.tool_diameter_mm),
+            RunSetting::Teeth => p.teeth.map(|z| SettingValue::Count(z as usize)),
+            RunSetting::SensorNoise => number(p.sensor_noise_a),
+        }
+    }
+
+    /// Puts a checked value into `spec` (`None` restores the preset's value).
+    ///
+    /// # Panics
+    /// Never for values made by [`RunSetting::parse`] for this setting; a value of another kind
+    /// is ignored (a bug, caught by the tests that cover every setting).
+    pub fn apply(self, spec: &mut RunSpec, value: Option<SettingValue>) {
+        let number = match value {
+            Some(SettingValue::Number(v)) => Some(v),
+            _ => None,
+        };
+        let count = match value {
+            Some(SettingValue::Count(n)) => Some(n),
+            _ => None,
+        };
+        let s = &mut spec.settings;
+        let p = &mut spec.plant;
+        match self {
+            RunSetting::Seed => {
+                spec.seed = match value {
+                    Some(SettingValue::Seed(seed)) => seed,
+                    _ => DEFAULT_SEED,
+                }
+            }
+            RunSetting::Feedback => {
+                s.feedback = match value {
+                    Some(SettingValue::Feedback(f)) => Some(f),
+                    _ => None,
+                }
+            }
+            RunSetting::TargetForce => s.target_force_n = number,
+            RunSetting::MinOverride => s.min_override_pct = number,
+            RunSetting::MaxOverride => s.max_override_pct = number,
+            RunSetting::MaxRate => s.max_rate_pct_per_s = number,
+            RunSetting::ArmingOverride => s.arming_override_pct = number,
+            RunSetting::ControlPeriod => s.control_period_s = number,
+            RunSetting::FilterOrder => s.lowpass_order = count,
+            RunSetting::SpindleCutoff => s.spindle_lowpass_hz = number,
+            RunSetting::FeedCutoff => s.feed_lowpass_hz = number,
+            RunSetting::Material => {
+                p.material = match value {
+                    Some(SettingValue::Material(m)) => Some(m),
+                    _ => None,
+                }
+            }
+            RunSetting::SpindleSpeed => p.spindle_rpm = number,
+            RunSetting::ProgrammedFeed => p.programmed_feed_mm_min = number,
+            RunSetting::DepthScale => p.depth_scale = number,
+            RunSetting::ToolDiameter => p.tool_diameter_mm = number,
+            RunSetting::Teeth => p.teeth = count.map(|n| n as u32),
+            RunSetting::SensorNoise => p.sensor_noise_a = number,
+        }
+    }
+}
+
+/// The seed of a run that names none.
+pub const DEFAULT_SEED: u64 = 1;
+
+/// The highest override `preset`'s machine applies: the top of its dial, or the 255 % of an
+/// override input.
+pub fn machine_max_override_pct(preset: Preset) -> f64 {
+    match preset.override_mode() {
+        OverrideMode::Dial(table) => table.positions().into_iter().fold(0.0, f64::max),
+        OverrideMode::WholePercent | OverrideMode::Continuous => MAX_OVERRIDE_PCT,
+    }
+}
+
+/// Checks every setting `spec` holds against the table: a saved configuration is held to the
+/// same ranges as the form and the command line.
+pub fn check_spec(spec: &RunSpec) -> Result<(), SettingError> {
+    for setting in RunSetting::ALL {
+        if let Some(value) = setting.value_in(spec) {
+            setting.check(value, spec.preset)?;
+        }
+    }
+    Ok(())
+}
+
+/// What is wrong with a value.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Problem {
+    /// The text is not a value of the setting's kind; the message says why.
+    Parse(String),
+    /// Not one of the names the setting takes.
+    Unknown(String),
+    /// Zero or negative where only a positive value makes sense.
+    NotPositive(f64),
+    /// Negative where zero is the least.
+    Negative(f64),
+    /// Outside the accepted range.
+    OutOfRange {
+        /// The value given.
+        value: f64,
+        /// Smallest accepted.
+        min: f64,
+        /// Largest accepted.
+        max: f64,
+        /// Unit of all three.
+        unit: &'static str,
+        /// What the number counts, for unitless settings ("order 0 is outside 1–20").
+        noun: &'static str,
+    },
+    /// Above what the preset's machine applies.
+    AboveMachine {
+        /// The value given.
+        value: f64,
+        /// The machine's highest override.
+        max: f64,
+    },
+}
+
+impl fmt::Display for Problem {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Problem::Parse(message) => f.write_str(message),
+            Problem::Unknown(text) => write!(f, "{text:?} is not one of the choices"),
+            Problem::NotPositive(v) => write!(f, "must be positive, got {v}"),
+            Problem::Negative(v) => write!(f, "must be zero or positive, got {v}"),
+            Problem::OutOfRange {
+                value,
+                min,
+                max,
+                unit: "",
+                noun,
+            } => {
+                let noun = noun
+                    .split_whitespace()
+                    .last()
+                    .unwrap_or("value")
+                    .to_lowercase();
+                write!(f, "{noun} {value} is outside {min}–{max}")
+            }
+            Problem::OutOfRange {
+                value,
+                min,
+                max,
+                unit,
+                ..
+            } => write!(f, "{value} {unit} is outside {min}–{max} {unit}"),
+            Problem::AboveMachine { value, max } => write!(
+                f,
+                "highest override {value} % is more than this machine applies ({max} %)"
+            ),
+        }
+    }
+}
+
+/// A setting that did not parse or is out of range.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SettingError {
+    /// Which setting.
+    pub setting: RunSetting,
+    /// What is wrong with it.
+    pub problem: Problem,
+}
+
+impl SettingError {
+    /// The message for the command line, naming the option (`--period-s: 5 s is outside …`).
+    pub fn for_cli(&self) -> String {
+        let option = self.setting.spec().cli_option;
+        match self.problem {
+            // The message names the quantity already.
+            Problem::AboveMachine { .. } => format!("{} (--{option})", self.problem),
+            _ => format!("--{option}: {}", self.problem),
+        }
+    }
+
+    /// The choices of a setting that takes names, for messages.
+    pub fn choices(&self) -> Option<String> {
+        match self.setting.spec().kind {
+            SettingKind::Feedback => Some(
+                Feedback::ALL
+                    .iter()
+                    .map(|f| f.name())
+                    .collect::<Vec<_>>()
+                    .join(", "),
+            ),
+            SettingKind::Material => Some(
+                Material::ALL
+                    .iter()
+                    .map(|m| m.name())
+                    .collect::<Vec<_>>()
+                    .join(", "),
+            ),
+            _ => None,
+        }
+    }
+}
+
+impl fmt::Display for SettingError {
+    /// The message for a saved configuration, naming its JSON field.
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self.problem {
+            Problem::AboveMachine { .. } => write!(f, "{}", self.problem),
+            _ => write!(f, "{}: {}", self.setting.spec().json_field, self.problem),
+        }
+    }
+}
+
+impl std::error::Error for SettingError {}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::control::registry::ControllerKind;
+
+    fn preset(name: &str) -> Preset {
+        Preset::from_name(name).unwrap()
+    }
+
+    #[test]
+    fn names_are_unique_in_each_namespace() {
+        for names in [
+            RunSetting::ALL.map(|s| s.spec().json_field),
+            RunSetting::ALL.map(|s| s.spec().query_key),
+            RunSetting::ALL.map(|s| s.spec().cli_option),
+        ] {
+            let mut sorted = names.to_vec();
+            sorted.sort_unstable();
+            sorted.dedup();
+            assert_eq!(sorted.len(), names.len(), "{names:?}");
+        }
+        for s in RunSetting::ALL {
+            assert_eq!(RunSetting::from_query_key(s.spec().query_key), Some(s));
+            assert_eq!(RunSetting::from_cli_option(s.spec().cli_option), Some(s));
+        }
+    }
+
+    #[test]
+    fn every_setting_takes_its_range_ends_and_refuses_beyond() {
+        let p = preset("kim-step-doc");
+        for s in RunSetting::ALL {
+            let Some((min, max)) = s.range(p) else {
+                continue;
+            };
+            for v in [min, max] {
+                let parsed = s.parse(&v.to_string(), p).unwrap().unwrap();
+                let mut spec = RunSpec::new(p, ControllerKind::Pi);
+                s.apply(&mut spec, Some(parsed));
+                assert_eq!(s.value_in(&spec), Some(parsed), "{s:?}");
+                assert_eq!(check_spec(&spec), Ok(()));
+                s.apply(&mut spec, None);
+                assert!(s.value_in(&spec).is_none() || s == RunSetting::Seed);
+            }
+            let step = if matches!(s.spec().kind, SettingKind::Count { .. }) {
+                1.0
+            } else {
+                (max - min).abs().max(1.0) * 0.01
+            };
+            for v in [min - step, max + step] {
+                if v < 0.0 && matches!(s.spec().kind, SettingKind::Count { .. }) {
+                    continue;
+                }
+                let e = s.parse(&v.to_string(), p).unwrap_err();
+                assert_eq!(e.setting, s);
+                assert!(e.for_cli().contains(s.spec().cli_option), "{}", e.for_cli());
+            }
+        }
+    }
+
+    #[test]
+    fn messages_match_what_people_already_read() {
+        let p = preset("kim-step-doc");
+        let message = |s: RunSetting, text: &str| s.parse(text, p).unwrap_err().problem.to_string();
+        assert_eq!(
+            message(RunSetting::FilterOrder, "0"),
+            "order 0 is outside 1–20"
+        );
+        assert_eq!(
+            message(RunSetting::SpindleSpeed, "10"),
+            "10 rpm is outside 50–20000 rpm"
+        );
+        assert_eq!(
+            RunSetting::SpindleSpeed
+                .parse("-5", p)
+                .unwrap_err()
+                .for_cli(),
+            "--rpm: must be positive, got -5"
+        );
+        assert_eq!(
+            RunSetting::MaxOverride
+                .parse("1e6", p)
+                .unwrap_err()
+                .for_cli(),
+            "highest override 1000000 % is more than this machine applies (255 %) \
+             (--max-override)"
+        );
+        assert!(message(RunSetting::ProgrammedFeed, "1,500").contains("ambiguous"));
+        assert!(message(RunSetting::Feedback, "torque").contains("\"torque\""));
+    }
+
+    #[test]
+    fn the_highest_override_follows_the_machine() {
+        let dial = Preset::ALL
+            .into_iter()
+            .find(|p| matches!(p.override_mode(), OverrideMode::Dial(_)))
+            .unwrap();
+        let top = machine_max_override_pct(dial);
+        assert!(top < MAX_OVERRIDE_PCT);
+        assert!(RunSetting::MaxOverride
+            .parse(&top.to_string(), dial)
+            .is_ok());
+        let e = RunSetting::MaxOverride
+            .parse(&(top + 1.0).to_string(), dial)
+            .unwrap_err();
+        assert!(matches!(e.problem, Problem::AboveMachine { .. }), "{e}");
+    }
+
+    #[test]
+    fn a_saved_spec_out_of_range_is_refused_with_its_field() {
+        let mut spec = RunSpec::new(preset("kim-step-doc"), ControllerKind::Pi);
+        spec.settings.arming_override_pct = Some(400.0);
+        let e = check_spec(&spec).unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "arming_override_pct: 400 % is outside 0–255 %"
+        );
+    }
+}
