@@ -56,211 +56,106 @@ const fn param(
     }
 }
 
-const FIXED_PARAMS: &[ParamSpec] = &[param(
-    "override_pct",
-    "Override",
-    "%",
-    100.0,
-    0.0,
-    255.0,
-    "the override held for the whole run",
-)];
+/// Declares a controller's tuning: a struct with one `f64` field per parameter and its table
+/// (`PARAMS`: key = field name, label, unit, default, range, help), in one place, so the table
+/// and the fields cannot drift apart and a misspelt parameter is a compile error, not a NaN.
+macro_rules! tuning {
+    (
+        $(#[$meta:meta])*
+        pub struct $name:ident {
+            $($field:ident: ($label:expr, $unit:expr, $default:expr, $min:expr, $max:expr, $help:expr),)+
+        }
+    ) => {
+        $(#[$meta])*
+        #[derive(Debug, Clone, Copy, PartialEq)]
+        pub struct $name {
+            $(
+                #[doc = $help]
+                pub $field: f64,
+            )+
+        }
 
-const RESTRICTION_PARAMS: &[ParamSpec] = &[
-    param(
-        "band_pct",
-        "Band width",
-        "% of target",
-        10.0,
-        0.5,
-        100.0,
-        "distance between the upper and lower limit, centred on the target",
-    ),
-    param(
-        "step_pct",
-        "Step",
-        "%",
-        10.0,
-        0.1,
-        50.0,
-        "override change per control period outside the band (one dial grade)",
-    ),
-];
+        impl $name {
+            /// The parameters, in form order.
+            pub const PARAMS: &'static [ParamSpec] = &[
+                $(param(stringify!($field), $label, $unit, $default, $min, $max, $help),)+
+            ];
 
-const THRESHOLD_PARAMS: &[ParamSpec] = &[
-    param(
-        "gap_pct",
-        "Threshold gap",
-        "% of target",
-        10.0,
-        0.0,
-        100.0,
-        "distance between the maximum and minimum thresholds, centred on the target",
-    ),
-    param(
-        "kp",
-        "K_p",
-        "% per %",
-        0.5,
-        0.0,
-        10.0,
-        "override change per percent of force beyond a threshold (paper 003: 0.5)",
-    ),
-    param(
-        "ignore_after_start_s",
-        "Ignore after spindle start",
-        "s",
-        3.0,
-        0.0,
-        60.0,
-        "time after spindle start during which the current is ignored (paper 003: 3 s)",
-    ),
-];
+            /// The tuning from values in the order of [`Self::PARAMS`] (missing ones take their
+            /// defaults).
+            fn from_values(values: &[f64]) -> Self {
+                let mut index = 0;
+                $(
+                    let $field = values
+                        .get(index)
+                        .copied()
+                        .unwrap_or(Self::PARAMS[index].default);
+                    index += 1;
+                )+
+                let _ = index;
+                Self { $($field,)+ }
+            }
+        }
+    };
+}
 
-const PI_PARAMS: &[ParamSpec] = &[
-    param(
-        "kp",
-        "K_p",
-        "% per %",
-        0.3,
-        0.0,
-        10.0,
-        "proportional gain on the relative force error",
-    ),
-    param(
-        "ki_per_s",
-        "K_i",
-        "% per %·s",
-        1.0,
-        0.0,
-        100.0,
-        "integral gain on the relative force error",
-    ),
-    param(
-        "tracking_time_s",
-        "Anti-windup time",
-        "s",
-        0.5,
-        0.001,
-        100.0,
-        "back-calculation time constant: how fast the integrator follows a clamp",
-    ),
-    param(
-        "initial_override_pct",
-        "Initial override",
-        "%",
-        100.0,
-        0.0,
-        255.0,
-        "override the integrator starts from",
-    ),
-];
+tuning! {
+    /// The fixed-feed baseline.
+    pub struct FixedTuning {
+        override_pct: ("Override", "%", 100.0, 0.0, 255.0, "the override held for the whole run"),
+    }
+}
 
-const MRAC_PARAMS: &[ParamSpec] = &[
-    param(
-        "lambda_per_s",
-        "λ",
-        "1/s",
-        2.0,
-        0.01,
-        100.0,
-        "slope of the sliding variable E = dF̃/dt + λF̃",
-    ),
-    param(
-        "kd_pct_s",
-        "K_d",
-        "%·s",
-        8.0,
-        0.0,
-        1000.0,
-        "gain on the sliding variable",
-    ),
-    param(
-        "gamma_beta_pct_per_s",
-        "γ₃",
-        "%/s",
-        50.0,
-        0.0,
-        10_000.0,
-        "adaptation gain of β̂",
-    ),
-    param(
-        "gamma_dynamics_pct_per_s",
-        "γ₁ = γ₂",
-        "%/s",
-        0.0,
-        0.0,
-        10_000.0,
-        "adaptation gains of m̂ and α̂ (act only while the target changes)",
-    ),
-    param(
-        "initial_beta_pct",
-        "Initial β̂",
-        "%",
-        100.0,
-        1.0,
-        255.0,
-        "the override first assumed to give the target force",
-    ),
-    param(
-        "min_beta_pct",
-        "β̂ lower bound",
-        "%",
-        5.0,
-        0.0,
-        255.0,
-        "projection bound of β̂",
-    ),
-    param(
-        "max_beta_pct",
-        "β̂ upper bound",
-        "%",
-        255.0,
-        1.0,
-        1000.0,
-        "projection bound of β̂",
-    ),
-    param(
-        "derivative_time_s",
-        "Derivative filter",
-        "s",
-        0.2,
-        0.001,
-        10.0,
-        "time constant of the filtered differentiator of the force",
-    ),
-];
+tuning! {
+    /// Paper 000's current restriction.
+    pub struct RestrictionTuning {
+        band_pct: ("Band width", "% of target", 10.0, 0.5, 100.0, "distance between the upper and lower limit, centred on the target"),
+        step_pct: ("Step", "%", 10.0, 0.1, 50.0, "override change per control period outside the band (one dial grade)"),
+    }
+}
 
-const FUZZY_PARAMS: &[ParamSpec] = &[
-    param(
-        "error_range_pct",
-        "Error range",
-        "% of target",
-        100.0,
-        1.0,
-        1000.0,
-        "|E| that saturates the error input (paper 002: 25 A of 25 A, k_e = 6/25)",
-    ),
-    param(
-        "change_range_pct",
-        "Error-change range",
-        "% of target",
-        200.0,
-        1.0,
-        2000.0,
-        "|EC| per control period that saturates the change input (paper 002: k_ec = 3/25)",
-    ),
-    param(
-        "output_range_pct",
-        "Output range",
-        "%",
-        20.0,
-        0.1,
-        255.0,
-        "override change per period at |U| = 6 (paper 002's k_u = 250 of 1500 mm/min is 100 %, \
-         which chatters at cutlab's 40–60 ms periods; the paper's period is not stated)",
-    ),
-];
+tuning! {
+    /// Paper 003's threshold-proportional law.
+    pub struct ThresholdTuning {
+        gap_pct: ("Threshold gap", "% of target", 10.0, 0.0, 100.0, "distance between the maximum and minimum thresholds, centred on the target"),
+        kp: ("K_p", "% per %", 0.5, 0.0, 10.0, "override change per percent of force beyond a threshold (paper 003: 0.5)"),
+        ignore_after_start_s: ("Ignore after spindle start", "s", 3.0, 0.0, 60.0, "time after spindle start during which the current is ignored (paper 003: 3 s)"),
+    }
+}
+
+tuning! {
+    /// PI with anti-windup.
+    pub struct PiTuning {
+        kp: ("K_p", "% per %", 0.3, 0.0, 10.0, "proportional gain on the relative force error"),
+        ki_per_s: ("K_i", "% per %·s", 1.0, 0.0, 100.0, "integral gain on the relative force error"),
+        tracking_time_s: ("Anti-windup time", "s", 0.5, 0.001, 100.0, "back-calculation time constant: how fast the integrator follows a clamp"),
+        initial_override_pct: ("Initial override", "%", 100.0, 0.0, 255.0, "override the integrator starts from"),
+    }
+}
+
+tuning! {
+    /// Paper 001's Lyapunov MRAC.
+    pub struct MracTuning {
+        lambda_per_s: ("λ", "1/s", 2.0, 0.01, 100.0, "slope of the sliding variable E = dF̃/dt + λF̃"),
+        kd_pct_s: ("K_d", "%·s", 8.0, 0.0, 1000.0, "gain on the sliding variable"),
+        gamma_beta_pct_per_s: ("γ₃", "%/s", 50.0, 0.0, 10_000.0, "adaptation gain of β̂"),
+        gamma_dynamics_pct_per_s: ("γ₁ = γ₂", "%/s", 0.0, 0.0, 10_000.0, "adaptation gains of m̂ and α̂ (act only while the target changes)"),
+        initial_beta_pct: ("Initial β̂", "%", 100.0, 1.0, 255.0, "the override first assumed to give the target force"),
+        min_beta_pct: ("β̂ lower bound", "%", 5.0, 0.0, 255.0, "projection bound of β̂"),
+        max_beta_pct: ("β̂ upper bound", "%", 255.0, 1.0, 1000.0, "projection bound of β̂"),
+        derivative_time_s: ("Derivative filter", "s", 0.2, 0.001, 10.0, "time constant of the filtered differentiator of the force"),
+    }
+}
+
+tuning! {
+    /// Paper 002's fuzzy controller (both rule bases).
+    pub struct FuzzyTuning {
+        error_range_pct: ("Error range", "% of target", 100.0, 1.0, 1000.0, "|E| that saturates the error input (paper 002: 25 A of 25 A, k_e = 6/25)"),
+        change_range_pct: ("Error-change range", "% of target", 200.0, 1.0, 2000.0, "|EC| per control period that saturates the change input (paper 002: k_ec = 3/25)"),
+        output_range_pct: ("Output range", "%", 20.0, 0.1, 255.0, "override change per period at |U| = 6 (paper 002's k_u = 250 of 1500 mm/min is 100 %, \
+         which chatters at cutlab's 40–60 ms periods; the paper's period is not stated)"),
+    }
+}
 
 /// Every controller of the lab.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
@@ -338,12 +233,12 @@ impl ControllerKind {
     /// The parameters, in form order.
     pub fn params(self) -> &'static [ParamSpec] {
         match self {
-            ControllerKind::Fixed => FIXED_PARAMS,
-            ControllerKind::Restriction => RESTRICTION_PARAMS,
-            ControllerKind::Threshold => THRESHOLD_PARAMS,
-            ControllerKind::Pi => PI_PARAMS,
-            ControllerKind::Mrac => MRAC_PARAMS,
-            ControllerKind::FuzzyExperience | ControllerKind::FuzzyDynamics => FUZZY_PARAMS,
+            ControllerKind::Fixed => FixedTuning::PARAMS,
+            ControllerKind::Restriction => RestrictionTuning::PARAMS,
+            ControllerKind::Threshold => ThresholdTuning::PARAMS,
+            ControllerKind::Pi => PiTuning::PARAMS,
+            ControllerKind::Mrac => MracTuning::PARAMS,
+            ControllerKind::FuzzyExperience | ControllerKind::FuzzyDynamics => FuzzyTuning::PARAMS,
         }
     }
 }
@@ -548,10 +443,6 @@ impl ControllerConfig {
         self.set(key, value)
     }
 
-    fn value(&self, key: &str) -> f64 {
-        self.get(key).unwrap_or(f64::NAN)
-    }
-
     /// Builds the controller for a run. Cross-parameter checks happen here.
     pub fn build(&self, context: &RunContext) -> Result<Box<dyn Controller>, ParamError> {
         if !(context.target_force_n.is_finite() && context.target_force_n > 0.0) {
@@ -560,29 +451,38 @@ impl ControllerConfig {
                 context.target_force_n
             )));
         }
-        let v = |key| self.value(key);
         let target = context.target_force_n;
+        let values = &self.values;
         Ok(match self.kind {
-            ControllerKind::Fixed => Box::new(FixedFeed::new(v("override_pct"))),
+            ControllerKind::Fixed => Box::new(FixedFeed::new(
+                FixedTuning::from_values(values).override_pct,
+            )),
             ControllerKind::Restriction => {
-                let half_band = target * v("band_pct") / 200.0;
+                let t = RestrictionTuning::from_values(values);
+                let half_band = target * t.band_pct / 200.0;
                 Box::new(CurrentRestriction::new(RestrictionParams {
                     upper_limit_n: target + half_band,
                     lower_limit_n: target - half_band,
-                    step_pct: v("step_pct"),
+                    step_pct: t.step_pct,
                 }))
             }
-            ControllerKind::Threshold => Box::new(ThresholdProportional::new(ThresholdParams {
-                gap_pct: v("gap_pct"),
-                kp: v("kp"),
-                ignore_after_start_s: v("ignore_after_start_s"),
-            })),
-            ControllerKind::Pi => Box::new(PiController::new(PiParams {
-                kp: v("kp"),
-                ki_per_s: v("ki_per_s"),
-                tracking_time_s: v("tracking_time_s"),
-                initial_override_pct: v("initial_override_pct"),
-            })),
+            ControllerKind::Threshold => {
+                let t = ThresholdTuning::from_values(values);
+                Box::new(ThresholdProportional::new(ThresholdParams {
+                    gap_pct: t.gap_pct,
+                    kp: t.kp,
+                    ignore_after_start_s: t.ignore_after_start_s,
+                }))
+            }
+            ControllerKind::Pi => {
+                let t = PiTuning::from_values(values);
+                Box::new(PiController::new(PiParams {
+                    kp: t.kp,
+                    ki_per_s: t.ki_per_s,
+                    tracking_time_s: t.tracking_time_s,
+                    initial_override_pct: t.initial_override_pct,
+                }))
+            }
             ControllerKind::FuzzyExperience | ControllerKind::FuzzyDynamics => {
                 let base = if self.kind == ControllerKind::FuzzyExperience {
                     RuleBase::Experience
@@ -590,13 +490,14 @@ impl ControllerConfig {
                     RuleBase::Dynamics
                 };
                 let table = self.rule_table.unwrap_or_else(|| base.table());
+                let t = FuzzyTuning::from_values(values);
                 Box::new(
                     FuzzyController::new(
                         &table,
                         FuzzyParams {
-                            error_range_pct: v("error_range_pct"),
-                            change_range_pct: v("change_range_pct"),
-                            output_range_pct: v("output_range_pct"),
+                            error_range_pct: t.error_range_pct,
+                            change_range_pct: t.change_range_pct,
+                            output_range_pct: t.output_range_pct,
                             defuzzifier: Defuzzifier::WeightedAverage,
                         },
                     )
@@ -604,21 +505,21 @@ impl ControllerConfig {
                 )
             }
             ControllerKind::Mrac => {
-                if v("min_beta_pct") >= v("max_beta_pct") {
+                let t = MracTuning::from_values(values);
+                if t.min_beta_pct >= t.max_beta_pct {
                     return Err(ParamError(
                         "min_beta_pct must be below max_beta_pct".to_string(),
                     ));
                 }
                 Box::new(ModelReferenceAdaptive::new(MracParams {
-                    lambda_per_s: v("lambda_per_s"),
-                    kd_pct_s: v("kd_pct_s"),
-                    gamma_beta_pct_per_s: v("gamma_beta_pct_per_s"),
-                    gamma_dynamics_pct_per_s: v("gamma_dynamics_pct_per_s"),
-                    initial_beta_pct: v("initial_beta_pct")
-                        .clamp(v("min_beta_pct"), v("max_beta_pct")),
-                    min_beta_pct: v("min_beta_pct"),
-                    max_beta_pct: v("max_beta_pct"),
-                    derivative_time_s: v("derivative_time_s"),
+                    lambda_per_s: t.lambda_per_s,
+                    kd_pct_s: t.kd_pct_s,
+                    gamma_beta_pct_per_s: t.gamma_beta_pct_per_s,
+                    gamma_dynamics_pct_per_s: t.gamma_dynamics_pct_per_s,
+                    initial_beta_pct: t.initial_beta_pct.clamp(t.min_beta_pct, t.max_beta_pct),
+                    min_beta_pct: t.min_beta_pct,
+                    max_beta_pct: t.max_beta_pct,
+                    derivative_time_s: t.derivative_time_s,
                 }))
             }
         })
@@ -654,6 +555,21 @@ mod tests {
             // On target at 100 % every controller's request is 100 %.
             assert!((out - 100.0).abs() < 1e-9, "{kind}: {out}");
         }
+    }
+
+    #[test]
+    fn a_tuning_reads_each_value_into_the_field_of_its_key() {
+        let t = PiTuning::from_values(&[0.7, 2.0, 0.25, 90.0]);
+        assert_eq!(
+            (t.kp, t.ki_per_s, t.tracking_time_s, t.initial_override_pct),
+            (0.7, 2.0, 0.25, 90.0)
+        );
+        let keys: Vec<_> = PiTuning::PARAMS.iter().map(|p| p.key).collect();
+        assert_eq!(keys, ["kp", "ki_per_s", "tracking_time_s", "initial_override_pct"]);
+        // Missing values take their defaults, never NaN.
+        let m = MracTuning::from_values(&[]);
+        assert_eq!(m.derivative_time_s, 0.2);
+        assert!(MracTuning::PARAMS.iter().all(|p| !p.default.is_nan()));
     }
 
     #[test]
