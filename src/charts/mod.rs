@@ -92,6 +92,42 @@ pub enum Scale {
     Log,
 }
 
+impl Scale {
+    /// A data value in the space where the axis is linear (its decade for a log axis).
+    pub fn to_linear(self, value: f64) -> f64 {
+        match self {
+            Scale::Linear => value,
+            Scale::Log => value.log10(),
+        }
+    }
+
+    /// The data value of a point in the axis's linear space.
+    pub fn from_linear(self, position: f64) -> f64 {
+        match self {
+            Scale::Linear => position,
+            Scale::Log => 10f64.powf(position),
+        }
+    }
+
+    /// Where `value` lies along `range`, 0 at its start and 1 at its end.
+    ///
+    /// ```
+    /// use cutlab::charts::Scale;
+    /// assert_eq!(Scale::Linear.fraction(&(0.0..10.0), 2.5), 0.25);
+    /// assert!((Scale::Log.fraction(&(1.0..100.0), 10.0) - 0.5).abs() < 1e-12);
+    /// ```
+    pub fn fraction(self, range: &Range<f64>, value: f64) -> f64 {
+        let (a, b) = (self.to_linear(range.start), self.to_linear(range.end));
+        (self.to_linear(value) - a) / (b - a)
+    }
+
+    /// The value at `fraction` along `range` (the inverse of [`Scale::fraction`]).
+    pub fn at_fraction(self, range: &Range<f64>, fraction: f64) -> f64 {
+        let (a, b) = (self.to_linear(range.start), self.to_linear(range.end));
+        self.from_linear(a + fraction * (b - a))
+    }
+}
+
 /// One axis: its label (with unit) and the shown range.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Axis {
@@ -165,14 +201,14 @@ impl PlotGeometry {
     pub fn x_at(&self, px: f64) -> f64 {
         let t =
             (px - f64::from(self.x_px.start)) / f64::from((self.x_px.end - self.x_px.start).max(1));
-        interpolate(&self.x_range, self.x_scale, t)
+        self.x_scale.at_fraction(&self.x_range, t)
     }
 
     /// The data y at pixel row `py`.
     pub fn y_at(&self, py: f64) -> f64 {
         let t =
             (f64::from(self.y_px.end) - py) / f64::from((self.y_px.end - self.y_px.start).max(1));
-        interpolate(&self.y_range, self.y_scale, t)
+        self.y_scale.at_fraction(&self.y_range, t)
     }
 
     /// True if the pixel lies inside the plotting area.
@@ -181,16 +217,6 @@ impl PlotGeometry {
             && px <= f64::from(self.x_px.end)
             && py >= f64::from(self.y_px.start)
             && py <= f64::from(self.y_px.end)
-    }
-}
-
-fn interpolate(range: &Range<f64>, scale: Scale, t: f64) -> f64 {
-    match scale {
-        Scale::Linear => range.start + t * (range.end - range.start),
-        Scale::Log => {
-            let (a, b) = (range.start.log10(), range.end.log10());
-            10f64.powf(a + t * (b - a))
-        }
     }
 }
 

@@ -20,28 +20,17 @@ use crate::signal::decimate::min_max;
 /// assert!((r.start - 10f64.powf(0.5)).abs() < 1e-12 && (r.end - 10f64.powf(1.5)).abs() < 1e-12);
 /// ```
 pub fn zoom(range: &Range<f64>, anchor: f64, factor: f64, scale: Scale) -> Range<f64> {
-    let (to, from) = transform(scale);
+    let to = |v| scale.to_linear(v);
     let (a, b, c) = (to(range.start), to(range.end), to(anchor));
     let c = if c.is_finite() { c } else { (a + b) / 2.0 };
-    from(c + (a - c) * factor)..from(c + (b - c) * factor)
+    scale.from_linear(c + (a - c) * factor)..scale.from_linear(c + (b - c) * factor)
 }
 
 /// Moves `range` by `fraction` of its width (positive moves toward larger values).
 pub fn pan(range: &Range<f64>, fraction: f64, scale: Scale) -> Range<f64> {
-    let (to, from) = transform(scale);
-    let (a, b) = (to(range.start), to(range.end));
+    let (a, b) = (scale.to_linear(range.start), scale.to_linear(range.end));
     let shift = (b - a) * fraction;
-    from(a + shift)..from(b + shift)
-}
-
-/// A map from data values to a space where the axis is linear, and back.
-type AxisTransform = (fn(f64) -> f64, fn(f64) -> f64);
-
-fn transform(scale: Scale) -> AxisTransform {
-    match scale {
-        Scale::Linear => (|v| v, |v| v),
-        Scale::Log => (f64::log10, |v| 10f64.powf(v)),
-    }
+    scale.from_linear(a + shift)..scale.from_linear(b + shift)
 }
 
 /// The chart as shown: series hidden by the legend removed, points outside `x_range` dropped

@@ -89,82 +89,74 @@ impl Trace {
     }
 }
 
-/// The CSV columns [`write_csv`] writes, in order.
-pub const CSV_COLUMNS: [&str; 17] = [
-    "time_s",
-    "depth_mm",
-    "width_mm",
-    "path_position_mm",
-    "programmed_feed_mm_min",
-    "feed_mm_min",
-    "requested_override_pct",
-    "override_pct",
-    "applied_override_pct",
-    "force_n",
-    "force_est_n",
-    "force_power_law_n",
-    "target_force_n",
-    "spindle_current_rms_a",
-    "feed_current_rms_a",
-    "spindle_speed_rpm",
-    "material_removal_mm3_s",
+/// A numeric column of the trace CSV: its name (unit in the name) and the value it takes from a
+/// row, side by side so the two cannot drift apart.
+#[derive(Clone, Copy)]
+pub struct CsvColumn<T> {
+    /// Header name.
+    pub name: &'static str,
+    /// The row's value.
+    pub value: fn(&TraceRow) -> T,
+}
+
+macro_rules! csv_columns {
+    ($ty:ty; $($field:ident),+ $(,)?) => {
+        [$(CsvColumn::<$ty> { name: stringify!($field), value: |r| r.$field }),+]
+    };
+}
+
+/// The numeric columns [`write_csv`] writes, in order.
+pub const CSV_COLUMNS: [CsvColumn<f64>; 17] = csv_columns![f64;
+    time_s,
+    depth_mm,
+    width_mm,
+    path_position_mm,
+    programmed_feed_mm_min,
+    feed_mm_min,
+    requested_override_pct,
+    override_pct,
+    applied_override_pct,
+    force_n,
+    force_est_n,
+    force_power_law_n,
+    target_force_n,
+    spindle_current_rms_a,
+    feed_current_rms_a,
+    spindle_speed_rpm,
+    material_removal_mm3_s,
 ];
 
 /// The state flags [`write_csv`] writes after the values and terms, as 0/1.
-pub const CSV_FLAG_COLUMNS: [&str; 5] = [
-    "armed",
-    "sensor_fault",
-    "feed_hold",
-    "estimate_in_range",
-    "cross_check_disagrees",
+pub const CSV_FLAG_COLUMNS: [CsvColumn<bool>; 5] = csv_columns![bool;
+    armed,
+    sensor_fault,
+    feed_hold,
+    estimate_in_range,
+    cross_check_disagrees,
 ];
 
-fn csv_values(r: &TraceRow) -> [f64; CSV_COLUMNS.len()] {
-    [
-        r.time_s,
-        r.depth_mm,
-        r.width_mm,
-        r.path_position_mm,
-        r.programmed_feed_mm_min,
-        r.feed_mm_min,
-        r.requested_override_pct,
-        r.override_pct,
-        r.applied_override_pct,
-        r.force_n,
-        r.force_est_n,
-        r.force_power_law_n,
-        r.target_force_n,
-        r.spindle_current_rms_a,
-        r.feed_current_rms_a,
-        r.spindle_speed_rpm,
-        r.material_removal_mm3_s,
-    ]
+fn csv_values(r: &TraceRow) -> impl Iterator<Item = String> + '_ {
+    CSV_COLUMNS.iter().map(move |c| (c.value)(r).to_string())
 }
 
-fn csv_flags(r: &TraceRow) -> impl Iterator<Item = String> {
-    [
-        r.armed,
-        r.sensor_fault,
-        r.feed_hold,
-        r.estimate_in_range,
-        r.cross_check_disagrees,
-    ]
-    .into_iter()
-    .map(|b| u8::from(b).to_string())
+fn csv_flags(r: &TraceRow) -> impl Iterator<Item = String> + '_ {
+    CSV_FLAG_COLUMNS
+        .iter()
+        .map(move |c| u8::from((c.value)(r)).to_string())
 }
 
 /// Writes the trace as CSV with a header: the [`CSV_COLUMNS`], the controller's terms, and the
 /// [`CSV_FLAG_COLUMNS`]. Numbers are written at full precision (shortest round-trip form).
 pub fn write_csv(trace: &Trace, out: &mut dyn std::io::Write) -> std::io::Result<()> {
-    let mut header: Vec<String> = CSV_COLUMNS.iter().map(|c| c.to_string()).collect();
+    let mut header: Vec<String> = CSV_COLUMNS.iter().map(|c| c.name.to_string()).collect();
     for (name, unit) in &trace.term_names {
         header.push(csv_term_header(name, unit));
     }
-    header.extend(CSV_FLAG_COLUMNS.map(String::from));
+    header.extend(CSV_FLAG_COLUMNS.iter().map(|c| c.name.to_string()));
     writeln!(out, "{}", header.join(","))?;
     let width = trace.term_names.len();
     for (i, r) in trace.rows.iter().enumerate() {
-        let mut line: Vec<String> = csv_values(r).iter().map(|v| v.to_string()).collect();
+        let mut line: Vec<String> = csv_values(r).collect();
         line.extend(
             trace
                 .terms
@@ -194,14 +186,14 @@ pub fn write_csv_runs(
     out: &mut dyn std::io::Write,
 ) -> std::io::Result<()> {
     let mut header = vec!["run"];
-    header.extend(CSV_COLUMNS);
-    header.extend(CSV_FLAG_COLUMNS);
+    header.extend(CSV_COLUMNS.iter().map(|c| c.name));
+    header.extend(CSV_FLAG_COLUMNS.iter().map(|c| c.name));
     writeln!(out, "{}", header.join(","))?;
     for (name, trace) in runs {
         let name = csv_field(name);
         for r in &trace.rows {
             let mut line = vec![name.clone()];
-            line.extend(csv_values(r).iter().map(|v| v.to_string()));
+            line.extend(csv_values(r));
             line.extend(csv_flags(r));
             writeln!(out, "{}", line.join(","))?;
         }

@@ -565,7 +565,10 @@ mod tests {
             (0.7, 2.0, 0.25, 90.0)
         );
         let keys: Vec<_> = PiTuning::PARAMS.iter().map(|p| p.key).collect();
-        assert_eq!(keys, ["kp", "ki_per_s", "tracking_time_s", "initial_override_pct"]);
+        assert_eq!(
+            keys,
+            ["kp", "ki_per_s", "tracking_time_s", "initial_override_pct"]
+        );
         // Missing values take their defaults, never NaN.
         let m = MracTuning::from_values(&[]);
         assert_eq!(m.derivative_time_s, 0.2);

@@ -183,14 +183,7 @@ pub fn ChartCanvas(
         });
         let left_px = geometry.with_value(|g| {
             g.as_ref().map(|g| {
-                let t = match g.x_scale {
-                    crate::charts::Scale::Linear => {
-                        (x - g.x_range.start) / (g.x_range.end - g.x_range.start)
-                    }
-                    crate::charts::Scale::Log => {
-                        (x / g.x_range.start).log10() / (g.x_range.end / g.x_range.start).log10()
-                    }
-                };
+                let t = g.x_scale.fraction(&g.x_range, x);
                 (f64::from(g.x_px.start) + t * f64::from(g.x_px.end - g.x_px.start))
                     / ratio.get_value()
             })
