@@ -9,9 +9,23 @@
 //!
 //! ```text
 //! scenario ─► CNC (programmed feed × override) ─► cutting process ─► feed / spindle drives
-//!    ─► sensors (Hall, ADC) ─► signal chain (filter, RMS, spectrum) ─► estimator (current → force)
-//!    ─► controller ─► safety envelope ─► feed override ─► back to the CNC
+//!    ─► sensors (Hall, ADC) ─► Machine::step ─► one SensorSample
+//!
+//! every sample, pushed (SampleLoop::push) by a machine, a log or the serial line:
+//!    SafetyEnvelope::observe (stuck / implausible currents, arming clock)
+//!    ─► signal chain (filter, three-phase RMS, period sums)
+//! every control period:
+//!    estimator (current → force) ─► controller ─► SafetyEnvelope::command (limits, rate,
+//!    quantisation, faults, overload) ─► OverrideCommand ─► back to the CNC
+//!
+//! before the loop, the teach cut: the same machine and signal chain open-loop through a schedule
+//! of overrides, each period's current paired with a force (simulation truth, a dynamometer, or
+//! the model of the cut) ─► least-squares fit ─► the estimator
 //! ```
+//!
+//! A run is defined once ([`closed_loop::definition`]): the browser form, the command line and a
+//! saved configuration parse every setting through the same table. Long work (teach cut, loop,
+//! reference search, recordings) is a [`work::Work`] the browser slices and the CLI runs to the end.
 //!
 //! ## Modules
 //!
@@ -25,7 +39,7 @@
 //! | [`estimation`] | current → force: paper 000's feed-drive and paper 003's spindle models, F/V speed identification, teach-cut calibration by least squares |
 //! | [`control`] | the controller interface and registry: fixed feed, current restriction, threshold-proportional, fuzzy (a Mamdani engine with FLL), PI with anti-windup, Lyapunov MRAC |
 //! | [`safety`] | the safety envelope after every controller: limits, rate limit, quantisation, arming, sensor faults, overload |
-//! | [`closed_loop`] | the one loop that wires them: teach cut, signal chain, trace, metrics and the table of them, and the preset runs the CLI and the browser share |
+//! | [`closed_loop`] | the one loop that wires them, fed by pushed samples: the run definition, teach cut, signal chain, trace, metrics and the table of them, and the lab runs the CLI and the browser share |
 //! | [`input`] | numbers typed into forms, parsed with messages for the field |
 //! | [`rng`] | the seeded random source every simulation draws from |
 //! | [`math`] | transcendental functions that give the same bits natively and in wasm |

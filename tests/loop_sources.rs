@@ -37,7 +37,6 @@ fn pushed_samples_give_the_trace_of_the_pulled_loop() {
     )
     .unwrap();
     let mut command = pushed.command();
-    let mut commands = 0;
     while !pushed.finished() {
         let step = machine.step(command);
         let sample = LoopSample {
@@ -47,14 +46,13 @@ fn pushed_samples_give_the_trace_of_the_pulled_loop() {
         };
         if let Some(next) = pushed.push(&sample) {
             command = next;
-            commands += 1;
-            if machine.finished() {
-                pushed.end_of_program();
-            }
+        }
+        // The program's last sample ends the run, and the period it falls in.
+        if machine.finished() {
+            pushed.end_of_program();
         }
     }
     let trace = pushed.finish().unwrap();
-    assert_eq!(commands, trace.rows.len());
     assert_eq!(trace, pulled.trace);
 }
 
@@ -179,4 +177,91 @@ fn a_teach_cut_on_the_model_of_the_cut_holds_the_target_on_a_machine_without_tru
     // The run itself: no truth in its trace, and the loop still ran to the program's end.
     assert!(run.trace.completed);
     assert!(run.trace.rows.iter().all(|r| r.force_n.is_nan()));
+}
+
+/// A machine whose program never ends.
+struct Endless(Box<dyn Machine>);
+
+impl Machine for Endless {
+    fn sample_rate_hz(&self) -> f64 {
+        self.0.sample_rate_hz()
+    }
+    fn step(&mut self, command: OverrideCommand) -> MachineStep {
+        self.0.step(command)
+    }
+    fn finished(&self) -> bool {
+        false
+    }
+}
+
+#[test]
+fn a_run_stopped_at_its_time_limit_is_not_reported_as_finished() {
+    let spec = RunSpec::new(Preset::ManeeratDoc1, ControllerKind::Pi);
+    let taught = simulate(&spec).unwrap();
+    let mut settings = taught.settings.clone();
+    settings.max_duration_s = 5.0;
+    let controller = spec
+        .controller
+        .build(&RunContext {
+            target_force_n: settings.target_force_n,
+            control_period_s: settings.control_period_s,
+        })
+        .unwrap();
+    let trace = cutlab::closed_loop::runner::ClosedLoop::new(
+        Box::new(Endless(Box::new(spec.preset.machine(1).unwrap()))),
+        controller,
+        taught.calibration.estimator.clone(),
+        settings,
+    )
+    .unwrap()
+    .run_to_end()
+    .unwrap();
+    assert!(!trace.completed);
+    let last = trace.rows.last().unwrap().time_s;
+    assert!((5.0..5.2).contains(&last), "{last}");
+}
+
+#[test]
+fn the_end_of_the_program_raises_no_sensor_fault() {
+    // The machine repeats its last reading once the program is over; the loop must not take
+    // that for a stuck sensor (it did, at the end of runs whose last period was cut short).
+    for controller in [ControllerKind::Mrac, ControllerKind::FuzzyDynamics] {
+        let result = simulate(&RunSpec::new(Preset::KimStepDoc, controller)).unwrap();
+        assert!(result.trace.completed);
+        assert!(
+            result.trace.rows.iter().all(|r| !r.sensor_fault),
+            "{controller:?}: {:?}",
+            result.trace.events
+        );
+    }
+}
+
+#[test]
+fn a_spindle_that_droops_under_load_is_one_calibration_speed() {
+    // At 50 ms periods paper 002's spindle droops through a continuum of speeds; the teach cut
+    // once split it into a spurious second row (R² 0.45, 7 samples) and a target 5.5× too low.
+    let mut spec = RunSpec::new(Preset::LiuCurrentStep, ControllerKind::FuzzyDynamics);
+    let default_period = simulate(&spec).unwrap();
+    spec.settings.control_period_s = Some(0.05);
+    let short_period = simulate(&spec).unwrap();
+    let rows = |r: &cutlab::closed_loop::lab::RunResult| match &r.calibration.estimator {
+        cutlab::closed_loop::runner::Estimator::Spindle { model, .. } => model.rows.len(),
+        cutlab::closed_loop::runner::Estimator::Feed { .. } => 0,
+    };
+    assert_eq!(rows(&short_period), 1);
+    let (a, b) = (
+        default_period.settings.target_force_n,
+        short_period.settings.target_force_n,
+    );
+    assert!((a - b).abs() < 0.05 * a, "{a} N vs {b} N");
+}
+
+/// Natively only: a bisection is ten runs.
+#[cfg(not(target_arch = "wasm32"))]
+#[test]
+fn the_brake_benchs_references_stay_on_its_dial() {
+    // The bench's 16-grade dial stops at 150 %; the reference search used to ask for 255 %.
+    let spec = RunSpec::new(Preset::WangBrakeBench, ControllerKind::Restriction);
+    let found = cutlab::closed_loop::lab::references(&spec).unwrap();
+    assert!(found.safe_fixed_override_pct <= 150.0, "{found:?}");
 }

@@ -249,6 +249,11 @@ const TEACH_SETTLE_S: f64 = 1.0;
 /// Teach-cut periods this soon after an override change are skipped: the feed and the currents
 /// are still moving to the new level.
 const TEACH_SETTLE_AFTER_CHANGE_S: f64 = 0.5;
+/// Teach-cut periods whose mean spindle speed moved more than this fraction since the period
+/// before are skipped: a spindle still accelerating draws a current that says nothing about the
+/// load (40 A where the cut takes 6), and only the force source that knows the tool is in air
+/// (the simulation's truth) would otherwise reject it.
+const TEACH_STEADY_SPEED_FRACTION: f64 = 0.01;
 
 fn lowpass(
     cutoff_hz: f64,
@@ -357,7 +362,9 @@ pub trait SampleLoop {
     /// Whether the next pushed sample is the last of its control period.
     fn next_sample_ends_period(&self) -> bool;
 
-    /// The machine says its program (or log) has ended; the loop ends at once.
+    /// The machine says its program (or log) has ended with the last sample pushed: a period
+    /// under way ends with the samples it has (the machine has nothing more to say, and repeating
+    /// its last reading would look like a stuck sensor), and the loop ends.
     fn end_of_program(&mut self);
 
     /// Whether the loop has ended (program over, time limit, or its own reason).
@@ -410,6 +417,8 @@ pub struct TeachCut {
     dynamometer: DynamometerSums,
     samples: TeachSamples,
     time_s: f64,
+    /// The mean spindle speed of the period before, to tell acceleration from a steady cut.
+    previous_speed_rpm: f64,
     command: OverrideCommand,
     done: bool,
 }
@@ -433,6 +442,7 @@ impl TeachCut {
             dynamometer: DynamometerSums::default(),
             samples: TeachSamples::default(),
             time_s: 0.0,
+            previous_speed_rpm: f64::NAN,
             command: Self::command_at(0.0),
             done: false,
         })
@@ -493,8 +503,13 @@ impl TeachCut {
         // The drives need a moment after each override change (the spindle's bandwidth is below
         // 5 Hz), and air cuts are left out: the line is fitted where it is used, in the cut.
         let since_change_s = self.time_s % TEACH_STEP_S;
+        let speed_change_rpm = (period.spindle_speed_rpm - self.previous_speed_rpm).abs();
+        let accelerating =
+            speed_change_rpm > TEACH_STEADY_SPEED_FRACTION * period.spindle_speed_rpm.abs();
+        self.previous_speed_rpm = period.spindle_speed_rpm;
         let samples = &mut self.samples;
         let skipped = !spindle_settled
+            || accelerating
             || since_change_s < TEACH_SETTLE_AFTER_CHANGE_S
             || !(force_n.is_finite() && force_n > 0.0)
             || period.feed_mm_min.abs() < 1e-6;
@@ -616,6 +631,9 @@ impl SampleLoop for TeachCut {
     }
 
     fn end_of_program(&mut self) {
+        if self.samples_in_period > 0 && !self.done {
+            self.end_period(self.command.override_pct);
+        }
         self.done = true;
     }
 
@@ -663,6 +681,8 @@ pub struct FeedbackLoop {
     samples_per_period: usize,
     samples_in_period: usize,
     last: SensorSample,
+    /// The power-law estimate at the latest sample that carried one.
+    last_sensorless_n: f64,
     command: OverrideCommand,
     last_request_pct: f64,
     trace: Trace,
@@ -705,6 +725,7 @@ impl FeedbackLoop {
             samples_per_period,
             samples_in_period: 0,
             last: SensorSample::default(),
+            last_sensorless_n: f64::NAN,
             command,
             last_request_pct: command.override_pct,
             trace: Trace {
@@ -813,11 +834,12 @@ impl SampleLoop for FeedbackLoop {
         self.envelope.observe(&sample.step.sensors);
         self.chain.push(sample.step);
         self.last = sample.step.sensors;
+        self.last_sensorless_n = sample.sensorless_force_n.unwrap_or(f64::NAN);
         self.samples_in_period += 1;
         if self.samples_in_period < self.samples_per_period {
             return None;
         }
-        self.end_period(sample.sensorless_force_n.unwrap_or(f64::NAN));
+        self.end_period(self.last_sensorless_n);
         Some(self.command)
     }
 
@@ -830,6 +852,9 @@ impl SampleLoop for FeedbackLoop {
     }
 
     fn end_of_program(&mut self) {
+        if self.samples_in_period > 0 && !self.done {
+            self.end_period(self.last_sensorless_n);
+        }
         self.trace.completed = true;
         self.done = true;
     }
@@ -896,7 +921,8 @@ impl<L: SampleLoop> OnMachine<L> {
         let command = self.sample_loop.command();
         loop {
             let step = self.machine.step(command);
-            let ends = self.sample_loop.next_sample_ends_period();
+            let program_over = self.machine.finished();
+            let ends = program_over || self.sample_loop.next_sample_ends_period();
             let sample = LoopSample {
                 step: &step,
                 // The power law is evaluated once per period, where the loop reads it.
@@ -907,12 +933,14 @@ impl<L: SampleLoop> OnMachine<L> {
                 },
                 dynamometer: self.machine.dynamometer_force_n(),
             };
-            if self.sample_loop.push(&sample).is_some() || self.sample_loop.finished() {
+            let period_ended = self.sample_loop.push(&sample).is_some();
+            if program_over {
+                self.sample_loop.end_of_program();
                 break;
             }
-        }
-        if self.machine.finished() {
-            self.sample_loop.end_of_program();
+            if period_ended || self.sample_loop.finished() {
+                break;
+            }
         }
     }
 }

@@ -187,8 +187,11 @@ pub struct SpindleCurrentModel {
 const SPEED_CLUSTER_TOLERANCE: f64 = 0.02;
 
 impl SpindleCurrentModel {
-    /// Fits one line per distinct spindle speed in the teach-cut samples (speeds within 2 % of
-    /// each other are grouped). Every speed needs at least three samples at two or more loads.
+    /// Fits one line per distinct spindle speed in the teach-cut samples. A speed is a run of
+    /// sorted speeds each within 2 % of the one before: a spindle that droops under load gives a
+    /// continuum of measured speeds, which is one speed, however wide the droop, while two
+    /// programmed speeds leave a gap between them. Every speed needs at least three samples at
+    /// two or more loads.
     pub fn calibrate(
         current_a: &[f64],
         speed_rpm: &[f64],
@@ -208,7 +211,8 @@ impl SpindleCurrentModel {
             let base = speed_rpm[order[start]];
             let mut end = start + 1;
             while end < order.len()
-                && speed_rpm[order[end]] <= base * (1.0 + SPEED_CLUSTER_TOLERANCE)
+                && speed_rpm[order[end]]
+                    <= speed_rpm[order[end - 1]] * (1.0 + SPEED_CLUSTER_TOLERANCE)
                 && in_high_speed_range(base, gear_change_rpm)
                     == in_high_speed_range(speed_rpm[order[end]], gear_change_rpm)
             {
