@@ -294,7 +294,9 @@ fn the_reference_search_finds_the_highest_safe_fixed_override_in_pieces_or_at_on
     // does not; the cycle times are those of the fixed runs.
     let fixed = |pct: f64| simulate(&fixed_feed_spec(&spec, pct).unwrap()).unwrap();
     let safe = fixed(whole.safe_fixed_override_pct);
-    let limit = safe.settings.force_limit_n;
+    // Judged against the target, the force the controllers hold (issue: the reference once ran
+    // at up to 1.2 × target while the controllers aimed at 1.0 ×).
+    let limit = safe.settings.target_force_n;
     assert!(safe.metrics.peak_force_n <= limit);
     assert_eq!(safe.metrics.cycle_time_s, whole.safe_fixed_cycle_time_s);
     let faster = fixed(whole.safe_fixed_override_pct + 1.0);
