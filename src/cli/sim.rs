@@ -6,6 +6,7 @@ use serde::Serialize;
 
 use super::{help_text_for, wants_help, write_json, CliError, Io, OptionSpec, Options};
 use crate::closed_loop::config::RunConfiguration;
+use crate::closed_loop::definition::{parse_texts, RunSetting, SettingKind};
 use crate::closed_loop::lab::{
     apply_references, references, simulate, References, RunResult, RunSpec,
 };
@@ -14,62 +15,36 @@ use crate::closed_loop::runner::{Calibration, Feedback};
 use crate::closed_loop::summary::{best, METRIC_ROWS};
 use crate::closed_loop::trace::write_csv;
 use crate::control::registry::{ControllerConfig, ControllerKind};
-use crate::plant::materials::Material;
 use crate::plant::Preset;
 
-/// Options shared by `sim` and `compare`.
-const RUN_OPTIONS: [OptionSpec; 12] = [
-    OptionSpec::value(
-        "material",
+/// Options shared by `sim` and `compare`: the preset, every setting of the run definition
+/// ([`RunSetting::ALL`], the same table the browser's form is made from), and `--no-references`.
+fn run_options() -> Vec<OptionSpec> {
+    let mut o = vec![OptionSpec::value(
+        "scenario",
         "NAME",
-        "Work material of the whole part (mill presets; see cutlab force --help)",
-    ),
-    OptionSpec::value("rpm", "N", "Spindle speed of every block (mill presets)"),
-    OptionSpec::value(
-        "feed-mm-min",
-        "F",
-        "Programmed feed of every block (mill presets)",
-    ),
-    OptionSpec::value(
-        "depth-scale",
-        "K",
-        "Factor on the axial depth profile (mill presets)",
-    ),
-    OptionSpec::value(
-        "noise-a",
-        "A",
-        "Hall-sensor noise, standard deviation (mill presets)",
-    ),
-    OptionSpec::value("scenario", "NAME", "Preset to run (see cutlab scenarios)"),
-    OptionSpec::value("seed", "N", "Seed of every noise source (default 1)"),
-    OptionSpec::value(
-        "target-n",
-        "N",
-        "Target force in newtons (default: the preset's)",
-    ),
-    OptionSpec::value(
-        "period-s",
-        "S",
-        "Control period in seconds (default: whole spindle revolutions, at least 40 ms)",
-    ),
-    OptionSpec::value(
-        "feedback",
-        "spindle|feed",
-        "Which motor current measures the force (default: the preset's)",
-    ),
-    OptionSpec::value(
-        "max-override",
-        "PCT",
-        "Highest override the safety envelope allows (default 150)",
-    ),
-    OptionSpec::flag(
+        "Preset to run (see cutlab scenarios)",
+    )];
+    o.extend(RunSetting::ALL.iter().map(|s| {
+        let spec = s.spec();
+        let value = match spec.kind {
+            SettingKind::Feedback => "spindle|feed",
+            SettingKind::Material => "NAME",
+            SettingKind::Count { .. } | SettingKind::Seed => "N",
+            SettingKind::Number { .. } if spec.unit.is_empty() => "X",
+            SettingKind::Number { .. } => spec.unit,
+        };
+        OptionSpec::value(spec.cli_option, value, spec.help)
+    }));
+    o.push(OptionSpec::flag(
         "no-references",
         "Skip the fixed-feed reference runs (no savings; faster)",
-    ),
-];
+    ));
+    o
+}
 
 fn sim_options() -> Vec<OptionSpec> {
-    let mut o = RUN_OPTIONS.to_vec();
+    let mut o = run_options();
     o.extend([
         OptionSpec::value("controller", "NAME", "Controller (see cutlab controllers)"),
         OptionSpec::repeatable(
@@ -123,8 +98,8 @@ fn runs_from_config(
 
 /// The options that define a run (everything but outputs and `--no-references`).
 fn run_defining_options(extra: &[&'static str]) -> Vec<&'static str> {
-    RUN_OPTIONS
-        .iter()
+    run_options()
+        .into_iter()
         .map(|o| o.name)
         .filter(|name| *name != "no-references")
         .chain(extra.iter().copied())
@@ -132,7 +107,7 @@ fn run_defining_options(extra: &[&'static str]) -> Vec<&'static str> {
 }
 
 fn compare_options() -> Vec<OptionSpec> {
-    let mut o = RUN_OPTIONS.to_vec();
+    let mut o = run_options();
     o.extend([
         OptionSpec::value(
             "controllers",
@@ -159,75 +134,34 @@ fn preset_option(options: &Options) -> Result<Preset, CliError> {
     })
 }
 
-/// The run spec from the shared options, for a given controller.
+/// The run spec from the shared options, for a given controller: every setting parsed and
+/// checked by the run definition, as the browser's form does ([`parse_texts`]).
 fn spec(options: &Options, controller: ControllerConfig) -> Result<RunSpec, CliError> {
-    let mut spec = RunSpec {
-        preset: preset_option(options)?,
-        controller,
-        seed: options.get_or("seed", 1)?,
-        settings: Default::default(),
-        plant: Default::default(),
+    let texts: Vec<(RunSetting, &str)> = RunSetting::ALL
+        .into_iter()
+        .filter_map(|s| options.text(s.spec().cli_option).map(|text| (s, text)))
+        .collect();
+    parse_texts(preset_option(options)?, controller, &texts).map_err(|errors| {
+        // The first problem, in the order the options are listed, as one line.
+        let message = errors
+            .first()
+            .map_or_else(String::new, |e| match e.choices() {
+                Some(choices) => format!("{}; choices: {choices}", e.for_cli()),
+                None => e.for_cli(),
+            });
+        CliError::new(message)
+    })
+}
+
+/// Every run spec the `sim` options describe, for tests that hold the command line and the
+/// browser's form to one run definition.
+pub fn spec_from_args(args: &[String]) -> Result<RunSpec, CliError> {
+    let options = Options::parse(args, &sim_options())?;
+    let controller = match options.text("controller") {
+        Some(name) => controller_with_settings(name)?,
+        None => ControllerConfig::new(ControllerKind::Fixed),
     };
-    let s = &mut spec.settings;
-    s.target_force_n = options.get("target-n")?;
-    s.control_period_s = options.get("period-s")?;
-    s.max_override_pct = options.get("max-override")?;
-    if let Some(v) = s.target_force_n {
-        if !(v.is_finite() && v > 0.0) {
-            return Err(CliError::new(format!(
-                "--target-n: must be positive, got {v}"
-            )));
-        }
-    }
-    if let Some(v) = s.control_period_s {
-        if !(v.is_finite() && v > 0.0 && v <= 10.0) {
-            return Err(CliError::new(format!(
-                "--period-s: must lie in (0, 10] s, got {v}"
-            )));
-        }
-    }
-    let positive = |name: &str, allow_zero: bool| -> Result<Option<f64>, CliError> {
-        match options.get::<f64>(name)? {
-            Some(v) if v.is_finite() && (v > 0.0 || (allow_zero && v == 0.0)) => Ok(Some(v)),
-            Some(v) => Err(CliError::new(format!(
-                "--{name}: must be {}, got {v}",
-                if allow_zero {
-                    "zero or positive"
-                } else {
-                    "positive"
-                }
-            ))),
-            None => Ok(None),
-        }
-    };
-    let p = &mut spec.plant;
-    p.spindle_rpm = positive("rpm", false)?;
-    p.programmed_feed_mm_min = positive("feed-mm-min", false)?;
-    p.depth_scale = positive("depth-scale", false)?;
-    p.sensor_noise_a = positive("noise-a", true)?;
-    if let Some(name) = options.text("material") {
-        p.material = Some(Material::from_name(name).ok_or_else(|| {
-            CliError::new(format!(
-                "--material: unknown material {name:?}; materials: {}",
-                Material::ALL
-                    .iter()
-                    .map(|m| m.name())
-                    .collect::<Vec<_>>()
-                    .join(", ")
-            ))
-        })?);
-    }
-    if let Some(text) = options.text("feedback") {
-        s.feedback = Some(
-            Feedback::ALL
-                .into_iter()
-                .find(|f| f.name() == text.trim())
-                .ok_or_else(|| {
-                    CliError::new(format!("--feedback: {text:?} is not one of spindle, feed"))
-                })?,
-        );
-    }
-    Ok(spec)
+    spec(&options, controller)
 }
 
 /// Parses `NAME` or `NAME:key=value:key=value`.

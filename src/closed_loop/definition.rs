@@ -17,6 +17,7 @@ use std::fmt;
 
 use super::lab::RunSpec;
 use super::runner::Feedback;
+use crate::control::registry::ControllerConfig;
 use crate::input::{parse_count, parse_number, parse_seed};
 use crate::plant::cnc::{OverrideMode, MAX_OVERRIDE_PCT};
 use crate::plant::materials::Material;
@@ -421,12 +422,21 @@ impl RunSetting {
                 Feedback::ALL
                     .into_iter()
                     .find(|f| f.name() == text)
-                    .ok_or_else(|| problem(Problem::Unknown(text.to_string())))?,
+                    .ok_or_else(|| {
+                        problem(Problem::Unknown {
+                            what: "feedback path",
+                            text: text.to_string(),
+                        })
+                    })?,
             ),
-            SettingKind::Material => SettingValue::Material(
-                Material::from_name(text)
-                    .ok_or_else(|| problem(Problem::Unknown(text.to_string())))?,
-            ),
+            SettingKind::Material => {
+                SettingValue::Material(Material::from_name(text).ok_or_else(|| {
+                    problem(Problem::Unknown {
+                        what: "material",
+                        text: text.to_string(),
+                    })
+                })?)
+            }
         };
         self.check(value, preset)?;
         Ok(Some(value))
@@ -540,11 +550,52 @@ impl RunSetting {
             }
             RunSetting::SpindleSpeed => p.spindle_rpm = number,
             RunSetting::ProgrammedFeed => p.programmed_feed_mm_min = number,
-            RunSetting::DepthScale => p.depth_scale = number,
+            // A factor of 1 is the preset's own profile, not an edit.
+            RunSetting::DepthScale => p.depth_scale = number.filter(|k| *k != 1.0),
             RunSetting::ToolDiameter => p.tool_diameter_mm = number,
             RunSetting::Teeth => p.teeth = count.map(|n| n as u32),
             RunSetting::SensorNoise => p.sensor_noise_a = number,
         }
+    }
+}
+
+/// Parses the typed text of several settings on `preset` into a run of its controller: what the
+/// browser's form and the command line both do with what a person typed. Blank text keeps the
+/// preset's value; every setting that does not parse or is out of range is reported.
+///
+/// ```
+/// use cutlab::closed_loop::definition::{parse_texts, RunSetting};
+/// use cutlab::control::registry::ControllerConfig;
+/// use cutlab::control::registry::ControllerKind;
+/// use cutlab::plant::Preset;
+/// let texts = [(RunSetting::SpindleSpeed, "1200"), (RunSetting::ControlPeriod, "")];
+/// let spec = parse_texts(Preset::KimStepDoc, ControllerConfig::new(ControllerKind::Pi), &texts)
+///     .unwrap();
+/// assert_eq!(spec.plant.spindle_rpm, Some(1200.0));
+/// assert_eq!(spec.settings.control_period_s, None);
+/// let bad = [(RunSetting::FilterOrder, "0"), (RunSetting::SpindleSpeed, "10")];
+/// let errors = parse_texts(Preset::KimStepDoc, ControllerConfig::new(ControllerKind::Pi), &bad)
+///     .unwrap_err();
+/// assert_eq!(errors.len(), 2);
+/// ```
+pub fn parse_texts<T: AsRef<str>>(
+    preset: Preset,
+    controller: ControllerConfig,
+    texts: &[(RunSetting, T)],
+) -> Result<RunSpec, Vec<SettingError>> {
+    let mut spec = RunSpec::new(preset, controller.kind());
+    spec.controller = controller;
+    let mut errors = Vec::new();
+    for (setting, text) in texts {
+        match setting.parse(text.as_ref(), preset) {
+            Ok(value) => setting.apply(&mut spec, value),
+            Err(e) => errors.push(e),
+        }
+    }
+    if errors.is_empty() {
+        Ok(spec)
+    } else {
+        Err(errors)
     }
 }
 
@@ -577,7 +628,12 @@ pub enum Problem {
     /// The text is not a value of the setting's kind; the message says why.
     Parse(String),
     /// Not one of the names the setting takes.
-    Unknown(String),
+    Unknown {
+        /// What the setting names ("material").
+        what: &'static str,
+        /// What was given.
+        text: String,
+    },
     /// Zero or negative where only a positive value makes sense.
     NotPositive(f64),
     /// Negative where zero is the least.
@@ -608,7 +664,7 @@ impl fmt::Display for Problem {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
             Problem::Parse(message) => f.write_str(message),
-            Problem::Unknown(text) => write!(f, "{text:?} is not one of the choices"),
+            Problem::Unknown { what, text } => write!(f, "unknown {what} {text:?}"),
             Problem::NotPositive(v) => write!(f, "must be positive, got {v}"),
             Problem::Negative(v) => write!(f, "must be zero or positive, got {v}"),
             Problem::OutOfRange {

@@ -596,8 +596,7 @@ impl Work for ReferenceSearch {
                 self.calibration = Some(result.calibration);
             }
             RunKind::Bisection => {
-                if result.metrics.peak_force_n <= self.reference_force_n && result.trace.completed
-                {
+                if result.metrics.peak_force_n <= self.reference_force_n && result.trace.completed {
                     self.low_pct = pct;
                     self.best_cycle_time_s = Some(result.metrics.cycle_time_s);
                 } else {

@@ -6,8 +6,8 @@ use std::collections::BTreeMap;
 
 use leptos::prelude::*;
 
-use crate::closed_loop::definition::{RunSetting, SettingGroup, SettingKind, SettingValue};
-use crate::closed_loop::lab::{RunSpec, SettingsOverrides};
+use crate::closed_loop::definition::{parse_texts, RunSetting, SettingGroup, SettingKind};
+use crate::closed_loop::lab::SettingsOverrides;
 use crate::closed_loop::runner::Feedback;
 use crate::control::fuzzy::rules::RuleTable;
 use crate::control::registry::{ControllerConfig, ControllerKind};
@@ -109,49 +109,38 @@ impl ScenarioForm {
             .collect()
     }
 
-    /// Parses the fields; errors are keyed by the setting's query key.
+    /// Parses the fields through the run definition ([`parse_texts`], as the command line
+    /// does); errors are keyed by the setting's query key.
     pub fn parse(&self) -> Result<ScenarioChoice, BTreeMap<&'static str, String>> {
-        let mut errors = BTreeMap::new();
         let Some(preset) = Preset::from_name(&self.preset.get()) else {
-            errors.insert("preset", "choose a preset".to_string());
-            return Err(errors);
+            return Err(BTreeMap::from([("preset", "choose a preset".to_string())]));
         };
-        let mut spec = RunSpec::new(preset, ControllerKind::Fixed);
         // The machine fields are hidden for presets without a mill; what they hold then must
         // neither block the run nor change it.
         let has_mill = preset.scenario().is_some();
-        for (setting, text) in self.fields() {
-            if setting.spec().group == SettingGroup::Machine && !has_mill {
-                continue;
-            }
-            let text = text.get();
-            if setting == RunSetting::Seed && text.trim().is_empty() {
-                errors.insert(setting.spec().query_key, "enter a seed".to_string());
-                continue;
-            }
-            match setting.parse(&text, preset) {
-                // A depth factor of 1 is the preset's own profile, not an edit.
-                Ok(Some(SettingValue::Number(k)))
-                    if setting == RunSetting::DepthScale && k == 1.0 => {}
-                Ok(value) => setting.apply(&mut spec, value),
-                Err(e) => {
+        let texts: Vec<(RunSetting, String)> = self
+            .fields()
+            .filter(|(setting, _)| has_mill || setting.spec().group != SettingGroup::Machine)
+            .map(|(setting, text)| (setting, text.get()))
+            .collect();
+        match parse_texts(preset, ControllerConfig::new(ControllerKind::Fixed), &texts) {
+            Ok(spec) => Ok(ScenarioChoice {
+                preset,
+                seed: spec.seed,
+                settings: spec.settings,
+                plant: spec.plant,
+            }),
+            Err(errors) => Err(errors
+                .into_iter()
+                .map(|e| {
                     let message = match e.choices() {
                         Some(choices) => format!("{}; choices: {choices}", e.problem),
                         None => e.problem.to_string(),
                     };
-                    errors.insert(setting.spec().query_key, message);
-                }
-            }
+                    (e.setting.spec().query_key, message)
+                })
+                .collect()),
         }
-        if !errors.is_empty() {
-            return Err(errors);
-        }
-        Ok(ScenarioChoice {
-            preset,
-            seed: spec.seed,
-            settings: spec.settings,
-            plant: spec.plant,
-        })
     }
 }
 

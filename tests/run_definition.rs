@@ -1,0 +1,83 @@
+//! The command line and the browser accept exactly the same settings with the same ranges and
+//! messages: both parse what a person typed through the run definition
+//! (`closed_loop::definition`). The browser's form gathers its fields' text and calls
+//! [`parse_texts`]; the command line maps its options onto the same table. For every setting, at
+//! both ends of its range, just beyond them and with junk, the two must give the same run or the
+//! same problem.
+#![cfg(feature = "cli")]
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
+
+mod common;
+
+use cutlab::cli::sim::spec_from_args;
+use cutlab::closed_loop::definition::{parse_texts, RunSetting, SettingKind};
+use cutlab::control::registry::{ControllerConfig, ControllerKind};
+use cutlab::plant::Preset;
+
+/// Texts a person might type for `setting` on `preset`: the range's ends, just beyond them, and
+/// junk.
+fn probes(setting: RunSetting, preset: Preset) -> Vec<String> {
+    let mut texts = vec!["junk".to_string(), "1,500".to_string(), "-1".to_string()];
+    match setting.spec().kind {
+        SettingKind::Feedback => texts.extend(["spindle", "feed", "torque"].map(String::from)),
+        SettingKind::Material => texts.extend(["sm45c", "aluminium", "cheese"].map(String::from)),
+        SettingKind::Seed => texts.extend(["0", "18446744073709551615", "2.5"].map(String::from)),
+        SettingKind::Count { .. } | SettingKind::Number { .. } => {
+            let (min, max) = setting.range(preset).unwrap();
+            let step = if matches!(setting.spec().kind, SettingKind::Count { .. }) {
+                1.0
+            } else {
+                (max - min) * 0.001
+            };
+            for v in [min, max, min - step, max + step, 1e308] {
+                texts.push(v.to_string());
+            }
+        }
+    }
+    texts
+}
+
+#[test]
+fn the_command_line_and_the_form_accept_the_same_settings_and_ranges() {
+    let mut compared = 0;
+    for preset in [Preset::KimStepDoc, Preset::WangBrakeBench] {
+        for setting in RunSetting::ALL {
+            for text in probes(setting, preset) {
+                let option = format!("--{}", setting.spec().cli_option);
+                let args: Vec<String> = ["--scenario", preset.name(), option.as_str(), &text]
+                    .map(String::from)
+                    .to_vec();
+                let cli = spec_from_args(&args);
+                let form = parse_texts(
+                    preset,
+                    ControllerConfig::new(ControllerKind::Fixed),
+                    &[(setting, text.as_str())],
+                );
+                match (&cli, &form) {
+                    (Ok(a), Ok(b)) => assert_eq!(a, b, "{setting:?} {text:?}"),
+                    (Err(a), Err(b)) => {
+                        // The same problem, the command line naming its option.
+                        let problem = b[0].problem.to_string();
+                        assert!(a.0.contains(&problem), "{setting:?} {text:?}: {a} / {problem}");
+                        assert!(a.0.contains(&option), "{a}");
+                    }
+                    _ => panic!("{setting:?} {text:?}: CLI {cli:?}, form {form:?}"),
+                }
+                compared += 1;
+            }
+        }
+    }
+    // Every setting of the table was tried, on a mill and on the bench.
+    assert!(compared > 2 * RunSetting::ALL.len() * 5, "{compared}");
+}
+
+#[test]
+fn every_setting_has_its_option_in_the_help() {
+    let (result, out) = common::cutlab_text(&["sim", "--help"], "");
+    result.unwrap();
+    for setting in RunSetting::ALL {
+        let option = format!("--{}", setting.spec().cli_option);
+        assert!(out.contains(&option), "sim --help lacks {option}");
+    }
+}
+
