@@ -27,6 +27,7 @@ fn pushed_samples_give_the_trace_of_the_pulled_loop() {
         .build(&RunContext {
             target_force_n: pulled.settings.target_force_n,
             control_period_s: pulled.settings.control_period_s,
+            amps_per_newton: f64::NAN,
         })
         .unwrap();
     let mut pushed = FeedbackLoop::new(
@@ -205,6 +206,7 @@ fn a_run_stopped_at_its_time_limit_is_not_reported_as_finished() {
         .build(&RunContext {
             target_force_n: settings.target_force_n,
             control_period_s: settings.control_period_s,
+            amps_per_newton: f64::NAN,
         })
         .unwrap();
     let trace = cutlab::closed_loop::runner::ClosedLoop::new(

@@ -58,7 +58,10 @@ fn the_command_line_and_the_form_accept_the_same_settings_and_ranges() {
                     (Err(a), Err(b)) => {
                         // The same problem, the command line naming its option.
                         let problem = b[0].problem.to_string();
-                        assert!(a.0.contains(&problem), "{setting:?} {text:?}: {a} / {problem}");
+                        assert!(
+                            a.0.contains(&problem),
+                            "{setting:?} {text:?}: {a} / {problem}"
+                        );
                         assert!(a.0.contains(&option), "{a}");
                     }
                     _ => panic!("{setting:?} {text:?}: CLI {cli:?}, form {form:?}"),
@@ -80,4 +83,3 @@ fn every_setting_has_its_option_in_the_help() {
         assert!(out.contains(&option), "sim --help lacks {option}");
     }
 }
-

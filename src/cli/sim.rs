@@ -358,9 +358,17 @@ pub fn run_compare(args: &[String], io: &mut Io<'_>) -> Result<(), CliError> {
         return write_json(io.stdout, &entries);
     }
     let refs_line = refs.map(|r| {
+        let safe = if r.safe_fixed_override_pct.is_finite() {
+            format!(
+                "safest fixed override {:.0} % → {:.1} s",
+                r.safe_fixed_override_pct, r.safe_fixed_cycle_time_s
+            )
+        } else {
+            "no fixed override keeps the peak force at the target".to_string()
+        };
         format!(
-            "references: programmed feed {:.1} s; safest fixed override {:.0} % → {:.1} s\n",
-            r.programmed_cycle_time_s, r.safe_fixed_override_pct, r.safe_fixed_cycle_time_s
+            "references: programmed feed {:.1} s; {safe}\n",
+            r.programmed_cycle_time_s
         )
     });
     let borrowed: Vec<(String, &RunResult)> =

@@ -201,12 +201,12 @@ impl RunSetting {
                 "max_override_pct",
                 "max_override",
                 "max-override",
-                "Highest override",
+                "Highest override (blank: preset's)",
                 "%",
                 number(20.0, MAX_OVERRIDE_PCT),
                 Scenario,
-                "highest override the safety envelope allows (default 150; at most what the \
-                 machine applies)",
+                "highest override the safety envelope allows (default 150 %, 255 % on paper \
+                 003's machine; at most what the machine applies)",
             ),
             RunSetting::MinOverride => (
                 "min_override_pct",

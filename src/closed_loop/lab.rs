@@ -12,7 +12,7 @@ use super::runner::{
 use super::trace::Trace;
 use crate::control::registry::{ControllerConfig, ControllerKind, RunContext};
 use crate::machine::Machine;
-use crate::plant::cnc::OverrideMode;
+use crate::plant::cnc::{OverrideMode, MAX_OVERRIDE_PCT};
 use crate::plant::presets::PlantEdits;
 use crate::plant::presets::PlantKind;
 use crate::plant::Preset;
@@ -162,6 +162,11 @@ pub fn default_settings(spec: &RunSpec) -> Result<LoopSettings, LoopError> {
     // The bench has no spindle: its "start" is the feed drive's.
     if preset.plant_kind() == PlantKind::BrakeBench {
         envelope.arming_trigger = ArmingTrigger::ProgrammedFeed;
+    }
+    // Paper 003's override is a byte in percent, 0–255 %: its experiments (the 1 mm entry, the
+    // aluminium section, the taper's light corner) need the room above FANUC's 150 % dial.
+    if matches!(preset.override_mode(), OverrideMode::WholePercent) {
+        envelope.max_override_pct = MAX_OVERRIDE_PCT;
     }
     if let Some(v) = o.min_override_pct {
         envelope.min_override_pct = v;
@@ -356,6 +361,7 @@ impl LabRun {
         calibration: &Calibration,
     ) -> Result<ClosedLoop, LoopError> {
         let mut settings = self.settings.clone();
+        let summary = self.spec.preset.summary();
         settle_target(&self.spec, &mut settings, calibration);
         if !(settings.target_force_n.is_finite() && settings.target_force_n > 0.0) {
             return Err(LoopError::NoTarget);
@@ -371,6 +377,9 @@ impl LabRun {
             .build(&RunContext {
                 target_force_n: settings.target_force_n,
                 control_period_s: settings.control_period_s,
+                amps_per_newton: calibration
+                    .estimator
+                    .sensitivity_a_per_n(summary.spindle_rpm.unwrap_or(0.0)),
             })
             .map_err(LoopError::Controller)?;
         ClosedLoop::new(machine, controller, calibration.estimator.clone(), settings)
@@ -498,7 +507,8 @@ pub fn simulate(spec: &RunSpec) -> Result<RunResult, LoopError> {
 pub struct References {
     /// Cycle time at the programmed feed (fixed 100 %).
     pub programmed_cycle_time_s: f64,
-    /// The highest fixed override whose peak regulated force stays at or below the target: the
+    /// The highest fixed override whose peak regulated force stays at or below the target (NaN
+    /// when not even the lowest does, and with it the cycle time and that saving): the
     /// feed a machinist would fix for the part's worst spot, judged against the same force the
     /// controllers are asked to hold (not the 1.2 × target limit, which would let the fixed feed
     /// run 20 % harder than any controller aims to).
@@ -540,7 +550,7 @@ pub struct ReferenceSearch {
 enum RunKind {
     Programmed,
     Bisection,
-    /// No bisection step stayed under the limit: the cycle time at the lowest override.
+    /// No bisection step stayed under the target: the lowest override, checked like the others.
     Lowest,
 }
 
@@ -571,6 +581,17 @@ impl ReferenceSearch {
     /// The references, once found.
     pub fn found(&self) -> Option<References> {
         self.found
+    }
+
+    /// After the lowest override also broke the target, the answer is that no fixed feed keeps
+    /// the force at the target (the cut's floor, its edge forces at the deepest point, lies
+    /// above it): NaN, which leaves the saving against a safe fixed feed undefined rather than
+    /// measured against a 1 % crawl that is not safe either.
+    fn no_safe_fixed_feed(&mut self, kind: RunKind) -> Option<f64> {
+        (kind == RunKind::Lowest).then(|| {
+            self.low_pct = f64::NAN;
+            f64::NAN
+        })
     }
 }
 
@@ -603,7 +624,11 @@ impl Work for ReferenceSearch {
                     self.high_pct = pct;
                 }
             }
-            RunKind::Lowest => self.best_cycle_time_s = Some(result.metrics.cycle_time_s),
+            RunKind::Lowest => {
+                if result.metrics.peak_force_n <= self.reference_force_n && result.trace.completed {
+                    self.best_cycle_time_s = Some(result.metrics.cycle_time_s);
+                }
+            }
         }
         let next = if self.high_pct - self.low_pct > 1.0 {
             Some((
@@ -615,7 +640,11 @@ impl Work for ReferenceSearch {
         } else {
             None
         };
-        match (next, self.best_cycle_time_s) {
+        match (
+            next,
+            self.best_cycle_time_s
+                .or_else(|| self.no_safe_fixed_feed(kind)),
+        ) {
             (Some((pct, kind)), _) => {
                 let spec = fixed_feed_spec(&self.spec, pct)?;
                 self.run = match &self.calibration {

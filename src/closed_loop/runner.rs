@@ -208,6 +208,15 @@ impl Estimator {
         }
     }
 
+    /// The current sensitivity, A per N, at a spindle speed (the spindle model's line there; the
+    /// feed model's one slope).
+    pub fn sensitivity_a_per_n(&self, spindle_rpm: f64) -> f64 {
+        match self {
+            Estimator::Spindle { model, .. } => model.line_at(spindle_rpm).1,
+            Estimator::Feed { model } => model.sensitivity_a_per_n,
+        }
+    }
+
     /// The current the model expects for `force_n` (to express a current target as a force).
     pub fn force_for_current_n(&self, current_a: f64, spindle_rpm: f64, feed_mm_min: f64) -> f64 {
         match self {

@@ -120,6 +120,7 @@ tuning! {
         gap_pct: ("Threshold gap", "% of target", 10.0, 0.0, 100.0, "distance between the maximum and minimum thresholds, centred on the target"),
         kp: ("K_p", "% per %", 0.5, 0.0, 10.0, "override change per percent of force beyond a threshold (paper 003: 0.5)"),
         ignore_after_start_s: ("Ignore after spindle start", "s", 3.0, 0.0, 60.0, "time after spindle start during which the current is ignored (paper 003: 3 s)"),
+        gap_a: ("Threshold gap as current", "A", 0.0, 0.0, 20.0, "the gap as paper 003 states it, in amperes of spindle current (paper 003: 0.4 A), converted to force by the teach cut's sensitivity; 0 uses the gap in % of target"),
     }
 }
 
@@ -341,6 +342,9 @@ pub struct RunContext {
     pub target_force_n: f64,
     /// The control period.
     pub control_period_s: f64,
+    /// The calibrated current sensitivity at the run's operating point, A per N (NaN when not
+    /// known): turns a limit stated in amperes, as the papers state theirs, into a force.
+    pub amps_per_newton: f64,
 }
 
 impl ControllerConfig {
@@ -468,8 +472,21 @@ impl ControllerConfig {
             }
             ControllerKind::Threshold => {
                 let t = ThresholdTuning::from_values(values);
+                let gap_pct = if t.gap_a > 0.0 {
+                    let per_n = context.amps_per_newton;
+                    if !(per_n.is_finite() && per_n > 0.0) {
+                        return Err(ParamError(
+                            "gap_a needs the teach cut's current sensitivity, which this run \
+                             does not have; give the gap in % of target (gap_pct)"
+                                .to_string(),
+                        ));
+                    }
+                    100.0 * t.gap_a / (per_n * target)
+                } else {
+                    t.gap_pct
+                };
                 Box::new(ThresholdProportional::new(ThresholdParams {
-                    gap_pct: t.gap_pct,
+                    gap_pct,
                     kp: t.kp,
                     ignore_after_start_s: t.ignore_after_start_s,
                 }))
@@ -536,6 +553,7 @@ mod tests {
         let context = RunContext {
             target_force_n: 300.0,
             control_period_s: 0.1,
+            amps_per_newton: f64::NAN,
         };
         for kind in ControllerKind::ALL {
             assert_eq!(kind.name().parse::<ControllerKind>(), Ok(kind));
@@ -555,6 +573,35 @@ mod tests {
             // On target at 100 % every controller's request is 100 %.
             assert!((out - 100.0).abs() < 1e-9, "{kind}: {out}");
         }
+    }
+
+    #[test]
+    fn the_threshold_gap_in_amperes_is_the_papers_and_needs_a_sensitivity() {
+        let mut c = ControllerConfig::new(ControllerKind::Threshold);
+        c.set("gap_a", 0.4).unwrap();
+        let context = |amps_per_newton| RunContext {
+            target_force_n: 400.0,
+            control_period_s: 0.1,
+            amps_per_newton,
+        };
+        assert!(c.build(&context(f64::NAN)).is_err());
+        // 0.4 A at 0.005 A/N is 80 N, a 20 % gap on a 400 N target (±10 %): 9 % above target is
+        // inside it (no change), and outside the default 10 % gap (±5 %).
+        let mut controller = c.build(&context(0.005)).unwrap();
+        let input = ControlInput {
+            time_s: 10.0,
+            dt_s: 0.1,
+            force_n: 436.0,
+            target_force_n: 400.0,
+            programmed_feed_mm_min: 200.0,
+            applied_override_pct: 100.0,
+            time_since_start_s: 10.0,
+        };
+        assert_eq!(controller.step(&input), 100.0);
+        let mut default_gap = ControllerConfig::new(ControllerKind::Threshold)
+            .build(&context(0.005))
+            .unwrap();
+        assert!(default_gap.step(&input) < 100.0);
     }
 
     #[test]

@@ -47,7 +47,6 @@ pub struct ScenarioChoice {
 fn shown_default(setting: RunSetting) -> &'static str {
     match setting {
         RunSetting::Seed => "1",
-        RunSetting::MaxOverride => "150",
         RunSetting::FilterOrder => "4",
         RunSetting::SpindleCutoff => "260",
         RunSetting::FeedCutoff => "50",
@@ -58,7 +57,7 @@ fn shown_default(setting: RunSetting) -> &'static str {
 
 /// Settings always written to the URL, so a shared link keeps them whatever the defaults become.
 fn always_in_query(setting: RunSetting) -> bool {
-    matches!(setting, RunSetting::Seed | RunSetting::MaxOverride)
+    matches!(setting, RunSetting::Seed)
 }
 
 impl ScenarioForm {
