@@ -218,6 +218,14 @@ pub enum SafetyEvent {
         /// The force that tripped the alarm.
         force_n: f64,
     },
+    /// The tool was cutting before the loop armed: the controller enters the cut uncontrolled
+    /// (a part program should approach in air until the arming delay has passed).
+    CutBeforeArming {
+        /// When the cut was first seen.
+        time_s: f64,
+        /// The estimated force then.
+        force_n: f64,
+    },
 }
 
 impl SafetyEvent {
@@ -227,7 +235,8 @@ impl SafetyEvent {
             SafetyEvent::Armed { time_s }
             | SafetyEvent::FaultDetected { time_s, .. }
             | SafetyEvent::FaultCleared { time_s }
-            | SafetyEvent::Overload { time_s, .. } => time_s,
+            | SafetyEvent::Overload { time_s, .. }
+            | SafetyEvent::CutBeforeArming { time_s, .. } => time_s,
         }
     }
 
@@ -242,6 +251,10 @@ impl SafetyEvent {
             SafetyEvent::Overload { force_n, .. } => {
                 format!("overload: {force_n:.0} N above the hard limit; feed hold")
             }
+            SafetyEvent::CutBeforeArming { force_n, .. } => format!(
+                "warning: cutting ({force_n:.0} N) before the loop armed; the controller enters \
+                 the cut uncontrolled (approach in air until the arming delay has passed)"
+            ),
         }
     }
 }

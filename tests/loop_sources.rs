@@ -267,3 +267,49 @@ fn the_brake_benchs_references_stay_on_its_dial() {
     let found = cutlab::closed_loop::lab::references(&spec).unwrap();
     assert!(found.safe_fixed_override_pct <= 150.0, "{found:?}");
 }
+
+#[test]
+fn a_cut_before_the_loop_arms_is_warned_about_once() {
+    use cutlab::safety::SafetyEvent;
+    let spec = RunSpec::new(Preset::KimStepDoc, ControllerKind::Threshold);
+    let taught = simulate(&spec).unwrap();
+    let warnings = |trace: &cutlab::closed_loop::trace::Trace| {
+        trace
+            .events
+            .iter()
+            .filter(|e| matches!(e, SafetyEvent::CutBeforeArming { .. }))
+            .count()
+    };
+    // The preset approaches in air until the loop arms: no warning.
+    assert_eq!(warnings(&taught.trace), 0, "{:?}", taught.trace.events);
+    // Arming 20 s after spindle start leaves the first depth steps uncontrolled: one warning,
+    // from the estimate alone (the machine below offers no truth).
+    let mut settings = taught.settings.clone();
+    settings.envelope.arming_delay_s = 20.0;
+    let controller = spec
+        .controller
+        .build(&RunContext {
+            target_force_n: settings.target_force_n,
+            control_period_s: settings.control_period_s,
+            amps_per_newton: f64::NAN,
+        })
+        .unwrap();
+    let late = cutlab::closed_loop::runner::ClosedLoop::new(
+        Box::new(WithDynamometer {
+            machine: Box::new(spec.preset.machine(1).unwrap()),
+            last: MachineStep::default(),
+        }),
+        controller,
+        taught.calibration.estimator.clone(),
+        settings,
+    )
+    .unwrap()
+    .run_to_end()
+    .unwrap();
+    assert_eq!(warnings(&late), 1, "{:?}", late.events);
+    let warned_at = late.events.iter().find_map(|e| match e {
+        SafetyEvent::CutBeforeArming { time_s, .. } => Some(*time_s),
+        _ => None,
+    });
+    assert!(warned_at.unwrap() < 20.0);
+}

@@ -33,7 +33,7 @@ use crate::estimation::least_squares::FitError;
 use crate::estimation::speed::FvSpeedModel;
 use crate::machine::{DynamometerReading, Machine, MachineStep, OverrideCommand, SensorSample};
 use crate::plant::PlantError;
-use crate::safety::{EnvelopeConfig, EnvelopeError, SafetyEnvelope};
+use crate::safety::{EnvelopeConfig, EnvelopeError, SafetyEnvelope, SafetyEvent};
 use crate::signal::butterworth::{butter, ButterworthSpec, Cutoff, DesignError, FilterKind};
 use crate::work::{Progress, Work};
 
@@ -695,8 +695,19 @@ pub struct FeedbackLoop {
     command: OverrideCommand,
     last_request_pct: f64,
     trace: Trace,
+    /// Whether the cut-before-arming warning was given (once a run).
+    warned_cut_before_arming: bool,
+    /// The force estimate of the period before.
+    previous_estimate_n: f64,
     done: bool,
 }
+
+/// A force estimate above this fraction of the target, with the spindle at speed, before the
+/// loop has armed, is a cut the controller cannot shape.
+const CUT_BEFORE_ARMING_FRACTION: f64 = 0.5;
+/// The spindle is at speed within this fraction of its command (its run-up current would read as
+/// a force).
+const AT_SPEED_FRACTION: f64 = 0.02;
 
 impl FeedbackLoop {
     /// Wires `controller` and `estimator` with `settings` for samples at `sample_rate_hz`.
@@ -743,6 +754,8 @@ impl FeedbackLoop {
                 ..Trace::default()
             },
             settings,
+            warned_cut_before_arming: false,
+            previous_estimate_n: f64::NAN,
             done: false,
         })
     }
@@ -755,6 +768,37 @@ impl FeedbackLoop {
     /// The trace so far.
     pub fn trace(&self) -> &Trace {
         &self.trace
+    }
+
+    /// Warns once when the estimate shows a cut before the loop has armed.
+    fn watch_cut_before_arming(
+        &mut self,
+        period: &PeriodSummary,
+        estimate: &ForceEstimate,
+        armed: bool,
+    ) {
+        let force_n = estimate.force_n;
+        let at_speed = period.spindle_command_rpm > 0.0
+            && (period.spindle_speed_rpm - period.spindle_command_rpm).abs()
+                <= AT_SPEED_FRACTION * period.spindle_command_rpm;
+        // After its run-up the spindle's current decays for a few periods and reads as a falling
+        // force; a cut's force rises or holds. (A run-up also reads far outside the calibrated
+        // range, which `in_range` rejects.)
+        let falling = force_n < 0.9 * self.previous_estimate_n;
+        self.previous_estimate_n = force_n;
+        if !armed
+            && !self.warned_cut_before_arming
+            && at_speed
+            && !falling
+            && estimate.in_range
+            && force_n > CUT_BEFORE_ARMING_FRACTION * self.settings.target_force_n
+        {
+            self.warned_cut_before_arming = true;
+            self.trace.events.push(SafetyEvent::CutBeforeArming {
+                time_s: period.end_time_s,
+                force_n,
+            });
+        }
     }
 
     /// Ends a control period: estimate, control, limit, record.
@@ -774,6 +818,7 @@ impl FeedbackLoop {
             time_since_start_s: self.envelope.time_since_start_s(&last),
         };
         let armed = self.envelope.armed();
+        self.watch_cut_before_arming(&period, &estimate, armed);
         // The controller runs only while armed: before that its output would be ignored, and an
         // integrating law must not accumulate the spindle's starting transient.
         if armed {
