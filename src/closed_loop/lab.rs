@@ -189,11 +189,23 @@ pub fn default_settings(spec: &RunSpec) -> Result<LoopSettings, LoopError> {
         target_force_n: f64::NAN,
         force_limit_n: f64::NAN,
         envelope,
-        max_duration_s: 3.0 * summary.nominal_duration_s.max(1.0) + 10.0,
+        max_duration_s: time_limit_s(spec),
         cross_check_tolerance: 0.3,
     };
     set_target(&mut settings, target);
     Ok(settings)
+}
+
+/// The time a run may take before it is stopped: three times the program's nominal duration, and
+/// for a fixed feed below 100 % that much longer again (a reference run at 20 % takes five times
+/// the program's time and must still finish to count).
+fn time_limit_s(spec: &RunSpec) -> f64 {
+    let nominal_s = spec.preset.summary().nominal_duration_s.max(1.0);
+    let slowdown = spec
+        .controller
+        .fixed_override_pct()
+        .map_or(1.0, |pct| (100.0 / pct.max(1.0)).max(1.0));
+    3.0 * nominal_s * slowdown + 10.0
 }
 
 /// The metrics' force limit, as a multiple of the target.

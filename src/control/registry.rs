@@ -387,6 +387,12 @@ impl ControllerConfig {
         self.kind
     }
 
+    /// The override a fixed-feed controller holds (`None` for every other controller).
+    pub fn fixed_override_pct(&self) -> Option<f64> {
+        (self.kind == ControllerKind::Fixed)
+            .then(|| FixedTuning::from_values(&self.values).override_pct)
+    }
+
     /// The value of parameter `key`.
     pub fn get(&self, key: &str) -> Option<f64> {
         self.kind
