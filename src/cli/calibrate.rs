@@ -1,19 +1,7 @@
 //! `cutlab calibrate FILE.csv`: fit the current-to-force models from a logged teach cut.
 //!
-//! Reads a CSV with a header line — the CSV `cutlab sim --csv` writes, or any log with the same
-//! column names. The spindle model needs `spindle_current_rms_a` and `spindle_speed_rpm`, the
-//! feed model `feed_current_rms_a` and `feed_mm_min`, and both a force:
-//!
-//! * measured: the `force_n` column (a dynamometer's |F̄|); the feed model uses a
-//!   `feed_force_n` column if the log has one, else `force_n`, and says so;
-//! * or, without a dynamometer, modelled from the cut: with `--material`, `--diameter-mm`,
-//!   `--teeth` and `--mode`, each row's mean force comes from its `feed_mm_min`,
-//!   `spindle_speed_rpm`, `depth_mm` and `width_mm` through the mechanistic model
-//!   ([`crate::estimation::cut_forces`]), the resultant for the spindle model and the feed force
-//!   for the feed model. If the log has `force_n` too, the report says how far the two differ.
-//!
-//! Rows without force (air cuts, force ≤ 0) are left out, as in the teach cut. Full import of
-//! messy machine logs comes later; this reader is strict and says exactly where a file is wrong.
+//! Reads the file, hands the text to [`crate::estimation::teach_log`] (which says what the log
+//! must hold and fits both models), and prints the report or its JSON.
 
 use std::fmt::Write as _;
 
@@ -21,11 +9,10 @@ use serde::Serialize;
 
 use super::{help_text_for, wants_help, write_json, CliError, Io, OptionSpec, Options};
 use crate::closed_loop::runner::GEAR_CHANGE_RPM;
-use crate::estimation::current_force::{FeedCurrentModel, SpindleCurrentModel};
 use crate::estimation::cut_forces::CutGeometry;
+use crate::estimation::teach_log::{calibrate_log, LogCalibration, LogError, LogTable};
 use crate::plant::materials::Material;
-use crate::plant::mechanics::{Cutter, MillingMode, ToolForces};
-use crate::signal::spectrum::{uniform_sample_rate_hz, SpectrumError, TIME_STEP_TOLERANCE};
+use crate::plant::mechanics::{Cutter, MillingMode};
 
 const OPTIONS: &[OptionSpec] = &[
     OptionSpec::flag("json", "Print the fitted models as JSON"),
@@ -89,192 +76,12 @@ fn cut_geometry(options: &Options) -> Result<Option<(CutGeometry, String)>, CliE
 }
 
 /// The forces the fits use, and where they came from.
-struct Forces {
-    resultant_n: Vec<f64>,
-    feed_n: Vec<f64>,
-    source: String,
-    feed_source: String,
-    /// RMS of (model − force_n) over rows where both cut, % of the mean force_n.
-    model_vs_measured_pct: Option<f64>,
-}
-
-fn forces(
-    table: &Table,
-    geometry: Option<&(CutGeometry, String)>,
-    file: &str,
-) -> Result<Forces, CliError> {
-    let measured = table.column("force_n");
-    let Some((geometry, source)) = geometry else {
-        let measured = measured.ok_or_else(|| {
-            CliError::new(format!(
-                "{file}: no \"force_n\" column (columns: {}); without a measured force, \
-                 model it from the cut with --material, --diameter-mm, --teeth and --mode",
-                table.header.join(", ")
-            ))
-        })?;
-        let (feed_n, feed_source) = match table.column("feed_force_n") {
-            Some(feed) => (feed.to_vec(), "the feed_force_n column".to_string()),
-            None => (
-                measured.to_vec(),
-                "the force_n column (the log has no feed_force_n)".to_string(),
-            ),
-        };
-        return Ok(Forces {
-            resultant_n: measured.to_vec(),
-            feed_n,
-            source: "the force_n column".into(),
-            feed_source,
-            model_vs_measured_pct: None,
-        });
-    };
-    let column = |name: &str| {
-        table.column(name).ok_or_else(|| {
-            CliError::new(format!(
-                "{file}: modelled forces need a {name:?} column (columns: {})",
-                table.header.join(", ")
-            ))
-        })
-    };
-    let (feed, speed, depth, width) = (
-        column("feed_mm_min")?,
-        column("spindle_speed_rpm")?,
-        column("depth_mm")?,
-        column("width_mm")?,
-    );
-    let rows = 0..feed.len();
-    let modelled: Vec<Option<ToolForces>> = rows
-        .map(|i| geometry.mean_forces(feed[i], speed[i], depth[i], width[i]))
-        .collect();
-    let resultant_n: Vec<f64> = modelled
-        .iter()
-        .map(|f| f.map_or(f64::NAN, |f| f.resultant_n()))
-        .collect();
-    let feed_n = modelled
-        .iter()
-        .map(|f| f.map_or(f64::NAN, |f| -f.fx_n))
-        .collect();
-    let model_vs_measured_pct = measured.and_then(|measured| {
-        let pairs: Vec<(f64, f64)> = resultant_n
-            .iter()
-            .zip(measured)
-            .filter(|(m, f)| **m > 0.0 && **f > 0.0 && f.is_finite())
-            .map(|(m, f)| (*m, *f))
-            .collect();
-        let n = pairs.len() as f64;
-        let mean = pairs.iter().map(|p| p.1).sum::<f64>() / n;
-        let rms = (pairs.iter().map(|(m, f)| (m - f).powi(2)).sum::<f64>() / n).sqrt();
-        (n > 0.0).then_some(100.0 * rms / mean)
-    });
-    Ok(Forces {
-        resultant_n,
-        feed_n,
-        feed_source: format!("{source}, feed force −F̄x"),
-        source: source.clone(),
-        model_vs_measured_pct,
-    })
-}
-
-/// The numeric columns of a CSV, by name.
-struct Table {
-    header: Vec<String>,
-    columns: Vec<Vec<f64>>,
-    /// The file line (from 1) of each data row: blank lines are skipped.
-    row_lines: Vec<usize>,
-}
-
-impl Table {
-    fn parse(text: &str, file: &str) -> Result<Self, CliError> {
-        let mut lines = text
-            .lines()
-            .enumerate()
-            .filter(|(_, l)| !l.trim().is_empty());
-        let Some((header_index, header_line)) = lines.next() else {
-            return Err(CliError::new(format!("{file}: the file is empty")));
-        };
-        let header: Vec<String> = header_line
-            .split(',')
-            .map(|h| h.trim().trim_matches('"').to_string())
-            .collect();
-        for (i, name) in header.iter().enumerate() {
-            if header[..i].contains(name) {
-                return Err(CliError::new(format!(
-                    "{file}: line {}: column {name:?} appears twice; which one to fit is ambiguous",
-                    header_index + 1
-                )));
-            }
-        }
-        let mut columns = vec![Vec::new(); header.len()];
-        let mut row_lines = Vec::new();
-        for (index, line) in lines {
-            row_lines.push(index + 1);
-            let cells: Vec<&str> = line.split(',').collect();
-            if cells.len() != header.len() {
-                return Err(CliError::new(format!(
-                    "{file}: line {}: {} fields, the header has {}",
-                    index + 1,
-                    cells.len(),
-                    header.len()
-                )));
-            }
-            for ((cell, column), name) in cells.iter().zip(&mut columns).zip(&header) {
-                let value = cell.trim().parse::<f64>().map_err(|_| {
-                    CliError::new(format!(
-                        "{file}: line {}, column {name:?}: cannot parse {:?} as a number",
-                        index + 1,
-                        cell.trim()
-                    ))
-                })?;
-                column.push(value);
-            }
-        }
-        Ok(Self {
-            header,
-            columns,
-            row_lines,
-        })
-    }
-
-    /// The file line of data row `row` (from 0).
-    fn line_of_row(&self, row: usize) -> usize {
-        self.row_lines.get(row).copied().unwrap_or(0)
-    }
-
-    fn column(&self, name: &str) -> Option<&[f64]> {
-        self.header
-            .iter()
-            .position(|h| h == name)
-            .map(|i| self.columns[i].as_slice())
-    }
-}
-
+/// The JSON report: the file and what the calibration found.
 #[derive(Serialize)]
-struct Report {
-    file: String,
-    rows_with_force: usize,
-    /// Where the spindle model's force came from.
-    force_source: String,
-    /// Where the feed model's force came from.
-    feed_force_source: String,
-    /// With modelled forces and a force_n column: RMS difference, % of the mean measured force.
-    model_vs_measured_pct: Option<f64>,
-    /// The log's sampling, from its `time_s` column: even steps and their rate, or where the
-    /// steps are uneven (the fit itself does not need even steps, but a reader of the log does).
-    time_steps: Option<String>,
-    spindle: Option<SpindleCurrentModel>,
-    spindle_error: Option<String>,
-    feed: Option<FeedCurrentModel>,
-    feed_error: Option<String>,
-}
-
-/// Keeps the rows of `columns` where `force` is finite and positive.
-fn cutting_rows(force: &[f64], columns: &[&[f64]]) -> Vec<Vec<f64>> {
-    let keep: Vec<usize> = (0..force.len())
-        .filter(|&i| force[i].is_finite() && force[i] > 0.0)
-        .collect();
-    std::iter::once(force)
-        .chain(columns.iter().copied())
-        .map(|c| keep.iter().map(|&i| c[i]).collect())
-        .collect()
+struct JsonReport<'a> {
+    file: &'a str,
+    #[serde(flatten)]
+    report: &'a LogCalibration,
 }
 
 /// Runs `cutlab calibrate`.
@@ -303,80 +110,24 @@ pub fn run(args: &[String], io: &mut Io<'_>) -> Result<(), CliError> {
     }
     let text = std::fs::read_to_string(file)
         .map_err(|e| CliError::new(format!("{file}: cannot read: {e}")))?;
-    let table = Table::parse(&text, file)?;
+    let in_file = |e: LogError| CliError::new(format!("{file}: {e}"));
+    let table = LogTable::parse(&text).map_err(in_file)?;
     let geometry = cut_geometry(&options)?;
-    let forces = forces(&table, geometry.as_ref(), file)?;
-    let force = forces.resultant_n.as_slice();
-    let rows_with_force = force.iter().filter(|f| f.is_finite() && **f > 0.0).count();
-
-    let time_steps = table.column("time_s").map(|times| {
-        match uniform_sample_rate_hz(times, TIME_STEP_TOLERANCE) {
-            Ok(rate_hz) => format!("even, {:.6} s ({rate_hz:.4} Hz)", 1.0 / rate_hz),
-            // The error counts time stamps from 0; say where in the file (data from line 2).
-            Err(SpectrumError::UnevenTimeSteps {
-                index,
-                step_s,
-                median_step_s,
-                ..
-            }) => format!(
-                "uneven: the step to line {} (time_s {}) is {step_s:.6} s, the median step \
-                 {median_step_s:.6} s (a short last row is a period the program ended in)",
-                table.line_of_row(index),
-                times[index]
-            ),
-            Err(e) => format!("not usable: {e}"),
-        }
-    });
-    let mut report = Report {
-        file: file.clone(),
-        rows_with_force,
-        force_source: forces.source.clone(),
-        feed_force_source: forces.feed_source.clone(),
-        model_vs_measured_pct: forces.model_vs_measured_pct,
-        time_steps,
-        spindle: None,
-        spindle_error: None,
-        feed: None,
-        feed_error: None,
-    };
-    match (
-        table.column("spindle_current_rms_a"),
-        table.column("spindle_speed_rpm"),
-    ) {
-        (Some(current), Some(speed)) => {
-            let rows = cutting_rows(force, &[current, speed]);
-            match SpindleCurrentModel::calibrate(&rows[1], &rows[2], &rows[0], gear_change_rpm) {
-                Ok(m) => report.spindle = Some(m),
-                Err(e) => report.spindle_error = Some(e.to_string()),
-            }
-        }
-        _ => {
-            report.spindle_error =
-                Some("needs columns spindle_current_rms_a and spindle_speed_rpm".into())
-        }
-    }
-    match (
-        table.column("feed_current_rms_a"),
-        table.column("feed_mm_min"),
-    ) {
-        (Some(current), Some(feed)) => {
-            let rows = cutting_rows(&forces.feed_n, &[current, feed]);
-            match FeedCurrentModel::calibrate(&rows[1], &rows[2], &rows[0]) {
-                Ok(m) => report.feed = Some(m),
-                Err(e) => report.feed_error = Some(e.to_string()),
-            }
-        }
-        _ => report.feed_error = Some("needs columns feed_current_rms_a and feed_mm_min".into()),
-    }
-    if report.spindle.is_none() && report.feed.is_none() {
-        return Err(CliError::new(format!(
-            "{file}: no model could be fitted: spindle: {}; feed: {}",
-            report.spindle_error.as_deref().unwrap_or("-"),
-            report.feed_error.as_deref().unwrap_or("-")
-        )));
-    }
+    let report = calibrate_log(
+        &table,
+        geometry.as_ref().map(|(g, source)| (g, source.as_str())),
+        gear_change_rpm,
+    )
+    .map_err(in_file)?;
+    let rows_with_force = report.rows_with_force;
     if options.flag("json") {
-        return write_json(io.stdout, &report);
+        return write_json(
+            io.stdout,
+            &JsonReport {
+                file,
+                report: &report,
+            },
+        );
     }
     let mut out = format!(
         "{file}: {rows_with_force} rows with force, from {}\n",

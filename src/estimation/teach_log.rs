@@ -1,0 +1,523 @@
+//! Calibration from a logged teach cut: a CSV of per-period rows (the CSV `cutlab sim --csv`
+//! writes, or any log with the same column names) → paper 003's spindle-current model and paper
+//! 000's feed-current model, with the quality of each fit.
+//!
+//! The spindle model needs `spindle_current_rms_a` and `spindle_speed_rpm`, the feed model
+//! `feed_current_rms_a` and `feed_mm_min`, and both a force:
+//!
+//! * measured: the `force_n` column (a dynamometer's |F̄|); the feed model uses a `feed_force_n`
+//!   column if the log has one, else `force_n`, and says so;
+//! * or, without a dynamometer, modelled from the cut ([`CutGeometry`]): each row's mean force
+//!   from its `feed_mm_min`, `spindle_speed_rpm`, `depth_mm` and `width_mm`, the resultant for
+//!   the spindle model and the feed force for the feed model. If the log has `force_n` too, the
+//!   report says how far the two differ.
+//!
+//! Rows without force (air cuts, force ≤ 0) are left out, as in the teach cut. This reader is
+//! strict (comma-separated, a header line, numbers only) and says exactly where a file is wrong;
+//! messy machine logs are the log importer's. It works on text, so the command line and the
+//! browser share it; nothing here panics on any input.
+
+use std::collections::HashSet;
+use std::fmt;
+
+use serde::Serialize;
+
+use super::current_force::{FeedCurrentModel, SpindleCurrentModel};
+use super::cut_forces::CutGeometry;
+use crate::plant::mechanics::ToolForces;
+use crate::signal::spectrum::{uniform_sample_rate_hz, SpectrumError, TIME_STEP_TOLERANCE};
+
+/// Magnitudes beyond this in a column the fit uses are no physical current, speed or force; a
+/// least-squares fit over them would overflow (1e200 squared) and report nonsense.
+pub const MAX_FIT_MAGNITUDE: f64 = 1e12;
+
+/// Why a log could not be read or fitted; the message says where.
+#[derive(Debug, Clone, PartialEq)]
+pub enum LogError {
+    /// The text has no header line.
+    Empty,
+    /// A header names a column twice.
+    DuplicateColumn {
+        /// File line, from 1.
+        line: usize,
+        /// The name.
+        name: String,
+    },
+    /// A data line has another number of fields than the header.
+    FieldCount {
+        /// File line, from 1.
+        line: usize,
+        /// Fields found.
+        found: usize,
+        /// Fields in the header.
+        expected: usize,
+    },
+    /// A cell is not a number.
+    NotANumber {
+        /// File line, from 1.
+        line: usize,
+        /// Its column.
+        column: String,
+        /// What it holds.
+        text: String,
+    },
+    /// A value the fit would use is beyond any physical magnitude.
+    Absurd {
+        /// File line, from 1.
+        line: usize,
+        /// Its column.
+        column: String,
+        /// The value.
+        value: f64,
+    },
+    /// A column the calibration needs is missing.
+    MissingColumn {
+        /// The column.
+        name: &'static str,
+        /// Why it is needed.
+        purpose: &'static str,
+        /// The columns the log has.
+        columns: Vec<String>,
+    },
+    /// Neither model could be fitted.
+    NoModel {
+        /// Why the spindle model failed.
+        spindle: String,
+        /// Why the feed model failed.
+        feed: String,
+    },
+}
+
+impl fmt::Display for LogError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            LogError::Empty => f.write_str("the file is empty"),
+            LogError::DuplicateColumn { line, name } => write!(
+                f,
+                "line {line}: column {name:?} appears twice; which one to fit is ambiguous"
+            ),
+            LogError::FieldCount {
+                line,
+                found,
+                expected,
+            } => write!(f, "line {line}: {found} fields, the header has {expected}"),
+            LogError::NotANumber { line, column, text } => write!(
+                f,
+                "line {line}, column {column:?}: cannot parse {text:?} as a number"
+            ),
+            LogError::Absurd {
+                line,
+                column,
+                value,
+            } => write!(
+                f,
+                "line {line}, column {column:?}: {value:e} is beyond any physical value \
+                 (|value| ≤ {MAX_FIT_MAGNITUDE:e})"
+            ),
+            LogError::MissingColumn {
+                name,
+                purpose,
+                columns,
+            } => write!(
+                f,
+                "no {name:?} column (columns: {}); {purpose}",
+                columns.join(", ")
+            ),
+            LogError::NoModel { spindle, feed } => write!(
+                f,
+                "no model could be fitted: spindle: {spindle}; feed: {feed}"
+            ),
+        }
+    }
+}
+
+impl std::error::Error for LogError {}
+
+/// The numeric columns of a CSV log, by name.
+#[derive(Debug, Clone, PartialEq)]
+pub struct LogTable {
+    header: Vec<String>,
+    columns: Vec<Vec<f64>>,
+    /// The file line (from 1) of each data row: blank lines are skipped.
+    row_lines: Vec<usize>,
+}
+
+impl LogTable {
+    /// Parses comma-separated text with a header line. A UTF-8 byte-order mark is ignored (a
+    /// spreadsheet's export starts with one, and it would otherwise rename the first column).
+    ///
+    /// ```
+    /// use cutlab::estimation::teach_log::LogTable;
+    /// let t = LogTable::parse("\u{feff}time_s,force_n\n0,1\n0.1,2.5\n").unwrap();
+    /// assert_eq!(t.column("time_s"), Some(&[0.0, 0.1][..]));
+    /// assert_eq!(t.column("force_n"), Some(&[1.0, 2.5][..]));
+    /// ```
+    pub fn parse(text: &str) -> Result<Self, LogError> {
+        let text = text.strip_prefix('\u{feff}').unwrap_or(text);
+        let mut lines = text
+            .lines()
+            .enumerate()
+            .filter(|(_, l)| !l.trim().is_empty());
+        let Some((header_index, header_line)) = lines.next() else {
+            return Err(LogError::Empty);
+        };
+        let header: Vec<String> = header_line
+            .split(',')
+            .map(|h| h.trim().trim_matches('"').to_string())
+            .collect();
+        // A set, not a scan of the names before each: a million columns stay a moment's work.
+        let mut seen = HashSet::with_capacity(header.len());
+        for name in &header {
+            if !seen.insert(name.as_str()) {
+                return Err(LogError::DuplicateColumn {
+                    line: header_index + 1,
+                    name: name.clone(),
+                });
+            }
+        }
+        let mut columns = vec![Vec::new(); header.len()];
+        let mut row_lines = Vec::new();
+        for (index, line) in lines {
+            row_lines.push(index + 1);
+            let cells: Vec<&str> = line.split(',').collect();
+            if cells.len() != header.len() {
+                return Err(LogError::FieldCount {
+                    line: index + 1,
+                    found: cells.len(),
+                    expected: header.len(),
+                });
+            }
+            for ((cell, column), name) in cells.iter().zip(&mut columns).zip(&header) {
+                let value = cell
+                    .trim()
+                    .parse::<f64>()
+                    .map_err(|_| LogError::NotANumber {
+                        line: index + 1,
+                        column: name.clone(),
+                        text: cell.trim().to_string(),
+                    })?;
+                column.push(value);
+            }
+        }
+        Ok(Self {
+            header,
+            columns,
+            row_lines,
+        })
+    }
+
+    /// The column names, in file order.
+    pub fn header(&self) -> &[String] {
+        &self.header
+    }
+
+    /// The file line of data row `row` (from 0).
+    pub fn line_of_row(&self, row: usize) -> usize {
+        self.row_lines.get(row).copied().unwrap_or(0)
+    }
+
+    /// The values of column `name`.
+    pub fn column(&self, name: &str) -> Option<&[f64]> {
+        self.header
+            .iter()
+            .position(|h| h == name)
+            .and_then(|i| self.columns.get(i))
+            .map(Vec::as_slice)
+    }
+
+    /// Column `name` with every value checked against [`MAX_FIT_MAGNITUDE`].
+    fn fit_column(&self, name: &str) -> Result<Option<&[f64]>, LogError> {
+        let Some(values) = self.column(name) else {
+            return Ok(None);
+        };
+        if let Some(row) = values.iter().position(|v| v.abs() > MAX_FIT_MAGNITUDE) {
+            return Err(LogError::Absurd {
+                line: self.line_of_row(row),
+                column: name.to_string(),
+                value: values[row],
+            });
+        }
+        Ok(Some(values))
+    }
+
+    fn required(&self, name: &'static str, purpose: &'static str) -> Result<&[f64], LogError> {
+        self.fit_column(name)?
+            .ok_or_else(|| LogError::MissingColumn {
+                name,
+                purpose,
+                columns: self.header.clone(),
+            })
+    }
+}
+
+/// What a calibration from a log found.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct LogCalibration {
+    /// Rows with a positive force.
+    pub rows_with_force: usize,
+    /// Where the spindle model's force came from.
+    pub force_source: String,
+    /// Where the feed model's force came from.
+    pub feed_force_source: String,
+    /// With modelled forces and a `force_n` column: RMS difference, % of the mean measured force.
+    pub model_vs_measured_pct: Option<f64>,
+    /// The log's sampling, from its `time_s` column: even steps and their rate, or where the
+    /// steps are uneven (the fit itself does not need even steps, but a reader of the log does).
+    pub time_steps: Option<String>,
+    /// Paper 003's spindle model, if it could be fitted.
+    pub spindle: Option<SpindleCurrentModel>,
+    /// Why not.
+    pub spindle_error: Option<String>,
+    /// Paper 000's feed model, if it could be fitted.
+    pub feed: Option<FeedCurrentModel>,
+    /// Why not.
+    pub feed_error: Option<String>,
+}
+
+struct Forces {
+    resultant_n: Vec<f64>,
+    feed_n: Vec<f64>,
+    source: String,
+    feed_source: String,
+    model_vs_measured_pct: Option<f64>,
+}
+
+/// The forces of each row: measured, or modelled from the cut by `geometry` (described by
+/// `geometry_source` in the report).
+fn forces(table: &LogTable, geometry: Option<(&CutGeometry, &str)>) -> Result<Forces, LogError> {
+    let measured = table.fit_column("force_n")?;
+    let Some((geometry, source)) = geometry else {
+        let measured = measured.ok_or_else(|| LogError::MissingColumn {
+            name: "force_n",
+            purpose: "without a measured force, model it from the cut (--material, \
+                      --diameter-mm, --teeth and --mode)",
+            columns: table.header.clone(),
+        })?;
+        let (feed_n, feed_source) = match table.fit_column("feed_force_n")? {
+            Some(feed) => (feed.to_vec(), "the feed_force_n column".to_string()),
+            None => (
+                measured.to_vec(),
+                "the force_n column (the log has no feed_force_n)".to_string(),
+            ),
+        };
+        return Ok(Forces {
+            resultant_n: measured.to_vec(),
+            feed_n,
+            source: "the force_n column".into(),
+            feed_source,
+            model_vs_measured_pct: None,
+        });
+    };
+    const PURPOSE: &str = "modelled forces need the cut's feed, speed, depth and width";
+    let (feed, speed, depth, width) = (
+        table.required("feed_mm_min", PURPOSE)?,
+        table.required("spindle_speed_rpm", PURPOSE)?,
+        table.required("depth_mm", PURPOSE)?,
+        table.required("width_mm", PURPOSE)?,
+    );
+    let modelled: Vec<Option<ToolForces>> = (0..feed.len())
+        .map(|i| geometry.mean_forces(feed[i], speed[i], depth[i], width[i]))
+        .collect();
+    let resultant_n: Vec<f64> = modelled
+        .iter()
+        .map(|f| f.map_or(f64::NAN, |f| f.resultant_n()))
+        .collect();
+    let feed_n = modelled
+        .iter()
+        .map(|f| f.map_or(f64::NAN, |f| -f.fx_n))
+        .collect();
+    let model_vs_measured_pct = measured.and_then(|measured| {
+        let pairs: Vec<(f64, f64)> = resultant_n
+            .iter()
+            .zip(measured)
+            .filter(|(m, f)| **m > 0.0 && **f > 0.0 && f.is_finite())
+            .map(|(m, f)| (*m, *f))
+            .collect();
+        let n = pairs.len() as f64;
+        let mean = pairs.iter().map(|p| p.1).sum::<f64>() / n;
+        let rms = (pairs.iter().map(|(m, f)| (m - f).powi(2)).sum::<f64>() / n).sqrt();
+        (n > 0.0).then_some(100.0 * rms / mean)
+    });
+    Ok(Forces {
+        resultant_n,
+        feed_n,
+        feed_source: format!("{source}, feed force −F̄x"),
+        source: source.to_string(),
+        model_vs_measured_pct,
+    })
+}
+
+/// Keeps the rows of `columns` where `force` is finite and positive.
+fn cutting_rows(force: &[f64], columns: &[&[f64]]) -> Vec<Vec<f64>> {
+    let keep: Vec<usize> = (0..force.len())
+        .filter(|&i| force[i].is_finite() && force[i] > 0.0)
+        .collect();
+    std::iter::once(force)
+        .chain(columns.iter().copied())
+        .map(|c| keep.iter().filter_map(|&i| c.get(i).copied()).collect())
+        .collect()
+}
+
+/// How the log was sampled, from its `time_s` column, naming the file line where steps are
+/// uneven.
+fn describe_time_steps(table: &LogTable) -> Option<String> {
+    let times = table.column("time_s")?;
+    Some(match uniform_sample_rate_hz(times, TIME_STEP_TOLERANCE) {
+        Ok(rate_hz) => format!("even, {:.6} s ({rate_hz:.4} Hz)", 1.0 / rate_hz),
+        // The error counts time stamps from 0; say where in the file.
+        Err(SpectrumError::UnevenTimeSteps {
+            index,
+            step_s,
+            median_step_s,
+            ..
+        }) => format!(
+            "uneven: the step to line {} (time_s {}) is {step_s:.6} s, the median step \
+             {median_step_s:.6} s (a short last row is a period the program ended in)",
+            table.line_of_row(index),
+            times.get(index).copied().unwrap_or(f64::NAN)
+        ),
+        Err(e) => format!("not usable: {e}"),
+    })
+}
+
+/// Fits both current-to-force models from a logged teach cut. `geometry` models the force from
+/// the cut instead of the `force_n` column (with a description of the cut for the report).
+///
+/// ```
+/// use cutlab::estimation::teach_log::{calibrate_log, LogTable};
+/// let mut csv = String::from("spindle_current_rms_a,spindle_speed_rpm,force_n\n");
+/// for i in 1..=20 {
+///     let force = 10.0 * f64::from(i);
+///     csv += &format!("{},1000,{force}\n", 5.0 + 0.01 * force);
+/// }
+/// let fitted = calibrate_log(&LogTable::parse(&csv).unwrap(), None, 900.0).unwrap();
+/// let row = fitted.spindle.unwrap().rows[0];
+/// assert!((row.sensitivity_a_per_n - 0.01).abs() < 1e-9);
+/// assert!(fitted.feed.is_none());
+/// ```
+pub fn calibrate_log(
+    table: &LogTable,
+    geometry: Option<(&CutGeometry, &str)>,
+    gear_change_rpm: f64,
+) -> Result<LogCalibration, LogError> {
+    let forces = forces(table, geometry)?;
+    let force = forces.resultant_n.as_slice();
+    let mut report = LogCalibration {
+        rows_with_force: force.iter().filter(|f| f.is_finite() && **f > 0.0).count(),
+        force_source: forces.source.clone(),
+        feed_force_source: forces.feed_source.clone(),
+        model_vs_measured_pct: forces.model_vs_measured_pct,
+        time_steps: describe_time_steps(table),
+        spindle: None,
+        spindle_error: None,
+        feed: None,
+        feed_error: None,
+    };
+    match (
+        table.fit_column("spindle_current_rms_a")?,
+        table.fit_column("spindle_speed_rpm")?,
+    ) {
+        (Some(current), Some(speed)) => {
+            let rows = cutting_rows(force, &[current, speed]);
+            match SpindleCurrentModel::calibrate(&rows[1], &rows[2], &rows[0], gear_change_rpm) {
+                Ok(m) => report.spindle = Some(m),
+                Err(e) => report.spindle_error = Some(e.to_string()),
+            }
+        }
+        _ => {
+            report.spindle_error =
+                Some("needs columns spindle_current_rms_a and spindle_speed_rpm".into())
+        }
+    }
+    match (
+        table.fit_column("feed_current_rms_a")?,
+        table.fit_column("feed_mm_min")?,
+    ) {
+        (Some(current), Some(feed)) => {
+            let rows = cutting_rows(&forces.feed_n, &[current, feed]);
+            match FeedCurrentModel::calibrate(&rows[1], &rows[2], &rows[0]) {
+                Ok(m) => report.feed = Some(m),
+                Err(e) => report.feed_error = Some(e.to_string()),
+            }
+        }
+        _ => report.feed_error = Some("needs columns feed_current_rms_a and feed_mm_min".into()),
+    }
+    if report.spindle.is_none() && report.feed.is_none() {
+        return Err(LogError::NoModel {
+            spindle: report.spindle_error.clone().unwrap_or_default(),
+            feed: report.feed_error.clone().unwrap_or_default(),
+        });
+    }
+    Ok(report)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn spindle_log(extra_row: &str) -> String {
+        let mut csv = String::from("spindle_current_rms_a,spindle_speed_rpm,force_n\n");
+        for i in 1..=20 {
+            let force = 10.0 * f64::from(i);
+            csv += &format!("{},1000,{force}\n", 5.0 + 0.01 * force);
+        }
+        csv + extra_row
+    }
+
+    #[test]
+    fn a_byte_order_mark_keeps_the_first_column() {
+        let text = format!("\u{feff}{}", spindle_log(""));
+        let t = LogTable::parse(&text).unwrap();
+        assert_eq!(t.header()[0], "spindle_current_rms_a");
+        assert!(calibrate_log(&t, None, 900.0).unwrap().spindle.is_some());
+    }
+
+    #[test]
+    fn an_absurd_value_is_refused_where_it_is_instead_of_a_nan_fit() {
+        for value in ["1e308", "1e200"] {
+            let t = LogTable::parse(&spindle_log(&format!("6,1000,{value}\n"))).unwrap();
+            let e = calibrate_log(&t, None, 900.0).unwrap_err();
+            assert!(
+                matches!(&e, LogError::Absurd { line: 22, column, .. } if column == "force_n"),
+                "{e}"
+            );
+            assert!(
+                e.to_string().starts_with("line 22, column \"force_n\""),
+                "{e}"
+            );
+        }
+    }
+
+    #[test]
+    fn a_header_of_many_columns_is_read_in_linear_time() {
+        // 200 000 distinct names: a scan per name would be 2·10¹⁰ comparisons.
+        let header: Vec<String> = (0..200_000).map(|i| format!("c{i}")).collect();
+        let text = format!("{}\n", header.join(","));
+        let t = LogTable::parse(&text).unwrap();
+        assert_eq!(t.header().len(), 200_000);
+        let twice = format!("{},c7\n", header.join(","));
+        assert!(matches!(
+            LogTable::parse(&twice),
+            Err(LogError::DuplicateColumn { line: 1, .. })
+        ));
+    }
+
+    #[test]
+    fn damaged_lines_are_named() {
+        let e = LogTable::parse("a,b\n1,2\n3\n").unwrap_err();
+        assert_eq!(e.to_string(), "line 3: 1 fields, the header has 2");
+        let e = LogTable::parse("a,b\n1,2\n3,x\n").unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "line 3, column \"b\": cannot parse \"x\" as a number"
+        );
+        assert_eq!(LogTable::parse(" \n").unwrap_err(), LogError::Empty);
+    }
+
+    #[test]
+    fn without_force_or_cut_the_error_names_the_missing_column() {
+        let t = LogTable::parse("spindle_current_rms_a,spindle_speed_rpm\n1,1000\n").unwrap();
+        let e = calibrate_log(&t, None, 900.0).unwrap_err();
+        assert!(e.to_string().starts_with("no \"force_n\" column"), "{e}");
+    }
+}
