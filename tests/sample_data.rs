@@ -112,3 +112,65 @@ fn modelled_forces_calibrate_like_measured_ones() {
         assert!(message.contains(expected), "{message}");
     }
 }
+
+/// `calibrate --material` and `force --material` take the same names: the composite part is two
+/// materials, and both refuse it with the same words (calibrate once accepted it).
+#[test]
+fn calibrate_and_force_refuse_the_same_materials() {
+    let path = format!("{DATA}kim-step-doc-teach-cut.csv");
+    let calibrate = |material: &str| {
+        common::cutlab_text(
+            &[
+                "calibrate",
+                &path,
+                "--material",
+                material,
+                "--diameter-mm",
+                "20",
+                "--teeth",
+                "2",
+                "--mode",
+                "slot",
+            ],
+            "",
+        )
+        .0
+    };
+    let force = |material: &str| {
+        common::cutlab_text(
+            &[
+                "force",
+                "--material",
+                material,
+                "--diameter-mm",
+                "20",
+                "--teeth",
+                "2",
+                "--helix-deg",
+                "30",
+                "--axial-depth-mm",
+                "3",
+                "--radial-width-mm",
+                "20",
+                "--mode",
+                "slot",
+                "--feed-per-tooth-mm",
+                "0.1",
+                "--rpm",
+                "1000",
+            ],
+            "",
+        )
+        .0
+    };
+    for material in ["composite", "cheese"] {
+        let (a, b) = (
+            calibrate(material).unwrap_err(),
+            force(material).unwrap_err(),
+        );
+        assert_eq!(a, b);
+        assert!(a.starts_with("--material: "), "{a}");
+    }
+    assert!(calibrate("sm45c").is_ok());
+    assert!(force("sm45c").is_ok());
+}

@@ -9,9 +9,8 @@ use serde::Serialize;
 
 use super::{help_text_for, wants_help, write_json, CliError, Io, OptionSpec, Options};
 use crate::closed_loop::runner::GEAR_CHANGE_RPM;
-use crate::estimation::cut_forces::CutGeometry;
+use crate::estimation::cut_forces::{cutting_material, CutGeometry};
 use crate::estimation::teach_log::{calibrate_log, LogCalibration, LogError, LogTable};
-use crate::plant::materials::Material;
 use crate::plant::mechanics::{Cutter, MillingMode};
 
 const OPTIONS: &[OptionSpec] = &[
@@ -44,12 +43,7 @@ fn cut_geometry(options: &Options) -> Result<Option<(CutGeometry, String)>, CliE
         }
         return Ok(None);
     };
-    let material = Material::from_name(name).ok_or_else(|| {
-        CliError::new(format!(
-            "--material: unknown material {name:?}; materials: {}",
-            Material::ALL.map(Material::name).join(", ")
-        ))
-    })?;
+    let material = cutting_material(name).map_err(|e| CliError::new(format!("--material: {e}")))?;
     let diameter_mm: f64 = options.require("diameter-mm")?;
     let teeth: u32 = options.require("teeth")?;
     let mode_text: String = options.require("mode")?;

@@ -4,7 +4,8 @@
 use serde::Serialize;
 
 use super::{help_text_for, wants_help, write_json, CliError, Io, OptionSpec, Options};
-use crate::plant::materials::{CuttingCoefficients, Material};
+use crate::estimation::cut_forces::cutting_material;
+use crate::plant::materials::CuttingCoefficients;
 use crate::plant::mechanics::{
     mean_forces, Cutter, Immersion, MillingForceModel, MillingMode, ToolForces, MAX_EDGE_TURNS,
 };
@@ -156,21 +157,8 @@ fn coefficients(
             given[0]
         ))),
         (Some(name), true) => {
-            let m = Material::from_name(name).ok_or_else(|| {
-                CliError::new(format!(
-                    "--material: unknown material {name:?}; materials: {}",
-                    Material::ALL
-                        .iter()
-                        .map(|m| m.name())
-                        .collect::<Vec<_>>()
-                        .join(", ")
-                ))
-            })?;
-            if m == Material::Composite {
-                return Err(CliError::new(
-                    "--material: composite is two materials (sm45c then aluminium); give one of them",
-                ));
-            }
+            let m =
+                cutting_material(name).map_err(|e| CliError::new(format!("--material: {e}")))?;
             Ok((Some(m.name()), m.coefficients()))
         }
         (None, _) => {

@@ -8,7 +8,7 @@
 //! as against a measured force. The fit is as good as the coefficients: a material whose K_tc is
 //! 20 % off gives sensitivities 20 % off, which a teach cut with a dynamometer would not.
 
-use crate::plant::materials::CuttingCoefficients;
+use crate::plant::materials::{CuttingCoefficients, Material};
 use crate::plant::mechanics::{mean_forces, Cutter, Immersion, MillingMode, ToolForces};
 
 /// The cut a log was made with, apart from what each row says.
@@ -20,6 +20,38 @@ pub struct CutGeometry {
     pub mode: MillingMode,
     /// The material's coefficients.
     pub coefficients: CuttingCoefficients,
+}
+
+/// The material of one cut by name: one of [`Material::ALL`] with cutting coefficients of its own
+/// (the composite part is two materials, and a cut is in one of them). The message names the
+/// choices, so `cutlab force` and `cutlab calibrate` refuse the same names alike.
+///
+/// ```
+/// use cutlab::estimation::cut_forces::cutting_material;
+/// assert!(cutting_material("sm45c").is_ok());
+/// assert!(cutting_material("composite").unwrap_err().contains("two materials"));
+/// assert!(cutting_material("cheese").unwrap_err().contains("unknown material"));
+/// ```
+pub fn cutting_material(name: &str) -> Result<Material, String> {
+    let singles = || {
+        Material::ALL
+            .into_iter()
+            .filter(|m| *m != Material::Composite)
+            .map(Material::name)
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
+    match Material::from_name(name) {
+        Some(Material::Composite) => Err(format!(
+            "composite is two materials (sm45c then aluminium); give one of them: {}",
+            singles()
+        )),
+        Some(m) => Ok(m),
+        None => Err(format!(
+            "unknown material {name:?}; materials: {}",
+            singles()
+        )),
+    }
 }
 
 impl CutGeometry {
