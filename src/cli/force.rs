@@ -224,6 +224,12 @@ pub fn run(args: &[String], io: &mut Io<'_>) -> Result<(), CliError> {
         None => diameter_mm,
     };
     let feed_per_tooth_mm = positive_option(&options, "feed-per-tooth-mm")?;
+    cutter
+        .check_cut(axial_depth_mm, feed_per_tooth_mm)
+        .map_err(|e| match e.field.as_str() {
+            "axial_depth_mm" => CliError::new(format!("--axial-depth-mm: {}", e.message)),
+            _ => CliError::new(format!("--feed-per-tooth-mm: {}", e.message)),
+        })?;
     let rpm = positive_option(&options, "rpm")?;
     let (material, k) = coefficients(&options)?;
     let revolutions: u32 = options.get_or("revolutions", 4)?;

@@ -73,6 +73,17 @@ use crate::math;
 /// [`Cutter::max_axial_depth_mm`]); a real flute wraps less than one.
 pub const MAX_EDGE_TURNS: f64 = 64.0;
 
+/// The largest cutter the model stands for: an end mill (a face mill is another tool, and a
+/// 10⁶ mm "cutter" is a typo).
+pub const MAX_DIAMETER_MM: f64 = 200.0;
+
+/// The longest flute of an end mill, in diameters: a deeper cut is no cut a mill makes.
+pub const MAX_DEPTH_DIAMETERS: f64 = 5.0;
+
+/// The largest feed per tooth the model takes: roughing end mills stay below 1 mm, and beyond a
+/// few millimetres the chip-thickness model means nothing.
+pub const MAX_FEED_PER_TOOTH_MM: f64 = 5.0;
+
 /// The most teeth a cutter may have (per-tooth state lives in fixed arrays).
 pub const MAX_TEETH: u32 = 16;
 
@@ -132,6 +143,15 @@ impl Cutter {
     /// Checks every field.
     pub fn validate(&self) -> Result<(), PlantError> {
         positive("diameter_mm", self.diameter_mm)?;
+        if self.diameter_mm > MAX_DIAMETER_MM {
+            return Err(PlantError::new(
+                "diameter_mm",
+                format!(
+                    "{} mm is larger than any end mill (at most {MAX_DIAMETER_MM} mm)",
+                    self.diameter_mm
+                ),
+            ));
+        }
         if self.teeth == 0 || self.teeth > MAX_TEETH {
             return Err(PlantError::new(
                 "teeth",
@@ -151,6 +171,41 @@ impl Cutter {
             ));
         }
         finite("runout_angle_deg", self.runout_angle_deg)?;
+        Ok(())
+    }
+
+    /// Checks that a cut is one this cutter can make: an axial depth within its flute
+    /// ([`MAX_DEPTH_DIAMETERS`] diameters) and a feed per tooth up to [`MAX_FEED_PER_TOOTH_MM`].
+    ///
+    /// ```
+    /// use cutlab::plant::mechanics::Cutter;
+    /// let c = Cutter::new(10.0, 2, 30.0).unwrap();
+    /// assert!(c.check_cut(20.0, 0.1).is_ok());
+    /// let e = c.check_cut(1000.0, 0.1).unwrap_err();
+    /// assert_eq!(e.field, "axial_depth_mm");
+    /// assert!(c.check_cut(3.0, 1e300).is_err());
+    /// ```
+    pub fn check_cut(&self, axial_depth_mm: f64, feed_per_tooth_mm: f64) -> Result<(), PlantError> {
+        let deepest_mm = MAX_DEPTH_DIAMETERS * self.diameter_mm;
+        if !(axial_depth_mm >= 0.0 && axial_depth_mm <= deepest_mm) {
+            return Err(PlantError::new(
+                "axial_depth_mm",
+                format!(
+                    "{axial_depth_mm} mm is deeper than the flute of a {} mm end mill (at most \
+                     {deepest_mm} mm, {MAX_DEPTH_DIAMETERS} diameters)",
+                    self.diameter_mm
+                ),
+            ));
+        }
+        if !(feed_per_tooth_mm >= 0.0 && feed_per_tooth_mm <= MAX_FEED_PER_TOOTH_MM) {
+            return Err(PlantError::new(
+                "feed_per_tooth_mm",
+                format!(
+                    "{feed_per_tooth_mm} mm is beyond any feed per tooth (at most \
+                     {MAX_FEED_PER_TOOTH_MM} mm)"
+                ),
+            ));
+        }
         Ok(())
     }
 
