@@ -8,10 +8,8 @@
 use wasm_bindgen_test::wasm_bindgen_test as test;
 
 use cutlab::machine::{Machine, OverrideCommand};
-use cutlab::plant::reduced::{
-    BondGraphMachine, BondGraphModel, BondGraphParams, BondGraphRun, SecondOrderConfig,
-    SecondOrderMachine, SecondOrderProcess,
-};
+use cutlab::plant::bond_graph::{BondGraphMachine, BondGraphModel, BondGraphParams, BondGraphRun};
+use cutlab::plant::second_order::{SecondOrderConfig, SecondOrderMachine, SecondOrderProcess};
 use cutlab::plant::Preset;
 
 /// tests/reference/plant/second_order.csv, from scripts/reference/plant_reference.py.

@@ -22,8 +22,8 @@
 //! ```
 //!
 //! The reduced models stand in for the whole chain when a paper's own plant is wanted:
-//! [`reduced::SecondOrderMachine`] (paper 001's m·F̈ + (mc+d)·Ḟ + dc·F = k·f_r) and
-//! [`reduced::BondGraphMachine`] (paper 002's eq 5 with Table 1). [`bench::BrakeBench`] is
+//! [`second_order::SecondOrderMachine`] (paper 001's m·F̈ + (mc+d)·Ḟ + dc·F = k·f_r) and
+//! [`bond_graph::BondGraphMachine`] (paper 002's eq 5 with Table 1). [`bench::BrakeBench`] is
 //! paper 000's magnetic-particle brake bench. [`power_law`] is paper 004's empirical model, a
 //! sensorless cross-check rather than a plant.
 //!
@@ -41,7 +41,8 @@
 //! | [`scenario`] | tool paths, depth/width profiles, material regions |
 //! | [`simulator`] | the full simulated mill, a [`crate::machine::Machine`] |
 //! | [`bench`] | paper 000's brake test bench, a `Machine` |
-//! | [`reduced`] | paper 001's and paper 002's reduced plants, each a `Machine` |
+//! | [`second_order`] | paper 001's second-order force process, a `Machine` |
+//! | [`bond_graph`] | paper 002's bond-graph spindle + x-axis model, a `Machine` |
 //! | [`presets`] | the papers' experiments as named, seeded machines |
 //! | [`recording`] | open-loop runs summarised per block for plotting, and the brake bench's load steps |
 //! | [`signals`] | every internal signal of a sample, with units, for plots and CSV |
@@ -60,6 +61,7 @@
 //! last, ±∞ clamps to the machine's limits.
 
 pub mod bench;
+pub mod bond_graph;
 pub mod cnc;
 pub mod dynamics;
 pub mod feed_drive;
@@ -69,8 +71,8 @@ pub mod mechanics;
 pub mod power_law;
 pub mod presets;
 pub mod recording;
-pub mod reduced;
 pub mod scenario;
+pub mod second_order;
 pub mod sensors;
 pub mod signals;
 pub mod simulator;

@@ -15,11 +15,12 @@
 use serde::{Deserialize, Serialize};
 
 use super::bench::{BrakeBench, BrakeBenchConfig};
+use super::bond_graph::{BondGraphMachine, BondGraphRun};
 use super::cnc::{CncConfig, OverrideMode};
 use super::materials::Material;
 use super::mechanics::{mean_forces, Cutter, Immersion, MillingMode};
-use super::reduced::{BondGraphMachine, BondGraphRun, SecondOrderConfig, SecondOrderRun};
 use super::scenario::{MaterialRegion, Move, Scenario, ScenarioSpec};
+use super::second_order::{SecondOrderConfig, SecondOrderRun};
 use super::signals::PlantSignals;
 use super::simulator::{SimConfig, Simulator};
 use super::{Plant, PlantError};
