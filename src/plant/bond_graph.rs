@@ -32,15 +32,18 @@ use serde::{Deserialize, Serialize};
 use std::f64::consts::TAU;
 
 use super::cnc::{CncConfig, FeedPlanner, OverrideInput, PlanBlock};
-use super::feed_drive::{three_phase_rms_a, ThreePhaseWaveform};
+use super::feed_drive::ThreePhaseWaveform;
 use super::linalg::{self, Mat};
 use super::sensors::{
     AdcConfig, CurrentSensor, CurrentSensorConfig, HallSensorConfig, PhaseWiring,
 };
 use super::signals::{AxisSignals, PlantSignals};
 use super::spindle_drive::SpindleDriveConfig;
-use super::{non_negative, positive, rpm_from_rad_s, Plant, PlantError, S_PER_MIN};
-use crate::machine::{Machine, MachineStep, OverrideCommand, PlantTruth, SensorSample};
+use super::{
+    non_negative, positive, rpm_from_rad_s, PlantError, PlantModel, PlantSample, Sampling, Tick,
+    S_PER_MIN,
+};
+use crate::machine::{OverrideCommand, PlantTruth, SensorSample};
 
 /// Paper 002's Table 1.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -457,7 +460,7 @@ pub struct BondGraphMachine {
     run: BondGraphRun,
     levels: Vec<LoadLevel>,
     level: usize,
-    dt_s: f64,
+    sampling: Sampling,
     override_input: OverrideInput,
     planner: FeedPlanner,
     x: [f64; 6],
@@ -468,10 +471,6 @@ pub struct BondGraphMachine {
     waveform: ThreePhaseWaveform,
     spindle_sensor: CurrentSensor,
     feed_sensor: CurrentSensor,
-    samples: u64,
-    signals: PlantSignals,
-    last: MachineStep,
-    finished: bool,
 }
 
 /// Pole pairs used to turn the bond graph's motor speeds into phase-current frequencies (the
@@ -483,7 +482,8 @@ impl BondGraphMachine {
     /// A machine at rest.
     pub fn new(run: BondGraphRun) -> Result<Self, PlantError> {
         run.validate()?;
-        let dt_s = 1.0 / run.sample_rate_hz;
+        let sampling = Sampling::new(run.sample_rate_hz);
+        let dt_s = sampling.dt_s();
         let mut levels = Vec::with_capacity(run.load_steps.len());
         for (i, step) in run.load_steps.iter().enumerate() {
             let (a, b) = run.params.state_space(step.cutting_damping_n_s_per_m);
@@ -524,7 +524,7 @@ impl BondGraphMachine {
         Ok(Self {
             levels,
             level: 0,
-            dt_s,
+            sampling,
             override_input: OverrideInput::new(&run.cnc, dt_s).map_err(|e| e.within("cnc"))?,
             planner: FeedPlanner::new(vec![block], run.cnc, dt_s).map_err(|e| e.within("cnc"))?,
             x: [0.0; 6],
@@ -538,10 +538,6 @@ impl BondGraphMachine {
             feed_sensor: CurrentSensor::new(run.feed_sensor, dt_s, run.seed, 0)
                 .map_err(|e| e.within("feed_sensor"))?,
             run,
-            samples: 0,
-            signals: PlantSignals::default(),
-            last: MachineStep::default(),
-            finished: false,
         })
     }
 
@@ -554,10 +550,19 @@ impl BondGraphMachine {
     pub fn state(&self) -> [f64; 6] {
         self.x
     }
+}
 
-    fn advance(&mut self, command: OverrideCommand) -> MachineStep {
-        self.samples += 1;
-        let time_s = self.samples as f64 * self.dt_s;
+impl PlantModel for BondGraphMachine {
+    fn sampling(&self) -> &Sampling {
+        &self.sampling
+    }
+
+    fn sampling_mut(&mut self) -> &mut Sampling {
+        &mut self.sampling
+    }
+
+    fn advance(&mut self, tick: Tick, command: OverrideCommand) -> PlantSample {
+        let (time_s, dt_s) = (tick.time_s, tick.dt_s);
         while self.level + 1 < self.levels.len() && time_s >= self.levels[self.level + 1].start_s {
             self.level += 1;
         }
@@ -576,12 +581,12 @@ impl BondGraphMachine {
         self.x = x;
         let out = self.run.params.outputs(&self.x);
         let feed_mm_min = out.table_velocity_m_s * 1e3 * S_PER_MIN;
-        self.position_mm += feed_mm_min / S_PER_MIN * self.dt_s;
+        self.position_mm += feed_mm_min / S_PER_MIN * dt_s;
         self.spindle_angle_rad = (self.spindle_angle_rad
-            + SPINDLE_POLE_PAIRS * out.spindle_speed_rad_s * self.dt_s)
+            + SPINDLE_POLE_PAIRS * out.spindle_speed_rad_s * dt_s)
             .rem_euclid(TAU);
         self.feed_angle_rad = (self.feed_angle_rad
-            + FEED_POLE_PAIRS * out.feed_motor_speed_rad_s * self.dt_s)
+            + FEED_POLE_PAIRS * out.feed_motor_speed_rad_s * dt_s)
             .rem_euclid(TAU);
         // The gyrator currents are taken as RMS values of balanced three-phase sets.
         let spindle_currents = self.waveform.currents(
@@ -623,15 +628,15 @@ impl BondGraphMachine {
             feed_per_tooth_mm: f64::NAN,
             path_position_mm: self.position_mm,
             tool_x_mm: self.position_mm,
+            // The gyrator current is the RMS value of the three-phase set drawn from it.
             feed_current_rms_a: out.feed_current_a.abs(),
             spindle_current_rms_a: out.spindle_current_a.abs(),
             ..PlantTruth::default()
         };
-        self.signals = PlantSignals {
+        let signals = PlantSignals {
             time_s,
-            path_position_mm: self.position_mm,
+            truth,
             commanded_position_mm: cnc.commanded_position_mm,
-            tool_x_mm: self.position_mm,
             programmed_feed_mm_min: self.run.programmed_feed_mm_min,
             requested_override_pct: command.override_pct,
             applied_override_pct: applied.pct,
@@ -639,18 +644,10 @@ impl BondGraphMachine {
             feed_hold: hold,
             commanded_feed_mm_min: cnc.commanded_feed_mm_min,
             feed_mm_min,
-            feed_per_tooth_mm: f64::NAN,
             spindle_command_rpm: rpm_from_rad_s(se1 / self.run.params.spindle_armature_coefficient),
             spindle_speed_rpm: spindle_rpm,
-            depth_mm: f64::NAN,
-            width_mm: f64::NAN,
             entry_deg: f64::NAN,
             exit_deg: f64::NAN,
-            force_x_n: -out.contact_force_n,
-            force_resultant_n: out.contact_force_n.abs(),
-            feed_force_n: cutting_force_n,
-            spindle_torque_nm: torque_nm,
-            cutting_power_w: power_w,
             power_law_force_n: f64::NAN,
             axis_x: AxisSignals {
                 velocity_mm_min: feed_mm_min,
@@ -661,9 +658,7 @@ impl BondGraphMachine {
             },
             spindle_motor_torque_nm: self.run.params.spindle_armature_coefficient
                 * out.spindle_current_a,
-            spindle_current_rms_a: out.spindle_current_a.abs(),
             spindle_phase_currents_a: spindle_currents,
-            feed_current_rms_a: three_phase_rms_a(feed_currents),
             fv_voltage_v: fv,
             feed_currents_read_a: feed_read,
             spindle_currents_read_a: spindle_read,
@@ -671,37 +666,14 @@ impl BondGraphMachine {
             brake_torque_nm: f64::NAN,
             ..PlantSignals::default()
         };
-        self.finished = time_s >= self.run.duration_s - 0.5 * self.dt_s;
-        MachineStep {
+        PlantSample {
             sensors,
-            truth: Some(truth),
+            signals,
+            finished: time_s >= self.run.duration_s - 0.5 * dt_s,
         }
     }
-}
 
-impl Machine for BondGraphMachine {
-    fn sample_rate_hz(&self) -> f64 {
-        self.run.sample_rate_hz
-    }
-
-    fn step(&mut self, command: OverrideCommand) -> MachineStep {
-        if !self.finished {
-            self.last = self.advance(command);
-        }
-        self.last
-    }
-
-    fn finished(&self) -> bool {
-        self.finished
-    }
-}
-
-impl Plant for BondGraphMachine {
-    fn signals(&self) -> &PlantSignals {
-        &self.signals
-    }
-
-    fn reset(&mut self) {
+    fn restart(&mut self) -> PlantSignals {
         self.level = 0;
         self.override_input.reset();
         self.planner.reset();
@@ -712,10 +684,7 @@ impl Plant for BondGraphMachine {
         self.feed_angle_rad = 0.0;
         self.spindle_sensor.reset(self.run.seed, 3);
         self.feed_sensor.reset(self.run.seed, 0);
-        self.samples = 0;
-        self.signals = PlantSignals::default();
-        self.last = MachineStep::default();
-        self.finished = false;
+        PlantSignals::default()
     }
 }
 

@@ -80,7 +80,7 @@ pub mod spindle_drive;
 
 use std::fmt;
 
-use crate::machine::{Machine, OverrideCommand};
+use crate::machine::{Machine, MachineStep, OverrideCommand, SensorSample};
 
 pub use presets::{Preset, PresetMachine};
 pub use signals::PlantSignals;
@@ -88,13 +88,150 @@ pub use simulator::{SimConfig, Simulator};
 
 /// A simulated machine: a [`Machine`] that also shows its insides and can start over.
 ///
-/// Object-safe, so the lab can hold any plant as `Box<dyn Plant>`.
+/// Object-safe, so the lab can hold any plant as `Box<dyn Plant>`. Every [`PlantModel`] is one.
 pub trait Plant: Machine {
     /// Every internal signal of the last sample.
     fn signals(&self) -> &PlantSignals;
 
     /// Back to the state right after construction (same seed, same noise).
     fn reset(&mut self);
+}
+
+/// The physics of one simulated plant, a sample period at a time.
+///
+/// A type that implements it is a [`Machine`] and a [`Plant`] (the blanket implementations
+/// below), so what every plant shares is written once: the sample clock, the latest sample that
+/// [`Machine::step`] returns and keeps returning once the run has ended, and a reset that
+/// replays the same run.
+pub trait PlantModel {
+    /// The clock and the latest sample, kept for the shared implementations.
+    fn sampling(&self) -> &Sampling;
+
+    /// The same, to update.
+    fn sampling_mut(&mut self) -> &mut Sampling;
+
+    /// Advances the physics over the sample period that ends at `tick` under `command`. Called
+    /// only until a sample says the run has finished.
+    fn advance(&mut self, tick: Tick, command: OverrideCommand) -> PlantSample;
+
+    /// Back to the state right after construction; returns the signals to show before the
+    /// first sample.
+    fn restart(&mut self) -> PlantSignals;
+
+    /// Paper 004's sensorless force estimate at the latest sample, for a plant that knows the
+    /// programmed cutting conditions (see [`Machine::sensorless_force_n`]).
+    fn power_law_force_n(&self) -> Option<f64> {
+        None
+    }
+}
+
+/// The sample period a [`PlantModel`] advances over.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Tick {
+    /// 1 for the first sample after the start (or a reset), 2 for the next, …
+    pub number: u64,
+    /// Time at the end of the period since the start: `number · dt_s`.
+    pub time_s: f64,
+    /// Length of the period, 1/sample rate.
+    pub dt_s: f64,
+}
+
+/// One sample of a simulated plant.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct PlantSample {
+    /// What its sensors read.
+    pub sensors: SensorSample,
+    /// Everything inside, the ground truth included.
+    pub signals: PlantSignals,
+    /// The run ended with this sample.
+    pub finished: bool,
+}
+
+/// What every simulated plant keeps besides its physics: the sample clock and the latest sample.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Sampling {
+    sample_rate_hz: f64,
+    dt_s: f64,
+    samples: u64,
+    latest: PlantSample,
+}
+
+impl Sampling {
+    /// A clock at `sample_rate_hz` (validated by the plant's configuration) before its first
+    /// sample.
+    pub fn new(sample_rate_hz: f64) -> Self {
+        Self {
+            sample_rate_hz,
+            dt_s: 1.0 / sample_rate_hz,
+            samples: 0,
+            latest: PlantSample::default(),
+        }
+    }
+
+    /// The sample period.
+    pub fn dt_s(&self) -> f64 {
+        self.dt_s
+    }
+
+    /// The latest sample.
+    pub fn latest(&self) -> &PlantSample {
+        &self.latest
+    }
+
+    fn tick(&mut self) -> Tick {
+        self.samples += 1;
+        Tick {
+            number: self.samples,
+            time_s: self.samples as f64 * self.dt_s,
+            dt_s: self.dt_s,
+        }
+    }
+
+    fn machine_step(&self) -> MachineStep {
+        MachineStep {
+            sensors: self.latest.sensors,
+            truth: Some(self.latest.signals.truth),
+        }
+    }
+}
+
+impl<P: PlantModel> Machine for P {
+    fn sample_rate_hz(&self) -> f64 {
+        self.sampling().sample_rate_hz
+    }
+
+    fn step(&mut self, command: OverrideCommand) -> MachineStep {
+        if !self.sampling().latest.finished {
+            let tick = self.sampling_mut().tick();
+            let sample = self.advance(tick, command);
+            self.sampling_mut().latest = sample;
+        }
+        self.sampling().machine_step()
+    }
+
+    fn finished(&self) -> bool {
+        self.sampling().latest.finished
+    }
+
+    fn sensorless_force_n(&self) -> Option<f64> {
+        self.power_law_force_n()
+    }
+}
+
+impl<P: PlantModel> Plant for P {
+    fn signals(&self) -> &PlantSignals {
+        &self.sampling().latest.signals
+    }
+
+    fn reset(&mut self) {
+        let signals = self.restart();
+        let sampling = self.sampling_mut();
+        sampling.samples = 0;
+        sampling.latest = PlantSample {
+            signals,
+            ..PlantSample::default()
+        };
+    }
 }
 
 /// Runs `plant` with a fixed `command` until it finishes or `max_samples` have passed, keeping

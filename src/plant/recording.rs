@@ -182,7 +182,7 @@ impl OpenLoopRun {
         if let Some(step) = self.steps.last_mut() {
             if s.time_s - step.start_s >= self.step_settle_s {
                 let n = step.feed_iu_a.len() as f64;
-                step.feed_rms_a = (step.feed_rms_a * n + s.feed_current_rms_a) / (n + 1.0);
+                step.feed_rms_a = (step.feed_rms_a * n + s.truth.feed_current_rms_a) / (n + 1.0);
                 step.feed_iu_a.push(s.feed_currents_read_a[0]);
             }
         }
@@ -193,23 +193,23 @@ impl OpenLoopRun {
         let a = &mut self.sums;
         let first = a.n == 0;
         a.n += 1;
-        let r = s.force_resultant_n;
+        let r = s.truth.force_resultant_n;
         let (fu, su) = (s.feed_currents_read_a[0], s.spindle_currents_read_a[0]);
-        a.fx += s.force_x_n;
-        a.fy += s.force_y_n;
-        a.fz += s.force_z_n;
+        a.fx += s.truth.force_x_n;
+        a.fy += s.truth.force_y_n;
+        a.fz += s.truth.force_z_n;
         a.rmin = if first { r } else { a.rmin.min(r) };
         a.rmax = if first { r } else { a.rmax.max(r) };
         a.fmin = if first { fu } else { a.fmin.min(fu) };
         a.fmax = if first { fu } else { a.fmax.max(fu) };
         a.smin = if first { su } else { a.smin.min(su) };
         a.smax = if first { su } else { a.smax.max(su) };
-        a.torque += s.spindle_torque_nm;
-        a.power += s.cutting_power_w;
-        a.feed_rms += s.feed_current_rms_a;
-        a.spindle_rms += s.spindle_current_rms_a;
-        a.depth += if s.depth_mm.is_finite() {
-            s.depth_mm
+        a.torque += s.truth.spindle_torque_nm;
+        a.power += s.truth.cutting_power_w;
+        a.feed_rms += s.truth.feed_current_rms_a;
+        a.spindle_rms += s.truth.spindle_current_rms_a;
+        a.depth += if s.truth.depth_mm.is_finite() {
+            s.truth.depth_mm
         } else {
             0.0
         };

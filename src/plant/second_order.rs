@@ -27,8 +27,8 @@ use super::scenario::Profile;
 use super::sensors::CurrentSensor;
 use super::signals::{AxisSignals, PlantSignals};
 use super::spindle_drive::SpindleDrive;
-use super::{non_negative, positive, Plant, PlantError};
-use crate::machine::{Machine, MachineStep, OverrideCommand, PlantTruth, SensorSample};
+use super::{non_negative, positive, PlantError, PlantModel, PlantSample, Sampling, Tick};
+use crate::machine::{OverrideCommand, PlantTruth, SensorSample};
 use crate::math;
 
 /// Paper 001's process in cutlab's parameters.
@@ -211,7 +211,7 @@ pub struct SecondOrderRun {
 pub struct SecondOrderMachine {
     run: SecondOrderRun,
     gain: Profile,
-    dt_s: f64,
+    sampling: Sampling,
     override_input: OverrideInput,
     planner: FeedPlanner,
     process: SecondOrderProcess,
@@ -219,11 +219,7 @@ pub struct SecondOrderMachine {
     spindle: SpindleDrive,
     feed_sensor: CurrentSensor,
     spindle_sensor: CurrentSensor,
-    samples: u64,
     started_at_s: Option<f64>,
-    signals: PlantSignals,
-    last: MachineStep,
-    finished: bool,
 }
 
 impl SecondOrderMachine {
@@ -254,7 +250,8 @@ impl SecondOrderMachine {
         non_negative("radial_ratio", run.radial_ratio)?;
         let gain = Profile::new(&run.gain_n_per_mm_min, "gain_n_per_mm_min")?;
         let m = &run.machine;
-        let dt_s = 1.0 / m.sample_rate_hz;
+        let sampling = Sampling::new(m.sample_rate_hz);
+        let dt_s = sampling.dt_s();
         let block = PlanBlock {
             length_mm: run.length_mm,
             feed_mm_min: run.programmed_feed_mm_min,
@@ -264,7 +261,7 @@ impl SecondOrderMachine {
         };
         Ok(Self {
             gain,
-            dt_s,
+            sampling,
             override_input: OverrideInput::new(&m.cnc, dt_s)
                 .map_err(|e| e.within("machine.cnc"))?,
             planner: FeedPlanner::new(vec![block], m.cnc, dt_s)
@@ -276,17 +273,22 @@ impl SecondOrderMachine {
             feed_sensor: CurrentSensor::new(m.feed_sensor, dt_s, m.seed, 0)?,
             spindle_sensor: CurrentSensor::new(m.spindle_sensor, dt_s, m.seed, 3)?,
             run,
-            samples: 0,
             started_at_s: None,
-            signals: PlantSignals::default(),
-            last: MachineStep::default(),
-            finished: false,
         })
     }
+}
 
-    fn advance(&mut self, command: OverrideCommand) -> MachineStep {
-        self.samples += 1;
-        let time_s = self.samples as f64 * self.dt_s;
+impl PlantModel for SecondOrderMachine {
+    fn sampling(&self) -> &Sampling {
+        &self.sampling
+    }
+
+    fn sampling_mut(&mut self) -> &mut Sampling {
+        &mut self.sampling
+    }
+
+    fn advance(&mut self, tick: Tick, command: OverrideCommand) -> PlantSample {
+        let time_s = tick.time_s;
         let (applied, hold) = self.override_input.step(command);
         let tol = self.run.machine.cnc.spindle_arrival_tolerance * self.run.spindle_rpm;
         let ready = (self.spindle.speed_rpm() - self.run.spindle_rpm).abs() <= tol;
@@ -335,11 +337,10 @@ impl SecondOrderMachine {
             spindle_current_rms_a: sp.rms_current_a,
             ..PlantTruth::default()
         };
-        self.signals = PlantSignals {
+        let signals = PlantSignals {
             time_s,
-            path_position_mm: cnc.position_mm,
+            truth,
             commanded_position_mm: cnc.commanded_position_mm,
-            tool_x_mm: cnc.position_mm,
             programmed_feed_mm_min: self.run.programmed_feed_mm_min,
             requested_override_pct: command.override_pct,
             applied_override_pct: applied.pct,
@@ -347,19 +348,11 @@ impl SecondOrderMachine {
             feed_hold: hold,
             commanded_feed_mm_min: cnc.commanded_feed_mm_min,
             feed_mm_min: v,
-            feed_per_tooth_mm: f_tooth,
             spindle_command_rpm: self.run.spindle_rpm,
             spindle_speed_rpm: sp.speed_rpm,
             spindle_gear: sp.gear,
-            depth_mm: f64::NAN,
-            width_mm: f64::NAN,
             entry_deg: f64::NAN,
             exit_deg: f64::NAN,
-            force_x_n: -force_n,
-            force_resultant_n: force_n,
-            feed_force_n: force_n,
-            spindle_torque_nm: torque_nm,
-            cutting_power_w: power_w,
             power_law_force_n: f64::NAN,
             axis_x: AxisSignals {
                 velocity_mm_min: v,
@@ -369,9 +362,7 @@ impl SecondOrderMachine {
                 phase_currents_a: ax.phase_currents_a,
             },
             spindle_motor_torque_nm: sp.motor_torque_nm,
-            spindle_current_rms_a: sp.rms_current_a,
             spindle_phase_currents_a: sp.phase_currents_a,
-            feed_current_rms_a: feed_rms,
             fv_voltage_v: sp.fv_voltage_v,
             feed_currents_read_a: feed_read,
             spindle_currents_read_a: spindle_read,
@@ -379,37 +370,14 @@ impl SecondOrderMachine {
             brake_torque_nm: f64::NAN,
             ..PlantSignals::default()
         };
-        self.finished = cnc.finished || time_s >= self.run.machine.max_duration_s;
-        MachineStep {
+        PlantSample {
             sensors,
-            truth: Some(truth),
+            signals,
+            finished: cnc.finished || time_s >= self.run.machine.max_duration_s,
         }
     }
-}
 
-impl Machine for SecondOrderMachine {
-    fn sample_rate_hz(&self) -> f64 {
-        self.run.machine.sample_rate_hz
-    }
-
-    fn step(&mut self, command: OverrideCommand) -> MachineStep {
-        if !self.finished {
-            self.last = self.advance(command);
-        }
-        self.last
-    }
-
-    fn finished(&self) -> bool {
-        self.finished
-    }
-}
-
-impl Plant for SecondOrderMachine {
-    fn signals(&self) -> &PlantSignals {
-        &self.signals
-    }
-
-    fn reset(&mut self) {
+    fn restart(&mut self) -> PlantSignals {
         let seed = self.run.machine.seed;
         self.override_input.reset();
         self.planner.reset();
@@ -418,13 +386,11 @@ impl Plant for SecondOrderMachine {
         self.spindle.reset();
         self.feed_sensor.reset(seed, 0);
         self.spindle_sensor.reset(seed, 3);
-        self.samples = 0;
         self.started_at_s = None;
-        self.signals = PlantSignals::default();
-        self.last = MachineStep::default();
-        self.finished = false;
+        PlantSignals::default()
     }
 }
+
 #[cfg(test)]
 mod tests {
     use super::*;
