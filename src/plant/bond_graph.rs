@@ -32,7 +32,7 @@ use serde::{Deserialize, Serialize};
 use std::f64::consts::TAU;
 
 use super::cnc::{CncConfig, FeedPlanner, OverrideInput, PlanBlock};
-use super::feed_drive::ThreePhaseWaveform;
+use super::feed_drive::{three_phase_rms_a, ThreePhaseWaveform};
 use super::linalg::{self, Mat};
 use super::sensors::{
     AdcConfig, CurrentSensor, CurrentSensorConfig, HallSensorConfig, PhaseWiring,
@@ -628,8 +628,8 @@ impl PlantModel for BondGraphMachine {
             feed_per_tooth_mm: f64::NAN,
             path_position_mm: self.position_mm,
             tool_x_mm: self.position_mm,
-            // The gyrator current is the RMS value of the three-phase set drawn from it.
-            feed_current_rms_a: out.feed_current_a.abs(),
+            // Eq 7 over the three phases, as the field promises and the other plants do.
+            feed_current_rms_a: three_phase_rms_a(feed_currents),
             spindle_current_rms_a: out.spindle_current_a.abs(),
             ..PlantTruth::default()
         };
