@@ -11,6 +11,7 @@ use serde::Serialize;
 use super::signals::PlantSignals;
 use super::{Plant, PresetMachine};
 use crate::machine::{Machine, OverrideCommand};
+use crate::signal::stats::MinMeanMax;
 
 /// One block of samples, summarised.
 #[derive(Debug, Clone, Copy, PartialEq, Default, Serialize)]
@@ -66,27 +67,77 @@ pub struct LoadStep {
     pub feed_rms_a: f64,
 }
 
+/// The block being summarised: one accumulator per plotted signal.
 #[derive(Debug, Clone, Copy, Default)]
-struct Sums {
-    n: usize,
-    last: BlockRow,
-    fx: f64,
-    fy: f64,
-    fz: f64,
-    rmin: f64,
-    rmax: f64,
-    torque: f64,
-    power: f64,
-    fmin: f64,
-    fmax: f64,
-    smin: f64,
-    smax: f64,
-    feed_rms: f64,
-    spindle_rms: f64,
-    depth: f64,
-    feed: f64,
-    rpm: f64,
-    brake: f64,
+struct Block {
+    end_time_s: f64,
+    force_x_n: MinMeanMax,
+    force_y_n: MinMeanMax,
+    force_z_n: MinMeanMax,
+    resultant_n: MinMeanMax,
+    spindle_torque_nm: MinMeanMax,
+    cutting_power_w: MinMeanMax,
+    feed_iu_a: MinMeanMax,
+    spindle_iu_a: MinMeanMax,
+    feed_rms_a: MinMeanMax,
+    spindle_rms_a: MinMeanMax,
+    depth_mm: MinMeanMax,
+    feed_mm_min: MinMeanMax,
+    spindle_rpm: MinMeanMax,
+    brake_torque_nm: MinMeanMax,
+}
+
+impl Block {
+    fn push(&mut self, s: &PlantSignals) {
+        let t = &s.truth;
+        self.end_time_s = s.time_s;
+        self.force_x_n.push(t.force_x_n);
+        self.force_y_n.push(t.force_y_n);
+        self.force_z_n.push(t.force_z_n);
+        self.resultant_n.push(t.force_resultant_n);
+        self.spindle_torque_nm.push(t.spindle_torque_nm);
+        self.cutting_power_w.push(t.cutting_power_w);
+        self.feed_iu_a.push(s.feed_currents_read_a[0]);
+        self.spindle_iu_a.push(s.spindle_currents_read_a[0]);
+        self.feed_rms_a.push(t.feed_current_rms_a);
+        self.spindle_rms_a.push(t.spindle_current_rms_a);
+        // A plant without a depth (the bond graph) plots as no depth rather than a gap.
+        self.depth_mm.push(if t.depth_mm.is_finite() {
+            t.depth_mm
+        } else {
+            0.0
+        });
+        self.feed_mm_min.push(s.feed_mm_min);
+        self.spindle_rpm.push(s.spindle_speed_rpm);
+        self.brake_torque_nm.push(s.brake_torque_nm);
+    }
+
+    fn samples(&self) -> usize {
+        self.force_x_n.count()
+    }
+
+    fn row(&self) -> BlockRow {
+        BlockRow {
+            time_s: self.end_time_s,
+            force_x_n: self.force_x_n.mean(),
+            force_y_n: self.force_y_n.mean(),
+            force_z_n: self.force_z_n.mean(),
+            resultant_min_n: self.resultant_n.min(),
+            resultant_max_n: self.resultant_n.max(),
+            spindle_torque_nm: self.spindle_torque_nm.mean(),
+            cutting_power_w: self.cutting_power_w.mean(),
+            feed_iu_min_a: self.feed_iu_a.min(),
+            feed_iu_max_a: self.feed_iu_a.max(),
+            spindle_iu_min_a: self.spindle_iu_a.min(),
+            spindle_iu_max_a: self.spindle_iu_a.max(),
+            feed_rms_a: self.feed_rms_a.mean(),
+            spindle_rms_a: self.spindle_rms_a.mean(),
+            depth_mm: self.depth_mm.mean(),
+            feed_mm_min: self.feed_mm_min.mean(),
+            spindle_rpm: self.spindle_rpm.mean(),
+            brake_torque_nm: self.brake_torque_nm.mean(),
+        }
+    }
 }
 
 /// A plant run at a fixed override, recorded block by block.
@@ -96,7 +147,7 @@ pub struct OpenLoopRun {
     block: usize,
     max_samples: usize,
     samples: usize,
-    sums: Sums,
+    block_sums: Block,
     rows: Vec<BlockRow>,
     steps: Vec<LoadStep>,
     step_settle_s: f64,
@@ -115,7 +166,7 @@ impl OpenLoopRun {
             block: block.max(1),
             max_samples: (max_s.max(0.0) * rate).min(1e9) as usize,
             samples: 0,
-            sums: Sums::default(),
+            block_sums: Block::default(),
             rows: Vec::new(),
             steps: Vec::new(),
             step_settle_s: 1.0,
@@ -189,57 +240,11 @@ impl OpenLoopRun {
     }
 
     fn push(&mut self, s: &PlantSignals) {
-        let block_ends = self.sums.n + 1 >= self.block || self.finished();
-        let a = &mut self.sums;
-        let first = a.n == 0;
-        a.n += 1;
-        let r = s.truth.force_resultant_n;
-        let (fu, su) = (s.feed_currents_read_a[0], s.spindle_currents_read_a[0]);
-        a.fx += s.truth.force_x_n;
-        a.fy += s.truth.force_y_n;
-        a.fz += s.truth.force_z_n;
-        a.rmin = if first { r } else { a.rmin.min(r) };
-        a.rmax = if first { r } else { a.rmax.max(r) };
-        a.fmin = if first { fu } else { a.fmin.min(fu) };
-        a.fmax = if first { fu } else { a.fmax.max(fu) };
-        a.smin = if first { su } else { a.smin.min(su) };
-        a.smax = if first { su } else { a.smax.max(su) };
-        a.torque += s.truth.spindle_torque_nm;
-        a.power += s.truth.cutting_power_w;
-        a.feed_rms += s.truth.feed_current_rms_a;
-        a.spindle_rms += s.truth.spindle_current_rms_a;
-        a.depth += if s.truth.depth_mm.is_finite() {
-            s.truth.depth_mm
-        } else {
-            0.0
-        };
-        a.feed += s.feed_mm_min;
-        a.rpm += s.spindle_speed_rpm;
-        a.brake += s.brake_torque_nm;
-        a.last.time_s = s.time_s;
+        let block_ends = self.block_sums.samples() + 1 >= self.block || self.finished();
+        self.block_sums.push(s);
         if block_ends {
-            let n = a.n as f64;
-            self.rows.push(BlockRow {
-                time_s: a.last.time_s,
-                force_x_n: a.fx / n,
-                force_y_n: a.fy / n,
-                force_z_n: a.fz / n,
-                resultant_min_n: a.rmin,
-                resultant_max_n: a.rmax,
-                spindle_torque_nm: a.torque / n,
-                cutting_power_w: a.power / n,
-                feed_iu_min_a: a.fmin,
-                feed_iu_max_a: a.fmax,
-                spindle_iu_min_a: a.smin,
-                spindle_iu_max_a: a.smax,
-                feed_rms_a: a.feed_rms / n,
-                spindle_rms_a: a.spindle_rms / n,
-                depth_mm: a.depth / n,
-                feed_mm_min: a.feed / n,
-                spindle_rpm: a.rpm / n,
-                brake_torque_nm: a.brake / n,
-            });
-            *a = Sums::default();
+            self.rows.push(self.block_sums.row());
+            self.block_sums = Block::default();
         }
     }
 }
