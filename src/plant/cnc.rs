@@ -93,17 +93,21 @@ pub struct DialTable {
 }
 
 impl Default for DialTable {
-    /// FANUC's usual 16-position feed-rate override: 0, 10, …, 150 %.
+    /// [`DialTable::FANUC`].
     fn default() -> Self {
-        let mut percent_by_code = [0.0; 16];
-        for (i, p) in percent_by_code.iter_mut().enumerate() {
-            *p = 10.0 * i as f64;
-        }
-        Self { percent_by_code }
+        Self::FANUC
     }
 }
 
 impl DialTable {
+    /// FANUC's usual 16-position feed-rate override: 0, 10, …, 150 %.
+    pub const FANUC: DialTable = DialTable {
+        percent_by_code: [
+            0.0, 10.0, 20.0, 30.0, 40.0, 50.0, 60.0, 70.0, 80.0, 90.0, 100.0, 110.0, 120.0, 130.0,
+            140.0, 150.0,
+        ],
+    };
+
     /// A table of 16 finite percentages in 0–255 (any order: the codes need not be monotonic).
     pub fn new(percent_by_code: [f64; 16]) -> Result<Self, PlantError> {
         for (i, p) in percent_by_code.iter().enumerate() {
