@@ -18,6 +18,7 @@
 //! docs/plant.md). Each preset's machine takes a seed: the same seed gives the same run.
 
 use std::f64::consts::PI;
+use std::fmt;
 
 use serde::{Deserialize, Serialize};
 
@@ -25,7 +26,7 @@ use super::bench::{BrakeBench, BrakeBenchConfig};
 use super::bond_graph::{BondGraphMachine, BondGraphRun};
 use super::cnc::{CncConfig, DialTable, OverrideMode};
 use super::materials::Material;
-use super::mechanics::{mean_forces, Cutter, Immersion, MillingMode};
+use super::mechanics::{mean_forces, Cutter, Immersion, MillingMode, MAX_TEETH};
 use super::scenario::{MaterialRegion, Move, MoveKind, Scenario, ScenarioSpec};
 use super::second_order::{SecondOrderConfig, SecondOrderRun};
 use super::signals::PlantSignals;
@@ -748,9 +749,11 @@ impl Preset {
                 ),
             ));
         }
-        let Some(mut spec) = self.scenario_spec() else {
+        let (Some(cut), Some(mut spec)) = (self.mill_parameters(), self.scenario_spec()) else {
             return self.machine(seed);
         };
+        let mut config = self.sim_config(seed);
+        edits.check(cut, &config)?;
         if let Some(m) = edits.material {
             for region in &mut spec.materials {
                 region.material = m;
@@ -765,12 +768,6 @@ impl Preset {
             }
         }
         if let Some(k) = edits.depth_scale {
-            if !(k.is_finite() && k > 0.0) {
-                return Err(PlantError::new(
-                    "depth_scale",
-                    format!("must be positive, got {k}"),
-                ));
-            }
             for point in &mut spec.depth_mm {
                 point.1 *= k;
             }
@@ -781,7 +778,6 @@ impl Preset {
         if let Some(z) = edits.teeth {
             spec.cutter.teeth = z;
         }
-        let mut config = self.sim_config(seed);
         if let Some(noise) = edits.sensor_noise_a {
             config.feed_sensor.hall.noise_a = noise;
             config.spindle_sensor.hall.noise_a = noise;
@@ -960,6 +956,21 @@ impl Preset {
 
 /// Changes a user makes to a mill preset; `None` keeps the preset's value (and is left out of
 /// the serialised form).
+///
+/// Each edit must lie in a physically sane range, checked by [`PlantEdits::check`] (and by
+/// [`Preset::machine_with`]):
+///
+/// | edit | accepted | why |
+/// |---|---|---|
+/// | `spindle_rpm` | 10 rpm … the spindle drive's top speed (6914 rpm by default) | the spindle could never reach a faster command, and the feed waits for it |
+/// | `programmed_feed_mm_min` | 1 … 20 000 mm/min | a machining centre's cutting feeds (the control clamps above its own maximum, 10 000 mm/min by default) |
+/// | `tool_diameter_mm` | 0.5 … 100 mm | end mills, from micro tools to the largest |
+/// | `teeth` | 1 … 16 | what the force model holds |
+/// | `depth_scale` | 0.01 … the factor that makes the deepest cut 4 tool diameters | a long-series end mill's flute length (standard ones: 2–3 diameters) |
+/// | `sensor_noise_a` | 0 … 5 A | beyond the feed channel's full scale (±4.8 A) noise only saturates it |
+///
+/// A tool diameter that makes the preset's own deepest cut deeper than 4 diameters is refused
+/// as `tool_diameter_mm`.
 #[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct PlantEdits {
@@ -984,6 +995,178 @@ pub struct PlantEdits {
     /// Standard deviation of the Hall sensors' noise, both channels.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub sensor_noise_a: Option<f64>,
+}
+
+impl PlantEdits {
+    /// The lowest spindle speed accepted; the highest is the spindle drive's top speed.
+    pub const MIN_SPINDLE_RPM: f64 = 10.0;
+    /// The programmed feeds accepted, [lowest, highest].
+    pub const FEED_MM_MIN: [f64; 2] = [1.0, 20_000.0];
+    /// The tool diameters accepted, [smallest, largest].
+    pub const TOOL_DIAMETER_MM: [f64; 2] = [0.5, 100.0];
+    /// The deepest cut accepted, in tool diameters.
+    pub const MAX_DEPTH_PER_DIAMETER: f64 = 4.0;
+    /// The smallest depth scale accepted: below, the tool scratches rather than cuts.
+    pub const MIN_DEPTH_SCALE: f64 = 0.01;
+    /// The sensor noise accepted (standard deviation), [least, most].
+    pub const SENSOR_NOISE_A: [f64; 2] = [0.0, 5.0];
+
+    /// Checks every edit against its accepted range for the mill preset cutting `cut` on
+    /// `machine` (see the table on [`PlantEdits`]); the error names the first edit out of
+    /// range and the range.
+    ///
+    /// ```
+    /// use cutlab::plant::presets::{PlantEdits, Preset};
+    /// let p = Preset::ManeeratDoc1; // DOC 1 mm with a Ø10 mm cutter
+    /// let (cut, machine) = (p.mill_parameters().unwrap(), p.sim_config(0));
+    /// let deep = PlantEdits { depth_scale: Some(40.0), ..PlantEdits::default() };
+    /// assert!(deep.check(cut, &machine).is_ok()); // 40 mm = 4 diameters
+    /// let deeper = PlantEdits { depth_scale: Some(41.0), ..PlantEdits::default() };
+    /// let e = deeper.check(cut, &machine).unwrap_err();
+    /// assert_eq!((e.field, e.min, e.max), ("depth_scale", 0.01, 40.0));
+    /// assert_eq!(e.to_string(), "depth_scale: 41 is outside the accepted 0.01–40 (the deepest cut at most 4 tool diameters)");
+    /// ```
+    pub fn check(&self, cut: &MillParameters, machine: &SimConfig) -> Result<(), EditError> {
+        let within = |field, value: Option<f64>, [min, max]: [f64; 2], unit, why| match value {
+            Some(v) if !(v >= min && v <= max) => Err(EditError {
+                field,
+                value: v,
+                min,
+                max,
+                unit,
+                why,
+            }),
+            _ => Ok(()),
+        };
+        within(
+            "spindle_rpm",
+            self.spindle_rpm,
+            [
+                Self::MIN_SPINDLE_RPM,
+                machine.spindle_drive.max_spindle_rpm(),
+            ],
+            "rpm",
+            "up to the spindle's top speed",
+        )?;
+        within(
+            "programmed_feed_mm_min",
+            self.programmed_feed_mm_min,
+            Self::FEED_MM_MIN,
+            "mm/min",
+            "a machining centre's cutting feeds",
+        )?;
+        within(
+            "tool_diameter_mm",
+            self.tool_diameter_mm,
+            Self::TOOL_DIAMETER_MM,
+            "mm",
+            "end mills",
+        )?;
+        within(
+            "teeth",
+            self.teeth.map(f64::from),
+            [1.0, f64::from(MAX_TEETH)],
+            "teeth",
+            "what the force model holds",
+        )?;
+        within(
+            "sensor_noise_a",
+            self.sensor_noise_a,
+            Self::SENSOR_NOISE_A,
+            "A",
+            "beyond the feed channel's full scale noise only saturates it",
+        )?;
+        let depth_why = "the deepest cut at most 4 tool diameters";
+        let deepest_mm = cut.depth_mm.iter().map(|&(_, d)| d).fold(0.0, f64::max);
+        let diameter_mm = self.tool_diameter_mm.unwrap_or(cut.cutter.diameter_mm);
+        let deepest_allowed_mm = Self::MAX_DEPTH_PER_DIAMETER * diameter_mm;
+        match self.depth_scale {
+            Some(k) => within(
+                "depth_scale",
+                Some(k),
+                [Self::MIN_DEPTH_SCALE, deepest_allowed_mm / deepest_mm],
+                "",
+                depth_why,
+            ),
+            // The preset's own depth on a smaller tool.
+            None => within(
+                "tool_diameter_mm",
+                self.tool_diameter_mm,
+                [
+                    Self::TOOL_DIAMETER_MM[0].max(deepest_mm / Self::MAX_DEPTH_PER_DIAMETER),
+                    Self::TOOL_DIAMETER_MM[1],
+                ],
+                "mm",
+                depth_why,
+            ),
+        }
+    }
+}
+
+/// A plant edit outside the range cutlab accepts (see [`PlantEdits`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct EditError {
+    /// The edit, named as in [`PlantEdits`].
+    pub field: &'static str,
+    /// The value asked for.
+    pub value: f64,
+    /// The smallest value accepted.
+    pub min: f64,
+    /// The largest value accepted.
+    pub max: f64,
+    /// The unit of all three ("" for a factor).
+    pub unit: &'static str,
+    /// What the range stands for.
+    pub why: &'static str,
+}
+
+impl fmt::Display for EditError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let with_unit = |v: f64| {
+            let number = readable(v);
+            if self.unit.is_empty() {
+                number
+            } else {
+                format!("{number} {}", self.unit)
+            }
+        };
+        write!(
+            f,
+            "{}: {} is outside the accepted {}–{} ({})",
+            self.field,
+            with_unit(self.value),
+            readable(self.min),
+            with_unit(self.max),
+            self.why
+        )
+    }
+}
+
+impl std::error::Error for EditError {}
+
+impl From<EditError> for PlantError {
+    fn from(e: EditError) -> Self {
+        let message = e.to_string();
+        let message = message
+            .strip_prefix(&format!("{}: ", e.field))
+            .unwrap_or(&message)
+            .to_string();
+        PlantError::new(e.field, message)
+    }
+}
+
+/// `v` as a person reads it: plain digits, at most four decimals, or an exponent when very
+/// large or small (1e308 has 309 digits).
+fn readable(v: f64) -> String {
+    if v == 0.0 || (1e-3..1e7).contains(&v.abs()) {
+        let rounded = format!("{v:.4}");
+        rounded
+            .trim_end_matches('0')
+            .trim_end_matches('.')
+            .to_string()
+    } else {
+        format!("{v:e}")
+    }
 }
 
 /// Any preset's machine.
@@ -1100,6 +1283,126 @@ mod tests {
             };
             assert!(mean_resultant_n(&edge_only, depth, Material::ToolSteel) < target);
         }
+    }
+
+    #[test]
+    fn absurd_edits_are_refused_naming_the_field_and_its_range() {
+        let cases = [
+            (
+                Preset::KimStepDoc,
+                PlantEdits {
+                    programmed_feed_mm_min: Some(1e308),
+                    ..PlantEdits::default()
+                },
+                "programmed_feed_mm_min",
+                "1–20000 mm/min",
+            ),
+            (
+                // 1000 mm deep on maneerat's Ø10 mm cutter.
+                Preset::ManeeratDoc1,
+                PlantEdits {
+                    depth_scale: Some(1000.0),
+                    ..PlantEdits::default()
+                },
+                "depth_scale",
+                "0.01–40",
+            ),
+            (
+                Preset::KimStepDoc,
+                PlantEdits {
+                    tool_diameter_mm: Some(1e6),
+                    ..PlantEdits::default()
+                },
+                "tool_diameter_mm",
+                "0.5–100 mm",
+            ),
+        ];
+        for (preset, edits, field, range) in cases {
+            let e = preset.machine_with(1, &edits).unwrap_err();
+            assert_eq!(e.field, field, "{e}");
+            assert!(e.message.contains(range), "{e}");
+        }
+    }
+
+    #[test]
+    fn edits_are_checked_with_the_edited_tool_and_the_machine_s_spindle() {
+        let p = Preset::KimStepDoc; // 5 mm deep at the end, Ø20 mm
+        let (cut, machine) = (p.mill_parameters().unwrap(), p.sim_config(0));
+        let check = |edits: PlantEdits| edits.check(cut, &machine);
+        // A 1 mm tool for the preset's own 5 mm: the tool is what was edited.
+        let e = check(PlantEdits {
+            tool_diameter_mm: Some(1.0),
+            ..PlantEdits::default()
+        })
+        .unwrap_err();
+        assert_eq!((e.field, e.min, e.max), ("tool_diameter_mm", 1.25, 100.0));
+        // Scaled with a smaller tool, the limit follows the tool.
+        let e = check(PlantEdits {
+            tool_diameter_mm: Some(10.0),
+            depth_scale: Some(9.0),
+            ..PlantEdits::default()
+        })
+        .unwrap_err();
+        assert_eq!((e.field, e.max), ("depth_scale", 8.0));
+        // Faster than the spindle can turn, NaN, and a tooth count the model cannot hold.
+        let top = machine.spindle_drive.max_spindle_rpm();
+        for (edits, field) in [
+            (
+                PlantEdits {
+                    spindle_rpm: Some(top + 1.0),
+                    ..PlantEdits::default()
+                },
+                "spindle_rpm",
+            ),
+            (
+                PlantEdits {
+                    programmed_feed_mm_min: Some(f64::NAN),
+                    ..PlantEdits::default()
+                },
+                "programmed_feed_mm_min",
+            ),
+            (
+                PlantEdits {
+                    teeth: Some(40),
+                    ..PlantEdits::default()
+                },
+                "teeth",
+            ),
+            (
+                PlantEdits {
+                    sensor_noise_a: Some(-0.1),
+                    ..PlantEdits::default()
+                },
+                "sensor_noise_a",
+            ),
+        ] {
+            assert_eq!(check(edits).unwrap_err().field, field);
+        }
+        // The ends of every range are accepted and run.
+        let edge = PlantEdits {
+            spindle_rpm: Some(top),
+            programmed_feed_mm_min: Some(20_000.0),
+            tool_diameter_mm: Some(100.0),
+            teeth: Some(16),
+            depth_scale: Some(0.01),
+            sensor_noise_a: Some(5.0),
+            material: Some(Material::Aluminium),
+        };
+        assert_eq!(check(edge), Ok(()));
+        assert!(p.machine_with(1, &edge).is_ok());
+        let e = p
+            .machine_with(
+                1,
+                &PlantEdits {
+                    tool_diameter_mm: Some(1e6),
+                    ..PlantEdits::default()
+                },
+            )
+            .unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "tool_diameter_mm: 1000000 mm is outside the accepted 0.5–100 mm (end mills)"
+        );
     }
 
     #[test]
