@@ -219,12 +219,24 @@ impl BondGraphParams {
         feed_voltage_v: f64,
         cutting_damping_n_s_per_m: f64,
     ) -> Option<BondGraphOutputs> {
+        self.steady_state_vector(spindle_voltage_v, feed_voltage_v, cutting_damping_n_s_per_m)
+            .map(|x| self.outputs(&x))
+    }
+
+    /// The state vector [p₃, p₆, p₁₁, p₁₄, q₁₇, p₂₀] of [`BondGraphParams::steady_state`]:
+    /// x = −A⁻¹·B·[S_e1, S_e2].
+    pub fn steady_state_vector(
+        &self,
+        spindle_voltage_v: f64,
+        feed_voltage_v: f64,
+        cutting_damping_n_s_per_m: f64,
+    ) -> Option<[f64; 6]> {
         let (a, b) = self.state_space(cutting_damping_n_s_per_m);
         let mut rhs = [0.0; 6];
         for (r, row) in rhs.iter_mut().zip(&b) {
             *r = -(row[0] * spindle_voltage_v + row[1] * feed_voltage_v);
         }
-        linalg::solve(&a, &rhs).map(|x| self.outputs(&x))
+        linalg::solve(&a, &rhs)
     }
 }
 
@@ -323,7 +335,7 @@ pub struct BondGraphRun {
     pub load_steps: Vec<LoadStep>,
     /// Length of the run.
     pub duration_s: f64,
-    /// The feed waits this long after the spindle voltage is applied.
+    /// The feed waits this long after the start (the spindle is at speed from t = 0).
     pub spindle_start_dwell_s: f64,
     /// Sample rate.
     pub sample_rate_hz: f64,
@@ -441,6 +453,15 @@ struct LoadLevel {
     speed_per_volt: [f64; 2],
 }
 
+impl LoadLevel {
+    /// S_e2 that gives `feed_mm_min` in steady state with the spindle at `spindle_voltage_v`
+    /// (exact: eq 5 is linear).
+    fn feed_voltage_v(&self, spindle_voltage_v: f64, feed_mm_min: f64) -> f64 {
+        let v_m_s = feed_mm_min / S_PER_MIN * 1e-3;
+        (v_m_s - self.speed_per_volt[0] * spindle_voltage_v) / self.speed_per_volt[1]
+    }
+}
+
 /// Paper 002's bond-graph plant as a machine: the CNC's feed sets S_e2, the spindle runs at its
 /// rated S_e1, and the sensors read the spindle and x-axis currents.
 ///
@@ -464,7 +485,10 @@ pub struct BondGraphMachine {
     override_input: OverrideInput,
     planner: FeedPlanner,
     x: [f64; 6],
+    /// Where `x` starts and restarts: the spindle at speed, the table still.
+    initial_state: [f64; 6],
     feed_voltage_v: f64,
+    initial_feed_voltage_v: f64,
     position_mm: f64,
     spindle_angle_rad: f64,
     feed_angle_rad: f64,
@@ -479,7 +503,12 @@ const SPINDLE_POLE_PAIRS: f64 = 2.0;
 const FEED_POLE_PAIRS: f64 = 4.0;
 
 impl BondGraphMachine {
-    /// A machine at rest.
+    /// A machine with its spindle running at the rated voltage and the table still: eq 5's
+    /// steady state for S_e1 and the S_e2 of zero feed at the first load level.
+    ///
+    /// Starting from rest instead would switch both voltages on at once, and the spindle's
+    /// run-up, which eq 5 couples into the table through m_s·K_L, would shake the table at
+    /// ±650 mm/min for the first 0.1 s (and ±3 mm/min after 3 s) with no feed commanded.
     pub fn new(run: BondGraphRun) -> Result<Self, PlantError> {
         run.validate()?;
         let sampling = Sampling::new(run.sample_rate_hz);
@@ -513,6 +542,22 @@ impl BondGraphMachine {
                 speed_per_volt: [v1, v2],
             });
         }
+        let spindle_voltage_v = run.params.spindle_voltage_v;
+        let (initial_feed_voltage_v, initial_state) = match levels.first() {
+            Some(first) => {
+                let se2 = first.feed_voltage_v(spindle_voltage_v, 0.0);
+                let x = run.params.steady_state_vector(
+                    spindle_voltage_v,
+                    se2,
+                    first.cutting_damping_n_s_per_m,
+                );
+                (se2, x)
+            }
+            None => (0.0, None),
+        };
+        let initial_state = initial_state.ok_or_else(|| {
+            PlantError::new("load_steps[0]", "eq 5 has no steady state with this load")
+        })?;
         let length_mm = run.programmed_feed_mm_min * 2.56 * run.duration_s / S_PER_MIN + 1.0;
         let block = PlanBlock {
             length_mm,
@@ -527,8 +572,10 @@ impl BondGraphMachine {
             sampling,
             override_input: OverrideInput::new(&run.cnc, dt_s).map_err(|e| e.within("cnc"))?,
             planner: FeedPlanner::new(vec![block], run.cnc, dt_s).map_err(|e| e.within("cnc"))?,
-            x: [0.0; 6],
-            feed_voltage_v: 0.0,
+            x: initial_state,
+            initial_state,
+            feed_voltage_v: initial_feed_voltage_v,
+            initial_feed_voltage_v,
             position_mm: 0.0,
             spindle_angle_rad: 0.0,
             feed_angle_rad: 0.0,
@@ -571,9 +618,7 @@ impl PlantModel for BondGraphMachine {
         let cnc = self.planner.step(applied.pct, hold, ready);
         let level = self.levels[self.level];
         let se1 = self.run.params.spindle_voltage_v;
-        // S_e2 for the commanded feed in steady state (exact: eq 5 is linear).
-        let v_cmd_m_s = cnc.commanded_feed_mm_min / S_PER_MIN * 1e-3;
-        self.feed_voltage_v = (v_cmd_m_s - level.speed_per_volt[0] * se1) / level.speed_per_volt[1];
+        self.feed_voltage_v = level.feed_voltage_v(se1, cnc.commanded_feed_mm_min);
         let mut x = linalg::mul_vec(&level.phi, &self.x);
         for (xi, g) in x.iter_mut().zip(&level.gamma) {
             *xi += g[0] * se1 + g[1] * self.feed_voltage_v;
@@ -677,8 +722,8 @@ impl PlantModel for BondGraphMachine {
         self.level = 0;
         self.override_input.reset();
         self.planner.reset();
-        self.x = [0.0; 6];
-        self.feed_voltage_v = 0.0;
+        self.x = self.initial_state;
+        self.feed_voltage_v = self.initial_feed_voltage_v;
         self.position_mm = 0.0;
         self.spindle_angle_rad = 0.0;
         self.feed_angle_rad = 0.0;

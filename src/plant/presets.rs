@@ -503,7 +503,7 @@ static LIU_CURRENT_STEP: Definition = Definition {
     choices: &[
         "cutting resistance C_cut so the spindle draws the 25 A reference at 1500 mm/min",
         "load step +40 % of the total resistance at 15 s; 40 s run",
-        "spindle voltage applied at t = 0, feed after 3 s",
+        "spindle at its rated voltage's speed from t = 0 (eq 5's steady state, table still), feed after 3 s",
         "S_e2 set for the commanded feed in steady state",
         "continuous override",
     ],
