@@ -29,7 +29,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use super::cnc::{CncConfig, FeedPlanner, OverrideInput, PlanBlock};
+use super::cnc::{CncConfig, Control, PlanBlock};
 use super::feed_drive::{three_phase_rms_a, FeedDrive, FeedDriveConfig};
 use super::sensors::{CurrentSensor, CurrentSensorConfig};
 use super::signals::{AxisSignals, PlantSignals};
@@ -218,8 +218,7 @@ impl BrakeBenchConfig {
 pub struct BrakeBench {
     config: BrakeBenchConfig,
     sampling: Sampling,
-    override_input: OverrideInput,
-    planner: FeedPlanner,
+    control: Control,
     drive: FeedDrive,
     brake: MagneticParticleBrake,
     sensor: CurrentSensor,
@@ -233,18 +232,10 @@ impl BrakeBench {
         let dt_s = sampling.dt_s();
         // One straight "block" long enough for the whole run at the highest override.
         let length_mm = config.feed_mm_min * 2.56 * config.duration_s() / S_PER_MIN + 1.0;
-        let block = PlanBlock {
-            length_mm,
-            feed_mm_min: config.feed_mm_min,
-            radius_mm: f64::INFINITY,
-            start_direction_rad: 0.0,
-            end_direction_rad: 0.0,
-        };
+        let block = PlanBlock::straight(length_mm, config.feed_mm_min);
         Ok(Self {
             sampling,
-            override_input: OverrideInput::new(&config.cnc, dt_s).map_err(|e| e.within("cnc"))?,
-            planner: FeedPlanner::new(vec![block], config.cnc, dt_s)
-                .map_err(|e| e.within("cnc"))?,
+            control: Control::new(&config.cnc, vec![block], dt_s).map_err(|e| e.within("cnc"))?,
             drive: FeedDrive::new(config.feed_drive, dt_s).map_err(|e| e.within("feed_drive"))?,
             brake: MagneticParticleBrake::new(config.brake).map_err(|e| e.within("brake"))?,
             sensor: CurrentSensor::new(config.feed_sensor, dt_s, config.seed, 0)
@@ -270,8 +261,8 @@ impl PlantModel for BrakeBench {
 
     fn advance(&mut self, tick: Tick, command: OverrideCommand) -> PlantSample {
         let time_s = tick.time_s;
-        let (applied, hold) = self.override_input.step(command);
-        let cnc = self.planner.step(applied.pct, hold, true);
+        let control = self.control.step(command, true);
+        let (applied, cnc) = (control.applied, control.cnc);
         let excitation_a = self.config.excitation_at(time_s);
         let brake_nm = self.brake.torque_nm(excitation_a);
         let fd = &self.config.feed_drive;
@@ -305,16 +296,6 @@ impl PlantModel for BrakeBench {
             ..PlantTruth::default()
         };
         let signals = PlantSignals {
-            time_s,
-            truth,
-            commanded_position_mm: cnc.commanded_position_mm,
-            programmed_feed_mm_min: self.config.feed_mm_min,
-            requested_override_pct: command.override_pct,
-            applied_override_pct: applied.pct,
-            dial_code: applied.dial_code,
-            feed_hold: hold,
-            commanded_feed_mm_min: cnc.commanded_feed_mm_min,
-            feed_mm_min: cnc.feed_mm_min,
             entry_deg: f64::NAN,
             exit_deg: f64::NAN,
             power_law_force_n: f64::NAN,
@@ -328,7 +309,7 @@ impl PlantModel for BrakeBench {
             feed_currents_read_a: read,
             brake_excitation_a: excitation_a,
             brake_torque_nm: brake_nm,
-            ..PlantSignals::default()
+            ..PlantSignals::from_control(time_s, truth, &control)
         };
         PlantSample {
             sensors,
@@ -338,8 +319,7 @@ impl PlantModel for BrakeBench {
     }
 
     fn restart(&mut self) -> PlantSignals {
-        self.override_input.reset();
-        self.planner.reset();
+        self.control.reset();
         self.drive.reset();
         self.brake.reset();
         self.sensor.reset(self.config.seed, 0);

@@ -31,7 +31,7 @@
 use serde::{Deserialize, Serialize};
 use std::f64::consts::TAU;
 
-use super::cnc::{CncConfig, FeedPlanner, OverrideInput, PlanBlock};
+use super::cnc::{CncConfig, Control, PlanBlock};
 use super::feed_drive::{three_phase_rms_a, ThreePhaseWaveform};
 use super::linalg::{self, Mat};
 use super::sensors::{
@@ -482,8 +482,7 @@ pub struct BondGraphMachine {
     levels: Vec<LoadLevel>,
     level: usize,
     sampling: Sampling,
-    override_input: OverrideInput,
-    planner: FeedPlanner,
+    control: Control,
     x: [f64; 6],
     /// Where `x` starts and restarts: the spindle at speed, the table still.
     initial_state: [f64; 6],
@@ -559,19 +558,12 @@ impl BondGraphMachine {
             PlantError::new("load_steps[0]", "eq 5 has no steady state with this load")
         })?;
         let length_mm = run.programmed_feed_mm_min * 2.56 * run.duration_s / S_PER_MIN + 1.0;
-        let block = PlanBlock {
-            length_mm,
-            feed_mm_min: run.programmed_feed_mm_min,
-            radius_mm: f64::INFINITY,
-            start_direction_rad: 0.0,
-            end_direction_rad: 0.0,
-        };
+        let block = PlanBlock::straight(length_mm, run.programmed_feed_mm_min);
         Ok(Self {
             levels,
             level: 0,
             sampling,
-            override_input: OverrideInput::new(&run.cnc, dt_s).map_err(|e| e.within("cnc"))?,
-            planner: FeedPlanner::new(vec![block], run.cnc, dt_s).map_err(|e| e.within("cnc"))?,
+            control: Control::new(&run.cnc, vec![block], dt_s).map_err(|e| e.within("cnc"))?,
             x: initial_state,
             initial_state,
             feed_voltage_v: initial_feed_voltage_v,
@@ -613,9 +605,9 @@ impl PlantModel for BondGraphMachine {
         while self.level + 1 < self.levels.len() && time_s >= self.levels[self.level + 1].start_s {
             self.level += 1;
         }
-        let (applied, hold) = self.override_input.step(command);
         let ready = time_s >= self.run.spindle_start_dwell_s;
-        let cnc = self.planner.step(applied.pct, hold, ready);
+        let control = self.control.step(command, ready);
+        let (applied, cnc) = (control.applied, control.cnc);
         let level = self.levels[self.level];
         let se1 = self.run.params.spindle_voltage_v;
         self.feed_voltage_v = level.feed_voltage_v(se1, cnc.commanded_feed_mm_min);
@@ -679,15 +671,6 @@ impl PlantModel for BondGraphMachine {
             ..PlantTruth::default()
         };
         let signals = PlantSignals {
-            time_s,
-            truth,
-            commanded_position_mm: cnc.commanded_position_mm,
-            programmed_feed_mm_min: self.run.programmed_feed_mm_min,
-            requested_override_pct: command.override_pct,
-            applied_override_pct: applied.pct,
-            dial_code: applied.dial_code,
-            feed_hold: hold,
-            commanded_feed_mm_min: cnc.commanded_feed_mm_min,
             feed_mm_min,
             spindle_command_rpm: rpm_from_rad_s(se1 / self.run.params.spindle_armature_coefficient),
             spindle_speed_rpm: spindle_rpm,
@@ -709,7 +692,7 @@ impl PlantModel for BondGraphMachine {
             spindle_currents_read_a: spindle_read,
             brake_excitation_a: f64::NAN,
             brake_torque_nm: f64::NAN,
-            ..PlantSignals::default()
+            ..PlantSignals::from_control(time_s, truth, &control)
         };
         PlantSample {
             sensors,
@@ -720,8 +703,7 @@ impl PlantModel for BondGraphMachine {
 
     fn restart(&mut self) -> PlantSignals {
         self.level = 0;
-        self.override_input.reset();
-        self.planner.reset();
+        self.control.reset();
         self.x = self.initial_state;
         self.feed_voltage_v = self.initial_feed_voltage_v;
         self.position_mm = 0.0;

@@ -20,7 +20,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use super::cnc::{FeedPlanner, OverrideInput, PlanBlock};
+use super::cnc::{Control, PlanBlock};
 use super::feed_drive::{three_phase_rms_a, FeedDrive};
 use super::linalg::{self, Mat};
 use super::scenario::Profile;
@@ -212,8 +212,7 @@ pub struct SecondOrderMachine {
     run: SecondOrderRun,
     gain: Profile,
     sampling: Sampling,
-    override_input: OverrideInput,
-    planner: FeedPlanner,
+    control: Control,
     process: SecondOrderProcess,
     axis: FeedDrive,
     spindle: SpindleDrive,
@@ -252,19 +251,11 @@ impl SecondOrderMachine {
         let m = &run.machine;
         let sampling = Sampling::new(m.sample_rate_hz);
         let dt_s = sampling.dt_s();
-        let block = PlanBlock {
-            length_mm: run.length_mm,
-            feed_mm_min: run.programmed_feed_mm_min,
-            radius_mm: f64::INFINITY,
-            start_direction_rad: 0.0,
-            end_direction_rad: 0.0,
-        };
+        let block = PlanBlock::straight(run.length_mm, run.programmed_feed_mm_min);
         Ok(Self {
             gain,
             sampling,
-            override_input: OverrideInput::new(&m.cnc, dt_s)
-                .map_err(|e| e.within("machine.cnc"))?,
-            planner: FeedPlanner::new(vec![block], m.cnc, dt_s)
+            control: Control::new(&m.cnc, vec![block], dt_s)
                 .map_err(|e| e.within("machine.cnc"))?,
             process: SecondOrderProcess::new(run.process, dt_s)?,
             axis: FeedDrive::new(m.feed_drive, dt_s).map_err(|e| e.within("machine.feed_drive"))?,
@@ -289,10 +280,10 @@ impl PlantModel for SecondOrderMachine {
 
     fn advance(&mut self, tick: Tick, command: OverrideCommand) -> PlantSample {
         let time_s = tick.time_s;
-        let (applied, hold) = self.override_input.step(command);
         let tol = self.run.machine.cnc.spindle_arrival_tolerance * self.run.spindle_rpm;
         let ready = (self.spindle.speed_rpm() - self.run.spindle_rpm).abs() <= tol;
-        let cnc = self.planner.step(applied.pct, hold, ready);
+        let control = self.control.step(command, ready);
+        let (applied, cnc) = (control.applied, control.cnc);
         let gain = self.gain.value_at(cnc.position_mm);
         // f_r is the commanded feed; the process contains the feed drive's own lag.
         let (v, force_n) = self.process.step(cnc.commanded_feed_mm_min, gain);
@@ -338,15 +329,6 @@ impl PlantModel for SecondOrderMachine {
             ..PlantTruth::default()
         };
         let signals = PlantSignals {
-            time_s,
-            truth,
-            commanded_position_mm: cnc.commanded_position_mm,
-            programmed_feed_mm_min: self.run.programmed_feed_mm_min,
-            requested_override_pct: command.override_pct,
-            applied_override_pct: applied.pct,
-            dial_code: applied.dial_code,
-            feed_hold: hold,
-            commanded_feed_mm_min: cnc.commanded_feed_mm_min,
             feed_mm_min: v,
             spindle_command_rpm: self.run.spindle_rpm,
             spindle_speed_rpm: sp.speed_rpm,
@@ -368,7 +350,7 @@ impl PlantModel for SecondOrderMachine {
             spindle_currents_read_a: spindle_read,
             brake_excitation_a: f64::NAN,
             brake_torque_nm: f64::NAN,
-            ..PlantSignals::default()
+            ..PlantSignals::from_control(time_s, truth, &control)
         };
         PlantSample {
             sensors,
@@ -379,8 +361,7 @@ impl PlantModel for SecondOrderMachine {
 
     fn restart(&mut self) -> PlantSignals {
         let seed = self.run.machine.seed;
-        self.override_input.reset();
-        self.planner.reset();
+        self.control.reset();
         self.process.reset();
         self.axis.reset();
         self.spindle.reset();

@@ -11,6 +11,7 @@
 
 use serde::Serialize;
 
+use super::cnc::ControlStep;
 use super::materials::Material;
 use super::spindle_drive::SpindleGear;
 use crate::machine::PlantTruth;
@@ -91,6 +92,29 @@ pub struct PlantSignals {
     pub brake_excitation_a: f64,
     /// Brake torque (brake bench only).
     pub brake_torque_nm: f64,
+}
+
+impl PlantSignals {
+    /// A sample's signals with what every plant reports alike — the time, the truth, and the
+    /// control's override, feed hold, block, commanded and actual feed and position — and the
+    /// rest at their defaults, for the plant to fill in.
+    pub fn from_control(time_s: f64, truth: PlantTruth, control: &ControlStep) -> Self {
+        let cnc = &control.cnc;
+        Self {
+            time_s,
+            truth,
+            commanded_position_mm: cnc.commanded_position_mm,
+            block: cnc.block,
+            programmed_feed_mm_min: cnc.programmed_feed_mm_min,
+            requested_override_pct: control.command.override_pct,
+            applied_override_pct: control.applied.pct,
+            dial_code: control.applied.dial_code,
+            feed_hold: control.feed_hold,
+            commanded_feed_mm_min: cnc.commanded_feed_mm_min,
+            feed_mm_min: cnc.feed_mm_min,
+            ..Self::default()
+        }
+    }
 }
 
 /// One column of a trace: a name, its unit and how to read it.

@@ -1,6 +1,6 @@
 //! The simulated mill: scenario → CNC → cutting → drives → sensors, one sample per step.
 //!
-//! Each [`Simulator::step`] (Δt = 1/sample rate, 10 kHz by default):
+//! Each [`Machine::step`](crate::machine::Machine::step) (Δt = 1/sample rate, 10 kHz by default):
 //!
 //! 1. the PMC latches the override and feed hold ([`super::cnc::OverrideInput`]);
 //! 2. the CNC advances the commanded and actual path position ([`super::cnc::FeedPlanner`]),
@@ -26,7 +26,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use super::cnc::{samples_per, AppliedOverride, CncConfig, FeedPlanner, OverrideInput};
+use super::cnc::{samples_per, AppliedOverride, CncConfig, Control};
 use super::feed_drive::{three_phase_rms_a, FeedDrive, FeedDriveConfig};
 use super::materials::{CuttingCoefficients, Material};
 use super::mechanics::{mean_forces, Immersion, MillingForceModel, MillingMode};
@@ -212,8 +212,7 @@ pub struct Simulator {
     config: SimConfig,
     sampling: Sampling,
     ipo_samples: u64,
-    override_input: OverrideInput,
-    planner: FeedPlanner,
+    control: Control,
     force_model: MillingForceModel,
     region_coefficients: Vec<CuttingCoefficients>,
     region_power_law: Vec<PowerLawModel>,
@@ -251,8 +250,7 @@ impl Simulator {
         let mut sim = Self {
             sampling,
             ipo_samples: samples_per(config.cnc.interpolation_period_s, dt_s),
-            override_input: OverrideInput::new(&config.cnc, dt_s).map_err(|e| e.within("cnc"))?,
-            planner: FeedPlanner::new(blocks, config.cnc, dt_s).map_err(|e| e.within("cnc"))?,
+            control: Control::new(&config.cnc, blocks, dt_s).map_err(|e| e.within("cnc"))?,
             force_model,
             region_coefficients,
             region_power_law,
@@ -327,7 +325,7 @@ impl Simulator {
 
     /// The override the machine applies now.
     pub fn applied_override(&self) -> AppliedOverride {
-        self.override_input.applied()
+        self.control.applied()
     }
 }
 
@@ -345,11 +343,11 @@ impl PlantModel for Simulator {
         let ipo_tick = (tick.number - 1).is_multiple_of(self.ipo_samples);
 
         // 1–2. Override through the PMC, then the CNC.
-        let (applied, feed_hold) = self.override_input.step(command);
         let block = self.planner_block();
         let spindle_command_rpm = self.scenario.segments()[block].spindle_rpm;
         let ready = self.spindle_ready(time_s, spindle_command_rpm);
-        let cnc = self.planner.step(applied.pct, feed_hold, ready);
+        let control = self.control.step(command, ready);
+        let (applied, cnc) = (control.applied, control.cnc);
 
         // 3. Where the tool is and what it meets.
         let s = cnc.position_mm;
@@ -470,17 +468,6 @@ impl PlantModel for Simulator {
             spindle_current_rms_a: spindle.rms_current_a,
         };
         let signals = PlantSignals {
-            time_s,
-            truth,
-            commanded_position_mm: cnc.commanded_position_mm,
-            block: cnc.block,
-            programmed_feed_mm_min: cnc.programmed_feed_mm_min,
-            requested_override_pct: command.override_pct,
-            applied_override_pct: applied.pct,
-            dial_code: applied.dial_code,
-            feed_hold,
-            commanded_feed_mm_min: cnc.commanded_feed_mm_min,
-            feed_mm_min,
             spindle_command_rpm,
             spindle_speed_rpm: spindle.speed_rpm,
             spindle_gear: spindle.gear,
@@ -509,6 +496,7 @@ impl PlantModel for Simulator {
             spindle_currents_read_a: spindle_read,
             brake_excitation_a: f64::NAN,
             brake_torque_nm: f64::NAN,
+            ..PlantSignals::from_control(time_s, truth, &control)
         };
         PlantSample {
             sensors,
@@ -522,8 +510,7 @@ impl PlantModel for Simulator {
     }
 
     fn restart(&mut self) -> PlantSignals {
-        self.override_input.reset();
-        self.planner.reset();
+        self.control.reset();
         self.spindle.reset();
         for axis in self.axes.iter_mut() {
             axis.reset();
