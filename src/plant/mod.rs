@@ -18,8 +18,14 @@
 //!                 ─► spindle_drive  torque → RMS current = idle(n) + S(n, gear)·T with < 5 Hz lag,
 //!                                   gear change at 900 rpm, start current, F/V voltage (paper 003)
 //!                 ─► sensors    Hall sensor (6 A → 25 mA into 500 Ω, paper 000), ADC
-//!                 ─► SensorSample + PlantTruth (crate::machine)
+//!                 ─► SensorSample + PlantTruth (crate::machine), inside PlantSignals
 //! ```
+//!
+//! Every plant implements one trait, [`PlantModel`]: advance the physics over one sample period
+//! ([`Tick`]) and restart. The blanket implementations here make each a
+//! [`crate::machine::Machine`] and a [`Plant`], so the sample clock, the latest sample (repeated
+//! once the run has ended) and the reset are written once for all of them. A sample's
+//! [`PlantSignals`] holds its [`crate::machine::PlantTruth`], built once.
 //!
 //! The reduced models stand in for the whole chain when a paper's own plant is wanted:
 //! [`second_order::SecondOrderMachine`] (paper 001's m·F̈ + (mc+d)·Ḟ + dc·F = k·f_r) and
@@ -39,12 +45,12 @@
 //! | [`sensors`] | Hall current sensors and the ADC |
 //! | [`cnc`] | the FANUC-style control: override modes, dial table, feed planning |
 //! | [`scenario`] | tool paths, depth/width profiles, material regions |
-//! | [`simulator`] | the full simulated mill, a [`crate::machine::Machine`] |
-//! | [`bench`] | paper 000's brake test bench, a `Machine` |
-//! | [`second_order`] | paper 001's second-order force process, a `Machine` |
-//! | [`bond_graph`] | paper 002's bond-graph spindle + x-axis model, a `Machine` |
-//! | [`presets`] | the papers' experiments as named, seeded machines |
-//! | [`recording`] | open-loop runs summarised per block for plotting, and the brake bench's load steps |
+//! | [`simulator`] | the full simulated mill, a [`PlantModel`] |
+//! | [`bench`](mod@bench) | paper 000's brake test bench, a `PlantModel` |
+//! | [`second_order`] | paper 001's second-order force process, a `PlantModel` |
+//! | [`bond_graph`] | paper 002's bond-graph spindle + x-axis model, a `PlantModel` |
+//! | [`presets`] | the papers' experiments as named, seeded machines: [`Preset`], one [`presets::Definition`] each, and the checked [`presets::PlantEdits`] |
+//! | [`recording`] | open-loop runs summarised per block, the brake bench's load-step analysis and its phase currents, each a [`crate::work::Work`] |
 //! | [`signals`] | every internal signal of a sample, with units, for plots and CSV |
 //! | [`dynamics`] | exactly discretised first- and second-order lags |
 //!

@@ -1271,7 +1271,7 @@ mod tests {
             Preset::ManeeratDoc2,
             Preset::ManeeratDoc4,
         ] {
-            let params = p.mill_parameters().unwrap();
+            let params = *p.mill_parameters().unwrap();
             let depth = params.depth_mm[0].1;
             let f = mean_resultant_n(&params, depth, Material::ToolSteel);
             let target = p.target_force_n().unwrap();
@@ -1279,7 +1279,7 @@ mod tests {
             // …and the target is reachable: the edge forces alone stay below it.
             let edge_only = MillParameters {
                 feed_mm_min: 1e-9,
-                ..*params
+                ..params
             };
             assert!(mean_resultant_n(&edge_only, depth, Material::ToolSteel) < target);
         }
