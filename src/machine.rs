@@ -10,6 +10,8 @@
 //! (the true force, the depth of cut) travels beside it in [`PlantTruth`], used for plots and
 //! metrics, never by a controller.
 
+use serde::Serialize;
+
 /// What the adaptive controller asks of the machine for the next sample period.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct OverrideCommand {
@@ -61,7 +63,7 @@ pub struct SensorSample {
 }
 
 /// What only a simulation knows: the ground truth for plots and metrics.
-#[derive(Debug, Clone, Copy, PartialEq, Default)]
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize)]
 pub struct PlantTruth {
     /// Cutting force components on the tool in the machine frame.
     pub force_x_n: f64,

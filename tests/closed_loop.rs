@@ -188,7 +188,10 @@ fn feedback_holds_the_force_closer_to_target_than_fixed_feed_across_depth_steps(
         mean_error_pct(&fixed)
     );
     assert!(threshold.metrics.peak_force_n < fixed.metrics.peak_force_n);
-    assert!(threshold.metrics.time_above_limit_s < 0.1 * fixed.metrics.time_above_limit_s);
+    // On paper 003's 0–255 % override the controller crosses the 1 mm entry at up to 255 %, so
+    // the step to 5 mm overshoots for longer than it did on a 150 % dial (1.8 s against 0.8 s of
+    // the fixed feed's 18 s): still a small fraction of the fixed feed's.
+    assert!(threshold.metrics.time_above_limit_s < 0.15 * fixed.metrics.time_above_limit_s);
 }
 
 #[test]

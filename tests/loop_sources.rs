@@ -265,7 +265,13 @@ fn the_brake_benchs_references_stay_on_its_dial() {
     // The bench's 16-grade dial stops at 150 %; the reference search used to ask for 255 %.
     let spec = RunSpec::new(Preset::WangBrakeBench, ControllerKind::Restriction);
     let found = cutlab::closed_loop::lab::references(&spec).unwrap();
-    assert!(found.safe_fixed_override_pct <= 150.0, "{found:?}");
+    // The brake's torque does not depend on the feed, so no fixed override brings the load to
+    // the target: the answer is "none" (NaN), never an override beyond the dial.
+    assert!(
+        found.safe_fixed_override_pct.is_nan() || found.safe_fixed_override_pct <= 150.0,
+        "{found:?}"
+    );
+    assert!(found.programmed_cycle_time_s.is_finite());
 }
 
 #[test]

@@ -175,10 +175,10 @@ fn feed_hold_stops_the_axes_and_leaves_the_edges_rubbing() {
     let cutting = run(&mut m, false, 0.6); // 10 revolutions at 1000 rpm
     run(&mut m, true, 0.5);
     assert!(m.signals().feed_mm_min.abs() < 1e-3);
-    let held_at = m.signals().path_position_mm;
+    let held_at = m.signals().truth.path_position_mm;
     let rubbing = run(&mut m, true, 0.6);
     // The position loop has long since converged: the axes stand.
-    assert!((m.signals().path_position_mm - held_at).abs() < 1e-6);
+    assert!((m.signals().truth.path_position_mm - held_at).abs() < 1e-6);
     let cutter = Cutter::new(20.0, 2, 30.0).unwrap();
     let slot = Immersion::new(MillingMode::Slot, 20.0, 20.0);
     let edges_only = -mean_forces(&cutter, &Material::Sm45c.coefficients(), &slot, 3.0, 0.0).fx_n;
@@ -201,15 +201,15 @@ fn the_right_angle_at_b_dips_the_spindle_current_as_in_paper_003_fig_13() {
     let (mut before_sum, mut before_n) = (0.0, 0);
     let mut dip = f64::INFINITY;
     let mut slowest = f64::INFINITY;
-    while m.signals().path_position_mm < b + 1.0 {
+    while m.signals().truth.path_position_mm < b + 1.0 {
         m.step(command(100.0));
         let s = m.signals();
-        if (b - 3.0..b - 1.0).contains(&s.path_position_mm) {
-            before_sum += s.spindle_current_rms_a;
+        if (b - 3.0..b - 1.0).contains(&s.truth.path_position_mm) {
+            before_sum += s.truth.spindle_current_rms_a;
             before_n += 1;
         }
-        if (b - 0.2..b + 0.5).contains(&s.path_position_mm) {
-            dip = dip.min(s.spindle_current_rms_a);
+        if (b - 0.2..b + 0.5).contains(&s.truth.path_position_mm) {
+            dip = dip.min(s.truth.spindle_current_rms_a);
             slowest = slowest.min(s.feed_mm_min);
         }
     }

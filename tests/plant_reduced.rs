@@ -8,11 +8,9 @@
 use wasm_bindgen_test::wasm_bindgen_test as test;
 
 use cutlab::machine::{Machine, OverrideCommand};
-use cutlab::plant::reduced::{
-    BondGraphMachine, BondGraphModel, BondGraphParams, BondGraphRun, SecondOrderConfig,
-    SecondOrderMachine, SecondOrderProcess,
-};
-use cutlab::plant::Preset;
+use cutlab::plant::bond_graph::{BondGraphMachine, BondGraphModel, BondGraphParams, BondGraphRun};
+use cutlab::plant::second_order::{SecondOrderConfig, SecondOrderMachine, SecondOrderProcess};
+use cutlab::plant::{Plant, Preset};
 
 /// tests/reference/plant/second_order.csv, from scripts/reference/plant_reference.py.
 const SECOND_ORDER: &str = include_str!("reference/plant/second_order.csv");
@@ -144,6 +142,36 @@ fn liu_preset_draws_the_25_a_reference_at_1500_mm_min_then_steps_up() {
         });
     }
     assert!((s.truth.unwrap().spindle_current_rms_a - 12.5).abs() < 0.2);
+}
+
+#[test]
+fn liu_preset_holds_the_table_still_until_the_feed_is_commanded() {
+    // The spindle runs from t = 0; the CNC commands no feed for the first 3 s.
+    let mut m = Preset::LiuCurrentStep.machine(0).unwrap();
+    let mut samples = 0;
+    loop {
+        m.step(OverrideCommand::default());
+        let s = m.signals();
+        if s.commanded_feed_mm_min != 0.0 {
+            break;
+        }
+        assert!(
+            s.feed_mm_min.abs() < 0.1 && s.axis_x.velocity_mm_min.abs() < 0.1,
+            "the table moves at {} mm/min at {} s with no feed commanded",
+            s.feed_mm_min,
+            s.time_s
+        );
+        samples += 1;
+    }
+    assert!(
+        samples >= 29_000,
+        "the feed started after {samples} samples"
+    );
+    // Once commanded, it follows: 1500 mm/min by 13 s, before the load step at 15 s.
+    for _ in 0..100_000 {
+        m.step(OverrideCommand::default());
+    }
+    assert!((m.signals().feed_mm_min - 1500.0).abs() < 15.0);
 }
 
 #[test]

@@ -89,7 +89,7 @@ fn every_preset_runs_with_finite_sensor_readings() {
         for s in &rows {
             let finite = s.feed_currents_read_a.iter().all(|v| v.is_finite())
                 && s.spindle_currents_read_a.iter().all(|v| v.is_finite())
-                && s.force_resultant_n.is_finite()
+                && s.truth.force_resultant_n.is_finite()
                 && s.feed_mm_min.is_finite();
             assert!(finite, "{}: {s:?}", preset.name());
         }
@@ -174,10 +174,10 @@ fn kim_step_doc_spindle_current_steps_evenly_with_depth() {
     while !m.finished() {
         m.step(OverrideCommand::default());
         let s = m.signals();
-        let into = s.path_position_mm - 15.0;
+        let into = s.truth.path_position_mm - 15.0;
         let step = (into / 30.0).floor();
         if (0.0..5.0).contains(&step) && (10.0..20.0).contains(&(into - 30.0 * step)) {
-            sums[step as usize] += s.spindle_current_rms_a;
+            sums[step as usize] += s.truth.spindle_current_rms_a;
             counts[step as usize] += 1;
         }
     }

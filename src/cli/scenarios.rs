@@ -197,17 +197,20 @@ fn run_preset(preset: Preset, options: &Options, io: &mut Io<'_>) -> Result<(), 
         n += 1;
         let s = machine.signals();
         if summary {
-            stats.peak_force_resultant_n = stats.peak_force_resultant_n.max(s.force_resultant_n);
+            stats.peak_force_resultant_n =
+                stats.peak_force_resultant_n.max(s.truth.force_resultant_n);
             stats.peak_spindle_current_rms_a = stats
                 .peak_spindle_current_rms_a
-                .max(s.spindle_current_rms_a);
+                .max(s.truth.spindle_current_rms_a);
             if s.time_s > 3.0 {
                 stats.peak_spindle_current_rms_after_3_s_a = stats
                     .peak_spindle_current_rms_after_3_s_a
-                    .max(s.spindle_current_rms_a);
+                    .max(s.truth.spindle_current_rms_a);
             }
-            stats.peak_feed_current_rms_a = stats.peak_feed_current_rms_a.max(s.feed_current_rms_a);
-            force_sum += s.force_resultant_n;
+            stats.peak_feed_current_rms_a = stats
+                .peak_feed_current_rms_a
+                .max(s.truth.feed_current_rms_a);
+            force_sum += s.truth.force_resultant_n;
             feed_sum += s.feed_mm_min;
         } else if n.is_multiple_of(every) {
             writeln!(io.stdout, "{}", csv_row(s))?;
@@ -218,7 +221,7 @@ fn run_preset(preset: Preset, options: &Options, io: &mut Io<'_>) -> Result<(), 
         stats.samples = n;
         stats.duration_s = s.time_s;
         stats.finished = machine.finished();
-        stats.final_path_position_mm = s.path_position_mm;
+        stats.final_path_position_mm = s.truth.path_position_mm;
         stats.mean_force_resultant_n = force_sum / n.max(1) as f64;
         stats.mean_feed_mm_min = feed_sum / n.max(1) as f64;
         return write_json(io.stdout, &stats);

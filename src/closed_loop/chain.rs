@@ -17,6 +17,7 @@ use crate::machine::MachineStep;
 use crate::signal::filter::{NoChannels, SosFilterBank};
 use crate::signal::rms::three_phase_rms;
 use crate::signal::sos::Sos;
+use crate::signal::stats::MinMeanMax;
 
 /// One control period, summarised.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
@@ -76,10 +77,8 @@ struct Sums {
     fx: f64,
     fy: f64,
     feed_force: f64,
-    force_min: f64,
-    force_max: f64,
-    iu_min: f64,
-    iu_max: f64,
+    force: MinMeanMax,
+    iu: MinMeanMax,
     depth: f64,
     width: f64,
     mrr: f64,
@@ -105,7 +104,6 @@ impl SignalChain {
         self.spindle_filter.process_slice(&mut spindle);
         self.feed_filter.process_slice(&mut feed);
         let sums = &mut self.sums;
-        let first = sums.n == 0;
         sums.n += 1;
         sums.end_time_s = s.time_s;
         sums.spindle_rms += three_phase_rms(spindle[0], spindle[1], spindle[2]);
@@ -114,16 +112,12 @@ impl SignalChain {
         sums.speed += s.spindle_speed_rpm;
         sums.command_rpm = s.spindle_command_rpm;
         sums.feed += s.feed_mm_min;
-        let iu = s.feed_phase_currents_a[0];
-        sums.iu_min = if first { iu } else { sums.iu_min.min(iu) };
-        sums.iu_max = if first { iu } else { sums.iu_max.max(iu) };
+        sums.iu.push(s.feed_phase_currents_a[0]);
         if let Some(t) = &step.truth {
             sums.fx += t.force_x_n;
             sums.fy += t.force_y_n;
             sums.feed_force += t.feed_force_n;
-            let r = t.force_resultant_n;
-            sums.force_min = if first { r } else { sums.force_min.min(r) };
-            sums.force_max = if first { r } else { sums.force_max.max(r) };
+            sums.force.push(t.force_resultant_n);
             sums.depth += t.depth_mm;
             sums.width += t.width_mm;
             sums.mrr += t.material_removal_mm3_s;
@@ -152,12 +146,9 @@ impl SignalChain {
                 f64::NAN
             },
             feed_force_n: truth(s.feed_force),
-            force_min_max_n: if s.truth_seen {
-                (s.force_min, s.force_max)
-            } else {
-                (f64::NAN, f64::NAN)
-            },
-            feed_current_u_min_max_a: (s.iu_min, s.iu_max),
+            // NaN without truth: nothing was pushed.
+            force_min_max_n: s.force.min_max(),
+            feed_current_u_min_max_a: s.iu.min_max(),
             depth_mm: truth(s.depth),
             width_mm: truth(s.width),
             material_removal_mm3_s: truth(s.mrr),

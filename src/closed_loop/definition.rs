@@ -21,6 +21,7 @@ use crate::control::registry::ControllerConfig;
 use crate::input::{parse_count, parse_number, parse_seed};
 use crate::plant::cnc::{OverrideMode, MAX_OVERRIDE_PCT};
 use crate::plant::materials::Material;
+use crate::plant::mechanics::MAX_TEETH;
 use crate::plant::Preset;
 
 /// Which group of the form a setting belongs to.
@@ -334,7 +335,10 @@ impl RunSetting {
                 "teeth",
                 "Teeth",
                 "teeth",
-                SettingKind::Count { min: 1, max: 12 },
+                SettingKind::Count {
+                    min: 1,
+                    max: MAX_TEETH as usize,
+                },
                 Machine,
                 "number of teeth of the cutter (mill presets)",
             ),

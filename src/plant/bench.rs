@@ -24,17 +24,19 @@
 //!
 //! [`PlantTruth::feed_force_n`] carries the brake's torque as the equivalent force at the nut,
 //! T_brake·2πη/L_0, so a feed-current model can be calibrated on the bench exactly as paper 000
-//! does; there is no cutting, no spindle and no depth (NaN in the signals). A NaN excitation
-//! gives a NaN torque; the schedule's validated values never do.
+//! does; there is no cutting and no spindle: depth and width of cut are 0 and the cutting
+//! angles NaN. A NaN excitation gives a NaN torque; the schedule's validated values never do.
 
 use serde::{Deserialize, Serialize};
 
-use super::cnc::{CncConfig, FeedPlanner, OverrideInput, PlanBlock};
+use super::cnc::{CncConfig, Control, PlanBlock};
 use super::feed_drive::{three_phase_rms_a, FeedDrive, FeedDriveConfig};
 use super::sensors::{CurrentSensor, CurrentSensorConfig};
 use super::signals::{AxisSignals, PlantSignals};
-use super::{non_negative, positive, Plant, PlantError, S_PER_MIN};
-use crate::machine::{Machine, MachineStep, OverrideCommand, PlantTruth, SensorSample};
+use super::{
+    non_negative, positive, PlantError, PlantModel, PlantSample, Sampling, Tick, S_PER_MIN,
+};
+use crate::machine::{OverrideCommand, PlantTruth, SensorSample};
 
 /// A magnetic-particle brake.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -215,46 +217,30 @@ impl BrakeBenchConfig {
 #[derive(Debug, Clone)]
 pub struct BrakeBench {
     config: BrakeBenchConfig,
-    dt_s: f64,
-    override_input: OverrideInput,
-    planner: FeedPlanner,
+    sampling: Sampling,
+    control: Control,
     drive: FeedDrive,
     brake: MagneticParticleBrake,
     sensor: CurrentSensor,
-    samples: u64,
-    signals: PlantSignals,
-    last: MachineStep,
-    finished: bool,
 }
 
 impl BrakeBench {
     /// A bench at rest.
     pub fn new(config: BrakeBenchConfig) -> Result<Self, PlantError> {
         config.validate()?;
-        let dt_s = 1.0 / config.sample_rate_hz;
+        let sampling = Sampling::new(config.sample_rate_hz);
+        let dt_s = sampling.dt_s();
         // One straight "block" long enough for the whole run at the highest override.
         let length_mm = config.feed_mm_min * 2.56 * config.duration_s() / S_PER_MIN + 1.0;
-        let block = PlanBlock {
-            length_mm,
-            feed_mm_min: config.feed_mm_min,
-            radius_mm: f64::INFINITY,
-            start_direction_rad: 0.0,
-            end_direction_rad: 0.0,
-        };
+        let block = PlanBlock::straight(length_mm, config.feed_mm_min);
         Ok(Self {
-            dt_s,
-            override_input: OverrideInput::new(&config.cnc, dt_s).map_err(|e| e.within("cnc"))?,
-            planner: FeedPlanner::new(vec![block], config.cnc, dt_s)
-                .map_err(|e| e.within("cnc"))?,
+            sampling,
+            control: Control::new(&config.cnc, vec![block], dt_s).map_err(|e| e.within("cnc"))?,
             drive: FeedDrive::new(config.feed_drive, dt_s).map_err(|e| e.within("feed_drive"))?,
             brake: MagneticParticleBrake::new(config.brake).map_err(|e| e.within("brake"))?,
             sensor: CurrentSensor::new(config.feed_sensor, dt_s, config.seed, 0)
                 .map_err(|e| e.within("feed_sensor"))?,
             config,
-            samples: 0,
-            signals: PlantSignals::default(),
-            last: MachineStep::default(),
-            finished: false,
         })
     }
 
@@ -262,12 +248,21 @@ impl BrakeBench {
     pub fn config(&self) -> &BrakeBenchConfig {
         &self.config
     }
+}
 
-    fn advance(&mut self, command: OverrideCommand) -> MachineStep {
-        self.samples += 1;
-        let time_s = self.samples as f64 * self.dt_s;
-        let (applied, hold) = self.override_input.step(command);
-        let cnc = self.planner.step(applied.pct, hold, true);
+impl PlantModel for BrakeBench {
+    fn sampling(&self) -> &Sampling {
+        &self.sampling
+    }
+
+    fn sampling_mut(&mut self) -> &mut Sampling {
+        &mut self.sampling
+    }
+
+    fn advance(&mut self, tick: Tick, command: OverrideCommand) -> PlantSample {
+        let time_s = tick.time_s;
+        let control = self.control.step(command, true);
+        let (applied, cnc) = (control.applied, control.cnc);
         let excitation_a = self.config.excitation_at(time_s);
         let brake_nm = self.brake.torque_nm(excitation_a);
         let fd = &self.config.feed_drive;
@@ -289,6 +284,8 @@ impl BrakeBench {
             spindle_running: false,
             time_since_spindle_start_s: 0.0,
         };
+        // No cut: depth and width of cut are 0, so the closed loop's metrics count no row as
+        // cutting.
         let truth = PlantTruth {
             force_x_n: -equivalent_force_n,
             force_resultant_n: equivalent_force_n,
@@ -298,25 +295,9 @@ impl BrakeBench {
             feed_current_rms_a: rms,
             ..PlantTruth::default()
         };
-        self.signals = PlantSignals {
-            time_s,
-            path_position_mm: cnc.position_mm,
-            commanded_position_mm: cnc.commanded_position_mm,
-            tool_x_mm: cnc.position_mm,
-            programmed_feed_mm_min: self.config.feed_mm_min,
-            requested_override_pct: command.override_pct,
-            applied_override_pct: applied.pct,
-            dial_code: applied.dial_code,
-            feed_hold: hold,
-            commanded_feed_mm_min: cnc.commanded_feed_mm_min,
-            feed_mm_min: cnc.feed_mm_min,
-            depth_mm: f64::NAN,
-            width_mm: f64::NAN,
+        let signals = PlantSignals {
             entry_deg: f64::NAN,
             exit_deg: f64::NAN,
-            force_x_n: -equivalent_force_n,
-            force_resultant_n: equivalent_force_n,
-            feed_force_n: equivalent_force_n,
             power_law_force_n: f64::NAN,
             axis_x: AxisSignals {
                 velocity_mm_min: cnc.feed_mm_min,
@@ -325,52 +306,24 @@ impl BrakeBench {
                 iq_a: out.iq_a,
                 phase_currents_a: out.phase_currents_a,
             },
-            feed_current_rms_a: rms,
             feed_currents_read_a: read,
             brake_excitation_a: excitation_a,
             brake_torque_nm: brake_nm,
-            ..PlantSignals::default()
+            ..PlantSignals::from_control(time_s, truth, &control)
         };
-        self.finished = time_s >= self.config.duration_s() - 0.5 * self.dt_s;
-        MachineStep {
+        PlantSample {
             sensors,
-            truth: Some(truth),
+            signals,
+            finished: time_s >= self.config.duration_s() - 0.5 * tick.dt_s,
         }
     }
-}
 
-impl Machine for BrakeBench {
-    fn sample_rate_hz(&self) -> f64 {
-        self.config.sample_rate_hz
-    }
-
-    fn step(&mut self, command: OverrideCommand) -> MachineStep {
-        if !self.finished {
-            self.last = self.advance(command);
-        }
-        self.last
-    }
-
-    fn finished(&self) -> bool {
-        self.finished
-    }
-}
-
-impl Plant for BrakeBench {
-    fn signals(&self) -> &PlantSignals {
-        &self.signals
-    }
-
-    fn reset(&mut self) {
-        self.override_input.reset();
-        self.planner.reset();
+    fn restart(&mut self) -> PlantSignals {
+        self.control.reset();
         self.drive.reset();
         self.brake.reset();
         self.sensor.reset(self.config.seed, 0);
-        self.samples = 0;
-        self.signals = PlantSignals::default();
-        self.last = MachineStep::default();
-        self.finished = false;
+        PlantSignals::default()
     }
 }
 

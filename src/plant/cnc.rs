@@ -93,17 +93,21 @@ pub struct DialTable {
 }
 
 impl Default for DialTable {
-    /// FANUC's usual 16-position feed-rate override: 0, 10, …, 150 %.
+    /// [`DialTable::FANUC`].
     fn default() -> Self {
-        let mut percent_by_code = [0.0; 16];
-        for (i, p) in percent_by_code.iter_mut().enumerate() {
-            *p = 10.0 * i as f64;
-        }
-        Self { percent_by_code }
+        Self::FANUC
     }
 }
 
 impl DialTable {
+    /// FANUC's usual 16-position feed-rate override: 0, 10, …, 150 %.
+    pub const FANUC: DialTable = DialTable {
+        percent_by_code: [
+            0.0, 10.0, 20.0, 30.0, 40.0, 50.0, 60.0, 70.0, 80.0, 90.0, 100.0, 110.0, 120.0, 130.0,
+            140.0, 150.0,
+        ],
+    };
+
     /// A table of 16 finite percentages in 0–255 (any order: the codes need not be monotonic).
     pub fn new(percent_by_code: [f64; 16]) -> Result<Self, PlantError> {
         for (i, p) in percent_by_code.iter().enumerate() {
@@ -422,6 +426,85 @@ pub struct PlanBlock {
     pub start_direction_rad: f64,
     /// Direction at its end.
     pub end_direction_rad: f64,
+}
+
+impl PlanBlock {
+    /// A straight block along +x: the one block of the plants without a tool path.
+    pub fn straight(length_mm: f64, feed_mm_min: f64) -> Self {
+        Self {
+            length_mm,
+            feed_mm_min,
+            radius_mm: f64::INFINITY,
+            start_direction_rad: 0.0,
+            end_direction_rad: 0.0,
+        }
+    }
+}
+
+/// The control as every plant drives it, one sample at a time: the PMC reads the override and
+/// feed hold (at its scan), then the planner moves the axes along the blocks.
+///
+/// ```
+/// use cutlab::machine::OverrideCommand;
+/// use cutlab::plant::cnc::{CncConfig, Control, OverrideMode, PlanBlock};
+/// let config = CncConfig { override_mode: OverrideMode::Continuous, ..CncConfig::default() };
+/// let mut control = Control::new(&config, vec![PlanBlock::straight(100.0, 600.0)], 1e-3).unwrap();
+/// let half = OverrideCommand { override_pct: 50.0, feed_hold: false };
+/// let mut s = control.step(half, true);
+/// for _ in 0..1000 { s = control.step(half, true); } // 1 s at 5 mm/s: 5 mm along
+/// assert_eq!(s.applied.pct, 50.0);
+/// assert!((s.cnc.feed_mm_min - 300.0).abs() < 1.0);
+/// ```
+#[derive(Debug, Clone, PartialEq)]
+pub struct Control {
+    input: OverrideInput,
+    planner: FeedPlanner,
+}
+
+/// One sample of the [`Control`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ControlStep {
+    /// What the controller asked for.
+    pub command: OverrideCommand,
+    /// The override in force.
+    pub applied: AppliedOverride,
+    /// Feed hold in force.
+    pub feed_hold: bool,
+    /// What the CNC commanded and where the axes are.
+    pub cnc: CncState,
+}
+
+impl Control {
+    /// The control of `config` along `blocks`, sampled every `dt_s`.
+    pub fn new(config: &CncConfig, blocks: Vec<PlanBlock>, dt_s: f64) -> Result<Self, PlantError> {
+        Ok(Self {
+            input: OverrideInput::new(config, dt_s)?,
+            planner: FeedPlanner::new(blocks, *config, dt_s)?,
+        })
+    }
+
+    /// Advances one sample under `command`; the axes move only once `spindle_ready`.
+    pub fn step(&mut self, command: OverrideCommand, spindle_ready: bool) -> ControlStep {
+        let (applied, feed_hold) = self.input.step(command);
+        let cnc = self.planner.step(applied.pct, feed_hold, spindle_ready);
+        ControlStep {
+            command,
+            applied,
+            feed_hold,
+            cnc,
+        }
+    }
+
+    /// The override in force.
+    pub fn applied(&self) -> AppliedOverride {
+        self.input.applied()
+    }
+
+    /// Back to the start of the program at 100 %.
+    pub fn reset(&mut self) {
+        self.input.reset();
+        self.planner.reset();
+    }
 }
 
 #[derive(Debug, Clone, Copy, PartialEq)]

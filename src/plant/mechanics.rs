@@ -187,7 +187,7 @@ impl Cutter {
     /// ```
     pub fn check_cut(&self, axial_depth_mm: f64, feed_per_tooth_mm: f64) -> Result<(), PlantError> {
         let deepest_mm = MAX_DEPTH_DIAMETERS * self.diameter_mm;
-        if !(axial_depth_mm >= 0.0 && axial_depth_mm <= deepest_mm) {
+        if !(0.0..=deepest_mm).contains(&axial_depth_mm) {
             return Err(PlantError::new(
                 "axial_depth_mm",
                 format!(
@@ -197,7 +197,7 @@ impl Cutter {
                 ),
             ));
         }
-        if !(feed_per_tooth_mm >= 0.0 && feed_per_tooth_mm <= MAX_FEED_PER_TOOTH_MM) {
+        if !(0.0..=MAX_FEED_PER_TOOTH_MM).contains(&feed_per_tooth_mm) {
             return Err(PlantError::new(
                 "feed_per_tooth_mm",
                 format!(

@@ -18,12 +18,18 @@
 //!                 ─► spindle_drive  torque → RMS current = idle(n) + S(n, gear)·T with < 5 Hz lag,
 //!                                   gear change at 900 rpm, start current, F/V voltage (paper 003)
 //!                 ─► sensors    Hall sensor (6 A → 25 mA into 500 Ω, paper 000), ADC
-//!                 ─► SensorSample + PlantTruth (crate::machine)
+//!                 ─► SensorSample + PlantTruth (crate::machine), inside PlantSignals
 //! ```
 //!
+//! Every plant implements one trait, [`PlantModel`]: advance the physics over one sample period
+//! ([`Tick`]) and restart. The blanket implementations here make each a
+//! [`crate::machine::Machine`] and a [`Plant`], so the sample clock, the latest sample (repeated
+//! once the run has ended) and the reset are written once for all of them. A sample's
+//! [`PlantSignals`] holds its [`crate::machine::PlantTruth`], built once.
+//!
 //! The reduced models stand in for the whole chain when a paper's own plant is wanted:
-//! [`reduced::SecondOrderMachine`] (paper 001's m·F̈ + (mc+d)·Ḟ + dc·F = k·f_r) and
-//! [`reduced::BondGraphMachine`] (paper 002's eq 5 with Table 1). [`bench::BrakeBench`] is
+//! [`second_order::SecondOrderMachine`] (paper 001's m·F̈ + (mc+d)·Ḟ + dc·F = k·f_r) and
+//! [`bond_graph::BondGraphMachine`] (paper 002's eq 5 with Table 1). [`bench::BrakeBench`] is
 //! paper 000's magnetic-particle brake bench. [`power_law`] is paper 004's empirical model, a
 //! sensorless cross-check rather than a plant.
 //!
@@ -39,11 +45,12 @@
 //! | [`sensors`] | Hall current sensors and the ADC |
 //! | [`cnc`] | the FANUC-style control: override modes, dial table, feed planning |
 //! | [`scenario`] | tool paths, depth/width profiles, material regions |
-//! | [`simulator`] | the full simulated mill, a [`crate::machine::Machine`] |
-//! | [`bench`] | paper 000's brake test bench, a `Machine` |
-//! | [`reduced`] | paper 001's and paper 002's reduced plants, each a `Machine` |
-//! | [`presets`] | the papers' experiments as named, seeded machines |
-//! | [`recording`] | open-loop runs summarised per block for plotting, and the brake bench's load steps |
+//! | [`simulator`] | the full simulated mill, a [`PlantModel`] |
+//! | [`bench`](mod@bench) | paper 000's brake test bench, a `PlantModel` |
+//! | [`second_order`] | paper 001's second-order force process, a `PlantModel` |
+//! | [`bond_graph`] | paper 002's bond-graph spindle + x-axis model, a `PlantModel` |
+//! | [`presets`] | the papers' experiments as named, seeded machines: [`Preset`], one [`presets::Definition`] each, and the checked [`presets::PlantEdits`] |
+//! | [`recording`] | open-loop runs summarised per block, the brake bench's load-step analysis and its phase currents, each a [`crate::work::Work`] |
 //! | [`signals`] | every internal signal of a sample, with units, for plots and CSV |
 //! | [`dynamics`] | exactly discretised first- and second-order lags |
 //!
@@ -60,6 +67,7 @@
 //! last, ±∞ clamps to the machine's limits.
 
 pub mod bench;
+pub mod bond_graph;
 pub mod cnc;
 pub mod dynamics;
 pub mod feed_drive;
@@ -69,8 +77,8 @@ pub mod mechanics;
 pub mod power_law;
 pub mod presets;
 pub mod recording;
-pub mod reduced;
 pub mod scenario;
+pub mod second_order;
 pub mod sensors;
 pub mod signals;
 pub mod simulator;
@@ -78,7 +86,7 @@ pub mod spindle_drive;
 
 use std::fmt;
 
-use crate::machine::{Machine, OverrideCommand};
+use crate::machine::{Machine, MachineStep, OverrideCommand, SensorSample};
 
 pub use presets::{Preset, PresetMachine};
 pub use signals::PlantSignals;
@@ -86,13 +94,150 @@ pub use simulator::{SimConfig, Simulator};
 
 /// A simulated machine: a [`Machine`] that also shows its insides and can start over.
 ///
-/// Object-safe, so the lab can hold any plant as `Box<dyn Plant>`.
+/// Object-safe, so the lab can hold any plant as `Box<dyn Plant>`. Every [`PlantModel`] is one.
 pub trait Plant: Machine {
     /// Every internal signal of the last sample.
     fn signals(&self) -> &PlantSignals;
 
     /// Back to the state right after construction (same seed, same noise).
     fn reset(&mut self);
+}
+
+/// The physics of one simulated plant, a sample period at a time.
+///
+/// A type that implements it is a [`Machine`] and a [`Plant`] (the blanket implementations
+/// below), so what every plant shares is written once: the sample clock, the latest sample that
+/// [`Machine::step`] returns and keeps returning once the run has ended, and a reset that
+/// replays the same run.
+pub trait PlantModel {
+    /// The clock and the latest sample, kept for the shared implementations.
+    fn sampling(&self) -> &Sampling;
+
+    /// The same, to update.
+    fn sampling_mut(&mut self) -> &mut Sampling;
+
+    /// Advances the physics over the sample period that ends at `tick` under `command`. Called
+    /// only until a sample says the run has finished.
+    fn advance(&mut self, tick: Tick, command: OverrideCommand) -> PlantSample;
+
+    /// Back to the state right after construction; returns the signals to show before the
+    /// first sample.
+    fn restart(&mut self) -> PlantSignals;
+
+    /// Paper 004's sensorless force estimate at the latest sample, for a plant that knows the
+    /// programmed cutting conditions (see [`Machine::sensorless_force_n`]).
+    fn power_law_force_n(&self) -> Option<f64> {
+        None
+    }
+}
+
+/// The sample period a [`PlantModel`] advances over.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Tick {
+    /// 1 for the first sample after the start (or a reset), 2 for the next, …
+    pub number: u64,
+    /// Time at the end of the period since the start: `number · dt_s`.
+    pub time_s: f64,
+    /// Length of the period, 1/sample rate.
+    pub dt_s: f64,
+}
+
+/// One sample of a simulated plant.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct PlantSample {
+    /// What its sensors read.
+    pub sensors: SensorSample,
+    /// Everything inside, the ground truth included.
+    pub signals: PlantSignals,
+    /// The run ended with this sample.
+    pub finished: bool,
+}
+
+/// What every simulated plant keeps besides its physics: the sample clock and the latest sample.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Sampling {
+    sample_rate_hz: f64,
+    dt_s: f64,
+    samples: u64,
+    latest: PlantSample,
+}
+
+impl Sampling {
+    /// A clock at `sample_rate_hz` (validated by the plant's configuration) before its first
+    /// sample.
+    pub fn new(sample_rate_hz: f64) -> Self {
+        Self {
+            sample_rate_hz,
+            dt_s: 1.0 / sample_rate_hz,
+            samples: 0,
+            latest: PlantSample::default(),
+        }
+    }
+
+    /// The sample period.
+    pub fn dt_s(&self) -> f64 {
+        self.dt_s
+    }
+
+    /// The latest sample.
+    pub fn latest(&self) -> &PlantSample {
+        &self.latest
+    }
+
+    fn tick(&mut self) -> Tick {
+        self.samples += 1;
+        Tick {
+            number: self.samples,
+            time_s: self.samples as f64 * self.dt_s,
+            dt_s: self.dt_s,
+        }
+    }
+
+    fn machine_step(&self) -> MachineStep {
+        MachineStep {
+            sensors: self.latest.sensors,
+            truth: Some(self.latest.signals.truth),
+        }
+    }
+}
+
+impl<P: PlantModel> Machine for P {
+    fn sample_rate_hz(&self) -> f64 {
+        self.sampling().sample_rate_hz
+    }
+
+    fn step(&mut self, command: OverrideCommand) -> MachineStep {
+        if !self.sampling().latest.finished {
+            let tick = self.sampling_mut().tick();
+            let sample = self.advance(tick, command);
+            self.sampling_mut().latest = sample;
+        }
+        self.sampling().machine_step()
+    }
+
+    fn finished(&self) -> bool {
+        self.sampling().latest.finished
+    }
+
+    fn sensorless_force_n(&self) -> Option<f64> {
+        self.power_law_force_n()
+    }
+}
+
+impl<P: PlantModel> Plant for P {
+    fn signals(&self) -> &PlantSignals {
+        &self.sampling().latest.signals
+    }
+
+    fn reset(&mut self) {
+        let signals = self.restart();
+        let sampling = self.sampling_mut();
+        sampling.samples = 0;
+        sampling.latest = PlantSample {
+            signals,
+            ..PlantSample::default()
+        };
+    }
 }
 
 /// Runs `plant` with a fixed `command` until it finishes or `max_samples` have passed, keeping

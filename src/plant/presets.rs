@@ -9,17 +9,26 @@
 //! | `liu-current-step` | paper 002 Fig. 7: bond-graph plant, 1500 mm/min, a step in load, I_ref 25 A | bond graph |
 //! | `wang-brake-bench` | paper 000 §4: magnetic-particle brake in excitation steps, with hysteresis | brake bench |
 //!
+//! Each preset is one [`Definition`] (a `static` below: names, source, the values chosen where
+//! the paper is silent, override mode, plant, cut and target), and [`Preset`] is the registry
+//! that names them. Every method of `Preset` reads the definition, so adding a preset is one
+//! variant, one line in [`Preset::ALL`] and [`Preset::definition`], and one `static`.
+//!
 //! Every value a paper leaves out is chosen and listed in [`Preset::choices`] (and in
 //! docs/plant.md). Each preset's machine takes a seed: the same seed gives the same run.
+
+use std::f64::consts::PI;
+use std::fmt;
 
 use serde::{Deserialize, Serialize};
 
 use super::bench::{BrakeBench, BrakeBenchConfig};
-use super::cnc::{CncConfig, OverrideMode};
+use super::bond_graph::{BondGraphMachine, BondGraphRun};
+use super::cnc::{CncConfig, DialTable, OverrideMode};
 use super::materials::Material;
-use super::mechanics::{mean_forces, Cutter, Immersion, MillingMode};
-use super::reduced::{BondGraphMachine, BondGraphRun, SecondOrderConfig, SecondOrderRun};
-use super::scenario::{MaterialRegion, Move, Scenario, ScenarioSpec};
+use super::mechanics::{mean_forces, Cutter, Immersion, MillingMode, MAX_TEETH};
+use super::scenario::{MaterialRegion, Move, MoveKind, Scenario, ScenarioSpec};
+use super::second_order::{SecondOrderConfig, SecondOrderRun};
 use super::signals::PlantSignals;
 use super::simulator::{SimConfig, Simulator};
 use super::{Plant, PlantError};
@@ -140,10 +149,384 @@ pub struct PresetSummary {
     pub choices: &'static [&'static str],
 }
 
-const KIM_TOOL: (f64, u32, f64) = (20.0, 2, 30.0);
-const MANEERAT_TOOL: (f64, u32, f64) = (10.0, 4, 30.0);
-const MANEERAT_FEED_MM_MIN: f64 = 900.0;
-const MANEERAT_WIDTH_MM: f64 = 3.0;
+/// Everything about one preset.
+#[derive(Debug)]
+pub struct Definition {
+    /// Name for the CLI and URLs.
+    pub name: &'static str,
+    /// Label for lists.
+    pub label: &'static str,
+    /// The paper and figure it reproduces.
+    pub source: &'static str,
+    /// Every value chosen because the paper does not give it.
+    pub choices: &'static [&'static str],
+    /// How the override reaches the machine.
+    pub override_mode: OverrideMode,
+    /// The plant and what it runs.
+    pub plant: PlantDefinition,
+}
+
+/// A preset's plant and what runs on it.
+#[derive(Debug)]
+pub enum PlantDefinition {
+    /// The simulated mill cutting this.
+    Mill(MillParameters),
+    /// Paper 002's bond graph on its Fig. 7 run ([`BondGraphRun::paper_002`]).
+    BondGraph {
+        /// The reference current the paper regulates the spindle to.
+        target_spindle_current_a: f64,
+    },
+    /// Paper 000's brake bench on its default schedule ([`BrakeBenchConfig::default`]).
+    BrakeBench,
+}
+
+/// A mill preset's cut: tool, conditions, path, depth, materials and force target.
+#[derive(Debug, Clone, Copy)]
+pub struct MillParameters {
+    /// The end mill.
+    pub cutter: Cutter,
+    /// Up, down or slot.
+    pub mode: MillingMode,
+    /// Radial width of cut, constant along the path.
+    pub width_mm: f64,
+    /// Spindle speed of every block.
+    pub spindle_rpm: f64,
+    /// Programmed feed of every block.
+    pub feed_mm_min: f64,
+    /// Start of the path.
+    pub start_mm: [f64; 2],
+    /// The moves, each to its end point.
+    pub path: &'static [([f64; 2], MoveKind)],
+    /// Axial depth as (path position, depth) points.
+    pub depth_mm: &'static [(f64, f64)],
+    /// Material regions as (from, to, material) in path position.
+    pub materials: &'static [(f64, f64, Material)],
+    /// The force target.
+    pub target: ForceTarget,
+    /// Paper 001's reduced plant can stand in for this cut: it has one depth and one material.
+    pub second_order_equivalent: bool,
+}
+
+/// Where a mill preset's force target comes from.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum ForceTarget {
+    /// The paper gives it.
+    Given(f64),
+    /// Chosen: the mechanistic mean resultant at this depth in this material, at the programmed
+    /// feed.
+    MeanResultantAt {
+        /// Axial depth.
+        depth_mm: f64,
+        /// Work material.
+        material: Material,
+    },
+}
+
+/// |F̄| of the mechanistic model at a depth, at the cut's programmed feed.
+fn mean_resultant_n(p: &MillParameters, depth_mm: f64, material: Material) -> f64 {
+    let feed_per_tooth = p.feed_mm_min / (f64::from(p.cutter.teeth) * p.spindle_rpm);
+    let f = mean_forces(
+        &p.cutter,
+        &material.coefficients(),
+        &Immersion::new(p.mode, p.width_mm, p.cutter.diameter_mm),
+        depth_mm,
+        feed_per_tooth,
+    );
+    math::hypot(f.fx_n, f.fy_n)
+}
+
+impl MillParameters {
+    /// The force target in newtons.
+    pub fn target_force_n(&self) -> f64 {
+        match self.target {
+            ForceTarget::Given(force_n) => force_n,
+            ForceTarget::MeanResultantAt { depth_mm, material } => {
+                mean_resultant_n(self, depth_mm, material)
+            }
+        }
+    }
+
+    /// The scenario's plain specification, named `name`.
+    pub fn scenario_spec(&self, name: &str) -> ScenarioSpec {
+        ScenarioSpec {
+            name: name.to_string(),
+            start_mm: self.start_mm,
+            moves: self
+                .path
+                .iter()
+                .map(|&(end_mm, kind)| Move {
+                    end_mm,
+                    kind,
+                    feed_mm_min: self.feed_mm_min,
+                    spindle_rpm: self.spindle_rpm,
+                })
+                .collect(),
+            cutter: self.cutter,
+            mode: self.mode,
+            depth_mm: self.depth_mm.to_vec(),
+            width_mm: vec![(0.0, self.width_mm)],
+            materials: self
+                .materials
+                .iter()
+                .map(|&(from_mm, to_mm, material)| MaterialRegion {
+                    from_mm,
+                    to_mm,
+                    material,
+                })
+                .collect(),
+            spindle_start_dwell_s: 0.0,
+        }
+    }
+}
+
+/// A cutter without runout, for the definitions.
+const fn end_mill(diameter_mm: f64, teeth: u32, helix_deg: f64) -> Cutter {
+    Cutter {
+        diameter_mm,
+        teeth,
+        helix_deg,
+        runout_mm: 0.0,
+        runout_angle_deg: 0.0,
+    }
+}
+
+/// Paper 003's tool where it names one (Fig. 10), and cutlab's choice where it does not.
+const KIM_CUTTER: Cutter = end_mill(20.0, 2, 30.0);
+
+/// Paper 003 (Kim, Kwon, Chu) Fig. 10: depth steps 1 → 5 mm in SM45C.
+static KIM_STEP_DOC: Definition = Definition {
+    name: "kim-step-doc",
+    label: "Depth steps 1→5 mm, SM45C",
+    source: "paper 003 (Kim, Kwon, Chu), Fig. 10",
+    choices: &[
+        "slot (full immersion, as eq 4-6 assume)",
+        "feed 200 mm/min (0.1 mm/tooth; Fig. 5 spans 30-500 mm/min)",
+        "30° helix",
+        "each depth step 30 mm long, 15 mm air approach and exit",
+        "target force: mean resultant at DOC 2.5 mm (control started at 3 mm)",
+        "override 0-255 % in 1 % steps (the paper's DSP board)",
+    ],
+    override_mode: OverrideMode::WholePercent,
+    plant: PlantDefinition::Mill(MillParameters {
+        cutter: KIM_CUTTER,
+        mode: MillingMode::Slot,
+        width_mm: 20.0,
+        spindle_rpm: 1000.0,
+        feed_mm_min: 200.0,
+        start_mm: [-15.0, 0.0],
+        path: &[([165.0, 0.0], MoveKind::Line)],
+        depth_mm: &[
+            (15.0, 1.0),
+            (45.0, 1.0),
+            (45.0, 2.0),
+            (75.0, 2.0),
+            (75.0, 3.0),
+            (105.0, 3.0),
+            (105.0, 4.0),
+            (135.0, 4.0),
+            (135.0, 5.0),
+        ],
+        materials: &[(15.0, 165.0, Material::Sm45c)],
+        target: ForceTarget::MeanResultantAt {
+            depth_mm: 2.5,
+            material: Material::Sm45c,
+        },
+        second_order_equivalent: false,
+    }),
+};
+
+/// Paper 003 Fig. 11: a taper across SM45C then aluminium.
+static KIM_MATERIAL_TAPER: Definition = Definition {
+    name: "kim-material-taper",
+    label: "Taper across SM45C → aluminium",
+    source: "paper 003 (Kim, Kwon, Chu), Fig. 11",
+    choices: &[
+        "Ø20 mm 2-flute carbide end mill with 30° helix (Fig. 11 gives no tool)",
+        "slot",
+        "120 mm block: 60 mm SM45C then 60 mm aluminium 7050",
+        "taper 1 → 4 mm linear over the whole block",
+        "target force: mean resultant at DOC 2 mm in SM45C",
+        "override 0-255 % in 1 % steps",
+    ],
+    override_mode: OverrideMode::WholePercent,
+    plant: PlantDefinition::Mill(MillParameters {
+        cutter: KIM_CUTTER,
+        mode: MillingMode::Slot,
+        width_mm: 20.0,
+        spindle_rpm: 600.0,
+        feed_mm_min: 160.0,
+        start_mm: [-15.0, 0.0],
+        path: &[([135.0, 0.0], MoveKind::Line)],
+        depth_mm: &[(15.0, 1.0), (135.0, 4.0)],
+        materials: &[(15.0, 135.0, Material::Composite)],
+        target: ForceTarget::MeanResultantAt {
+            depth_mm: 2.0,
+            material: Material::Sm45c,
+        },
+        second_order_equivalent: false,
+    }),
+};
+
+/// The circular taper's circle: radius, and where it starts along the path (B, after 15 mm of
+/// air and the 30 mm line A→B).
+const CIRCLE_RADIUS_MM: f64 = 20.0;
+const CIRCLE_START_MM: f64 = 45.0;
+const HALF_CIRCLE_MM: f64 = PI * CIRCLE_RADIUS_MM;
+
+/// Paper 003 Fig. 12–13: a line at DOC 2 mm, then a circle with DOC 2 → 5 → 2 mm.
+static KIM_CIRCULAR_TAPER: Definition = Definition {
+    name: "kim-circular-taper",
+    label: "Circular taper 2→5→2 mm",
+    source: "paper 003 (Kim, Kwon, Chu), Fig. 12-13",
+    choices: &[
+        "Ø20 mm 2-flute carbide end mill with 30° helix, SM45C",
+        "slot along the whole path",
+        "A→B 30 mm (after 15 mm of air), circle of radius 20 mm about B + (20, 0) mm, clockwise: B→C then C→B",
+        "a 90° corner at B, so the axes stop (in-position check) as in Fig. 13's dip",
+        "depth 2 → 5 mm linear over B→C, 5 → 2 mm over C→B",
+        "target force: mean resultant at DOC 3 mm",
+        "override 0-255 % in 1 % steps",
+    ],
+    override_mode: OverrideMode::WholePercent,
+    plant: PlantDefinition::Mill(MillParameters {
+        cutter: KIM_CUTTER,
+        mode: MillingMode::Slot,
+        width_mm: 20.0,
+        spindle_rpm: 3000.0,
+        feed_mm_min: 170.0,
+        start_mm: [-45.0, 0.0],
+        path: &[
+            ([0.0, 0.0], MoveKind::Line),
+            (
+                [2.0 * CIRCLE_RADIUS_MM, 0.0],
+                MoveKind::Arc {
+                    center_mm: [CIRCLE_RADIUS_MM, 0.0],
+                    clockwise: true,
+                },
+            ),
+            (
+                [0.0, 0.0],
+                MoveKind::Arc {
+                    center_mm: [CIRCLE_RADIUS_MM, 0.0],
+                    clockwise: true,
+                },
+            ),
+        ],
+        depth_mm: &[
+            (CIRCLE_START_MM, 2.0),
+            (CIRCLE_START_MM + HALF_CIRCLE_MM, 5.0),
+            (CIRCLE_START_MM + 2.0 * HALF_CIRCLE_MM, 2.0),
+        ],
+        materials: &[(
+            15.0,
+            CIRCLE_START_MM + 2.0 * HALF_CIRCLE_MM,
+            Material::Sm45c,
+        )],
+        target: ForceTarget::MeanResultantAt {
+            depth_mm: 3.0,
+            material: Material::Sm45c,
+        },
+        second_order_equivalent: false,
+    }),
+};
+
+/// Paper 001's three experiments differ only in depth and target.
+const fn maneerat(
+    name: &'static str,
+    label: &'static str,
+    source: &'static str,
+    depth_mm: &'static [(f64, f64)],
+    target_force_n: f64,
+) -> Definition {
+    Definition {
+        name,
+        label,
+        source,
+        choices: &[
+            "4 flutes, 30° helix",
+            "hardened tool steel coefficients for the printed 'SKD41'",
+            "down milling at 3 mm radial width",
+            "programmed feed 900 mm/min (0.075 mm/tooth), above target at every depth",
+            "120 mm cut after 10 mm of air",
+            "continuous override (the paper's D/A card)",
+        ],
+        override_mode: OverrideMode::Continuous,
+        plant: PlantDefinition::Mill(MillParameters {
+            cutter: end_mill(10.0, 4, 30.0),
+            mode: MillingMode::Down,
+            width_mm: 3.0,
+            spindle_rpm: 3000.0,
+            feed_mm_min: 900.0,
+            start_mm: [-10.0, 0.0],
+            path: &[([120.0, 0.0], MoveKind::Line)],
+            depth_mm,
+            materials: &[(10.0, 130.0, Material::ToolSteel)],
+            // The paper prints the targets in "Nm"; they are forces.
+            target: ForceTarget::Given(target_force_n),
+            second_order_equivalent: true,
+        }),
+    }
+}
+
+/// Paper 001 (Maneerat et al.) Fig. 7.
+static MANEERAT_DOC_1: Definition = maneerat(
+    "maneerat-doc-1",
+    "Tool steel, DOC 1 mm, target 150 N",
+    "paper 001 (Maneerat et al.), Fig. 7",
+    &[(0.0, 1.0)],
+    150.0,
+);
+
+/// Paper 001 Fig. 8.
+static MANEERAT_DOC_2: Definition = maneerat(
+    "maneerat-doc-2",
+    "Tool steel, DOC 2 mm, target 200 N",
+    "paper 001 (Maneerat et al.), Fig. 8",
+    &[(0.0, 2.0)],
+    200.0,
+);
+
+/// Paper 001 Fig. 9.
+static MANEERAT_DOC_4: Definition = maneerat(
+    "maneerat-doc-4",
+    "Tool steel, DOC 4 mm, target 320 N",
+    "paper 001 (Maneerat et al.), Fig. 9",
+    &[(0.0, 4.0)],
+    320.0,
+);
+
+/// Paper 002 (Liu, Wang, Wang) Fig. 7: the bond-graph plant and a step in load.
+static LIU_CURRENT_STEP: Definition = Definition {
+    name: "liu-current-step",
+    label: "Bond-graph plant, load step",
+    source: "paper 002 (Liu, Wang, Wang), eq 5, Table 1, Fig. 7",
+    choices: &[
+        "cutting resistance C_cut so the spindle draws the 25 A reference at 1500 mm/min",
+        "load step +40 % of the total resistance at 15 s; 40 s run",
+        "spindle at its rated voltage's speed from t = 0 (eq 5's steady state, table still), feed after 3 s",
+        "S_e2 set for the commanded feed in steady state",
+        "continuous override",
+    ],
+    override_mode: OverrideMode::Continuous,
+    plant: PlantDefinition::BondGraph {
+        target_spindle_current_a: 25.0,
+    },
+};
+
+/// Paper 000 (Wang, Ai, Ze, He) §4: the magnetic-particle brake bench.
+static WANG_BRAKE_BENCH: Definition = Definition {
+    name: "wang-brake-bench",
+    label: "Brake bench, excitation steps",
+    source: "paper 000 (Wang, Ai, Ze, He), section 4, Fig. 5, 9, 11, 12",
+    choices: &[
+        "feed 600 mm/min: 4 Hz electrical frequency with a 10 mm screw and 4 pole pairs",
+        "brake 2 N·m/A, hysteresis ±0.03 A",
+        "excitation 0 → 1 A → 0 in 0.1 A steps of 3 s",
+        "override on the 16-position dial (paper 000's X20.7/X20.4/X20.3/X20.2)",
+    ],
+    override_mode: OverrideMode::Dial(DialTable::FANUC),
+    plant: PlantDefinition::BrakeBench,
+};
 
 impl From<Preset> for &'static str {
     fn from(preset: Preset) -> Self {
@@ -173,46 +556,33 @@ impl Preset {
         Preset::WangBrakeBench,
     ];
 
+    /// Everything about this preset.
+    pub fn definition(self) -> &'static Definition {
+        match self {
+            Preset::KimStepDoc => &KIM_STEP_DOC,
+            Preset::KimMaterialTaper => &KIM_MATERIAL_TAPER,
+            Preset::KimCircularTaper => &KIM_CIRCULAR_TAPER,
+            Preset::ManeeratDoc1 => &MANEERAT_DOC_1,
+            Preset::ManeeratDoc2 => &MANEERAT_DOC_2,
+            Preset::ManeeratDoc4 => &MANEERAT_DOC_4,
+            Preset::LiuCurrentStep => &LIU_CURRENT_STEP,
+            Preset::WangBrakeBench => &WANG_BRAKE_BENCH,
+        }
+    }
+
     /// Name for the CLI and URLs.
     pub fn name(self) -> &'static str {
-        match self {
-            Preset::KimStepDoc => "kim-step-doc",
-            Preset::KimMaterialTaper => "kim-material-taper",
-            Preset::KimCircularTaper => "kim-circular-taper",
-            Preset::ManeeratDoc1 => "maneerat-doc-1",
-            Preset::ManeeratDoc2 => "maneerat-doc-2",
-            Preset::ManeeratDoc4 => "maneerat-doc-4",
-            Preset::LiuCurrentStep => "liu-current-step",
-            Preset::WangBrakeBench => "wang-brake-bench",
-        }
+        self.definition().name
     }
 
     /// Label for lists.
     pub fn label(self) -> &'static str {
-        match self {
-            Preset::KimStepDoc => "Depth steps 1→5 mm, SM45C",
-            Preset::KimMaterialTaper => "Taper across SM45C → aluminium",
-            Preset::KimCircularTaper => "Circular taper 2→5→2 mm",
-            Preset::ManeeratDoc1 => "Tool steel, DOC 1 mm, target 150 N",
-            Preset::ManeeratDoc2 => "Tool steel, DOC 2 mm, target 200 N",
-            Preset::ManeeratDoc4 => "Tool steel, DOC 4 mm, target 320 N",
-            Preset::LiuCurrentStep => "Bond-graph plant, load step",
-            Preset::WangBrakeBench => "Brake bench, excitation steps",
-        }
+        self.definition().label
     }
 
     /// The paper and figure it reproduces.
     pub fn source(self) -> &'static str {
-        match self {
-            Preset::KimStepDoc => "paper 003 (Kim, Kwon, Chu), Fig. 10",
-            Preset::KimMaterialTaper => "paper 003 (Kim, Kwon, Chu), Fig. 11",
-            Preset::KimCircularTaper => "paper 003 (Kim, Kwon, Chu), Fig. 12-13",
-            Preset::ManeeratDoc1 => "paper 001 (Maneerat et al.), Fig. 7",
-            Preset::ManeeratDoc2 => "paper 001 (Maneerat et al.), Fig. 8",
-            Preset::ManeeratDoc4 => "paper 001 (Maneerat et al.), Fig. 9",
-            Preset::LiuCurrentStep => "paper 002 (Liu, Wang, Wang), eq 5, Table 1, Fig. 7",
-            Preset::WangBrakeBench => "paper 000 (Wang, Ai, Ze, He), section 4, Fig. 5, 9, 11, 12",
-        }
+        self.definition().source
     }
 
     /// The preset named `name`.
@@ -234,94 +604,22 @@ impl Preset {
 
     /// The plant it runs on.
     pub fn plant_kind(self) -> PlantKind {
-        match self {
-            Preset::LiuCurrentStep => PlantKind::BondGraph,
-            Preset::WangBrakeBench => PlantKind::BrakeBench,
-            _ => PlantKind::Mill,
+        match self.definition().plant {
+            PlantDefinition::Mill(_) => PlantKind::Mill,
+            PlantDefinition::BondGraph { .. } => PlantKind::BondGraph,
+            PlantDefinition::BrakeBench => PlantKind::BrakeBench,
         }
     }
 
     /// Every value this preset had to choose because its paper does not give it.
     pub fn choices(self) -> &'static [&'static str] {
-        match self {
-            Preset::KimStepDoc => &[
-                "slot (full immersion, as eq 4-6 assume)",
-                "feed 200 mm/min (0.1 mm/tooth; Fig. 5 spans 30-500 mm/min)",
-                "30° helix",
-                "each depth step 30 mm long, 15 mm air approach and exit",
-                "target force: mean resultant at DOC 2.5 mm (control started at 3 mm)",
-                "override 0-255 % in 1 % steps (the paper's DSP board)",
-            ],
-            Preset::KimMaterialTaper => &[
-                "Ø20 mm 2-flute carbide end mill with 30° helix (Fig. 11 gives no tool)",
-                "slot",
-                "120 mm block: 60 mm SM45C then 60 mm aluminium 7050",
-                "taper 1 → 4 mm linear over the whole block",
-                "target force: mean resultant at DOC 2 mm in SM45C",
-                "override 0-255 % in 1 % steps",
-            ],
-            Preset::KimCircularTaper => &[
-                "Ø20 mm 2-flute carbide end mill with 30° helix, SM45C",
-                "slot along the whole path",
-                "A→B 30 mm (after 15 mm of air), circle of radius 20 mm about B + (20, 0) mm, clockwise: B→C then C→B",
-                "a 90° corner at B, so the axes stop (in-position check) as in Fig. 13's dip",
-                "depth 2 → 5 mm linear over B→C, 5 → 2 mm over C→B",
-                "target force: mean resultant at DOC 3 mm",
-                "override 0-255 % in 1 % steps",
-            ],
-            Preset::ManeeratDoc1 | Preset::ManeeratDoc2 | Preset::ManeeratDoc4 => &[
-                "4 flutes, 30° helix",
-                "hardened tool steel coefficients for the printed 'SKD41'",
-                "down milling at 3 mm radial width",
-                "programmed feed 900 mm/min (0.075 mm/tooth), above target at every depth",
-                "120 mm cut after 10 mm of air",
-                "continuous override (the paper's D/A card)",
-            ],
-            Preset::LiuCurrentStep => &[
-                "cutting resistance C_cut so the spindle draws the 25 A reference at 1500 mm/min",
-                "load step +40 % of the total resistance at 15 s; 40 s run",
-                "spindle voltage applied at t = 0, feed after 3 s",
-                "S_e2 set for the commanded feed in steady state",
-                "continuous override",
-            ],
-            Preset::WangBrakeBench => &[
-                "feed 600 mm/min: 4 Hz electrical frequency with a 10 mm screw and 4 pole pairs",
-                "brake 2 N·m/A, hysteresis ±0.03 A",
-                "excitation 0 → 1 A → 0 in 0.1 A steps of 3 s",
-                "override on the 16-position dial (paper 000's X20.7/X20.4/X20.3/X20.2)",
-            ],
-        }
+        self.definition().choices
     }
 
-    fn mill_parameters(self) -> Option<MillParameters> {
-        let kim = |rpm: f64, feed: f64| MillParameters {
-            tool: KIM_TOOL,
-            mode: MillingMode::Slot,
-            width_mm: KIM_TOOL.0,
-            spindle_rpm: rpm,
-            feed_mm_min: feed,
-        };
-        let maneerat = MillParameters {
-            tool: MANEERAT_TOOL,
-            mode: MillingMode::Down,
-            width_mm: MANEERAT_WIDTH_MM,
-            spindle_rpm: 3000.0,
-            feed_mm_min: MANEERAT_FEED_MM_MIN,
-        };
-        match self {
-            Preset::KimStepDoc => Some(kim(1000.0, 200.0)),
-            Preset::KimMaterialTaper => Some(kim(600.0, 160.0)),
-            Preset::KimCircularTaper => Some(kim(3000.0, 170.0)),
-            Preset::ManeeratDoc1 | Preset::ManeeratDoc2 | Preset::ManeeratDoc4 => Some(maneerat),
-            Preset::LiuCurrentStep | Preset::WangBrakeBench => None,
-        }
-    }
-
-    fn maneerat_depth_mm(self) -> Option<f64> {
-        match self {
-            Preset::ManeeratDoc1 => Some(1.0),
-            Preset::ManeeratDoc2 => Some(2.0),
-            Preset::ManeeratDoc4 => Some(4.0),
+    /// The cut of a mill preset; `None` for the bench and the bond graph.
+    pub fn mill_parameters(self) -> Option<&'static MillParameters> {
+        match &self.definition().plant {
+            PlantDefinition::Mill(cut) => Some(cut),
             _ => None,
         }
     }
@@ -335,99 +633,20 @@ impl Preset {
 
     /// The scenario's plain specification.
     pub fn scenario_spec(self) -> Option<ScenarioSpec> {
-        let p = self.mill_parameters()?;
-        let cutter = Cutter {
-            diameter_mm: p.tool.0,
-            teeth: p.tool.1,
-            helix_deg: p.tool.2,
-            runout_mm: 0.0,
-            runout_angle_deg: 0.0,
-        };
-        let region = |from_mm: f64, to_mm: f64, material: Material| MaterialRegion {
-            from_mm,
-            to_mm,
-            material,
-        };
-        let line = |x: f64| Move::line([x, 0.0], p.feed_mm_min, p.spindle_rpm);
-        let (start_mm, moves, depth_mm, materials) = match self {
-            Preset::KimStepDoc => (
-                [-15.0, 0.0],
-                vec![line(165.0)],
-                vec![
-                    (15.0, 1.0),
-                    (45.0, 1.0),
-                    (45.0, 2.0),
-                    (75.0, 2.0),
-                    (75.0, 3.0),
-                    (105.0, 3.0),
-                    (105.0, 4.0),
-                    (135.0, 4.0),
-                    (135.0, 5.0),
-                ],
-                vec![region(15.0, 165.0, Material::Sm45c)],
-            ),
-            Preset::KimMaterialTaper => (
-                [-15.0, 0.0],
-                vec![line(135.0)],
-                vec![(15.0, 1.0), (135.0, 4.0)],
-                vec![region(15.0, 135.0, Material::Composite)],
-            ),
-            Preset::KimCircularTaper => {
-                let radius = 20.0;
-                let half = std::f64::consts::PI * radius;
-                let b = 45.0;
-                (
-                    [-45.0, 0.0],
-                    vec![
-                        line(0.0),
-                        Move::arc(
-                            [2.0 * radius, 0.0],
-                            [radius, 0.0],
-                            true,
-                            p.feed_mm_min,
-                            p.spindle_rpm,
-                        ),
-                        Move::arc(
-                            [0.0, 0.0],
-                            [radius, 0.0],
-                            true,
-                            p.feed_mm_min,
-                            p.spindle_rpm,
-                        ),
-                    ],
-                    vec![(b, 2.0), (b + half, 5.0), (b + 2.0 * half, 2.0)],
-                    vec![region(15.0, b + 2.0 * half, Material::Sm45c)],
-                )
-            }
-            Preset::ManeeratDoc1 | Preset::ManeeratDoc2 | Preset::ManeeratDoc4 => (
-                [-10.0, 0.0],
-                vec![line(120.0)],
-                vec![(0.0, self.maneerat_depth_mm().unwrap_or(1.0))],
-                vec![region(10.0, 130.0, Material::ToolSteel)],
-            ),
-            Preset::LiuCurrentStep | Preset::WangBrakeBench => return None,
-        };
-        Some(ScenarioSpec {
-            name: self.name().to_string(),
-            start_mm,
-            moves,
-            cutter,
-            mode: p.mode,
-            depth_mm,
-            width_mm: vec![(0.0, p.width_mm)],
-            materials,
-            spindle_start_dwell_s: 0.0,
-        })
+        self.mill_parameters()
+            .map(|cut| cut.scenario_spec(self.name()))
     }
 
     /// How the override reaches the preset's machine.
     pub fn override_mode(self) -> OverrideMode {
-        match self {
-            Preset::KimStepDoc | Preset::KimMaterialTaper | Preset::KimCircularTaper => {
-                OverrideMode::WholePercent
-            }
-            Preset::WangBrakeBench => OverrideMode::default(),
-            _ => OverrideMode::Continuous,
+        self.definition().override_mode
+    }
+
+    /// The control of every plant: the defaults with this preset's override mode.
+    fn cnc_config(self) -> CncConfig {
+        CncConfig {
+            override_mode: self.override_mode(),
+            ..CncConfig::default()
         }
     }
 
@@ -435,10 +654,7 @@ impl Preset {
     pub fn sim_config(self, seed: u64) -> SimConfig {
         SimConfig {
             seed,
-            cnc: CncConfig {
-                override_mode: self.override_mode(),
-                ..CncConfig::default()
-            },
+            cnc: self.cnc_config(),
             ..SimConfig::default()
         }
     }
@@ -460,24 +676,18 @@ impl Preset {
 
     /// The brake bench's settings (wang-brake-bench only).
     pub fn bench_config(self, seed: u64) -> Option<BrakeBenchConfig> {
-        (self == Preset::WangBrakeBench).then(|| BrakeBenchConfig {
+        matches!(self.definition().plant, PlantDefinition::BrakeBench).then(|| BrakeBenchConfig {
             seed,
-            cnc: CncConfig {
-                override_mode: self.override_mode(),
-                ..CncConfig::default()
-            },
+            cnc: self.cnc_config(),
             ..BrakeBenchConfig::default()
         })
     }
 
     /// The bond graph's run (liu-current-step only).
     pub fn bond_graph_run(self, seed: u64) -> Option<BondGraphRun> {
-        (self == Preset::LiuCurrentStep).then(|| BondGraphRun {
+        matches!(self.definition().plant, PlantDefinition::BondGraph { .. }).then(|| BondGraphRun {
             seed,
-            cnc: CncConfig {
-                override_mode: self.override_mode(),
-                ..CncConfig::default()
-            },
+            cnc: self.cnc_config(),
             ..BondGraphRun::paper_002()
         })
     }
@@ -493,9 +703,27 @@ impl Preset {
     ///     assert!(s.truth.is_some() && m.sample_rate_hz() == 10_000.0);
     /// }
     /// ```
+    pub fn machine(self, seed: u64) -> Result<PresetMachine, PlantError> {
+        Ok(match self.plant_kind() {
+            PlantKind::Mill => PresetMachine::Mill(Box::new(self.simulator(seed)?)),
+            PlantKind::BrakeBench => {
+                let cfg = self
+                    .bench_config(seed)
+                    .ok_or_else(|| PlantError::new("preset", "not a bench preset"))?;
+                PresetMachine::BrakeBench(Box::new(BrakeBench::new(cfg)?))
+            }
+            PlantKind::BondGraph => {
+                let run = self
+                    .bond_graph_run(seed)
+                    .ok_or_else(|| PlantError::new("preset", "not a bond-graph preset"))?;
+                PresetMachine::BondGraph(Box::new(BondGraphMachine::new(run)?))
+            }
+        })
+    }
+
     /// The preset's machine with a user's edits applied (mill presets only: edits for the bench
-    /// or the bond graph are an error, not silently ignored). Edited values are checked like any configuration: an error names
-    /// the field.
+    /// or the bond graph are an error, not silently ignored). Edited values are checked like
+    /// any configuration: an error names the field.
     ///
     /// ```
     /// use cutlab::plant::presets::{PlantEdits, Preset};
@@ -521,9 +749,11 @@ impl Preset {
                 ),
             ));
         }
-        let Some(mut spec) = self.scenario_spec() else {
+        let (Some(cut), Some(mut spec)) = (self.mill_parameters(), self.scenario_spec()) else {
             return self.machine(seed);
         };
+        let mut config = self.sim_config(seed);
+        edits.check(cut, &config)?;
         if let Some(m) = edits.material {
             for region in &mut spec.materials {
                 region.material = m;
@@ -538,12 +768,6 @@ impl Preset {
             }
         }
         if let Some(k) = edits.depth_scale {
-            if !(k.is_finite() && k > 0.0) {
-                return Err(PlantError::new(
-                    "depth_scale",
-                    format!("must be positive, got {k}"),
-                ));
-            }
             for point in &mut spec.depth_mm {
                 point.1 *= k;
             }
@@ -554,7 +778,6 @@ impl Preset {
         if let Some(z) = edits.teeth {
             spec.cutter.teeth = z;
         }
-        let mut config = self.sim_config(seed);
         if let Some(noise) = edits.sensor_noise_a {
             config.feed_sensor.hall.noise_a = noise;
             config.spindle_sensor.hall.noise_a = noise;
@@ -563,24 +786,6 @@ impl Preset {
             Scenario::new(spec)?,
             config,
         )?)))
-    }
-
-    pub fn machine(self, seed: u64) -> Result<PresetMachine, PlantError> {
-        Ok(match self.plant_kind() {
-            PlantKind::Mill => PresetMachine::Mill(Box::new(self.simulator(seed)?)),
-            PlantKind::BrakeBench => {
-                let cfg = self
-                    .bench_config(seed)
-                    .ok_or_else(|| PlantError::new("preset", "not a bench preset"))?;
-                PresetMachine::BrakeBench(Box::new(BrakeBench::new(cfg)?))
-            }
-            PlantKind::BondGraph => {
-                let run = self
-                    .bond_graph_run(seed)
-                    .ok_or_else(|| PlantError::new("preset", "not a bond-graph preset"))?;
-                PresetMachine::BondGraph(Box::new(BondGraphMachine::new(run)?))
-            }
-        })
     }
 
     /// The load schedule of a non-cutting preset, for drawing (`None` for mill presets, whose
@@ -627,29 +832,23 @@ impl Preset {
     /// assert_eq!(Preset::WangBrakeBench.target_force_n(), None);
     /// ```
     pub fn target_force_n(self) -> Option<f64> {
-        let kim = |depth_mm: f64, material: Material| {
-            let p = self.mill_parameters()?;
-            Some(mean_resultant_n(&p, depth_mm, material))
-        };
-        match self {
-            Preset::ManeeratDoc1 => Some(150.0),
-            Preset::ManeeratDoc2 => Some(200.0),
-            Preset::ManeeratDoc4 => Some(320.0),
-            Preset::KimStepDoc => kim(2.5, Material::Sm45c),
-            Preset::KimMaterialTaper => kim(2.0, Material::Sm45c),
-            Preset::KimCircularTaper => kim(3.0, Material::Sm45c),
-            Preset::LiuCurrentStep | Preset::WangBrakeBench => None,
-        }
+        self.mill_parameters().map(MillParameters::target_force_n)
     }
 
     /// The spindle-current target the paper gives (paper 002: I_ref = 25 A).
     pub fn target_spindle_current_a(self) -> Option<f64> {
-        (self == Preset::LiuCurrentStep).then_some(25.0)
+        match self.definition().plant {
+            PlantDefinition::BondGraph {
+                target_spindle_current_a,
+            } => Some(target_spindle_current_a),
+            _ => None,
+        }
     }
 
     /// Paper 001's reduced plant standing in for a maneerat preset: eq 2.3 with the static gain
     /// of the mechanistic model's mean resultant at the programmed feed, τ_f = 1/K_v (the
-    /// position loop) and τ_c = one spindle revolution (chosen). `None` for other presets.
+    /// position loop) and τ_c = one spindle revolution (chosen), over the same path with the
+    /// gain zero in the air before the material. `None` for other presets.
     ///
     /// ```
     /// use cutlab::plant::Preset;
@@ -658,24 +857,26 @@ impl Preset {
     /// assert!(Preset::KimStepDoc.second_order_equivalent(1).is_none());
     /// ```
     pub fn second_order_equivalent(self, seed: u64) -> Option<SecondOrderRun> {
-        let depth = self.maneerat_depth_mm()?;
-        let p = self.mill_parameters()?;
+        let p = self
+            .mill_parameters()
+            .filter(|p| p.second_order_equivalent)?;
+        let &(air_mm, _, material) = p.materials.first()?;
+        let depth_mm = p.depth_mm.iter().map(|&(_, d)| d).fold(0.0, f64::max);
         let machine = self.sim_config(seed);
-        let gain = mean_resultant_n(&p, depth, Material::ToolSteel) / p.feed_mm_min;
+        let gain = mean_resultant_n(p, depth_mm, material) / p.feed_mm_min;
         let process = SecondOrderConfig {
             feed_time_constant_s: 1.0 / machine.cnc.position_loop_gain_per_s,
             force_time_constant_s: 60.0 / p.spindle_rpm,
             force_gain_n_per_mm_min: gain,
         };
-        let k = Material::ToolSteel.coefficients();
         Some(SecondOrderRun {
             process,
-            length_mm: 130.0,
+            length_mm: self.scenario()?.total_length_mm(),
             programmed_feed_mm_min: p.feed_mm_min,
             spindle_rpm: p.spindle_rpm,
-            gain_n_per_mm_min: vec![(0.0, 0.0), (10.0, 0.0), (10.0, gain)],
-            cutter_radius_mm: 0.5 * p.tool.0,
-            radial_ratio: k.radial_ratio(),
+            gain_n_per_mm_min: vec![(0.0, 0.0), (air_mm, 0.0), (air_mm, gain)],
+            cutter_radius_mm: 0.5 * p.cutter.diameter_mm,
+            radial_ratio: material.coefficients().radial_ratio(),
             machine,
         })
     }
@@ -706,30 +907,37 @@ impl Preset {
             let hi = values.iter().copied().fold(f64::NEG_INFINITY, f64::max);
             [lo, hi]
         });
-        let nominal_duration_s = match (&scenario, self.bench_config(0), self.bond_graph_run(0)) {
+        let bench = self.bench_config(0);
+        let bond_graph = self.bond_graph_run(0);
+        let nominal_duration_s = match (&scenario, &bench, &bond_graph) {
             (Some(s), _, _) => s.nominal_duration_s(),
             (None, Some(b), _) => b.duration_s(),
             (None, None, Some(r)) => r.duration_s,
             _ => 0.0,
         };
-        let (spindle_rpm, programmed_feed_mm_min) = match (p, self) {
-            (Some(p), _) => (Some(p.spindle_rpm), Some(p.feed_mm_min)),
-            (None, Preset::WangBrakeBench) => (None, self.bench_config(0).map(|b| b.feed_mm_min)),
-            (None, _) => (
-                self.bond_graph_run(0).map(|r| {
-                    super::rpm_from_rad_s(
-                        r.params.spindle_voltage_v / r.params.spindle_armature_coefficient,
-                    )
-                }),
-                self.bond_graph_run(0).map(|r| r.programmed_feed_mm_min),
+        let (spindle_rpm, programmed_feed_mm_min) = match (p, &bench, &bond_graph) {
+            (Some(p), _, _) => (Some(p.spindle_rpm), Some(p.feed_mm_min)),
+            (None, Some(b), _) => (None, Some(b.feed_mm_min)),
+            (None, None, Some(r)) => (
+                Some(super::rpm_from_rad_s(
+                    r.params.spindle_voltage_v / r.params.spindle_armature_coefficient,
+                )),
+                Some(r.programmed_feed_mm_min),
             ),
+            (None, None, None) => (None, None),
         };
         PresetSummary {
             name: self.name(),
             label: self.label(),
             source: self.source(),
             plant: self.plant_kind().name(),
-            tool: p.map(|p| format!("Ø{} mm, {} teeth, {}° helix", p.tool.0, p.tool.1, p.tool.2)),
+            tool: p.map(|p| {
+                let c = &p.cutter;
+                format!(
+                    "Ø{} mm, {} teeth, {}° helix",
+                    c.diameter_mm, c.teeth, c.helix_deg
+                )
+            }),
             material: materials,
             mode: p.map(|p| p.mode.name()),
             spindle_rpm,
@@ -746,37 +954,23 @@ impl Preset {
     }
 }
 
-#[derive(Debug, Clone, Copy)]
-struct MillParameters {
-    tool: (f64, u32, f64),
-    mode: MillingMode,
-    width_mm: f64,
-    spindle_rpm: f64,
-    feed_mm_min: f64,
-}
-
-/// |F̄| of the mechanistic model at a depth, at the preset's programmed feed.
-fn mean_resultant_n(p: &MillParameters, depth_mm: f64, material: Material) -> f64 {
-    let cutter = Cutter {
-        diameter_mm: p.tool.0,
-        teeth: p.tool.1,
-        helix_deg: p.tool.2,
-        runout_mm: 0.0,
-        runout_angle_deg: 0.0,
-    };
-    let feed_per_tooth = p.feed_mm_min / (f64::from(p.tool.1) * p.spindle_rpm);
-    let f = mean_forces(
-        &cutter,
-        &material.coefficients(),
-        &Immersion::new(p.mode, p.width_mm, p.tool.0),
-        depth_mm,
-        feed_per_tooth,
-    );
-    math::hypot(f.fx_n, f.fy_n)
-}
-
 /// Changes a user makes to a mill preset; `None` keeps the preset's value (and is left out of
 /// the serialised form).
+///
+/// Each edit must lie in a physically sane range, checked by [`PlantEdits::check`] (and by
+/// [`Preset::machine_with`]):
+///
+/// | edit | accepted | why |
+/// |---|---|---|
+/// | `spindle_rpm` | 10 rpm … the spindle drive's top speed (6914 rpm by default) | the spindle could never reach a faster command, and the feed waits for it |
+/// | `programmed_feed_mm_min` | 1 … 20 000 mm/min | a machining centre's cutting feeds (the control clamps above its own maximum, 10 000 mm/min by default) |
+/// | `tool_diameter_mm` | 0.5 … 100 mm | end mills, from micro tools to the largest |
+/// | `teeth` | 1 … 16 | what the force model holds |
+/// | `depth_scale` | 0.01 … the factor that makes the deepest cut 4 tool diameters | a long-series end mill's flute length (standard ones: 2–3 diameters) |
+/// | `sensor_noise_a` | 0 … 5 A | beyond the feed channel's full scale (±4.8 A) noise only saturates it |
+///
+/// A tool diameter that makes the preset's own deepest cut deeper than 4 diameters is refused
+/// as `tool_diameter_mm`.
 #[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct PlantEdits {
@@ -801,6 +995,178 @@ pub struct PlantEdits {
     /// Standard deviation of the Hall sensors' noise, both channels.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub sensor_noise_a: Option<f64>,
+}
+
+impl PlantEdits {
+    /// The lowest spindle speed accepted; the highest is the spindle drive's top speed.
+    pub const MIN_SPINDLE_RPM: f64 = 10.0;
+    /// The programmed feeds accepted, [lowest, highest].
+    pub const FEED_MM_MIN: [f64; 2] = [1.0, 20_000.0];
+    /// The tool diameters accepted, [smallest, largest].
+    pub const TOOL_DIAMETER_MM: [f64; 2] = [0.5, 100.0];
+    /// The deepest cut accepted, in tool diameters.
+    pub const MAX_DEPTH_PER_DIAMETER: f64 = 4.0;
+    /// The smallest depth scale accepted: below, the tool scratches rather than cuts.
+    pub const MIN_DEPTH_SCALE: f64 = 0.01;
+    /// The sensor noise accepted (standard deviation), [least, most].
+    pub const SENSOR_NOISE_A: [f64; 2] = [0.0, 5.0];
+
+    /// Checks every edit against its accepted range for the mill preset cutting `cut` on
+    /// `machine` (see the table on [`PlantEdits`]); the error names the first edit out of
+    /// range and the range.
+    ///
+    /// ```
+    /// use cutlab::plant::presets::{PlantEdits, Preset};
+    /// let p = Preset::ManeeratDoc1; // DOC 1 mm with a Ø10 mm cutter
+    /// let (cut, machine) = (p.mill_parameters().unwrap(), p.sim_config(0));
+    /// let deep = PlantEdits { depth_scale: Some(40.0), ..PlantEdits::default() };
+    /// assert!(deep.check(cut, &machine).is_ok()); // 40 mm = 4 diameters
+    /// let deeper = PlantEdits { depth_scale: Some(41.0), ..PlantEdits::default() };
+    /// let e = deeper.check(cut, &machine).unwrap_err();
+    /// assert_eq!((e.field, e.min, e.max), ("depth_scale", 0.01, 40.0));
+    /// assert_eq!(e.to_string(), "depth_scale: 41 is outside the accepted 0.01–40 (the deepest cut at most 4 tool diameters)");
+    /// ```
+    pub fn check(&self, cut: &MillParameters, machine: &SimConfig) -> Result<(), EditError> {
+        let within = |field, value: Option<f64>, [min, max]: [f64; 2], unit, why| match value {
+            Some(v) if !(v >= min && v <= max) => Err(EditError {
+                field,
+                value: v,
+                min,
+                max,
+                unit,
+                why,
+            }),
+            _ => Ok(()),
+        };
+        within(
+            "spindle_rpm",
+            self.spindle_rpm,
+            [
+                Self::MIN_SPINDLE_RPM,
+                machine.spindle_drive.max_spindle_rpm(),
+            ],
+            "rpm",
+            "up to the spindle's top speed",
+        )?;
+        within(
+            "programmed_feed_mm_min",
+            self.programmed_feed_mm_min,
+            Self::FEED_MM_MIN,
+            "mm/min",
+            "a machining centre's cutting feeds",
+        )?;
+        within(
+            "tool_diameter_mm",
+            self.tool_diameter_mm,
+            Self::TOOL_DIAMETER_MM,
+            "mm",
+            "end mills",
+        )?;
+        within(
+            "teeth",
+            self.teeth.map(f64::from),
+            [1.0, f64::from(MAX_TEETH)],
+            "teeth",
+            "what the force model holds",
+        )?;
+        within(
+            "sensor_noise_a",
+            self.sensor_noise_a,
+            Self::SENSOR_NOISE_A,
+            "A",
+            "beyond the feed channel's full scale noise only saturates it",
+        )?;
+        let depth_why = "the deepest cut at most 4 tool diameters";
+        let deepest_mm = cut.depth_mm.iter().map(|&(_, d)| d).fold(0.0, f64::max);
+        let diameter_mm = self.tool_diameter_mm.unwrap_or(cut.cutter.diameter_mm);
+        let deepest_allowed_mm = Self::MAX_DEPTH_PER_DIAMETER * diameter_mm;
+        match self.depth_scale {
+            Some(k) => within(
+                "depth_scale",
+                Some(k),
+                [Self::MIN_DEPTH_SCALE, deepest_allowed_mm / deepest_mm],
+                "",
+                depth_why,
+            ),
+            // The preset's own depth on a smaller tool.
+            None => within(
+                "tool_diameter_mm",
+                self.tool_diameter_mm,
+                [
+                    Self::TOOL_DIAMETER_MM[0].max(deepest_mm / Self::MAX_DEPTH_PER_DIAMETER),
+                    Self::TOOL_DIAMETER_MM[1],
+                ],
+                "mm",
+                depth_why,
+            ),
+        }
+    }
+}
+
+/// A plant edit outside the range cutlab accepts (see [`PlantEdits`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct EditError {
+    /// The edit, named as in [`PlantEdits`].
+    pub field: &'static str,
+    /// The value asked for.
+    pub value: f64,
+    /// The smallest value accepted.
+    pub min: f64,
+    /// The largest value accepted.
+    pub max: f64,
+    /// The unit of all three ("" for a factor).
+    pub unit: &'static str,
+    /// What the range stands for.
+    pub why: &'static str,
+}
+
+impl fmt::Display for EditError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let with_unit = |v: f64| {
+            let number = readable(v);
+            if self.unit.is_empty() {
+                number
+            } else {
+                format!("{number} {}", self.unit)
+            }
+        };
+        write!(
+            f,
+            "{}: {} is outside the accepted {}–{} ({})",
+            self.field,
+            with_unit(self.value),
+            readable(self.min),
+            with_unit(self.max),
+            self.why
+        )
+    }
+}
+
+impl std::error::Error for EditError {}
+
+impl From<EditError> for PlantError {
+    fn from(e: EditError) -> Self {
+        let message = e.to_string();
+        let message = message
+            .strip_prefix(&format!("{}: ", e.field))
+            .unwrap_or(&message)
+            .to_string();
+        PlantError::new(e.field, message)
+    }
+}
+
+/// `v` as a person reads it: plain digits, at most four decimals, or an exponent when very
+/// large or small (1e308 has 309 digits).
+fn readable(v: f64) -> String {
+    if v == 0.0 || (1e-3..1e7).contains(&v.abs()) {
+        let rounded = format!("{v:.4}");
+        rounded
+            .trim_end_matches('0')
+            .trim_end_matches('.')
+            .to_string()
+    } else {
+        format!("{v:e}")
+    }
 }
 
 /// Any preset's machine.
@@ -905,8 +1271,8 @@ mod tests {
             Preset::ManeeratDoc2,
             Preset::ManeeratDoc4,
         ] {
-            let params = p.mill_parameters().unwrap();
-            let depth = p.maneerat_depth_mm().unwrap();
+            let params = *p.mill_parameters().unwrap();
+            let depth = params.depth_mm[0].1;
             let f = mean_resultant_n(&params, depth, Material::ToolSteel);
             let target = p.target_force_n().unwrap();
             assert!(f > target, "{}: {f} vs {target}", p.name());
@@ -917,6 +1283,126 @@ mod tests {
             };
             assert!(mean_resultant_n(&edge_only, depth, Material::ToolSteel) < target);
         }
+    }
+
+    #[test]
+    fn absurd_edits_are_refused_naming_the_field_and_its_range() {
+        let cases = [
+            (
+                Preset::KimStepDoc,
+                PlantEdits {
+                    programmed_feed_mm_min: Some(1e308),
+                    ..PlantEdits::default()
+                },
+                "programmed_feed_mm_min",
+                "1–20000 mm/min",
+            ),
+            (
+                // 1000 mm deep on maneerat's Ø10 mm cutter.
+                Preset::ManeeratDoc1,
+                PlantEdits {
+                    depth_scale: Some(1000.0),
+                    ..PlantEdits::default()
+                },
+                "depth_scale",
+                "0.01–40",
+            ),
+            (
+                Preset::KimStepDoc,
+                PlantEdits {
+                    tool_diameter_mm: Some(1e6),
+                    ..PlantEdits::default()
+                },
+                "tool_diameter_mm",
+                "0.5–100 mm",
+            ),
+        ];
+        for (preset, edits, field, range) in cases {
+            let e = preset.machine_with(1, &edits).unwrap_err();
+            assert_eq!(e.field, field, "{e}");
+            assert!(e.message.contains(range), "{e}");
+        }
+    }
+
+    #[test]
+    fn edits_are_checked_with_the_edited_tool_and_the_machine_s_spindle() {
+        let p = Preset::KimStepDoc; // 5 mm deep at the end, Ø20 mm
+        let (cut, machine) = (p.mill_parameters().unwrap(), p.sim_config(0));
+        let check = |edits: PlantEdits| edits.check(cut, &machine);
+        // A 1 mm tool for the preset's own 5 mm: the tool is what was edited.
+        let e = check(PlantEdits {
+            tool_diameter_mm: Some(1.0),
+            ..PlantEdits::default()
+        })
+        .unwrap_err();
+        assert_eq!((e.field, e.min, e.max), ("tool_diameter_mm", 1.25, 100.0));
+        // Scaled with a smaller tool, the limit follows the tool.
+        let e = check(PlantEdits {
+            tool_diameter_mm: Some(10.0),
+            depth_scale: Some(9.0),
+            ..PlantEdits::default()
+        })
+        .unwrap_err();
+        assert_eq!((e.field, e.max), ("depth_scale", 8.0));
+        // Faster than the spindle can turn, NaN, and a tooth count the model cannot hold.
+        let top = machine.spindle_drive.max_spindle_rpm();
+        for (edits, field) in [
+            (
+                PlantEdits {
+                    spindle_rpm: Some(top + 1.0),
+                    ..PlantEdits::default()
+                },
+                "spindle_rpm",
+            ),
+            (
+                PlantEdits {
+                    programmed_feed_mm_min: Some(f64::NAN),
+                    ..PlantEdits::default()
+                },
+                "programmed_feed_mm_min",
+            ),
+            (
+                PlantEdits {
+                    teeth: Some(40),
+                    ..PlantEdits::default()
+                },
+                "teeth",
+            ),
+            (
+                PlantEdits {
+                    sensor_noise_a: Some(-0.1),
+                    ..PlantEdits::default()
+                },
+                "sensor_noise_a",
+            ),
+        ] {
+            assert_eq!(check(edits).unwrap_err().field, field);
+        }
+        // The ends of every range are accepted and run.
+        let edge = PlantEdits {
+            spindle_rpm: Some(top),
+            programmed_feed_mm_min: Some(20_000.0),
+            tool_diameter_mm: Some(100.0),
+            teeth: Some(16),
+            depth_scale: Some(0.01),
+            sensor_noise_a: Some(5.0),
+            material: Some(Material::Aluminium),
+        };
+        assert_eq!(check(edge), Ok(()));
+        assert!(p.machine_with(1, &edge).is_ok());
+        let e = p
+            .machine_with(
+                1,
+                &PlantEdits {
+                    tool_diameter_mm: Some(1e6),
+                    ..PlantEdits::default()
+                },
+            )
+            .unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "tool_diameter_mm: 1000000 mm is outside the accepted 0.5–100 mm (end mills)"
+        );
     }
 
     #[test]

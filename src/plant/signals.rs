@@ -1,17 +1,20 @@
 //! Every internal signal of one plant sample, with units, for plots, CSV and tests.
 //!
 //! [`crate::machine::SensorSample`] and [`crate::machine::PlantTruth`] are what the closed loop
-//! sees; [`PlantSignals`] is everything else a user may want to plot: the CNC's commanded feed and
-//! dial code, both feed axes' torques and currents, the spindle's motor torque and gear, the
-//! paper-004 power-law estimate. [`COLUMNS`] names each scalar with its unit, so a trace can be
+//! sees; [`PlantSignals`] holds the truth and everything else a user may want to plot: the CNC's
+//! commanded feed and dial code, both feed axes' torques and currents, the spindle's motor torque
+//! and gear, the paper-004 power-law estimate. [`COLUMNS`] names each scalar with its unit, so a trace can be
 //! written as CSV or listed in a chart picker from one table.
 //!
-//! Signals a plant does not have (depth in the brake bench, brake torque in the mill) are NaN.
+//! Signals a plant does not have (feed per tooth in the bond graph, brake torque in the mill) are
+//! NaN. The brake bench cuts nothing: its depth and width are 0.
 
 use serde::Serialize;
 
+use super::cnc::ControlStep;
 use super::materials::Material;
 use super::spindle_drive::SpindleGear;
+use crate::machine::PlantTruth;
 
 /// One feed axis in one sample.
 #[derive(Debug, Clone, Copy, PartialEq, Default, Serialize)]
@@ -33,14 +36,13 @@ pub struct AxisSignals {
 pub struct PlantSignals {
     /// Time since the start.
     pub time_s: f64,
-    /// Actual distance along the path.
-    pub path_position_mm: f64,
+    /// The ground truth the closed loop gets beside the sensors: forces, torque, power, depth,
+    /// width and feed per tooth at the tool, path and tool position, removal rate, true RMS
+    /// currents. Serialised flat, its fields beside the others.
+    #[serde(flatten)]
+    pub truth: PlantTruth,
     /// Commanded distance along the path.
     pub commanded_position_mm: f64,
-    /// Tool position x.
-    pub tool_x_mm: f64,
-    /// Tool position y.
-    pub tool_y_mm: f64,
     /// Index of the block being commanded.
     pub block: usize,
     /// Programmed feed.
@@ -57,40 +59,18 @@ pub struct PlantSignals {
     pub commanded_feed_mm_min: f64,
     /// Actual path feed.
     pub feed_mm_min: f64,
-    /// Feed per tooth cut.
-    pub feed_per_tooth_mm: f64,
     /// Spindle speed command.
     pub spindle_command_rpm: f64,
     /// Spindle speed.
     pub spindle_speed_rpm: f64,
     /// Gear in use (None when stopped).
     pub spindle_gear: Option<SpindleGear>,
-    /// Axial depth at the tool.
-    pub depth_mm: f64,
-    /// Radial width at the tool.
-    pub width_mm: f64,
     /// Material at the tool (None in air).
     pub material: Option<Material>,
     /// Entry angle φ_st.
     pub entry_deg: f64,
     /// Exit angle φ_ex.
     pub exit_deg: f64,
-    /// Cutting force on the tool, machine x.
-    pub force_x_n: f64,
-    /// Machine y.
-    pub force_y_n: f64,
-    /// Machine z.
-    pub force_z_n: f64,
-    /// |F| in the x-y plane.
-    pub force_resultant_n: f64,
-    /// Component resisting the feed.
-    pub feed_force_n: f64,
-    /// Cutting torque at the spindle.
-    pub spindle_torque_nm: f64,
-    /// Cutting power.
-    pub cutting_power_w: f64,
-    /// Material removal rate.
-    pub material_removal_mm3_s: f64,
     /// Paper 004's power-law resultant for the current conditions (its bias calibrated once to
     /// the mechanistic mean of the scenario's nominal cut).
     pub power_law_force_n: f64,
@@ -100,12 +80,8 @@ pub struct PlantSignals {
     pub axis_y: AxisSignals,
     /// Spindle motor torque (lagged load plus acceleration).
     pub spindle_motor_torque_nm: f64,
-    /// True spindle RMS current.
-    pub spindle_current_rms_a: f64,
     /// True spindle phase currents.
     pub spindle_phase_currents_a: [f64; 3],
-    /// True RMS current of the reported feed axis (eq 7 over its three phases).
-    pub feed_current_rms_a: f64,
     /// F/V converter output.
     pub fv_voltage_v: f64,
     /// Feed phase currents as read (Hall + ADC).
@@ -116,6 +92,29 @@ pub struct PlantSignals {
     pub brake_excitation_a: f64,
     /// Brake torque (brake bench only).
     pub brake_torque_nm: f64,
+}
+
+impl PlantSignals {
+    /// A sample's signals with what every plant reports alike — the time, the truth, and the
+    /// control's override, feed hold, block, commanded and actual feed and position — and the
+    /// rest at their defaults, for the plant to fill in.
+    pub fn from_control(time_s: f64, truth: PlantTruth, control: &ControlStep) -> Self {
+        let cnc = &control.cnc;
+        Self {
+            time_s,
+            truth,
+            commanded_position_mm: cnc.commanded_position_mm,
+            block: cnc.block,
+            programmed_feed_mm_min: cnc.programmed_feed_mm_min,
+            requested_override_pct: control.command.override_pct,
+            applied_override_pct: control.applied.pct,
+            dial_code: control.applied.dial_code,
+            feed_hold: control.feed_hold,
+            commanded_feed_mm_min: cnc.commanded_feed_mm_min,
+            feed_mm_min: cnc.feed_mm_min,
+            ..Self::default()
+        }
+    }
 }
 
 /// One column of a trace: a name, its unit and how to read it.
@@ -168,10 +167,10 @@ macro_rules! col {
 /// ```
 pub const COLUMNS: &[Column] = &[
     col!("time", "s", |s| s.time_s),
-    col!("path_position", "mm", |s| s.path_position_mm),
+    col!("path_position", "mm", |s| s.truth.path_position_mm),
     col!("commanded_position", "mm", |s| s.commanded_position_mm),
-    col!("tool_x", "mm", |s| s.tool_x_mm),
-    col!("tool_y", "mm", |s| s.tool_y_mm),
+    col!("tool_x", "mm", |s| s.truth.tool_x_mm),
+    col!("tool_y", "mm", |s| s.truth.tool_y_mm),
     col!("block", "", |s| s.block as f64),
     col!("programmed_feed", "mm/min", |s| s.programmed_feed_mm_min),
     col!("requested_override", "%", |s| s.requested_override_pct),
@@ -180,25 +179,27 @@ pub const COLUMNS: &[Column] = &[
     col!("feed_hold", "", |s| f64::from(u8::from(s.feed_hold))),
     col!("commanded_feed", "mm/min", |s| s.commanded_feed_mm_min),
     col!("feed", "mm/min", |s| s.feed_mm_min),
-    col!("feed_per_tooth", "mm", |s| s.feed_per_tooth_mm),
+    col!("feed_per_tooth", "mm", |s| s.truth.feed_per_tooth_mm),
     col!("spindle_command", "rpm", |s| s.spindle_command_rpm),
     col!("spindle_speed", "rpm", |s| s.spindle_speed_rpm),
     col!("spindle_gear", "0 high / 1 low", |s| gear_index(
         s.spindle_gear
     )),
-    col!("depth", "mm", |s| s.depth_mm),
-    col!("width", "mm", |s| s.width_mm),
+    col!("depth", "mm", |s| s.truth.depth_mm),
+    col!("width", "mm", |s| s.truth.width_mm),
     col!("material", "index", |s| material_index(s.material)),
     col!("entry", "deg", |s| s.entry_deg),
     col!("exit", "deg", |s| s.exit_deg),
-    col!("force_x", "N", |s| s.force_x_n),
-    col!("force_y", "N", |s| s.force_y_n),
-    col!("force_z", "N", |s| s.force_z_n),
-    col!("force_resultant", "N", |s| s.force_resultant_n),
-    col!("feed_force", "N", |s| s.feed_force_n),
-    col!("spindle_torque", "N·m", |s| s.spindle_torque_nm),
-    col!("cutting_power", "W", |s| s.cutting_power_w),
-    col!("material_removal", "mm³/s", |s| s.material_removal_mm3_s),
+    col!("force_x", "N", |s| s.truth.force_x_n),
+    col!("force_y", "N", |s| s.truth.force_y_n),
+    col!("force_z", "N", |s| s.truth.force_z_n),
+    col!("force_resultant", "N", |s| s.truth.force_resultant_n),
+    col!("feed_force", "N", |s| s.truth.feed_force_n),
+    col!("spindle_torque", "N·m", |s| s.truth.spindle_torque_nm),
+    col!("cutting_power", "W", |s| s.truth.cutting_power_w),
+    col!("material_removal", "mm³/s", |s| s
+        .truth
+        .material_removal_mm3_s),
     col!("power_law_force", "N", |s| s.power_law_force_n),
     col!("x_velocity", "mm/min", |s| s.axis_x.velocity_mm_min),
     col!("x_load_force", "N", |s| s.axis_x.load_force_n),
@@ -214,10 +215,12 @@ pub const COLUMNS: &[Column] = &[
     col!("y_iu", "A", |s| s.axis_y.phase_currents_a[0]),
     col!("y_iv", "A", |s| s.axis_y.phase_currents_a[1]),
     col!("y_iw", "A", |s| s.axis_y.phase_currents_a[2]),
-    col!("feed_current_rms", "A", |s| s.feed_current_rms_a),
+    col!("feed_current_rms", "A", |s| s.truth.feed_current_rms_a),
     col!("spindle_motor_torque", "N·m", |s| s
         .spindle_motor_torque_nm),
-    col!("spindle_current_rms", "A", |s| s.spindle_current_rms_a),
+    col!("spindle_current_rms", "A", |s| s
+        .truth
+        .spindle_current_rms_a),
     col!("spindle_iu", "A", |s| s.spindle_phase_currents_a[0]),
     col!("spindle_iv", "A", |s| s.spindle_phase_currents_a[1]),
     col!("spindle_iw", "A", |s| s.spindle_phase_currents_a[2]),

@@ -1,6 +1,6 @@
 //! The simulated mill: scenario → CNC → cutting → drives → sensors, one sample per step.
 //!
-//! Each [`Simulator::step`] (Δt = 1/sample rate, 10 kHz by default):
+//! Each [`Machine::step`](crate::machine::Machine::step) (Δt = 1/sample rate, 10 kHz by default):
 //!
 //! 1. the PMC latches the override and feed hold ([`super::cnc::OverrideInput`]);
 //! 2. the CNC advances the commanded and actual path position ([`super::cnc::FeedPlanner`]),
@@ -26,7 +26,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use super::cnc::{samples_per, AppliedOverride, CncConfig, FeedPlanner, OverrideInput};
+use super::cnc::{samples_per, AppliedOverride, CncConfig, Control};
 use super::feed_drive::{three_phase_rms_a, FeedDrive, FeedDriveConfig};
 use super::materials::{CuttingCoefficients, Material};
 use super::mechanics::{mean_forces, Immersion, MillingForceModel, MillingMode};
@@ -35,8 +35,8 @@ use super::scenario::Scenario;
 use super::sensors::{CurrentSensor, CurrentSensorConfig};
 use super::signals::{AxisSignals, PlantSignals};
 use super::spindle_drive::{SpindleDrive, SpindleDriveConfig};
-use super::{positive, Plant, PlantError};
-use crate::machine::{Machine, MachineStep, OverrideCommand, PlantTruth, SensorSample};
+use super::{positive, Plant, PlantError, PlantModel, PlantSample, Sampling, Tick};
+use crate::machine::{OverrideCommand, PlantTruth, SensorSample};
 
 /// Which feed axis the feed-current sensors are on.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
@@ -210,10 +210,9 @@ fn calibrated_power_law(scenario: &Scenario, material: Material) -> PowerLawMode
 pub struct Simulator {
     scenario: Scenario,
     config: SimConfig,
-    dt_s: f64,
+    sampling: Sampling,
     ipo_samples: u64,
-    override_input: OverrideInput,
-    planner: FeedPlanner,
+    control: Control,
     force_model: MillingForceModel,
     region_coefficients: Vec<CuttingCoefficients>,
     region_power_law: Vec<PowerLawModel>,
@@ -221,23 +220,20 @@ pub struct Simulator {
     axes: [FeedDrive; 2],
     feed_sensor: CurrentSensor,
     spindle_sensor: CurrentSensor,
-    samples: u64,
     segment_hint: usize,
     immersion_width_mm: f64,
     immersion: Immersion,
     spindle_arrived_at_s: Option<f64>,
     spindle_started_at_s: Option<f64>,
     power_law_force_n: f64,
-    signals: PlantSignals,
-    last: MachineStep,
-    finished: bool,
 }
 
 impl Simulator {
     /// A machine at rest at the start of `scenario`.
     pub fn new(scenario: Scenario, config: SimConfig) -> Result<Self, PlantError> {
         config.validate()?;
-        let dt_s = 1.0 / config.sample_rate_hz;
+        let sampling = Sampling::new(config.sample_rate_hz);
+        let dt_s = sampling.dt_s();
         let blocks = scenario.plan_blocks();
         let force_model = MillingForceModel::new(*scenario.cutter())?;
         let region_coefficients = scenario
@@ -252,10 +248,9 @@ impl Simulator {
             .collect();
         let axis = FeedDrive::new(config.feed_drive, dt_s).map_err(|e| e.within("feed_drive"))?;
         let mut sim = Self {
-            dt_s,
+            sampling,
             ipo_samples: samples_per(config.cnc.interpolation_period_s, dt_s),
-            override_input: OverrideInput::new(&config.cnc, dt_s).map_err(|e| e.within("cnc"))?,
-            planner: FeedPlanner::new(blocks, config.cnc, dt_s).map_err(|e| e.within("cnc"))?,
+            control: Control::new(&config.cnc, blocks, dt_s).map_err(|e| e.within("cnc"))?,
             force_model,
             region_coefficients,
             region_power_law,
@@ -280,14 +275,10 @@ impl Simulator {
             immersion_width_mm: f64::NAN,
             scenario,
             config,
-            samples: 0,
             segment_hint: 0,
             spindle_arrived_at_s: None,
             spindle_started_at_s: None,
             power_law_force_n: 0.0,
-            signals: PlantSignals::default(),
-            last: MachineStep::default(),
-            finished: false,
         };
         sim.reset();
         Ok(sim)
@@ -324,17 +315,39 @@ impl Simulator {
                 .is_some_and(|t| time_s - t >= self.scenario.spec().spindle_start_dwell_s)
     }
 
-    fn advance(&mut self, command: OverrideCommand) -> MachineStep {
-        self.samples += 1;
-        let time_s = self.samples as f64 * self.dt_s;
-        let ipo_tick = (self.samples - 1).is_multiple_of(self.ipo_samples);
+    fn planner_block(&self) -> usize {
+        self.sampling
+            .latest()
+            .signals
+            .block
+            .min(self.scenario.segments().len().saturating_sub(1))
+    }
+
+    /// The override the machine applies now.
+    pub fn applied_override(&self) -> AppliedOverride {
+        self.control.applied()
+    }
+}
+
+impl PlantModel for Simulator {
+    fn sampling(&self) -> &Sampling {
+        &self.sampling
+    }
+
+    fn sampling_mut(&mut self) -> &mut Sampling {
+        &mut self.sampling
+    }
+
+    fn advance(&mut self, tick: Tick, command: OverrideCommand) -> PlantSample {
+        let time_s = tick.time_s;
+        let ipo_tick = (tick.number - 1).is_multiple_of(self.ipo_samples);
 
         // 1–2. Override through the PMC, then the CNC.
-        let (applied, feed_hold) = self.override_input.step(command);
         let block = self.planner_block();
         let spindle_command_rpm = self.scenario.segments()[block].spindle_rpm;
         let ready = self.spindle_ready(time_s, spindle_command_rpm);
-        let cnc = self.planner.step(applied.pct, feed_hold, ready);
+        let control = self.control.step(command, ready);
+        let (applied, cnc) = (control.applied, control.cnc);
 
         // 3. Where the tool is and what it meets.
         let s = cnc.position_mm;
@@ -454,37 +467,13 @@ impl Simulator {
             feed_current_rms_a: feed_rms,
             spindle_current_rms_a: spindle.rms_current_a,
         };
-        self.signals = PlantSignals {
-            time_s,
-            path_position_mm: s,
-            commanded_position_mm: cnc.commanded_position_mm,
-            tool_x_mm: point.position_mm[0],
-            tool_y_mm: point.position_mm[1],
-            block: cnc.block,
-            programmed_feed_mm_min: cnc.programmed_feed_mm_min,
-            requested_override_pct: command.override_pct,
-            applied_override_pct: applied.pct,
-            dial_code: applied.dial_code,
-            feed_hold,
-            commanded_feed_mm_min: cnc.commanded_feed_mm_min,
-            feed_mm_min,
-            feed_per_tooth_mm,
+        let signals = PlantSignals {
             spindle_command_rpm,
             spindle_speed_rpm: spindle.speed_rpm,
             spindle_gear: spindle.gear,
-            depth_mm: cut_depth_mm,
-            width_mm: cut_width_mm,
             material: region.map(|r| self.scenario.material_regions()[r].material),
             entry_deg: self.immersion.entry_rad.to_degrees(),
             exit_deg: self.immersion.exit_rad.to_degrees(),
-            force_x_n,
-            force_y_n,
-            force_z_n: forces.fz_n,
-            force_resultant_n: resultant_n,
-            feed_force_n: -forces.fx_n,
-            spindle_torque_nm: forces.torque_nm,
-            cutting_power_w: power_w,
-            material_removal_mm3_s: removal,
             power_law_force_n: self.power_law_force_n,
             axis_x: AxisSignals {
                 velocity_mm_min: vx,
@@ -501,63 +490,27 @@ impl Simulator {
                 phase_currents_a: ay.phase_currents_a,
             },
             spindle_motor_torque_nm: spindle.motor_torque_nm,
-            spindle_current_rms_a: spindle.rms_current_a,
             spindle_phase_currents_a: spindle.phase_currents_a,
-            feed_current_rms_a: feed_rms,
             fv_voltage_v: spindle.fv_voltage_v,
             feed_currents_read_a: feed_read,
             spindle_currents_read_a: spindle_read,
             brake_excitation_a: f64::NAN,
             brake_torque_nm: f64::NAN,
+            ..PlantSignals::from_control(time_s, truth, &control)
         };
-        self.finished = cnc.finished || time_s >= self.config.max_duration_s;
-        MachineStep {
+        PlantSample {
             sensors,
-            truth: Some(truth),
+            signals,
+            finished: cnc.finished || time_s >= self.config.max_duration_s,
         }
     }
 
-    fn planner_block(&self) -> usize {
-        self.signals
-            .block
-            .min(self.scenario.segments().len().saturating_sub(1))
+    fn power_law_force_n(&self) -> Option<f64> {
+        Some(self.sampling.latest().signals.power_law_force_n)
     }
 
-    /// The override the machine applies now.
-    pub fn applied_override(&self) -> AppliedOverride {
-        self.override_input.applied()
-    }
-}
-
-impl Machine for Simulator {
-    fn sample_rate_hz(&self) -> f64 {
-        self.config.sample_rate_hz
-    }
-
-    fn step(&mut self, command: OverrideCommand) -> MachineStep {
-        if !self.finished {
-            self.last = self.advance(command);
-        }
-        self.last
-    }
-
-    fn finished(&self) -> bool {
-        self.finished
-    }
-
-    fn sensorless_force_n(&self) -> Option<f64> {
-        Some(self.signals.power_law_force_n)
-    }
-}
-
-impl Plant for Simulator {
-    fn signals(&self) -> &PlantSignals {
-        &self.signals
-    }
-
-    fn reset(&mut self) {
-        self.override_input.reset();
-        self.planner.reset();
+    fn restart(&mut self) -> PlantSignals {
+        self.control.reset();
         self.spindle.reset();
         for axis in self.axes.iter_mut() {
             axis.reset();
@@ -565,28 +518,29 @@ impl Plant for Simulator {
         self.feed_sensor.reset(self.config.seed, FEED_SENSOR_STREAM);
         self.spindle_sensor
             .reset(self.config.seed, SPINDLE_SENSOR_STREAM);
-        self.samples = 0;
         self.segment_hint = 0;
         self.immersion_width_mm = f64::NAN;
         self.spindle_arrived_at_s = None;
         self.spindle_started_at_s = None;
         self.power_law_force_n = 0.0;
         let start = self.scenario.point_at(0.0);
-        self.signals = PlantSignals {
-            tool_x_mm: start.position_mm[0],
-            tool_y_mm: start.position_mm[1],
+        PlantSignals {
+            truth: PlantTruth {
+                tool_x_mm: start.position_mm[0],
+                tool_y_mm: start.position_mm[1],
+                ..PlantTruth::default()
+            },
             brake_excitation_a: f64::NAN,
             brake_torque_nm: f64::NAN,
             ..PlantSignals::default()
-        };
-        self.last = MachineStep::default();
-        self.finished = false;
+        }
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::machine::{Machine, MachineStep};
     use crate::plant::mechanics::Cutter;
     use crate::plant::scenario::{MaterialRegion, Move, ScenarioSpec};
 
@@ -636,7 +590,7 @@ mod tests {
             n += 1;
         }
         assert!(sim.finished());
-        assert!((sim.signals().path_position_mm - 12.0).abs() < 0.02);
+        assert!((sim.signals().truth.path_position_mm - 12.0).abs() < 0.02);
         assert!(peak_force > 100.0);
         // Stepping after the end repeats the last sample.
         let a = sim.step(OverrideCommand::default());

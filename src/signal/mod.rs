@@ -18,6 +18,7 @@
 //! | [`dq`] | Clarke and Park transforms (amplitude- and power-invariant) and the PMSM torque of paper 000 eq 7–8 | — |
 //! | [`spectrum`] | windowed single-sided amplitude spectrum, Welch PSD, peaks, spindle/tooth-passing markers, a check that time stamps are evenly spaced | `welch` |
 //! | [`decimate`] | min/max decimation of long series for plotting | — |
+//! | [`stats`] | [`MinMeanMax`](stats::MinMeanMax): running minimum, mean and maximum of a stream | — |
 //!
 //! ## Design apart from state
 //!
@@ -43,6 +44,7 @@ pub mod filtfilt;
 pub mod rms;
 pub mod sos;
 pub mod spectrum;
+pub mod stats;
 pub mod zpk;
 
 mod complex;

@@ -8,3 +8,4 @@ pub mod run_form;
 pub mod run_view;
 pub mod runner;
 pub mod savings;
+pub mod work_job;

@@ -9,116 +9,19 @@ use std::time::Duration;
 use leptos::prelude::*;
 
 use crate::charts::{Axis, LineChart, Rgb, Series, PALETTE};
-use crate::estimation::least_squares::fit;
-use crate::machine::Machine;
-use crate::plant::recording::{BlockRow, OpenLoopRun};
+use crate::plant::recording::{BlockRow, OpenLoopRecording, OpenLoopRun};
 use crate::plant::Preset;
-use crate::signal::spectrum::{amplitude_spectrum, Window};
 use crate::web::components::chart::ChartCanvas;
 use crate::web::components::fields::{parse_number, NumberField, SelectField};
 use crate::web::components::runner::{Debounce, RunProgress, RunStatus, Runner};
+use crate::web::components::work_job::Shared;
 use crate::web::route::{query_params, replace_query, Page};
-use crate::work::{Progress, Work};
 
 /// Wait after the last edit before re-running.
 const RERUN_DELAY: Duration = Duration::from_millis(300);
 
 /// Samples summarised per plotted row: 5 ms at 10 kHz.
 const BLOCK_SAMPLES: usize = 50;
-
-/// Spectra are drawn up to this frequency: the bench's 4 Hz electrical frequency and its first
-/// harmonics (paper 000 Fig. 9).
-const SPECTRUM_MAX_HZ: f64 = 20.0;
-
-/// A load step needs at least this many settled samples (0.1 s at 10 kHz) to count; shorter
-/// "steps" are the brake's torque following the feed as it starts or stops.
-const MIN_STEP_SAMPLES: usize = 1000;
-
-/// One brake-bench load step as the page shows it.
-#[derive(Debug, Clone, PartialEq)]
-pub struct StepSummary {
-    /// Brake torque during the step.
-    brake_torque_nm: f64,
-    /// Mean RMS feed current over its settled part.
-    feed_rms_a: f64,
-    /// Amplitude spectrum of the phase current i_u up to [`SPECTRUM_MAX_HZ`]: (Hz, A).
-    spectrum: Vec<(f64, f64)>,
-}
-
-/// A finished open-loop recording.
-#[derive(Debug, Clone, PartialEq)]
-pub struct Recording {
-    preset: Preset,
-    rows: Vec<BlockRow>,
-    steps: Vec<StepSummary>,
-}
-
-struct PlantJob {
-    preset: Preset,
-    run: OpenLoopRun,
-    sample_rate_hz: f64,
-    /// The summaries of the load steps that have ended. Each step's spectrum is taken as soon as
-    /// the next step begins, so the work is spread over the run's chunks instead of holding the
-    /// page for all steps at the end.
-    steps: Vec<StepSummary>,
-    /// How many of the run's load steps have been summarised (or skipped as too short).
-    steps_seen: usize,
-}
-
-impl PlantJob {
-    /// Summarises the load steps up to (not including) `ended`.
-    fn summarise_steps(&mut self, ended: usize) {
-        let ended = ended.min(self.run.load_steps().len());
-        for step in &self.run.load_steps()[self.steps_seen.min(ended)..ended] {
-            if step.feed_iu_a.len() < MIN_STEP_SAMPLES {
-                continue;
-            }
-            // Cannot fail: the step has more than one sample and the rate is the plant's.
-            let spectrum = amplitude_spectrum(&step.feed_iu_a, self.sample_rate_hz, Window::Hann)
-                .map(|sp| {
-                    sp.freq_hz
-                        .iter()
-                        .zip(&sp.amplitude)
-                        .take_while(|(f, _)| **f <= SPECTRUM_MAX_HZ)
-                        .map(|(f, a)| (*f, *a))
-                        .collect()
-                })
-                .unwrap_or_default();
-            self.steps.push(StepSummary {
-                brake_torque_nm: step.brake_torque_nm,
-                feed_rms_a: step.feed_rms_a,
-                spectrum,
-            });
-        }
-        self.steps_seen = self.steps_seen.max(ended);
-    }
-}
-
-impl Work for PlantJob {
-    type Output = Arc<Recording>;
-    type Error = String;
-
-    fn advance(&mut self, budget: usize) -> Result<bool, String> {
-        let done = self.run.advance(budget.max(1000));
-        // A step has ended once the next one has begun; the last one when the run ends.
-        let steps = self.run.load_steps().len();
-        self.summarise_steps(if done { steps } else { steps.saturating_sub(1) });
-        Ok(done)
-    }
-
-    fn progress(&self) -> Progress {
-        Progress::new("Simulating the machine", self.run.fraction())
-    }
-
-    fn finish(&mut self) -> Result<Self::Output, String> {
-        self.summarise_steps(self.run.load_steps().len());
-        Ok(Arc::new(Recording {
-            preset: self.preset,
-            rows: self.run.rows().to_vec(),
-            steps: std::mem::take(&mut self.steps),
-        }))
-    }
-}
 
 fn time_series(rows: &[BlockRow], f: impl Fn(&BlockRow) -> f64) -> Vec<(f64, f64)> {
     rows.iter().map(|r| (r.time_s, f(r))).collect()
@@ -132,7 +35,7 @@ fn time_chart(y: &str, series: Vec<Series>) -> LineChart {
 }
 
 /// Every chart of a recording, in page order, with its accessible name.
-fn recording_charts(rec: &Recording) -> Vec<(&'static str, LineChart)> {
+fn recording_charts(rec: &OpenLoopRecording) -> Vec<(&'static str, LineChart)> {
     let r = &rec.rows;
     let mut charts = Vec::new();
     if let Some(scenario) = rec.preset.scenario() {
@@ -271,8 +174,8 @@ struct BenchCharts {
 
 /// Paper 000's bench: spectra at the load steps, and RMS current against brake torque with the
 /// fitted line.
-fn bench_charts(rec: &Recording) -> Option<BenchCharts> {
-    let steps = &rec.steps;
+fn bench_charts(rec: &OpenLoopRecording) -> Option<BenchCharts> {
+    let steps = &rec.load_steps;
     if steps.is_empty() {
         return None;
     }
@@ -284,15 +187,12 @@ fn bench_charts(rec: &Recording) -> Option<BenchCharts> {
     };
     let (mut loading, mut unloading) = (spectrum_chart(), spectrum_chart());
     let largest_nm = steps.iter().map(|s| s.brake_torque_nm).fold(0.0, f64::max);
-    let mut previous_nm = f64::NEG_INFINITY;
     for s in steps {
-        // A step is loading when its torque is at least the previous step's.
-        let chart = if s.brake_torque_nm >= previous_nm {
+        let chart = if s.loading {
             &mut loading
         } else {
             &mut unloading
         };
-        previous_nm = s.brake_torque_nm;
         chart.series.push(Series::new(
             format!("{:.2} N·m", s.brake_torque_nm),
             load_colour(s.brake_torque_nm / largest_nm),
@@ -308,8 +208,6 @@ fn bench_charts(rec: &Recording) -> Option<BenchCharts> {
         loading.y.range = shared.clone();
         unloading.y.range = shared;
     }
-    let torque: Vec<f64> = steps.iter().map(|s| s.brake_torque_nm).collect();
-    let rms: Vec<f64> = steps.iter().map(|s| s.feed_rms_a).collect();
     let mut line = LineChart::new(
         Axis::linear("brake torque (N·m)"),
         Axis::linear("RMS current (A)"),
@@ -317,12 +215,14 @@ fn bench_charts(rec: &Recording) -> Option<BenchCharts> {
     line.series.push(Series::new(
         "load steps (loading and unloading)",
         PALETTE[0],
-        torque.iter().copied().zip(rms.iter().copied()).collect(),
+        steps
+            .iter()
+            .map(|s| (s.brake_torque_nm, s.feed_rms_a))
+            .collect(),
     ));
-    let ones = vec![1.0; torque.len()];
-    let text = match fit(&[("idle current", &ones), ("torque", &torque)], &rms) {
-        Ok(f) => {
-            let (a, b) = (f.coefficients[0], f.coefficients[1]);
+    let text = match rec.load_line() {
+        Ok(fitted) => {
+            let (a, b) = (fitted.idle_current_a, fitted.slope_a_per_nm);
             line.series.push(
                 Series::new(
                     "least-squares line",
@@ -334,8 +234,8 @@ fn bench_charts(rec: &Recording) -> Option<BenchCharts> {
             format!(
                 "RMS current = {a:.3} A + {b:.3} A/(N·m) × torque over {} load steps (R² = {:.4}): \
                  linear, with an idle current that is not zero, as paper 000's Fig. 11 shows.",
-                steps.len(),
-                f.r_squared
+                fitted.steps,
+                fitted.r_squared
             )
         }
         Err(e) => format!("No line could be fitted to {} load steps: {e}", steps.len()),
@@ -366,7 +266,7 @@ pub fn PlantPage() -> impl IntoView {
         Ok(v) => Some(format!("{v} % is outside 0–255 %")),
         Err(e) => Some(e),
     });
-    let runner = Runner::<Arc<Recording>>::new();
+    let runner = Runner::<Arc<OpenLoopRecording>>::new();
     let debounce = Debounce::new(RERUN_DELAY);
     let runner_for_effect = runner.clone();
     Effect::new(move |_| {
@@ -386,20 +286,12 @@ pub fn PlantPage() -> impl IntoView {
             return;
         }
         let runner = runner_for_effect.clone();
-        debounce.request(move || match p.machine(1) {
-            Ok(machine) => {
-                let max_s = p.summary().nominal_duration_s * 3.0 + 10.0;
-                let sample_rate_hz = machine.sample_rate_hz();
-                runner.start(PlantJob {
-                    preset: p,
-                    run: OpenLoopRun::new(machine, pct, BLOCK_SAMPLES, max_s),
-                    sample_rate_hz,
-                    steps: Vec::new(),
-                    steps_seen: 0,
-                });
-            }
-            Err(e) => {
-                let _ = runner.status.try_set(RunStatus::Failed(e.to_string()));
+        debounce.request(move || {
+            match OpenLoopRun::new(p, 1, pct, BLOCK_SAMPLES, OpenLoopRun::time_limit_s(p)) {
+                Ok(run) => runner.start(Shared(run)),
+                Err(e) => {
+                    let _ = runner.status.try_set(RunStatus::Failed(e.to_string()));
+                }
             }
         });
     });

@@ -10,19 +10,17 @@ use std::sync::Arc;
 use leptos::prelude::*;
 
 use crate::charts::{Axis, LineChart, Scale, Series, PALETTE};
-use crate::machine::{Machine, OverrideCommand};
-use crate::plant::presets::PresetMachine;
-use crate::plant::Preset;
+use crate::plant::recording::{BenchRecording, PhaseRecording};
 use crate::signal::butterworth::{butter, ButterworthSpec, Cutoff, FilterKind};
 use crate::signal::filter::SosFilterBank;
 use crate::signal::rms::three_phase_rms;
 use crate::signal::sos::Sos;
-use crate::signal::spectrum::{amplitude_spectrum, find_peaks, AmplitudeSpectrum, Window};
+use crate::signal::spectrum::{amplitude_spectrum, find_peaks, Window};
 use crate::web::components::chart::ChartCanvas;
 use crate::web::components::fields::{parse_count, parse_number, NumberField, SelectField};
 use crate::web::components::runner::{RunProgress, RunStatus, Runner};
+use crate::web::components::work_job::Shared;
 use crate::web::route::{query_params, replace_query, Page};
-use crate::work::{Progress, Work};
 
 /// A filter the papers use, one click away.
 struct FilterPreset {
@@ -280,102 +278,6 @@ fn response_charts(spec: &ButterworthSpec, sos: &Sos) -> (LineChart, LineChart) 
     (magnitude_chart, phase_chart)
 }
 
-/// A stretch of the brake bench's feed-motor phase currents (paper 000's experiment).
-struct PhaseRecording {
-    sample_rate_hz: f64,
-    time_s: Vec<f64>,
-    /// Interleaved i_u, i_v, i_w.
-    phases_a: Vec<f64>,
-    /// The spectrum of the raw i_u, which no filter design changes: made once, by the job.
-    raw_spectrum: Option<AmplitudeSpectrum>,
-}
-
-/// The bench is recorded from this time (a loaded step, after the drive has settled) …
-const RECORD_FROM_S: f64 = 9.0;
-/// … for this long: long enough to resolve paper 000's 4 Hz peak to 0.25 Hz.
-const RECORD_FOR_S: f64 = 4.0;
-
-/// Records the bench in pieces: 130 000 samples take over half a second in the browser, so the
-/// page runs them through a [`Runner`] instead of freezing while it opens.
-struct BenchRecording {
-    machine: PresetMachine,
-    skip: usize,
-    total: usize,
-    done: usize,
-    recording: PhaseRecording,
-}
-
-impl BenchRecording {
-    fn new() -> Result<Self, String> {
-        let machine = Preset::WangBrakeBench
-            .machine(1)
-            .map_err(|e| e.to_string())?;
-        let rate = machine.sample_rate_hz();
-        let skip = (RECORD_FROM_S * rate) as usize;
-        let keep = (RECORD_FOR_S * rate) as usize;
-        Ok(Self {
-            machine,
-            skip,
-            total: skip + keep,
-            done: 0,
-            recording: PhaseRecording {
-                sample_rate_hz: rate,
-                time_s: Vec::with_capacity(keep),
-                phases_a: Vec::with_capacity(3 * keep),
-                raw_spectrum: None,
-            },
-        })
-    }
-}
-
-impl Work for BenchRecording {
-    type Output = Arc<PhaseRecording>;
-    type Error = String;
-
-    fn advance(&mut self, budget: usize) -> Result<bool, String> {
-        if self.recording.raw_spectrum.is_some() {
-            return Ok(true);
-        }
-        if self.done >= self.total {
-            // A chunk of its own, apart from the last samples and from the charts that the
-            // finished recording sets off, so no one task holds them all.
-            let u: Vec<f64> = self.recording.phases_a.iter().step_by(3).copied().collect();
-            let spectrum = amplitude_spectrum(&u, self.recording.sample_rate_hz, Window::Hann)
-                .map_err(|e| e.to_string())?;
-            self.recording.raw_spectrum = Some(spectrum);
-            return Ok(false);
-        }
-        let end = (self.done + budget.max(1)).min(self.total);
-        for i in self.done..end {
-            let step = self.machine.step(OverrideCommand::default());
-            if i >= self.skip {
-                self.recording.time_s.push(step.sensors.time_s);
-                self.recording
-                    .phases_a
-                    .extend_from_slice(&step.sensors.feed_phase_currents_a);
-            }
-        }
-        self.done = end;
-        Ok(false)
-    }
-
-    fn progress(&self) -> Progress {
-        Progress::new(
-            "simulating the brake bench",
-            self.done as f64 / self.total.max(1) as f64,
-        )
-    }
-
-    fn finish(&mut self) -> Result<Self::Output, String> {
-        Ok(Arc::new(PhaseRecording {
-            sample_rate_hz: self.recording.sample_rate_hz,
-            time_s: std::mem::take(&mut self.recording.time_s),
-            phases_a: std::mem::take(&mut self.recording.phases_a),
-            raw_spectrum: self.recording.raw_spectrum.take(),
-        }))
-    }
-}
-
 /// Phase current before and after the filter, three-phase RMS of both, and both spectra.
 fn current_charts(
     recording: &PhaseRecording,
@@ -429,7 +331,7 @@ fn current_charts(
     rms_chart.fit();
 
     let u_filtered: Vec<f64> = filtered.iter().step_by(3).copied().collect();
-    let raw = recording.raw_spectrum.as_ref()?;
+    let raw = &recording.raw_spectrum;
     let after = amplitude_spectrum(&u_filtered, recording.sample_rate_hz, Window::Hann).ok()?;
     let shown = |s: &crate::signal::spectrum::AmplitudeSpectrum| -> Vec<(f64, f64)> {
         s.freq_hz
@@ -513,9 +415,9 @@ pub fn SignalChainPage() -> impl IntoView {
     // The bench recording is made once, in pieces; the filter is re-applied whenever the design
     // changes.
     let bench = Runner::<Arc<PhaseRecording>>::new();
-    match BenchRecording::new() {
-        Ok(job) => bench.start(job),
-        Err(e) => bench.status.set(RunStatus::Failed(e)),
+    match BenchRecording::loaded_step(1) {
+        Ok(recording) => bench.start(Shared(recording)),
+        Err(e) => bench.status.set(RunStatus::Failed(e.to_string())),
     }
     let recording = bench.finished();
     let currents = Memo::new(

@@ -1,23 +1,4 @@
-//! The papers' reduced plants, each usable as the whole machine.
-//!
-//! ## Paper 001: a second-order force process
-//!
-//! Maneerat et al. model the feed drive and the milling process as
-//!
-//! ```text
-//! m·ẍ + d·ẋ = f_r            (eq 2.1: the table answers the control signal f_r)
-//! k·v = Ḟ_c + c·F_c          (eq 2.2: the force builds up with the table speed v = ẋ)
-//! m·F̈_c + (mc + d)·Ḟ_c + dc·F_c = k·f_r     (eq 2.3)
-//! ```
-//!
-//! The paper gives no numbers. cutlab takes the control signal to be the CNC's commanded feed in
-//! mm/min with d = 1, so m = τ_f is the feed drive's time constant in seconds, c = 1/τ_c the
-//! force's build-up rate, and k/(d·c) = G the static gain in N per mm/min. Writing
-//! F_c = G·y with ẏ = c·(v − y) keeps eq 2.3 exactly for a constant G and lets G follow the depth
-//! along the path (a depth step then changes the force at once, as it does in a cut).
-//! [`SecondOrderConfig::paper_coefficients`] gives m, d, c, k back.
-//!
-//! ## Paper 002: the bond-graph spindle + x-axis model
+//! Paper 002's plant: Liu et al.'s bond-graph spindle + x-axis model, usable as the whole machine.
 //!
 //! Liu et al.'s eq 5 with the evident typesetting errors repaired (ṗ₇ is ṗ₆; the first line's
 //! r_s/J_m1 multiplies p₆; q₉ and p₁₇ are q₁₇):
@@ -50,417 +31,19 @@
 use serde::{Deserialize, Serialize};
 use std::f64::consts::TAU;
 
-use super::cnc::{CncConfig, FeedPlanner, OverrideInput, PlanBlock};
-use super::feed_drive::{three_phase_rms_a, FeedDrive, ThreePhaseWaveform};
+use super::cnc::{CncConfig, Control, PlanBlock};
+use super::feed_drive::{three_phase_rms_a, ThreePhaseWaveform};
 use super::linalg::{self, Mat};
-use super::scenario::Profile;
 use super::sensors::{
     AdcConfig, CurrentSensor, CurrentSensorConfig, HallSensorConfig, PhaseWiring,
 };
 use super::signals::{AxisSignals, PlantSignals};
-use super::spindle_drive::{SpindleDrive, SpindleDriveConfig};
-use super::{non_negative, positive, rpm_from_rad_s, Plant, PlantError, S_PER_MIN};
-use crate::machine::{Machine, MachineStep, OverrideCommand, PlantTruth, SensorSample};
-use crate::math;
-
-// ───────────────────────────── paper 001 ─────────────────────────────
-
-/// Paper 001's process in cutlab's parameters.
-///
-/// ```
-/// use cutlab::plant::reduced::SecondOrderConfig;
-/// let c = SecondOrderConfig::new(0.05, 0.02, 0.4).unwrap();
-/// let p = c.paper_coefficients();
-/// assert_eq!((p.m, p.d, p.c), (0.05, 1.0, 50.0));
-/// assert!((p.k - 0.4 * 50.0).abs() < 1e-12);              // k = G·c·d
-/// assert!((p.mc_plus_d - (0.05 * 50.0 + 1.0)).abs() < 1e-12);
-/// ```
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-pub struct SecondOrderConfig {
-    /// τ_f = m/d: how fast the table follows the feed command.
-    pub feed_time_constant_s: f64,
-    /// τ_c = 1/c: how fast the force builds up with the feed.
-    pub force_time_constant_s: f64,
-    /// G = k/(d·c): static force per commanded feed.
-    pub force_gain_n_per_mm_min: f64,
-}
-
-/// Paper 001's m, d, c, k (eq 2.3) for f_r in mm/min and F in N.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
-pub struct PaperCoefficients {
-    /// m (s, with d = 1).
-    pub m: f64,
-    /// d (1).
-    pub d: f64,
-    /// c (1/s).
-    pub c: f64,
-    /// k (N per mm/min per s).
-    pub k: f64,
-    /// mc + d, eq 2.3's first-derivative coefficient (α in the adaptive law).
-    pub mc_plus_d: f64,
-    /// dc, eq 2.3's zeroth-derivative coefficient (β).
-    pub dc: f64,
-}
-
-impl SecondOrderConfig {
-    /// A process with positive time constants and a gain ≥ 0.
-    pub fn new(
-        feed_time_constant_s: f64,
-        force_time_constant_s: f64,
-        force_gain_n_per_mm_min: f64,
-    ) -> Result<Self, PlantError> {
-        let c = Self {
-            feed_time_constant_s,
-            force_time_constant_s,
-            force_gain_n_per_mm_min,
-        };
-        c.validate()?;
-        Ok(c)
-    }
-
-    /// Checks every field.
-    pub fn validate(&self) -> Result<(), PlantError> {
-        positive("feed_time_constant_s", self.feed_time_constant_s)?;
-        positive("force_time_constant_s", self.force_time_constant_s)?;
-        non_negative("force_gain_n_per_mm_min", self.force_gain_n_per_mm_min)?;
-        Ok(())
-    }
-
-    /// m, d, c, k of eq 2.3.
-    pub fn paper_coefficients(&self) -> PaperCoefficients {
-        let m = self.feed_time_constant_s;
-        let d = 1.0;
-        let c = 1.0 / self.force_time_constant_s;
-        let k = self.force_gain_n_per_mm_min * c * d;
-        PaperCoefficients {
-            m,
-            d,
-            c,
-            k,
-            mc_plus_d: m * c + d,
-            dc: d * c,
-        }
-    }
-
-    /// The force at `time_s` after a step of the feed command to `feed_mm_min` from rest: the
-    /// closed-form solution of eq 2.3.
-    ///
-    /// ```
-    /// use cutlab::plant::reduced::SecondOrderConfig;
-    /// let c = SecondOrderConfig::new(0.05, 0.02, 0.4).unwrap();
-    /// assert!((c.step_response_n(10.0, 500.0) - 200.0).abs() < 1e-9);
-    /// assert_eq!(c.step_response_n(0.0, 500.0), 0.0);
-    /// ```
-    pub fn step_response_n(&self, time_s: f64, feed_mm_min: f64) -> f64 {
-        if time_s <= 0.0 {
-            return 0.0;
-        }
-        let (tf, tc) = (self.feed_time_constant_s, self.force_time_constant_s);
-        let shape = if (tf - tc).abs() < 1e-12 * tf {
-            1.0 - (1.0 + time_s / tf) * math::exp(-time_s / tf)
-        } else {
-            1.0 - (tf * math::exp(-time_s / tf) - tc * math::exp(-time_s / tc)) / (tf - tc)
-        };
-        self.force_gain_n_per_mm_min * feed_mm_min * shape
-    }
-}
-
-/// The process's state, stepped exactly for a command held over each sample.
-///
-/// ```
-/// use cutlab::plant::reduced::{SecondOrderConfig, SecondOrderProcess};
-/// let cfg = SecondOrderConfig::new(0.05, 0.02, 0.4).unwrap();
-/// let mut p = SecondOrderProcess::new(cfg, 1e-3).unwrap();
-/// let mut f = 0.0;
-/// for _ in 0..100 { f = p.step(500.0, cfg.force_gain_n_per_mm_min).1; }
-/// assert!((f - cfg.step_response_n(0.1, 500.0)).abs() < 1e-9);
-/// ```
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct SecondOrderProcess {
-    phi: Mat<2>,
-    gamma: [f64; 2],
-    /// [v (mm/min), y (mm/min)].
-    x: [f64; 2],
-}
-
-impl SecondOrderProcess {
-    /// At rest, sampled every `dt_s`.
-    pub fn new(config: SecondOrderConfig, dt_s: f64) -> Result<Self, PlantError> {
-        config.validate()?;
-        positive("dt_s", dt_s)?;
-        let (tf, tc) = (config.feed_time_constant_s, config.force_time_constant_s);
-        let a = [[-1.0 / tf, 0.0], [1.0 / tc, -1.0 / tc]];
-        let b = [[1.0 / tf], [0.0]];
-        let (phi, gamma) = linalg::zoh::<2, 1, 3>(&a, &b, dt_s);
-        Ok(Self {
-            phi,
-            gamma: [gamma[0][0], gamma[1][0]],
-            x: [0.0, 0.0],
-        })
-    }
-
-    /// Advances one sample with command `feed_command_mm_min` and the current gain; returns
-    /// (table speed v in mm/min, force F in N).
-    pub fn step(&mut self, feed_command_mm_min: f64, gain_n_per_mm_min: f64) -> (f64, f64) {
-        let x = linalg::mul_vec(&self.phi, &self.x);
-        self.x = [
-            x[0] + self.gamma[0] * feed_command_mm_min,
-            x[1] + self.gamma[1] * feed_command_mm_min,
-        ];
-        (self.x[0], gain_n_per_mm_min * self.x[1])
-    }
-
-    /// Back to rest.
-    pub fn reset(&mut self) {
-        self.x = [0.0, 0.0];
-    }
-}
-
-/// What paper 001's plant cuts: a straight line, one spindle speed, a gain along the path.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct SecondOrderRun {
-    /// The process dynamics (its gain is overridden by `gain_n_per_mm_min` along the path).
-    pub process: SecondOrderConfig,
-    /// Length of the cut.
-    pub length_mm: f64,
-    /// Programmed feed.
-    pub programmed_feed_mm_min: f64,
-    /// Spindle speed.
-    pub spindle_rpm: f64,
-    /// Static gain G(s) along the path as (position, N per mm/min) points.
-    pub gain_n_per_mm_min: Vec<(f64, f64)>,
-    /// Cutter radius R, for the torque T = R·F/√(1 + r²) (paper 003 eq 3, 5).
-    pub cutter_radius_mm: f64,
-    /// Radial-to-tangential ratio r.
-    pub radial_ratio: f64,
-    /// Sample rate, seed, CNC, drives and sensors (the scenario-free parts of a mill).
-    pub machine: super::simulator::SimConfig,
-}
-
-/// Paper 001's plant as a machine: CNC → eq 2.3 → feed and spindle drives → sensors.
-///
-/// The reduced model has no geometry: its one force F acts against the feed (the feed axis is X)
-/// and makes the spindle torque R·F/√(1 + r²).
-#[derive(Debug, Clone)]
-pub struct SecondOrderMachine {
-    run: SecondOrderRun,
-    gain: Profile,
-    dt_s: f64,
-    override_input: OverrideInput,
-    planner: FeedPlanner,
-    process: SecondOrderProcess,
-    axis: FeedDrive,
-    spindle: SpindleDrive,
-    feed_sensor: CurrentSensor,
-    spindle_sensor: CurrentSensor,
-    samples: u64,
-    started_at_s: Option<f64>,
-    signals: PlantSignals,
-    last: MachineStep,
-    finished: bool,
-}
-
-impl SecondOrderMachine {
-    /// A machine at rest.
-    ///
-    /// ```
-    /// use cutlab::machine::{Machine, OverrideCommand};
-    /// use cutlab::plant::reduced::{SecondOrderConfig, SecondOrderMachine, SecondOrderRun};
-    /// use cutlab::plant::simulator::SimConfig;
-    /// let run = SecondOrderRun {
-    ///     process: SecondOrderConfig::new(1.0 / 30.0, 0.02, 0.3).unwrap(),
-    ///     length_mm: 50.0, programmed_feed_mm_min: 600.0, spindle_rpm: 3000.0,
-    ///     gain_n_per_mm_min: vec![(0.0, 0.3)], cutter_radius_mm: 5.0, radial_ratio: 0.4,
-    ///     machine: SimConfig { sample_rate_hz: 1000.0, ..SimConfig::default() },
-    /// };
-    /// let mut m = SecondOrderMachine::new(run).unwrap();
-    /// let mut s = m.step(OverrideCommand::default());
-    /// for _ in 0..4000 { s = m.step(OverrideCommand::default()); }
-    /// assert!((s.truth.unwrap().force_resultant_n - 0.3 * 600.0).abs() < 1.0);
-    /// ```
-    pub fn new(run: SecondOrderRun) -> Result<Self, PlantError> {
-        run.process.validate().map_err(|e| e.within("process"))?;
-        run.machine.validate().map_err(|e| e.within("machine"))?;
-        positive("length_mm", run.length_mm)?;
-        positive("programmed_feed_mm_min", run.programmed_feed_mm_min)?;
-        non_negative("spindle_rpm", run.spindle_rpm)?;
-        positive("cutter_radius_mm", run.cutter_radius_mm)?;
-        non_negative("radial_ratio", run.radial_ratio)?;
-        let gain = Profile::new(&run.gain_n_per_mm_min, "gain_n_per_mm_min")?;
-        let m = &run.machine;
-        let dt_s = 1.0 / m.sample_rate_hz;
-        let block = PlanBlock {
-            length_mm: run.length_mm,
-            feed_mm_min: run.programmed_feed_mm_min,
-            radius_mm: f64::INFINITY,
-            start_direction_rad: 0.0,
-            end_direction_rad: 0.0,
-        };
-        Ok(Self {
-            gain,
-            dt_s,
-            override_input: OverrideInput::new(&m.cnc, dt_s)
-                .map_err(|e| e.within("machine.cnc"))?,
-            planner: FeedPlanner::new(vec![block], m.cnc, dt_s)
-                .map_err(|e| e.within("machine.cnc"))?,
-            process: SecondOrderProcess::new(run.process, dt_s)?,
-            axis: FeedDrive::new(m.feed_drive, dt_s).map_err(|e| e.within("machine.feed_drive"))?,
-            spindle: SpindleDrive::new(m.spindle_drive, dt_s)
-                .map_err(|e| e.within("machine.spindle_drive"))?,
-            feed_sensor: CurrentSensor::new(m.feed_sensor, dt_s, m.seed, 0)?,
-            spindle_sensor: CurrentSensor::new(m.spindle_sensor, dt_s, m.seed, 3)?,
-            run,
-            samples: 0,
-            started_at_s: None,
-            signals: PlantSignals::default(),
-            last: MachineStep::default(),
-            finished: false,
-        })
-    }
-
-    fn advance(&mut self, command: OverrideCommand) -> MachineStep {
-        self.samples += 1;
-        let time_s = self.samples as f64 * self.dt_s;
-        let (applied, hold) = self.override_input.step(command);
-        let tol = self.run.machine.cnc.spindle_arrival_tolerance * self.run.spindle_rpm;
-        let ready = (self.spindle.speed_rpm() - self.run.spindle_rpm).abs() <= tol;
-        let cnc = self.planner.step(applied.pct, hold, ready);
-        let gain = self.gain.value_at(cnc.position_mm);
-        // f_r is the commanded feed; the process contains the feed drive's own lag.
-        let (v, force_n) = self.process.step(cnc.commanded_feed_mm_min, gain);
-        let r = self.run.radial_ratio;
-        let torque_nm = self.run.cutter_radius_mm * 1e-3 * force_n / (1.0 + r * r).sqrt();
-        let ax = self.axis.step(v, force_n, 0.0);
-        let sp = self.spindle.step(self.run.spindle_rpm, torque_nm);
-        if sp.running && self.started_at_s.is_none() {
-            self.started_at_s = Some(time_s);
-        }
-        let feed_read = self.feed_sensor.read(ax.phase_currents_a);
-        let spindle_read = self.spindle_sensor.read(sp.phase_currents_a);
-        let feed_rms = three_phase_rms_a(ax.phase_currents_a);
-        // The reduced model has no tool geometry.
-        let f_tooth = f64::NAN;
-        let power_w = torque_nm * super::rad_s_from_rpm(sp.speed_rpm);
-        let sensors = SensorSample {
-            time_s,
-            feed_phase_currents_a: feed_read,
-            spindle_phase_currents_a: spindle_read,
-            spindle_fv_voltage_v: sp.fv_voltage_v,
-            spindle_speed_rpm: sp.speed_rpm,
-            spindle_command_rpm: self.run.spindle_rpm,
-            programmed_feed_mm_min: self.run.programmed_feed_mm_min,
-            feed_mm_min: v,
-            applied_override_pct: applied.pct,
-            spindle_running: sp.running,
-            time_since_spindle_start_s: self.started_at_s.map_or(0.0, |t| time_s - t),
-        };
-        let truth = PlantTruth {
-            force_x_n: -force_n,
-            force_resultant_n: force_n,
-            feed_force_n: force_n,
-            spindle_torque_nm: torque_nm,
-            cutting_power_w: power_w,
-            depth_mm: f64::NAN,
-            width_mm: f64::NAN,
-            feed_per_tooth_mm: f_tooth,
-            path_position_mm: cnc.position_mm,
-            tool_x_mm: cnc.position_mm,
-            feed_current_rms_a: feed_rms,
-            spindle_current_rms_a: sp.rms_current_a,
-            ..PlantTruth::default()
-        };
-        self.signals = PlantSignals {
-            time_s,
-            path_position_mm: cnc.position_mm,
-            commanded_position_mm: cnc.commanded_position_mm,
-            tool_x_mm: cnc.position_mm,
-            programmed_feed_mm_min: self.run.programmed_feed_mm_min,
-            requested_override_pct: command.override_pct,
-            applied_override_pct: applied.pct,
-            dial_code: applied.dial_code,
-            feed_hold: hold,
-            commanded_feed_mm_min: cnc.commanded_feed_mm_min,
-            feed_mm_min: v,
-            feed_per_tooth_mm: f_tooth,
-            spindle_command_rpm: self.run.spindle_rpm,
-            spindle_speed_rpm: sp.speed_rpm,
-            spindle_gear: sp.gear,
-            depth_mm: f64::NAN,
-            width_mm: f64::NAN,
-            entry_deg: f64::NAN,
-            exit_deg: f64::NAN,
-            force_x_n: -force_n,
-            force_resultant_n: force_n,
-            feed_force_n: force_n,
-            spindle_torque_nm: torque_nm,
-            cutting_power_w: power_w,
-            power_law_force_n: f64::NAN,
-            axis_x: AxisSignals {
-                velocity_mm_min: v,
-                load_force_n: force_n,
-                torque_nm: ax.torque_nm,
-                iq_a: ax.iq_a,
-                phase_currents_a: ax.phase_currents_a,
-            },
-            spindle_motor_torque_nm: sp.motor_torque_nm,
-            spindle_current_rms_a: sp.rms_current_a,
-            spindle_phase_currents_a: sp.phase_currents_a,
-            feed_current_rms_a: feed_rms,
-            fv_voltage_v: sp.fv_voltage_v,
-            feed_currents_read_a: feed_read,
-            spindle_currents_read_a: spindle_read,
-            brake_excitation_a: f64::NAN,
-            brake_torque_nm: f64::NAN,
-            ..PlantSignals::default()
-        };
-        self.finished = cnc.finished || time_s >= self.run.machine.max_duration_s;
-        MachineStep {
-            sensors,
-            truth: Some(truth),
-        }
-    }
-}
-
-impl Machine for SecondOrderMachine {
-    fn sample_rate_hz(&self) -> f64 {
-        self.run.machine.sample_rate_hz
-    }
-
-    fn step(&mut self, command: OverrideCommand) -> MachineStep {
-        if !self.finished {
-            self.last = self.advance(command);
-        }
-        self.last
-    }
-
-    fn finished(&self) -> bool {
-        self.finished
-    }
-}
-
-impl Plant for SecondOrderMachine {
-    fn signals(&self) -> &PlantSignals {
-        &self.signals
-    }
-
-    fn reset(&mut self) {
-        let seed = self.run.machine.seed;
-        self.override_input.reset();
-        self.planner.reset();
-        self.process.reset();
-        self.axis.reset();
-        self.spindle.reset();
-        self.feed_sensor.reset(seed, 0);
-        self.spindle_sensor.reset(seed, 3);
-        self.samples = 0;
-        self.started_at_s = None;
-        self.signals = PlantSignals::default();
-        self.last = MachineStep::default();
-        self.finished = false;
-    }
-}
-
-// ───────────────────────────── paper 002 ─────────────────────────────
+use super::spindle_drive::SpindleDriveConfig;
+use super::{
+    non_negative, positive, rpm_from_rad_s, PlantError, PlantModel, PlantSample, Sampling, Tick,
+    S_PER_MIN,
+};
+use crate::machine::{OverrideCommand, PlantTruth, SensorSample};
 
 /// Paper 002's Table 1.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -625,7 +208,7 @@ impl BondGraphParams {
     /// unique one, which Table 1's values never cause).
     ///
     /// ```
-    /// use cutlab::plant::reduced::BondGraphParams;
+    /// use cutlab::plant::bond_graph::BondGraphParams;
     /// let p = BondGraphParams::default();
     /// let s = p.steady_state(380.0, 220.0, 0.0).unwrap();
     /// assert!((s.spindle_current_a - 12.86).abs() < 0.01); // paper 002: "12 A"
@@ -636,12 +219,24 @@ impl BondGraphParams {
         feed_voltage_v: f64,
         cutting_damping_n_s_per_m: f64,
     ) -> Option<BondGraphOutputs> {
+        self.steady_state_vector(spindle_voltage_v, feed_voltage_v, cutting_damping_n_s_per_m)
+            .map(|x| self.outputs(&x))
+    }
+
+    /// The state vector [p₃, p₆, p₁₁, p₁₄, q₁₇, p₂₀] of [`BondGraphParams::steady_state`]:
+    /// x = −A⁻¹·B·[S_e1, S_e2].
+    pub fn steady_state_vector(
+        &self,
+        spindle_voltage_v: f64,
+        feed_voltage_v: f64,
+        cutting_damping_n_s_per_m: f64,
+    ) -> Option<[f64; 6]> {
         let (a, b) = self.state_space(cutting_damping_n_s_per_m);
         let mut rhs = [0.0; 6];
         for (r, row) in rhs.iter_mut().zip(&b) {
             *r = -(row[0] * spindle_voltage_v + row[1] * feed_voltage_v);
         }
-        linalg::solve(&a, &rhs).map(|x| self.outputs(&x))
+        linalg::solve(&a, &rhs)
     }
 }
 
@@ -665,7 +260,7 @@ pub struct BondGraphOutputs {
 /// Eq 5 stepped exactly with voltages held over each sample.
 ///
 /// ```
-/// use cutlab::plant::reduced::{BondGraphModel, BondGraphParams};
+/// use cutlab::plant::bond_graph::{BondGraphModel, BondGraphParams};
 /// let mut m = BondGraphModel::new(BondGraphParams::default(), 0.0, 1e-3).unwrap();
 /// let mut out = m.step(380.0, 220.0);
 /// for _ in 0..8000 { out = m.step(380.0, 220.0); }
@@ -740,7 +335,7 @@ pub struct BondGraphRun {
     pub load_steps: Vec<LoadStep>,
     /// Length of the run.
     pub duration_s: f64,
-    /// The feed waits this long after the spindle voltage is applied.
+    /// The feed waits this long after the start (the spindle is at speed from t = 0).
     pub spindle_start_dwell_s: f64,
     /// Sample rate.
     pub sample_rate_hz: f64,
@@ -802,7 +397,7 @@ impl BondGraphRun {
     /// in steady state r_s·i_s = m_s·K_L·q₁₇ and K_L·q₁₇ = (C_z + C_cut)·v.
     ///
     /// ```
-    /// use cutlab::plant::reduced::{BondGraphParams, BondGraphRun};
+    /// use cutlab::plant::bond_graph::{BondGraphParams, BondGraphRun};
     /// let c = BondGraphRun::cutting_damping_for(&BondGraphParams::default(), 25.0, 1500.0);
     /// assert!((c - 442_952.38).abs() < 0.01); // N·s/m
     /// ```
@@ -858,12 +453,21 @@ struct LoadLevel {
     speed_per_volt: [f64; 2],
 }
 
+impl LoadLevel {
+    /// S_e2 that gives `feed_mm_min` in steady state with the spindle at `spindle_voltage_v`
+    /// (exact: eq 5 is linear).
+    fn feed_voltage_v(&self, spindle_voltage_v: f64, feed_mm_min: f64) -> f64 {
+        let v_m_s = feed_mm_min / S_PER_MIN * 1e-3;
+        (v_m_s - self.speed_per_volt[0] * spindle_voltage_v) / self.speed_per_volt[1]
+    }
+}
+
 /// Paper 002's bond-graph plant as a machine: the CNC's feed sets S_e2, the spindle runs at its
 /// rated S_e1, and the sensors read the spindle and x-axis currents.
 ///
 /// ```
 /// use cutlab::machine::{Machine, OverrideCommand};
-/// use cutlab::plant::reduced::{BondGraphMachine, BondGraphRun};
+/// use cutlab::plant::bond_graph::{BondGraphMachine, BondGraphRun};
 /// let run = BondGraphRun { sample_rate_hz: 1000.0, ..BondGraphRun::paper_002() };
 /// let mut m = BondGraphMachine::new(run).unwrap();
 /// let mut s = m.step(OverrideCommand::default());
@@ -877,21 +481,19 @@ pub struct BondGraphMachine {
     run: BondGraphRun,
     levels: Vec<LoadLevel>,
     level: usize,
-    dt_s: f64,
-    override_input: OverrideInput,
-    planner: FeedPlanner,
+    sampling: Sampling,
+    control: Control,
     x: [f64; 6],
+    /// Where `x` starts and restarts: the spindle at speed, the table still.
+    initial_state: [f64; 6],
     feed_voltage_v: f64,
+    initial_feed_voltage_v: f64,
     position_mm: f64,
     spindle_angle_rad: f64,
     feed_angle_rad: f64,
     waveform: ThreePhaseWaveform,
     spindle_sensor: CurrentSensor,
     feed_sensor: CurrentSensor,
-    samples: u64,
-    signals: PlantSignals,
-    last: MachineStep,
-    finished: bool,
 }
 
 /// Pole pairs used to turn the bond graph's motor speeds into phase-current frequencies (the
@@ -900,10 +502,16 @@ const SPINDLE_POLE_PAIRS: f64 = 2.0;
 const FEED_POLE_PAIRS: f64 = 4.0;
 
 impl BondGraphMachine {
-    /// A machine at rest.
+    /// A machine with its spindle running at the rated voltage and the table still: eq 5's
+    /// steady state for S_e1 and the S_e2 of zero feed at the first load level.
+    ///
+    /// Starting from rest instead would switch both voltages on at once, and the spindle's
+    /// run-up, which eq 5 couples into the table through m_s·K_L, would shake the table at
+    /// ±650 mm/min for the first 0.1 s (and ±3 mm/min after 3 s) with no feed commanded.
     pub fn new(run: BondGraphRun) -> Result<Self, PlantError> {
         run.validate()?;
-        let dt_s = 1.0 / run.sample_rate_hz;
+        let sampling = Sampling::new(run.sample_rate_hz);
+        let dt_s = sampling.dt_s();
         let mut levels = Vec::with_capacity(run.load_steps.len());
         for (i, step) in run.load_steps.iter().enumerate() {
             let (a, b) = run.params.state_space(step.cutting_damping_n_s_per_m);
@@ -933,22 +541,33 @@ impl BondGraphMachine {
                 speed_per_volt: [v1, v2],
             });
         }
-        let length_mm = run.programmed_feed_mm_min * 2.56 * run.duration_s / S_PER_MIN + 1.0;
-        let block = PlanBlock {
-            length_mm,
-            feed_mm_min: run.programmed_feed_mm_min,
-            radius_mm: f64::INFINITY,
-            start_direction_rad: 0.0,
-            end_direction_rad: 0.0,
+        let spindle_voltage_v = run.params.spindle_voltage_v;
+        let (initial_feed_voltage_v, initial_state) = match levels.first() {
+            Some(first) => {
+                let se2 = first.feed_voltage_v(spindle_voltage_v, 0.0);
+                let x = run.params.steady_state_vector(
+                    spindle_voltage_v,
+                    se2,
+                    first.cutting_damping_n_s_per_m,
+                );
+                (se2, x)
+            }
+            None => (0.0, None),
         };
+        let initial_state = initial_state.ok_or_else(|| {
+            PlantError::new("load_steps[0]", "eq 5 has no steady state with this load")
+        })?;
+        let length_mm = run.programmed_feed_mm_min * 2.56 * run.duration_s / S_PER_MIN + 1.0;
+        let block = PlanBlock::straight(length_mm, run.programmed_feed_mm_min);
         Ok(Self {
             levels,
             level: 0,
-            dt_s,
-            override_input: OverrideInput::new(&run.cnc, dt_s).map_err(|e| e.within("cnc"))?,
-            planner: FeedPlanner::new(vec![block], run.cnc, dt_s).map_err(|e| e.within("cnc"))?,
-            x: [0.0; 6],
-            feed_voltage_v: 0.0,
+            sampling,
+            control: Control::new(&run.cnc, vec![block], dt_s).map_err(|e| e.within("cnc"))?,
+            x: initial_state,
+            initial_state,
+            feed_voltage_v: initial_feed_voltage_v,
+            initial_feed_voltage_v,
             position_mm: 0.0,
             spindle_angle_rad: 0.0,
             feed_angle_rad: 0.0,
@@ -958,10 +577,6 @@ impl BondGraphMachine {
             feed_sensor: CurrentSensor::new(run.feed_sensor, dt_s, run.seed, 0)
                 .map_err(|e| e.within("feed_sensor"))?,
             run,
-            samples: 0,
-            signals: PlantSignals::default(),
-            last: MachineStep::default(),
-            finished: false,
         })
     }
 
@@ -974,21 +589,28 @@ impl BondGraphMachine {
     pub fn state(&self) -> [f64; 6] {
         self.x
     }
+}
 
-    fn advance(&mut self, command: OverrideCommand) -> MachineStep {
-        self.samples += 1;
-        let time_s = self.samples as f64 * self.dt_s;
+impl PlantModel for BondGraphMachine {
+    fn sampling(&self) -> &Sampling {
+        &self.sampling
+    }
+
+    fn sampling_mut(&mut self) -> &mut Sampling {
+        &mut self.sampling
+    }
+
+    fn advance(&mut self, tick: Tick, command: OverrideCommand) -> PlantSample {
+        let (time_s, dt_s) = (tick.time_s, tick.dt_s);
         while self.level + 1 < self.levels.len() && time_s >= self.levels[self.level + 1].start_s {
             self.level += 1;
         }
-        let (applied, hold) = self.override_input.step(command);
         let ready = time_s >= self.run.spindle_start_dwell_s;
-        let cnc = self.planner.step(applied.pct, hold, ready);
+        let control = self.control.step(command, ready);
+        let (applied, cnc) = (control.applied, control.cnc);
         let level = self.levels[self.level];
         let se1 = self.run.params.spindle_voltage_v;
-        // S_e2 for the commanded feed in steady state (exact: eq 5 is linear).
-        let v_cmd_m_s = cnc.commanded_feed_mm_min / S_PER_MIN * 1e-3;
-        self.feed_voltage_v = (v_cmd_m_s - level.speed_per_volt[0] * se1) / level.speed_per_volt[1];
+        self.feed_voltage_v = level.feed_voltage_v(se1, cnc.commanded_feed_mm_min);
         let mut x = linalg::mul_vec(&level.phi, &self.x);
         for (xi, g) in x.iter_mut().zip(&level.gamma) {
             *xi += g[0] * se1 + g[1] * self.feed_voltage_v;
@@ -996,12 +618,12 @@ impl BondGraphMachine {
         self.x = x;
         let out = self.run.params.outputs(&self.x);
         let feed_mm_min = out.table_velocity_m_s * 1e3 * S_PER_MIN;
-        self.position_mm += feed_mm_min / S_PER_MIN * self.dt_s;
+        self.position_mm += feed_mm_min / S_PER_MIN * dt_s;
         self.spindle_angle_rad = (self.spindle_angle_rad
-            + SPINDLE_POLE_PAIRS * out.spindle_speed_rad_s * self.dt_s)
+            + SPINDLE_POLE_PAIRS * out.spindle_speed_rad_s * dt_s)
             .rem_euclid(TAU);
         self.feed_angle_rad = (self.feed_angle_rad
-            + FEED_POLE_PAIRS * out.feed_motor_speed_rad_s * self.dt_s)
+            + FEED_POLE_PAIRS * out.feed_motor_speed_rad_s * dt_s)
             .rem_euclid(TAU);
         // The gyrator currents are taken as RMS values of balanced three-phase sets.
         let spindle_currents = self.waveform.currents(
@@ -1043,34 +665,17 @@ impl BondGraphMachine {
             feed_per_tooth_mm: f64::NAN,
             path_position_mm: self.position_mm,
             tool_x_mm: self.position_mm,
-            feed_current_rms_a: out.feed_current_a.abs(),
+            // Eq 7 over the three phases, as the field promises and the other plants do.
+            feed_current_rms_a: three_phase_rms_a(feed_currents),
             spindle_current_rms_a: out.spindle_current_a.abs(),
             ..PlantTruth::default()
         };
-        self.signals = PlantSignals {
-            time_s,
-            path_position_mm: self.position_mm,
-            commanded_position_mm: cnc.commanded_position_mm,
-            tool_x_mm: self.position_mm,
-            programmed_feed_mm_min: self.run.programmed_feed_mm_min,
-            requested_override_pct: command.override_pct,
-            applied_override_pct: applied.pct,
-            dial_code: applied.dial_code,
-            feed_hold: hold,
-            commanded_feed_mm_min: cnc.commanded_feed_mm_min,
+        let signals = PlantSignals {
             feed_mm_min,
-            feed_per_tooth_mm: f64::NAN,
             spindle_command_rpm: rpm_from_rad_s(se1 / self.run.params.spindle_armature_coefficient),
             spindle_speed_rpm: spindle_rpm,
-            depth_mm: f64::NAN,
-            width_mm: f64::NAN,
             entry_deg: f64::NAN,
             exit_deg: f64::NAN,
-            force_x_n: -out.contact_force_n,
-            force_resultant_n: out.contact_force_n.abs(),
-            feed_force_n: cutting_force_n,
-            spindle_torque_nm: torque_nm,
-            cutting_power_w: power_w,
             power_law_force_n: f64::NAN,
             axis_x: AxisSignals {
                 velocity_mm_min: feed_mm_min,
@@ -1081,90 +686,38 @@ impl BondGraphMachine {
             },
             spindle_motor_torque_nm: self.run.params.spindle_armature_coefficient
                 * out.spindle_current_a,
-            spindle_current_rms_a: out.spindle_current_a.abs(),
             spindle_phase_currents_a: spindle_currents,
-            feed_current_rms_a: three_phase_rms_a(feed_currents),
             fv_voltage_v: fv,
             feed_currents_read_a: feed_read,
             spindle_currents_read_a: spindle_read,
             brake_excitation_a: f64::NAN,
             brake_torque_nm: f64::NAN,
-            ..PlantSignals::default()
+            ..PlantSignals::from_control(time_s, truth, &control)
         };
-        self.finished = time_s >= self.run.duration_s - 0.5 * self.dt_s;
-        MachineStep {
+        PlantSample {
             sensors,
-            truth: Some(truth),
+            signals,
+            finished: time_s >= self.run.duration_s - 0.5 * dt_s,
         }
     }
-}
 
-impl Machine for BondGraphMachine {
-    fn sample_rate_hz(&self) -> f64 {
-        self.run.sample_rate_hz
-    }
-
-    fn step(&mut self, command: OverrideCommand) -> MachineStep {
-        if !self.finished {
-            self.last = self.advance(command);
-        }
-        self.last
-    }
-
-    fn finished(&self) -> bool {
-        self.finished
-    }
-}
-
-impl Plant for BondGraphMachine {
-    fn signals(&self) -> &PlantSignals {
-        &self.signals
-    }
-
-    fn reset(&mut self) {
+    fn restart(&mut self) -> PlantSignals {
         self.level = 0;
-        self.override_input.reset();
-        self.planner.reset();
-        self.x = [0.0; 6];
-        self.feed_voltage_v = 0.0;
+        self.control.reset();
+        self.x = self.initial_state;
+        self.feed_voltage_v = self.initial_feed_voltage_v;
         self.position_mm = 0.0;
         self.spindle_angle_rad = 0.0;
         self.feed_angle_rad = 0.0;
         self.spindle_sensor.reset(self.run.seed, 3);
         self.feed_sensor.reset(self.run.seed, 0);
-        self.samples = 0;
-        self.signals = PlantSignals::default();
-        self.last = MachineStep::default();
-        self.finished = false;
+        PlantSignals::default()
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn second_order_step_matches_the_closed_form_at_every_sample() {
-        let cfg = SecondOrderConfig::new(0.033, 0.02, 0.5).unwrap();
-        let dt = 1e-4;
-        let mut p = SecondOrderProcess::new(cfg, dt).unwrap();
-        for k in 1..=2000 {
-            let (_, f) = p.step(300.0, cfg.force_gain_n_per_mm_min);
-            let exact = cfg.step_response_n(k as f64 * dt, 300.0);
-            assert!((f - exact).abs() < 1e-9 * 150.0, "k {k}: {f} vs {exact}");
-        }
-    }
-
-    #[test]
-    fn equal_time_constants_use_the_critically_damped_form() {
-        let cfg = SecondOrderConfig::new(0.02, 0.02, 1.0).unwrap();
-        let mut p = SecondOrderProcess::new(cfg, 1e-3).unwrap();
-        let mut f = 0.0;
-        for _ in 0..50 {
-            f = p.step(100.0, 1.0).1;
-        }
-        assert!((f - cfg.step_response_n(0.05, 100.0)).abs() < 1e-9);
-    }
 
     #[test]
     fn bond_graph_steady_state_balances_eq_5() {
