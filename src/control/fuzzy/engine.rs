@@ -68,6 +68,11 @@ impl Defuzzifier {
         Defuzzifier::MeanOfMaximum,
     ];
 
+    /// The defuzzifier of fuzzylite's `name` (`"Centroid"`, `"WeightedAverage"`, …).
+    pub fn from_name(name: &str) -> Option<Defuzzifier> {
+        Self::ALL.into_iter().find(|d| d.name() == name)
+    }
+
     /// fuzzylite's name.
     pub fn name(self) -> &'static str {
         match self {

@@ -157,3 +157,95 @@ pub fn paper_002_engine(table: &RuleTable, defuzzifier: Defuzzifier) -> Result<E
         Norm::Minimum,
     )
 }
+
+/// The rule table of an engine that has paper 002's shape — inputs E and EC and output U, each
+/// with the seven standard triangles, and rules of one E term and one EC term to one U term —
+/// whatever order its rules come in; `None` for any other engine (a table would misstate it).
+/// This is how an imported FLL engine comes back to the 7×7 table the lab edits.
+///
+/// ```
+/// use cutlab::control::fuzzy::engine::Defuzzifier;
+/// use cutlab::control::fuzzy::rules::{paper_002_engine, rule_table_of, RuleBase};
+/// let table = RuleBase::Dynamics.table();
+/// let engine = paper_002_engine(&table, Defuzzifier::WeightedAverage).unwrap();
+/// assert_eq!(rule_table_of(&engine), Some(table));
+/// ```
+pub fn rule_table_of(engine: &Engine) -> Option<RuleTable> {
+    let standard = seven_terms();
+    let [e, ec] = engine.inputs() else {
+        return None;
+    };
+    let [u] = engine.outputs() else {
+        return None;
+    };
+    if e.terms != standard || ec.terms != standard || u.terms != standard {
+        return None;
+    }
+    // 9 marks a cell no rule filled: a table with a hole is no table.
+    let mut table = [[9i8; 7]; 7];
+    for rule in engine.rules() {
+        let (&[(0, i), (1, j)] | &[(1, j), (0, i)]) = rule.antecedents.as_slice() else {
+            return None;
+        };
+        let &[(0, t)] = rule.consequents.as_slice() else {
+            return None;
+        };
+        let cell = table.get_mut(i).and_then(|row| row.get_mut(j))?;
+        *cell = i8::try_from(t).ok()? - 3;
+    }
+    table
+        .iter()
+        .flatten()
+        .all(|l| (-3..=3).contains(l))
+        .then_some(table)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::control::fuzzy::fll;
+
+    #[test]
+    fn an_exported_engine_comes_back_to_its_table() {
+        for base in [RuleBase::Experience, RuleBase::Dynamics] {
+            let table = base.table();
+            let engine = paper_002_engine(&table, Defuzzifier::Centroid).unwrap();
+            let text = fll::write(&engine);
+            let imported = fll::parse(&text).unwrap();
+            assert_eq!(rule_table_of(&imported), Some(table), "{base:?}");
+        }
+    }
+
+    #[test]
+    fn an_engine_of_another_shape_has_no_table() {
+        let table = RuleBase::Dynamics.table();
+        let engine = paper_002_engine(&table, Defuzzifier::Centroid).unwrap();
+        // A rule missing leaves a hole.
+        let mut rules = engine.rules().to_vec();
+        rules.pop();
+        let holed = Engine::new(
+            "holed",
+            engine.inputs().to_vec(),
+            engine.outputs().to_vec(),
+            rules,
+            Norm::Minimum,
+            Norm::Minimum,
+        )
+        .unwrap();
+        assert_eq!(rule_table_of(&holed), None);
+        // Other terms on an input.
+        let mut inputs = engine.inputs().to_vec();
+        inputs[0].terms.pop();
+        let fewer = Engine::new(
+            "fewer",
+            inputs,
+            engine.outputs().to_vec(),
+            engine.rules()[..42].to_vec(),
+            Norm::Minimum,
+            Norm::Minimum,
+        );
+        if let Ok(fewer) = fewer {
+            assert_eq!(rule_table_of(&fewer), None);
+        }
+    }
+}

@@ -11,9 +11,7 @@ use crate::closed_loop::lab::LabRuns;
 use crate::closed_loop::lab::{RunResult, RunSpec};
 use crate::control::fuzzy::engine::{Defuzzifier, Engine};
 use crate::control::fuzzy::fll;
-use crate::control::fuzzy::rules::{
-    paper_002_engine, seven_terms, RuleBase, RuleTable, LEVEL_NAMES,
-};
+use crate::control::fuzzy::rules::{paper_002_engine, rule_table_of, RuleBase, LEVEL_NAMES};
 use crate::control::registry::{ControllerConfig, ControllerKind};
 use crate::plant::Preset;
 use crate::web::components::chart::ChartCanvas;
@@ -32,43 +30,6 @@ const SURFACE_POINTS: usize = 61;
 enum Source {
     Table,
     Imported(Arc<Engine>),
-}
-
-fn defuzzifier_named(name: &str) -> Defuzzifier {
-    Defuzzifier::ALL
-        .into_iter()
-        .find(|d| d.name() == name)
-        .unwrap_or(Defuzzifier::Centroid)
-}
-
-/// The table of an imported engine, if it is paper 002's shape (E, EC → U, the seven standard
-/// triangles, 49 single-consequent rules).
-fn table_of(engine: &Engine) -> Option<RuleTable> {
-    let standard = seven_terms();
-    let [e, ec] = engine.inputs() else {
-        return None;
-    };
-    let [u] = engine.outputs() else {
-        return None;
-    };
-    if e.terms != standard || ec.terms != standard || u.terms != standard {
-        return None;
-    }
-    let mut table = [[9i8; 7]; 7];
-    for rule in engine.rules() {
-        let (&[(0, i), (1, j)] | &[(1, j), (0, i)]) = rule.antecedents.as_slice() else {
-            return None;
-        };
-        let &[(0, t)] = rule.consequents.as_slice() else {
-            return None;
-        };
-        table[i][j] = t as i8 - 3;
-    }
-    table
-        .iter()
-        .flatten()
-        .all(|l| (-3..=3).contains(l))
-        .then_some(table)
 }
 
 fn surface(engine: &Engine) -> HeatMap {
@@ -162,7 +123,7 @@ pub fn FuzzyPage() -> impl IntoView {
     });
 
     let engine = Memo::new(move |_| -> Result<Arc<Engine>, String> {
-        let d = defuzzifier_named(&defuzzifier.get());
+        let d = Defuzzifier::from_name(&defuzzifier.get()).unwrap_or(Defuzzifier::Centroid);
         match source.get() {
             Source::Table => paper_002_engine(&table.get(), d)
                 .map(Arc::new)
@@ -360,7 +321,7 @@ pub fn FuzzyPage() -> impl IntoView {
             }
             // Into the editable table only if the file is exactly paper 002's engine with some
             // table (same ranges, terms, operators and weights): anything else is kept whole.
-            let as_table = table_of(&engine).filter(|t| {
+            let as_table = rule_table_of(&engine).filter(|t| {
                 engine.outputs().first().is_some_and(|output| {
                     paper_002_engine(t, output.defuzzifier)
                         .is_ok_and(|paper| fll::write(&paper) == fll::write(&engine))
