@@ -136,6 +136,7 @@ fn a_teach_cut_on_the_model_of_the_cut_holds_the_target_on_a_machine_without_tru
         mode: scenario.mode,
         coefficients: scenario.materials[0].material.coefficients(),
     };
+    let reference = simulate(&spec).unwrap();
     let truthless = |seed: u64| -> Box<dyn Machine> {
         Box::new(WithDynamometer {
             machine: Box::new(spec.preset.machine(seed).unwrap()),
@@ -155,7 +156,6 @@ fn a_teach_cut_on_the_model_of_the_cut_holds_the_target_on_a_machine_without_tru
     .unwrap()
     .run_to_end()
     .unwrap();
-    let reference = simulate(&spec).unwrap();
     // The model of the cut is the plant's mechanistic model without runout: the calibrated
     // estimator agrees with the truth-taught one to a few percent.
     let estimate = |r: &cutlab::closed_loop::lab::RunResult, current_a: f64| {

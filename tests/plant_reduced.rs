@@ -194,7 +194,7 @@ fn maneerats_reduced_plant_settles_at_gain_times_feed_and_follows_the_override()
         }
         f
     };
-    let full = force_at(100.0, 3000);
+    let full = force_at(100.0, 6000);
     assert!(
         (full - gain * 900.0).abs() < 1e-3 * full,
         "{full} vs {}",

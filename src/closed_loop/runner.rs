@@ -398,9 +398,46 @@ struct TeachSamples {
     command_rpm: Vec<f64>,
     fv_voltage_v: Vec<f64>,
     feed_mm_min: Vec<f64>,
+    /// The regulated force of the periods at 100 % override, the index of each among the
+    /// samples, and its ratio to the true mean resultant (NaN without truth).
     full_override_forces_n: Vec<f64>,
+    full_override_at: Vec<usize>,
     full_override_ratios: Vec<f64>,
     max_phase_current_a: f64,
+}
+
+/// A period whose current is within this fraction of the teach cut's lowest is taken for air by
+/// the cut-model force source.
+const AIR_CURRENT_MARGIN: f64 = 0.02;
+
+impl TeachSamples {
+    /// The samples without the air cut. The model of the cut gives a force whenever the axes
+    /// feed, in air too, so it cannot say where the tool enters; the current can: the teach
+    /// program approaches in air (as a part program does), and its lowest current is the idle
+    /// one. Periods within [`AIR_CURRENT_MARGIN`] of it are air.
+    fn without_air(&self) -> TeachSamples {
+        let air_a = self.current_a.iter().copied().fold(f64::INFINITY, f64::min);
+        let keep: Vec<usize> = (0..self.current_a.len())
+            .filter(|&i| self.current_a[i] > air_a * (1.0 + AIR_CURRENT_MARGIN))
+            .collect();
+        let pick = |v: &[f64]| keep.iter().filter_map(|&i| v.get(i).copied()).collect();
+        let full: Vec<usize> = (0..self.full_override_at.len())
+            .filter(|&k| keep.contains(&self.full_override_at[k]))
+            .collect();
+        let pick_full = |v: &[f64]| full.iter().filter_map(|&k| v.get(k).copied()).collect();
+        TeachSamples {
+            current_a: pick(&self.current_a),
+            force_n: pick(&self.force_n),
+            speed_rpm: pick(&self.speed_rpm),
+            command_rpm: pick(&self.command_rpm),
+            fv_voltage_v: pick(&self.fv_voltage_v),
+            feed_mm_min: pick(&self.feed_mm_min),
+            full_override_forces_n: pick_full(&self.full_override_forces_n),
+            full_override_at: full.iter().map(|&k| self.full_override_at[k]).collect(),
+            full_override_ratios: pick_full(&self.full_override_ratios),
+            max_phase_current_a: self.max_phase_current_a,
+        }
+    }
 }
 
 /// Sums of a period's dynamometer readings.
@@ -485,6 +522,7 @@ impl TeachCut {
                 geometry,
                 depth_mm,
                 width_mm,
+                ..
             } => geometry
                 .mean_forces(
                     period.feed_mm_min,
@@ -524,11 +562,12 @@ impl TeachCut {
             || period.feed_mm_min.abs() < 1e-6;
         if !skipped {
             if command_pct == 100.0 {
+                samples.full_override_at.push(samples.current_a.len());
                 samples.full_override_forces_n.push(force_n);
-                let ratio = force_n / period.force_mean_resultant_n;
-                if ratio.is_finite() {
-                    samples.full_override_ratios.push(ratio);
-                }
+                // NaN without truth: dropped when the ratio is taken.
+                samples
+                    .full_override_ratios
+                    .push(force_n / period.force_mean_resultant_n);
             }
             samples.current_a.push(match self.feedback {
                 Feedback::SpindleCurrent => period.spindle_current_rms_a,
@@ -548,7 +587,14 @@ impl TeachCut {
 
     /// Fits the estimator to what was collected.
     pub fn calibration(&self) -> Result<Calibration, LoopError> {
-        let s = &self.samples;
+        let in_cut;
+        let s = match self.force_source {
+            TeachForce::CutModel { .. } => {
+                in_cut = self.samples.without_air();
+                &in_cut
+            }
+            _ => &self.samples,
+        };
         let estimator = match self.feedback {
             Feedback::SpindleCurrent => {
                 let speed_model = FvSpeedModel::calibrate(
@@ -590,7 +636,13 @@ impl TeachCut {
         Ok(Calibration {
             estimator,
             median_force_at_full_override_n: median(&s.full_override_forces_n),
-            regulated_per_resultant: median(&s.full_override_ratios),
+            regulated_per_resultant: median(
+                &s.full_override_ratios
+                    .iter()
+                    .copied()
+                    .filter(|r| r.is_finite())
+                    .collect::<Vec<_>>(),
+            ),
             periods: s.force_n.len(),
             max_phase_current_a: s.max_phase_current_a,
         })

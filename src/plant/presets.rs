@@ -447,7 +447,8 @@ const fn maneerat(
             "hardened tool steel coefficients for the printed 'SKD41'",
             "down milling at 3 mm radial width",
             "programmed feed 900 mm/min (0.075 mm/tooth), above target at every depth",
-            "120 mm cut after 10 mm of air",
+            "120 mm cut after 40 mm of air: the approach outlasts the 3 s arming delay, as a part \
+             program's would, so the loop is armed before the tool enters",
             "continuous override (the paper's D/A card)",
         ],
         override_mode: OverrideMode::Continuous,
@@ -457,10 +458,10 @@ const fn maneerat(
             width_mm: 3.0,
             spindle_rpm: 3000.0,
             feed_mm_min: 900.0,
-            start_mm: [-10.0, 0.0],
+            start_mm: [-40.0, 0.0],
             path: &[([120.0, 0.0], MoveKind::Line)],
             depth_mm,
-            materials: &[(10.0, 130.0, Material::ToolSteel)],
+            materials: &[(40.0, 160.0, Material::ToolSteel)],
             // The paper prints the targets in "Nm"; they are forces.
             target: ForceTarget::Given(target_force_n),
             second_order_equivalent: true,
