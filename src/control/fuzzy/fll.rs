@@ -383,13 +383,24 @@ fn rule(
         .position(|w| *w == "then")
         .ok_or_else(|| fail("no \"then\"".into()))?;
     let (consequent_words, weight) = match words.iter().position(|w| *w == "with") {
+        // The weight closes the rule: a "with" before "then" would leave the consequent inside
+        // out (and slicing it panicked).
+        Some(w) if w < then => {
+            return Err(fail(
+                "\"with\" and its weight come after the consequent".into(),
+            ))
+        }
         Some(w) => {
             let value = words
                 .get(w + 1)
                 .ok_or_else(|| fail("\"with\" needs a weight".into()))?;
-            (&words[then + 1..w], number(line, value, "rule weight")?)
+            if words.len() > w + 2 {
+                return Err(fail("nothing may follow the weight".into()));
+            }
+            let consequent = words.get(then + 1..w).unwrap_or_default();
+            (consequent, number(line, value, "rule weight")?)
         }
-        None => (&words[then + 1..], 1.0),
+        None => (words.get(then + 1..).unwrap_or_default(), 1.0),
     };
     let propositions = |part: &[&str], output: bool| -> Result<Vec<(usize, usize)>, FuzzyError> {
         part.split(|w| *w == "and")
@@ -532,6 +543,36 @@ pub fn write(engine: &Engine) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn rules_with_keywords_in_any_order_are_errors_that_name_the_line_never_panics() {
+        let head = "Engine: e\nInputVariable: E\n  range: -1 1\n  term: A Triangle -1 0 1\n\
+                    OutputVariable: U\n  range: -1 1\n  term: B Triangle -1 0 1\n\
+                    RuleBlock: r\n";
+        let words = [
+            "if", "is", "and", "or", "then", "with", "very", "not", "E", "A", "U", "B", "0.5",
+        ];
+        let mut rng = crate::rng::Rng::seed_from(11);
+        for n in 0..3000 {
+            let len = 1 + (rng.next_u64() % 12) as usize;
+            let rule: Vec<&str> = (0..len)
+                .map(|_| words[(rng.next_u64() % words.len() as u64) as usize])
+                .collect();
+            let text = format!("{head}  rule: {}\n", rule.join(" "));
+            if let Err(e) = parse(&text) {
+                assert!(e.to_string().starts_with("line 9:"), "{n}: {e}");
+            }
+        }
+        // The case that panicked, and a weight with something after it.
+        for rule in [
+            "if E is A with 0.5 then U is B",
+            "if E is A then U is B with 0.5 U",
+        ] {
+            let e = parse(&format!("{head}  rule: {rule}\n")).unwrap_err();
+            assert!(e.to_string().starts_with("line 9:"), "{e}");
+        }
+        assert!(parse(&format!("{head}  rule: if E is A then U is B with 0.5\n")).is_ok());
+    }
     use crate::control::fuzzy::rules::{paper_002_engine, RuleBase};
 
     #[test]
