@@ -59,3 +59,18 @@ fn exported_engine_evaluates_line_by_line_at_full_precision() {
     );
     std::fs::remove_dir_all(dir).ok();
 }
+
+/// Stray words after `fuzzy eval` and `fuzzy export` were silently ignored; they are errors.
+#[test]
+fn stray_arguments_after_fuzzy_subcommands_are_refused() {
+    let fll = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/www/data/paper-002-dynamics.fll"
+    );
+    let (result, _) = cutlab(&["fuzzy", "eval", "--fll", fll, "0.5"], "0 0\n");
+    let e = result.unwrap_err();
+    assert!(e.starts_with("unexpected argument \"0.5\""), "{e}");
+    let (result, _) = cutlab(&["fuzzy", "export", "--rules", "dynamics", "extra"], "");
+    assert_eq!(result.unwrap_err(), "unexpected argument \"extra\"");
+    assert!(cutlab(&["fuzzy", "eval", "--fll", fll], "0 0\n").0.is_ok());
+}

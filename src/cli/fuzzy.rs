@@ -57,6 +57,7 @@ fn eval(args: &[String], io: &mut Io<'_>) -> Result<(), CliError> {
         );
     }
     let options = Options::parse(args, EVAL_OPTIONS)?;
+    options.reject_positionals("the inputs come on standard input")?;
     let path: String = options.require("fll")?;
     let text = std::fs::read_to_string(&path)
         .map_err(|e| CliError::new(format!("{path}: cannot read: {e}")))?;
@@ -110,6 +111,7 @@ fn export(args: &[String], io: &mut Io<'_>) -> Result<(), CliError> {
         );
     }
     let options = Options::parse(args, EXPORT_OPTIONS)?;
+    options.reject_positionals("")?;
     let rules: String = options.require("rules")?;
     let base = RuleBase::ALL
         .into_iter()
