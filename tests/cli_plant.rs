@@ -202,3 +202,45 @@ fn scenarios_errors_name_the_option() {
     let (result, _) = cutlab(&["scenarios", "--seed", "3"]);
     assert_eq!(result.unwrap_err(), "--seed only applies with --run NAME");
 }
+
+/// A cut no end mill makes, or forces beyond f64, are refused naming the option: they once came
+/// out as nulls (or absurd numbers) with exit 0.
+#[test]
+fn force_refuses_absurd_cuts_and_overflow() {
+    let with = |changes: &[(&str, &str)]| {
+        let mut args: Vec<&str> = SLOT.to_vec();
+        if !changes.iter().any(|(o, _)| *o == "--ktc") {
+            args.extend(["--material", "sm45c"]);
+        } else {
+            args.extend(["--krc", "790", "--kac", "440", "--kte", "35", "--kre", "45"]);
+            args.extend(["--kae", "3"]);
+        }
+        for (option, value) in changes {
+            match args.iter().position(|a| a == option) {
+                Some(i) => args[i + 1] = value,
+                None => args.extend([*option, *value]),
+            }
+        }
+        cutlab(&args).0
+    };
+    let cases: [(&[(&str, &str)], &str); 4] = [
+        (
+            &[("--diameter-mm", "1e6")],
+            "--diameter-mm: 1000000 mm is larger than any end mill",
+        ),
+        (
+            &[
+                ("--diameter-mm", "10"),
+                ("--radial-width-mm", "10"),
+                ("--axial-depth-mm", "1000"),
+            ],
+            "--axial-depth-mm: 1000 mm is deeper than the flute",
+        ),
+        (&[("--feed-per-tooth-mm", "1e300")], "--feed-per-tooth-mm: "),
+        (&[("--ktc", "1e308")], "the forces overflow f64"),
+    ];
+    for (changes, expected) in cases {
+        let e = with(changes).unwrap_err();
+        assert!(e.starts_with(expected), "{changes:?}: {e}");
+    }
+}

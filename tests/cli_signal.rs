@@ -355,3 +355,26 @@ fn help_describes_streaming_and_zero_phase_buffering() {
     assert!(text.contains("constant memory"));
     assert!(text.contains("temporary file"));
 }
+
+/// Samples whose squares overflow gave a spectrum of nulls with exit 0; an endless input aborted
+/// on allocation. Both are refused with a message.
+#[test]
+fn spectrum_refuses_overflow_and_records_too_long_to_hold() {
+    let huge = to_bytes(&vec![1e300; 5000]);
+    let e = error_of(&["spectrum", "--fs", "1000"], &huge);
+    assert!(e.starts_with("stdin: the spectrum overflows"), "{e}");
+
+    let mut endless = std::io::BufReader::new(std::io::repeat(0));
+    let mut out = Vec::new();
+    let args: Vec<String> = ["spectrum", "--fs", "1000"].map(String::from).to_vec();
+    let e = cutlab::cli::run(
+        &args,
+        &mut cutlab::cli::Io {
+            stdin: &mut endless,
+            stdout: &mut out,
+        },
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(e.starts_with("stdin: more than 67108864 samples"), "{e}");
+}

@@ -300,5 +300,22 @@ pub fn run(args: &[String], io: &mut Io<'_>) -> Result<(), CliError> {
         peak_torque_nm,
         closed_form: Means::from(&closed, rpm),
     };
+    // JSON prints an overflowed number as null: say so instead.
+    let numbers = [
+        report.mean_fx_n,
+        report.mean_fy_n,
+        report.mean_fz_n,
+        report.mean_resultant_n,
+        report.mean_torque_nm,
+        report.mean_power_w,
+        report.peak_resultant_n,
+        report.peak_torque_nm,
+    ];
+    if numbers.iter().any(|v| !v.is_finite()) {
+        return Err(CliError::new(
+            "the forces overflow f64: the cutting coefficients or the cut are beyond any \
+             physical value",
+        ));
+    }
     write_json(io.stdout, &report)
 }

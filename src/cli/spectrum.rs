@@ -2,6 +2,8 @@
 
 use serde::Serialize;
 
+use std::io::Read as _;
+
 use super::{help_text_for, wants_help, write_json, CliError, Io, OptionSpec, Options};
 use crate::signal::spectrum::welch;
 
@@ -27,6 +29,9 @@ struct Output {
 }
 
 /// Runs `cutlab spectrum`.
+/// The longest record read: 2²⁶ samples (512 MiB of f64).
+pub const MAX_SAMPLES: usize = 1 << 26;
+
 pub fn run(args: &[String], io: &mut Io<'_>) -> Result<(), CliError> {
     if wants_help(args) {
         return help_text_for(
@@ -48,8 +53,18 @@ pub fn run(args: &[String], io: &mut Io<'_>) -> Result<(), CliError> {
     if nperseg == 0 {
         return Err(CliError::new("--nperseg: must be at least 1"));
     }
+    // Refuse a record too long to hold rather than let the allocation abort the process.
     let mut bytes = Vec::new();
-    io.stdin.read_to_end(&mut bytes)?;
+    io.stdin
+        .take(8 * MAX_SAMPLES as u64 + 1)
+        .read_to_end(&mut bytes)?;
+    if bytes.len() > 8 * MAX_SAMPLES {
+        return Err(CliError::new(format!(
+            "stdin: more than {MAX_SAMPLES} samples ({} MiB); split the record and average the \
+             spectra of its parts",
+            8 * MAX_SAMPLES / (1 << 20)
+        )));
+    }
     let (samples, rest) = bytes.as_chunks::<8>();
     if !rest.is_empty() {
         return Err(CliError::new(format!(
@@ -70,6 +85,14 @@ pub fn run(args: &[String], io: &mut Io<'_>) -> Result<(), CliError> {
     }
     let psd = welch(&samples, sample_rate_hz, nperseg)
         .map_err(|e| CliError::new(format!("stdin: {e}")))?;
+    // Squares of samples near 1e308 overflow; JSON would print them as null.
+    if psd.psd.iter().any(|p| !p.is_finite()) {
+        let largest = samples.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+        return Err(CliError::new(format!(
+            "stdin: the spectrum overflows (samples up to {largest:e} square beyond f64); scale \
+             the samples down"
+        )));
+    }
     write_json(
         io.stdout,
         &Output {
