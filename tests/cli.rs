@@ -43,7 +43,11 @@ fn errors_are_one_line_and_name_what_is_wrong() {
     );
     assert!(!message.contains('\n'));
     let (result, _) = cutlab(&["controllers", "--jsn"], "");
-    assert_eq!(result.unwrap_err(), "unknown option --jsn (see --help)");
+    // clap suggests the option meant.
+    assert_eq!(
+        result.unwrap_err(),
+        "unknown option --jsn (did you mean --json?) (see --help)"
+    );
 }
 
 #[test]

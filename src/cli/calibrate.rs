@@ -7,36 +7,71 @@ use std::fmt::Write as _;
 
 use serde::Serialize;
 
-use super::{help_text_for, wants_help, write_json, CliError, Io, OptionSpec, Options};
+use super::args::{required, value_or};
+use super::{write_json, CliError, Io};
 use crate::closed_loop::runner::GEAR_CHANGE_RPM;
 use crate::estimation::cut_forces::{cutting_material, CutGeometry};
 use crate::estimation::teach_log::{calibrate_log, LogCalibration, LogError, LogTable};
 use crate::plant::mechanics::{Cutter, MillingMode};
 
-const OPTIONS: &[OptionSpec] = &[
-    OptionSpec::flag("json", "Print the fitted models as JSON"),
-    OptionSpec::value(
-        "gear-change-rpm",
-        "RPM",
-        "Spindle speed of the gear change (default 900, paper 003)",
-    ),
-    OptionSpec::value(
-        "material",
-        "NAME",
-        "Model each row's force from its feed, speed, depth and width instead of force_n \
+pub(crate) const ABOUT: &str =
+    "Fit paper 003's spindle-current model and paper 000's feed-current model from a\n\
+logged teach cut (e.g. the CSV of cutlab sim --csv) and report R², the residual\n\
+spread and the calibrated range. The force is the log's force_n column, or without\n\
+a dynamometer, modelled from each row's feed, speed, depth and width (--material).";
+
+#[derive(Debug, clap::Args)]
+pub struct CalibrateArgs {
+    /// The CSV log of a teach cut
+    #[arg(value_name = "FILE.csv")]
+    files: Vec<String>,
+    #[arg(long = "json", help = "Print the fitted models as JSON")]
+    json: bool,
+    #[arg(
+        long = "gear-change-rpm",
+        help = "Spindle speed of the gear change (default 900, paper 003)",
+        value_name = "RPM",
+        allow_hyphen_values = true
+    )]
+    gear_change_rpm: Option<String>,
+    #[arg(
+        long = "material",
+        help = "Model each row's force from its feed, speed, depth and width instead of force_n \
          (with --diameter-mm, --teeth, --mode; names as in cutlab force --help)",
-    ),
-    OptionSpec::value("diameter-mm", "D", "Cutter diameter, mm (with --material)"),
-    OptionSpec::value("teeth", "Z", "Number of teeth (with --material)"),
-    OptionSpec::value("mode", "up|down|slot", "Milling mode (with --material)"),
-];
+        value_name = "NAME",
+        allow_hyphen_values = true
+    )]
+    material: Option<String>,
+    #[arg(
+        long = "diameter-mm",
+        help = "Cutter diameter, mm (with --material)",
+        value_name = "D",
+        allow_hyphen_values = true
+    )]
+    diameter_mm: Option<String>,
+    #[arg(
+        long = "teeth",
+        help = "Number of teeth (with --material)",
+        value_name = "Z",
+        allow_hyphen_values = true
+    )]
+    teeth: Option<String>,
+    #[arg(
+        long = "mode",
+        help = "Milling mode (with --material)",
+        value_name = "up|down|slot",
+        allow_hyphen_values = true
+    )]
+    mode: Option<String>,
+}
 
 const GEOMETRY_OPTIONS: [&str; 3] = ["diameter-mm", "teeth", "mode"];
 
 /// The cut from `--material` and its companions, if given, with a description for the report.
-fn cut_geometry(options: &Options) -> Result<Option<(CutGeometry, String)>, CliError> {
-    let Some(name) = options.text("material") else {
-        if let Some(stray) = GEOMETRY_OPTIONS.iter().find(|o| options.flag(o)) {
+fn cut_geometry(args: &CalibrateArgs) -> Result<Option<(CutGeometry, String)>, CliError> {
+    let Some(name) = args.material.as_deref() else {
+        let given = [&args.diameter_mm, &args.teeth, &args.mode].map(Option::is_some);
+        if let Some((stray, _)) = GEOMETRY_OPTIONS.iter().zip(given).find(|(_, g)| *g) {
             return Err(CliError::new(format!(
                 "--{stray} only applies with --material (modelled forces)"
             )));
@@ -44,9 +79,9 @@ fn cut_geometry(options: &Options) -> Result<Option<(CutGeometry, String)>, CliE
         return Ok(None);
     };
     let material = cutting_material(name).map_err(|e| CliError::new(format!("--material: {e}")))?;
-    let diameter_mm: f64 = options.require("diameter-mm")?;
-    let teeth: u32 = options.require("teeth")?;
-    let mode_text: String = options.require("mode")?;
+    let diameter_mm: f64 = required("diameter-mm", &args.diameter_mm)?;
+    let teeth: u32 = required("teeth", &args.teeth)?;
+    let mode_text: String = required("mode", &args.mode)?;
     let mode = MillingMode::from_name(&mode_text).ok_or_else(|| {
         CliError::new(format!(
             "--mode: expected up, down or slot, got {mode_text:?}"
@@ -79,24 +114,11 @@ struct JsonReport<'a> {
 }
 
 /// Runs `cutlab calibrate`.
-pub fn run(args: &[String], io: &mut Io<'_>) -> Result<(), CliError> {
-    if wants_help(args) {
-        return help_text_for(
-            io,
-            "cutlab calibrate FILE.csv [--json] [--gear-change-rpm RPM] \
-             [--material NAME --diameter-mm D --teeth Z --mode up|down|slot]",
-            "Fit paper 003's spindle-current model and paper 000's feed-current model from a\n\
-             logged teach cut (e.g. the CSV of cutlab sim --csv) and report R², the residual\n\
-             spread and the calibrated range. The force is the log's force_n column, or without\n\
-             a dynamometer, modelled from each row's feed, speed, depth and width (--material).",
-            OPTIONS,
-        );
-    }
-    let options = Options::parse(args, OPTIONS)?;
-    let [file] = options.positionals() else {
+pub fn run(args: CalibrateArgs, io: &mut Io<'_>) -> Result<(), CliError> {
+    let [file] = args.files.as_slice() else {
         return Err(CliError::new("name exactly one CSV file to calibrate from"));
     };
-    let gear_change_rpm: f64 = options.get_or("gear-change-rpm", GEAR_CHANGE_RPM)?;
+    let gear_change_rpm: f64 = value_or("gear-change-rpm", &args.gear_change_rpm, GEAR_CHANGE_RPM)?;
     if !(gear_change_rpm.is_finite() && gear_change_rpm > 0.0) {
         return Err(CliError::new(format!(
             "--gear-change-rpm: must be a positive speed, got {gear_change_rpm}"
@@ -106,7 +128,7 @@ pub fn run(args: &[String], io: &mut Io<'_>) -> Result<(), CliError> {
         .map_err(|e| CliError::new(format!("{file}: cannot read: {e}")))?;
     let in_file = |e: LogError| CliError::new(format!("{file}: {e}"));
     let table = LogTable::parse(&text).map_err(in_file)?;
-    let geometry = cut_geometry(&options)?;
+    let geometry = cut_geometry(&args)?;
     let report = calibrate_log(
         &table,
         geometry.as_ref().map(|(g, source)| (g, source.as_str())),
@@ -114,7 +136,7 @@ pub fn run(args: &[String], io: &mut Io<'_>) -> Result<(), CliError> {
     )
     .map_err(in_file)?;
     let rows_with_force = report.rows_with_force;
-    if options.flag("json") {
+    if args.json {
         return write_json(
             io.stdout,
             &JsonReport {

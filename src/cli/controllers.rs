@@ -2,10 +2,17 @@
 
 use serde::Serialize;
 
-use super::{help_text_for, wants_help, write_json, CliError, Io, OptionSpec, Options};
+use super::{write_json, CliError, Io};
 use crate::control::registry::{ControllerKind, ParamSpec};
 
-const OPTIONS: &[OptionSpec] = &[OptionSpec::flag("json", "Print JSON instead of a table")];
+/// List the feed-override controllers with their parameters (default, range, unit). Set a
+/// parameter in `cutlab sim` with --set key=value.
+#[derive(Debug, clap::Args)]
+pub struct ControllersArgs {
+    /// Print JSON instead of a table
+    #[arg(long)]
+    json: bool,
+}
 
 #[derive(Serialize)]
 struct ControllerListing {
@@ -16,19 +23,8 @@ struct ControllerListing {
 }
 
 /// Runs `cutlab controllers`.
-pub fn run(args: &[String], io: &mut Io<'_>) -> Result<(), CliError> {
-    if wants_help(args) {
-        return help_text_for(
-            io,
-            "cutlab controllers [--json]",
-            "List the feed-override controllers with their parameters (default, range, unit).\n\
-             Set a parameter in `cutlab sim` with --set key=value.",
-            OPTIONS,
-        );
-    }
-    let options = Options::parse(args, OPTIONS)?;
-    options.reject_positionals("")?;
-    if options.flag("json") {
+pub fn run(args: ControllersArgs, io: &mut Io<'_>) -> Result<(), CliError> {
+    if args.json {
         let listing: Vec<ControllerListing> = ControllerKind::ALL
             .iter()
             .map(|k| ControllerListing {

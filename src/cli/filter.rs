@@ -9,60 +9,100 @@ use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicU64, Ordering};
 
-use super::{help_text_for, wants_help, CliError, Io, OptionSpec, Options};
+use super::args::{reject_extra, required, value_or};
+use super::{CliError, Io};
 use crate::signal::butterworth::{butter, ButterworthSpec, Cutoff, DesignError, FilterKind};
 use crate::signal::filtfilt::{filter_stream, filtfilt_stream, StreamError, MAX_STREAM_CHANNELS};
 use crate::signal::sos::Sos;
 
-const DESIGN_OPTIONS: &[OptionSpec] = &[
-    OptionSpec::value(
-        "kind",
-        "KIND",
-        "lowpass, highpass, bandpass or bandstop (default lowpass)",
-    ),
-    OptionSpec::value(
-        "order",
-        "N",
-        "Filter order, 1 to 20 (band filters have 2N poles)",
-    ),
-    OptionSpec::value(
-        "cutoff",
-        "HZ[,HZ2]",
-        "Cut-off frequency in Hz; lower,upper for bandpass/bandstop",
-    ),
-    OptionSpec::value("fs", "HZ", "Sampling rate in Hz"),
-];
+/// The filter a design or an application describes.
+#[derive(Debug, clap::Args)]
+pub struct DesignOptions {
+    #[arg(
+        long = "kind",
+        help = "lowpass, highpass, bandpass or bandstop (default lowpass)",
+        value_name = "KIND",
+        allow_hyphen_values = true
+    )]
+    kind: Option<String>,
+    #[arg(
+        long = "order",
+        help = "Filter order, 1 to 20 (band filters have 2N poles)",
+        value_name = "N",
+        allow_hyphen_values = true
+    )]
+    order: Option<String>,
+    #[arg(
+        long = "cutoff",
+        help = "Cut-off frequency in Hz; lower,upper for bandpass/bandstop",
+        value_name = "HZ[,HZ2]",
+        allow_hyphen_values = true
+    )]
+    cutoff: Option<String>,
+    #[arg(
+        long = "fs",
+        help = "Sampling rate in Hz",
+        value_name = "HZ",
+        allow_hyphen_values = true
+    )]
+    fs: Option<String>,
+}
 
-const APPLY_OPTIONS: &[OptionSpec] = &[
-    OptionSpec::value(
-        "kind",
-        "KIND",
-        "lowpass, highpass, bandpass or bandstop (default lowpass)",
-    ),
-    OptionSpec::value("order", "N", "Filter order, 1 to 20 (band filters have 2N poles)"),
-    OptionSpec::value(
-        "cutoff",
-        "HZ[,HZ2]",
-        "Cut-off frequency in Hz; lower,upper for bandpass/bandstop",
-    ),
-    OptionSpec::value("fs", "HZ", "Sampling rate in Hz"),
-    OptionSpec::value(
-        "channels",
-        "C",
-        "Interleaved channels per frame, each filtered on its own (default 1)",
-    ),
-    OptionSpec::flag(
-        "zero-phase",
-        "Filter forward and backward (scipy's sosfiltfilt, default odd padding); buffers through a temporary file",
-    ),
-    OptionSpec::value(
-        "temp-dir",
-        "DIR",
-        "Where --zero-phase puts its temporary file (default: the system temp directory, $TMPDIR)",
-    ),
-];
+/// `cutlab filter`: design or apply.
+#[derive(Debug, clap::Args)]
+pub struct FilterArgs {
+    #[command(subcommand)]
+    command: Option<FilterCommand>,
+}
 
-const ABOUT: &str = "Design a digital Butterworth filter as second-order sections, or apply one to samples.\n\n\
+#[derive(Debug, clap::Subcommand)]
+enum FilterCommand {
+    /// Print the sections as JSON, equal to scipy.signal.butter(..., output='sos')
+    #[command(long_about = DESIGN_ABOUT)]
+    Design(DesignArgs),
+    /// Filter raw little-endian f64 samples from stdin to stdout
+    #[command(long_about = APPLY_ABOUT)]
+    Apply(ApplyArgs),
+}
+
+#[derive(Debug, clap::Args)]
+pub struct DesignArgs {
+    #[command(flatten)]
+    design: DesignOptions,
+    /// Stray words: refused with a hint where such input goes.
+    #[arg(hide = true)]
+    extra: Vec<String>,
+}
+
+#[derive(Debug, clap::Args)]
+pub struct ApplyArgs {
+    #[command(flatten)]
+    design: DesignOptions,
+    #[arg(
+        long = "channels",
+        help = "Interleaved channels per frame, each filtered on its own (default 1)",
+        value_name = "C",
+        allow_hyphen_values = true
+    )]
+    channels: Option<String>,
+    #[arg(
+        long = "zero-phase",
+        help = "Filter forward and backward (scipy's sosfiltfilt, default odd padding); buffers through a temporary file"
+    )]
+    zero_phase: bool,
+    #[arg(
+        long = "temp-dir",
+        help = "Where --zero-phase puts its temporary file (default: the system temp directory, $TMPDIR)",
+        value_name = "DIR",
+        allow_hyphen_values = true
+    )]
+    temp_dir: Option<String>,
+    /// Stray words: refused with a hint where such input goes.
+    #[arg(hide = true)]
+    extra: Vec<String>,
+}
+
+pub(crate) const ABOUT: &str = "Design a digital Butterworth filter as second-order sections, or apply one to samples.\n\n\
 Subcommands:\n  \
 design  Print the sections as JSON {\"sos\": [[b0, b1, b2, a0, a1, a2], ...]}, scipy's layout,\n          \
 equal to scipy.signal.butter(N, Wn, btype, fs=fs, output='sos')\n  \
@@ -89,50 +129,27 @@ written to stdout until the input has ended. The file is removed afterwards.\n\n
 Example: cutlab filter apply --order 10 --cutoff 50 --fs 10000 --channels 3 < in.f64 > out.f64";
 
 /// Runs `cutlab filter`.
-pub fn run(args: &[String], io: &mut Io<'_>) -> Result<(), CliError> {
-    match args.first().map(String::as_str) {
-        Some("design") => design(&args[1..], io),
-        Some("apply") => apply(&args[1..], io),
-        Some(other) if !other.starts_with('-') => Err(CliError::new(format!(
-            "unknown filter subcommand {other:?}; subcommands: design, apply"
-        ))),
-        _ if wants_help(args) => {
-            help_text_for(io, "cutlab filter <design|apply> [OPTIONS]", ABOUT, &[])
-        }
-        _ => Err(CliError::new(
+/// Runs `cutlab filter`.
+pub fn run(args: FilterArgs, io: &mut Io<'_>) -> Result<(), CliError> {
+    match args.command {
+        Some(FilterCommand::Design(a)) => design(a, io),
+        Some(FilterCommand::Apply(a)) => apply(a, io),
+        None => Err(CliError::new(
             "cutlab filter needs a subcommand: design or apply (see cutlab filter --help)",
         )),
     }
 }
 
-fn design(args: &[String], io: &mut Io<'_>) -> Result<(), CliError> {
-    if wants_help(args) {
-        return help_text_for(
-            io,
-            "cutlab filter design [--kind KIND] --order N --cutoff HZ[,HZ2] --fs HZ",
-            DESIGN_ABOUT,
-            DESIGN_OPTIONS,
-        );
-    }
-    let options = Options::parse(args, DESIGN_OPTIONS)?;
-    options.reject_positionals("samples come on stdin")?;
-    let sos = design_from(&options)?;
+fn design(args: DesignArgs, io: &mut Io<'_>) -> Result<(), CliError> {
+    reject_extra(&args.extra, "samples come on stdin")?;
+    let sos = design_from(&args.design)?;
     write_sos_json(io.stdout, &sos)
 }
 
-fn apply(args: &[String], io: &mut Io<'_>) -> Result<(), CliError> {
-    if wants_help(args) {
-        return help_text_for(
-            io,
-            "cutlab filter apply [--kind KIND] --order N --cutoff HZ[,HZ2] --fs HZ [--channels C] [--zero-phase] < IN > OUT",
-            APPLY_ABOUT,
-            APPLY_OPTIONS,
-        );
-    }
-    let options = Options::parse(args, APPLY_OPTIONS)?;
-    options.reject_positionals("samples come on stdin")?;
-    let sos = design_from(&options)?;
-    let channels: usize = options.get_or("channels", 1)?;
+fn apply(args: ApplyArgs, io: &mut Io<'_>) -> Result<(), CliError> {
+    reject_extra(&args.extra, "samples come on stdin")?;
+    let sos = design_from(&args.design)?;
+    let channels: usize = value_or("channels", &args.channels, 1)?;
     if channels == 0 {
         return Err(CliError::new("--channels: must be at least 1"));
     }
@@ -141,16 +158,17 @@ fn apply(args: &[String], io: &mut Io<'_>) -> Result<(), CliError> {
             "--channels: at most {MAX_STREAM_CHANNELS}, got {channels}"
         )));
     }
-    if options.flag("zero-phase") {
-        let directory = options
-            .text("temp-dir")
+    if args.zero_phase {
+        let directory = args
+            .temp_dir
+            .as_deref()
             .map(PathBuf::from)
             .unwrap_or_else(std::env::temp_dir);
         let mut scratch = TempFile::create(&directory)?;
         filtfilt_stream(&sos, channels, io.stdin, io.stdout, &mut scratch.file)
             .map_err(stream_error)?;
     } else {
-        if options.text("temp-dir").is_some() {
+        if args.temp_dir.as_deref().is_some() {
             return Err(CliError::new(
                 "--temp-dir only matters with --zero-phase (causal filtering needs no temporary file)",
             ));
@@ -162,17 +180,18 @@ fn apply(args: &[String], io: &mut Io<'_>) -> Result<(), CliError> {
 }
 
 /// The design the options describe; errors name the option.
-pub(crate) fn design_from(options: &Options) -> Result<Sos, CliError> {
-    let kind = match options.text("kind") {
+pub(crate) fn design_from(args: &DesignOptions) -> Result<Sos, CliError> {
+    let kind = match args.kind.as_deref() {
         Some(text) => text
             .parse::<FilterKind>()
             .map_err(|e| CliError::new(format!("--kind: {e}")))?,
         None => FilterKind::Lowpass,
     };
-    let order: usize = options.require("order")?;
-    let sample_rate_hz: f64 = options.require("fs")?;
-    let cutoff_text = options
-        .text("cutoff")
+    let order: usize = required("order", &args.order)?;
+    let sample_rate_hz: f64 = required("fs", &args.fs)?;
+    let cutoff_text = args
+        .cutoff
+        .as_deref()
         .ok_or_else(|| CliError::new("missing required option --cutoff"))?;
     let values = cutoff_text
         .split(',')

@@ -3,7 +3,8 @@
 
 use serde::Serialize;
 
-use super::{help_text_for, wants_help, write_json, CliError, Io, OptionSpec, Options};
+use super::args::{reject_extra, required, value, value_or};
+use super::{write_json, CliError, Io};
 use crate::estimation::cut_forces::cutting_material;
 use crate::plant::materials::CuttingCoefficients;
 use crate::plant::mechanics::{
@@ -11,55 +12,151 @@ use crate::plant::mechanics::{
 };
 use crate::plant::PlantError;
 
-const OPTIONS: &[OptionSpec] = &[
-    OptionSpec::value("diameter-mm", "D", "cutter diameter, mm"),
-    OptionSpec::value("teeth", "Z", "number of teeth (1-16)"),
-    OptionSpec::value(
-        "helix-deg",
-        "H",
-        "helix angle, degrees (default 0: straight teeth)",
-    ),
-    OptionSpec::value("axial-depth-mm", "A", "axial depth of cut, mm"),
-    OptionSpec::value(
-        "radial-width-mm",
-        "W",
-        "radial width of cut, mm (default: the diameter)",
-    ),
-    OptionSpec::value("mode", "up|down|slot", "milling mode"),
-    OptionSpec::value("feed-per-tooth-mm", "F", "feed per tooth, mm"),
-    OptionSpec::value("rpm", "N", "spindle speed, rev/min"),
-    OptionSpec::value(
-        "material",
-        "NAME",
-        "work material: sm45c, aluminium, gc30, tool-steel",
-    ),
-    OptionSpec::value("ktc", "N/mm²", "tangential cutting coefficient K_tc"),
-    OptionSpec::value("krc", "N/mm²", "radial cutting coefficient K_rc"),
-    OptionSpec::value("kac", "N/mm²", "axial cutting coefficient K_ac"),
-    OptionSpec::value("kte", "N/mm", "tangential edge coefficient K_te"),
-    OptionSpec::value("kre", "N/mm", "radial edge coefficient K_re"),
-    OptionSpec::value("kae", "N/mm", "axial edge coefficient K_ae"),
-    OptionSpec::value(
-        "runout-um",
-        "R",
-        "radial runout of the cutter, µm (default 0)",
-    ),
-    OptionSpec::value(
-        "runout-deg",
-        "DEG",
-        "angle of the runout from tooth 0 (default 0)",
-    ),
-    OptionSpec::value(
-        "revolutions",
-        "N",
-        "whole revolutions to simulate (default 4)",
-    ),
-    OptionSpec::value(
-        "steps-per-rev",
-        "N",
-        "angle steps per revolution (default 7200)",
-    ),
-];
+pub(crate) const ABOUT: &str =
+    "Mean and peak milling forces of one cut, from whole revolutions of the mechanistic\n\
+model (Altintas ch. 2; paper 003 eq 1-6), with the closed-form means beside them.\n\
+Forces act on the tool in the feed frame: x along the feed, y to its left, z along\n\
+the tool axis.";
+
+#[derive(Debug, clap::Args)]
+pub struct ForceArgs {
+    #[arg(
+        long = "diameter-mm",
+        help = "cutter diameter, mm",
+        value_name = "D",
+        allow_hyphen_values = true
+    )]
+    diameter_mm: Option<String>,
+    #[arg(
+        long = "teeth",
+        help = "number of teeth (1-16)",
+        value_name = "Z",
+        allow_hyphen_values = true
+    )]
+    teeth: Option<String>,
+    #[arg(
+        long = "helix-deg",
+        help = "helix angle, degrees (default 0: straight teeth)",
+        value_name = "H",
+        allow_hyphen_values = true
+    )]
+    helix_deg: Option<String>,
+    #[arg(
+        long = "axial-depth-mm",
+        help = "axial depth of cut, mm",
+        value_name = "A",
+        allow_hyphen_values = true
+    )]
+    axial_depth_mm: Option<String>,
+    #[arg(
+        long = "radial-width-mm",
+        help = "radial width of cut, mm (default: the diameter)",
+        value_name = "W",
+        allow_hyphen_values = true
+    )]
+    radial_width_mm: Option<String>,
+    #[arg(
+        long = "mode",
+        help = "milling mode",
+        value_name = "up|down|slot",
+        allow_hyphen_values = true
+    )]
+    mode: Option<String>,
+    #[arg(
+        long = "feed-per-tooth-mm",
+        help = "feed per tooth, mm",
+        value_name = "F",
+        allow_hyphen_values = true
+    )]
+    feed_per_tooth_mm: Option<String>,
+    #[arg(
+        long = "rpm",
+        help = "spindle speed, rev/min",
+        value_name = "N",
+        allow_hyphen_values = true
+    )]
+    rpm: Option<String>,
+    #[arg(
+        long = "material",
+        help = "work material: sm45c, aluminium, gc30, tool-steel",
+        value_name = "NAME",
+        allow_hyphen_values = true
+    )]
+    material: Option<String>,
+    #[arg(
+        long = "ktc",
+        help = "tangential cutting coefficient K_tc",
+        value_name = "N/mm²",
+        allow_hyphen_values = true
+    )]
+    ktc: Option<String>,
+    #[arg(
+        long = "krc",
+        help = "radial cutting coefficient K_rc",
+        value_name = "N/mm²",
+        allow_hyphen_values = true
+    )]
+    krc: Option<String>,
+    #[arg(
+        long = "kac",
+        help = "axial cutting coefficient K_ac",
+        value_name = "N/mm²",
+        allow_hyphen_values = true
+    )]
+    kac: Option<String>,
+    #[arg(
+        long = "kte",
+        help = "tangential edge coefficient K_te",
+        value_name = "N/mm",
+        allow_hyphen_values = true
+    )]
+    kte: Option<String>,
+    #[arg(
+        long = "kre",
+        help = "radial edge coefficient K_re",
+        value_name = "N/mm",
+        allow_hyphen_values = true
+    )]
+    kre: Option<String>,
+    #[arg(
+        long = "kae",
+        help = "axial edge coefficient K_ae",
+        value_name = "N/mm",
+        allow_hyphen_values = true
+    )]
+    kae: Option<String>,
+    #[arg(
+        long = "runout-um",
+        help = "radial runout of the cutter, µm (default 0)",
+        value_name = "R",
+        allow_hyphen_values = true
+    )]
+    runout_um: Option<String>,
+    #[arg(
+        long = "runout-deg",
+        help = "angle of the runout from tooth 0 (default 0)",
+        value_name = "DEG",
+        allow_hyphen_values = true
+    )]
+    runout_deg: Option<String>,
+    #[arg(
+        long = "revolutions",
+        help = "whole revolutions to simulate (default 4)",
+        value_name = "N",
+        allow_hyphen_values = true
+    )]
+    revolutions: Option<String>,
+    #[arg(
+        long = "steps-per-rev",
+        help = "angle steps per revolution (default 7200)",
+        value_name = "N",
+        allow_hyphen_values = true
+    )]
+    steps_per_rev: Option<String>,
+    /// Stray words: refused with a hint where such input goes.
+    #[arg(hide = true)]
+    extra: Vec<String>,
+}
 
 const COEFFICIENT_OPTIONS: [&str; 6] = ["ktc", "krc", "kac", "kte", "kre", "kae"];
 
@@ -132,8 +229,8 @@ fn option_error(e: PlantError) -> CliError {
     CliError::new(format!("--{option}: {}", e.message))
 }
 
-fn positive_option(options: &Options, name: &str) -> Result<f64, CliError> {
-    let v: f64 = options.require(name)?;
+fn positive_option(name: &str, text: &Option<String>) -> Result<f64, CliError> {
+    let v: f64 = required(name, text)?;
     if v.is_finite() && v > 0.0 {
         Ok(v)
     } else {
@@ -143,15 +240,17 @@ fn positive_option(options: &Options, name: &str) -> Result<f64, CliError> {
     }
 }
 
-fn coefficients(
-    options: &Options,
-) -> Result<(Option<&'static str>, CuttingCoefficients), CliError> {
+fn coefficients(args: &ForceArgs) -> Result<(Option<&'static str>, CuttingCoefficients), CliError> {
+    let texts = [
+        &args.ktc, &args.krc, &args.kac, &args.kte, &args.kre, &args.kae,
+    ];
     let given: Vec<&str> = COEFFICIENT_OPTIONS
         .iter()
-        .copied()
-        .filter(|n| options.text(n).is_some())
+        .zip(texts)
+        .filter(|(_, t)| t.is_some())
+        .map(|(n, _)| *n)
         .collect();
-    match (options.text("material"), given.is_empty()) {
+    match (args.material.as_deref(), given.is_empty()) {
         (Some(_), false) => Err(CliError::new(format!(
             "--material and --{} exclude each other: give a material or all six coefficients",
             given[0]
@@ -163,8 +262,8 @@ fn coefficients(
         }
         (None, _) => {
             let mut v = [0.0; 6];
-            for (slot, name) in v.iter_mut().zip(COEFFICIENT_OPTIONS) {
-                *slot = options.get(name)?.ok_or_else(|| {
+            for ((slot, name), text) in v.iter_mut().zip(COEFFICIENT_OPTIONS).zip(texts) {
+                *slot = value(name, text)?.ok_or_else(|| {
                     CliError::new(format!(
                         "missing required option --{name} (or give --material)"
                     ))
@@ -178,31 +277,17 @@ fn coefficients(
 }
 
 /// Runs `cutlab force`.
-pub fn run(args: &[String], io: &mut Io<'_>) -> Result<(), CliError> {
-    if wants_help(args) {
-        return help_text_for(
-            io,
-            "cutlab force --diameter-mm D --teeth Z [--helix-deg H] --axial-depth-mm A \
-             [--radial-width-mm W] --mode up|down|slot --feed-per-tooth-mm F --rpm N \
-             (--material NAME | --ktc … --kae …)",
-            "Mean and peak milling forces of one cut, from whole revolutions of the mechanistic\n\
-             model (Altintas ch. 2; paper 003 eq 1-6), with the closed-form means beside them.\n\
-             Forces act on the tool in the feed frame: x along the feed, y to its left, z along\n\
-             the tool axis.",
-            OPTIONS,
-        );
-    }
-    let options = Options::parse(args, OPTIONS)?;
-    options.reject_positionals("")?;
-    let diameter_mm = positive_option(&options, "diameter-mm")?;
-    let teeth: u32 = options.require("teeth")?;
-    let helix_deg: f64 = options.get_or("helix-deg", 0.0)?;
-    let runout_um: f64 = options.get_or("runout-um", 0.0)?;
-    let runout_deg: f64 = options.get_or("runout-deg", 0.0)?;
+pub fn run(args: ForceArgs, io: &mut Io<'_>) -> Result<(), CliError> {
+    reject_extra(&args.extra, "")?;
+    let diameter_mm = positive_option("diameter-mm", &args.diameter_mm)?;
+    let teeth: u32 = required("teeth", &args.teeth)?;
+    let helix_deg: f64 = value_or("helix-deg", &args.helix_deg, 0.0)?;
+    let runout_um: f64 = value_or("runout-um", &args.runout_um, 0.0)?;
+    let runout_deg: f64 = value_or("runout-deg", &args.runout_deg, 0.0)?;
     let cutter = Cutter::new(diameter_mm, teeth, helix_deg)
         .and_then(|c| c.with_runout(runout_um * 1e-3, runout_deg))
         .map_err(option_error)?;
-    let axial_depth_mm = positive_option(&options, "axial-depth-mm")?;
+    let axial_depth_mm = positive_option("axial-depth-mm", &args.axial_depth_mm)?;
     if axial_depth_mm > cutter.max_axial_depth_mm() {
         return Err(CliError::new(format!(
             "--axial-depth-mm: {axial_depth_mm} mm is deeper than a {} mm cutter with a {}° helix \
@@ -213,27 +298,27 @@ pub fn run(args: &[String], io: &mut Io<'_>) -> Result<(), CliError> {
             MAX_EDGE_TURNS - 2.0
         )));
     }
-    let mode_text: String = options.require("mode")?;
+    let mode_text: String = required("mode", &args.mode)?;
     let mode = MillingMode::from_name(&mode_text).ok_or_else(|| {
         CliError::new(format!(
             "--mode: expected up, down or slot, got {mode_text:?}"
         ))
     })?;
-    let radial_width_mm = match options.text("radial-width-mm") {
-        Some(_) => positive_option(&options, "radial-width-mm")?,
+    let radial_width_mm = match args.radial_width_mm.as_deref() {
+        Some(_) => positive_option("radial-width-mm", &args.radial_width_mm)?,
         None => diameter_mm,
     };
-    let feed_per_tooth_mm = positive_option(&options, "feed-per-tooth-mm")?;
+    let feed_per_tooth_mm = positive_option("feed-per-tooth-mm", &args.feed_per_tooth_mm)?;
     cutter
         .check_cut(axial_depth_mm, feed_per_tooth_mm)
         .map_err(|e| match e.field.as_str() {
             "axial_depth_mm" => CliError::new(format!("--axial-depth-mm: {}", e.message)),
             _ => CliError::new(format!("--feed-per-tooth-mm: {}", e.message)),
         })?;
-    let rpm = positive_option(&options, "rpm")?;
-    let (material, k) = coefficients(&options)?;
-    let revolutions: u32 = options.get_or("revolutions", 4)?;
-    let steps_per_rev: u32 = options.get_or("steps-per-rev", 7200)?;
+    let rpm = positive_option("rpm", &args.rpm)?;
+    let (material, k) = coefficients(&args)?;
+    let revolutions: u32 = value_or("revolutions", &args.revolutions, 4)?;
+    let steps_per_rev: u32 = value_or("steps-per-rev", &args.steps_per_rev, 7200)?;
     if !(1..=1000).contains(&revolutions) {
         return Err(CliError::new(format!(
             "--revolutions: must lie in 1..=1000, got {revolutions}"

@@ -2,63 +2,77 @@
 
 use std::io::BufRead;
 
-use super::{help_text_for, wants_help, CliError, Io, OptionSpec, Options};
+use super::args::{reject_extra, required};
+use super::{CliError, Io};
 use crate::control::fuzzy::engine::Defuzzifier;
 use crate::control::fuzzy::fll::{parse, write};
 use crate::control::fuzzy::rules::{paper_002_engine, RuleBase};
 
-const EVAL_OPTIONS: &[OptionSpec] = &[OptionSpec::value(
-    "fll",
-    "FILE",
-    "The engine, in fuzzylite's FLL format (Mamdani)",
-)];
+/// Evaluate a Mamdani engine given in fuzzylite's FLL format (one evaluation per stdin line: the
+/// input values in the order the file declares them), or print paper 002's engine as FLL.
+#[derive(Debug, clap::Args)]
+pub struct FuzzyArgs {
+    #[command(subcommand)]
+    command: Option<FuzzyCommand>,
+}
 
-const EXPORT_OPTIONS: &[OptionSpec] = &[
-    OptionSpec::value(
-        "rules",
-        "experience|dynamics",
-        "Which of paper 002's rule tables",
-    ),
-    OptionSpec::value(
-        "defuzzifier",
-        "centroid|weighted-average|mean-of-maximum",
-        "How the output is defuzzified (default centroid)",
-    ),
-];
+#[derive(Debug, clap::Subcommand)]
+enum FuzzyCommand {
+    /// Read one evaluation per line of standard input (input values separated by spaces, in the
+    /// order the FLL file declares its input variables) and print the output values,
+    /// space-separated, at full precision. Blank lines and lines starting with # are skipped.
+    Eval(EvalArgs),
+    /// Print paper 002's engine (E, EC → U on [-6, 6], seven triangles each, 49 rules) as FLL.
+    Export(ExportArgs),
+}
+
+#[derive(Debug, clap::Args)]
+pub struct EvalArgs {
+    #[arg(
+        long = "fll",
+        help = "The engine, in fuzzylite's FLL format (Mamdani)",
+        value_name = "FILE",
+        allow_hyphen_values = true
+    )]
+    fll: Option<String>,
+    /// Stray words: refused with a hint where such input goes.
+    #[arg(hide = true)]
+    extra: Vec<String>,
+}
+
+#[derive(Debug, clap::Args)]
+pub struct ExportArgs {
+    #[arg(
+        long = "rules",
+        help = "Which of paper 002's rule tables",
+        value_name = "experience|dynamics",
+        allow_hyphen_values = true
+    )]
+    rules: Option<String>,
+    #[arg(
+        long = "defuzzifier",
+        help = "How the output is defuzzified (default centroid)",
+        value_name = "centroid|weighted-average|mean-of-maximum",
+        allow_hyphen_values = true
+    )]
+    defuzzifier: Option<String>,
+    /// Stray words: refused with a hint where such input goes.
+    #[arg(hide = true)]
+    extra: Vec<String>,
+}
 
 /// Runs `cutlab fuzzy`.
-pub fn run(args: &[String], io: &mut Io<'_>) -> Result<(), CliError> {
-    match args.first().map(String::as_str) {
-        Some("eval") => eval(&args[1..], io),
-        Some("export") => export(&args[1..], io),
-        None | Some("--help" | "-h") => help_text_for(
-            io,
-            "cutlab fuzzy eval --fll FILE | cutlab fuzzy export --rules experience|dynamics",
-            "Evaluate a Mamdani engine given in fuzzylite's FLL format (one evaluation per stdin\n\
-             line: the input values in the order the file declares them), or print paper 002's\n\
-             engine as FLL.",
-            &[],
-        ),
-        Some(other) => Err(CliError::new(format!(
-            "unknown fuzzy subcommand {other:?}; use eval or export"
-        ))),
+pub fn run(args: FuzzyArgs, io: &mut Io<'_>) -> Result<(), CliError> {
+    match args.command {
+        Some(FuzzyCommand::Eval(a)) => eval(a, io),
+        Some(FuzzyCommand::Export(a)) => export(a, io),
+        None => super::print_help(io, &["fuzzy"]),
     }
 }
 
-fn eval(args: &[String], io: &mut Io<'_>) -> Result<(), CliError> {
-    if wants_help(args) {
-        return help_text_for(
-            io,
-            "cutlab fuzzy eval --fll FILE < inputs.txt",
-            "Read one evaluation per line of standard input (input values separated by spaces, in\n\
-             the order the FLL file declares its input variables) and print the output values,\n\
-             space-separated, at full precision. Blank lines and lines starting with # are skipped.",
-            EVAL_OPTIONS,
-        );
-    }
-    let options = Options::parse(args, EVAL_OPTIONS)?;
-    options.reject_positionals("the inputs come on standard input")?;
-    let path: String = options.require("fll")?;
+fn eval(args: EvalArgs, io: &mut Io<'_>) -> Result<(), CliError> {
+    reject_extra(&args.extra, "the inputs come on standard input")?;
+    let path: String = required("fll", &args.fll)?;
     let text = std::fs::read_to_string(&path)
         .map_err(|e| CliError::new(format!("{path}: cannot read: {e}")))?;
     let mut engine = parse(&text).map_err(|e| CliError::new(format!("{path}: {e}")))?;
@@ -101,25 +115,16 @@ fn eval(args: &[String], io: &mut Io<'_>) -> Result<(), CliError> {
     Ok(())
 }
 
-fn export(args: &[String], io: &mut Io<'_>) -> Result<(), CliError> {
-    if wants_help(args) {
-        return help_text_for(
-            io,
-            "cutlab fuzzy export --rules experience|dynamics [--defuzzifier NAME]",
-            "Print paper 002's engine (E, EC → U on [-6, 6], seven triangles each, 49 rules) as FLL.",
-            EXPORT_OPTIONS,
-        );
-    }
-    let options = Options::parse(args, EXPORT_OPTIONS)?;
-    options.reject_positionals("")?;
-    let rules: String = options.require("rules")?;
+fn export(args: ExportArgs, io: &mut Io<'_>) -> Result<(), CliError> {
+    reject_extra(&args.extra, "")?;
+    let rules: String = required("rules", &args.rules)?;
     let base = RuleBase::ALL
         .into_iter()
         .find(|b| b.name() == rules)
         .ok_or_else(|| {
             CliError::new(format!("--rules: {rules:?} is not experience or dynamics"))
         })?;
-    let defuzzifier = match options.text("defuzzifier").unwrap_or("centroid") {
+    let defuzzifier = match args.defuzzifier.as_deref().unwrap_or("centroid") {
         "centroid" => Defuzzifier::Centroid,
         "weighted-average" => Defuzzifier::WeightedAverage,
         "mean-of-maximum" => Defuzzifier::MeanOfMaximum,

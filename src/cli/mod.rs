@@ -1,8 +1,8 @@
 //! The `cutlab` command line: the same core as the browser lab, in a terminal.
 //!
 //! [`run`] takes the arguments and the standard streams, so tests drive the whole command line
-//! in-process. Each subcommand lives in its own module with a `run(args, io)` function and lists
-//! itself once in [`COMMANDS`], which also produces the top-level help.
+//! in-process. clap (derive) parses them: each subcommand lives in its own module with an
+//! `…Args` struct (its options, their help and value names) and a `run(args, io)` function.
 
 pub mod args;
 pub mod calibrate;
@@ -16,9 +16,11 @@ pub mod spectrum;
 
 use std::io::{BufRead, Write};
 
-pub use args::{CliError, OptionSpec, Options};
+use clap::{CommandFactory, Parser, Subcommand};
 
-/// The standard streams a subcommand reads and writes.
+pub use args::CliError;
+
+/// The standard streams a command reads and writes.
 pub struct Io<'a> {
     /// Standard input (samples, evaluations).
     pub stdin: &'a mut dyn BufRead,
@@ -26,141 +28,136 @@ pub struct Io<'a> {
     pub stdout: &'a mut dyn Write,
 }
 
-/// One subcommand: its name, a line of help and its entry point.
-pub struct Command {
-    /// The word typed after `cutlab`.
-    pub name: &'static str,
-    /// One line for `cutlab --help`.
-    pub about: &'static str,
-    /// Runs the subcommand on the arguments after its name.
-    pub run: fn(&[String], &mut Io<'_>) -> Result<(), CliError>,
+/// cutlab — adaptive cutting-force control of CNC milling: signal chain, simulated machine,
+/// estimators, controllers and safety envelope.
+#[derive(Debug, Parser)]
+#[command(
+    name = "cutlab",
+    version,
+    about = "cutlab — adaptive cutting-force control of CNC milling: signal chain, simulated \
+             machine, estimators, controllers and safety envelope.",
+    disable_help_subcommand = true,
+    arg_required_else_help = false
+)]
+struct Cli {
+    #[command(subcommand)]
+    command: Option<Command>,
 }
 
-/// Every subcommand, in the order `cutlab --help` lists them.
-pub const COMMANDS: &[Command] = &[
-    Command {
-        name: "calibrate",
-        about: "Fit the current-to-force models from a logged teach cut (CSV)",
-        run: calibrate::run,
-    },
-    Command {
-        name: "compare",
-        about: "Run several controllers on one preset and print their metrics side by side",
-        run: sim::run_compare,
-    },
-    Command {
+/// Every subcommand; [`COMMANDS`] lists their names. One is parsed per process, so the size of
+/// the largest variant costs nothing worth boxing.
+#[derive(Debug, Subcommand)]
+#[allow(clippy::large_enum_variant)]
+enum Command {
+    /// Fit the current-to-force models from a logged teach cut (CSV)
+    #[command(long_about = calibrate::ABOUT)]
+    Calibrate(calibrate::CalibrateArgs),
+    /// Run several controllers on one preset and print their metrics side by side
+    Compare(sim::CompareArgs),
+    /// List the controllers with their parameters, defaults and units
+    Controllers(controllers::ControllersArgs),
+    /// Design a Butterworth filter (second-order sections) or apply one to f64 samples
+    #[command(long_about = filter::ABOUT)]
+    Filter(filter::FilterArgs),
+    /// Mean and peak milling forces of one cut (mechanistic model, whole revolutions)
+    #[command(long_about = force::ABOUT)]
+    Force(force::ForceArgs),
+    /// Evaluate a fuzzy engine from an FLL file, or export paper 002's engine as FLL
+    Fuzzy(fuzzy::FuzzyArgs),
+    /// List the papers' experiments (presets), or run one open-loop
+    Scenarios(scenarios::ScenariosArgs),
+    /// Run one closed loop on a preset: teach cut, controller, safety envelope, metrics
+    Sim(sim::SimArgs),
+    /// Welch power spectral density of f64 samples on stdin (scipy.signal.welch)
+    #[command(long_about = spectrum::ABOUT)]
+    Spectrum(spectrum::SpectrumArgs),
+}
+
+/// A subcommand's name and its line in `cutlab --help`.
+pub struct CommandInfo {
+    /// The word typed after `cutlab`.
+    pub name: &'static str,
+}
+
+/// Every subcommand's name, in `--help` order.
+pub const COMMANDS: &[CommandInfo] = &[
+    CommandInfo { name: "calibrate" },
+    CommandInfo { name: "compare" },
+    CommandInfo {
         name: "controllers",
-        about: "List the controllers with their parameters, defaults and units",
-        run: controllers::run,
     },
-    Command {
-        name: "filter",
-        about: "Design a Butterworth filter (second-order sections) or apply one to f64 samples",
-        run: filter::run,
-    },
-    Command {
-        name: "force",
-        about: "Mean and peak milling forces of one cut (mechanistic model, whole revolutions)",
-        run: force::run,
-    },
-    Command {
-        name: "fuzzy",
-        about: "Evaluate a fuzzy engine from an FLL file, or export paper 002's engine as FLL",
-        run: fuzzy::run,
-    },
-    Command {
-        name: "scenarios",
-        about: "List the papers' experiments (presets), or run one open-loop",
-        run: scenarios::run,
-    },
-    Command {
-        name: "sim",
-        about: "Run one closed loop on a preset: teach cut, controller, safety envelope, metrics",
-        run: sim::run_sim,
-    },
-    Command {
-        name: "spectrum",
-        about: "Welch power spectral density of f64 samples on stdin (scipy.signal.welch)",
-        run: spectrum::run,
-    },
+    CommandInfo { name: "filter" },
+    CommandInfo { name: "force" },
+    CommandInfo { name: "fuzzy" },
+    CommandInfo { name: "scenarios" },
+    CommandInfo { name: "sim" },
+    CommandInfo { name: "spectrum" },
 ];
 
-/// The version line printed by `cutlab --version`.
+/// Prints the help of the command at `path` (`["filter"]` for `cutlab filter`): what a command
+/// made of subcommands shows when none is named.
+pub fn print_help(io: &mut Io<'_>, path: &[&str]) -> Result<(), CliError> {
+    let mut command = Cli::command();
+    for name in path {
+        let Some(sub) = command.find_subcommand(name).cloned() else {
+            break;
+        };
+        command = sub.bin_name(format!("cutlab {}", path.join(" ")));
+    }
+    write!(io.stdout, "{}", command.render_help())?;
+    Ok(())
+}
+
+/// The version line `--version` prints.
 pub fn version_line() -> String {
     format!("cutlab {}", env!("CARGO_PKG_VERSION"))
 }
 
-/// The top-level help.
-pub fn help_text() -> String {
-    let mut out = String::from(
-        "cutlab — adaptive cutting-force control of CNC milling: signal chain, simulated machine,\n\
-         estimators, controllers and safety envelope.\n\n\
-         Usage: cutlab <COMMAND> [OPTIONS]\n\nCommands:\n",
-    );
-    let width = COMMANDS.iter().map(|c| c.name.len()).max().unwrap_or(0);
-    for c in COMMANDS {
-        out.push_str(&format!("  {:width$}  {}\n", c.name, c.about));
-    }
-    out.push_str(
-        "\nOptions:\n  --help     Print this help (also after a command: cutlab <COMMAND> --help)\n  \
-         --version  Print the version\n",
-    );
-    out
-}
-
 /// Runs the command line on `args` (without the program name).
 pub fn run(args: &[String], io: &mut Io<'_>) -> Result<(), CliError> {
-    let Some(first) = args.first() else {
-        io.stdout.write_all(help_text().as_bytes())?;
-        return Ok(());
-    };
-    match first.as_str() {
-        "--help" | "-h" | "help" => {
-            io.stdout.write_all(help_text().as_bytes())?;
-            Ok(())
-        }
-        "--version" | "-V" => {
-            if let Some(extra) = args.get(1) {
-                return Err(CliError::new(format!(
-                    "{first} takes no arguments, got {extra:?}"
-                )));
-            }
-            writeln!(io.stdout, "{}", version_line())?;
-            Ok(())
-        }
-        name => {
-            let command = COMMANDS.iter().find(|c| c.name == name).ok_or_else(|| {
-                CliError::new(format!(
-                    "unknown command {name:?}; commands: {}",
-                    COMMANDS
-                        .iter()
-                        .map(|c| c.name)
-                        .collect::<Vec<_>>()
-                        .join(", ")
-                ))
-            })?;
-            (command.run)(&args[1..], io)
+    // clap prints the version at --version whatever follows; a stray word is a mistake to say.
+    if let [first, extra, ..] = args {
+        if first == "--version" || first == "-V" {
+            return Err(CliError::new(format!(
+                "{first} takes no arguments, got {extra:?}"
+            )));
         }
     }
-}
-
-/// True when `args` asks for help (`--help` or `-h` anywhere before a `--`).
-pub fn wants_help(args: &[String]) -> bool {
-    args.iter()
-        .take_while(|a| a.as_str() != "--")
-        .any(|a| a == "--help" || a == "-h")
-}
-
-/// Prints a subcommand's help.
-pub fn help_text_for(
-    io: &mut Io<'_>,
-    usage: &str,
-    about: &str,
-    options: &[OptionSpec],
-) -> Result<(), CliError> {
-    io.stdout
-        .write_all(args::help_text(usage, about, options).as_bytes())?;
-    Ok(())
+    let parsed =
+        match Cli::try_parse_from(std::iter::once("cutlab").chain(args.iter().map(String::as_str)))
+        {
+            Ok(parsed) => parsed,
+            Err(e) => {
+                use clap::error::ErrorKind;
+                return match e.kind() {
+                    ErrorKind::DisplayHelp
+                    | ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand => {
+                        write!(io.stdout, "{}", e.render())?;
+                        Ok(())
+                    }
+                    ErrorKind::DisplayVersion => {
+                        writeln!(io.stdout, "{}", version_line())?;
+                        Ok(())
+                    }
+                    _ => Err(args::one_line(&e)),
+                };
+            }
+        };
+    match parsed.command {
+        None => {
+            write!(io.stdout, "{}", Cli::command().render_help())?;
+            Ok(())
+        }
+        Some(Command::Calibrate(a)) => calibrate::run(a, io),
+        Some(Command::Compare(a)) => sim::run_compare(a, io),
+        Some(Command::Controllers(a)) => controllers::run(a, io),
+        Some(Command::Filter(a)) => filter::run(a, io),
+        Some(Command::Force(a)) => force::run(a, io),
+        Some(Command::Fuzzy(a)) => fuzzy::run(a, io),
+        Some(Command::Scenarios(a)) => scenarios::run(a, io),
+        Some(Command::Sim(a)) => sim::run_sim(a, io),
+        Some(Command::Spectrum(a)) => spectrum::run(a, io),
+    }
 }
 
 /// Writes `value` as pretty JSON followed by a newline.
@@ -169,4 +166,20 @@ pub fn write_json<T: serde::Serialize>(out: &mut dyn Write, value: &T) -> Result
         .map_err(|e| CliError::new(format!("cannot write JSON: {e}")))?;
     writeln!(out)?;
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_command_list_is_the_parsers() {
+        let parsed: Vec<String> = Cli::command()
+            .get_subcommands()
+            .map(|c| c.get_name().to_string())
+            .collect();
+        let listed: Vec<&str> = COMMANDS.iter().map(|c| c.name).collect();
+        assert_eq!(parsed, listed);
+        Cli::command().debug_assert();
+    }
 }

@@ -6,39 +6,59 @@
 
 use serde::Serialize;
 
-use super::{help_text_for, wants_help, write_json, CliError, Io, OptionSpec, Options};
+use super::args::value_or;
+use super::{write_json, CliError, Io};
 use crate::machine::{Machine, OverrideCommand};
 use crate::plant::signals::{csv_header, csv_row};
 use crate::plant::{Plant, Preset};
 
-const OPTIONS: &[OptionSpec] = &[
-    OptionSpec::flag("json", "Print the list as JSON"),
-    OptionSpec::value(
-        "run",
-        "NAME",
-        "Run this preset open-loop and print its signals as CSV",
-    ),
-    OptionSpec::value("seed", "N", "Seed of the sensor noise (default 0)"),
-    OptionSpec::value(
-        "override",
-        "PCT",
-        "Override held for the whole run, % (default 100)",
-    ),
-    OptionSpec::value(
-        "every",
-        "N",
-        "Print every N-th sample (default 100: 10 ms at 10 kHz)",
-    ),
-    OptionSpec::value(
-        "max-s",
-        "S",
-        "Stop after S seconds of machine time (default: the end)",
-    ),
-    OptionSpec::flag(
-        "summary",
-        "With --run: print peaks and means as JSON instead of CSV",
-    ),
-];
+/// List the papers' experiments (presets) with their sources, key parameters and every value
+/// cutlab chose where the paper is silent; or run one open-loop.
+#[derive(Debug, clap::Args)]
+pub struct ScenariosArgs {
+    #[arg(long = "json", help = "Print the list as JSON")]
+    json: bool,
+    #[arg(
+        long = "run",
+        help = "Run this preset open-loop and print its signals as CSV",
+        value_name = "NAME",
+        allow_hyphen_values = true
+    )]
+    run: Option<String>,
+    #[arg(
+        long = "seed",
+        help = "Seed of the sensor noise (default 0)",
+        value_name = "N",
+        allow_hyphen_values = true
+    )]
+    seed: Option<String>,
+    #[arg(
+        long = "override",
+        help = "Override held for the whole run, % (default 100)",
+        value_name = "PCT",
+        allow_hyphen_values = true
+    )]
+    r#override: Option<String>,
+    #[arg(
+        long = "every",
+        help = "Print every N-th sample (default 100: 10 ms at 10 kHz)",
+        value_name = "N",
+        allow_hyphen_values = true
+    )]
+    every: Option<String>,
+    #[arg(
+        long = "max-s",
+        help = "Stop after S seconds of machine time (default: the end)",
+        value_name = "S",
+        allow_hyphen_values = true
+    )]
+    max_s: Option<String>,
+    #[arg(
+        long = "summary",
+        help = "With --run: print peaks and means as JSON instead of CSV"
+    )]
+    summary: bool,
+}
 
 #[derive(Serialize)]
 struct RunSummary {
@@ -71,40 +91,34 @@ fn preset_named(name: &str) -> Result<Preset, CliError> {
 }
 
 /// Runs `cutlab scenarios`.
-pub fn run(args: &[String], io: &mut Io<'_>) -> Result<(), CliError> {
-    if wants_help(args) {
-        return help_text_for(
-            io,
-            "cutlab scenarios [--json] | cutlab scenarios --run NAME [--seed N] [--override PCT] \
-             [--every N] [--max-s S] [--summary]",
-            "List the papers' experiments (presets) with their sources, key parameters and every\n\
-             value cutlab chose where the paper is silent; or run one open-loop.",
-            OPTIONS,
-        );
-    }
-    let options = Options::parse(args, OPTIONS)?;
-    options.reject_positionals("")?;
-    match options.text("run") {
-        Some(_) if options.flag("json") => Err(CliError::new(
+pub fn run(args: ScenariosArgs, io: &mut Io<'_>) -> Result<(), CliError> {
+    match args.run.as_deref() {
+        Some(_) if args.json => Err(CliError::new(
             "--json lists the presets; with --run the samples are CSV (use --summary for totals)",
         )),
-        Some(name) => run_preset(preset_named(name)?, &options, io),
+        Some(name) => run_preset(preset_named(name)?, &args, io),
         None => {
-            for only_with_run in ["seed", "override", "every", "max-s", "summary"] {
-                if options.text(only_with_run).is_some() {
-                    return Err(CliError::new(format!(
-                        "--{only_with_run} only applies with --run NAME"
-                    )));
-                }
+            let given = [
+                args.seed.is_some(),
+                args.r#override.is_some(),
+                args.every.is_some(),
+                args.max_s.is_some(),
+                args.summary,
+            ];
+            let names = ["seed", "override", "every", "max-s", "summary"];
+            if let Some((only_with_run, _)) = names.iter().zip(given).find(|(_, g)| *g) {
+                return Err(CliError::new(format!(
+                    "--{only_with_run} only applies with --run NAME"
+                )));
             }
-            list(&options, io)
+            list(&args, io)
         }
     }
 }
 
-fn list(options: &Options, io: &mut Io<'_>) -> Result<(), CliError> {
+fn list(args: &ScenariosArgs, io: &mut Io<'_>) -> Result<(), CliError> {
     let summaries: Vec<_> = Preset::ALL.iter().map(|p| p.summary()).collect();
-    if options.flag("json") {
+    if args.json {
         return write_json(io.stdout, &summaries);
     }
     for s in &summaries {
@@ -147,23 +161,23 @@ fn list(options: &Options, io: &mut Io<'_>) -> Result<(), CliError> {
     Ok(())
 }
 
-fn run_preset(preset: Preset, options: &Options, io: &mut Io<'_>) -> Result<(), CliError> {
-    let seed: u64 = options.get_or("seed", 0)?;
-    let override_pct: f64 = options.get_or("override", 100.0)?;
+fn run_preset(preset: Preset, args: &ScenariosArgs, io: &mut Io<'_>) -> Result<(), CliError> {
+    let seed: u64 = value_or("seed", &args.seed, 0)?;
+    let override_pct: f64 = value_or("override", &args.r#override, 100.0)?;
     if !(override_pct.is_finite() && (0.0..=255.0).contains(&override_pct)) {
         return Err(CliError::new(format!(
             "--override: must lie in [0, 255], got {override_pct}"
         )));
     }
-    let every: u64 = options.get_or("every", 100)?;
+    let every: u64 = value_or("every", &args.every, 100)?;
     if every == 0 {
         return Err(CliError::new("--every: must be at least 1"));
     }
-    let max_s: f64 = options.get_or("max-s", f64::INFINITY)?;
+    let max_s: f64 = value_or("max-s", &args.max_s, f64::INFINITY)?;
     if max_s.is_nan() || max_s <= 0.0 {
         return Err(CliError::new(format!("--max-s: must be > 0, got {max_s}")));
     }
-    let summary = options.flag("summary");
+    let summary = args.summary;
     let mut machine = preset
         .machine(seed)
         .map_err(|e| CliError::new(format!("--run {}: {e}", preset.name())))?;

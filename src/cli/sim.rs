@@ -4,7 +4,8 @@ use std::fmt::Write as _;
 
 use serde::Serialize;
 
-use super::{help_text_for, wants_help, write_json, CliError, Io, OptionSpec, Options};
+use super::args::required;
+use super::{write_json, CliError, Io};
 use crate::closed_loop::config::RunConfiguration;
 use crate::closed_loop::definition::{parse_texts, RunSetting, SettingKind};
 use crate::closed_loop::lab::{
@@ -19,72 +20,145 @@ use crate::plant::Preset;
 
 /// Options shared by `sim` and `compare`: the preset, every setting of the run definition
 /// ([`RunSetting::ALL`], the same table the browser's form is made from), and `--no-references`.
-fn run_options() -> Vec<OptionSpec> {
-    let mut o = vec![OptionSpec::value(
-        "scenario",
-        "NAME",
-        "Preset to run (see cutlab scenarios)",
-    )];
-    o.extend(RunSetting::ALL.iter().map(|s| {
-        let spec = s.spec();
-        let value = match spec.kind {
-            SettingKind::Feedback => "spindle|feed",
-            SettingKind::Material => "NAME",
-            SettingKind::Count { .. } | SettingKind::Seed => "N",
-            SettingKind::Number { .. } if spec.unit.is_empty() => "X",
-            SettingKind::Number { .. } => spec.unit,
-        };
-        OptionSpec::value(spec.cli_option, value, spec.help)
-    }));
-    o.push(OptionSpec::flag(
-        "no-references",
-        "Skip the fixed-feed reference runs (no savings; faster)",
-    ));
-    o
+/// Declared from that table at run time, so a setting added to it is an option here at once.
+#[derive(Debug, Clone, Default)]
+pub struct RunOptions {
+    scenario: Option<String>,
+    /// The settings given, with their text, in table order.
+    texts: Vec<(RunSetting, String)>,
+    no_references: bool,
 }
 
-fn sim_options() -> Vec<OptionSpec> {
-    let mut o = run_options();
-    o.extend([
-        OptionSpec::value("controller", "NAME", "Controller (see cutlab controllers)"),
-        OptionSpec::repeatable(
-            "set",
-            "KEY=VALUE",
-            "Set a controller parameter (repeatable)",
-        ),
-        OptionSpec::value(
-            "csv",
-            "FILE",
-            "Write the trace as CSV (one row per control period)",
-        ),
-        OptionSpec::value(
-            "json",
-            "FILE",
-            "Write metrics, settings, calibration and events as JSON",
-        ),
-        CONFIG_OPTION,
-    ]);
-    o
+impl RunOptions {
+    /// The first option given that defines the run (for the clash with `--config`).
+    fn first_defining(&self) -> Option<&'static str> {
+        self.scenario
+            .as_ref()
+            .map(|_| "scenario")
+            .or_else(|| self.texts.first().map(|(s, _)| s.spec().cli_option))
+    }
 }
 
-/// `--config`: the runs saved by the browser's "Configuration (JSON)" export.
-const CONFIG_OPTION: OptionSpec = OptionSpec::value(
-    "config",
-    "FILE",
-    "Run what a saved configuration (the browser's Configuration JSON export) holds, instead of \
-     --scenario, --controller and the other run options",
-);
+impl clap::FromArgMatches for RunOptions {
+    fn from_arg_matches(matches: &clap::ArgMatches) -> Result<Self, clap::Error> {
+        Self::from_arg_matches_mut(&mut matches.clone())
+    }
 
-/// The runs of `--config FILE`, if given; `defining` are the options it replaces, which may not
-/// be given with it (two sources for one setting would leave a person guessing which won).
+    fn from_arg_matches_mut(matches: &mut clap::ArgMatches) -> Result<Self, clap::Error> {
+        Ok(Self {
+            scenario: matches.remove_one::<String>("scenario"),
+            texts: RunSetting::ALL
+                .into_iter()
+                .filter_map(|s| {
+                    matches
+                        .remove_one::<String>(s.spec().cli_option)
+                        .map(|text| (s, text))
+                })
+                .collect(),
+            no_references: matches.get_flag("no-references"),
+        })
+    }
+
+    fn update_from_arg_matches(&mut self, matches: &clap::ArgMatches) -> Result<(), clap::Error> {
+        *self = Self::from_arg_matches(matches)?;
+        Ok(())
+    }
+}
+
+impl clap::Args for RunOptions {
+    fn augment_args(command: clap::Command) -> clap::Command {
+        use clap::{Arg, ArgAction};
+        let mut command = command.arg(
+            Arg::new("scenario")
+                .long("scenario")
+                .value_name("NAME")
+                .value_parser(clap::value_parser!(String))
+                .help("Preset to run (see cutlab scenarios)"),
+        );
+        for setting in RunSetting::ALL {
+            let spec = setting.spec();
+            let placeholder = match spec.kind {
+                SettingKind::Feedback => "spindle|feed",
+                SettingKind::Material => "NAME",
+                SettingKind::Count { .. } | SettingKind::Seed => "N",
+                SettingKind::Number { .. } if spec.unit.is_empty() => "X",
+                SettingKind::Number { .. } => spec.unit,
+            };
+            command = command.arg(
+                Arg::new(spec.cli_option)
+                    .long(spec.cli_option)
+                    .value_name(placeholder)
+                    .value_parser(clap::value_parser!(String))
+                    .allow_hyphen_values(true)
+                    .help(spec.help),
+            );
+        }
+        command.arg(
+            Arg::new("no-references")
+                .long("no-references")
+                .action(ArgAction::SetTrue)
+                .help("Skip the fixed-feed reference runs (no savings; faster)"),
+        )
+    }
+
+    fn augment_args_for_update(command: clap::Command) -> clap::Command {
+        Self::augment_args(command)
+    }
+}
+
+const CONFIG_HELP: &str = "Run what a saved configuration (the browser's Configuration JSON \
+     export) holds, instead of --scenario, --controller and the other run options";
+
+/// Run one closed loop on a preset: a teach cut calibrates the current-to-force model, then the
+/// controller holds the force through the safety envelope. Prints the metrics; --csv and --json
+/// write the trace and the full report.
+#[derive(Debug, clap::Args)]
+pub struct SimArgs {
+    #[command(flatten)]
+    run: RunOptions,
+    /// Controller (see cutlab controllers)
+    #[arg(long, value_name = "NAME")]
+    controller: Option<String>,
+    /// Set a controller parameter (repeatable)
+    #[arg(long, value_name = "KEY=VALUE", allow_hyphen_values = true)]
+    set: Vec<String>,
+    /// Write the trace as CSV (one row per control period)
+    #[arg(long, value_name = "FILE")]
+    csv: Option<String>,
+    /// Write metrics, settings, calibration and events as JSON
+    #[arg(long, value_name = "FILE")]
+    json: Option<String>,
+    #[arg(long, value_name = "FILE", help = CONFIG_HELP)]
+    config: Option<String>,
+}
+
+/// Run several controllers (or tunings: pi:kp=0.5) on one preset with the same seed and print
+/// their metrics side by side; * marks the best value of each row.
+#[derive(Debug, clap::Args)]
+pub struct CompareArgs {
+    #[command(flatten)]
+    run: RunOptions,
+    /// Controllers to compare; each NAME or NAME:key=value:key=value
+    #[arg(long, value_name = "A,B,...")]
+    controllers: Option<String>,
+    /// Print the metrics as JSON instead of a table
+    #[arg(long)]
+    json: bool,
+    #[arg(long, value_name = "FILE", help = CONFIG_HELP)]
+    config: Option<String>,
+}
+
+/// The runs of `--config FILE`, if given; `defining` is the first option given that it replaces,
+/// which may not be given with it (two sources for one setting would leave a person guessing
+/// which won).
 fn runs_from_config(
-    options: &Options,
-    defining: &[&str],
+    config: &Option<String>,
+    defining: Option<&str>,
 ) -> Result<Option<Vec<RunSpec>>, CliError> {
-    let Some(path) = options.text("config") else {
+    let Some(path) = config else {
         return Ok(None);
     };
-    if let Some(clash) = defining.iter().find(|name| options.flag(name)) {
+    if let Some(clash) = defining {
         return Err(CliError::new(format!(
             "--{clash} cannot be given with --config: the file defines the runs"
         )));
@@ -96,32 +170,8 @@ fn runs_from_config(
     Ok(Some(config.runs))
 }
 
-/// The options that define a run (everything but outputs and `--no-references`).
-fn run_defining_options(extra: &[&'static str]) -> Vec<&'static str> {
-    run_options()
-        .into_iter()
-        .map(|o| o.name)
-        .filter(|name| *name != "no-references")
-        .chain(extra.iter().copied())
-        .collect()
-}
-
-fn compare_options() -> Vec<OptionSpec> {
-    let mut o = run_options();
-    o.extend([
-        OptionSpec::value(
-            "controllers",
-            "A,B,...",
-            "Controllers to compare; each NAME or NAME:key=value:key=value",
-        ),
-        OptionSpec::flag("json", "Print the metrics as JSON instead of a table"),
-        CONFIG_OPTION,
-    ]);
-    o
-}
-
-fn preset_option(options: &Options) -> Result<Preset, CliError> {
-    let name: String = options.require("scenario")?;
+fn preset_option(run: &RunOptions) -> Result<Preset, CliError> {
+    let name: String = required("scenario", &run.scenario)?;
     Preset::from_name(&name).ok_or_else(|| {
         CliError::new(format!(
             "--scenario: unknown preset {name:?}; presets: {}",
@@ -136,12 +186,8 @@ fn preset_option(options: &Options) -> Result<Preset, CliError> {
 
 /// The run spec from the shared options, for a given controller: every setting parsed and
 /// checked by the run definition, as the browser's form does ([`parse_texts`]).
-fn spec(options: &Options, controller: ControllerConfig) -> Result<RunSpec, CliError> {
-    let texts: Vec<(RunSetting, &str)> = RunSetting::ALL
-        .into_iter()
-        .filter_map(|s| options.text(s.spec().cli_option).map(|text| (s, text)))
-        .collect();
-    parse_texts(preset_option(options)?, controller, &texts).map_err(|errors| {
+fn spec(run: &RunOptions, controller: ControllerConfig) -> Result<RunSpec, CliError> {
+    parse_texts(preset_option(run)?, controller, &run.texts).map_err(|errors| {
         // The first problem, in the order the options are listed, as one line.
         let message = errors
             .first()
@@ -156,12 +202,20 @@ fn spec(options: &Options, controller: ControllerConfig) -> Result<RunSpec, CliE
 /// Every run spec the `sim` options describe, for tests that hold the command line and the
 /// browser's form to one run definition.
 pub fn spec_from_args(args: &[String]) -> Result<RunSpec, CliError> {
-    let options = Options::parse(args, &sim_options())?;
-    let controller = match options.text("controller") {
+    #[derive(clap::Parser)]
+    struct Sim {
+        #[command(flatten)]
+        args: SimArgs,
+    }
+    let parsed = <Sim as clap::Parser>::try_parse_from(
+        std::iter::once("sim").chain(args.iter().map(String::as_str)),
+    )
+    .map_err(|e| super::args::one_line(&e))?;
+    let controller = match parsed.args.controller.as_deref() {
         Some(name) => controller_with_settings(name)?,
         None => ControllerConfig::new(ControllerKind::Fixed),
     };
-    spec(&options, controller)
+    spec(&parsed.args.run, controller)
 }
 
 /// Parses `NAME` or `NAME:key=value:key=value`.
@@ -215,22 +269,13 @@ struct EventLine {
 }
 
 /// Runs `cutlab sim`.
-pub fn run_sim(args: &[String], io: &mut Io<'_>) -> Result<(), CliError> {
-    let options_spec = sim_options();
-    if wants_help(args) {
-        return help_text_for(
-            io,
-            "cutlab sim (--scenario NAME --controller NAME [--set key=value]... [--seed S] | \
-             --config FILE) [--csv FILE] [--json FILE]",
-            "Run one closed loop on a preset: a teach cut calibrates the current-to-force model,\n\
-             then the controller holds the force through the safety envelope. Prints the\n\
-             metrics; --csv and --json write the trace and the full report.",
-            &options_spec,
-        );
-    }
-    let options = Options::parse(args, &options_spec)?;
-    options.reject_positionals("")?;
-    let spec = match runs_from_config(&options, &run_defining_options(&["controller", "set"]))? {
+pub fn run_sim(args: SimArgs, io: &mut Io<'_>) -> Result<(), CliError> {
+    let defining = args.run.first_defining().or_else(|| {
+        (args.controller.is_some())
+            .then_some("controller")
+            .or((!args.set.is_empty()).then_some("set"))
+    });
+    let spec = match runs_from_config(&args.config, defining)? {
         Some(mut runs) if runs.len() == 1 => runs.remove(0),
         Some(runs) => {
             return Err(CliError::new(format!(
@@ -239,27 +284,26 @@ pub fn run_sim(args: &[String], io: &mut Io<'_>) -> Result<(), CliError> {
             )))
         }
         None => {
-            let kind: ControllerKind = options
-                .require::<String>("controller")?
+            let kind: ControllerKind = required::<String>("controller", &args.controller)?
                 .parse()
                 .map_err(|e| CliError::new(format!("--controller: {e}")))?;
             let mut controller = ControllerConfig::new(kind);
-            for assignment in options.all("set") {
+            for assignment in &args.set {
                 controller
                     .set_text(assignment)
                     .map_err(|e| CliError::new(format!("--set: {e}")))?;
             }
-            spec(&options, controller)?
+            spec(&args.run, controller)?
         }
     };
-    let (result, refs) = run_one(&spec, !options.flag("no-references"))?;
-    if let Some(path) = options.text("csv") {
+    let (result, refs) = run_one(&spec, !args.run.no_references)?;
+    if let Some(path) = args.csv.as_deref() {
         let mut file = std::fs::File::create(path)
             .map_err(|e| CliError::new(format!("--csv: cannot create {path:?}: {e}")))?;
         write_csv(&result.trace, &mut file)
             .map_err(|e| CliError::new(format!("--csv: cannot write {path:?}: {e}")))?;
     }
-    if let Some(path) = options.text("json") {
+    if let Some(path) = args.json.as_deref() {
         let report = SimReport {
             scenario: spec.preset.name(),
             controller: &spec.controller,
@@ -297,23 +341,15 @@ struct CompareEntry<'a> {
 }
 
 /// Runs `cutlab compare`.
-pub fn run_compare(args: &[String], io: &mut Io<'_>) -> Result<(), CliError> {
-    let options_spec = compare_options();
-    if wants_help(args) {
-        return help_text_for(
-            io,
-            "cutlab compare (--scenario NAME --controllers A,B,... | --config FILE) [--json]",
-            "Run several controllers (or tunings: pi:kp=0.5) on one preset with the same seed and\n\
-             print their metrics side by side; * marks the best value of each row.",
-            &options_spec,
-        );
-    }
-    let options = Options::parse(args, &options_spec)?;
-    options.reject_positionals("")?;
-    let (base, named) = match runs_from_config(&options, &run_defining_options(&["controllers"]))? {
+pub fn run_compare(args: CompareArgs, io: &mut Io<'_>) -> Result<(), CliError> {
+    let defining = args
+        .run
+        .first_defining()
+        .or_else(|| args.controllers.is_some().then_some("controllers"));
+    let (base, named) = match runs_from_config(&args.config, defining)? {
         Some(runs) => one_scenario(runs)?,
         None => {
-            let list: String = options.require("controllers")?;
+            let list: String = required("controllers", &args.controllers)?;
             let named = list
                 .split(',')
                 .enumerate()
@@ -326,12 +362,12 @@ pub fn run_compare(args: &[String], io: &mut Io<'_>) -> Result<(), CliError> {
                 })
                 .collect::<Result<Vec<_>, CliError>>()?;
             (
-                spec(&options, ControllerConfig::new(ControllerKind::Fixed))?,
+                spec(&args.run, ControllerConfig::new(ControllerKind::Fixed))?,
                 named,
             )
         }
     };
-    let with_references = !options.flag("no-references");
+    let with_references = !args.run.no_references;
     let refs = if with_references {
         Some(references(&base).map_err(|e| CliError::new(e.to_string()))?)
     } else {
@@ -347,7 +383,7 @@ pub fn run_compare(args: &[String], io: &mut Io<'_>) -> Result<(), CliError> {
         }
         results.push((name, config, result));
     }
-    if options.flag("json") {
+    if args.json {
         let entries: Vec<CompareEntry> = results
             .iter()
             .map(|(_, config, r)| CompareEntry {

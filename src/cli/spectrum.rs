@@ -4,19 +4,33 @@ use serde::Serialize;
 
 use std::io::Read as _;
 
-use super::{help_text_for, wants_help, write_json, CliError, Io, OptionSpec, Options};
+use super::args::{reject_extra, required, value_or};
+use super::{write_json, CliError, Io};
 use crate::signal::spectrum::welch;
 
-const OPTIONS: &[OptionSpec] = &[
-    OptionSpec::value("fs", "HZ", "Sampling rate in Hz"),
-    OptionSpec::value(
-        "nperseg",
-        "N",
-        "Samples per segment (default 256; shortened to the input if longer, as scipy does)",
-    ),
-];
+/// Welch power spectral density of f64 samples on stdin (scipy.signal.welch).
+#[derive(Debug, clap::Args)]
+pub struct SpectrumArgs {
+    #[arg(
+        long = "fs",
+        help = "Sampling rate in Hz",
+        value_name = "HZ",
+        allow_hyphen_values = true
+    )]
+    fs: Option<String>,
+    #[arg(
+        long = "nperseg",
+        help = "Samples per segment (default 256; shortened to the input if longer, as scipy does)",
+        value_name = "N",
+        allow_hyphen_values = true
+    )]
+    nperseg: Option<String>,
+    /// Stray words: refused with a hint where such input goes.
+    #[arg(hide = true)]
+    extra: Vec<String>,
+}
 
-const ABOUT: &str = "Power spectral density of raw little-endian f64 samples on stdin, by Welch's method, printed\n\
+pub(crate) const ABOUT: &str = "Power spectral density of raw little-endian f64 samples on stdin, by Welch's method, printed\n\
 as JSON {\"freq_hz\": [...], \"psd\": [...]} (unit²/Hz). Equal to scipy.signal.welch(x, fs, nperseg=N)\n\
 with its defaults: periodic Hann window, 50 % overlap, each segment's mean removed, density\n\
 scaling, one-sided, mean of the segments. Reads the whole input into memory.\n\n\
@@ -28,28 +42,19 @@ struct Output {
     psd: Vec<f64>,
 }
 
-/// Runs `cutlab spectrum`.
 /// The longest record read: 2²⁶ samples (512 MiB of f64).
 pub const MAX_SAMPLES: usize = 1 << 26;
 
-pub fn run(args: &[String], io: &mut Io<'_>) -> Result<(), CliError> {
-    if wants_help(args) {
-        return help_text_for(
-            io,
-            "cutlab spectrum --fs HZ [--nperseg N] < IN",
-            ABOUT,
-            OPTIONS,
-        );
-    }
-    let options = Options::parse(args, OPTIONS)?;
-    options.reject_positionals("samples come on stdin")?;
-    let sample_rate_hz: f64 = options.require("fs")?;
+/// Runs `cutlab spectrum`.
+pub fn run(args: SpectrumArgs, io: &mut Io<'_>) -> Result<(), CliError> {
+    reject_extra(&args.extra, "samples come on stdin")?;
+    let sample_rate_hz: f64 = required("fs", &args.fs)?;
     if !(sample_rate_hz.is_finite() && sample_rate_hz > 0.0) {
         return Err(CliError::new(format!(
             "--fs: sample rate must be a positive, finite number of Hz, got {sample_rate_hz}"
         )));
     }
-    let nperseg: usize = options.get_or("nperseg", 256)?;
+    let nperseg: usize = value_or("nperseg", &args.nperseg, 256)?;
     if nperseg == 0 {
         return Err(CliError::new("--nperseg: must be at least 1"));
     }
