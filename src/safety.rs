@@ -218,6 +218,12 @@ pub enum SafetyEvent {
         /// The force that tripped the alarm.
         force_n: f64,
     },
+    /// The controller asked for a non-finite override (a law fed garbage, or one that diverged):
+    /// the envelope holds the override until the requests are numbers again.
+    ControllerFault {
+        /// When.
+        time_s: f64,
+    },
     /// The tool was cutting before the loop armed: the controller enters the cut uncontrolled
     /// (a part program should approach in air until the arming delay has passed).
     CutBeforeArming {
@@ -236,7 +242,8 @@ impl SafetyEvent {
             | SafetyEvent::FaultDetected { time_s, .. }
             | SafetyEvent::FaultCleared { time_s }
             | SafetyEvent::Overload { time_s, .. }
-            | SafetyEvent::CutBeforeArming { time_s, .. } => time_s,
+            | SafetyEvent::CutBeforeArming { time_s, .. }
+            | SafetyEvent::ControllerFault { time_s } => time_s,
         }
     }
 
@@ -250,6 +257,9 @@ impl SafetyEvent {
             SafetyEvent::FaultCleared { .. } => "sensor fault cleared".into(),
             SafetyEvent::Overload { force_n, .. } => {
                 format!("overload: {force_n:.0} N above the hard limit; feed hold")
+            }
+            SafetyEvent::ControllerFault { .. } => {
+                "controller fault: it asked for a non-finite override; override held".into()
             }
             SafetyEvent::CutBeforeArming { force_n, .. } => format!(
                 "warning: cutting ({force_n:.0} N) before the loop armed; the controller enters \
@@ -276,11 +286,13 @@ pub struct SafetyEnvelope {
     overload_s: f64,
     /// How long the programmed feed has been non-zero (for [`ArmingTrigger::ProgrammedFeed`]).
     programmed_feed_s: f64,
+    /// Whether the controller's last request was not a number (reported once per episode).
+    controller_fault: bool,
     events: Vec<SafetyEvent>,
 }
 
 /// Events kept before the caller drains them; more in one period are dropped, which cannot
-/// happen with the event kinds above (at most four per period).
+/// happen with the event kinds above (at most five per period).
 const EVENT_CAPACITY: usize = 16;
 
 impl SafetyEnvelope {
@@ -369,6 +381,7 @@ impl SafetyEnvelope {
             unchanged_s: 0.0,
             overload_s: 0.0,
             programmed_feed_s: 0.0,
+            controller_fault: false,
             events: Vec::with_capacity(EVENT_CAPACITY),
             config,
         };
@@ -536,6 +549,15 @@ impl SafetyEnvelope {
             self.emit(SafetyEvent::Overload { time_s, force_n });
         }
 
+        // A non-finite request (a controller fed garbage, or diverged) holds the override, and
+        // says so once per episode.
+        if self.armed && self.fault.is_none() {
+            let bad_request = !request_pct.is_finite();
+            if bad_request && !self.controller_fault {
+                self.emit(SafetyEvent::ControllerFault { time_s });
+            }
+            self.controller_fault = bad_request;
+        }
         let c = &self.config;
         let wanted = if !self.armed {
             c.arming_override_pct
@@ -544,7 +566,6 @@ impl SafetyEnvelope {
                 (Some(_), FaultAction::Hold) => self.continuous_pct,
                 (Some(_), FaultAction::Fallback(v)) => v,
                 (None, _) if request_pct.is_finite() => request_pct,
-                // A non-finite request (a controller fed garbage) holds.
                 (None, _) => self.continuous_pct,
             }
         };
@@ -578,6 +599,34 @@ mod tests {
 
     fn envelope(config: EnvelopeConfig) -> SafetyEnvelope {
         SafetyEnvelope::new(config, 1000.0).unwrap()
+    }
+
+    #[test]
+    fn a_non_finite_request_is_one_controller_fault_event_and_the_override_holds() {
+        let mut env = envelope(EnvelopeConfig::for_target(300.0));
+        let s = running_sample(0.0);
+        let held = env.command(100.0, 300.0, 0.0, 0.1, &s).override_pct;
+        assert!(env.armed());
+        for (i, bad) in [f64::NAN, f64::NEG_INFINITY, f64::INFINITY]
+            .into_iter()
+            .enumerate()
+        {
+            let cmd = env.command(bad, 300.0, 0.1 * (i + 1) as f64, 0.1, &s);
+            assert_eq!(cmd.override_pct, held);
+        }
+        env.command(110.0, 300.0, 0.4, 0.1, &s);
+        env.command(f64::NAN, 300.0, 0.5, 0.1, &s);
+        let mut events = Vec::new();
+        env.drain_events(&mut events);
+        let faults: Vec<f64> = events
+            .iter()
+            .filter_map(|e| match e {
+                SafetyEvent::ControllerFault { time_s } => Some(*time_s),
+                _ => None,
+            })
+            .collect();
+        // One event per episode: the first bad request, and again after a good one.
+        assert_eq!(faults, vec![0.1, 0.5]);
     }
 
     #[test]

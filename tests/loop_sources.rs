@@ -319,3 +319,25 @@ fn a_cut_before_the_loop_arms_is_warned_about_once() {
     });
     assert!(warned_at.unwrap() < 20.0);
 }
+
+#[test]
+fn pi_with_the_shortest_tracking_time_stays_finite_on_the_depth_steps() {
+    use cutlab::safety::SafetyEvent;
+    // T_t = 1 ms, inside its documented range: the Euler-stepped back-calculation diverged to
+    // −inf from 13.5 s and the envelope held the override without a word.
+    let mut spec = RunSpec::new(Preset::KimStepDoc, ControllerKind::Pi);
+    spec.controller.set("tracking_time_s", 0.001).unwrap();
+    let result = simulate(&spec).unwrap();
+    assert!(result.trace.completed);
+    assert!(result
+        .trace
+        .rows
+        .iter()
+        .all(|r| r.requested_override_pct.is_finite()));
+    assert!(!result
+        .trace
+        .events
+        .iter()
+        .any(|e| matches!(e, SafetyEvent::ControllerFault { .. })));
+    assert!(result.metrics.force_mean_abs_error_pct < 15.0);
+}

@@ -22,7 +22,8 @@ pub struct PiParams {
     pub kp: f64,
     /// Integral gain, per second, in the same units as `kp`.
     pub ki_per_s: f64,
-    /// Back-calculation (tracking) time constant; 0 < T_t. Åström & Hägglund suggest
+    /// Back-calculation (tracking) time constant; 0 < T_t, stable at any control period (the
+    /// tracking is discretised exactly). Åström & Hägglund suggest
     /// T_t ≈ √(T_i·T_d); without D, about T_i = K_p/K_i or less.
     pub tracking_time_s: f64,
     /// The override the integrator starts from.
@@ -80,8 +81,12 @@ impl Controller for PiController {
             }
             _ => 0.0,
         };
-        self.integral_pct +=
-            input.dt_s * (p.ki_per_s * 100.0 * error + windup_pct / p.tracking_time_s);
+        // Back-calculation, discretised exactly: over one period the integrator moves the fraction
+        // 1 − exp(−dt/T_t) of the way to what the machine applied. An explicit Euler step
+        // (dt/T_t) overshoots once the period exceeds T_t and diverges: T_t = 1 ms at a 40 ms
+        // period ran the integral to −inf on kim-step-doc.
+        let tracking = 1.0 - crate::math::exp(-input.dt_s / p.tracking_time_s);
+        self.integral_pct += input.dt_s * p.ki_per_s * 100.0 * error + tracking * windup_pct;
         let proportional_pct = p.kp * 100.0 * error;
         let request = p.initial_override_pct + proportional_pct + self.integral_pct;
         self.last_request_pct = Some(request);
@@ -107,6 +112,34 @@ impl Controller for PiController {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_tracking_time_far_below_the_period_stays_finite_and_tracks_the_clamp() {
+        // T_t = 1 ms at 40 ms periods, the envelope holding the override at 150 % while the
+        // force stays low: the Euler step multiplied the windup by 40 each period.
+        let mut c = PiController::new(PiParams {
+            kp: 0.3,
+            ki_per_s: 1.0,
+            tracking_time_s: 0.001,
+            initial_override_pct: 100.0,
+        });
+        let mut applied = 100.0;
+        for i in 0..2000 {
+            let request = c.step(&ControlInput {
+                time_s: 0.04 * f64::from(i),
+                dt_s: 0.04,
+                force_n: 100.0,
+                target_force_n: 300.0,
+                programmed_feed_mm_min: 200.0,
+                applied_override_pct: applied,
+                time_since_start_s: 10.0,
+            });
+            assert!(request.is_finite(), "period {i}: {request}");
+            applied = request.clamp(10.0, 150.0);
+        }
+        // Pinned at the ceiling, the integrator sits near it instead of winding up.
+        assert!(c.integral_pct.abs() < 200.0, "{}", c.integral_pct);
+    }
 
     fn input(force_n: f64, applied: f64) -> ControlInput {
         ControlInput {
@@ -152,9 +185,12 @@ mod tests {
             applied = request.min(120.0);
         }
         // Without anti-windup the integral would be 200 · 0.1 · 50 = 1000 %; back-calculation
-        // settles where K_i·100·e = (request − 120)/T_t, i.e. request = 120 + 25 = 145 %.
+        // settles where dt·K_i·100·e = (1 − exp(−dt/T_t))·(request − 120): with dt·K_i·100·e =
+        // 5 % and T_t = 0.5 s, request = 120 + 5/(1 − e^−0.2) ≈ 147.6 % (the Euler step's
+        // equilibrium, 120 + 25 = 145 %, is its first-order approximation).
         let request = with_clamp.step(&input(50.0, applied));
-        assert!((request - 145.0).abs() < 1e-6, "request {request}");
+        let expected = 120.0 + 5.0 / (1.0 - (-0.2f64).exp());
+        assert!((request - expected).abs() < 1e-6, "request {request} vs {expected}");
         // Once the force overshoots, the request leaves the clamp within a few periods.
         let mut periods = 0;
         while with_clamp.step(&input(150.0, applied)) >= 120.0 {
