@@ -190,7 +190,10 @@ mod tests {
         // equilibrium, 120 + 25 = 145 %, is its first-order approximation).
         let request = with_clamp.step(&input(50.0, applied));
         let expected = 120.0 + 5.0 / (1.0 - (-0.2f64).exp());
-        assert!((request - expected).abs() < 1e-6, "request {request} vs {expected}");
+        assert!(
+            (request - expected).abs() < 1e-6,
+            "request {request} vs {expected}"
+        );
         // Once the force overshoots, the request leaves the clamp within a few periods.
         let mut periods = 0;
         while with_clamp.step(&input(150.0, applied)) >= 120.0 {
