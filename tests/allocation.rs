@@ -70,3 +70,66 @@ fn filtering_and_fuzzy_inference_allocate_nothing() {
     });
     assert_eq!(info.count_total, 0);
 }
+
+#[test]
+fn an_engine_with_many_output_terms_reserves_memory_linear_in_them() {
+    use cutlab::control::fuzzy::engine::{
+        Defuzzifier, Engine, InputVariable, Norm, OutputVariable, Rule, Term,
+    };
+    use cutlab::control::fuzzy::membership::Shape;
+    // 10 000 output terms once reserved their pairwise crossings: about 25 GB.
+    let terms = |n: usize| -> Vec<Term> {
+        (0..n)
+            .map(|i| Term {
+                name: format!("t{i}"),
+                shape: Shape::Triangle {
+                    a: i as f64,
+                    b: i as f64 + 0.5,
+                    c: i as f64 + 1.0,
+                },
+            })
+            .collect()
+    };
+    let n = 10_000;
+    let input = InputVariable {
+        name: "x".into(),
+        min: 0.0,
+        max: n as f64 + 1.0,
+        lock_range: true,
+        terms: terms(n),
+    };
+    let output = OutputVariable {
+        name: "y".into(),
+        min: 0.0,
+        max: n as f64 + 1.0,
+        lock_range: false,
+        terms: terms(n),
+        defuzzifier: Defuzzifier::Centroid,
+        default_value: 0.0,
+        lock_previous: false,
+    };
+    let rules: Vec<Rule> = (0..n)
+        .map(|i| Rule {
+            antecedents: vec![(0, i)],
+            consequents: vec![(0, i)],
+            weight: 1.0,
+        })
+        .collect();
+    let info = allocation_counter::measure(|| {
+        let engine = Engine::new(
+            "big",
+            vec![input],
+            vec![output],
+            rules,
+            Norm::Minimum,
+            Norm::Minimum,
+        );
+        assert!(engine.is_ok());
+    });
+    // A few kilobytes per term, not n² crossings.
+    assert!(
+        info.bytes_max < 4_000 * n as u64,
+        "{} bytes for {n} terms",
+        info.bytes_max
+    );
+}

