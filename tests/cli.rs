@@ -122,3 +122,77 @@ fn the_binary_turns_hostile_arguments_into_one_line_errors() {
         assert_eq!(stderr.lines().count(), 1, "{stderr}");
     }
 }
+
+/// clap's errors, in the command line's words: one line, a suggestion for a misspelling, the
+/// names that exist for an unknown command, both values of an option given twice.
+#[test]
+fn parser_errors_are_one_line_with_suggestions_and_the_names_that_exist() {
+    let error = |args: &[&str]| {
+        let (result, _) = cutlab(args, "");
+        let message = result.unwrap_err();
+        assert!(!message.contains('\n'), "{args:?}: {message}");
+        message
+    };
+    assert_eq!(
+        error(&["filter", "design", "--ordr", "4"]),
+        "unknown option --ordr (did you mean --order?) (see --help)"
+    );
+    let commands = "commands: calibrate, compare, controllers, filter, force, fuzzy, scenarios, \
+                    sim, spectrum";
+    assert_eq!(
+        error(&["simm"]),
+        format!("unknown command \"simm\" (did you mean sim?); {commands}")
+    );
+    assert!(error(&["frobnicate"]).ends_with(commands));
+    assert!(error(&["help", "frobnicate"]).starts_with("unknown command \"frobnicate\""));
+    assert_eq!(
+        error(&["filter", "desing"]),
+        "unknown filter subcommand \"desing\" (did you mean design?); subcommands: design, apply"
+    );
+    assert_eq!(
+        error(&["fuzzy", "evl"]),
+        "unknown fuzzy subcommand \"evl\" (did you mean eval?); subcommands: eval, export"
+    );
+    let design = ["filter", "design", "--order", "4", "--fs", "100"];
+    assert_eq!(
+        error(&[&design[..], &["--cutoff", "5", "--cutoff=6"]].concat()),
+        "--cutoff is given twice (\"5\", then \"6\")"
+    );
+    assert_eq!(
+        error(&["controllers", "--json", "--json"]),
+        "--json is given twice"
+    );
+    assert_eq!(
+        error(&["controllers", "--json=yes"]),
+        "--json takes no value"
+    );
+    assert_eq!(error(&["spectrum", "--fs"]), "--fs needs a value (HZ)");
+    assert_eq!(
+        error(&["sim", "--scenario", "--controller", "pi"]),
+        "--scenario needs a value (NAME)"
+    );
+}
+
+/// `cutlab help`, `cutlab help COMMAND`, `-h` and `--help` after a command print help on
+/// standard output and succeed.
+#[test]
+fn help_in_every_spelling_goes_to_stdout() {
+    let (result, top) = cutlab(&["--help"], "");
+    assert!(result.is_ok());
+    for args in [&["help"][..], &["-h"]] {
+        let (result, out) = cutlab(args, "");
+        assert!(result.is_ok(), "{args:?}");
+        assert!(out.starts_with("cutlab"), "{args:?}: {out}");
+        assert!(out.contains("Usage: cutlab"), "{args:?}: {out}");
+    }
+    assert!(top.contains("--version"));
+    let (result, sim) = cutlab(&["help", "sim"], "");
+    assert!(result.is_ok());
+    assert!(
+        sim.contains("Usage: cutlab sim") && sim.contains("--rpm"),
+        "{sim}"
+    );
+    let (result, design) = cutlab(&["filter", "design", "--order", "4", "-h"], "");
+    assert!(result.is_ok());
+    assert!(design.contains("Usage: cutlab filter design"), "{design}");
+}

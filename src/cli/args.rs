@@ -4,7 +4,8 @@
 //! until the command reads them with [`value`], [`required`] or [`value_or`], so an error names
 //! the option and says why (`--order: cannot parse "x" as a non-negative integer`), and ranges
 //! are checked where the value is used. [`one_line`] turns clap's own errors (unknown option,
-//! missing value, an option given twice) into the one line the command line prints.
+//! missing value, an option given twice, an unknown command) into the one line the command line
+//! prints.
 
 use std::fmt;
 use std::str::FromStr;
@@ -95,71 +96,145 @@ fn context(e: &clap::Error, kind: ContextKind) -> Option<String> {
     }
 }
 
+/// clap's most likely subcommand for a misspelt one (it lists them most similar last).
+fn best_suggestion(e: &clap::Error) -> Option<String> {
+    match e.get(ContextKind::SuggestedSubcommand)? {
+        ContextValue::String(s) => Some(s.clone()),
+        ContextValue::Strings(v) => v.last().cloned(),
+        _ => None,
+    }
+}
+
 /// The option's name as typed on the command line (`--order`), from clap's `--order <N>`.
 fn option_name(arg: &str) -> &str {
     arg.split([' ', '=']).next().unwrap_or(arg)
 }
 
-/// clap's error as the one line the command line prints; a misspelt option or command gets
-/// clap's suggestion.
-pub fn one_line(e: &clap::Error) -> CliError {
+/// The placeholder of an option's value (`N` from clap's `--order <N>`), if it takes one.
+fn placeholder(arg: &str) -> Option<&str> {
+    let (_, rest) = arg.split_once(' ')?;
+    let rest = rest.trim_end_matches("...");
+    Some(rest.trim_start_matches('<').trim_end_matches('>'))
+}
+
+/// The values `args` gives option `name` (`--cutoff 5`, `--cutoff=6`), in order, up to `--`.
+fn given_values(args: &[String], name: &str) -> Vec<String> {
+    let mut values = Vec::new();
+    let mut iter = args.iter().take_while(|a| *a != "--");
+    while let Some(arg) = iter.next() {
+        if arg == name {
+            values.extend(iter.next().cloned());
+        } else if let Some(value) = arg
+            .strip_prefix(name)
+            .and_then(|rest| rest.strip_prefix('='))
+        {
+            values.push(value.to_string());
+        }
+    }
+    values
+}
+
+/// clap's error on `args` (without the program name) as the one line the command line prints;
+/// `root` is the command that parsed them, whose subcommands an unknown one is told. A misspelt
+/// option or command gets clap's suggestion.
+pub fn one_line(e: &clap::Error, args: &[String], root: &clap::Command) -> CliError {
     let suggestion = context(e, ContextKind::SuggestedArg)
-        .or_else(|| context(e, ContextKind::SuggestedSubcommand))
+        .or_else(|| best_suggestion(e))
         .map(|s| format!(" (did you mean {s}?)"))
         .unwrap_or_default();
-    let message = match e.kind() {
-        ErrorKind::UnknownArgument => match context(e, ContextKind::InvalidArg) {
-            Some(arg) if arg.starts_with('-') && arg.len() > 1 => {
-                format!(
-                    "unknown option {}{suggestion} (see --help)",
-                    option_name(&arg)
-                )
-            }
-            Some(arg) => format!("unexpected argument {arg:?}"),
+    let invalid_arg = context(e, ContextKind::InvalidArg);
+    let message = match (e.kind(), invalid_arg) {
+        (ErrorKind::UnknownArgument, Some(arg)) if arg.starts_with('-') && arg.len() > 1 => {
+            format!(
+                "unknown option {}{suggestion} (see --help)",
+                option_name(&arg)
+            )
+        }
+        (ErrorKind::UnknownArgument, Some(arg)) => format!("unexpected argument {arg:?}"),
+        (ErrorKind::InvalidSubcommand, _) => match context(e, ContextKind::InvalidSubcommand) {
+            Some(name) => unknown_subcommand(&name, &suggestion, e, root),
             None => first_line(e),
         },
-        ErrorKind::InvalidSubcommand => match (
-            context(e, ContextKind::InvalidSubcommand),
-            parent_command(e),
-        ) {
-            (Some(name), Some(parent)) => format!(
-                "unknown {parent} subcommand {name:?}{suggestion} (see cutlab {parent} --help)"
-            ),
-            (Some(name), None) => format!("unknown command {name:?}{suggestion} (see --help)"),
-            (None, _) => first_line(e),
-        },
-        ErrorKind::ArgumentConflict => match context(e, ContextKind::InvalidArg) {
-            Some(arg) => format!("{} is given twice", option_name(&arg)),
-            None => first_line(e),
-        },
-        ErrorKind::InvalidValue | ErrorKind::NoEquals => {
-            match context(e, ContextKind::InvalidArg) {
-                Some(arg) => format!("{} needs a value", option_name(&arg)),
-                None => first_line(e),
+        (ErrorKind::ArgumentConflict, Some(arg)) => {
+            let name = option_name(&arg);
+            let prior = context(e, ContextKind::PriorArg);
+            match prior.as_deref().map(option_name) {
+                Some(other) if other != name => format!("{name} cannot be given with {other}"),
+                _ => match (placeholder(&arg), given_values(args, name).as_slice()) {
+                    (Some(_), [first, second, ..]) => {
+                        format!("{name} is given twice ({first:?}, then {second:?})")
+                    }
+                    _ => format!("{name} is given twice"),
+                },
             }
         }
-        ErrorKind::MissingRequiredArgument => match context(e, ContextKind::InvalidArg) {
-            Some(arg) => format!("missing required option {}", option_name(&arg)),
-            None => first_line(e),
+        (ErrorKind::InvalidValue | ErrorKind::NoEquals, Some(arg)) => match placeholder(&arg) {
+            Some(value) => format!("{} needs a value ({value})", option_name(&arg)),
+            None => format!("{} needs a value", option_name(&arg)),
         },
+        (ErrorKind::TooManyValues, Some(arg)) if placeholder(&arg).is_none() => {
+            format!("{} takes no value", option_name(&arg))
+        }
+        (ErrorKind::MissingRequiredArgument, Some(arg)) => {
+            format!("missing required option {}", option_name(&arg))
+        }
         _ => first_line(e),
     };
     CliError::new(message)
 }
 
-/// The command whose subcommand was misspelt (`filter` in `cutlab filter frobnicate`), read from
-/// the usage line clap attaches; `None` at the top level.
-fn parent_command(e: &clap::Error) -> Option<String> {
-    let usage = match e.get(ContextKind::Usage)? {
-        ContextValue::StyledStr(s) => s.to_string(),
-        _ => return None,
-    };
-    let after = usage.split("cutlab").nth(1)?;
-    let words: Vec<&str> = after
-        .split_whitespace()
-        .take_while(|w| !w.starts_with(['<', '[', '-']))
+/// `unknown command "x"` (or `unknown filter subcommand "x"`) with clap's suggestion and the
+/// names that exist.
+fn unknown_subcommand(
+    name: &str,
+    suggestion: &str,
+    e: &clap::Error,
+    root: &clap::Command,
+) -> String {
+    let path = parent_command(e);
+    let mut command = root;
+    for word in &path {
+        match command.find_subcommand(word) {
+            Some(sub) => command = sub,
+            None => break,
+        }
+    }
+    let names: Vec<&str> = command
+        .get_subcommands()
+        .filter(|c| !c.is_hide_set() && c.get_name() != "help")
+        .map(|c| c.get_name())
         .collect();
-    (!words.is_empty()).then(|| words.join(" "))
+    let (what, plural) = match path.as_slice() {
+        [] => (String::from("command"), "commands"),
+        path => (format!("{} subcommand", path.join(" ")), "subcommands"),
+    };
+    if names.is_empty() {
+        format!("unknown {what} {name:?}{suggestion}")
+    } else {
+        format!(
+            "unknown {what} {name:?}{suggestion}; {plural}: {}",
+            names.join(", ")
+        )
+    }
+}
+
+/// The command whose subcommand was misspelt (`["filter"]` in `cutlab filter frobnicate`), read
+/// from the usage line clap attaches; empty at the top level (and for `cutlab help frobnicate`).
+fn parent_command(e: &clap::Error) -> Vec<String> {
+    let usage = match e.get(ContextKind::Usage) {
+        Some(ContextValue::StyledStr(s)) => s.to_string(),
+        _ => return Vec::new(),
+    };
+    let usage = usage.trim_start();
+    usage
+        .strip_prefix("Usage:")
+        .unwrap_or(usage)
+        .split_whitespace()
+        .skip(1)
+        .take_while(|w| !w.starts_with(['<', '[', '-']))
+        .filter(|w| *w != "help")
+        .map(str::to_string)
+        .collect()
 }
 
 fn first_line(e: &clap::Error) -> String {
@@ -190,5 +265,16 @@ mod tests {
                 .0,
             "unexpected argument \"x\" (samples come on stdin)"
         );
+    }
+
+    #[test]
+    fn option_names_placeholders_and_given_values_come_from_clap_and_the_args() {
+        assert_eq!(option_name("--order <N>"), "--order");
+        assert_eq!(placeholder("--set <KEY=VALUE>..."), Some("KEY=VALUE"));
+        assert_eq!(placeholder("--json"), None);
+        let args: Vec<String> = ["--fs", "1", "--fs=2", "--fsx", "3", "--", "--fs", "4"]
+            .map(String::from)
+            .to_vec();
+        assert_eq!(given_values(&args, "--fs"), ["1", "2"]);
     }
 }

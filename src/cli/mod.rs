@@ -36,7 +36,6 @@ pub struct Io<'a> {
     version,
     about = "cutlab — adaptive cutting-force control of CNC milling: signal chain, simulated \
              machine, estimators, controllers and safety envelope.",
-    disable_help_subcommand = true,
     arg_required_else_help = false
 )]
 struct Cli {
@@ -139,7 +138,7 @@ pub fn run(args: &[String], io: &mut Io<'_>) -> Result<(), CliError> {
                         writeln!(io.stdout, "{}", version_line())?;
                         Ok(())
                     }
-                    _ => Err(args::one_line(&e)),
+                    _ => Err(args::one_line(&e, args, &Cli::command())),
                 };
             }
         };

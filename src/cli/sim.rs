@@ -210,7 +210,7 @@ pub fn spec_from_args(args: &[String]) -> Result<RunSpec, CliError> {
     let parsed = <Sim as clap::Parser>::try_parse_from(
         std::iter::once("sim").chain(args.iter().map(String::as_str)),
     )
-    .map_err(|e| super::args::one_line(&e))?;
+    .map_err(|e| super::args::one_line(&e, args, &<Sim as clap::CommandFactory>::command()))?;
     let controller = match parsed.args.controller.as_deref() {
         Some(name) => controller_with_settings(name)?,
         None => ControllerConfig::new(ControllerKind::Fixed),
