@@ -10,6 +10,11 @@ use crate::control::fuzzy::rules::{paper_002_engine, RuleBase};
 
 /// Evaluate a Mamdani engine given in fuzzylite's FLL format (one evaluation per stdin line: the
 /// input values in the order the file declares them), or print paper 002's engine as FLL.
+pub(crate) const ABOUT: &str = "Evaluate a Mamdani engine given in fuzzylite's FLL format (one \
+evaluation per stdin\nline: the input values in the order the file declares them), or print \
+paper 002's engine as FLL.";
+
+/// The options of `cutlab fuzzy`: a subcommand ([`ABOUT`]).
 #[derive(Debug, clap::Args)]
 pub struct FuzzyArgs {
     #[command(subcommand)]
@@ -18,11 +23,14 @@ pub struct FuzzyArgs {
 
 #[derive(Debug, clap::Subcommand)]
 enum FuzzyCommand {
+    /// Evaluate an FLL engine on each line of standard input
+    ///
     /// Read one evaluation per line of standard input (input values separated by spaces, in the
     /// order the FLL file declares its input variables) and print the output values,
     /// space-separated, at full precision. Blank lines and lines starting with # are skipped.
+    #[command(verbatim_doc_comment)]
     Eval(EvalArgs),
-    /// Print paper 002's engine (E, EC → U on [-6, 6], seven triangles each, 49 rules) as FLL.
+    /// Print paper 002's engine (E, EC → U on [-6, 6], seven triangles each, 49 rules) as FLL
     Export(ExportArgs),
 }
 

@@ -62,6 +62,7 @@ enum Command {
     #[command(long_about = force::ABOUT)]
     Force(force::ForceArgs),
     /// Evaluate a fuzzy engine from an FLL file, or export paper 002's engine as FLL
+    #[command(long_about = fuzzy::ABOUT)]
     Fuzzy(fuzzy::FuzzyArgs),
     /// List the papers' experiments (presets), or run one open-loop
     Scenarios(scenarios::ScenariosArgs),
@@ -103,7 +104,7 @@ pub fn print_help(io: &mut Io<'_>, path: &[&str]) -> Result<(), CliError> {
         };
         command = sub.bin_name(format!("cutlab {}", path.join(" ")));
     }
-    write!(io.stdout, "{}", command.render_help())?;
+    write!(io.stdout, "{}", command.render_long_help())?;
     Ok(())
 }
 
