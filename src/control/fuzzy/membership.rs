@@ -7,6 +7,8 @@
 //! `end < start`). Degenerate edges (a = b) are vertical: the degree jumps to 1 at the vertex.
 //! A NaN input has degree 0 (it activates nothing), where fuzzylite would propagate NaN.
 
+use std::fmt;
+
 use super::FuzzyError;
 
 /// The shape of one linguistic term.
@@ -158,6 +160,17 @@ impl Shape {
         let p = self.degree(x0 + third);
         let q = self.degree(x1 - third);
         (2.0 * p - q, 2.0 * q - p)
+    }
+}
+
+/// The shape as an FLL term writes it: `Triangle -6 -6 -4`, `Trapezoid 0 1 2 4`, `Ramp 2 0`.
+impl fmt::Display for Shape {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match *self {
+            Shape::Triangle { a, b, c } => write!(f, "Triangle {a} {b} {c}"),
+            Shape::Trapezoid { a, b, c, d } => write!(f, "Trapezoid {a} {b} {c} {d}"),
+            Shape::Ramp { start, end } => write!(f, "Ramp {start} {end}"),
+        }
     }
 }
 
