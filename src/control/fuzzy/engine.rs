@@ -465,9 +465,10 @@ impl Engine {
             (l.min(from), r.max(to))
         });
         let (lo, hi) = (left.max(var.min), right.min(var.max));
-        // Finite: the engine refuses universes whose width overflows.
+        // lo and hi lie in the universe, so the width is a number: the engine refuses universes
+        // whose width overflows. None left means the active terms lie outside the universe.
         let width = hi - lo;
-        if !(width > 0.0) {
+        if width <= 0.0 {
             return f64::NAN;
         }
         let bp = &mut self.breakpoints;
