@@ -861,4 +861,85 @@ mod tests {
             }
         }
     }
+
+    #[test]
+    fn property_each_run_of_non_finite_requests_is_one_fault_event_and_the_output_holds() {
+        let mut rng = Rng::seed_from(4711);
+        let mut episodes = 0;
+        for case in 0..200 {
+            let mut config = EnvelopeConfig::for_target(300.0);
+            if case % 2 == 0 {
+                config.resolution = OverrideResolution::Continuous;
+            }
+            config.min_override_pct = 10.0 * (rng.uniform() * 5.0).floor();
+            config.max_override_pct = config.min_override_pct + 20.0 + 100.0 * rng.uniform();
+            config.max_rate_pct_per_s = 5.0 + 200.0 * rng.uniform();
+            config.arming_delay_s = rng.uniform();
+            let step = config.resolution.step_pct();
+            let (min, max, rate) = (
+                config.min_override_pct,
+                config.max_override_pct,
+                config.max_rate_pct_per_s,
+            );
+            let mut env = envelope(config);
+            let (mut previous, mut t, mut spindle_start_s) = (env.output_pct(), 0.0, 0.0);
+            // Whether the last request the envelope listened to was not a number.
+            let mut in_episode = false;
+            let mut events = Vec::new();
+            for period in 0..400 {
+                let dt = 0.01 + 0.05 * rng.uniform();
+                t += dt;
+                // Now and then the spindle stops and starts again: disarmed, then re-armed.
+                let mut s = running_sample(t);
+                if rng.uniform() < 0.01 {
+                    spindle_start_s = t;
+                }
+                s.time_since_spindle_start_s = t - spindle_start_s;
+                // Runs of non-finite requests among finite ones, some far outside the limits.
+                let request = match rng.next_u64() % 8 {
+                    0 | 1 if in_episode || rng.uniform() < 0.3 => {
+                        [f64::NAN, f64::INFINITY, f64::NEG_INFINITY][period % 3]
+                    }
+                    2 => -1e6 + 2e6 * rng.uniform(),
+                    _ => 200.0 * rng.uniform(),
+                };
+                let out = env.command(request, 100.0, t, dt, &s).override_pct;
+                events.clear();
+                env.drain_events(&mut events);
+                let faults = events
+                    .iter()
+                    .filter(
+                        |e| matches!(e, SafetyEvent::ControllerFault { time_s } if *time_s == t),
+                    )
+                    .count();
+                let listened = env.armed() && env.fault().is_none();
+                let bad = !request.is_finite();
+                let opens = listened && bad && !in_episode;
+                assert_eq!(
+                    faults,
+                    usize::from(opens),
+                    "case {case}, period {period}: {events:?}"
+                );
+                episodes += usize::from(opens);
+                if listened {
+                    in_episode = bad;
+                    if bad {
+                        assert_eq!(out, previous, "case {case}, period {period}: not held");
+                    }
+                }
+                assert!(
+                    out.is_finite() && out >= min && out <= max,
+                    "case {case}: {out}"
+                );
+                assert!(
+                    (out - previous).abs() <= rate * dt + step + 1e-9,
+                    "case {case}, period {period}: jump {previous} → {out}"
+                );
+                previous = out;
+            }
+            let described = SafetyEvent::ControllerFault { time_s: t }.describe();
+            assert!(described.contains("non-finite override"), "{described}");
+        }
+        assert!(episodes > 1000, "only {episodes} episodes");
+    }
 }

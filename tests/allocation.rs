@@ -133,3 +133,55 @@ fn an_engine_with_many_output_terms_reserves_memory_linear_in_them() {
         info.bytes_max
     );
 }
+
+/// An FLL engine whose output has `n` terms, with one rule naming each.
+fn fll_with_terms_and_rules(n: usize) -> String {
+    use std::fmt::Write as _;
+    let mut text = String::from(
+        "Engine: many\nInputVariable: x\n  range: 0 1\n  term: a Triangle 0 0.5 1\n\
+         OutputVariable: y\n",
+    );
+    let _ = writeln!(text, "  range: 0 {}", n + 1);
+    for i in 0..n {
+        let _ = writeln!(text, "  term: t{i} Triangle {i} {i}.5 {}", i + 1);
+    }
+    text.push_str("RuleBlock: rules\n");
+    for i in 0..n {
+        let _ = writeln!(text, "  rule: if x is a then y is t{i}");
+    }
+    text
+}
+
+#[test]
+fn parsing_many_terms_and_rules_allocates_linearly_in_them() {
+    use cutlab::control::fuzzy::fll::parse;
+    // Each rule's look-up once listed every variable's terms: rules × terms bytes, 6.4 GB for
+    // 20 000 of each (and 80 000 took 100 GB of allocations, 21 s).
+    let measure = |n: usize| {
+        let text = fll_with_terms_and_rules(n);
+        let info = allocation_counter::measure(|| {
+            assert!(parse(&text).is_ok());
+        });
+        (info.bytes_total, info.count_total)
+    };
+    let n = 20_000;
+    let (bytes, count) = measure(n);
+    let (bytes_twice, count_twice) = measure(2 * n);
+    // A few hundred bytes and a handful of allocations per line, whatever the size.
+    for (lines, bytes, count) in [(2 * n, bytes, count), (4 * n, bytes_twice, count_twice)] {
+        assert!(
+            bytes < 2_000 * lines as u64,
+            "{bytes} bytes for {lines} lines"
+        );
+        assert!(
+            count < 20 * lines as u64,
+            "{count} allocations for {lines} lines"
+        );
+    }
+    // Twice the terms and rules, about twice the work: n² would make it four times.
+    assert!(bytes_twice < 5 * bytes / 2, "{bytes} → {bytes_twice} bytes");
+    assert!(
+        count_twice < 5 * count / 2,
+        "{count} → {count_twice} allocations"
+    );
+}

@@ -5,7 +5,9 @@
 #[cfg(target_arch = "wasm32")]
 use wasm_bindgen_test::wasm_bindgen_test as test;
 
-use cutlab::control::fuzzy::engine::{Defuzzifier, Norm};
+use cutlab::control::fuzzy::engine::{
+    Defuzzifier, Engine, InputVariable, Norm, OutputVariable, Rule, Term,
+};
 use cutlab::control::fuzzy::fll::{parse, write};
 use cutlab::control::fuzzy::membership::Shape;
 use cutlab::control::fuzzy::rules::{paper_002_engine, RuleBase, RuleTable, TABLE_4_AS_PRINTED};
@@ -330,6 +332,58 @@ fn engine_tolerance(engine: &Value, case: &Value, k: usize) -> f64 {
 /// parser, evaluates it at every point and compares every output with the reference. Returns
 /// the parsed engines and the number of comparisons.
 fn compare_with_references(name: &str) -> (Vec<cutlab::control::fuzzy::engine::Engine>, usize) {
+    compare_with_scaled_references(name, 1.0, 0.0)
+}
+
+/// The engine with every output variable moved by x ↦ scale·x + shift (scale > 0): its range,
+/// its terms' vertices and its default. Every defuzzifier commutes with that map, so the moved
+/// engine's outputs are the references moved the same way.
+fn with_outputs_moved(engine: &Engine, scale: f64, shift: f64) -> Engine {
+    let map = |x: f64| scale * x + shift;
+    let outputs = engine
+        .outputs()
+        .iter()
+        .map(|o| OutputVariable {
+            min: map(o.min),
+            max: map(o.max),
+            default_value: map(o.default_value),
+            terms: o
+                .terms
+                .iter()
+                .map(|t| Term {
+                    name: t.name.clone(),
+                    shape: match t.shape {
+                        Shape::Triangle { a, b, c } => Shape::triangle(map(a), map(b), map(c)),
+                        Shape::Trapezoid { a, b, c, d } => {
+                            Shape::trapezoid(map(a), map(b), map(c), map(d))
+                        }
+                        Shape::Ramp { start, end } => Shape::ramp(map(start), map(end)),
+                    }
+                    .unwrap(),
+                })
+                .collect(),
+            ..o.clone()
+        })
+        .collect();
+    Engine::new(
+        engine.name.clone(),
+        engine.inputs().to_vec(),
+        outputs,
+        engine.rules().to_vec(),
+        engine.conjunction(),
+        engine.implication(),
+    )
+    .unwrap()
+}
+
+/// [`compare_with_references`] with every output moved by x ↦ scale·x + shift
+/// ([`with_outputs_moved`]); the tolerance scales with the outputs and grows by the rounding of
+/// the moved numbers themselves (a few ulps of the largest).
+fn compare_with_scaled_references(
+    name: &str,
+    scale: f64,
+    shift: f64,
+) -> (Vec<cutlab::control::fuzzy::engine::Engine>, usize) {
     let engine = reference_engine(name);
     let points: Vec<Vec<f64>> = engine["points"]
         .as_array()
@@ -345,6 +399,10 @@ fn compare_with_references(name: &str) -> (Vec<cutlab::control::fuzzy::engine::E
         let defuzzifier = case["defuzzifier"].as_str().unwrap();
         let mut ours = parse(case["fll"].as_str().unwrap()).unwrap();
         assert_eq!(ours.outputs().len(), outputs, "{name}: outputs");
+        let identity = scale == 1.0 && shift == 0.0;
+        if !identity {
+            ours = with_outputs_moved(&ours, scale, shift);
+        }
         if defuzzifier == "mean-of-maximum" {
             // Where the highest level of the aggregate is reached on two separate intervals,
             // fuzzylite 6 averages the first interval only; no reference point is such a place.
@@ -365,6 +423,16 @@ fn compare_with_references(name: &str) -> (Vec<cutlab::control::fuzzy::engine::E
                     tol <= 3e-5,
                     "{name}: {defuzzifier} tolerance {tol} from {tool} is too loose to mean much"
                 );
+                let (expected, tol) = if identity {
+                    (expected, tol)
+                } else {
+                    let range = numbers(&engine["output_ranges"][k]);
+                    let largest = shift.abs() + scale * range[0].abs().max(range[1].abs());
+                    (
+                        scale * expected + shift,
+                        scale * tol + 16.0 * f64::EPSILON * largest,
+                    )
+                };
                 assert!(
                     (value - expected).abs() <= tol,
                     "{name} / {defuzzifier} vs {tool}, output {} at {point:?}: {value} vs \
@@ -463,4 +531,149 @@ fn two_output_engine_matches_fuzzylite_scikit_fuzzy_and_eq_7() {
     }
     // 65 points, two outputs, four references.
     assert_eq!(checked, 65 * 2 * 4);
+}
+
+/// Output universes of these magnitudes and widths: (scale, shift) of x ↦ scale·x + shift.
+/// Terms near 1e155 made the centroid's moments overflow to inf; terms 1e-12 wide, or near
+/// 1e-300, had their vertices merged as "equal" and came out as the default value.
+const MAGNITUDES: [(f64, f64); 8] = [
+    (1e-12, 0.0),
+    (1e-12, 1.0),
+    (1e-300, 0.0),
+    (1e-300, -3e-298),
+    (1e155, 0.0),
+    (1e155, 1e160),
+    (1e306, 0.0),
+    (1e-9, -1e6),
+];
+
+#[test]
+fn a_triangle_centroid_is_the_mean_of_its_vertices_at_any_magnitude() {
+    for (scale, shift) in MAGNITUDES {
+        for implication in [Norm::Minimum, Norm::AlgebraicProduct] {
+            let map = |x: f64| scale * x + shift;
+            let (a, b, c) = (map(0.0), map(0.3), map(1.0));
+            let term = |shape| Term {
+                name: "t".into(),
+                shape,
+            };
+            let input = InputVariable {
+                name: "x".into(),
+                min: 0.0,
+                max: 1.0,
+                lock_range: false,
+                terms: vec![term(Shape::ramp(0.0, 1.0).unwrap())],
+            };
+            let output = OutputVariable {
+                name: "y".into(),
+                min: map(-1.0),
+                max: map(2.0),
+                lock_range: false,
+                terms: vec![term(Shape::triangle(a, b, c).unwrap())],
+                defuzzifier: Defuzzifier::Centroid,
+                default_value: f64::NAN,
+                lock_previous: false,
+            };
+            let rule = Rule {
+                antecedents: vec![(0, 0)],
+                consequents: vec![(0, 0)],
+                weight: 1.0,
+            };
+            let mut engine = Engine::new(
+                "one",
+                vec![input],
+                vec![output],
+                vec![rule],
+                Norm::Minimum,
+                implication,
+            )
+            .unwrap();
+            // The rounding of the vertices themselves, a few ulps of the largest.
+            let tol = 1e-12 * (c - a) + 8.0 * f64::EPSILON * a.abs().max(c.abs());
+            let mut out = [0.0];
+            // Fully active: the whole triangle.
+            for (d, expected) in [
+                (Defuzzifier::Centroid, a / 3.0 + b / 3.0 + c / 3.0),
+                (Defuzzifier::MeanOfMaximum, b),
+                (Defuzzifier::WeightedAverage, b),
+            ] {
+                engine.set_defuzzifier(d);
+                engine.evaluate(&[1.0], &mut out);
+                assert!(
+                    (out[0] - expected).abs() <= tol,
+                    "{scale:e}·x + {shift:e}, {implication:?}, {d:?}: {:e} vs {expected:e}",
+                    out[0]
+                );
+            }
+        }
+    }
+}
+
+#[test]
+fn references_moved_to_extreme_magnitudes_stay_the_moved_references() {
+    for (scale, shift) in MAGNITUDES {
+        let mut checked = 0;
+        for name in [
+            "shapes",
+            "shapes-product",
+            "two-outputs",
+            "paper002-dynamics-product-and-product",
+        ] {
+            checked += compare_with_scaled_references(name, scale, shift).1;
+        }
+        assert_eq!(
+            checked,
+            65 * 6 + 65 * 2 * 4 + 67 * 2,
+            "{scale:e}, {shift:e}"
+        );
+    }
+}
+
+#[test]
+fn universes_and_terms_wider_than_an_f64_are_refused_saying_so() {
+    let text =
+        write(&paper_002_engine(&RuleBase::Dynamics.table(), Defuzzifier::Centroid).unwrap());
+    let wide_output = text.replacen(
+        "OutputVariable: U\n  enabled: true\n  range: -6 6",
+        "OutputVariable: U\n  enabled: true\n  range: -1e308 1e308",
+        1,
+    );
+    let e = parse(&wide_output).unwrap_err().to_string();
+    assert!(
+        e == "output U: range -1e308 1e308 must be finite with min < max and a width max − min \
+             that an f64 can hold",
+        "{e}"
+    );
+    let wide_term = text.replacen(
+        "term: NB Triangle -6 -6 -4",
+        "term: NB Ramp -1e308 1e308",
+        1,
+    );
+    let e = parse(&wide_term).unwrap_err().to_string();
+    assert!(
+        e.starts_with("line 6: term NB: ") && e.contains("wider than an f64 can hold"),
+        "{e}"
+    );
+    // Built without a constructor, the engine checks it.
+    let mut engine = parse(&text).unwrap();
+    let mut outputs = engine.outputs().to_vec();
+    outputs[0].terms[0].shape = Shape::Triangle {
+        a: -1e308,
+        b: 0.0,
+        c: 1e308,
+    };
+    let e = Engine::new(
+        "wide",
+        engine.inputs().to_vec(),
+        outputs,
+        engine.rules().to_vec(),
+        Norm::Minimum,
+        Norm::Minimum,
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(e.starts_with("output U, term NB: "), "{e}");
+    let mut out = [0.0];
+    engine.evaluate(&[1.0, 1.0], &mut out);
+    assert!(out[0].is_finite());
 }

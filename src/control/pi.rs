@@ -141,6 +141,43 @@ mod tests {
         assert!(c.integral_pct.abs() < 200.0, "{}", c.integral_pct);
     }
 
+    #[test]
+    fn the_tracking_is_stable_for_every_tracking_time_in_range_at_every_period() {
+        // The registry's range of T_t is 0.001–100 s; control periods from 0.1 ms to 1 s. Any
+        // T_t below half the period made the Euler step's factor 1 − dt/T_t exceed 1 in size.
+        let mut rng = crate::rng::Rng::seed_from(9);
+        for tracking_time_s in [0.001, 0.003, 0.01, 0.1, 1.0, 10.0, 100.0] {
+            for dt_s in [1e-4, 0.01, 0.04, 0.2, 1.0] {
+                let mut c = PiController::new(PiParams {
+                    kp: 10.0 * rng.uniform(),
+                    ki_per_s: 100.0 * rng.uniform(),
+                    tracking_time_s,
+                    initial_override_pct: 100.0,
+                });
+                let (mut applied, mut load) = (100.0, 1.0);
+                for i in 0..2000 {
+                    if i % 50 == 0 {
+                        load = 0.2 + 3.0 * rng.uniform();
+                    }
+                    let request = c.step(&ControlInput {
+                        time_s: dt_s * f64::from(i),
+                        dt_s,
+                        force_n: 3.0 * load * applied,
+                        target_force_n: 300.0,
+                        programmed_feed_mm_min: 200.0,
+                        applied_override_pct: applied,
+                        time_since_start_s: 10.0,
+                    });
+                    assert!(
+                        request.is_finite() && request.abs() < 1e9,
+                        "T_t {tracking_time_s} s, dt {dt_s} s, period {i}: {request}"
+                    );
+                    applied = request.clamp(10.0, 150.0);
+                }
+            }
+        }
+    }
+
     fn input(force_n: f64, applied: f64) -> ControlInput {
         ControlInput {
             time_s: 0.0,

@@ -5,7 +5,7 @@
 //! |---|---|
 //! | [`membership`] | triangle, trapezoid and ramp terms as exact piecewise-linear functions |
 //! | [`engine`] | rules, inference (AND = min or product, max aggregation), exact centroid, weighted average (eq 7), mean of maximum |
-//! | [`rules`] | the experience-based (MacVicar-Whelan) and dynamics-based (Table 4, repaired) tables and paper 002's engine |
+//! | [`rules`] | the experience-based (MacVicar-Whelan) and dynamics-based (Table 4, repaired) tables, paper 002's engine, and the table of an engine ([`rules::paper_002_table`]) |
 //! | [`fll`] | fuzzylite's FLL format, read and written, for cross-checking in fuzzylite/QtFuzzyLite |
 //! | [`controller`] | a_f(i+1) = a_f(i) + k_u·U(k_e·E, k_ec·EC) as a [`crate::control::law::Controller`] |
 

@@ -158,10 +158,8 @@ pub fn paper_002_engine(table: &RuleTable, defuzzifier: Defuzzifier) -> Result<E
     )
 }
 
-/// The rule table of an engine that has paper 002's shape — inputs E and EC and output U, each
-/// with the seven standard triangles, and rules of one E term and one EC term to one U term —
-/// whatever order its rules come in; `None` for any other engine (a table would misstate it).
-/// This is how an imported FLL engine comes back to the 7×7 table the lab edits.
+/// The rule table of an engine that has paper 002's shape, whatever order its rules come in;
+/// `None` for any other engine (a table would misstate it). [`paper_002_table`] says why not.
 ///
 /// ```
 /// use cutlab::control::fuzzy::engine::Defuzzifier;
@@ -171,33 +169,186 @@ pub fn paper_002_engine(table: &RuleTable, defuzzifier: Defuzzifier) -> Result<E
 /// assert_eq!(rule_table_of(&engine), Some(table));
 /// ```
 pub fn rule_table_of(engine: &Engine) -> Option<RuleTable> {
-    let standard = seven_terms();
-    let [e, ec] = engine.inputs() else {
-        return None;
+    paper_002_table(engine).ok()
+}
+
+/// The rule table of `engine` if it is paper 002's engine ([`paper_002_engine`]) with some table,
+/// else an error that says what differs. This is how an imported FLL engine comes back to the
+/// 7×7 table the lab edits.
+///
+/// Paper 002's engine has inputs E and EC and one output U, each with [`seven_terms`] on
+/// [−6, 6], inputs clamped to their range, output default 0, AND and implication = minimum, and
+/// exactly one rule of weight 1 for every (E, EC) pair, naming one U term. The order of the
+/// rules, the engine's name and the defuzzifier are not part of a table: an engine that differs
+/// only in them evaluates the same under paper 002's engine with the returned table.
+///
+/// ```
+/// use cutlab::control::fuzzy::engine::Defuzzifier;
+/// use cutlab::control::fuzzy::fll;
+/// use cutlab::control::fuzzy::rules::{paper_002_engine, paper_002_table, RuleBase};
+/// let table = RuleBase::Dynamics.table();
+/// let text = fll::write(&paper_002_engine(&table, Defuzzifier::Centroid).unwrap());
+/// assert_eq!(paper_002_table(&fll::parse(&text).unwrap()), Ok(table));
+/// assert_eq!(table[0][6], -1); // E is NB, EC is PB → U is NS
+/// let lopsided = text.replacen("range: -6 6", "range: -6 7", 1);
+/// let why = paper_002_table(&fll::parse(&lopsided).unwrap()).unwrap_err();
+/// assert_eq!(why.to_string(), "input E: range -6 7, paper 002's is -6 6");
+/// ```
+pub fn paper_002_table(engine: &Engine) -> Result<RuleTable, FuzzyError> {
+    let (e, ec, u) = match (engine.inputs(), engine.outputs()) {
+        ([e, ec], [u]) if e.name == "E" && ec.name == "EC" && u.name == "U" => (e, ec, u),
+        (inputs, outputs) => {
+            let names = |names: Vec<&str>| names.join(", ");
+            return Err(FuzzyError::new(format!(
+                "a 7×7 table needs inputs E and EC and one output U; this engine has inputs [{}] \
+                 and outputs [{}]",
+                names(inputs.iter().map(|v| v.name.as_str()).collect()),
+                names(outputs.iter().map(|v| v.name.as_str()).collect()),
+            )));
+        }
     };
-    let [u] = engine.outputs() else {
-        return None;
-    };
-    if e.terms != standard || ec.terms != standard || u.terms != standard {
-        return None;
+    // Paper 002's engine itself is the reference for every setting, so the two cannot drift.
+    let paper = paper_002_engine(&RuleBase::Experience.table(), u.defuzzifier)?;
+    let (paper_e, paper_u) = (&paper.inputs()[0], &paper.outputs()[0]);
+    for v in [e, ec] {
+        let what = format!("input {}", v.name);
+        same_universe(
+            &what,
+            &v.terms,
+            (v.min, v.max),
+            &paper_e.terms,
+            (paper_e.min, paper_e.max),
+        )?;
+        if v.lock_range != paper_e.lock_range {
+            return Err(FuzzyError::new(format!(
+                "{what}: lock-range {}, paper 002's is {}",
+                v.lock_range, paper_e.lock_range
+            )));
+        }
     }
-    // 9 marks a cell no rule filled: a table with a hole is no table.
-    let mut table = [[9i8; 7]; 7];
-    for rule in engine.rules() {
+    same_universe(
+        "output U",
+        &u.terms,
+        (u.min, u.max),
+        &paper_u.terms,
+        (paper_u.min, paper_u.max),
+    )?;
+    let flags = [
+        ("lock-range", u.lock_range, paper_u.lock_range),
+        ("lock-previous", u.lock_previous, paper_u.lock_previous),
+    ];
+    for (key, mine, theirs) in flags {
+        if mine != theirs {
+            return Err(FuzzyError::new(format!(
+                "output U: {key} {mine}, paper 002's is {theirs}"
+            )));
+        }
+    }
+    if u.default_value != paper_u.default_value {
+        return Err(FuzzyError::new(format!(
+            "output U: default {}, paper 002's is {}",
+            u.default_value, paper_u.default_value
+        )));
+    }
+    let operators = [
+        ("conjunction", engine.conjunction(), paper.conjunction()),
+        ("implication", engine.implication(), paper.implication()),
+    ];
+    for (key, mine, theirs) in operators {
+        if mine != theirs {
+            return Err(FuzzyError::new(format!(
+                "{key} {}, paper 002's is {}",
+                mine.name(),
+                theirs.name()
+            )));
+        }
+    }
+    // Which rule (1-based) filled each cell: a cell filled twice or not at all is no table.
+    let mut filled_by = [[0usize; 7]; 7];
+    let mut table = [[0i8; 7]; 7];
+    for (index, rule) in engine.rules().iter().enumerate() {
+        let number = index + 1;
         let (&[(0, i), (1, j)] | &[(1, j), (0, i)]) = rule.antecedents.as_slice() else {
-            return None;
+            return Err(FuzzyError::new(format!(
+                "rule {number}: a table cell needs one E term and one EC term joined by \"and\""
+            )));
         };
         let &[(0, t)] = rule.consequents.as_slice() else {
-            return None;
+            return Err(FuzzyError::new(format!(
+                "rule {number}: a table cell names one U term"
+            )));
         };
-        let cell = table.get_mut(i).and_then(|row| row.get_mut(j))?;
-        *cell = i8::try_from(t).ok()? - 3;
+        if rule.weight != 1.0 {
+            return Err(FuzzyError::new(format!(
+                "rule {number}: weight {}; a table's rules have weight 1",
+                rule.weight
+            )));
+        }
+        // The terms are paper 002's seven (checked above), so every index is a level; the
+        // engine checked them against its terms when it was built.
+        let level = i8::try_from(t).ok().filter(|t| *t < 7).map(|t| t - 3);
+        let cell = filled_by.get_mut(i).and_then(|row| row.get_mut(j));
+        let (Some(first), Some(level)) = (cell, level) else {
+            return Err(FuzzyError::new(format!(
+                "rule {number}: refers to a term that does not exist"
+            )));
+        };
+        if *first != 0 {
+            return Err(FuzzyError::new(format!(
+                "rules {} and {number} both cover {}",
+                *first,
+                cell_name(i, j)
+            )));
+        }
+        *first = number;
+        table[i][j] = level;
     }
-    table
-        .iter()
-        .flatten()
-        .all(|l| (-3..=3).contains(l))
-        .then_some(table)
+    for (i, row) in filled_by.iter().enumerate() {
+        for (j, rule) in row.iter().enumerate() {
+            if *rule == 0 {
+                return Err(FuzzyError::new(format!(
+                    "no rule covers {}",
+                    cell_name(i, j)
+                )));
+            }
+        }
+    }
+    Ok(table)
+}
+/// "E is NB and EC is PS" for the cell of E level `e` and EC level `ec` (0-based).
+fn cell_name(e: usize, ec: usize) -> String {
+    let name = |i: usize| LEVEL_NAMES.get(i).copied().unwrap_or("?");
+    format!("E is {} and EC is {}", name(e), name(ec))
+}
+
+/// An error naming the first way a variable's terms or range differ from paper 002's.
+fn same_universe(
+    what: &str,
+    terms: &[Term],
+    range: (f64, f64),
+    paper_terms: &[Term],
+    paper_range: (f64, f64),
+) -> Result<(), FuzzyError> {
+    if terms.len() != paper_terms.len() {
+        return Err(FuzzyError::new(format!(
+            "{what} has {} terms; a 7×7 table needs paper 002's seven ({})",
+            terms.len(),
+            LEVEL_NAMES.join(" ")
+        )));
+    }
+    if let Some((mine, theirs)) = terms.iter().zip(paper_terms).find(|(a, b)| a != b) {
+        return Err(FuzzyError::new(format!(
+            "{what}: term {} {}, paper 002's is {} {}",
+            mine.name, mine.shape, theirs.name, theirs.shape
+        )));
+    }
+    if range != paper_range {
+        return Err(FuzzyError::new(format!(
+            "{what}: range {} {}, paper 002's is {} {}",
+            range.0, range.1, paper_range.0, paper_range.1
+        )));
+    }
+    Ok(())
 }
 
 #[cfg(test)]
@@ -247,5 +398,133 @@ mod tests {
         if let Ok(fewer) = fewer {
             assert_eq!(rule_table_of(&fewer), None);
         }
+    }
+
+    /// The exported FLL of the experience table, for editing into engines that are no table.
+    fn exported() -> String {
+        let engine = paper_002_engine(&RuleBase::Experience.table(), Defuzzifier::Centroid);
+        fll::write(&engine.unwrap())
+    }
+
+    #[test]
+    fn every_exported_engine_comes_back_to_its_table_whatever_its_rule_order() {
+        for base in RuleBase::ALL {
+            for d in Defuzzifier::ALL {
+                let text = fll::write(&paper_002_engine(&base.table(), d).unwrap());
+                assert_eq!(
+                    paper_002_table(&fll::parse(&text).unwrap()),
+                    Ok(base.table())
+                );
+                // Rules last to first, and the engine renamed: still the same table.
+                let (head, rules) = text.split_at(text.find("  rule:").unwrap());
+                let mut reversed: Vec<&str> = rules.lines().collect();
+                reversed.reverse();
+                let text = format!("{}{}\n", head, reversed.join("\n")).replacen(
+                    "Engine: paper002",
+                    "Engine: mine",
+                    1,
+                );
+                let engine = fll::parse(&text).unwrap();
+                assert_eq!(engine.rules().len(), 49);
+                assert_eq!(paper_002_table(&engine), Ok(base.table()), "{base:?} {d:?}");
+            }
+        }
+    }
+
+    #[test]
+    fn a_cell_covered_by_two_rules_is_no_table() {
+        // Rule 2 (E is NB, EC is NM) moved onto rule 1's cell: the old look-up kept the later
+        // rule and returned a table that misstated the engine.
+        let text = exported().replacen(
+            "rule: if E is NB and EC is NM then",
+            "rule: if E is NB and EC is NB then",
+            1,
+        );
+        let engine = fll::parse(&text).unwrap();
+        assert_eq!(rule_table_of(&engine), None);
+        assert_eq!(
+            paper_002_table(&engine).unwrap_err().to_string(),
+            "rules 1 and 2 both cover E is NB and EC is NB"
+        );
+    }
+
+    #[test]
+    fn an_engine_that_is_no_table_says_why() {
+        let last_rule = exported()
+            .lines()
+            .rfind(|l| l.contains("rule:"))
+            .unwrap()
+            .to_string();
+        let cases: [(&str, &str, &str); 9] = [
+            (
+                "term: NB Triangle -6 -6 -4",
+                "term: NB Triangle -6 -6 -3",
+                "input E: term NB Triangle -6 -6 -3, paper 002's is NB Triangle -6 -6 -4",
+            ),
+            (
+                "term: PB Triangle 4 6 6\nOutputVariable",
+                "term: PB Ramp 4 6\nOutputVariable",
+                "input EC: term PB Ramp 4 6, paper 002's is PB Triangle 4 6 6",
+            ),
+            (
+                "lock-range: true",
+                "lock-range: false",
+                "input E: lock-range false, paper 002's is true",
+            ),
+            (
+                "lock-range: false",
+                "lock-range: true",
+                "output U: lock-range true, paper 002's is false",
+            ),
+            (
+                "default: 0",
+                "default: nan",
+                "output U: default NaN, paper 002's is 0",
+            ),
+            (
+                "conjunction: Minimum",
+                "conjunction: AlgebraicProduct",
+                "conjunction AlgebraicProduct, paper 002's is Minimum",
+            ),
+            (
+                "then U is NB\n",
+                "then U is NB with 0.5\n",
+                "rule 1: weight 0.5; a table's rules have weight 1",
+            ),
+            (
+                "rule: if E is NB and EC is NB then",
+                "rule: if E is NB then",
+                "rule 1: a table cell needs one E term and one EC term",
+            ),
+            (
+                &format!("{last_rule}\n"),
+                "",
+                "no rule covers E is PB and EC is PB",
+            ),
+        ];
+        for (from, to, expected) in cases {
+            let text = exported().replacen(from, to, 1);
+            let engine = fll::parse(&text).unwrap_or_else(|e| panic!("{to}: {e}"));
+            let why = paper_002_table(&engine).unwrap_err().to_string();
+            assert!(why.starts_with(expected), "{to}: {why}");
+            assert_eq!(rule_table_of(&engine), None, "{to}");
+        }
+        // Another name for an input, and a second output.
+        let text = exported()
+            .replacen("InputVariable: EC", "InputVariable: X", 1)
+            .replace("EC is", "X is");
+        let why = paper_002_table(&fll::parse(&text).unwrap()).unwrap_err();
+        assert_eq!(
+            why.to_string(),
+            "a 7×7 table needs inputs E and EC and one output U; this engine has inputs [E, X] and \
+             outputs [U]"
+        );
+        let text = exported().replacen(
+            "RuleBlock:",
+            "OutputVariable: V\n  range: 0 1\n  term: A Triangle 0 0.5 1\nRuleBlock:",
+            1,
+        );
+        let why = paper_002_table(&fll::parse(&text).unwrap()).unwrap_err();
+        assert!(why.to_string().ends_with("outputs [U, V]"), "{why}");
     }
 }

@@ -11,7 +11,7 @@ use crate::closed_loop::lab::LabRuns;
 use crate::closed_loop::lab::{RunResult, RunSpec};
 use crate::control::fuzzy::engine::{Defuzzifier, Engine};
 use crate::control::fuzzy::fll;
-use crate::control::fuzzy::rules::{paper_002_engine, rule_table_of, RuleBase, LEVEL_NAMES};
+use crate::control::fuzzy::rules::{paper_002_engine, paper_002_table, RuleBase, LEVEL_NAMES};
 use crate::control::registry::{ControllerConfig, ControllerKind};
 use crate::plant::Preset;
 use crate::web::components::chart::ChartCanvas;
@@ -25,11 +25,12 @@ use crate::web::route::{query_params, replace_query, Page};
 /// Grid points per axis of the control surface.
 const SURFACE_POINTS: usize = 61;
 
-/// The engine being studied: paper 002's with an editable table, or one imported from FLL.
+/// The engine being studied: paper 002's with an editable table, or one imported from FLL with
+/// the reason it is not such a table.
 #[derive(Clone)]
 enum Source {
     Table,
-    Imported(Arc<Engine>),
+    Imported(Arc<Engine>, String),
 }
 
 fn surface(engine: &Engine) -> HeatMap {
@@ -128,7 +129,7 @@ pub fn FuzzyPage() -> impl IntoView {
             Source::Table => paper_002_engine(&table.get(), d)
                 .map(Arc::new)
                 .map_err(|e| e.to_string()),
-            Source::Imported(engine) => {
+            Source::Imported(engine, _) => {
                 let mut e = (*engine).clone();
                 e.set_defuzzifier(d);
                 Ok(Arc::new(e))
@@ -319,20 +320,14 @@ pub fn FuzzyPage() -> impl IntoView {
             if let Some(output) = engine.outputs().first() {
                 defuzzifier.set(output.defuzzifier.name().to_string());
             }
-            // Into the editable table only if the file is exactly paper 002's engine with some
-            // table (same ranges, terms, operators and weights): anything else is kept whole.
-            let as_table = rule_table_of(&engine).filter(|t| {
-                engine.outputs().first().is_some_and(|output| {
-                    paper_002_engine(t, output.defuzzifier)
-                        .is_ok_and(|paper| fll::write(&paper) == fll::write(&engine))
-                })
-            });
-            match as_table {
-                Some(t) => {
+            // Into the editable table only if the file is paper 002's engine with some table:
+            // anything else is kept whole.
+            match paper_002_table(&engine) {
+                Ok(t) => {
                     table.set(t);
                     source.set(Source::Table);
                 }
-                None => source.set(Source::Imported(Arc::new(engine))),
+                Err(why) => source.set(Source::Imported(Arc::new(engine), why.to_string())),
             }
         }
         Err(e) => set_fll_error.set(Some(format!("The FLL could not be read: {e}"))),
@@ -434,9 +429,9 @@ pub fn FuzzyPage() -> impl IntoView {
                                 .collect_view()}
                         </div>
                         {move || match source.get() {
-                            Source::Imported(e) => view! {
+                            Source::Imported(e, why) => view! {
                                 <p class="hint">
-                                    {format!("Showing the imported engine \"{}\"; its rules are not a 7×7 table. ", e.name)}
+                                    {format!("Showing the imported engine \"{}\"; it is not a 7×7 table ({why}). ", e.name)}
                                     <button type="button" on:click=move |_| source.set(Source::Table)>"Back to the table"</button>
                                 </p>
                             }
