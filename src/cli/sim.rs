@@ -7,7 +7,7 @@ use serde::Serialize;
 use super::args::required;
 use super::{write_json, CliError, Io};
 use crate::closed_loop::config::RunConfiguration;
-use crate::closed_loop::definition::{parse_texts, RunSetting, SettingKind};
+use crate::closed_loop::definition::{parse_texts, preset_controller, RunSetting, SettingKind};
 use crate::closed_loop::lab::{
     apply_references, references, simulate, References, RunResult, RunSpec,
 };
@@ -212,18 +212,19 @@ pub fn spec_from_args(args: &[String]) -> Result<RunSpec, CliError> {
     )
     .map_err(|e| super::args::one_line(&e, args, &<Sim as clap::CommandFactory>::command()))?;
     let controller = match parsed.args.controller.as_deref() {
-        Some(name) => controller_with_settings(name)?,
+        Some(name) => controller_with_settings(name, preset_option(&parsed.args.run)?)?,
         None => ControllerConfig::new(ControllerKind::Fixed),
     };
     spec(&parsed.args.run, controller)
 }
 
-/// Parses `NAME` or `NAME:key=value:key=value`.
-pub fn controller_with_settings(text: &str) -> Result<ControllerConfig, CliError> {
+/// Parses `NAME` or `NAME:key=value:key=value`, starting from `preset`'s defaults (the paper's own
+/// parameters where it states them).
+pub fn controller_with_settings(text: &str, preset: Preset) -> Result<ControllerConfig, CliError> {
     let mut parts = text.split(':');
     let name = parts.next().unwrap_or_default();
     let kind: ControllerKind = name.parse().map_err(|e| CliError::new(format!("{e}")))?;
-    let mut config = ControllerConfig::new(kind);
+    let mut config = preset_controller(preset, kind);
     for assignment in parts {
         config
             .set_text(assignment)
@@ -287,7 +288,7 @@ pub fn run_sim(args: SimArgs, io: &mut Io<'_>) -> Result<(), CliError> {
             let kind: ControllerKind = required::<String>("controller", &args.controller)?
                 .parse()
                 .map_err(|e| CliError::new(format!("--controller: {e}")))?;
-            let mut controller = ControllerConfig::new(kind);
+            let mut controller = preset_controller(preset_option(&args.run)?, kind);
             for assignment in &args.set {
                 controller
                     .set_text(assignment)
@@ -358,7 +359,10 @@ pub fn run_compare(args: CompareArgs, io: &mut Io<'_>) -> Result<(), CliError> {
                         "--controllers: entry {} of {list:?} is empty",
                         i + 1
                     ))),
-                    s => Ok((s.to_string(), controller_with_settings(s)?)),
+                    s => Ok((
+                        s.to_string(),
+                        controller_with_settings(s, preset_option(&args.run)?)?,
+                    )),
                 })
                 .collect::<Result<Vec<_>, CliError>>()?;
             (

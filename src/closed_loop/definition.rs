@@ -17,11 +17,12 @@ use std::fmt;
 
 use super::lab::RunSpec;
 use super::runner::Feedback;
-use crate::control::registry::ControllerConfig;
+use crate::control::registry::{ControllerConfig, ControllerKind};
 use crate::input::{parse_count, parse_number, parse_seed};
 use crate::plant::cnc::{OverrideMode, MAX_OVERRIDE_PCT};
 use crate::plant::materials::Material;
 use crate::plant::mechanics::MAX_TEETH;
+use crate::plant::presets::PlantKind;
 use crate::plant::Preset;
 
 /// Which group of the form a setting belongs to.
@@ -223,11 +224,12 @@ impl RunSetting {
                 "max_rate_pct_per_s",
                 "max_rate",
                 "max-rate-pct-s",
-                "Override rate limit",
+                "Override rate limit (blank: preset's)",
                 "%/s",
                 number(1.0, 100_000.0),
                 Scenario,
-                "fastest change of the override the safety envelope allows (default 100 %/s)",
+                "fastest change of the override the safety envelope allows (default 100 %/s; on \
+                 paper 002's preset its fuzzy law's 100 % per control period)",
             ),
             RunSetting::ArmingOverride => (
                 "arming_override_pct",
@@ -247,7 +249,8 @@ impl RunSetting {
                 "s",
                 number(0.001, 2.0),
                 SignalChain,
-                "control period (default: whole spindle revolutions, at least 40 ms)",
+                "control period (default: whole spindle revolutions, at least 40 ms; 0.5 s on paper 002's \
+                 preset)",
             ),
             RunSetting::FilterOrder => (
                 "lowpass_order",
@@ -602,6 +605,55 @@ pub fn parse_texts<T: AsRef<str>>(
         Err(errors)
     }
 }
+
+/// A controller at the defaults of `preset`: the generic defaults, except where the preset's paper
+/// states the controller's own parameters. Paper 002 states k_u = 250 mm/min per unit of U at
+/// 1500 mm/min, so on its preset (`liu-current-step`) the fuzzy controllers' output range is the
+/// paper's 100 % per control period (6 × 250 of 1500 mm/min) instead of the 20 % that keeps the
+/// fuzzy law from chattering at the mill presets' rate-limited 40 ms periods.
+///
+/// ```
+/// use cutlab::closed_loop::definition::preset_controller;
+/// use cutlab::control::registry::ControllerKind;
+/// use cutlab::plant::Preset;
+/// let liu = preset_controller(Preset::LiuCurrentStep, ControllerKind::FuzzyDynamics);
+/// assert_eq!(liu.get("output_range_pct"), Some(100.0));
+/// let kim = preset_controller(Preset::KimStepDoc, ControllerKind::FuzzyDynamics);
+/// assert_eq!(kim.get("output_range_pct"), Some(20.0));
+/// ```
+pub fn preset_controller(preset: Preset, kind: ControllerKind) -> ControllerConfig {
+    let mut config = ControllerConfig::new(kind);
+    for &(key, value) in paper_parameters(preset, kind) {
+        // The table below holds values inside every parameter's range (tested).
+        let _ = config.set(key, value);
+    }
+    config
+}
+
+/// The controller parameters `preset`'s paper states, as (key, value).
+pub fn paper_parameters(preset: Preset, kind: ControllerKind) -> &'static [(&'static str, f64)] {
+    match (preset.plant_kind(), kind) {
+        (PlantKind::BondGraph, ControllerKind::FuzzyExperience | ControllerKind::FuzzyDynamics) => {
+            &[("output_range_pct", PAPER_002_OUTPUT_RANGE_PCT)]
+        }
+        _ => &[],
+    }
+}
+
+/// Paper 002's k_u = 250 mm/min per unit of U, at |U| = 6 and 1500 mm/min: 100 % per period.
+pub const PAPER_002_OUTPUT_RANGE_PCT: f64 =
+    PAPER_002_K_U_MM_MIN * 6.0 / PAPER_002_FEED_MM_MIN * 100.0;
+/// Paper 002's output quantification factor k_u, mm/min of feed change per unit of U.
+const PAPER_002_K_U_MM_MIN: f64 = 250.0;
+/// Paper 002's programmed feed.
+const PAPER_002_FEED_MM_MIN: f64 = 1500.0;
+
+/// The control period on paper 002's preset. The paper does not state its sampling period; its
+/// Fig. 7 takes tens of seconds to settle after the step, which a loop sampling every few tens of
+/// milliseconds with k_u's 100 % steps never does, so its monitor was read slowly: cutlab takes
+/// 0.5 s (a CNC's load monitor polled over its interface). docs/papers.md shows both rule tables
+/// from 40 ms to 1 s.
+pub const PAPER_002_CONTROL_PERIOD_S: f64 = 0.5;
 
 /// The seed of a run that names none.
 pub const DEFAULT_SEED: u64 = 1;

@@ -4,7 +4,9 @@
 
 use serde::{Deserialize, Serialize};
 
-use super::definition::{check_spec, machine_max_override_pct};
+use super::definition::{
+    check_spec, machine_max_override_pct, PAPER_002_CONTROL_PERIOD_S, PAPER_002_OUTPUT_RANGE_PCT,
+};
 use super::metrics::{compute, with_savings, Metrics, MetricsConfig};
 use super::runner::{
     Calibration, ClosedLoop, Feedback, LoopError, LoopSettings, OnMachine, TeachCut, TeachForce,
@@ -80,7 +82,7 @@ impl RunSpec {
     pub fn new(preset: Preset, controller: ControllerKind) -> Self {
         Self {
             preset,
-            controller: ControllerConfig::new(controller),
+            controller: super::definition::preset_controller(preset, controller),
             seed: 1,
             settings: SettingsOverrides::default(),
             plant: PlantEdits::default(),
@@ -143,6 +145,7 @@ pub fn default_settings(spec: &RunSpec) -> Result<LoopSettings, LoopError> {
     let period = o
         .control_period_s
         .unwrap_or_else(|| match summary.spindle_rpm {
+            _ if preset.plant_kind() == PlantKind::BondGraph => PAPER_002_CONTROL_PERIOD_S,
             Some(rpm) if rpm > 0.0 && feedback == Feedback::SpindleCurrent => {
                 let revolution_s = 60.0 / rpm;
                 (MIN_CONTROL_PERIOD_S / revolution_s).ceil() * revolution_s
@@ -167,6 +170,11 @@ pub fn default_settings(spec: &RunSpec) -> Result<LoopSettings, LoopError> {
     // aluminium section, the taper's light corner) need the room above FANUC's 150 % dial.
     if matches!(preset.override_mode(), OverrideMode::WholePercent) {
         envelope.max_override_pct = MAX_OVERRIDE_PCT;
+    }
+    // Paper 002's fuzzy law moves the feed by up to k_u·6 = 100 % in one sampling period; the
+    // envelope on its preset lets that action through (the mills keep 100 %/s).
+    if preset.plant_kind() == PlantKind::BondGraph {
+        envelope.max_rate_pct_per_s = PAPER_002_OUTPUT_RANGE_PCT / period;
     }
     if let Some(v) = o.min_override_pct {
         envelope.min_override_pct = v;
@@ -447,7 +455,7 @@ impl Work for LabRun {
                 if run.advance(periods)? {
                     let settings = run.settings().clone();
                     let trace = run.into_trace();
-                    let metrics = compute(&trace, &metrics_config(&settings));
+                    let metrics = compute(&trace, &metrics_config(self.spec.preset, &settings));
                     self.stage = Stage::Done(Box::new(RunResult {
                         spec: self.spec.clone(),
                         settings,
@@ -500,12 +508,13 @@ impl Work for LabRun {
 /// The teach cut's seed is the run's plus this, so its noise differs from the run's.
 const TEACH_SEED_OFFSET: u64 = 0x7EAC;
 
-/// The metrics settings for a run's settings.
-pub fn metrics_config(settings: &LoopSettings) -> MetricsConfig {
+/// The metrics settings for a run of `preset` with `settings`.
+pub fn metrics_config(preset: Preset, settings: &LoopSettings) -> MetricsConfig {
     MetricsConfig {
         force_limit_n: settings.force_limit_n,
         settling_band_pct: 10.0,
         depth_step_mm: 0.2,
+        load_step_times_s: preset.load_step_times_s(),
     }
 }
 

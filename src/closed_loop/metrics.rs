@@ -10,7 +10,7 @@ use serde::Serialize;
 use super::trace::{csv_field, Trace, TraceRow};
 
 /// Settings of the metrics.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, PartialEq, Default)]
 pub struct MetricsConfig {
     /// The force limit for "time above the limit" (e.g. the tool's safe load).
     pub force_limit_n: f64,
@@ -18,9 +18,12 @@ pub struct MetricsConfig {
     pub settling_band_pct: f64,
     /// A depth change larger than this between two control periods is a step (or part of one).
     pub depth_step_mm: f64,
+    /// Times of load steps the trace cannot show as a depth change (paper 002's step in cutting
+    /// resistance), known from the experiment's schedule; each is measured like a depth step.
+    pub load_step_times_s: Vec<f64>,
 }
 
-/// The response to one depth-of-cut step.
+/// The response to one depth-of-cut step (or a scheduled load step, whose depths are NaN).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct StepResponse {
     /// When the depth changed.
@@ -110,7 +113,7 @@ fn durations(rows: &[TraceRow]) -> impl Iterator<Item = (f64, &TraceRow)> {
 ///     width_mm: 10.0, force_n: 110.0, target_force_n: 100.0, armed: true, ..TraceRow::default() })
 ///     .collect();
 /// let m = compute(&Trace { rows, completed: true, ..Trace::default() },
-///     &MetricsConfig { force_limit_n: 105.0, settling_band_pct: 5.0, depth_step_mm: 0.2 });
+///     &MetricsConfig { force_limit_n: 105.0, settling_band_pct: 5.0, depth_step_mm: 0.2, load_step_times_s: vec![] });
 /// assert!((m.force_iae_n_s - 10.0).abs() < 1e-9);     // 10 N for 1 s
 /// assert!((m.time_above_limit_s - 1.0).abs() < 1e-9);
 /// ```
@@ -230,7 +233,7 @@ pub fn with_savings(
 /// use cutlab::closed_loop::metrics::{compute, metrics_csv, MetricsConfig};
 /// use cutlab::closed_loop::trace::Trace;
 /// let m = compute(&Trace::default(), &MetricsConfig { force_limit_n: 1.0,
-///     settling_band_pct: 5.0, depth_step_mm: 0.2 });
+///     settling_band_pct: 5.0, depth_step_mm: 0.2, load_step_times_s: vec![] });
 /// let csv = metrics_csv(&m);
 /// assert!(csv.starts_with("metric,value\ncycle_time_s,0\n"));
 /// ```
@@ -245,7 +248,7 @@ pub fn metrics_csv(metrics: &Metrics) -> String {
 /// use cutlab::closed_loop::metrics::{compute, metrics_csv_columns, MetricsConfig};
 /// use cutlab::closed_loop::trace::Trace;
 /// let m = compute(&Trace::default(), &MetricsConfig { force_limit_n: 1.0,
-///     settling_band_pct: 5.0, depth_step_mm: 0.2 });
+///     settling_band_pct: 5.0, depth_step_mm: 0.2, load_step_times_s: vec![] });
 /// let csv = metrics_csv_columns(&[("A: fixed", &m), ("B: pi, kp 0.5", &m)]);
 /// assert!(csv.starts_with("metric,A: fixed,\"B: pi, kp 0.5\"\ncycle_time_s,0,0\n"));
 /// ```
@@ -365,7 +368,15 @@ fn depth_step_spans(rows: &[TraceRow], threshold_mm: f64) -> Vec<(usize, usize)>
 /// Steps out of the cut (to zero depth) are not responses to measure, and neither are steps with
 /// no armed cutting row in their window: the controller was not in charge.
 fn step_responses(rows: &[TraceRow], config: &MetricsConfig) -> Vec<StepResponse> {
-    let spans = depth_step_spans(rows, config.depth_step_mm);
+    let mut spans = depth_step_spans(rows, config.depth_step_mm);
+    for &t in &config.load_step_times_s {
+        // The first row at or after the step: its period saw the new load.
+        if let Some(i) = rows.iter().position(|r| r.time_s >= t).filter(|&i| i > 0) {
+            spans.push((i, i));
+        }
+    }
+    spans.sort_unstable();
+    spans.dedup();
     spans
         .iter()
         .enumerate()
@@ -375,6 +386,7 @@ fn step_responses(rows: &[TraceRow], config: &MetricsConfig) -> Vec<StepResponse
                 .find(|&i| path_slowdown(&rows[i]))
                 .unwrap_or(next_step);
             let depth_after_mm = rows[last].depth_mm;
+            // NaN (no depth known) is not a step out of the cut.
             if depth_after_mm <= 0.0 {
                 return None;
             }
@@ -419,6 +431,7 @@ mod tests {
             force_limit_n: 120.0,
             settling_band_pct: 5.0,
             depth_step_mm: 0.2,
+            load_step_times_s: Vec::new(),
         }
     }
 

@@ -507,6 +507,8 @@ static LIU_CURRENT_STEP: Definition = Definition {
         "spindle at its rated voltage's speed from t = 0 (eq 5's steady state, table still), feed after 3 s",
         "S_e2 set for the commanded feed in steady state",
         "continuous override",
+        "the paper's k_u as the fuzzy output (100 % per period), an envelope rate limit that lets \
+         it through, and a 0.5 s control period (the paper's sampling is not stated)",
     ],
     override_mode: OverrideMode::Continuous,
     plant: PlantDefinition::BondGraph {
@@ -690,6 +692,24 @@ impl Preset {
             seed,
             cnc: self.cnc_config(),
             ..BondGraphRun::paper_002()
+        })
+    }
+
+    /// When the load steps that no depth of cut shows (paper 002's step in cutting resistance);
+    /// empty for the presets whose steps are in their depth profile.
+    ///
+    /// ```
+    /// use cutlab::plant::Preset;
+    /// assert_eq!(Preset::LiuCurrentStep.load_step_times_s(), vec![15.0]);
+    /// assert!(Preset::KimStepDoc.load_step_times_s().is_empty());
+    /// ```
+    pub fn load_step_times_s(self) -> Vec<f64> {
+        self.bond_graph_run(0).map_or_else(Vec::new, |run| {
+            run.load_steps
+                .iter()
+                .map(|s| s.time_s)
+                .filter(|t| *t > 0.0)
+                .collect()
         })
     }
 

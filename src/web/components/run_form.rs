@@ -6,7 +6,9 @@ use std::collections::BTreeMap;
 
 use leptos::prelude::*;
 
-use crate::closed_loop::definition::{parse_texts, RunSetting, SettingGroup, SettingKind};
+use crate::closed_loop::definition::{
+    parse_texts, preset_controller, RunSetting, SettingGroup, SettingKind,
+};
 use crate::closed_loop::lab::SettingsOverrides;
 use crate::closed_loop::runner::Feedback;
 use crate::control::fuzzy::rules::RuleTable;
@@ -283,6 +285,16 @@ pub struct ControllerForm {
     pub id_prefix: &'static str,
     /// A rule table from the Fuzzy rules page, used by the fuzzy controllers.
     pub rule_table: RwSignal<Option<RuleTable>>,
+    /// The preset whose defaults the untouched parameters show (a paper's own values on its
+    /// preset, [`preset_controller`]).
+    preset: RwSignal<Preset>,
+}
+
+/// The text of `key`'s default for `kind` on `preset`.
+fn default_text(preset: Preset, kind: ControllerKind, key: &str) -> String {
+    preset_controller(preset, kind)
+        .get(key)
+        .map_or_else(String::new, |v| v.to_string())
 }
 
 /// A rule table as 49 digits 0–6 (level + 3), row by row, for URLs.
@@ -314,12 +326,27 @@ fn is_fuzzy(kind: &str) -> bool {
     kind.starts_with("fuzzy")
 }
 
+impl ScenarioForm {
+    /// The preset chosen now, if the name is one (tracked).
+    pub fn chosen_preset(&self) -> Option<Preset> {
+        Preset::from_name(&self.preset.get())
+    }
+
+    /// The preset chosen now, or the default preset while the name is none (untracked).
+    pub fn chosen_preset_untracked(&self) -> Preset {
+        Preset::from_name(&self.preset.get_untracked())
+            .or_else(|| Preset::from_name(DEFAULT_PRESET))
+            .unwrap_or(Preset::ALL[0])
+    }
+}
+
 impl ControllerForm {
     /// A form for `default_kind`, then whatever `query` says (`controller=pi&kp=0.4`); query keys
     /// are prefixed with `prefix` (e.g. `a.kp`) when several forms share a page.
     pub fn new(
         id_prefix: &'static str,
         default_kind: ControllerKind,
+        preset: Preset,
         query: &[(String, String)],
         query_prefix: &str,
     ) -> Self {
@@ -337,7 +364,7 @@ impl ControllerForm {
             for p in k.params() {
                 values.insert(
                     (k.name().to_string(), p.key.to_string()),
-                    p.default.to_string(),
+                    default_text(preset, k, p.key),
                 );
             }
         }
@@ -354,21 +381,43 @@ impl ControllerForm {
             values: RwSignal::new(values),
             id_prefix,
             rule_table: RwSignal::new(rule_table),
+            preset: RwSignal::new(preset),
         }
     }
 
     /// `kind` with its default parameters and built-in rules.
     pub fn reset_to(&self, kind: ControllerKind) {
+        let preset = self.preset.get_untracked();
         self.kind.set(kind.name().to_string());
         self.values.update(|values| {
             for p in kind.params() {
                 values.insert(
                     (kind.name().to_string(), p.key.to_string()),
-                    p.default.to_string(),
+                    default_text(preset, kind, p.key),
                 );
             }
         });
         self.rule_table.set(None);
+    }
+
+    /// Follows a change of preset: every parameter still at the old preset's default takes the
+    /// new one's (paper 002's k_u on its preset); what the user typed stays.
+    pub fn follow_preset(&self, preset: Preset) {
+        let old = self.preset.get_untracked();
+        if old == preset {
+            return;
+        }
+        self.values.update(|values| {
+            for kind in ControllerKind::ALL {
+                for p in kind.params() {
+                    let key = (kind.name().to_string(), p.key.to_string());
+                    if values.get(&key) == Some(&default_text(old, kind, p.key)) {
+                        values.insert(key, default_text(preset, kind, p.key));
+                    }
+                }
+            }
+        });
+        self.preset.set(preset);
     }
 
     /// Query pairs for the chosen controller and its non-default parameters.
@@ -379,10 +428,11 @@ impl ControllerForm {
             q.push((format!("{query_prefix}rules"), encode_rule_table(&table)));
         }
         if let Ok(k) = kind.parse::<ControllerKind>() {
+            let preset = self.preset.get();
             self.values.with(|v| {
                 for p in k.params() {
                     if let Some(text) = v.get(&(kind.clone(), p.key.to_string())) {
-                        if text.trim() != p.default.to_string() {
+                        if text.trim() != default_text(preset, k, p.key) {
                             q.push((format!("{query_prefix}{}", p.key), text.clone()));
                         }
                     }
@@ -401,7 +451,7 @@ impl ControllerForm {
                 "choose a controller".to_string(),
             )]));
         };
-        let mut config = ControllerConfig::new(kind);
+        let mut config = preset_controller(self.preset.get(), kind);
         let mut errors = BTreeMap::new();
         self.values.with(|v| {
             for p in kind.params() {

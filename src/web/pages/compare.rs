@@ -85,9 +85,18 @@ pub fn ComparePage() -> impl IntoView {
         ControllerForm::new(
             ["cmp-a-", "cmp-b-", "cmp-c-", "cmp-d-"][i],
             defaults[i],
+            scenario.chosen_preset_untracked(),
             &query,
             VARIANT_PREFIXES[i],
         )
+    });
+    // Untouched controller parameters follow the preset (a paper's own values on its preset).
+    Effect::new(move |_| {
+        if let Some(preset) = scenario.chosen_preset() {
+            for form in &forms {
+                form.follow_preset(preset);
+            }
+        }
     });
     let initial_count = query
         .iter()

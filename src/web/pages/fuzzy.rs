@@ -7,12 +7,13 @@ use std::sync::Arc;
 use leptos::prelude::*;
 
 use crate::charts::{Axis, HeatMap, LineChart, Series, PALETTE};
+use crate::closed_loop::definition::preset_controller;
 use crate::closed_loop::lab::LabRuns;
 use crate::closed_loop::lab::{RunResult, RunSpec};
 use crate::control::fuzzy::engine::{Defuzzifier, Engine};
 use crate::control::fuzzy::fll;
 use crate::control::fuzzy::rules::{paper_002_engine, paper_002_table, RuleBase, LEVEL_NAMES};
-use crate::control::registry::{ControllerConfig, ControllerKind};
+use crate::control::registry::ControllerKind;
 use crate::plant::Preset;
 use crate::web::components::chart::ChartCanvas;
 use crate::web::components::download::download_text;
@@ -234,7 +235,7 @@ pub fn FuzzyPage() -> impl IntoView {
         let Some(preset) = Preset::from_name(&run_preset.get_untracked()) else {
             return;
         };
-        let mut controller = ControllerConfig::new(ControllerKind::FuzzyDynamics);
+        let mut controller = preset_controller(preset, ControllerKind::FuzzyDynamics);
         if controller.set_rule_table(table.get_untracked()).is_err() {
             return;
         }

@@ -27,7 +27,19 @@ const RERUN_DELAY: Duration = Duration::from_millis(350);
 pub fn SimulatePage() -> impl IntoView {
     let query = query_params(&window().location().hash().unwrap_or_default());
     let scenario = ScenarioForm::new(&query);
-    let controller = ControllerForm::new("sim-", ControllerKind::Threshold, &query, "");
+    let controller = ControllerForm::new(
+        "sim-",
+        ControllerKind::Threshold,
+        scenario.chosen_preset_untracked(),
+        &query,
+        "",
+    );
+    // Untouched controller parameters follow the preset (a paper's own values on its preset).
+    Effect::new(move |_| {
+        if let Some(preset) = scenario.chosen_preset() {
+            controller.follow_preset(preset);
+        }
+    });
     let runner = Runner::<Vec<Arc<RunResult>>>::new();
     let savings = Savings::new();
 
