@@ -143,7 +143,7 @@ impl OpenLoopRecording {
     ///     .unwrap();
     /// let line = rec.load_line().unwrap();
     /// assert!((line.slope_a_per_nm - 0.59).abs() < 0.01); // √(1 + h₅² + h₇²)/(√2·K_t)
-    /// assert!(line.idle_current_a > 0.5 && line.r_squared > 0.999);
+    /// assert!(line.idle_current_a > 0.5 && line.r_squared > 0.99);
     /// ```
     pub fn load_line(&self) -> Result<LoadLine, FitError> {
         let torque: Vec<f64> = self.load_steps.iter().map(|s| s.brake_torque_nm).collect();
@@ -653,8 +653,9 @@ mod tests {
         for s in &rec.load_steps {
             let want = fd.idle_rms_current_a(bench.feed_mm_min)
                 + per_amp / fd.torque_constant_nm_per_a() * s.brake_torque_nm;
+            // Within the friction's wander (σ 0.03 N·m ≈ 0.018 A, 3 % of the idle current).
             assert!(
-                (s.feed_rms_a - want).abs() < 0.01 * want,
+                (s.feed_rms_a - want).abs() < 0.06 * want,
                 "{} N·m: {} A vs {want} A",
                 s.brake_torque_nm,
                 s.feed_rms_a
@@ -690,12 +691,14 @@ mod tests {
         let slope = per_amp / fd.torque_constant_nm_per_a();
         let idle = fd.idle_rms_current_a(600.0);
         assert_eq!(line.steps, 21);
+        // The bench's friction wanders and drifts (BenchFrictionConfig): the line is the
+        // model's within a few percent, and its points scatter about it as a real bench's do.
         assert!(
-            (line.slope_a_per_nm - slope).abs() < 0.005 * slope,
+            (line.slope_a_per_nm - slope).abs() < 0.03 * slope,
             "{line:?}"
         );
-        assert!((line.idle_current_a - idle).abs() < 0.01 * idle, "{line:?}");
-        assert!(line.r_squared > 0.9999, "{line:?}");
+        assert!((line.idle_current_a - idle).abs() < 0.03 * idle, "{line:?}");
+        assert!(line.r_squared > 0.99 && line.r_squared < 0.9995, "{line:?}");
         // A mill has no load steps to fit a line to.
         let mill = OpenLoopRecording {
             preset: Preset::KimStepDoc,
