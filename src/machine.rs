@@ -100,6 +100,17 @@ pub struct PlantTruth {
     pub spindle_current_rms_a: f64,
 }
 
+/// A sensorless force estimate from the programmed cutting conditions (paper 004's power law)
+/// and how far to trust it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SensorlessEstimate {
+    /// The estimated cutting force.
+    pub force_n: f64,
+    /// Its relative uncertainty (1 = ±100 %) from the model's form alone: zero at the cut it was
+    /// calibrated on, growing as the conditions move away from it.
+    pub relative_uncertainty: f64,
+}
+
 /// A dynamometer's reading of the cutting force on the tool, in the machine frame.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct DynamometerReading {
@@ -136,7 +147,7 @@ pub trait Machine {
     /// A sensorless estimate of the cutting force at the latest sample from the programmed cutting
     /// conditions (paper 004's power law), if the machine knows them. The closed loop shows it
     /// beside the current-based estimate and flags when they disagree.
-    fn sensorless_force_n(&self) -> Option<f64> {
+    fn sensorless_force(&self) -> Option<SensorlessEstimate> {
         None
     }
 

@@ -42,7 +42,7 @@ fn pushed_samples_give_the_trace_of_the_pulled_loop() {
         let step = machine.step(command);
         let sample = LoopSample {
             step: &step,
-            sensorless_force_n: machine.sensorless_force_n(),
+            sensorless: machine.sensorless_force(),
             dynamometer: None,
         };
         if let Some(next) = pushed.push(&sample) {
@@ -248,7 +248,7 @@ fn a_spindle_that_droops_under_load_is_one_calibration_speed() {
     let short_period = simulate(&spec).unwrap();
     let rows = |r: &cutlab::closed_loop::lab::RunResult| match &r.calibration.estimator {
         cutlab::closed_loop::runner::Estimator::Spindle { model, .. } => model.rows.len(),
-        cutlab::closed_loop::runner::Estimator::Feed { .. } => 0,
+        _ => 0,
     };
     assert_eq!(rows(&short_period), 1);
     let (a, b) = (

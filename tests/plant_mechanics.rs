@@ -271,3 +271,58 @@ fn paper_004_published_weights_reproduce_the_power_law() {
         }
     }
 }
+
+/// Paper 004 states no units. With a_e, f, a_p, d in mm the published carbon-steel biases give
+/// about 60 times the mechanistic force on paper 001's cut; d alone in metres about 1/17 of it;
+/// every length in metres nothing at all. The figures docs and src/plant/power_law.rs quote.
+#[test]
+fn paper_004_units_read_every_way_miss_the_mechanistic_force() {
+    use cutlab::plant::materials::Material;
+    use cutlab::plant::mechanics::{mean_forces, Cutter, Immersion, MillingMode};
+    let cutter = Cutter::new(10.0, 4, 30.0).unwrap();
+    let immersion = Immersion::new(MillingMode::Down, 3.0, 10.0);
+    let mechanistic = mean_forces(
+        &cutter,
+        &Material::Sm45c.coefficients(),
+        &immersion,
+        2.0,
+        0.075,
+    )
+    .resultant_n();
+    assert!((mechanistic - 204.7).abs() < 0.5, "{mechanistic}");
+    let model = PowerLawModel::published(PowerLawMaterial::CarbonSteel);
+    let mm = PowerLawInputs {
+        radial_width_mm: 3.0,
+        feed_per_tooth_mm: 0.075,
+        axial_depth_mm: 2.0,
+        diameter_mm: 10.0,
+        teeth_engaged: immersion.teeth_engaged(4),
+    };
+    let in_mm = model.forces(&mm).resultant_n();
+    let d_in_m = model
+        .forces(&PowerLawInputs {
+            diameter_mm: 0.010,
+            ..mm
+        })
+        .resultant_n();
+    let all_in_m = model
+        .forces(&PowerLawInputs {
+            radial_width_mm: 0.003,
+            feed_per_tooth_mm: 0.000_075,
+            axial_depth_mm: 0.002,
+            diameter_mm: 0.010,
+            ..mm
+        })
+        .resultant_n();
+    assert!(
+        (in_mm / mechanistic - 61.7).abs() < 1.0,
+        "{}",
+        in_mm / mechanistic
+    );
+    assert!(
+        (mechanistic / d_in_m - 16.8).abs() < 0.5,
+        "{}",
+        mechanistic / d_in_m
+    );
+    assert!(all_in_m / mechanistic < 1e-9);
+}

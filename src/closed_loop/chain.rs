@@ -13,7 +13,7 @@
 //!
 //! Filtering and RMS come from [`crate::signal`]; nothing here allocates after construction.
 
-use crate::machine::MachineStep;
+use crate::machine::{DynamometerReading, MachineStep};
 use crate::signal::filter::{NoChannels, SosFilterBank};
 use crate::signal::rms::three_phase_rms;
 use crate::signal::sos::Sos;
@@ -54,6 +54,10 @@ pub struct PeriodSummary {
     pub material_removal_mm3_s: f64,
     /// Path position at the end.
     pub path_position_mm: f64,
+    /// |mean of the dynamometer's (F_x, F_y)| over the period (NaN without a dynamometer).
+    pub dynamometer_resultant_n: f64,
+    /// Mean of the dynamometer's feed-direction force (NaN without a dynamometer).
+    pub dynamometer_feed_force_n: f64,
 }
 
 /// Per-sample processing and the running sums of one period.
@@ -84,6 +88,10 @@ struct Sums {
     mrr: f64,
     position: f64,
     truth_seen: bool,
+    dynamometer_n: usize,
+    dynamometer_x: f64,
+    dynamometer_y: f64,
+    dynamometer_feed: f64,
 }
 
 impl SignalChain {
@@ -126,6 +134,15 @@ impl SignalChain {
         }
     }
 
+    /// Takes one sample of a dynamometer's reading, beside the sample of the same instant.
+    pub fn push_dynamometer(&mut self, reading: &DynamometerReading) {
+        let sums = &mut self.sums;
+        sums.dynamometer_n += 1;
+        sums.dynamometer_x += reading.force_x_n;
+        sums.dynamometer_y += reading.force_y_n;
+        sums.dynamometer_feed += reading.feed_force_n;
+    }
+
     /// Ends the period: returns its summary and starts the next one.
     pub fn finish_period(&mut self) -> PeriodSummary {
         let s = std::mem::take(&mut self.sums);
@@ -153,6 +170,17 @@ impl SignalChain {
             width_mm: truth(s.width),
             material_removal_mm3_s: truth(s.mrr),
             path_position_mm: if s.truth_seen { s.position } else { f64::NAN },
+            dynamometer_resultant_n: if s.dynamometer_n > 0 {
+                let m = s.dynamometer_n as f64;
+                crate::math::hypot(s.dynamometer_x / m, s.dynamometer_y / m)
+            } else {
+                f64::NAN
+            },
+            dynamometer_feed_force_n: if s.dynamometer_n > 0 {
+                s.dynamometer_feed / s.dynamometer_n as f64
+            } else {
+                f64::NAN
+            },
         }
     }
 

@@ -15,6 +15,7 @@ use super::trace::Trace;
 use crate::control::registry::{ControllerConfig, ControllerKind, RunContext};
 use crate::machine::Machine;
 use crate::plant::cnc::{OverrideMode, MAX_OVERRIDE_PCT};
+use crate::plant::dynamometer::{DynamometerConfig, WithDynamometer};
 use crate::plant::presets::PlantEdits;
 use crate::plant::presets::PlantKind;
 use crate::plant::Preset;
@@ -116,6 +117,7 @@ const DEFAULT_CONTROL_PERIOD_S: f64 = 0.05;
 pub fn default_feedback(preset: Preset) -> Feedback {
     match preset.plant_kind() {
         PlantKind::BrakeBench => Feedback::FeedCurrent,
+        PlantKind::SecondOrder => Feedback::Dynamometer,
         _ => Feedback::SpindleCurrent,
     }
 }
@@ -146,7 +148,7 @@ pub fn default_settings(spec: &RunSpec) -> Result<LoopSettings, LoopError> {
         .control_period_s
         .unwrap_or_else(|| match summary.spindle_rpm {
             _ if preset.plant_kind() == PlantKind::BondGraph => PAPER_002_CONTROL_PERIOD_S,
-            Some(rpm) if rpm > 0.0 && feedback == Feedback::SpindleCurrent => {
+            Some(rpm) if rpm > 0.0 && feedback != Feedback::FeedCurrent => {
                 let revolution_s = 60.0 / rpm;
                 (MIN_CONTROL_PERIOD_S / revolution_s).ceil() * revolution_s
             }
@@ -278,18 +280,33 @@ pub enum RunMachines {
 impl RunMachines {
     /// The preset's machines for `spec`: the teach cut seeded apart from the run.
     pub fn for_preset(spec: &RunSpec) -> Result<Self, LoopError> {
-        let machine = |seed| -> Result<Box<dyn Machine>, LoopError> {
-            Ok(Box::new(
-                spec.preset
-                    .machine_with(seed, &spec.plant)
-                    .map_err(LoopError::Machine)?,
-            ))
-        };
         Ok(RunMachines::Separate {
-            teach: machine(spec.seed.wrapping_add(TEACH_SEED_OFFSET))?,
-            run: machine(spec.seed)?,
+            teach: preset_machine(spec, spec.seed.wrapping_add(TEACH_SEED_OFFSET))?,
+            run: preset_machine(spec, spec.seed)?,
         })
     }
+}
+
+/// `spec`'s simulated machine seeded with `seed`, with a dynamometer under the part when the run
+/// feeds back the measured force.
+fn preset_machine(spec: &RunSpec, seed: u64) -> Result<Box<dyn Machine>, LoopError> {
+    let machine = Box::new(
+        spec.preset
+            .machine_with(seed, &spec.plant)
+            .map_err(LoopError::Machine)?,
+    );
+    let feedback = spec
+        .settings
+        .feedback
+        .unwrap_or_else(|| default_feedback(spec.preset));
+    Ok(if feedback == Feedback::Dynamometer {
+        Box::new(
+            WithDynamometer::new(machine, DynamometerConfig::default(), seed)
+                .map_err(LoopError::Machine)?,
+        )
+    } else {
+        machine
+    })
 }
 
 /// A run in progress: first the teach cut, then the closed loop. Advancing in chunks lets a
@@ -355,11 +372,7 @@ impl LabRun {
     /// spec with the same preset, seed, machine and signal chain (the teach cut depends on those
     /// alone, so the result is the same as [`LabRun::new`]'s, for less work).
     pub fn calibrated(spec: &RunSpec, calibration: Calibration) -> Result<Self, LoopError> {
-        let machine: Box<dyn Machine> = Box::new(
-            spec.preset
-                .machine_with(spec.seed, &spec.plant)
-                .map_err(LoopError::Machine)?,
-        );
+        let machine = preset_machine(spec, spec.seed)?;
         let mut run = Self {
             nominal_duration_s: spec.preset.summary().nominal_duration_s.max(1.0),
             calibrated: true,

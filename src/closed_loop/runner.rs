@@ -31,7 +31,9 @@ use crate::estimation::current_force::{FeedCurrentModel, ForceEstimate, SpindleC
 use crate::estimation::cut_forces::CutGeometry;
 use crate::estimation::least_squares::FitError;
 use crate::estimation::speed::FvSpeedModel;
-use crate::machine::{DynamometerReading, Machine, MachineStep, OverrideCommand, SensorSample};
+use crate::machine::{
+    DynamometerReading, Machine, MachineStep, OverrideCommand, SensorSample, SensorlessEstimate,
+};
 use crate::plant::PlantError;
 use crate::safety::{EnvelopeConfig, EnvelopeError, SafetyEnvelope, SafetyEvent};
 use crate::signal::butterworth::{butter, ButterworthSpec, Cutoff, DesignError, FilterKind};
@@ -47,17 +49,25 @@ pub enum Feedback {
     /// Feed-drive current → feed force (paper 000).
     #[serde(alias = "feed")]
     FeedCurrent,
+    /// A dynamometer under the part reads the mean cutting force itself (paper 001's
+    /// experiments): no current, no model, but a sensor few machines carry.
+    Dynamometer,
 }
 
 impl Feedback {
     /// Both feedback paths.
-    pub const ALL: [Feedback; 2] = [Feedback::SpindleCurrent, Feedback::FeedCurrent];
+    pub const ALL: [Feedback; 3] = [
+        Feedback::SpindleCurrent,
+        Feedback::FeedCurrent,
+        Feedback::Dynamometer,
+    ];
 
     /// Name for the command line and URLs.
     pub fn name(self) -> &'static str {
         match self {
             Feedback::SpindleCurrent => "spindle",
             Feedback::FeedCurrent => "feed",
+            Feedback::Dynamometer => "dynamometer",
         }
     }
 
@@ -66,6 +76,7 @@ impl Feedback {
         match self {
             Feedback::SpindleCurrent => "Spindle current (paper 003)",
             Feedback::FeedCurrent => "Feed-drive current (paper 000)",
+            Feedback::Dynamometer => "Dynamometer (paper 001)",
         }
     }
 
@@ -73,7 +84,7 @@ impl Feedback {
     /// magnitude for the spindle path, the mean feed force for the feed path.
     pub fn regulated_truth_n(self, period: &PeriodSummary) -> f64 {
         match self {
-            Feedback::SpindleCurrent => period.force_mean_resultant_n,
+            Feedback::SpindleCurrent | Feedback::Dynamometer => period.force_mean_resultant_n,
             Feedback::FeedCurrent => period.feed_force_n,
         }
     }
@@ -192,6 +203,8 @@ pub enum Estimator {
         /// Current and feed speed → feed force.
         model: FeedCurrentModel,
     },
+    /// A dynamometer's reading, used as it is (its maker calibrated it).
+    Dynamometer,
 }
 
 impl Estimator {
@@ -205,6 +218,10 @@ impl Estimator {
             Estimator::Feed { model } => {
                 model.estimate(period.feed_current_rms_a, period.feed_mm_min)
             }
+            Estimator::Dynamometer => ForceEstimate {
+                force_n: period.dynamometer_resultant_n,
+                in_range: true,
+            },
         }
     }
 
@@ -214,6 +231,8 @@ impl Estimator {
         match self {
             Estimator::Spindle { model, .. } => model.line_at(spindle_rpm).1,
             Estimator::Feed { model } => model.sensitivity_a_per_n,
+            // No current is read: a limit in amperes has no meaning here.
+            Estimator::Dynamometer => f64::NAN,
         }
     }
 
@@ -227,6 +246,7 @@ impl Estimator {
             Estimator::Feed { model } => {
                 (current_a - model.idle_current_a(feed_mm_min)) / model.sensitivity_a_per_n
             }
+            Estimator::Dynamometer => f64::NAN,
         }
     }
 }
@@ -343,9 +363,9 @@ impl TeachForce {
 pub struct LoopSample<'a> {
     /// What the sensors read (and the truth, if simulated).
     pub step: &'a MachineStep,
-    /// The power-law estimate of [`Machine::sensorless_force_n`], when the machine offers one.
+    /// The power-law estimate of [`Machine::sensorless_force`], when the machine offers one.
     /// Only a period's last sample needs it ([`SampleLoop::next_sample_ends_period`]).
-    pub sensorless_force_n: Option<f64>,
+    pub sensorless: Option<SensorlessEstimate>,
     /// A dynamometer's reading, when the machine has one.
     pub dynamometer: Option<DynamometerReading>,
 }
@@ -440,15 +460,6 @@ impl TeachSamples {
     }
 }
 
-/// Sums of a period's dynamometer readings.
-#[derive(Debug, Clone, Copy, Default)]
-struct DynamometerSums {
-    samples: usize,
-    force_x_n: f64,
-    force_y_n: f64,
-    feed_force_n: f64,
-}
-
 /// A teach cut: the machine open-loop through the teach-cut override schedule
 /// ([`TEACH_OVERRIDES_PCT`]), each control period summarised by the loop's own signal chain and
 /// paired with the force from a [`TeachForce`] source; [`SampleLoop::finish`] fits the estimator.
@@ -460,7 +471,6 @@ pub struct TeachCut {
     samples_per_period: usize,
     samples_in_period: usize,
     last: SensorSample,
-    dynamometer: DynamometerSums,
     samples: TeachSamples,
     time_s: f64,
     /// The mean spindle speed of the period before, to tell acceleration from a steady cut.
@@ -485,7 +495,6 @@ impl TeachCut {
             force_source,
             max_duration_s: settings.max_duration_s,
             last: SensorSample::default(),
-            dynamometer: DynamometerSums::default(),
             samples: TeachSamples::default(),
             time_s: 0.0,
             previous_speed_rpm: f64::NAN,
@@ -507,17 +516,10 @@ impl TeachCut {
     fn period_force_n(&self, period: &PeriodSummary) -> f64 {
         match &self.force_source {
             TeachForce::SimulationTruth => self.feedback.regulated_truth_n(period),
-            TeachForce::Dynamometer => {
-                let d = &self.dynamometer;
-                let n = d.samples as f64;
-                match (d.samples, self.feedback) {
-                    (0, _) => f64::NAN,
-                    (_, Feedback::SpindleCurrent) => {
-                        crate::math::hypot(d.force_x_n / n, d.force_y_n / n)
-                    }
-                    (_, Feedback::FeedCurrent) => d.feed_force_n / n,
-                }
-            }
+            TeachForce::Dynamometer => match self.feedback {
+                Feedback::FeedCurrent => period.dynamometer_feed_force_n,
+                Feedback::SpindleCurrent | Feedback::Dynamometer => period.dynamometer_resultant_n,
+            },
             TeachForce::CutModel {
                 geometry,
                 depth_mm,
@@ -531,7 +533,7 @@ impl TeachCut {
                     *width_mm,
                 )
                 .map_or(f64::NAN, |f| match self.feedback {
-                    Feedback::SpindleCurrent => f.resultant_n(),
+                    Feedback::SpindleCurrent | Feedback::Dynamometer => f.resultant_n(),
                     Feedback::FeedCurrent => -f.fx_n,
                 }),
         }
@@ -543,7 +545,6 @@ impl TeachCut {
         self.samples_in_period = 0;
         self.time_s = period.end_time_s;
         let force_n = self.period_force_n(&period);
-        self.dynamometer = DynamometerSums::default();
         let last = self.last;
         let spindle_settled =
             last.time_since_spindle_start_s >= TEACH_SETTLE_S || !last.spindle_running;
@@ -570,7 +571,7 @@ impl TeachCut {
                     .push(force_n / period.force_mean_resultant_n);
             }
             samples.current_a.push(match self.feedback {
-                Feedback::SpindleCurrent => period.spindle_current_rms_a,
+                Feedback::SpindleCurrent | Feedback::Dynamometer => period.spindle_current_rms_a,
                 Feedback::FeedCurrent => period.feed_current_rms_a,
             });
             samples.force_n.push(force_n);
@@ -596,6 +597,8 @@ impl TeachCut {
             _ => &self.samples,
         };
         let estimator = match self.feedback {
+            // The sensor reads the force itself: nothing to fit.
+            Feedback::Dynamometer => Estimator::Dynamometer,
             Feedback::SpindleCurrent => {
                 let speed_model = FvSpeedModel::calibrate(
                     &s.command_rpm,
@@ -667,12 +670,8 @@ impl SampleLoop for TeachCut {
                 self.samples.max_phase_current_a = self.samples.max_phase_current_a.max(i.abs());
             }
         }
-        if let Some(d) = sample.dynamometer {
-            let sums = &mut self.dynamometer;
-            sums.samples += 1;
-            sums.force_x_n += d.force_x_n;
-            sums.force_y_n += d.force_y_n;
-            sums.feed_force_n += d.feed_force_n;
+        if let Some(d) = &sample.dynamometer {
+            self.chain.push_dynamometer(d);
         }
         self.last = *sensors;
         self.samples_in_period += 1;
@@ -743,7 +742,7 @@ pub struct FeedbackLoop {
     samples_in_period: usize,
     last: SensorSample,
     /// The power-law estimate at the latest sample that carried one.
-    last_sensorless_n: f64,
+    last_sensorless: SensorlessEstimate,
     command: OverrideCommand,
     last_request_pct: f64,
     trace: Trace,
@@ -797,7 +796,7 @@ impl FeedbackLoop {
             samples_per_period,
             samples_in_period: 0,
             last: SensorSample::default(),
-            last_sensorless_n: f64::NAN,
+            last_sensorless: NO_SENSORLESS_ESTIMATE,
             command,
             last_request_pct: command.override_pct,
             trace: Trace {
@@ -854,7 +853,8 @@ impl FeedbackLoop {
     }
 
     /// Ends a control period: estimate, control, limit, record.
-    fn end_period(&mut self, sensorless_n: f64) {
+    fn end_period(&mut self, sensorless: SensorlessEstimate) {
+        let sensorless_n = sensorless.force_n;
         let last = self.last;
         let period = self.chain.finish_period();
         self.samples_in_period = 0;
@@ -919,7 +919,7 @@ impl FeedbackLoop {
             cross_check_disagrees: disagrees(
                 estimate.force_n,
                 sensorless_n,
-                self.settings.cross_check_tolerance,
+                self.settings.cross_check_tolerance + sensorless.relative_uncertainty,
                 self.settings.target_force_n,
             ),
         });
@@ -939,13 +939,16 @@ impl SampleLoop for FeedbackLoop {
         }
         self.envelope.observe(&sample.step.sensors);
         self.chain.push(sample.step);
+        if let Some(d) = &sample.dynamometer {
+            self.chain.push_dynamometer(d);
+        }
         self.last = sample.step.sensors;
-        self.last_sensorless_n = sample.sensorless_force_n.unwrap_or(f64::NAN);
+        self.last_sensorless = sample.sensorless.unwrap_or(NO_SENSORLESS_ESTIMATE);
         self.samples_in_period += 1;
         if self.samples_in_period < self.samples_per_period {
             return None;
         }
-        self.end_period(self.last_sensorless_n);
+        self.end_period(self.last_sensorless);
         Some(self.command)
     }
 
@@ -959,7 +962,7 @@ impl SampleLoop for FeedbackLoop {
 
     fn end_of_program(&mut self) {
         if self.samples_in_period > 0 && !self.done {
-            self.end_period(self.last_sensorless_n);
+            self.end_period(self.last_sensorless);
         }
         self.trace.completed = true;
         self.done = true;
@@ -1032,8 +1035,8 @@ impl<L: SampleLoop> OnMachine<L> {
             let sample = LoopSample {
                 step: &step,
                 // The power law is evaluated once per period, where the loop reads it.
-                sensorless_force_n: if ends {
-                    self.machine.sensorless_force_n()
+                sensorless: if ends {
+                    self.machine.sensorless_force()
                 } else {
                     None
                 },
@@ -1129,6 +1132,12 @@ impl<L: SampleLoop> Work for OnMachine<L> {
 
 /// Whether two estimates differ by more than `tolerance` of the larger of them and the target
 /// (so two near-zero estimates in air never disagree).
+/// What a period without a sensorless estimate records.
+const NO_SENSORLESS_ESTIMATE: SensorlessEstimate = SensorlessEstimate {
+    force_n: f64::NAN,
+    relative_uncertainty: 0.0,
+};
+
 fn disagrees(current_based_n: f64, sensorless_n: f64, tolerance: f64, target_n: f64) -> bool {
     if !(current_based_n.is_finite() && sensorless_n.is_finite()) {
         return false;
@@ -1138,4 +1147,23 @@ fn disagrees(current_based_n: f64, sensorless_n: f64, tolerance: f64, target_n: 
         .max(sensorless_n.abs())
         .max(target_n * 0.25);
     (current_based_n - sensorless_n).abs() > tolerance * scale
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_cross_check_widens_with_the_power_laws_uncertainty_but_still_sees_a_real_gap() {
+        // ±30 % at the calibration cut.
+        assert!(!disagrees(100.0, 130.0, 0.3, 100.0));
+        assert!(disagrees(100.0, 150.0, 0.3, 100.0));
+        // Half the calibrated feed per tooth adds 0.25·ln 2 ≈ 0.17: 50 % apart is then within it.
+        let tolerance = 0.3 + 0.25 * 2f64.ln();
+        assert!(!disagrees(100.0, 150.0, tolerance, 100.0));
+        // A force two and a half times the estimate is still a disagreement.
+        assert!(disagrees(100.0, 250.0, tolerance, 100.0));
+        // No power-law estimate, no verdict.
+        assert!(!disagrees(100.0, f64::NAN, tolerance, 100.0));
+    }
 }

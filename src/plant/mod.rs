@@ -70,6 +70,7 @@ pub mod bench;
 pub mod bond_graph;
 pub mod cnc;
 pub mod dynamics;
+pub mod dynamometer;
 pub mod feed_drive;
 pub(crate) mod linalg;
 pub mod materials;
@@ -86,7 +87,7 @@ pub mod spindle_drive;
 
 use std::fmt;
 
-use crate::machine::{Machine, MachineStep, OverrideCommand, SensorSample};
+use crate::machine::{Machine, MachineStep, OverrideCommand, SensorSample, SensorlessEstimate};
 
 pub use presets::{Preset, PresetMachine};
 pub use signals::PlantSignals;
@@ -125,8 +126,8 @@ pub trait PlantModel {
     fn restart(&mut self) -> PlantSignals;
 
     /// Paper 004's sensorless force estimate at the latest sample, for a plant that knows the
-    /// programmed cutting conditions (see [`Machine::sensorless_force_n`]).
-    fn power_law_force_n(&self) -> Option<f64> {
+    /// programmed cutting conditions (see [`Machine::sensorless_force`]).
+    fn power_law_force(&self) -> Option<SensorlessEstimate> {
         None
     }
 }
@@ -219,8 +220,8 @@ impl<P: PlantModel> Machine for P {
         self.sampling().latest.finished
     }
 
-    fn sensorless_force_n(&self) -> Option<f64> {
-        self.power_law_force_n()
+    fn sensorless_force(&self) -> Option<SensorlessEstimate> {
+        self.power_law_force()
     }
 }
 

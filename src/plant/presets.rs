@@ -28,11 +28,11 @@ use super::cnc::{CncConfig, DialTable, OverrideMode};
 use super::materials::Material;
 use super::mechanics::{mean_forces, Cutter, Immersion, MillingMode, MAX_TEETH};
 use super::scenario::{MaterialRegion, Move, MoveKind, Scenario, ScenarioSpec};
-use super::second_order::{SecondOrderConfig, SecondOrderRun};
+use super::second_order::{SecondOrderConfig, SecondOrderMachine, SecondOrderRun};
 use super::signals::PlantSignals;
 use super::simulator::{SimConfig, Simulator};
 use super::{Plant, PlantError};
-use crate::machine::{Machine, MachineStep, OverrideCommand};
+use crate::machine::{Machine, MachineStep, OverrideCommand, SensorlessEstimate};
 use crate::math;
 
 /// A named experiment. Serialised by its [`name`](Preset::name), e.g. `"maneerat-doc-1"`.
@@ -51,6 +51,8 @@ pub enum Preset {
     ManeeratDoc2,
     /// Paper 001 Fig. 9.
     ManeeratDoc4,
+    /// Paper 001's own model: the second-order force process of eq 2.3 on Fig. 8's cut.
+    ManeeratSecondOrder,
     /// Paper 002 Fig. 7.
     LiuCurrentStep,
     /// Paper 000 §4.
@@ -67,23 +69,34 @@ pub enum PlantKind {
     BondGraph,
     /// Paper 000's brake bench ([`BrakeBench`]).
     BrakeBench,
+    /// Paper 001's second-order force process ([`SecondOrderMachine`]).
+    SecondOrder,
 }
 
 impl PlantKind {
     /// Every plant kind.
-    pub const ALL: [PlantKind; 3] = [PlantKind::Mill, PlantKind::BondGraph, PlantKind::BrakeBench];
+    pub const ALL: [PlantKind; 4] = [
+        PlantKind::Mill,
+        PlantKind::BondGraph,
+        PlantKind::BrakeBench,
+        PlantKind::SecondOrder,
+    ];
 
     /// Short name.
     ///
     /// ```
     /// use cutlab::plant::presets::PlantKind;
-    /// assert_eq!(PlantKind::ALL.map(PlantKind::name), ["mill", "bond-graph", "brake-bench"]);
+    /// assert_eq!(
+    ///     PlantKind::ALL.map(PlantKind::name),
+    ///     ["mill", "bond-graph", "brake-bench", "second-order"]
+    /// );
     /// ```
     pub fn name(self) -> &'static str {
         match self {
             PlantKind::Mill => "mill",
             PlantKind::BondGraph => "bond-graph",
             PlantKind::BrakeBench => "brake-bench",
+            PlantKind::SecondOrder => "second-order",
         }
     }
 
@@ -93,6 +106,7 @@ impl PlantKind {
             PlantKind::Mill => "Simulated mill (mechanistic cutting, drives, sensors)",
             PlantKind::BondGraph => "Paper 002's bond-graph spindle + x-axis model",
             PlantKind::BrakeBench => "Paper 000's magnetic-particle brake bench",
+            PlantKind::SecondOrder => "Paper 001's second-order force process (eq 2.3)",
         }
     }
 }
@@ -178,6 +192,9 @@ pub enum PlantDefinition {
     },
     /// Paper 000's brake bench on its default schedule ([`BrakeBenchConfig::default`]).
     BrakeBench,
+    /// Paper 001's eq 2.3 standing in for the mill on this cut
+    /// ([`Preset::second_order_equivalent`]).
+    SecondOrder(MillParameters),
 }
 
 /// A mill preset's cut: tool, conditions, path, depth, materials and force target.
@@ -496,6 +513,34 @@ static MANEERAT_DOC_4: Definition = maneerat(
     320.0,
 );
 
+/// Paper 001's own process model (eq 2.3) on Fig. 8's cut, with the force measured by a
+/// dynamometer as the paper's experiments measure it.
+static MANEERAT_SECOND_ORDER: Definition = {
+    let doc_2 = maneerat(
+        "maneerat-second-order",
+        "Paper 001's model: eq 2.3, DOC 2 mm, target 200 N",
+        "paper 001 (Maneerat et al.), eq 2.1–2.3 and Fig. 8",
+        &[(0.0, 2.0)],
+        200.0,
+    );
+    let PlantDefinition::Mill(cut) = doc_2.plant else {
+        unreachable!()
+    };
+    Definition {
+        choices: &[
+            "the process of eq 2.3: m·F̈ + (mc + d)·Ḟ + dc·F = k·f_r with f_r the commanded feed",
+            "its static gain the mechanistic model's mean resultant force per mm/min on Fig. 8's \
+             cut (tool steel, DOC 2 mm, 3 mm wide, 3000 rpm), zero in the 40 mm of air",
+            "τ_f = 1/K_v (the position loop) and τ_c = one spindle revolution (20 ms)",
+            "the force fed back by a dynamometer under the part (500 Hz, σ 2 N), as in the \
+             paper's experiments",
+            "continuous override (the paper's D/A card)",
+        ],
+        plant: PlantDefinition::SecondOrder(cut),
+        ..doc_2
+    }
+};
+
 /// Paper 002 (Liu, Wang, Wang) Fig. 7: the bond-graph plant and a step in load.
 static LIU_CURRENT_STEP: Definition = Definition {
     name: "liu-current-step",
@@ -548,13 +593,14 @@ impl TryFrom<String> for Preset {
 
 impl Preset {
     /// Every preset.
-    pub const ALL: [Preset; 8] = [
+    pub const ALL: [Preset; 9] = [
         Preset::KimStepDoc,
         Preset::KimMaterialTaper,
         Preset::KimCircularTaper,
         Preset::ManeeratDoc1,
         Preset::ManeeratDoc2,
         Preset::ManeeratDoc4,
+        Preset::ManeeratSecondOrder,
         Preset::LiuCurrentStep,
         Preset::WangBrakeBench,
     ];
@@ -568,6 +614,7 @@ impl Preset {
             Preset::ManeeratDoc1 => &MANEERAT_DOC_1,
             Preset::ManeeratDoc2 => &MANEERAT_DOC_2,
             Preset::ManeeratDoc4 => &MANEERAT_DOC_4,
+            Preset::ManeeratSecondOrder => &MANEERAT_SECOND_ORDER,
             Preset::LiuCurrentStep => &LIU_CURRENT_STEP,
             Preset::WangBrakeBench => &WANG_BRAKE_BENCH,
         }
@@ -611,6 +658,7 @@ impl Preset {
             PlantDefinition::Mill(_) => PlantKind::Mill,
             PlantDefinition::BondGraph { .. } => PlantKind::BondGraph,
             PlantDefinition::BrakeBench => PlantKind::BrakeBench,
+            PlantDefinition::SecondOrder(_) => PlantKind::SecondOrder,
         }
     }
 
@@ -619,10 +667,11 @@ impl Preset {
         self.definition().choices
     }
 
-    /// The cut of a mill preset; `None` for the bench and the bond graph.
+    /// The cut of a mill preset (and of the second-order process standing in for one); `None`
+    /// for the bench and the bond graph.
     pub fn mill_parameters(self) -> Option<&'static MillParameters> {
         match &self.definition().plant {
-            PlantDefinition::Mill(cut) => Some(cut),
+            PlantDefinition::Mill(cut) | PlantDefinition::SecondOrder(cut) => Some(cut),
             _ => None,
         }
     }
@@ -664,7 +713,10 @@ impl Preset {
 
     /// The full simulated mill of a mill preset.
     pub fn simulator(self, seed: u64) -> Result<Simulator, PlantError> {
-        let spec = self.scenario_spec().ok_or_else(|| {
+        let spec = self
+            .scenario_spec()
+            .filter(|_| self.plant_kind() == PlantKind::Mill);
+        let spec = spec.ok_or_else(|| {
             PlantError::new(
                 "preset",
                 format!(
@@ -738,6 +790,12 @@ impl Preset {
                     .bond_graph_run(seed)
                     .ok_or_else(|| PlantError::new("preset", "not a bond-graph preset"))?;
                 PresetMachine::BondGraph(Box::new(BondGraphMachine::new(run)?))
+            }
+            PlantKind::SecondOrder => {
+                let run = self
+                    .second_order_equivalent(seed)
+                    .ok_or_else(|| PlantError::new("preset", "not a second-order preset"))?;
+                PresetMachine::SecondOrder(Box::new(SecondOrderMachine::new(run)?))
             }
         })
     }
@@ -898,6 +956,7 @@ impl Preset {
             gain_n_per_mm_min: vec![(0.0, 0.0), (air_mm, 0.0), (air_mm, gain)],
             cutter_radius_mm: 0.5 * p.cutter.diameter_mm,
             radial_ratio: material.coefficients().radial_ratio(),
+            cut_depth_width_mm: (depth_mm, p.width_mm),
             machine,
         })
     }
@@ -1199,6 +1258,8 @@ pub enum PresetMachine {
     BrakeBench(Box<BrakeBench>),
     /// The bond graph.
     BondGraph(Box<BondGraphMachine>),
+    /// Paper 001's second-order process.
+    SecondOrder(Box<SecondOrderMachine>),
 }
 
 impl PresetMachine {
@@ -1207,6 +1268,7 @@ impl PresetMachine {
             PresetMachine::Mill(m) => m.as_ref(),
             PresetMachine::BrakeBench(m) => m.as_ref(),
             PresetMachine::BondGraph(m) => m.as_ref(),
+            PresetMachine::SecondOrder(m) => m.as_ref(),
         }
     }
 
@@ -1215,6 +1277,7 @@ impl PresetMachine {
             PresetMachine::Mill(m) => m.as_mut(),
             PresetMachine::BrakeBench(m) => m.as_mut(),
             PresetMachine::BondGraph(m) => m.as_mut(),
+            PresetMachine::SecondOrder(m) => m.as_mut(),
         }
     }
 
@@ -1240,8 +1303,8 @@ impl Machine for PresetMachine {
         self.plant().finished()
     }
 
-    fn sensorless_force_n(&self) -> Option<f64> {
-        self.plant().sensorless_force_n()
+    fn sensorless_force(&self) -> Option<SensorlessEstimate> {
+        self.plant().sensorless_force()
     }
 }
 
@@ -1272,7 +1335,8 @@ mod tests {
     fn mill_presets_have_valid_scenarios_and_the_others_a_schedule() {
         for p in Preset::ALL {
             match p.plant_kind() {
-                PlantKind::Mill => {
+                // The second-order process runs along its mill preset's path.
+                PlantKind::Mill | PlantKind::SecondOrder => {
                     let spec = p.scenario_spec().unwrap();
                     Scenario::new(spec).unwrap();
                     assert!(p.load_schedule().is_none());

@@ -199,6 +199,9 @@ pub struct SecondOrderRun {
     pub cutter_radius_mm: f64,
     /// Radial-to-tangential ratio r.
     pub radial_ratio: f64,
+    /// Axial depth and radial width of the cut where the gain is not zero (zero in the air), for
+    /// the metrics' "in the cut"; NaN when not known (every row then counts as cutting).
+    pub cut_depth_width_mm: (f64, f64),
     /// Sample rate, seed, CNC, drives and sensors (the scenario-free parts of a mill).
     pub machine: super::simulator::SimConfig,
 }
@@ -232,6 +235,7 @@ impl SecondOrderMachine {
     ///     process: SecondOrderConfig::new(1.0 / 30.0, 0.02, 0.3).unwrap(),
     ///     length_mm: 50.0, programmed_feed_mm_min: 600.0, spindle_rpm: 3000.0,
     ///     gain_n_per_mm_min: vec![(0.0, 0.3)], cutter_radius_mm: 5.0, radial_ratio: 0.4,
+    ///     cut_depth_width_mm: (2.0, 3.0),
     ///     machine: SimConfig { sample_rate_hz: 1000.0, ..SimConfig::default() },
     /// };
     /// let mut m = SecondOrderMachine::new(run).unwrap();
@@ -313,14 +317,19 @@ impl PlantModel for SecondOrderMachine {
             spindle_running: sp.running,
             time_since_spindle_start_s: self.started_at_s.map_or(0.0, |t| time_s - t),
         };
+        let (depth_mm, width_mm) = if gain > 0.0 {
+            self.run.cut_depth_width_mm
+        } else {
+            (0.0, 0.0)
+        };
         let truth = PlantTruth {
             force_x_n: -force_n,
             force_resultant_n: force_n,
             feed_force_n: force_n,
             spindle_torque_nm: torque_nm,
             cutting_power_w: power_w,
-            depth_mm: f64::NAN,
-            width_mm: f64::NAN,
+            depth_mm,
+            width_mm,
             feed_per_tooth_mm: f_tooth,
             path_position_mm: cnc.position_mm,
             tool_x_mm: cnc.position_mm,

@@ -36,7 +36,7 @@ use super::sensors::{CurrentSensor, CurrentSensorConfig};
 use super::signals::{AxisSignals, PlantSignals};
 use super::spindle_drive::{SpindleDrive, SpindleDriveConfig};
 use super::{positive, Plant, PlantError, PlantModel, PlantSample, Sampling, Tick};
-use crate::machine::{OverrideCommand, PlantTruth, SensorSample};
+use crate::machine::{OverrideCommand, PlantTruth, SensorSample, SensorlessEstimate};
 
 /// Which feed axis the feed-current sensors are on.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
@@ -157,7 +157,10 @@ const MIN_CUTTING_RPM: f64 = 1.0;
 /// Paper 004's model for `material` (cast iron's weights for GC30, carbon steel's for the rest),
 /// its bias calibrated to the mechanistic mean resultant of the scenario's nominal cut: the
 /// first block's feed per tooth at its spindle speed, the largest depth and width.
-fn calibrated_power_law(scenario: &Scenario, material: Material) -> PowerLawModel {
+fn calibrated_power_law(
+    scenario: &Scenario,
+    material: Material,
+) -> (PowerLawModel, PowerLawInputs) {
     let published = PowerLawModel::published(match material {
         Material::Gc30 => PowerLawMaterial::CastIron,
         _ => PowerLawMaterial::CarbonSteel,
@@ -190,9 +193,10 @@ fn calibrated_power_law(scenario: &Scenario, material: Material) -> PowerLawMode
         feed_per_tooth_mm,
     );
     // A scenario without a nominal cut (no depth, no feed) keeps the published biases.
-    published
+    let model = published
         .calibrated(&inputs, mean.resultant_n())
-        .unwrap_or(published)
+        .unwrap_or(published);
+    (model, inputs)
 }
 
 /// The simulated mill.
@@ -215,7 +219,8 @@ pub struct Simulator {
     control: Control,
     force_model: MillingForceModel,
     region_coefficients: Vec<CuttingCoefficients>,
-    region_power_law: Vec<PowerLawModel>,
+    /// Each material region's power law and the cut it was calibrated on.
+    region_power_law: Vec<(PowerLawModel, PowerLawInputs)>,
     spindle: SpindleDrive,
     axes: [FeedDrive; 2],
     feed_sensor: CurrentSensor,
@@ -226,6 +231,7 @@ pub struct Simulator {
     spindle_arrived_at_s: Option<f64>,
     spindle_started_at_s: Option<f64>,
     power_law_force_n: f64,
+    power_law_uncertainty: f64,
 }
 
 impl Simulator {
@@ -279,6 +285,7 @@ impl Simulator {
             spindle_arrived_at_s: None,
             spindle_started_at_s: None,
             power_law_force_n: 0.0,
+            power_law_uncertainty: 0.0,
         };
         sim.reset();
         Ok(sim)
@@ -413,17 +420,22 @@ impl PlantModel for Simulator {
 
         // Paper 004's estimate from what the CNC knows, once per interpolation period.
         if ipo_tick {
-            self.power_law_force_n = match region {
-                Some(r) if cutting => self.region_power_law[r]
-                    .forces(&PowerLawInputs {
+            (self.power_law_force_n, self.power_law_uncertainty) = match region {
+                Some(r) if cutting => {
+                    let (model, calibrated_on) = &self.region_power_law[r];
+                    let now = PowerLawInputs {
                         radial_width_mm: width_mm,
                         feed_per_tooth_mm,
                         axial_depth_mm: depth_mm,
                         diameter_mm: cutter.diameter_mm,
                         teeth_engaged: self.immersion.teeth_engaged(cutter.teeth),
-                    })
-                    .resultant_n(),
-                _ => 0.0,
+                    };
+                    (
+                        model.forces(&now).resultant_n(),
+                        model.relative_uncertainty(&now, calibrated_on),
+                    )
+                }
+                _ => (0.0, 0.0),
             };
         }
 
@@ -505,8 +517,11 @@ impl PlantModel for Simulator {
         }
     }
 
-    fn power_law_force_n(&self) -> Option<f64> {
-        Some(self.sampling.latest().signals.power_law_force_n)
+    fn power_law_force(&self) -> Option<SensorlessEstimate> {
+        Some(SensorlessEstimate {
+            force_n: self.sampling.latest().signals.power_law_force_n,
+            relative_uncertainty: self.power_law_uncertainty,
+        })
     }
 
     fn restart(&mut self) -> PlantSignals {
@@ -523,6 +538,7 @@ impl PlantModel for Simulator {
         self.spindle_arrived_at_s = None;
         self.spindle_started_at_s = None;
         self.power_law_force_n = 0.0;
+        self.power_law_uncertainty = 0.0;
         let start = self.scenario.point_at(0.0);
         PlantSignals {
             truth: PlantTruth {
