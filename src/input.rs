@@ -70,6 +70,29 @@ fn parse_whole<T: std::str::FromStr>(text: &str, range: &str) -> Result<T, Strin
         .map_err(|_| format!("\"{cleaned}\" is not a whole number{range}"))
 }
 
+/// `v` as a person reads it in a message: plain digits with at most four decimals, or an exponent
+/// when very large or small (1e308 has 309 digits).
+///
+/// ```
+/// use cutlab::input::readable;
+/// assert_eq!(readable(1e308), "1e308");
+/// assert_eq!(readable(20000.0), "20000");
+/// assert_eq!(readable(0.125), "0.125");
+/// assert_eq!(readable(2e-9), "2e-9");
+/// assert_eq!(readable(f64::NAN), "NaN");
+/// ```
+pub fn readable(v: f64) -> String {
+    if v == 0.0 || (1e-3..1e7).contains(&v.abs()) {
+        let rounded = format!("{v:.4}");
+        rounded
+            .trim_end_matches('0')
+            .trim_end_matches('.')
+            .to_string()
+    } else {
+        format!("{v:e}")
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -431,42 +431,57 @@ fn settling_and_fluctuation(r: &RunResult, step_s: f64, band: f64) -> (f64, f64)
     (outside, var.sqrt())
 }
 
-/// Paper 002's Fig. 7 under its own conditions (k_u's 100 % per period let through by the
-/// envelope, 0.5 s sampling): the dynamics-based rules settle after the load step much sooner and
-/// fluctuate less than the experience-based ones. At a 40 ms period both tables give the same
-/// response (docs/papers.md), which is why the preset states its period.
+/// Paper 002's Fig. 7 under its own conditions: k_u's 100 % per period let through by the
+/// envelope, and its Table 2's 50 ms sampling. There the two rule tables respond alike (Fig. 7's
+/// "settles earlier with small fluctuation" is not reproduced); the dynamics table's advantage
+/// appears only when the loop samples ten times more slowly. docs/papers.md has the analysis.
 #[test]
-fn paper_002_dynamics_rules_settle_faster_and_fluctuate_less_under_its_conditions() {
-    let experience = run(Preset::LiuCurrentStep, ControllerKind::FuzzyExperience);
-    let dynamics = run(Preset::LiuCurrentStep, ControllerKind::FuzzyDynamics);
-    assert_eq!(dynamics.settings.control_period_s, 0.5);
+fn paper_002_rule_tables_differ_only_when_the_loop_samples_slowly() {
+    let runs = |period: Option<f64>| {
+        [
+            ControllerKind::FuzzyExperience,
+            ControllerKind::FuzzyDynamics,
+        ]
+        .map(|kind| {
+            let mut spec = RunSpec::new(Preset::LiuCurrentStep, kind);
+            spec.settings.control_period_s = period;
+            simulate(&spec).unwrap()
+        })
+    };
+    let [experience, dynamics] = runs(None);
+    assert_eq!(dynamics.settings.control_period_s, 0.05);
     assert_eq!(
         dynamics.spec.controller.get("output_range_pct"),
         Some(100.0)
     );
-    assert_eq!(dynamics.settings.envelope.max_rate_pct_per_s, 200.0);
+    assert_eq!(dynamics.settings.envelope.max_rate_pct_per_s, 2000.0);
     // The load step is measured like a depth step.
     assert_eq!(dynamics.metrics.steps.len(), 1);
     assert_eq!(dynamics.metrics.steps[0].time_s, 15.0);
+    let (settle_e, _) = settling_and_fluctuation(&experience, 15.0, 0.02);
+    let (settle_d, _) = settling_and_fluctuation(&dynamics, 15.0, 0.02);
+    assert!(
+        (settle_d - settle_e).abs() <= 0.2 * settle_e,
+        "at 50 ms: dynamics {settle_d} s, experience {settle_e} s"
+    );
+    let iae = |r: &RunResult| r.metrics.force_iae_n_s;
+    assert!((iae(&dynamics) - iae(&experience)).abs() < 0.1 * iae(&experience));
 
+    let [experience, dynamics] = runs(Some(0.5));
     let (settle_e, wobble_e) = settling_and_fluctuation(&experience, 15.0, 0.02);
     let (settle_d, wobble_d) = settling_and_fluctuation(&dynamics, 15.0, 0.02);
     assert!(
         settle_d * 2.0 < settle_e,
-        "settling to ±2 %: dynamics {settle_d} s, experience {settle_e} s"
+        "at 0.5 s, settling to ±2 %: dynamics {settle_d} s, experience {settle_e} s"
     );
     assert!(
         wobble_d * 2.0 < wobble_e,
-        "fluctuation over the last 10 s: dynamics {wobble_d}, experience {wobble_e}"
+        "at 0.5 s, fluctuation over the last 10 s: dynamics {wobble_d}, experience {wobble_e}"
     );
     assert!(
         dynamics.metrics.override_total_variation_pct
-            < experience.metrics.override_total_variation_pct,
-        "override activity: dynamics {}, experience {}",
-        dynamics.metrics.override_total_variation_pct,
-        experience.metrics.override_total_variation_pct
+            < experience.metrics.override_total_variation_pct
     );
-    assert!(dynamics.metrics.force_iae_n_s < experience.metrics.force_iae_n_s);
 }
 
 /// Paper 001 under its own assumptions: its second-order process (eq 2.3) with the force read by

@@ -17,6 +17,7 @@ use crate::closed_loop::summary::{best, METRIC_ROWS};
 use crate::closed_loop::trace::write_csv;
 use crate::control::registry::{ControllerConfig, ControllerKind};
 use crate::plant::Preset;
+use crate::safety::SafetyEvent;
 
 /// Options shared by `sim` and `compare`: the preset, every setting of the run definition
 /// ([`RunSetting::ALL`], the same table the browser's form is made from), and `--no-references`.
@@ -332,7 +333,32 @@ pub fn run_sim(args: SimArgs, io: &mut Io<'_>) -> Result<(), CliError> {
     }
     let table = metrics_table(&[(spec.controller.kind().name().to_string(), &result)]);
     io.stdout.write_all(table.as_bytes())?;
-    Ok(())
+    fail_on_controller_faults([(spec.controller.kind().name(), &result)])
+}
+
+/// A run whose controller asked for a non-finite override completed only because the envelope
+/// held the override: its results are printed, and the command still fails so a script notices.
+fn fail_on_controller_faults<'a>(
+    runs: impl IntoIterator<Item = (&'a str, &'a RunResult)>,
+) -> Result<(), CliError> {
+    let faulted: Vec<String> = runs
+        .into_iter()
+        .filter_map(|(name, result)| {
+            result.trace.events.iter().find_map(|e| match e {
+                SafetyEvent::ControllerFault { time_s } => Some(format!("{name} at {time_s:.2} s")),
+                _ => None,
+            })
+        })
+        .collect();
+    if faulted.is_empty() {
+        Ok(())
+    } else {
+        Err(CliError::new(format!(
+            "the controller asked for a non-finite override ({}); the safety envelope held the \
+             override, so the results above are not the controller's",
+            faulted.join(", ")
+        )))
+    }
 }
 
 #[derive(Serialize)]
@@ -395,7 +421,8 @@ pub fn run_compare(args: CompareArgs, io: &mut Io<'_>) -> Result<(), CliError> {
                 metrics: &r.metrics,
             })
             .collect();
-        return write_json(io.stdout, &entries);
+        write_json(io.stdout, &entries)?;
+        return fail_on_controller_faults(results.iter().map(|(n, _, r)| (n.as_str(), r)));
     }
     let refs_line = refs.map(|r| {
         let safe = if r.safe_fixed_override_pct.is_finite() {
@@ -419,7 +446,7 @@ pub fn run_compare(args: CompareArgs, io: &mut Io<'_>) -> Result<(), CliError> {
         io.stdout.write_all(line.as_bytes())?;
     }
     io.stdout.write_all(metrics_table(&borrowed).as_bytes())?;
-    Ok(())
+    fail_on_controller_faults(results.iter().map(|(n, _, r)| (n.as_str(), r)))
 }
 
 /// Splits a saved comparison into its scenario (with the fixed-feed controller, for the
@@ -495,4 +522,23 @@ fn metrics_table(runs: &[(String, &RunResult)]) -> String {
         out.push('\n');
     }
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_controller_fault_fails_the_command_and_names_the_run() {
+        let spec = RunSpec::new(Preset::ManeeratDoc1, ControllerKind::Fixed);
+        let mut result = simulate(&spec).unwrap();
+        assert!(fail_on_controller_faults([("fixed", &result)]).is_ok());
+        result
+            .trace
+            .events
+            .push(SafetyEvent::ControllerFault { time_s: 4.5 });
+        let e = fail_on_controller_faults([("fixed", &result)]).unwrap_err();
+        assert!(e.0.contains("fixed at 4.50 s"), "{e}");
+        assert!(e.0.contains("held the override"), "{e}");
+    }
 }

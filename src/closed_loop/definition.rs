@@ -18,7 +18,7 @@ use std::fmt;
 use super::lab::RunSpec;
 use super::runner::Feedback;
 use crate::control::registry::{ControllerConfig, ControllerKind};
-use crate::input::{parse_count, parse_number, parse_seed};
+use crate::input::{parse_count, parse_number, parse_seed, readable};
 use crate::plant::cnc::{OverrideMode, MAX_OVERRIDE_PCT};
 use crate::plant::materials::Material;
 use crate::plant::mechanics::MAX_TEETH;
@@ -197,7 +197,8 @@ impl RunSetting {
                 "",
                 SettingKind::Feedback,
                 Scenario,
-                "which motor current measures the force: spindle or feed (default: the preset's)",
+                "how the force is measured: spindle or feed motor current, or a dynamometer under the \
+                 part (default: the preset's)",
             ),
             RunSetting::MaxOverride => (
                 "max_override_pct",
@@ -249,7 +250,7 @@ impl RunSetting {
                 "s",
                 number(0.001, 2.0),
                 SignalChain,
-                "control period (default: whole spindle revolutions, at least 40 ms; 0.5 s on paper 002's \
+                "control period (default: whole spindle revolutions, at least 40 ms; 50 ms on paper 002's \
                  preset)",
             ),
             RunSetting::FilterOrder => (
@@ -648,12 +649,11 @@ const PAPER_002_K_U_MM_MIN: f64 = 250.0;
 /// Paper 002's programmed feed.
 const PAPER_002_FEED_MM_MIN: f64 = 1500.0;
 
-/// The control period on paper 002's preset. The paper does not state its sampling period; its
-/// Fig. 7 takes tens of seconds to settle after the step, which a loop sampling every few tens of
-/// milliseconds with k_u's 100 % steps never does, so its monitor was read slowly: cutlab takes
-/// 0.5 s (a CNC's load monitor polled over its interface). docs/papers.md shows both rule tables
-/// from 40 ms to 1 s.
-pub const PAPER_002_CONTROL_PERIOD_S: f64 = 0.5;
+/// The control period on paper 002's preset: the paper's sampling, the 50 ms between the rows of
+/// its Table 2 (the data its rules were drawn from; Fig. 7's period is not stated).
+/// docs/papers.md shows both rule tables from 40 ms to 1 s: the dynamics table's advantage
+/// appears only when the loop samples far more slowly than this.
+pub const PAPER_002_CONTROL_PERIOD_S: f64 = 0.05;
 
 /// The seed of a run that names none.
 pub const DEFAULT_SEED: u64 = 1;
@@ -721,8 +721,8 @@ impl fmt::Display for Problem {
         match self {
             Problem::Parse(message) => f.write_str(message),
             Problem::Unknown { what, text } => write!(f, "unknown {what} {text:?}"),
-            Problem::NotPositive(v) => write!(f, "must be positive, got {v}"),
-            Problem::Negative(v) => write!(f, "must be zero or positive, got {v}"),
+            Problem::NotPositive(v) => write!(f, "must be positive, got {}", readable(*v)),
+            Problem::Negative(v) => write!(f, "must be zero or positive, got {}", readable(*v)),
             Problem::OutOfRange {
                 value,
                 min,
@@ -735,6 +735,7 @@ impl fmt::Display for Problem {
                     .last()
                     .unwrap_or("value")
                     .to_lowercase();
+                let (value, min, max) = (readable(*value), readable(*min), readable(*max));
                 write!(f, "{noun} {value} is outside {min}–{max}")
             }
             Problem::OutOfRange {
@@ -743,7 +744,10 @@ impl fmt::Display for Problem {
                 max,
                 unit,
                 ..
-            } => write!(f, "{value} {unit} is outside {min}–{max} {unit}"),
+            } => {
+                let (value, min, max) = (readable(*value), readable(*min), readable(*max));
+                write!(f, "{value} {unit} is outside {min}–{max} {unit}")
+            }
             Problem::AboveMachine { value, max } => write!(
                 f,
                 "highest override {value} % is more than this machine applies ({max} %)"

@@ -420,8 +420,11 @@ impl ControllerConfig {
         let spec = params[index];
         if !(value.is_finite() && value >= spec.min && value <= spec.max) {
             return Err(ParamError(format!(
-                "{key} = {value} is outside {}..={} {}",
-                spec.min, spec.max, spec.unit
+                "{key} = {} is outside {}..={} {}",
+                crate::input::readable(value),
+                spec.min,
+                spec.max,
+                spec.unit
             )));
         }
         self.values[index] = value;

@@ -148,7 +148,7 @@ impl Cutter {
                 "diameter_mm",
                 format!(
                     "{} mm is larger than any end mill (at most {MAX_DIAMETER_MM} mm)",
-                    self.diameter_mm
+                    crate::input::readable(self.diameter_mm)
                 ),
             ));
         }

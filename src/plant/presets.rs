@@ -32,6 +32,7 @@ use super::second_order::{SecondOrderConfig, SecondOrderMachine, SecondOrderRun}
 use super::signals::PlantSignals;
 use super::simulator::{SimConfig, Simulator};
 use super::{Plant, PlantError};
+use crate::input::readable;
 use crate::machine::{Machine, MachineStep, OverrideCommand, SensorlessEstimate};
 use crate::math;
 
@@ -553,7 +554,7 @@ static LIU_CURRENT_STEP: Definition = Definition {
         "S_e2 set for the commanded feed in steady state",
         "continuous override",
         "the paper's k_u as the fuzzy output (100 % per period), an envelope rate limit that lets \
-         it through, and a 0.5 s control period (the paper's sampling is not stated)",
+         it through, and its Table 2's 50 ms sampling as the control period",
     ],
     override_mode: OverrideMode::Continuous,
     plant: PlantDefinition::BondGraph {
@@ -1232,20 +1233,6 @@ impl From<EditError> for PlantError {
             .unwrap_or(&message)
             .to_string();
         PlantError::new(e.field, message)
-    }
-}
-
-/// `v` as a person reads it: plain digits, at most four decimals, or an exponent when very
-/// large or small (1e308 has 309 digits).
-fn readable(v: f64) -> String {
-    if v == 0.0 || (1e-3..1e7).contains(&v.abs()) {
-        let rounded = format!("{v:.4}");
-        rounded
-            .trim_end_matches('0')
-            .trim_end_matches('.')
-            .to_string()
-    } else {
-        format!("{v:e}")
     }
 }
 

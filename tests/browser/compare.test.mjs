@@ -107,6 +107,16 @@ test("the fuzzy rule bases' comparison starts from the paper's own settings", as
   assert.equal(await page.getByLabel('Preset', { exact: true }).inputValue(), 'liu-current-step');
   // Edits made for another experiment are gone from the link.
   assert.doesNotMatch(page.url(), /rpm=|kp=/);
+  // The paper's own k_u (100 % per period), and what the lab finds about Fig. 7.
+  for (const variant of ['Variant A', 'Variant B']) {
+    const output = page.getByRole('group', { name: variant }).getByLabel(/Output range/);
+    assert.equal(await output.inputValue(), '100');
+  }
+  await page.getByRole('status').filter({ hasText: 'not reproduced' }).waitFor();
+  // Its slowly sampled twin sets the period and says where the difference appears.
+  await page.getByRole('button', { name: 'Paper 002 at 0.5 s sampling' }).click();
+  await page.getByRole('status').filter({ hasText: "Fig. 7's difference" }).waitFor();
+  assert.match(page.url(), /period=0\.5/);
   assert.deepEqual(problems, []);
   await context.close();
 });
