@@ -196,3 +196,59 @@ fn help_in_every_spelling_goes_to_stdout() {
     assert!(result.is_ok());
     assert!(design.contains("Usage: cutlab filter design"), "{design}");
 }
+
+#[test]
+fn huge_and_tiny_numbers_in_messages_read_as_a_person_writes_them() {
+    let (result, _) = cutlab(
+        &[
+            "sim",
+            "--scenario",
+            "kim-step-doc",
+            "--controller",
+            "pi",
+            "--feed-mm-min",
+            "1e308",
+        ],
+        "",
+    );
+    assert_eq!(
+        result.unwrap_err(),
+        "--feed-mm-min: 1e308 mm/min is outside 1–20000 mm/min"
+    );
+    let (result, _) = cutlab(
+        &[
+            "sim",
+            "--scenario",
+            "kim-step-doc",
+            "--controller",
+            "pi",
+            "--set",
+            "kp=1e300",
+        ],
+        "",
+    );
+    assert!(result.unwrap_err().contains("kp = 1e300 is outside"));
+    let (result, _) = cutlab(
+        &[
+            "force",
+            "--diameter-mm",
+            "1e300",
+            "--teeth",
+            "2",
+            "--axial-depth-mm",
+            "1",
+            "--mode",
+            "slot",
+            "--feed-per-tooth-mm",
+            "0.1",
+            "--rpm",
+            "1000",
+            "--material",
+            "sm45c",
+        ],
+        "",
+    );
+    assert!(result
+        .unwrap_err()
+        .contains("1e300 mm is larger than any end mill"));
+}
