@@ -137,8 +137,11 @@ fn parser_errors_are_one_line_with_suggestions_and_the_names_that_exist() {
         error(&["filter", "design", "--ordr", "4"]),
         "unknown option --ordr (did you mean --order?) (see --help)"
     );
-    let commands = "commands: calibrate, compare, controllers, filter, force, fuzzy, scenarios, \
-                    sim, spectrum";
+    // Every command the parser has, in its order (tested against the parser in cli/mod.rs).
+    let names: Vec<&str> = cutlab::cli::COMMANDS.iter().map(|c| c.name).collect();
+    assert!(names.starts_with(&["calibrate", "compare", "controllers", "filter", "force"]));
+    let commands = format!("commands: {}", names.join(", "));
+    let commands = commands.as_str();
     assert_eq!(
         error(&["simm"]),
         format!("unknown command \"simm\" (did you mean sim?); {commands}")
@@ -251,4 +254,109 @@ fn huge_and_tiny_numbers_in_messages_read_as_a_person_writes_them() {
     assert!(result
         .unwrap_err()
         .contains("1e300 mm is larger than any end mill"));
+}
+
+#[test]
+fn tune_sweeps_and_searches_and_says_what_is_wrong() {
+    let (result, out) = cutlab(
+        &[
+            "tune",
+            "--controller",
+            "threshold",
+            "--scenarios",
+            "maneerat-doc-1",
+            "--param",
+            "kp=0.2:1",
+            "--sweep",
+            "3",
+            "--json",
+        ],
+        "",
+    );
+    result.unwrap();
+    let report: serde_json::Value = serde_json::from_str(&out).unwrap();
+    let points = report["points"].as_array().unwrap();
+    assert_eq!(points.len(), 3);
+    assert_eq!(points[2]["values"][0], 1.0);
+    assert!(points.iter().all(|p| p["cost"].as_f64().unwrap() > 0.0));
+
+    let (result, out) = cutlab(
+        &[
+            "tune",
+            "--controller",
+            "pi",
+            "--scenarios",
+            "maneerat-doc-1",
+            "--param",
+            "kp=0.05:1.5",
+            "--max-evals",
+            "6",
+        ],
+        "",
+    );
+    result.unwrap();
+    assert!(out.contains("best: kp="), "{out}");
+    assert!(out.contains("Pareto front"), "{out}");
+
+    for (args, message) in [
+        (
+            &[
+                "tune",
+                "--controller",
+                "pi",
+                "--scenarios",
+                "nope",
+                "--param",
+                "kp=0:1",
+            ][..],
+            "--scenarios: unknown preset \"nope\"",
+        ),
+        (
+            &[
+                "tune",
+                "--controller",
+                "pi",
+                "--scenarios",
+                "maneerat-doc-1",
+                "--param",
+                "kp=0:99",
+            ][..],
+            "kp = 99 is outside",
+        ),
+        (
+            &[
+                "tune",
+                "--controller",
+                "pi",
+                "--scenarios",
+                "maneerat-doc-1",
+                "--param",
+                "kp",
+            ][..],
+            "--param: \"kp\" is not of the form key=lo:hi",
+        ),
+        (
+            &[
+                "tune",
+                "--controller",
+                "pi",
+                "--scenarios",
+                "maneerat-doc-1",
+                "--param",
+                "kp=0:1",
+                "--objective",
+                "speed=2",
+            ][..],
+            "--objective: unknown objective term \"speed\"",
+        ),
+        (
+            &["tune", "--scenarios", "maneerat-doc-1", "--param", "kp=0:1"][..],
+            "--controller",
+        ),
+    ] {
+        let (result, _) = cutlab(args, "");
+        let e = result.unwrap_err();
+        assert!(e.contains(message), "{args:?}: {e}");
+        assert!(!e.contains('\n'));
+    }
 }

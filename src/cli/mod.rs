@@ -13,6 +13,7 @@ pub mod fuzzy;
 pub mod scenarios;
 pub mod sim;
 pub mod spectrum;
+pub mod tune;
 
 use std::io::{BufRead, Write};
 
@@ -71,6 +72,9 @@ enum Command {
     /// Welch power spectral density of f64 samples on stdin (scipy.signal.welch)
     #[command(long_about = spectrum::ABOUT)]
     Spectrum(spectrum::SpectrumArgs),
+    /// Tune a controller's parameters (grid sweep or Nelder–Mead) across scenarios
+    #[command(long_about = tune::ABOUT)]
+    Tune(tune::TuneArgs),
 }
 
 /// A subcommand's name and its line in `cutlab --help`.
@@ -92,6 +96,7 @@ pub const COMMANDS: &[CommandInfo] = &[
     CommandInfo { name: "scenarios" },
     CommandInfo { name: "sim" },
     CommandInfo { name: "spectrum" },
+    CommandInfo { name: "tune" },
 ];
 
 /// Prints the help of the command at `path` (`["filter"]` for `cutlab filter`): what a command
@@ -157,6 +162,7 @@ pub fn run(args: &[String], io: &mut Io<'_>) -> Result<(), CliError> {
         Some(Command::Scenarios(a)) => scenarios::run(a, io),
         Some(Command::Sim(a)) => sim::run_sim(a, io),
         Some(Command::Spectrum(a)) => spectrum::run(a, io),
+        Some(Command::Tune(a)) => tune::run(a, io),
     }
 }
 

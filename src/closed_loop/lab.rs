@@ -531,6 +531,17 @@ pub fn metrics_config(preset: Preset, settings: &LoopSettings) -> MetricsConfig 
     }
 }
 
+/// Runs only `spec`'s teach cut (on the machine a run would teach on) and returns the run's
+/// settings with the target it settles to, and the calibration: what a teach-in learns.
+pub fn teach_cut_only(spec: &RunSpec) -> Result<(LoopSettings, Calibration), LoopError> {
+    let mut settings = default_settings(spec)?;
+    let teach = preset_machine(spec, spec.seed.wrapping_add(TEACH_SEED_OFFSET))?;
+    let calibration =
+        OnMachine::teach_cut(teach, &settings, TeachForce::SimulationTruth)?.run_to_end()?;
+    settle_target(spec, &mut settings, &calibration);
+    Ok((settings, calibration))
+}
+
 /// Runs `spec` to the end, without reference runs.
 pub fn simulate(spec: &RunSpec) -> Result<RunResult, LoopError> {
     LabRun::new(spec)?.run_to_end()

@@ -236,7 +236,40 @@ impl Estimator {
         }
     }
 
-    /// The current the model expects for `force_n` (to express a current target as a force).
+    /// The spread (1 σ) of one period's estimate about the calibration line, in newtons: the
+    /// fit's residual at the calibration row nearest `spindle_rpm` (0 for a dynamometer, whose
+    /// noise the period mean averages away).
+    pub fn residual_std_n(&self, spindle_rpm: f64) -> f64 {
+        match self {
+            Estimator::Spindle { model, .. } => model
+                .rows
+                .iter()
+                .min_by(|a, b| {
+                    (a.speed_rpm - spindle_rpm)
+                        .abs()
+                        .total_cmp(&(b.speed_rpm - spindle_rpm).abs())
+                })
+                .map_or(f64::NAN, |row| row.quality.residual_std_n),
+            Estimator::Feed { model } => model.quality.residual_std_n,
+            Estimator::Dynamometer => 0.0,
+        }
+    }
+
+    /// The current the model expects at `force_n` (the reference current of a force target).
+    pub fn current_for_force_a(&self, force_n: f64, spindle_rpm: f64, feed_mm_min: f64) -> f64 {
+        match self {
+            Estimator::Spindle { model, .. } => {
+                let (idle, sensitivity, _) = model.line_at(spindle_rpm);
+                idle + sensitivity * force_n
+            }
+            Estimator::Feed { model } => {
+                model.idle_current_a(feed_mm_min) + model.sensitivity_a_per_n * force_n
+            }
+            Estimator::Dynamometer => f64::NAN,
+        }
+    }
+
+    /// The force the model reads from `current_a` (to express a current target as a force).
     pub fn force_for_current_n(&self, current_a: f64, spindle_rpm: f64, feed_mm_min: f64) -> f64 {
         match self {
             Estimator::Spindle { model, .. } => {
