@@ -159,3 +159,37 @@ fn a_teach_in_proposes_the_papers_target_and_its_reference_current() {
     );
     assert!(kim.force_at_full_override_n > kim.proposed_target_n);
 }
+
+#[test]
+fn tuning_in_pieces_gives_the_tuners_result() {
+    use cutlab::tuning::{TuningMode, TuningWork};
+    use cutlab::work::Work;
+    let make = || {
+        problem(
+            ControllerKind::Pi,
+            &["kp=0.05:1.5"],
+            &[Preset::ManeeratDoc1],
+        )
+    };
+    let search = NelderMead {
+        max_evaluations: 6,
+        ..NelderMead::default()
+    };
+    let whole = Tuner::new(make()).unwrap().tune(&search).unwrap();
+    let mut pieces = TuningWork::new(make(), TuningMode::Search(search)).unwrap();
+    let mut steps = 0;
+    while !pieces.advance(7).unwrap() {
+        steps += 1;
+        let p = pieces.progress();
+        assert!((0.0..=1.0).contains(&p.fraction), "{p:?}");
+    }
+    assert!(steps > 10, "{steps} pieces");
+    assert_eq!(pieces.finish().unwrap(), whole);
+
+    let sweep = Tuner::new(make()).unwrap().sweep(3).unwrap();
+    let swept = TuningWork::new(make(), TuningMode::Sweep(3))
+        .unwrap()
+        .run_to_end()
+        .unwrap();
+    assert_eq!(swept.evaluations, sweep);
+}

@@ -531,6 +531,14 @@ pub fn metrics_config(preset: Preset, settings: &LoopSettings) -> MetricsConfig 
     }
 }
 
+/// `spec`'s teach cut (on the machine a run would teach on) as work done in pieces; its
+/// calibration is the one [`LabRun::new`] would use.
+pub fn teach_cut_work(spec: &RunSpec) -> Result<OnMachine<TeachCut>, LoopError> {
+    let settings = default_settings(spec)?;
+    let teach = preset_machine(spec, spec.seed.wrapping_add(TEACH_SEED_OFFSET))?;
+    OnMachine::teach_cut(teach, &settings, TeachForce::SimulationTruth)
+}
+
 /// Runs only `spec`'s teach cut (on the machine a run would teach on) and returns the run's
 /// settings with the target it settles to, and the calibration: what a teach-in learns.
 pub fn teach_cut_only(spec: &RunSpec) -> Result<(LoopSettings, Calibration), LoopError> {

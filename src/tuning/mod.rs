@@ -153,24 +153,7 @@ pub struct Tuner {
 impl Tuner {
     /// Checks the problem and runs each scenario's teach cut once.
     pub fn new(problem: TuningProblem) -> Result<Self, TuningError> {
-        if problem.scenarios.is_empty() {
-            return Err(TuningError::Setup("name at least one scenario".into()));
-        }
-        if problem.params.is_empty() {
-            return Err(TuningError::Setup(
-                "name at least one parameter to tune (key=lo:hi)".into(),
-            ));
-        }
-        for range in &problem.params {
-            // Both ends must be values the controller accepts.
-            let mut probe = problem.controller.clone();
-            probe
-                .set(&range.key, range.lo)
-                .map_err(TuningError::Param)?;
-            probe
-                .set(&range.key, range.hi)
-                .map_err(TuningError::Param)?;
-        }
+        check(&problem)?;
         let calibrations = parallel_map(&problem.scenarios, |spec| {
             let mut spec = spec.clone();
             spec.controller = problem.controller.clone();
@@ -208,30 +191,7 @@ impl Tuner {
         })
         .into_iter()
         .collect::<Result<Vec<Metrics>, _>>()?;
-        Ok(self.summarise(values.to_vec(), metrics))
-    }
-
-    fn summarise(&self, values: Vec<f64>, metrics: Vec<Metrics>) -> Evaluation {
-        let n = metrics.len().max(1) as f64;
-        let cost = self
-            .problem
-            .scenarios
-            .iter()
-            .zip(&metrics)
-            .map(|(spec, m)| self.problem.objective.cost(m, nominal_duration_s(spec)))
-            .sum::<f64>()
-            / n;
-        Evaluation {
-            values,
-            cost,
-            cycle_time_s: metrics.iter().map(|m| m.cycle_time_s).sum::<f64>() / n,
-            force_error_pct: metrics
-                .iter()
-                .map(|m| m.force_mean_abs_error_pct)
-                .sum::<f64>()
-                / n,
-            metrics,
-        }
+        Ok(summarise(&self.problem, values.to_vec(), metrics))
     }
 
     /// Every point of the grid with `steps` values per parameter (lo … hi evenly, both ends
@@ -239,34 +199,11 @@ impl Tuner {
     ///
     /// The grid's points run in parallel natively; the result is in grid order either way.
     pub fn sweep(&self, steps: usize) -> Result<Vec<Evaluation>, TuningError> {
-        let axes: Vec<Vec<f64>> = self
-            .problem
-            .params
-            .iter()
-            .map(|r| grid_axis(r.lo, r.hi, steps))
-            .collect();
-        let total = axes.iter().map(Vec::len).try_fold(1usize, |acc, len| {
-            acc.checked_mul(len).filter(|t| *t <= MAX_SWEEP_POINTS)
-        });
-        let Some(total) = total.filter(|t| *t > 0) else {
-            return Err(TuningError::Setup(format!(
-                "a sweep of {steps} steps on {} parameters is more than {MAX_SWEEP_POINTS} \
-                 points",
-                axes.len()
-            )));
-        };
-        let points: Vec<Vec<f64>> = (0..total)
-            .map(|mut index| {
-                let mut point = vec![0.0; axes.len()];
-                for (slot, axis) in point.iter_mut().zip(&axes).rev() {
-                    *slot = axis[index % axis.len()];
-                    index /= axis.len();
-                }
-                point
-            })
-            .collect();
         // The scenarios of each point already run in parallel: points go one at a time.
-        points.iter().map(|p| self.evaluate(p)).collect()
+        grid_points(&self.problem.params, steps)?
+            .iter()
+            .map(|p| self.evaluate(p))
+            .collect()
     }
 
     /// Minimises the objective with `search` from the controller's current values.
@@ -318,6 +255,33 @@ impl Tuner {
     }
 }
 
+/// Every point of the grid with `steps` values per parameter, the first varying slowest.
+fn grid_points(params: &[ParamRange], steps: usize) -> Result<Vec<Vec<f64>>, TuningError> {
+    let axes: Vec<Vec<f64>> = params
+        .iter()
+        .map(|r| grid_axis(r.lo, r.hi, steps))
+        .collect();
+    let total = axes.iter().map(Vec::len).try_fold(1usize, |acc, len| {
+        acc.checked_mul(len).filter(|t| *t <= MAX_SWEEP_POINTS)
+    });
+    let Some(total) = total.filter(|t| *t > 0) else {
+        return Err(TuningError::Setup(format!(
+            "a sweep of {steps} steps on {} parameters is more than {MAX_SWEEP_POINTS} points",
+            axes.len()
+        )));
+    };
+    Ok((0..total)
+        .map(|mut index| {
+            let mut point = vec![0.0; axes.len()];
+            for (slot, axis) in point.iter_mut().zip(&axes).rev() {
+                *slot = axis[index % axis.len()];
+                index /= axis.len();
+            }
+            point
+        })
+        .collect())
+}
+
 /// `steps` evenly spaced values from `lo` to `hi` (the middle for one step).
 fn grid_axis(lo: f64, hi: f64, steps: usize) -> Vec<f64> {
     match steps {
@@ -363,15 +327,35 @@ pub fn pareto_front(points: &[(f64, f64)]) -> Vec<usize> {
 }
 
 fn calibrate(spec: &RunSpec) -> Result<Calibration, TuningError> {
-    let failed = |error| TuningError::Run {
-        preset: spec.preset.name(),
-        error,
-    };
-    let result = LabRun::new(spec)
-        .map_err(failed)?
-        .run_to_end()
-        .map_err(failed)?;
-    Ok(result.calibration)
+    crate::closed_loop::lab::teach_cut_only(spec)
+        .map(|(_, calibration)| calibration)
+        .map_err(|error| TuningError::Run {
+            preset: spec.preset.name(),
+            error,
+        })
+}
+
+/// An evaluation's summary: the objective and the means over the scenarios.
+fn summarise(problem: &TuningProblem, values: Vec<f64>, metrics: Vec<Metrics>) -> Evaluation {
+    let n = metrics.len().max(1) as f64;
+    let cost = problem
+        .scenarios
+        .iter()
+        .zip(&metrics)
+        .map(|(spec, m)| problem.objective.cost(m, nominal_duration_s(spec)))
+        .sum::<f64>()
+        / n;
+    Evaluation {
+        values,
+        cost,
+        cycle_time_s: metrics.iter().map(|m| m.cycle_time_s).sum::<f64>() / n,
+        force_error_pct: metrics
+            .iter()
+            .map(|m| m.force_mean_abs_error_pct)
+            .sum::<f64>()
+            / n,
+        metrics,
+    }
 }
 
 fn run_calibrated(spec: &RunSpec, calibration: Calibration) -> Result<Metrics, TuningError> {
@@ -483,4 +467,293 @@ pub fn teach_in(spec: &RunSpec) -> Result<TeachIn, TuningError> {
         estimate_noise_n,
         proposed_gap_pct: gap,
     })
+}
+
+/// How a [`TuningWork`] chooses its points.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum TuningMode {
+    /// Every point of a grid with this many values per parameter.
+    Sweep(usize),
+    /// Nelder–Mead from the controller's current values.
+    Search(NelderMead),
+}
+
+/// Tuning done a piece at a time (for the browser): the teach cuts, then each evaluation's runs,
+/// each advanced a budget of control periods at a time. The result is the [`Tuner`]'s.
+pub struct TuningWork {
+    problem: TuningProblem,
+    points: Points,
+    calibrations: Vec<Calibration>,
+    stage: WorkStage,
+    evaluations: Vec<Evaluation>,
+    converged: bool,
+}
+
+enum Points {
+    Grid { points: Vec<Vec<f64>>, next: usize },
+    Search(nelder_mead::Search),
+}
+
+enum WorkStage {
+    Teaching(Box<crate::closed_loop::runner::OnMachine<crate::closed_loop::runner::TeachCut>>),
+    Evaluating {
+        values: Vec<f64>,
+        run: Box<LabRun>,
+        metrics: Vec<Metrics>,
+    },
+    Done,
+}
+
+impl TuningWork {
+    /// Checks the problem and starts the first teach cut.
+    pub fn new(problem: TuningProblem, mode: TuningMode) -> Result<Self, TuningError> {
+        check(&problem)?;
+        let points = match mode {
+            TuningMode::Sweep(steps) => Points::Grid {
+                points: grid_points(&problem.params, steps)?,
+                next: 0,
+            },
+            TuningMode::Search(search) => {
+                let bounds: Vec<(f64, f64)> = problem.params.iter().map(|r| (r.lo, r.hi)).collect();
+                let start: Vec<f64> = problem
+                    .params
+                    .iter()
+                    .map(|r| problem.controller.get(&r.key).unwrap_or(r.lo))
+                    .collect();
+                Points::Search(search.search(&bounds, &start))
+            }
+        };
+        let first = start_teach_cut(&problem, 0)?;
+        Ok(Self {
+            problem,
+            points,
+            calibrations: Vec::new(),
+            stage: WorkStage::Teaching(first),
+            evaluations: Vec::new(),
+            converged: false,
+        })
+    }
+
+    /// The evaluations made so far, for a table that fills in while the work runs.
+    pub fn evaluations(&self) -> &[Evaluation] {
+        &self.evaluations
+    }
+
+    /// The next point to evaluate, telling the search the last evaluation's cost first.
+    fn next_point(&mut self) -> Option<Vec<f64>> {
+        match &mut self.points {
+            Points::Grid { points, next } => {
+                let point = points.get(*next).cloned();
+                *next += 1;
+                point
+            }
+            Points::Search(search) => {
+                if let Some(last) = self.evaluations.last() {
+                    search.tell(last.cost);
+                }
+                let point = search.ask();
+                if point.is_none() {
+                    self.converged = search.minimum().converged;
+                }
+                point
+            }
+        }
+    }
+
+    /// The run of `values` on scenario `index`, with its teach cut's calibration.
+    fn start_run(&self, values: &[f64], index: usize) -> Result<Box<LabRun>, TuningError> {
+        let mut spec = self.problem.scenarios[index].clone();
+        spec.controller = self.problem.controller.clone();
+        for (range, &v) in self.problem.params.iter().zip(values) {
+            spec.controller
+                .set(&range.key, v)
+                .map_err(TuningError::Param)?;
+        }
+        LabRun::calibrated(&spec, self.calibrations[index].clone())
+            .map(Box::new)
+            .map_err(|error| TuningError::Run {
+                preset: spec.preset.name(),
+                error,
+            })
+    }
+
+    /// Moves on to the next point, or to done.
+    fn start_next_point(&mut self) -> Result<(), TuningError> {
+        self.stage = match self.next_point() {
+            Some(values) => WorkStage::Evaluating {
+                run: self.start_run(&values, 0)?,
+                values,
+                metrics: Vec::new(),
+            },
+            None => WorkStage::Done,
+        };
+        Ok(())
+    }
+}
+
+/// The checks [`Tuner::new`] makes before any run.
+fn check(problem: &TuningProblem) -> Result<(), TuningError> {
+    if problem.scenarios.is_empty() {
+        return Err(TuningError::Setup("name at least one scenario".into()));
+    }
+    if problem.params.is_empty() {
+        return Err(TuningError::Setup(
+            "name at least one parameter to tune (key=lo:hi)".into(),
+        ));
+    }
+    for range in &problem.params {
+        // Both ends must be values the controller accepts.
+        let mut probe = problem.controller.clone();
+        probe
+            .set(&range.key, range.lo)
+            .map_err(TuningError::Param)?;
+        probe
+            .set(&range.key, range.hi)
+            .map_err(TuningError::Param)?;
+    }
+    Ok(())
+}
+
+fn start_teach_cut(
+    problem: &TuningProblem,
+    index: usize,
+) -> Result<
+    Box<crate::closed_loop::runner::OnMachine<crate::closed_loop::runner::TeachCut>>,
+    TuningError,
+> {
+    let mut spec = problem.scenarios[index].clone();
+    spec.controller = problem.controller.clone();
+    crate::closed_loop::lab::teach_cut_work(&spec)
+        .map(Box::new)
+        .map_err(|error| TuningError::Run {
+            preset: spec.preset.name(),
+            error,
+        })
+}
+
+impl Work for TuningWork {
+    type Output = Tuned;
+    type Error = TuningError;
+
+    /// Advances the current teach cut or run by at most `periods` control periods.
+    fn advance(&mut self, periods: usize) -> Result<bool, TuningError> {
+        let scenarios = self.problem.scenarios.len();
+        match std::mem::replace(&mut self.stage, WorkStage::Done) {
+            WorkStage::Done => {}
+            WorkStage::Teaching(mut teach) => {
+                let preset = self.problem.scenarios[self.calibrations.len()]
+                    .preset
+                    .name();
+                let failed = |error| TuningError::Run { preset, error };
+                if !teach.advance(periods).map_err(failed)? {
+                    self.stage = WorkStage::Teaching(teach);
+                } else {
+                    self.calibrations.push(teach.finish().map_err(failed)?);
+                    if self.calibrations.len() < scenarios {
+                        let next = start_teach_cut(&self.problem, self.calibrations.len())?;
+                        self.stage = WorkStage::Teaching(next);
+                    } else {
+                        self.start_next_point()?;
+                    }
+                }
+            }
+            WorkStage::Evaluating {
+                values,
+                mut run,
+                mut metrics,
+            } => {
+                let preset = self.problem.scenarios[metrics.len()].preset.name();
+                let failed = |error| TuningError::Run { preset, error };
+                if !run.advance(periods).map_err(failed)? {
+                    self.stage = WorkStage::Evaluating {
+                        values,
+                        run,
+                        metrics,
+                    };
+                } else {
+                    metrics.push(run.finish().map_err(failed)?.metrics);
+                    if metrics.len() < scenarios {
+                        self.stage = WorkStage::Evaluating {
+                            run: self.start_run(&values, metrics.len())?,
+                            values,
+                            metrics,
+                        };
+                    } else {
+                        self.evaluations
+                            .push(summarise(&self.problem, values, metrics));
+                        self.start_next_point()?;
+                    }
+                }
+            }
+        }
+        Ok(matches!(self.stage, WorkStage::Done))
+    }
+
+    fn progress(&self) -> crate::work::Progress {
+        let scenarios = self.problem.scenarios.len().max(1);
+        let total = match &self.points {
+            Points::Grid { points, .. } => points.len(),
+            Points::Search(_) => match self.problem_search_budget() {
+                Some(n) => n,
+                None => self.evaluations.len() + 1,
+            },
+        }
+        .max(1);
+        let (stage, done) = match &self.stage {
+            WorkStage::Teaching(_) => (
+                format!("Teach cut {} of {scenarios}", self.calibrations.len() + 1),
+                0.0,
+            ),
+            WorkStage::Evaluating { metrics, .. } => (
+                format!(
+                    "Evaluation {} of {}{total} (scenario {} of {scenarios})",
+                    self.evaluations.len() + 1,
+                    if matches!(self.points, Points::Search(_)) {
+                        "at most "
+                    } else {
+                        ""
+                    },
+                    metrics.len() + 1
+                ),
+                (self.evaluations.len() as f64 + metrics.len() as f64 / scenarios as f64)
+                    / total as f64,
+            ),
+            WorkStage::Done => ("Done".to_string(), 1.0),
+        };
+        crate::work::Progress::new(stage, done)
+    }
+
+    fn finish(&mut self) -> Result<Tuned, TuningError> {
+        if !matches!(self.stage, WorkStage::Done) {
+            return Err(TuningError::Setup("the tuning has not finished".into()));
+        }
+        let best = self
+            .evaluations
+            .iter()
+            .min_by(|a, b| a.cost.total_cmp(&b.cost))
+            .cloned()
+            .ok_or_else(|| TuningError::Setup("no evaluation succeeded".into()))?;
+        let pareto = pareto_front(
+            &self
+                .evaluations
+                .iter()
+                .map(|e| (e.cycle_time_s, e.force_error_pct))
+                .collect::<Vec<_>>(),
+        );
+        Ok(Tuned {
+            best,
+            evaluations: std::mem::take(&mut self.evaluations),
+            pareto,
+            converged: self.converged,
+        })
+    }
+}
+
+impl TuningWork {
+    fn problem_search_budget(&self) -> Option<usize> {
+        match &self.points {
+            Points::Search(search) => Some(search.max_evaluations()),
+            Points::Grid { .. } => None,
+        }
+    }
 }

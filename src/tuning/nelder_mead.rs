@@ -65,24 +65,17 @@ impl NelderMead {
         bounds: &[(f64, f64)],
         start: &[f64],
     ) -> Minimum {
-        let n = bounds.len();
-        let to_problem = |u: &[f64]| -> Vec<f64> {
-            u.iter()
-                .zip(bounds)
-                .map(|(&u, &(lo, hi))| lo + u.clamp(0.0, 1.0) * (hi - lo))
-                .collect()
-        };
-        // Counted through a cell: the loop reads the count while `evaluate` holds the cost.
-        let evaluations = std::cell::Cell::new(0usize);
-        let mut evaluate = |u: &[f64]| {
-            evaluations.set(evaluations.get() + 1);
-            let c = cost(&to_problem(u));
-            if c.is_finite() {
-                c
-            } else {
-                f64::INFINITY
-            }
-        };
+        let mut search = self.search(bounds, start);
+        while let Some(point) = search.ask() {
+            let c = cost(&point);
+            search.tell(c);
+        }
+        search.minimum()
+    }
+
+    /// The same search, one evaluation at a time: [`Search::ask`] for a point, [`Search::tell`]
+    /// its cost. The browser runs each evaluation in slices between frames this way.
+    pub fn search(&self, bounds: &[(f64, f64)], start: &[f64]) -> Search {
         let start_unit: Vec<f64> = bounds
             .iter()
             .enumerate()
@@ -95,83 +88,237 @@ impl NelderMead {
                 }
             })
             .collect();
-        let mut simplex: Vec<(Vec<f64>, f64)> = Vec::with_capacity(n + 1);
-        let c0 = evaluate(&start_unit);
-        simplex.push((start_unit.clone(), c0));
-        for i in 0..n {
-            let mut vertex = start_unit.clone();
-            vertex[i] += if vertex[i] + INITIAL_STEP <= 1.0 {
-                INITIAL_STEP
-            } else {
-                -INITIAL_STEP
-            };
-            let c = evaluate(&vertex);
-            simplex.push((vertex, c));
+        Search {
+            settings: *self,
+            bounds: bounds.to_vec(),
+            start: start_unit,
+            simplex: Vec::with_capacity(bounds.len() + 1),
+            evaluations: 0,
+            step: Step::Initial,
+            pending: None,
+            converged: false,
         }
-        let mut converged = n == 0;
-        while !converged && evaluations.get() < self.max_evaluations {
-            simplex.sort_by(|a, b| a.1.total_cmp(&b.1));
-            let (best, worst) = (simplex[0].1, simplex[n].1);
-            let spread = simplex
-                .iter()
-                .skip(1)
-                .map(|(v, _)| distance(v, &simplex[0].0))
-                .fold(0.0, f64::max);
-            if (worst - best).abs() <= self.cost_tolerance && spread <= self.point_tolerance {
-                converged = true;
-                break;
+    }
+}
+
+/// What the search does with the next cost it is told.
+#[derive(Debug, Clone, PartialEq)]
+enum Step {
+    /// Evaluating the initial simplex's vertices.
+    Initial,
+    /// Waiting for the reflected point's cost.
+    Reflect,
+    /// Waiting for the expanded point's cost; the reflected point and its cost.
+    Expand(Vec<f64>, f64),
+    /// Waiting for the contracted point's cost, to beat `reference`.
+    Contract(f64),
+    /// Shrinking the simplex towards its best vertex; the next vertex to replace.
+    Shrink(usize),
+    /// Finished.
+    Done,
+}
+
+/// A Nelder–Mead search in progress (see [`NelderMead::search`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Search {
+    settings: NelderMead,
+    bounds: Vec<(f64, f64)>,
+    start: Vec<f64>,
+    /// Vertices in unit-cube coordinates with their costs.
+    simplex: Vec<(Vec<f64>, f64)>,
+    evaluations: usize,
+    step: Step,
+    /// The point asked for and not yet told, in unit-cube coordinates.
+    pending: Option<Vec<f64>>,
+    converged: bool,
+}
+
+impl Search {
+    /// The next point to evaluate, in the problem's units; `None` once the search is over.
+    pub fn ask(&mut self) -> Option<Vec<f64>> {
+        if self.pending.is_none() {
+            let next = self.next_unit_point()?;
+            self.pending = Some(next);
+        }
+        self.pending.as_deref().map(|u| self.to_problem(u))
+    }
+
+    /// The cost of the point [`ask`](Self::ask) gave (non-finite counts as +∞). Telling without
+    /// asking does nothing.
+    pub fn tell(&mut self, cost: f64) {
+        let Some(point) = self.pending.take() else {
+            return;
+        };
+        self.evaluations += 1;
+        let cost = if cost.is_finite() {
+            cost
+        } else {
+            f64::INFINITY
+        };
+        let n = self.bounds.len();
+        match std::mem::replace(&mut self.step, Step::Done) {
+            Step::Initial => {
+                self.simplex.push((point, cost));
+                self.step = Step::Initial;
             }
-            let centroid: Vec<f64> = (0..n)
-                .map(|j| simplex[..n].iter().map(|(v, _)| v[j]).sum::<f64>() / n as f64)
-                .collect();
-            let along = |t: f64| -> Vec<f64> {
-                centroid
-                    .iter()
-                    .zip(&simplex[n].0)
-                    .map(|(c, w)| (c + t * (c - w)).clamp(0.0, 1.0))
-                    .collect()
-            };
-            let reflected = along(1.0);
-            let cr = evaluate(&reflected);
-            if cr < simplex[0].1 {
-                let expanded = along(2.0);
-                let ce = evaluate(&expanded);
-                simplex[n] = if ce < cr {
-                    (expanded, ce)
+            Step::Reflect => {
+                if cost < self.simplex[0].1 {
+                    self.step = Step::Expand(point, cost);
+                } else if cost < self.simplex[n - 1].1 {
+                    self.simplex[n] = (point, cost);
+                    self.step = Step::Reflect;
                 } else {
-                    (reflected, cr)
-                };
-            } else if cr < simplex[n - 1].1 {
-                simplex[n] = (reflected, cr);
-            } else {
-                // Contract towards the better of the worst point and its reflection.
-                let (t, reference) = if cr < worst { (0.5, cr) } else { (-0.5, worst) };
-                let contracted = along(t);
-                let cc = evaluate(&contracted);
-                if cc < reference {
-                    simplex[n] = (contracted, cc);
-                } else {
-                    let best_point = simplex[0].0.clone();
-                    for vertex in simplex.iter_mut().skip(1) {
-                        let shrunk: Vec<f64> = best_point
-                            .iter()
-                            .zip(&vertex.0)
-                            .map(|(b, v)| b + 0.5 * (v - b))
-                            .collect();
-                        let c = evaluate(&shrunk);
-                        *vertex = (shrunk, c);
-                    }
+                    // Contract towards the better of the worst point and its reflection.
+                    self.step = Step::Contract(cost.min(self.simplex[n].1));
                 }
             }
+            Step::Expand(reflected, reflected_cost) => {
+                self.simplex[n] = if cost < reflected_cost {
+                    (point, cost)
+                } else {
+                    (reflected, reflected_cost)
+                };
+                self.step = Step::Reflect;
+            }
+            Step::Contract(reference) => {
+                if cost < reference {
+                    self.simplex[n] = (point, cost);
+                    self.step = Step::Reflect;
+                } else {
+                    self.step = Step::Shrink(1);
+                }
+            }
+            Step::Shrink(i) => {
+                self.simplex[i] = (point, cost);
+                self.step = if i < n {
+                    Step::Shrink(i + 1)
+                } else {
+                    Step::Reflect
+                };
+            }
+            Step::Done => {}
         }
-        simplex.sort_by(|a, b| a.1.total_cmp(&b.1));
-        let (point, cost) = simplex.swap_remove(0);
+        // A contraction's own point was the one just told; `Contract` above either kept it or
+        // moved on to shrinking, which asks for new points.
+    }
+
+    /// The search's evaluation budget.
+    pub fn max_evaluations(&self) -> usize {
+        self.settings.max_evaluations
+    }
+
+    /// Evaluations told so far.
+    pub fn evaluations(&self) -> usize {
+        self.evaluations
+    }
+
+    /// True once [`ask`](Self::ask) has nothing more to ask.
+    pub fn is_done(&self) -> bool {
+        self.step == Step::Done
+    }
+
+    /// The best point so far (the start point before any cost was told).
+    pub fn minimum(&self) -> Minimum {
+        let best = self
+            .simplex
+            .iter()
+            .min_by(|a, b| a.1.total_cmp(&b.1))
+            .cloned()
+            .unwrap_or_else(|| (self.start.clone(), f64::INFINITY));
         Minimum {
-            point: to_problem(&point),
-            cost,
-            evaluations: evaluations.get(),
-            converged,
+            point: self.to_problem(&best.0),
+            cost: best.1,
+            evaluations: self.evaluations,
+            converged: self.converged,
         }
+    }
+
+    fn to_problem(&self, u: &[f64]) -> Vec<f64> {
+        u.iter()
+            .zip(&self.bounds)
+            .map(|(&u, &(lo, hi))| lo + u.clamp(0.0, 1.0) * (hi - lo))
+            .collect()
+    }
+
+    /// The unit-cube point the current step needs evaluated (ordering the simplex and testing
+    /// the tolerances first when a new iteration starts); `None` when done.
+    fn next_unit_point(&mut self) -> Option<Vec<f64>> {
+        let n = self.bounds.len();
+        match &self.step {
+            Step::Done => None,
+            Step::Initial if self.simplex.len() <= n => {
+                let i = self.simplex.len();
+                let mut vertex = self.start.clone();
+                if i > 0 {
+                    let j = i - 1;
+                    vertex[j] += if vertex[j] + INITIAL_STEP <= 1.0 {
+                        INITIAL_STEP
+                    } else {
+                        -INITIAL_STEP
+                    };
+                }
+                Some(vertex)
+            }
+            Step::Initial | Step::Reflect => {
+                if n == 0 || self.has_converged() {
+                    self.converged = true;
+                    self.step = Step::Done;
+                    None
+                } else if self.evaluations >= self.settings.max_evaluations {
+                    self.step = Step::Done;
+                    None
+                } else {
+                    self.step = Step::Reflect;
+                    Some(self.along(1.0))
+                }
+            }
+            Step::Expand(..) => Some(self.along(2.0)),
+            Step::Contract(reference) => {
+                let t = if *reference < self.simplex[n].1 {
+                    0.5
+                } else {
+                    -0.5
+                };
+                Some(self.along(t))
+            }
+            Step::Shrink(i) => {
+                let (best, vertex) = (&self.simplex[0].0, &self.simplex[*i].0);
+                Some(
+                    best.iter()
+                        .zip(vertex)
+                        .map(|(b, v)| b + 0.5 * (v - b))
+                        .collect(),
+                )
+            }
+        }
+    }
+
+    /// Orders the simplex and tests the tolerances.
+    fn has_converged(&mut self) -> bool {
+        let n = self.bounds.len();
+        self.simplex.sort_by(|a, b| a.1.total_cmp(&b.1));
+        let (best, worst) = (self.simplex[0].1, self.simplex[n].1);
+        let spread = self
+            .simplex
+            .iter()
+            .skip(1)
+            .map(|(v, _)| distance(v, &self.simplex[0].0))
+            .fold(0.0, f64::max);
+        (worst - best).abs() <= self.settings.cost_tolerance
+            && spread <= self.settings.point_tolerance
+    }
+
+    /// The point `centroid + t·(centroid − worst)`, clamped into the cube (the simplex sorted).
+    fn along(&self, t: f64) -> Vec<f64> {
+        let n = self.bounds.len();
+        let centroid: Vec<f64> = (0..n)
+            .map(|j| self.simplex[..n].iter().map(|(v, _)| v[j]).sum::<f64>() / n as f64)
+            .collect();
+        centroid
+            .iter()
+            .zip(&self.simplex[n].0)
+            .map(|(c, w)| (c + t * (c - w)).clamp(0.0, 1.0))
+            .collect()
     }
 }
 
@@ -227,9 +374,11 @@ mod tests {
                 }
             },
             &[(0.0, 1.0)],
-            &[0.9],
+            // The initial simplex's second vertex (0.65) is already where the cost is NaN.
+            &[0.4],
         );
         assert!(m.cost.is_finite() && m.point[0] <= 0.5, "{m:?}");
+        assert!((m.point[0] - 0.2).abs() < 0.01, "{m:?}");
         assert!(calls <= 25 + 2, "{calls} evaluations");
         assert_eq!(m.evaluations, calls);
     }
