@@ -539,6 +539,16 @@ pub fn teach_cut_work(spec: &RunSpec) -> Result<OnMachine<TeachCut>, LoopError> 
     OnMachine::teach_cut(teach, &settings, TeachForce::SimulationTruth)
 }
 
+/// The settings a run of `spec` uses once its teach cut gave `calibration` (the target settled).
+pub fn settled_settings(
+    spec: &RunSpec,
+    calibration: &Calibration,
+) -> Result<LoopSettings, LoopError> {
+    let mut settings = default_settings(spec)?;
+    settle_target(spec, &mut settings, calibration);
+    Ok(settings)
+}
+
 /// Runs only `spec`'s teach cut (on the machine a run would teach on) and returns the run's
 /// settings with the target it settles to, and the calibration: what a teach-in learns.
 pub fn teach_cut_only(spec: &RunSpec) -> Result<(LoopSettings, Calibration), LoopError> {

@@ -442,10 +442,22 @@ pub const MIN_PROPOSED_GAP_PCT: f64 = 5.0;
 /// assert!(t.reference_current_a > 0.0 && t.proposed_gap_pct >= 5.0);
 /// ```
 pub fn teach_in(spec: &RunSpec) -> Result<TeachIn, TuningError> {
-    let (settings, calibration) =
+    let (_, calibration) =
         crate::closed_loop::lab::teach_cut_only(spec).map_err(|error| TuningError::Run {
             preset: spec.preset.name(),
             error,
+        })?;
+    propose(spec, calibration)
+}
+
+/// What a teach-in proposes from `spec`'s teach-cut `calibration`.
+fn propose(spec: &RunSpec, calibration: Calibration) -> Result<TeachIn, TuningError> {
+    let settings =
+        crate::closed_loop::lab::settled_settings(spec, &calibration).map_err(|error| {
+            TuningError::Run {
+                preset: spec.preset.name(),
+                error,
+            }
         })?;
     let summary = spec.preset.summary();
     let rpm = summary.spindle_rpm.unwrap_or(0.0);
@@ -467,6 +479,71 @@ pub fn teach_in(spec: &RunSpec) -> Result<TeachIn, TuningError> {
         estimate_noise_n,
         proposed_gap_pct: gap,
     })
+}
+
+/// A teach-in of several scenarios done a piece at a time (for the browser).
+pub struct TeachInWork {
+    specs: Vec<RunSpec>,
+    current:
+        Option<Box<crate::closed_loop::runner::OnMachine<crate::closed_loop::runner::TeachCut>>>,
+    taught: Vec<TeachIn>,
+}
+
+impl TeachInWork {
+    /// The teach-ins of `specs`, in order.
+    pub fn new(specs: Vec<RunSpec>) -> Self {
+        Self {
+            specs,
+            current: None,
+            taught: Vec::new(),
+        }
+    }
+}
+
+impl Work for TeachInWork {
+    type Output = Vec<TeachIn>;
+    type Error = TuningError;
+
+    fn advance(&mut self, periods: usize) -> Result<bool, TuningError> {
+        let Some(spec) = self.specs.get(self.taught.len()) else {
+            return Ok(true);
+        };
+        let failed = |error| TuningError::Run {
+            preset: spec.preset.name(),
+            error,
+        };
+        let teach = match &mut self.current {
+            Some(teach) => teach,
+            None => self.current.insert(Box::new(
+                crate::closed_loop::lab::teach_cut_work(spec).map_err(failed)?,
+            )),
+        };
+        if teach.advance(periods).map_err(failed)? {
+            let calibration = teach.finish().map_err(failed)?;
+            self.current = None;
+            self.taught.push(propose(spec, calibration)?);
+        }
+        Ok(self.taught.len() >= self.specs.len())
+    }
+
+    fn progress(&self) -> crate::work::Progress {
+        let total = self.specs.len().max(1);
+        let part = self.current.as_ref().map_or(0.0, |t| t.progress().fraction);
+        crate::work::Progress::new(
+            format!(
+                "Teach cut {} of {total}",
+                (self.taught.len() + 1).min(total)
+            ),
+            (self.taught.len() as f64 + part) / total as f64,
+        )
+    }
+
+    fn finish(&mut self) -> Result<Vec<TeachIn>, TuningError> {
+        if self.taught.len() < self.specs.len() {
+            return Err(TuningError::Setup("the teach-in has not finished".into()));
+        }
+        Ok(std::mem::take(&mut self.taught))
+    }
 }
 
 /// How a [`TuningWork`] chooses its points.

@@ -46,6 +46,7 @@ pub fn App() -> impl IntoView {
                 Page::Compare => view! { <pages::compare::ComparePage /> }.into_any(),
                 Page::Fuzzy => view! { <pages::fuzzy::FuzzyPage /> }.into_any(),
                 Page::Plant => view! { <pages::plant::PlantPage /> }.into_any(),
+                Page::Tune => view! { <pages::tune::TunePage /> }.into_any(),
             }}
         </main>
         <footer class="site-footer">

@@ -16,15 +16,18 @@ pub enum Page {
     Fuzzy,
     /// The simulated machine on its own.
     Plant,
+    /// Teach-in, sweeps and automatic tuning.
+    Tune,
     /// The guided path through the ideas.
     Learn,
 }
 
 impl Page {
     /// Every page, in navigation order.
-    pub const ALL: [Page; 6] = [
+    pub const ALL: [Page; 7] = [
         Page::Simulate,
         Page::Compare,
+        Page::Tune,
         Page::Fuzzy,
         Page::Plant,
         Page::SignalChain,
@@ -42,6 +45,7 @@ impl Page {
             Page::Compare => "compare",
             Page::Fuzzy => "fuzzy",
             Page::Plant => "plant",
+            Page::Tune => "tune",
             Page::Learn => "learn",
         }
     }
@@ -54,6 +58,7 @@ impl Page {
             Page::Compare => "Compare",
             Page::Fuzzy => "Fuzzy rules",
             Page::Plant => "Machine",
+            Page::Tune => "Tune",
             Page::Learn => "Learn",
         }
     }

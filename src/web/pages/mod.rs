@@ -6,3 +6,4 @@ pub mod learn;
 pub mod plant;
 pub mod signal_chain;
 pub mod simulate;
+pub mod tune;
