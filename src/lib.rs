@@ -60,6 +60,7 @@ pub mod closed_loop;
 pub mod control;
 pub mod estimation;
 pub mod input;
+pub mod log;
 pub mod machine;
 pub mod math;
 pub mod plant;

@@ -360,3 +360,71 @@ fn tune_sweeps_and_searches_and_says_what_is_wrong() {
         assert!(!e.contains('\n'));
     }
 }
+
+#[test]
+fn log_inspect_reports_the_dialect_columns_and_problems_as_json() {
+    let (result, out) = cutlab(
+        &[
+            "log",
+            "inspect",
+            "tests/data/logs/semicolon_decimal_comma.csv",
+            "--json",
+        ],
+        "",
+    );
+    result.unwrap();
+    let report: serde_json::Value = serde_json::from_str(&out).unwrap();
+    assert_eq!(report["rows"], 12);
+    assert_eq!(report["delimiter"], ";");
+    assert_eq!(report["decimal"], ",");
+    assert_eq!(report["header"], true);
+    assert_eq!(report["time_column"], "Time [s]");
+    assert_eq!(report["sample_period_s"], 0.01);
+    let current = &report["columns"][1];
+    for (key, value) in [
+        ("name", serde_json::json!("X_Current [A]")),
+        ("kind", serde_json::json!("number")),
+        ("unit", serde_json::json!("A")),
+        ("role", serde_json::json!("rms-current")),
+        ("numeric_share", serde_json::json!(1.0)),
+        ("missing", serde_json::json!(0)),
+        ("min", serde_json::json!(1.5)),
+    ] {
+        assert_eq!(current[key], value, "{key}");
+    }
+    assert_eq!(report["columns"][4]["kind"], "text");
+    assert_eq!(report["columns"][4]["min"], serde_json::Value::Null);
+
+    let (result, out) = cutlab(
+        &[
+            "log",
+            "inspect",
+            "tests/data/logs/messy_no_header.csv",
+            "--json",
+        ],
+        "",
+    );
+    result.unwrap();
+    let report: serde_json::Value = serde_json::from_str(&out).unwrap();
+    assert_eq!(report["sample_period_s"], serde_json::Value::Null);
+    let problems = report["problems"].as_array().unwrap();
+    assert!(problems
+        .iter()
+        .any(|p| p["line"] == 7 && p["column"] == "column 2"));
+
+    let (result, _) = cutlab(&["log", "inspect", "no/such/file.csv"], "");
+    assert!(result
+        .unwrap_err()
+        .starts_with("no/such/file.csv: cannot open"));
+    let (result, _) = cutlab(
+        &[
+            "log",
+            "inspect",
+            "tests/data/logs/comma.csv",
+            "--sample-period-s",
+            "0",
+        ],
+        "",
+    );
+    assert!(result.unwrap_err().contains("--sample-period-s"));
+}

@@ -10,6 +10,7 @@ pub mod controllers;
 pub mod filter;
 pub mod force;
 pub mod fuzzy;
+pub mod log;
 pub mod scenarios;
 pub mod sim;
 pub mod spectrum;
@@ -65,6 +66,9 @@ enum Command {
     /// Evaluate a fuzzy engine from an FLL file, or export paper 002's engine as FLL
     #[command(long_about = fuzzy::ABOUT)]
     Fuzzy(fuzzy::FuzzyArgs),
+    /// Read a machine's CSV log as it is: its dialect, columns and problems
+    #[command(long_about = log::ABOUT)]
+    Log(log::LogArgs),
     /// List the papers' experiments (presets), or run one open-loop
     Scenarios(scenarios::ScenariosArgs),
     /// Run one closed loop on a preset: teach cut, controller, safety envelope, metrics
@@ -93,6 +97,7 @@ pub const COMMANDS: &[CommandInfo] = &[
     CommandInfo { name: "filter" },
     CommandInfo { name: "force" },
     CommandInfo { name: "fuzzy" },
+    CommandInfo { name: "log" },
     CommandInfo { name: "scenarios" },
     CommandInfo { name: "sim" },
     CommandInfo { name: "spectrum" },
@@ -159,6 +164,7 @@ pub fn run(args: &[String], io: &mut Io<'_>) -> Result<(), CliError> {
         Some(Command::Filter(a)) => filter::run(a, io),
         Some(Command::Force(a)) => force::run(a, io),
         Some(Command::Fuzzy(a)) => fuzzy::run(a, io),
+        Some(Command::Log(a)) => log::run(a, io),
         Some(Command::Scenarios(a)) => scenarios::run(a, io),
         Some(Command::Sim(a)) => sim::run_sim(a, io),
         Some(Command::Spectrum(a)) => spectrum::run(a, io),

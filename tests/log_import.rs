@@ -1,0 +1,177 @@
+//! Messy CSV logs load as they are: every dialect gives the same numbers, damaged lines are
+//! reported by line and column and kept as gaps, any bytes in any chunking never panic.
+// Test code: unwrapping and panicking on a broken expectation is the point.
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
+
+#[cfg(target_arch = "wasm32")]
+use wasm_bindgen_test::wasm_bindgen_test as test;
+
+use cutlab::log::{load, ColumnKind, Log, LogBuilder, Role};
+use cutlab::rng::Rng;
+
+const COMMA: &[u8] = include_bytes!("data/logs/comma.csv");
+const SEMICOLON: &[u8] = include_bytes!("data/logs/semicolon_decimal_comma.csv");
+const TAB: &[u8] = include_bytes!("data/logs/tab.csv");
+const MESSY: &[u8] = include_bytes!("data/logs/messy_no_header.csv");
+
+/// Values compared bit for bit, NaN equal to NaN.
+fn same(a: &[f64], b: &[f64]) -> bool {
+    a.len() == b.len() && a.iter().zip(b).all(|(x, y)| x.to_bits() == y.to_bits())
+}
+
+#[test]
+fn every_dialect_gives_the_same_numbers_labels_and_roles() {
+    let reference = load(COMMA, None);
+    assert_eq!(reference.rows, 12);
+    assert!(reference.header);
+    assert_eq!(reference.sample_period_s, Some(0.01));
+    assert_eq!(reference.time_column, Some(0));
+    let roles: Vec<Option<Role>> = reference.columns.iter().map(|c| c.role).collect();
+    assert_eq!(
+        roles,
+        [
+            Some(Role::Time),
+            Some(Role::RmsCurrent),
+            Some(Role::PhaseCurrent),
+            Some(Role::SpindleSpeed),
+            Some(Role::Label),
+            Some(Role::Force)
+        ]
+    );
+    assert_eq!(reference.columns[1].unit.as_deref(), Some("A"));
+    assert_eq!(reference.columns[2].values[0], -1.42e-6);
+    let phase = &reference.columns[4];
+    assert_eq!(phase.kind, ColumnKind::Text);
+    assert_eq!(phase.label_names, ["Prep", "Layer 1 Up", "End"]);
+    for (name, bytes) in [
+        ("semicolon, decimal comma, BOM, CRLF", SEMICOLON),
+        ("tab, no final newline", TAB),
+    ] {
+        let log = load(bytes, None);
+        assert_eq!(log.rows, reference.rows, "{name}");
+        assert!(log.problems.is_empty(), "{name}: {:?}", log.problems);
+        for (a, b) in log.columns.iter().zip(&reference.columns) {
+            assert_eq!(a.name, b.name, "{name}");
+            assert!(same(&a.values, &b.values), "{name}: {}", a.name);
+            assert_eq!(a.labels, b.labels, "{name}: {}", a.name);
+            assert_eq!(a.role, b.role, "{name}: {}", a.name);
+        }
+    }
+    assert_eq!(load(SEMICOLON, None).dialect.delimiter, b';');
+    assert!(load(SEMICOLON, None).dialect.decimal_comma);
+    assert_eq!(load(TAB, None).dialect.delimiter, b'\t');
+}
+
+#[test]
+fn damaged_lines_are_reported_by_line_and_column_and_kept_as_gaps() {
+    let log = load(MESSY, Some(0.01));
+    assert!(!log.header);
+    assert_eq!(log.rows, 8);
+    assert_eq!(
+        log.sample_period_s,
+        Some(0.01),
+        "given, since there is no time column"
+    );
+    let values = &log.columns[1];
+    assert_eq!(values.kind, ColumnKind::Number);
+    assert_eq!(values.values[0], 1.0);
+    assert!(values.values[2].is_nan() && values.values[5].is_nan());
+    assert_eq!(values.values[6], f64::INFINITY);
+    // A quoted label with doubled quotes, and one with a line break inside.
+    let labels = &log.columns[2];
+    assert_eq!(labels.kind, ColumnKind::Text);
+    let label = |row: usize| labels.label_names[labels.labels[row] as usize].as_str();
+    assert_eq!(label(1), "a \"quoted\" label");
+    assert_eq!(label(2), "two\nlines");
+    let found: Vec<(usize, Option<&str>)> = log
+        .problems
+        .iter()
+        .map(|p| (p.line, p.column.as_deref()))
+        .collect();
+    // The record with the quoted line break spans lines 3–4, so the short record is line 6.
+    assert!(found.contains(&(6, None)), "{:?}", log.problems);
+    assert!(found.contains(&(7, Some("column 2"))), "{:?}", log.problems);
+    assert!(found.contains(&(8, None)), "{:?}", log.problems);
+}
+
+#[test]
+fn a_time_column_in_milliseconds_is_read_in_seconds_and_its_gaps_reported() {
+    let text = "t_ms;Spindle current [A]\n0;1\n10;1\n20;1\n30;1\n80;1\n90;1\n";
+    let log = load(text.as_bytes(), None);
+    assert_eq!(log.time_column, Some(0));
+    assert_eq!(log.sample_period_s, Some(0.01));
+    assert_eq!(log.columns[0].values[4], 0.08);
+    let gap = log
+        .problems
+        .iter()
+        .find(|p| p.message.contains("gap"))
+        .unwrap();
+    assert_eq!(gap.line, 6);
+}
+
+fn load_in_chunks(bytes: &[u8], chunk: usize) -> Log {
+    let mut builder = LogBuilder::new();
+    for piece in bytes.chunks(chunk.max(1)) {
+        builder.push(piece);
+    }
+    builder.finish(None)
+}
+
+#[test]
+fn any_chunking_gives_the_same_log() {
+    for bytes in [COMMA, SEMICOLON, TAB, MESSY] {
+        let whole = load(bytes, None);
+        for chunk in [1, 2, 3, 5, 7, 64] {
+            let pieces = load_in_chunks(bytes, chunk);
+            assert_eq!(pieces.rows, whole.rows, "chunk {chunk}");
+            assert_eq!(pieces.problems, whole.problems, "chunk {chunk}");
+            for (a, b) in pieces.columns.iter().zip(&whole.columns) {
+                assert!(same(&a.values, &b.values), "chunk {chunk}: {}", a.name);
+                assert_eq!(a.labels, b.labels);
+            }
+        }
+    }
+}
+
+#[test]
+fn random_and_mutated_bytes_never_panic() {
+    let mut rng = Rng::seed_from(7);
+    let seeds: [&[u8]; 4] = [COMMA, SEMICOLON, TAB, MESSY];
+    for round in 0..400usize {
+        let mut bytes: Vec<u8> = if round.is_multiple_of(4) {
+            (0..(rng.next_u64() % 300))
+                .map(|_| rng.next_u64() as u8)
+                .collect()
+        } else {
+            seeds[round % seeds.len()].to_vec()
+        };
+        // Mutate: flip, insert and delete bytes, favouring the ones the parser cares about.
+        for _ in 0..(rng.next_u64() % 12) {
+            let special = [
+                b'"', b',', b';', b'\t', b'\n', b'\r', 0xEF, 0xFF, b'.', b'e',
+            ];
+            let byte = if rng.next_u64().is_multiple_of(2) {
+                special[(rng.next_u64() % special.len() as u64) as usize]
+            } else {
+                rng.next_u64() as u8
+            };
+            let at = if bytes.is_empty() {
+                0
+            } else {
+                (rng.next_u64() % bytes.len() as u64) as usize
+            };
+            match rng.next_u64() % 3 {
+                0 if !bytes.is_empty() => bytes[at] = byte,
+                1 => bytes.insert(at, byte),
+                _ if !bytes.is_empty() => {
+                    bytes.remove(at);
+                }
+                _ => bytes.push(byte),
+            }
+        }
+        let log = load_in_chunks(&bytes, 1 + (rng.next_u64() % 9) as usize);
+        for c in &log.columns {
+            assert!(c.values.is_empty() || c.values.len() == log.rows);
+        }
+    }
+}
