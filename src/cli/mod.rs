@@ -7,6 +7,7 @@
 pub mod args;
 pub mod calibrate;
 pub mod controllers;
+pub mod device;
 pub mod filter;
 pub mod force;
 pub mod fuzzy;
@@ -55,6 +56,9 @@ enum Command {
     Compare(sim::CompareArgs),
     /// List the controllers with their parameters, defaults and units
     Controllers(controllers::ControllersArgs),
+    /// Run a preset's simulated machine behind the feed-override protocol on stdin/stdout
+    #[command(long_about = device::ABOUT)]
+    Device(device::DeviceArgs),
     /// Design a Butterworth filter (second-order sections) or apply one to f64 samples
     #[command(long_about = filter::ABOUT)]
     Filter(filter::FilterArgs),
@@ -86,6 +90,7 @@ pub const COMMANDS: &[CommandInfo] = &[
     CommandInfo {
         name: "controllers",
     },
+    CommandInfo { name: "device" },
     CommandInfo { name: "filter" },
     CommandInfo { name: "force" },
     CommandInfo { name: "fuzzy" },
@@ -151,6 +156,7 @@ pub fn run(args: &[String], io: &mut Io<'_>) -> Result<(), CliError> {
         Some(Command::Calibrate(a)) => calibrate::run(a, io),
         Some(Command::Compare(a)) => sim::run_compare(a, io),
         Some(Command::Controllers(a)) => controllers::run(a, io),
+        Some(Command::Device(a)) => device::run(a, io),
         Some(Command::Filter(a)) => filter::run(a, io),
         Some(Command::Force(a)) => force::run(a, io),
         Some(Command::Fuzzy(a)) => fuzzy::run(a, io),

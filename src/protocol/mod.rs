@@ -19,4 +19,7 @@
 pub mod cobs;
 pub mod codec;
 pub mod crc;
+pub mod device;
 pub mod frame;
+#[cfg(not(target_arch = "wasm32"))]
+pub mod link;
