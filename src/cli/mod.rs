@@ -11,6 +11,7 @@ pub mod device;
 pub mod filter;
 pub mod force;
 pub mod fuzzy;
+pub mod host;
 pub mod scenarios;
 pub mod sim;
 pub mod spectrum;
@@ -68,6 +69,9 @@ enum Command {
     /// Evaluate a fuzzy engine from an FLL file, or export paper 002's engine as FLL
     #[command(long_about = fuzzy::ABOUT)]
     Fuzzy(fuzzy::FuzzyArgs),
+    /// Run the closed loop against a device over the feed-override protocol
+    #[command(long_about = host::ABOUT)]
+    Host(host::HostArgs),
     /// List the papers' experiments (presets), or run one open-loop
     Scenarios(scenarios::ScenariosArgs),
     /// Run one closed loop on a preset: teach cut, controller, safety envelope, metrics
@@ -94,6 +98,7 @@ pub const COMMANDS: &[CommandInfo] = &[
     CommandInfo { name: "filter" },
     CommandInfo { name: "force" },
     CommandInfo { name: "fuzzy" },
+    CommandInfo { name: "host" },
     CommandInfo { name: "scenarios" },
     CommandInfo { name: "sim" },
     CommandInfo { name: "spectrum" },
@@ -160,6 +165,7 @@ pub fn run(args: &[String], io: &mut Io<'_>) -> Result<(), CliError> {
         Some(Command::Filter(a)) => filter::run(a, io),
         Some(Command::Force(a)) => force::run(a, io),
         Some(Command::Fuzzy(a)) => fuzzy::run(a, io),
+        Some(Command::Host(a)) => host::run(a, io),
         Some(Command::Scenarios(a)) => scenarios::run(a, io),
         Some(Command::Sim(a)) => sim::run_sim(a, io),
         Some(Command::Spectrum(a)) => spectrum::run(a, io),

@@ -21,5 +21,6 @@ pub mod codec;
 pub mod crc;
 pub mod device;
 pub mod frame;
+pub mod host;
 #[cfg(not(target_arch = "wasm32"))]
 pub mod link;
