@@ -137,7 +137,7 @@ fn parser_errors_are_one_line_with_suggestions_and_the_names_that_exist() {
         error(&["filter", "design", "--ordr", "4"]),
         "unknown option --ordr (did you mean --order?) (see --help)"
     );
-    let commands = "commands: calibrate, compare, controllers, device, filter, force, fuzzy, host, scenarios, \
+    let commands = "commands: calibrate, compare, controllers, device, filter, force, fuzzy, host, protocol, scenarios, \
                     sim, spectrum";
     assert_eq!(
         error(&["simm"]),

@@ -12,6 +12,7 @@ pub mod filter;
 pub mod force;
 pub mod fuzzy;
 pub mod host;
+pub mod protocol;
 pub mod scenarios;
 pub mod sim;
 pub mod spectrum;
@@ -72,6 +73,9 @@ enum Command {
     /// Run the closed loop against a device over the feed-override protocol
     #[command(long_about = host::ABOUT)]
     Host(host::HostArgs),
+    /// Decode the feed-override protocol's bytes to JSON lines, or encode JSON lines to bytes
+    #[command(long_about = protocol::ABOUT)]
+    Protocol(protocol::ProtocolArgs),
     /// List the papers' experiments (presets), or run one open-loop
     Scenarios(scenarios::ScenariosArgs),
     /// Run one closed loop on a preset: teach cut, controller, safety envelope, metrics
@@ -99,6 +103,7 @@ pub const COMMANDS: &[CommandInfo] = &[
     CommandInfo { name: "force" },
     CommandInfo { name: "fuzzy" },
     CommandInfo { name: "host" },
+    CommandInfo { name: "protocol" },
     CommandInfo { name: "scenarios" },
     CommandInfo { name: "sim" },
     CommandInfo { name: "spectrum" },
@@ -166,6 +171,7 @@ pub fn run(args: &[String], io: &mut Io<'_>) -> Result<(), CliError> {
         Some(Command::Force(a)) => force::run(a, io),
         Some(Command::Fuzzy(a)) => fuzzy::run(a, io),
         Some(Command::Host(a)) => host::run(a, io),
+        Some(Command::Protocol(a)) => protocol::run(a, io),
         Some(Command::Scenarios(a)) => scenarios::run(a, io),
         Some(Command::Sim(a)) => sim::run_sim(a, io),
         Some(Command::Spectrum(a)) => spectrum::run(a, io),

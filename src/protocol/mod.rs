@@ -22,5 +22,6 @@ pub mod crc;
 pub mod device;
 pub mod frame;
 pub mod host;
+pub mod json;
 #[cfg(not(target_arch = "wasm32"))]
 pub mod link;
