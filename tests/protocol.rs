@@ -393,3 +393,130 @@ fn the_command_line_encodes_and_decodes_json_lines() {
         "line 2: not JSON: expected ident at line 1 column 2"
     );
 }
+
+/// The worked examples of docs/protocol.md, one per frame type.
+fn doc_examples() -> Vec<Frame> {
+    use cutlab::protocol::frame::{feature, sample_flag};
+    vec![
+        Frame::Hello(Hello {
+            version_major: 1,
+            version_minor: 0,
+        }),
+        Frame::Capabilities(Capabilities {
+            version_major: 1,
+            version_minor: 0,
+            device_id: padded("cutlab-emulator"),
+            program: padded("wang-brake-bench"),
+            channel_mask: 0x7F,
+            spindle_current_a_per_count: 0.005,
+            feed_current_a_per_count: 0.005,
+            fv_v_per_count: 0.0005,
+            sample_rate_hz: 1000.0,
+            override_mode: OverrideModeCode::Dial16,
+            min_override_cpct: 0,
+            max_override_cpct: 15000,
+            dial_cpct: core::array::from_fn(|i| 1000 * i as u16),
+            watchdog_timeout_ms: 500,
+            fallback_override_cpct: 5000,
+            over_current_a: 150.0,
+            features: feature::SIM_TRUTH,
+        }),
+        Frame::Sample(Sample {
+            seq: 1234,
+            time_us: 1_234_000,
+            flags: sample_flag::SPINDLE_RUNNING | sample_flag::IN_CYCLE | sample_flag::ARMED,
+            spindle_current_counts: [1200, -400, -800],
+            feed_current_counts: [100, -50, -50],
+            fv_counts: 2777,
+            spindle_speed_rpm: 1000.0,
+            spindle_command_rpm: 1000.0,
+            programmed_feed_mm_min: 200.0,
+            feed_mm_min: 180.0,
+            applied_override_cpct: 9000,
+            dial_code: 9,
+        }),
+        Frame::SimTruth(SimTruth::from_values(
+            1234,
+            [
+                -250.0, 300.0, 40.0, 390.5, 250.0, 3.9, 408.0, 2.0, 20.0, 0.09, 40.0, 120.0, 25.0,
+                0.0, 1.5, 9.2,
+            ],
+        )),
+        Frame::SetOverride(SetOverride {
+            seq: 42,
+            override_cpct: 8760,
+            flags: 0,
+        }),
+        Frame::Arm(Arm { seq: 1 }),
+        Frame::Disarm(Disarm { seq: 43 }),
+        Frame::Ack(Ack {
+            seq: 42,
+            command: FrameType::SetOverride as u8,
+            result: AckResult::Applied,
+            applied_override_cpct: 9000,
+            flags: 0,
+        }),
+        Frame::Fault(Fault {
+            seq: 1,
+            time_us: 90_500_000,
+            kind: FaultKind::Watchdog,
+            active: 1,
+            channel: 0xFF,
+            applied_override_cpct: 5000,
+        }),
+        Frame::Heartbeat(Heartbeat {
+            seq: 7,
+            time_us: 700_000,
+        }),
+    ]
+}
+
+fn hex(bytes: &[u8]) -> String {
+    bytes
+        .iter()
+        .map(|b| format!("{b:02x}"))
+        .collect::<Vec<_>>()
+        .join(" ")
+}
+
+/// The example block of `frame` as docs/protocol.md prints it.
+fn doc_block(frame: &Frame) -> String {
+    use cutlab::protocol::crc::crc32;
+    let mut payload = [0u8; 256];
+    let n = frame.write_payload(&mut payload).unwrap();
+    let wire = encoded(frame);
+    format!(
+        "payload ({n} bytes): {}\ncrc32:   {}\nwire:    {}\n",
+        hex(&payload[..n]),
+        hex(&crc32(&payload[..n]).to_le_bytes()),
+        hex(&wire)
+    )
+}
+
+/// docs/protocol.md's byte-level examples are this code's output. `PRINT_DOC_EXAMPLES=1`
+/// prints them (to paste after a change of layout).
+#[test]
+fn the_specifications_worked_examples_are_what_the_codec_writes() {
+    let doc = include_str!("../docs/protocol.md");
+    let print = std::env::var("PRINT_DOC_EXAMPLES").is_ok();
+    for f in doc_examples() {
+        let block = doc_block(&f);
+        if print {
+            println!(
+                "### {}\n{}\n{block}",
+                f.frame_type().name(),
+                frame_to_json_line(&f)
+            );
+            continue;
+        }
+        assert!(
+            doc.contains(&block),
+            "docs/protocol.md lacks the {} example:\n{block}",
+            f.frame_type().name()
+        );
+    }
+}
+
+fn frame_to_json_line(f: &Frame) -> String {
+    cutlab::protocol::json::frame_to_json(f).to_string()
+}
