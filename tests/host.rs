@@ -253,3 +253,95 @@ fn the_binary_runs_the_host_against_the_binary_device() {
     assert_eq!(report["metrics"]["completed"], false);
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// `cutlab device` survives any bytes on stdin: random bytes in, only frames out (heartbeats,
+/// nothing armed it), and it ends when stdin closes.
+#[cfg(feature = "cli")]
+#[test]
+fn the_device_binary_survives_garbage_on_stdin_and_writes_only_frames() {
+    use std::io::Write;
+    use std::process::{Command, Stdio};
+    let mut child = Command::new(env!("CARGO_BIN_EXE_cutlab"))
+        .args([
+            "device",
+            "--stdio",
+            "--scenario",
+            "kim-step-doc",
+            "--time-scale",
+            "10",
+        ])
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut stdin = child.stdin.take().unwrap();
+    let mut rng = cutlab::rng::Rng::seed_from(8);
+    for _ in 0..20 {
+        let junk: Vec<u8> = (0..512).map(|_| rng.next_u64() as u8).collect();
+        stdin.write_all(&junk).unwrap();
+        std::thread::sleep(std::time::Duration::from_millis(10));
+    }
+    drop(stdin);
+    let out = child.wait_with_output().unwrap();
+    assert!(out.status.success());
+    let mut decoder = cutlab::protocol::codec::Decoder::new();
+    let frames: Vec<_> = decoder.frames(&out.stdout).collect();
+    assert!(frames.len() > 10);
+    assert!(frames
+        .iter()
+        .all(|f| matches!(f, Ok(cutlab::protocol::frame::Frame::Heartbeat(_)))));
+    assert_eq!(decoder.stats().bytes_dropped, 0);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(stderr.contains("bytes dropped by the decoder"), "{stderr}");
+}
+
+#[cfg(feature = "cli")]
+mod common;
+
+#[cfg(feature = "cli")]
+#[test]
+fn host_and_device_options_are_checked_with_messages_that_name_them() {
+    let error = |args: &[&str]| common::cutlab_text(args, "").0.unwrap_err();
+    assert!(error(&["device", "--scenario", "kim-step-doc"]).contains("--stdio is required"));
+    assert!(error(&["device", "--stdio", "--scenario", "nope"]).contains("unknown preset"));
+    assert!(error(&[
+        "device",
+        "--stdio",
+        "--scenario",
+        "kim-step-doc",
+        "--stall-at-s",
+        "3"
+    ])
+    .contains("--stall-s"));
+    assert!(error(&[
+        "device",
+        "--stdio",
+        "--scenario",
+        "kim-step-doc",
+        "--drop-rate",
+        "2"
+    ])
+    .contains("drop rate"));
+    assert!(error(&["host", "--controller", "threshold"]).contains("--device-cmd"));
+    assert!(error(&["host", "--device-cmd", "true"]).contains("--controller"));
+    assert!(error(&[
+        "host",
+        "--port",
+        "/nonexistent/tty",
+        "--controller",
+        "threshold"
+    ])
+    .contains("cannot open"));
+    // A device that says nothing: the handshake gives up and says so.
+    let e = error(&[
+        "host",
+        "--device-cmd",
+        "cat > /dev/null",
+        "--controller",
+        "threshold",
+        "--link-timeout-s",
+        "0.3",
+    ]);
+    assert!(e.contains("no answer to Hello"), "{e}");
+}

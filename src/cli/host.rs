@@ -59,7 +59,8 @@ pub struct HostArgs {
     /// Stop the closed loop after this much machine time, s
     #[arg(long = "duration-s", value_name = "T", allow_hyphen_values = true)]
     duration_s: Option<String>,
-    /// The host's watchdog: no sample for this long (wall time) → link lost (default 2)
+    /// The host's watchdog: no sample for this long (wall time) → link lost (default 2; the
+    /// handshake waits five times as long for a device to answer)
     #[arg(long = "link-timeout-s", value_name = "S", allow_hyphen_values = true)]
     link_timeout_s: Option<String>,
     /// Write the closed loop's trace as CSV
@@ -195,7 +196,7 @@ pub fn run(args: HostArgs, io: &mut Io<'_>) -> Result<(), CliError> {
     }
     let options = HostOptions {
         link_timeout_s,
-        ..HostOptions::default()
+        handshake_timeout_s: 5.0 * link_timeout_s,
     };
     let Connection { link, child } = connect(&args, options)?;
     let program = text_field(&link.capabilities().program)

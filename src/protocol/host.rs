@@ -35,6 +35,8 @@ pub const MAX_FILLED_GAP: u32 = 8;
 /// Counts of what crossed the link, for the host's report.
 #[derive(Debug, Clone, Copy, PartialEq, Default, Serialize)]
 pub struct LinkStats {
+    /// Bytes received.
+    pub bytes_received: u64,
     /// Valid frames received.
     pub frames_received: u64,
     /// Samples missing from the sequence (gaps).
@@ -158,6 +160,7 @@ impl HostSession {
     pub fn stats(&self) -> LinkStats {
         let d = self.decoder.stats();
         LinkStats {
+            bytes_received: d.bytes_received,
             frames_rejected: d.frames_rejected,
             bytes_dropped: d.bytes_dropped,
             frames_unknown: d.unknown_frames,
@@ -578,5 +581,129 @@ impl DeviceSummary {
             fallback_override_pct: f64::from(c.fallback_override_cpct) / 100.0,
             sim_truth: c.features & feature::SIM_TRUTH != 0,
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::protocol::frame::{padded, Frame};
+
+    fn caps() -> Capabilities {
+        Capabilities {
+            version_major: 1,
+            version_minor: 0,
+            device_id: padded("test"),
+            program: padded("kim-step-doc"),
+            channel_mask: 0x7F,
+            spindle_current_a_per_count: 0.01,
+            feed_current_a_per_count: 0.01,
+            fv_v_per_count: 0.001,
+            sample_rate_hz: 1000.0,
+            override_mode: OverrideModeCode::WholePercent,
+            min_override_cpct: 0,
+            max_override_cpct: 25500,
+            dial_cpct: [0; 16],
+            watchdog_timeout_ms: 500,
+            fallback_override_cpct: 5000,
+            over_current_a: 150.0,
+            features: 0,
+        }
+    }
+
+    fn sample(seq: u32, time_us: u32, spindle_counts: i16) -> Sample {
+        Sample {
+            seq,
+            time_us,
+            flags: sample_flag::IN_CYCLE | sample_flag::SPINDLE_RUNNING,
+            spindle_current_counts: [spindle_counts, 0, 0],
+            feed_current_counts: [0; 3],
+            fv_counts: 0,
+            spindle_speed_rpm: 1000.0,
+            spindle_command_rpm: 1000.0,
+            programmed_feed_mm_min: 200.0,
+            feed_mm_min: 200.0,
+            applied_override_cpct: 10000,
+            dial_code: 0xFF,
+        }
+    }
+
+    fn session_with(frames: &[Frame]) -> HostSession {
+        let mut s = HostSession::new();
+        let mut bytes = Vec::new();
+        HostSession::push_frame(&Frame::Capabilities(caps()), &mut bytes);
+        for f in frames {
+            HostSession::push_frame(f, &mut bytes);
+        }
+        s.start_part();
+        s.receive(&bytes);
+        s
+    }
+
+    fn drain(s: &mut HostSession) -> Vec<LinkSample> {
+        std::iter::from_fn(|| s.next_sample()).collect()
+    }
+
+    #[test]
+    fn samples_scale_counts_and_time_from_the_cycle_start() {
+        let mut s = session_with(&[
+            Frame::Sample(sample(10, 5_001_000, 100)),
+            Frame::Sample(sample(11, 5_002_000, 200)),
+        ]);
+        let got = drain(&mut s);
+        assert_eq!(got.len(), 2);
+        let a = got[0].step.sensors;
+        assert!((a.time_s - 0.001).abs() < 1e-12);
+        // The scale travels as an f32: 0.01 is 0.0099999998.
+        assert!((a.spindle_phase_currents_a[0] - 1.0).abs() < 1e-6);
+        assert_eq!(a.applied_override_pct, 100.0);
+        assert!((got[1].step.sensors.time_since_spindle_start_s - 0.001).abs() < 1e-12);
+        assert_eq!(s.stats().frames_lost, 0);
+    }
+
+    #[test]
+    fn a_short_gap_is_counted_and_filled_by_interpolation_a_long_one_only_counted() {
+        let mut s = session_with(&[
+            Frame::Sample(sample(1, 1000, 100)),
+            Frame::Sample(sample(4, 4000, 400)),
+            Frame::Sample(sample(20, 20_000, 400)),
+        ]);
+        let got = drain(&mut s);
+        let currents: Vec<f64> = got
+            .iter()
+            .map(|g| g.step.sensors.spindle_phase_currents_a[0])
+            .collect();
+        let times: Vec<f64> = got.iter().map(|g| g.step.sensors.time_s).collect();
+        assert_eq!(got.len(), 5, "{currents:?}");
+        for (c, want) in currents.iter().zip([1.0, 2.0, 3.0, 4.0, 4.0]) {
+            assert!((c - want).abs() < 1e-6, "{currents:?}");
+        }
+        assert!((times[2] - 0.003).abs() < 1e-9 && (times[4] - 0.020).abs() < 1e-9);
+        assert_eq!(s.stats().frames_lost, 2 + 15);
+    }
+
+    #[test]
+    fn a_reordered_or_repeated_sample_is_dropped() {
+        let mut s = session_with(&[
+            Frame::Sample(sample(5, 5000, 1)),
+            Frame::Sample(sample(6, 6000, 1)),
+            Frame::Sample(sample(5, 5000, 1)),
+            Frame::Sample(sample(7, 7000, 1)),
+        ]);
+        assert_eq!(drain(&mut s).len(), 3);
+        assert_eq!(s.stats().frames_reordered, 1);
+        assert_eq!(s.stats().frames_lost, 0);
+    }
+
+    #[test]
+    fn the_device_clock_unwraps_across_its_32_bit_wrap() {
+        let mut s = session_with(&[
+            Frame::Sample(sample(1, u32::MAX - 499, 1)),
+            Frame::Sample(sample(2, 500, 1)),
+        ]);
+        let got = drain(&mut s);
+        let step_s = got[1].device_time_s - got[0].device_time_s;
+        assert!((step_s - 0.001).abs() < 1e-9, "{step_s}");
+        assert!((got[1].step.sensors.time_s - 0.002).abs() < 1e-9);
     }
 }

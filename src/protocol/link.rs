@@ -211,11 +211,10 @@ impl HostLink {
             }
             let elapsed = start.elapsed().as_secs_f64();
             if elapsed > options.handshake_timeout_s {
+                let s = session.stats();
                 return Err(HostError(format!(
-                    "no answer to Hello within {} s ({} bytes received, {} dropped)",
-                    options.handshake_timeout_s,
-                    session.stats().bytes_dropped + session.stats().frames_received,
-                    session.stats().bytes_dropped
+                    "no answer to Hello within {} s ({} bytes received, {} of them dropped)",
+                    options.handshake_timeout_s, s.bytes_received, s.bytes_dropped
                 )));
             }
             out.clear();
@@ -332,17 +331,19 @@ impl HostLink {
             match self.rx.recv_timeout(left) {
                 Ok(bytes) => self.session.receive(&bytes),
                 Err(RecvTimeoutError::Timeout) => {
+                    // Best effort: the line may be dead, but a device that only lost its
+                    // sending side hears the Disarm.
+                    self.session.disarm(&mut self.out);
+                    let _ = self
+                        .writer
+                        .write_all(&self.out)
+                        .and_then(|()| self.writer.flush());
+                    self.out.clear();
                     self.lose(format!(
                         "host watchdog: no sample for {} s: link lost; alarm, disarm, the part \
                          ends here",
                         self.options.link_timeout_s
                     ));
-                    // Best effort: the line may be dead, but a device that only lost its
-                    // sending side hears it.
-                    self.lost = false;
-                    self.session.disarm(&mut self.out);
-                    self.flush_out();
-                    self.lost = true;
                     return None;
                 }
                 Err(RecvTimeoutError::Disconnected) => {
