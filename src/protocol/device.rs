@@ -192,6 +192,11 @@ fn counts(value: f64, per_count: f64) -> i16 {
 }
 
 /// An override in hundredths of a percent, saturating.
+///
+/// ```
+/// use cutlab::protocol::device::cpct;
+/// assert_eq!((cpct(87.6), cpct(-3.0), cpct(1e9), cpct(f64::NAN)), (8760, 0, 65535, 0));
+/// ```
 pub fn cpct(pct: f64) -> u16 {
     let c = (pct * 100.0).round();
     if c.is_nan() {
@@ -208,6 +213,27 @@ struct Part {
 }
 
 /// The simulated machine behind the protocol. See the module docs.
+///
+/// ```
+/// use cutlab::plant::Preset;
+/// use cutlab::protocol::codec::{encode_frame, Decoder, MAX_FRAME_LEN};
+/// use cutlab::protocol::device::{DeviceConfig, DeviceEmulator};
+/// use cutlab::protocol::frame::{Arm, Frame};
+/// let mut device = DeviceEmulator::new(DeviceConfig::new(Preset::KimStepDoc)).unwrap();
+/// assert_eq!(device.capabilities().sample_rate_hz, 1000.0);
+/// let mut arm = [0u8; MAX_FRAME_LEN];
+/// let n = encode_frame(&Frame::Arm(Arm { seq: 1 }), &mut arm).unwrap();
+/// let mut out = Vec::new();
+/// device.receive(&arm[..n], &mut out); // an Ack; the emulator loads a part
+/// for _ in 0..100 {
+///     device.step_frame(&mut out); // SimTruth, Sample, and a Heartbeat every 0.1 s
+/// }
+/// let samples = Decoder::new()
+///     .frames(&out)
+///     .filter(|f| matches!(f, Ok(Frame::Sample(_))))
+///     .count();
+/// assert_eq!((samples, device.time_s()), (100, 0.1));
+/// ```
 pub struct DeviceEmulator {
     config: DeviceConfig,
     capabilities: Capabilities,
@@ -887,6 +913,40 @@ mod tests {
         assert!(got
             .iter()
             .any(|f| matches!(f, Frame::Fault(x) if x.active == 0)));
+    }
+
+    #[test]
+    fn an_over_current_is_reported_raised_and_cleared() {
+        let mut config = DeviceConfig::new(Preset::KimStepDoc);
+        // The spindle's starting current peaks near 70 A; running idle, about 12 A.
+        config.over_current_a = 30.0;
+        let mut d = DeviceEmulator::new(config).unwrap();
+        let mut out = Vec::new();
+        d.receive(&bytes_of(Frame::Arm(Arm { seq: 1 })), &mut out);
+        let mut faults = Vec::new();
+        for _ in 0..3000 {
+            // Keep the watchdog fed.
+            d.receive(
+                &bytes_of(Frame::Heartbeat(crate::protocol::frame::Heartbeat {
+                    seq: 1,
+                    time_us: 0,
+                })),
+                &mut out,
+            );
+            d.step_frame(&mut out);
+            faults.extend(frames(&out).into_iter().filter_map(|f| match f {
+                Frame::Fault(f) => Some((f.kind, f.active)),
+                _ => None,
+            }));
+            out.clear();
+        }
+        assert_eq!(
+            faults.first().copied(),
+            Some((FaultKind::OverCurrent, 1)),
+            "{faults:?}"
+        );
+        assert!(faults.contains(&(FaultKind::OverCurrent, 0)), "{faults:?}");
+        assert_eq!(d.stats().watchdog_fallbacks, 0);
     }
 
     #[test]
