@@ -52,6 +52,15 @@ fn host_against_emulator(
     (run, stats, diagnostics)
 }
 
+/// The emulator of kim-step-doc with a watchdog of `watchdog_s` device seconds. Tests that are
+/// not about the watchdog give it 5 s (a quarter second of wall time at 20×), so a busy machine
+/// that holds the host up for a moment does not trip it.
+fn kim_device(watchdog_s: f64) -> DeviceConfig {
+    let mut config = DeviceConfig::new(Preset::KimStepDoc);
+    config.watchdog_timeout_s = watchdog_s;
+    config
+}
+
 fn kim_threshold() -> RunSpec {
     RunSpec::new(Preset::KimStepDoc, ControllerKind::Threshold)
 }
@@ -61,15 +70,17 @@ fn within(a: f64, b: f64, rel: f64) -> bool {
 }
 
 /// The metrics a run over the link must share with the simulation. The protocol adds a
-/// 1 kHz signal chain, 5 mA current counts and a few milliseconds of latency; the cycle time,
-/// removed volume, removal rate and peak force stay within 3 %, the mean force error within two
-/// points. (The force IAE of the threshold controller is not compared: it moves by 9 % between
+/// 1 kHz signal chain, 5 mA current counts and a few milliseconds of latency; the removed volume,
+/// removal rate and peak force stay within 3 %, the cycle time within 5 % (a test machine busy
+/// with other work delays the host, and every delay is latency in the loop), the mean force error
+/// within three points. (The force IAE of the threshold controller is not compared: it moves by 9 % between
 /// two seeds of the simulation itself, as the controller's limit cycle locks in differently.)
-fn assert_like_sim(sim: &RunResult, link: &RunResult) {
+fn assert_like_sim(sim: &RunResult, run: &LinkRun) {
+    let link = run.result.as_ref().unwrap();
     let (s, l) = (&sim.metrics, &link.metrics);
-    let report = format!("sim {s:#?}\nlink {l:#?}");
+    let report = format!("sim {s:#?}\nlink {l:#?}\n{:?}", run.stats);
     assert!(l.completed, "{report}");
-    assert!(within(s.cycle_time_s, l.cycle_time_s, 0.03), "{report}");
+    assert!(within(s.cycle_time_s, l.cycle_time_s, 0.05), "{report}");
     assert!(
         within(s.removed_volume_mm3, l.removed_volume_mm3, 0.01),
         "{report}"
@@ -84,7 +95,7 @@ fn assert_like_sim(sim: &RunResult, link: &RunResult) {
     );
     assert!(within(s.peak_force_n, l.peak_force_n, 0.03), "{report}");
     assert!(
-        (s.force_mean_abs_error_pct - l.force_mean_abs_error_pct).abs() <= 2.0,
+        (s.force_mean_abs_error_pct - l.force_mean_abs_error_pct).abs() <= 3.0,
         "{report}"
     );
     assert_eq!(sim.settings.target_force_n, link.settings.target_force_n);
@@ -94,13 +105,9 @@ fn assert_like_sim(sim: &RunResult, link: &RunResult) {
 fn the_closed_loop_over_the_protocol_matches_the_simulation() {
     let spec = kim_threshold();
     let sim = simulate(&spec).unwrap();
-    let (run, device, diagnostics) = host_against_emulator(
-        DeviceConfig::new(Preset::KimStepDoc),
-        &spec,
-        HostOptions::default(),
-    );
-    let link = run.result.unwrap();
-    assert_like_sim(&sim, &link);
+    let (run, device, diagnostics) =
+        host_against_emulator(kim_device(5.0), &spec, HostOptions::default());
+    assert_like_sim(&sim, &run);
     let s = run.stats;
     assert!(!run.link_lost, "{:?}", run.events);
     assert_eq!(
@@ -119,15 +126,14 @@ fn the_closed_loop_over_the_protocol_matches_the_simulation() {
 fn a_lossy_noisy_line_still_completes_and_the_losses_are_counted() {
     let spec = kim_threshold();
     let sim = simulate(&spec).unwrap();
-    let mut config = DeviceConfig::new(Preset::KimStepDoc);
+    let mut config = kim_device(5.0);
     config.faults = FaultInjection {
         drop_rate: 0.01,
         noise_rate: 0.01,
         ..FaultInjection::default()
     };
     let (run, device, diagnostics) = host_against_emulator(config, &spec, HostOptions::default());
-    let link = run.result.unwrap();
-    assert_like_sim(&sim, &link);
+    assert_like_sim(&sim, &run);
     let s = run.stats;
     // About 2 % of 135 000 samples lost: 1 % dropped and 1 % corrupted (and rejected).
     assert!(s.frames_lost > 2000 && s.frames_lost < 3500, "{s:?}");
@@ -143,11 +149,13 @@ fn a_lossy_noisy_line_still_completes_and_the_losses_are_counted() {
 
 #[test]
 fn an_unplugged_cable_alarms_the_host_and_the_device_falls_back() {
-    let mut config = DeviceConfig::new(Preset::KimStepDoc);
+    // The device's watchdog (5 s of device time) fires while the host's (1 s of wall time, 20 s
+    // of device time) is still waiting.
+    let mut config = kim_device(5.0);
     // In the closed loop (the teach cut's part takes the first 66 s of device time).
     config.faults.unplug_at_s = Some(100.0);
     let options = HostOptions {
-        link_timeout_s: 0.5,
+        link_timeout_s: 1.0,
         ..HostOptions::default()
     };
     let (run, device, diagnostics) = host_against_emulator(config, &kim_threshold(), options);
@@ -171,9 +179,11 @@ fn an_unplugged_cable_alarms_the_host_and_the_device_falls_back() {
 
 #[test]
 fn a_stalled_receiver_fires_the_device_watchdog_and_both_sides_report_it() {
-    let mut config = DeviceConfig::new(Preset::KimStepDoc);
+    // A 4 s stall against a 2 s watchdog: the stall fires it, a hiccup of the test machine
+    // (under 0.1 s of wall time) does not.
+    let mut config = kim_device(2.0);
     config.faults.stall_at_s = Some(90.0);
-    config.faults.stall_s = 1.0;
+    config.faults.stall_s = 4.0;
     let (run, device, diagnostics) =
         host_against_emulator(config, &kim_threshold(), HostOptions::default());
     assert_eq!(device.watchdog_fallbacks, 1, "{diagnostics}");

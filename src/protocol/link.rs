@@ -45,8 +45,9 @@ pub fn spawn_reader<R: Read + Send + 'static>(mut input: R) -> Receiver<Vec<u8>>
     rx
 }
 
-/// Frames the device runs at most before it looks at its input again.
-const MAX_FRAMES_PER_BURST: usize = 20;
+/// Frames the device runs at most before it looks at its input again: when it has fallen behind
+/// the clock and catches up, a command still waits no more than 5 ms of device time.
+const MAX_FRAMES_PER_BURST: usize = 5;
 
 /// Why the device stopped.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
