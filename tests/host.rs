@@ -355,3 +355,80 @@ fn host_and_device_options_are_checked_with_messages_that_name_them() {
     ]);
     assert!(e.contains("no answer to Hello"), "{e}");
 }
+
+/// Each part is a `Machine`: its first step arms the device and a fresh part starts at time
+/// zero; a part left before its program's end is disarmed and run out before the next starts.
+#[test]
+fn parts_are_machines_and_a_part_left_early_is_run_out_before_the_next() {
+    use cutlab::machine::{Machine, OverrideCommand};
+    use cutlab::protocol::link::LinkPart;
+    use std::cell::RefCell;
+    use std::rc::Rc;
+    let _one = ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner());
+    let (host_to_device_r, host_to_device_w) = std::io::pipe().unwrap();
+    let (device_to_host_r, mut device_to_host_w) = std::io::pipe().unwrap();
+    let device = std::thread::spawn(move || {
+        let mut d = DeviceEmulator::new(kim_device(5.0)).unwrap();
+        let mut sink = Vec::new();
+        run_device(
+            &mut d,
+            host_to_device_r,
+            &mut device_to_host_w,
+            &mut sink,
+            TIME_SCALE,
+        );
+        d.stats()
+    });
+    let link = HostLink::connect(
+        device_to_host_r,
+        Box::new(host_to_device_w),
+        HostOptions::default(),
+    )
+    .unwrap();
+    let link = Rc::new(RefCell::new(link));
+    let mut first = LinkPart::new(Rc::clone(&link));
+    assert_eq!(first.sample_rate_hz(), 1000.0);
+    let command = OverrideCommand {
+        override_pct: 87.6,
+        feed_hold: false,
+    };
+    let mut last = first.step(command);
+    for _ in 0..2000 {
+        last = first.step(command);
+    }
+    assert!(
+        (last.sensors.time_s - 2.001).abs() < 1e-6,
+        "{}",
+        last.sensors.time_s
+    );
+    // kim-step-doc's override is whole percent: 87.6 % applies as 88 %.
+    assert_eq!(last.sensors.applied_override_pct, 88.0);
+    assert!(last.truth.is_some() && !first.finished());
+    let mut second = LinkPart::new(Rc::clone(&link));
+    let s = second.step(OverrideCommand::default());
+    assert!(
+        (s.sensors.time_s - 0.001).abs() < 1e-6,
+        "{}",
+        s.sensors.time_s
+    );
+    let events: Vec<String> = link
+        .borrow()
+        .session()
+        .events()
+        .iter()
+        .map(|e| e.text.clone())
+        .collect();
+    assert!(
+        events.iter().any(|e| e.contains("still running")),
+        "{events:?}"
+    );
+    assert!(
+        events.iter().any(|e| e.contains("part 2: arm")),
+        "{events:?}"
+    );
+    drop(first);
+    drop(second);
+    drop(link);
+    let stats = device.join().unwrap();
+    assert_eq!((stats.parts, stats.watchdog_fallbacks), (2, 0));
+}

@@ -355,8 +355,15 @@ impl HostLink {
         }
     }
 
-    /// Arms the device for a new part (after letting a part still running end).
+    /// Arms the device for a new part. A part still running (a loop that stopped before its
+    /// program's end) is handed back to the machine's own dial and left to end first.
     fn begin_part(&mut self) -> bool {
+        if self.part_running {
+            self.session
+                .event("the previous part is still running: disarm, wait for its end");
+            self.session.disarm(&mut self.out);
+            self.flush_out();
+        }
         while self.part_running {
             match self.next_sample() {
                 Some(s) if s.program_end => self.part_running = false,
