@@ -411,19 +411,13 @@ fn parts_are_machines_and_a_part_left_early_is_run_out_before_the_next() {
         "{}",
         s.sensors.time_s
     );
-    let events: Vec<String> = link
-        .borrow()
-        .session()
-        .events()
-        .iter()
-        .map(|e| e.text.clone())
-        .collect();
+    let events = link.borrow().session().events().to_vec();
     assert!(
-        events.iter().any(|e| e.contains("still running")),
+        events.iter().any(|e| e.text.contains("still running")),
         "{events:?}"
     );
     assert!(
-        events.iter().any(|e| e.contains("part 2: arm")),
+        events.iter().any(|e| e.part == 2 && e.text.contains("arm")),
         "{events:?}"
     );
     drop(first);

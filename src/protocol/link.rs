@@ -372,9 +372,7 @@ impl HostLink {
             }
         }
         self.session.start_part();
-        let part = self.session.part();
-        self.session
-            .event(format!("part {part}: arm (cycle start)"));
+        self.session.event("arm (cycle start)");
         self.command = None;
         self.last_arm_s = self.device_time_s;
         self.session.arm(&mut self.out);
@@ -469,8 +467,7 @@ impl Machine for LinkPart {
                 if s.program_end {
                     self.done = true;
                     link.part_running = false;
-                    let part = link.session.part();
-                    link.session.event(format!("part {part}: program end"));
+                    link.session.event("program end");
                 }
                 s.step
             }
