@@ -35,6 +35,7 @@
 //! |---|---|
 //! | [`plant`] | the simulated machine: milling mechanics, feed and spindle drives, motor currents, sensors, the FANUC-style CNC, scenarios and the papers' presets |
 //! | [`machine`] | the one interface between the closed loop and a machine: simulated, replayed or real |
+//! | [`protocol`] | the serial protocol to a bridge device: COBS/CRC-32 framing and frames (a `no_std` codec), the device emulator and the native host |
 //! | [`signal`] | Butterworth design (second-order sections), biquad-cascade filtering, zero-phase filtering, RMS, Clarke/Park, spectra, min/max decimation |
 //! | [`estimation`] | current → force: paper 000's feed-drive and paper 003's spindle models, F/V speed identification, teach-cut calibration by least squares |
 //! | [`control`] | the controller interface and registry: fixed feed, current restriction, threshold-proportional, fuzzy (a Mamdani engine with FLL), PI with anti-windup, Lyapunov MRAC |
@@ -64,6 +65,7 @@ pub mod log;
 pub mod machine;
 pub mod math;
 pub mod plant;
+pub mod protocol;
 pub mod rng;
 pub mod safety;
 pub mod signal;

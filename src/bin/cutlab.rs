@@ -20,8 +20,8 @@ fn main() -> ExitCode {
             return ExitCode::FAILURE;
         }
     };
-    let stdin = io::stdin();
-    let mut stdin = stdin.lock();
+    // Not locked for the whole run: `cutlab device` reads stdin on a thread of its own.
+    let mut stdin = io::BufReader::new(io::stdin());
     let stdout = io::stdout();
     let mut stdout = io::BufWriter::new(stdout.lock());
     let result = cutlab::cli::run(

@@ -7,10 +7,13 @@
 pub mod args;
 pub mod calibrate;
 pub mod controllers;
+pub mod device;
 pub mod filter;
 pub mod force;
 pub mod fuzzy;
+pub mod host;
 pub mod log;
+pub mod protocol;
 pub mod scenarios;
 pub mod sim;
 pub mod spectrum;
@@ -57,6 +60,9 @@ enum Command {
     Compare(sim::CompareArgs),
     /// List the controllers with their parameters, defaults and units
     Controllers(controllers::ControllersArgs),
+    /// Run a preset's simulated machine behind the feed-override protocol on stdin/stdout
+    #[command(long_about = device::ABOUT)]
+    Device(device::DeviceArgs),
     /// Design a Butterworth filter (second-order sections) or apply one to f64 samples
     #[command(long_about = filter::ABOUT)]
     Filter(filter::FilterArgs),
@@ -66,9 +72,15 @@ enum Command {
     /// Evaluate a fuzzy engine from an FLL file, or export paper 002's engine as FLL
     #[command(long_about = fuzzy::ABOUT)]
     Fuzzy(fuzzy::FuzzyArgs),
+    /// Run the closed loop against a device over the feed-override protocol
+    #[command(long_about = host::ABOUT)]
+    Host(host::HostArgs),
     /// Read a machine's CSV log as it is: its dialect, columns and problems
     #[command(long_about = log::ABOUT)]
     Log(log::LogArgs),
+    /// Decode the feed-override protocol's bytes to JSON lines, or encode JSON lines to bytes
+    #[command(long_about = protocol::ABOUT)]
+    Protocol(protocol::ProtocolArgs),
     /// List the papers' experiments (presets), or run one open-loop
     Scenarios(scenarios::ScenariosArgs),
     /// Run one closed loop on a preset: teach cut, controller, safety envelope, metrics
@@ -94,10 +106,13 @@ pub const COMMANDS: &[CommandInfo] = &[
     CommandInfo {
         name: "controllers",
     },
+    CommandInfo { name: "device" },
     CommandInfo { name: "filter" },
     CommandInfo { name: "force" },
     CommandInfo { name: "fuzzy" },
+    CommandInfo { name: "host" },
     CommandInfo { name: "log" },
+    CommandInfo { name: "protocol" },
     CommandInfo { name: "scenarios" },
     CommandInfo { name: "sim" },
     CommandInfo { name: "spectrum" },
@@ -161,10 +176,13 @@ pub fn run(args: &[String], io: &mut Io<'_>) -> Result<(), CliError> {
         Some(Command::Calibrate(a)) => calibrate::run(a, io),
         Some(Command::Compare(a)) => sim::run_compare(a, io),
         Some(Command::Controllers(a)) => controllers::run(a, io),
+        Some(Command::Device(a)) => device::run(a, io),
         Some(Command::Filter(a)) => filter::run(a, io),
         Some(Command::Force(a)) => force::run(a, io),
         Some(Command::Fuzzy(a)) => fuzzy::run(a, io),
+        Some(Command::Host(a)) => host::run(a, io),
         Some(Command::Log(a)) => log::run(a, io),
+        Some(Command::Protocol(a)) => protocol::run(a, io),
         Some(Command::Scenarios(a)) => scenarios::run(a, io),
         Some(Command::Sim(a)) => sim::run_sim(a, io),
         Some(Command::Spectrum(a)) => spectrum::run(a, io),

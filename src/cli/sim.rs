@@ -249,8 +249,9 @@ fn run_one(
     Ok((result, refs))
 }
 
+/// The JSON report of one run (`cutlab sim --json`; `cutlab host --json` adds the link's).
 #[derive(Serialize)]
-struct SimReport<'a> {
+pub(crate) struct SimReport<'a> {
     scenario: &'static str,
     controller: &'a ControllerConfig,
     seed: u64,
@@ -261,13 +262,45 @@ struct SimReport<'a> {
     metrics: &'a Metrics,
     references: Option<References>,
     calibration: &'a Calibration,
-    events: Vec<EventLine>,
+    pub(crate) events: Vec<EventLine>,
 }
 
+/// One event of a report.
 #[derive(Serialize)]
-struct EventLine {
-    time_s: f64,
-    event: String,
+pub(crate) struct EventLine {
+    pub(crate) time_s: f64,
+    pub(crate) event: String,
+}
+
+impl<'a> SimReport<'a> {
+    /// The report of `result`, a run of `spec`.
+    pub(crate) fn new(
+        spec: &RunSpec,
+        result: &'a RunResult,
+        references: Option<References>,
+    ) -> Self {
+        SimReport {
+            scenario: spec.preset.name(),
+            controller: &result.spec.controller,
+            seed: spec.seed,
+            target_force_n: result.settings.target_force_n,
+            force_limit_n: result.settings.force_limit_n,
+            control_period_s: result.settings.control_period_s,
+            feedback: result.settings.feedback,
+            metrics: &result.metrics,
+            references,
+            calibration: &result.calibration,
+            events: result
+                .trace
+                .events
+                .iter()
+                .map(|e| EventLine {
+                    time_s: e.time_s(),
+                    event: e.describe(),
+                })
+                .collect(),
+        }
+    }
 }
 
 /// Runs `cutlab sim`.
@@ -306,27 +339,7 @@ pub fn run_sim(args: SimArgs, io: &mut Io<'_>) -> Result<(), CliError> {
             .map_err(|e| CliError::new(format!("--csv: cannot write {path:?}: {e}")))?;
     }
     if let Some(path) = args.json.as_deref() {
-        let report = SimReport {
-            scenario: spec.preset.name(),
-            controller: &spec.controller,
-            seed: spec.seed,
-            target_force_n: result.settings.target_force_n,
-            force_limit_n: result.settings.force_limit_n,
-            control_period_s: result.settings.control_period_s,
-            feedback: result.settings.feedback,
-            metrics: &result.metrics,
-            references: refs,
-            calibration: &result.calibration,
-            events: result
-                .trace
-                .events
-                .iter()
-                .map(|e| EventLine {
-                    time_s: e.time_s(),
-                    event: e.describe(),
-                })
-                .collect(),
-        };
+        let report = SimReport::new(&spec, &result, refs);
         let mut file = std::fs::File::create(path)
             .map_err(|e| CliError::new(format!("--json: cannot create {path:?}: {e}")))?;
         write_json(&mut file, &report)?;
@@ -486,7 +499,7 @@ fn one_scenario(
 }
 
 /// A table of metrics, one column per run; `*` marks the best value of each row.
-fn metrics_table(runs: &[(String, &RunResult)]) -> String {
+pub(crate) fn metrics_table(runs: &[(String, &RunResult)]) -> String {
     let shown = |v: f64| {
         if v.fract() == 0.0 {
             format!("{v:.0}")

@@ -418,6 +418,14 @@ impl LabRun {
         ClosedLoop::new(machine, controller, calibration.estimator.clone(), settings)
     }
 
+    /// Stops the closed loop after `duration_s` of machine time if that comes before the
+    /// preset's own limit (a host's `--duration-s`); the teach cut is not affected.
+    pub fn limit_duration_s(&mut self, duration_s: f64) {
+        if duration_s < self.settings.max_duration_s || duration_s.is_nan() {
+            self.settings.max_duration_s = duration_s;
+        }
+    }
+
     /// The trace so far, once the closed loop has started.
     pub fn trace(&self) -> Option<&Trace> {
         match &self.stage {

@@ -1,0 +1,312 @@
+//! Frames as JSON objects, for `cutlab protocol decode` and `encode` and for people debugging a
+//! bridge with a serial sniffer.
+//!
+//! A frame is an object with its `"type"` ([`FrameType::name`]) and its fields by the names of
+//! the structs in [`super::frame`], in wire units (counts, hundredths of a percent, µs).
+//! Text fields (`device_id`, `program`) are strings; enumerations (`override_mode`, `result`,
+//! `kind`) are names, or numbers for codes this version does not know; `f32` fields are numbers
+//! (NaN and ±∞ are `null`, which encodes as NaN). Encoding takes the same objects; a field left
+//! out is zero.
+//!
+//! ```
+//! use cutlab::protocol::frame::{Frame, Arm};
+//! use cutlab::protocol::json::{frame_from_json, frame_to_json};
+//! let v = frame_to_json(&Frame::Arm(Arm { seq: 7 }));
+//! assert_eq!(v.to_string(), r#"{"seq":7,"type":"arm"}"#);
+//! assert_eq!(frame_from_json(&v), Ok(Frame::Arm(Arm { seq: 7 })));
+//! ```
+
+use serde_json::{json, Map, Value};
+
+use super::frame::{
+    padded, text_field, Ack, AckResult, Arm, Capabilities, Disarm, Fault, FaultKind, Frame,
+    FrameType, Heartbeat, Hello, OverrideModeCode, Sample, SetOverride, SimTruth, DEVICE_ID_LEN,
+    PROGRAM_LEN,
+};
+
+fn mode_name(m: OverrideModeCode) -> Value {
+    match m {
+        OverrideModeCode::Dial16 => json!("dial16"),
+        OverrideModeCode::WholePercent => json!("whole-percent"),
+        OverrideModeCode::Continuous => json!("continuous"),
+        OverrideModeCode::Other(c) => json!(c),
+    }
+}
+
+fn result_name(r: AckResult) -> Value {
+    match r {
+        AckResult::Applied => json!("applied"),
+        AckResult::Limited => json!("limited"),
+        AckResult::NotArmed => json!("not-armed"),
+        AckResult::Refused => json!("refused"),
+        AckResult::Other(c) => json!(c),
+    }
+}
+
+fn kind_name(k: FaultKind) -> Value {
+    match k {
+        FaultKind::Other(c) => json!(c),
+        k => json!(k.name()),
+    }
+}
+
+fn text(bytes: &[u8]) -> Value {
+    match text_field(bytes) {
+        Some(t) => json!(t),
+        None => json!(bytes),
+    }
+}
+
+/// The JSON object of `frame`.
+pub fn frame_to_json(frame: &Frame) -> Value {
+    let mut v = match frame {
+        Frame::Hello(h) => {
+            json!({"version_major": h.version_major, "version_minor": h.version_minor})
+        }
+        Frame::Capabilities(c) => json!({
+            "version_major": c.version_major,
+            "version_minor": c.version_minor,
+            "device_id": text(&c.device_id),
+            "program": text(&c.program),
+            "channel_mask": c.channel_mask,
+            "spindle_current_a_per_count": c.spindle_current_a_per_count,
+            "feed_current_a_per_count": c.feed_current_a_per_count,
+            "fv_v_per_count": c.fv_v_per_count,
+            "sample_rate_hz": c.sample_rate_hz,
+            "override_mode": mode_name(c.override_mode),
+            "min_override_cpct": c.min_override_cpct,
+            "max_override_cpct": c.max_override_cpct,
+            "dial_cpct": c.dial_cpct,
+            "watchdog_timeout_ms": c.watchdog_timeout_ms,
+            "fallback_override_cpct": c.fallback_override_cpct,
+            "over_current_a": c.over_current_a,
+            "features": c.features,
+        }),
+        Frame::Sample(s) => json!({
+            "seq": s.seq,
+            "time_us": s.time_us,
+            "flags": s.flags,
+            "spindle_current_counts": s.spindle_current_counts,
+            "feed_current_counts": s.feed_current_counts,
+            "fv_counts": s.fv_counts,
+            "spindle_speed_rpm": s.spindle_speed_rpm,
+            "spindle_command_rpm": s.spindle_command_rpm,
+            "programmed_feed_mm_min": s.programmed_feed_mm_min,
+            "feed_mm_min": s.feed_mm_min,
+            "applied_override_cpct": s.applied_override_cpct,
+            "dial_code": s.dial_code,
+        }),
+        Frame::SimTruth(t) => {
+            let mut m = Map::new();
+            m.insert("seq".into(), json!(t.seq));
+            for (name, value) in SimTruth::NAMES.iter().zip(t.values()) {
+                m.insert((*name).into(), json!(value));
+            }
+            Value::Object(m)
+        }
+        Frame::SetOverride(c) => {
+            json!({"seq": c.seq, "override_cpct": c.override_cpct, "flags": c.flags})
+        }
+        Frame::Arm(a) => json!({"seq": a.seq}),
+        Frame::Disarm(d) => json!({"seq": d.seq}),
+        Frame::Ack(a) => json!({
+            "seq": a.seq,
+            "command": FrameType::from_code(a.command).map_or(json!(a.command), |t| json!(t.name())),
+            "result": result_name(a.result),
+            "applied_override_cpct": a.applied_override_cpct,
+            "flags": a.flags,
+        }),
+        Frame::Fault(f) => json!({
+            "seq": f.seq,
+            "time_us": f.time_us,
+            "kind": kind_name(f.kind),
+            "active": f.active,
+            "channel": f.channel,
+            "applied_override_cpct": f.applied_override_cpct,
+        }),
+        Frame::Heartbeat(h) => json!({"seq": h.seq, "time_us": h.time_us}),
+    };
+    if let Value::Object(m) = &mut v {
+        m.insert("type".into(), json!(frame.frame_type().name()));
+    }
+    v
+}
+
+/// Reads the fields of one object, naming the field in errors.
+struct Fields<'a> {
+    map: &'a Map<String, Value>,
+}
+
+impl Fields<'_> {
+    fn int<T: TryFrom<i64>>(&self, name: &str) -> Result<T, String> {
+        match self.map.get(name) {
+            None => T::try_from(0).map_err(|_| format!("{name}: out of range")),
+            Some(v) => v
+                .as_i64()
+                .and_then(|i| T::try_from(i).ok())
+                .ok_or_else(|| format!("{name}: {v} is not an integer in range")),
+        }
+    }
+
+    fn f32(&self, name: &str) -> Result<f32, String> {
+        match self.map.get(name) {
+            None => Ok(0.0),
+            Some(Value::Null) => Ok(f32::NAN),
+            Some(v) => v
+                .as_f64()
+                .map(|x| x as f32)
+                .ok_or_else(|| format!("{name}: {v} is not a number")),
+        }
+    }
+
+    fn ints<T: TryFrom<i64> + Copy + Default, const N: usize>(
+        &self,
+        name: &str,
+    ) -> Result<[T; N], String> {
+        let mut out = [T::default(); N];
+        let Some(v) = self.map.get(name) else {
+            return Ok(out);
+        };
+        let items = v
+            .as_array()
+            .filter(|a| a.len() == N)
+            .ok_or_else(|| format!("{name}: expected an array of {N} integers, got {v}"))?;
+        for (slot, item) in out.iter_mut().zip(items) {
+            *slot = item
+                .as_i64()
+                .and_then(|i| T::try_from(i).ok())
+                .ok_or_else(|| format!("{name}: {item} is not an integer in range"))?;
+        }
+        Ok(out)
+    }
+
+    fn text<const N: usize>(&self, name: &str) -> Result<[u8; N], String> {
+        match self.map.get(name) {
+            None => Ok([0; N]),
+            Some(Value::String(s)) if s.len() <= N => Ok(padded(s)),
+            Some(Value::String(s)) => Err(format!("{name}: {s:?} is longer than {N} bytes")),
+            Some(_) => self.ints(name),
+        }
+    }
+
+    /// A name from `names` (code, name) or a number.
+    fn code(&self, name: &str, names: &[(u8, &str)]) -> Result<u8, String> {
+        match self.map.get(name) {
+            None => Ok(0),
+            Some(Value::String(s)) => names
+                .iter()
+                .find(|(_, n)| n == s)
+                .map(|(c, _)| *c)
+                .ok_or_else(|| {
+                    let known: Vec<&str> = names.iter().map(|(_, n)| *n).collect();
+                    format!("{name}: unknown {s:?}; known: {}", known.join(", "))
+                }),
+            Some(_) => self.int(name),
+        }
+    }
+}
+
+/// The frame a JSON object describes.
+pub fn frame_from_json(value: &Value) -> Result<Frame, String> {
+    let map = value
+        .as_object()
+        .ok_or_else(|| format!("expected a JSON object, got {value}"))?;
+    let type_name = map
+        .get("type")
+        .and_then(Value::as_str)
+        .ok_or("missing \"type\"")?;
+    let frame_type = FrameType::from_name(type_name).ok_or_else(|| {
+        let names: Vec<&str> = FrameType::ALL.iter().map(|t| t.name()).collect();
+        format!("unknown type {type_name:?}; types: {}", names.join(", "))
+    })?;
+    let f = Fields { map };
+    let modes = [(0, "dial16"), (1, "whole-percent"), (2, "continuous")];
+    let results = [
+        (0, "applied"),
+        (1, "limited"),
+        (2, "not-armed"),
+        (3, "refused"),
+    ];
+    let kinds = [
+        (1, "sensor"),
+        (2, "over-current"),
+        (3, "watchdog"),
+        (4, "e-stop"),
+    ];
+    let commands: Vec<(u8, &str)> = FrameType::ALL
+        .iter()
+        .map(|t| (*t as u8, t.name()))
+        .collect();
+    Ok(match frame_type {
+        FrameType::Hello => Frame::Hello(Hello {
+            version_major: f.int("version_major")?,
+            version_minor: f.int("version_minor")?,
+        }),
+        FrameType::Capabilities => Frame::Capabilities(Capabilities {
+            version_major: f.int("version_major")?,
+            version_minor: f.int("version_minor")?,
+            device_id: f.text::<DEVICE_ID_LEN>("device_id")?,
+            program: f.text::<PROGRAM_LEN>("program")?,
+            channel_mask: f.int("channel_mask")?,
+            spindle_current_a_per_count: f.f32("spindle_current_a_per_count")?,
+            feed_current_a_per_count: f.f32("feed_current_a_per_count")?,
+            fv_v_per_count: f.f32("fv_v_per_count")?,
+            sample_rate_hz: f.f32("sample_rate_hz")?,
+            override_mode: OverrideModeCode::from_code(f.code("override_mode", &modes)?),
+            min_override_cpct: f.int("min_override_cpct")?,
+            max_override_cpct: f.int("max_override_cpct")?,
+            dial_cpct: f.ints("dial_cpct")?,
+            watchdog_timeout_ms: f.int("watchdog_timeout_ms")?,
+            fallback_override_cpct: f.int("fallback_override_cpct")?,
+            over_current_a: f.f32("over_current_a")?,
+            features: f.int("features")?,
+        }),
+        FrameType::Sample => Frame::Sample(Sample {
+            seq: f.int("seq")?,
+            time_us: f.int("time_us")?,
+            flags: f.int("flags")?,
+            spindle_current_counts: f.ints("spindle_current_counts")?,
+            feed_current_counts: f.ints("feed_current_counts")?,
+            fv_counts: f.int("fv_counts")?,
+            spindle_speed_rpm: f.f32("spindle_speed_rpm")?,
+            spindle_command_rpm: f.f32("spindle_command_rpm")?,
+            programmed_feed_mm_min: f.f32("programmed_feed_mm_min")?,
+            feed_mm_min: f.f32("feed_mm_min")?,
+            applied_override_cpct: f.int("applied_override_cpct")?,
+            dial_code: f.int("dial_code")?,
+        }),
+        FrameType::SimTruth => {
+            let mut v = [0f32; 16];
+            for (slot, name) in v.iter_mut().zip(SimTruth::NAMES) {
+                *slot = f.f32(name)?;
+            }
+            Frame::SimTruth(SimTruth::from_values(f.int("seq")?, v))
+        }
+        FrameType::SetOverride => Frame::SetOverride(SetOverride {
+            seq: f.int("seq")?,
+            override_cpct: f.int("override_cpct")?,
+            flags: f.int("flags")?,
+        }),
+        FrameType::Arm => Frame::Arm(Arm { seq: f.int("seq")? }),
+        FrameType::Disarm => Frame::Disarm(Disarm { seq: f.int("seq")? }),
+        FrameType::Ack => Frame::Ack(Ack {
+            seq: f.int("seq")?,
+            command: f.code("command", &commands)?,
+            result: AckResult::from_code(f.code("result", &results)?),
+            applied_override_cpct: f.int("applied_override_cpct")?,
+            flags: f.int("flags")?,
+        }),
+        FrameType::Fault => Frame::Fault(Fault {
+            seq: f.int("seq")?,
+            time_us: f.int("time_us")?,
+            kind: FaultKind::from_code(f.code("kind", &kinds)?),
+            active: f.int("active")?,
+            channel: f.int("channel")?,
+            applied_override_cpct: f.int("applied_override_cpct")?,
+        }),
+        FrameType::Heartbeat => Frame::Heartbeat(Heartbeat {
+            seq: f.int("seq")?,
+            time_us: f.int("time_us")?,
+        }),
+    })
+}
