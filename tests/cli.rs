@@ -438,3 +438,75 @@ fn log_inspect_reports_the_dialect_columns_and_problems_as_json() {
     );
     assert!(result.unwrap_err().contains("--sample-period-s"));
 }
+
+#[test]
+fn log_analyse_groups_by_label_and_says_when_a_stage_is_skipped() {
+    let (result, out) = cutlab(
+        &[
+            "log",
+            "analyse",
+            "tests/data/logs/comma.csv",
+            "--column",
+            "X_Current [A]",
+            "--by",
+            "Phase",
+            "--lowpass-hz",
+            "80",
+            "--json",
+        ],
+        "",
+    );
+    result.unwrap();
+    let report: serde_json::Value = serde_json::from_str(&out).unwrap();
+    let column = &report["columns"][0];
+    assert_eq!(column["whole"]["count"], 12);
+    assert_eq!(column["by_label"][0]["label"], "Prep");
+    assert_eq!(column["by_label"][0]["stats"]["count"], 3);
+    assert!(column["notes"][0].as_str().unwrap().contains("Nyquist"));
+    for (args, message) in [
+        (
+            &["log", "analyse", "tests/data/logs/comma.csv"][..],
+            "--column",
+        ),
+        (
+            &[
+                "log",
+                "analyse",
+                "tests/data/logs/comma.csv",
+                "--column",
+                "nope",
+            ][..],
+            "no column \"nope\"",
+        ),
+        (
+            &[
+                "log",
+                "analyse",
+                "tests/data/logs/comma.csv",
+                "--column",
+                "Fx [N]",
+                "--order",
+                "4",
+            ][..],
+            "--lowpass-hz",
+        ),
+        (
+            &[
+                "log",
+                "analyse",
+                "tests/data/logs/comma.csv",
+                "--column",
+                "Fx [N]",
+                "--lowpass-hz",
+                "1",
+                "--order",
+                "99",
+            ][..],
+            "--order",
+        ),
+    ] {
+        let (result, _) = cutlab(args, "");
+        let e = result.unwrap_err();
+        assert!(e.contains(message), "{args:?}: {e}");
+    }
+}

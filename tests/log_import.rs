@@ -175,3 +175,78 @@ fn random_and_mutated_bytes_never_panic() {
         }
     }
 }
+
+/// A 1 kHz log of a 50 Hz current over two machining phases, and the same at 10 Hz.
+fn sine_log(rate_hz: f64, rows: usize) -> String {
+    let mut text = String::from("time [s],Spindle current [A],Phase\n");
+    for i in 0..rows {
+        let t = i as f64 / rate_hz;
+        let phase = if i < rows / 2 {
+            "Roughing"
+        } else {
+            "Finishing"
+        };
+        let offset = if i < rows / 2 { 10.0 } else { 4.0 };
+        let i_a = offset + 2.0 * (std::f64::consts::TAU * 50.0 * t).sin();
+        text.push_str(&format!("{t},{i_a},{phase}\n"));
+    }
+    text
+}
+
+#[test]
+fn analysis_groups_by_label_filters_below_nyquist_and_finds_the_spectral_line() {
+    use cutlab::log::analysis::{analyse, AnalysisRequest};
+    let log = load(sine_log(1000.0, 4000).as_bytes(), None);
+    assert_eq!(log.sample_period_s, Some(0.001));
+    let request = AnalysisRequest {
+        by: Some("Phase".into()),
+        lowpass: Some((10.0, 4)),
+        spectrum: true,
+    };
+    let a = analyse(&log, "Spindle current [A]", &request).unwrap();
+    assert_eq!(a.lowpass, Some((10.0, 4)));
+    // The 10 Hz low-pass removes the 50 Hz ripple: the phases' means stay, their spread goes.
+    let roughing = &a.by_label[0];
+    assert_eq!(roughing.label, "Roughing");
+    assert_eq!(roughing.stats.count, 2000);
+    assert!((roughing.stats.duration_s.unwrap() - 2.0).abs() < 1e-9);
+    assert!((roughing.stats.mean.unwrap() - 10.0).abs() < 0.05);
+    let finishing = &a.by_label[1];
+    assert!((finishing.stats.mean.unwrap() - 4.0).abs() < 0.05);
+    // Unfiltered, the spectrum's strongest line is the 50 Hz current.
+    let raw = analyse(
+        &log,
+        "Spindle current [A]",
+        &AnalysisRequest {
+            spectrum: true,
+            ..AnalysisRequest::default()
+        },
+    )
+    .unwrap();
+    let strongest = raw
+        .peaks
+        .iter()
+        .max_by(|a, b| a.psd.total_cmp(&b.psd))
+        .unwrap();
+    assert!((strongest.freq_hz - 50.0).abs() < 1.0, "{:?}", raw.peaks);
+    assert!((raw.whole.max.unwrap() - 12.0).abs() < 0.01);
+
+    // A 10 Hz log cannot take a 10 Hz low-pass: the stage is skipped and the analysis says why.
+    let slow = load(sine_log(10.0, 100).as_bytes(), None);
+    let a = analyse(&slow, "Spindle current [A]", &request).unwrap();
+    assert_eq!(a.lowpass, None);
+    assert!(
+        a.notes[0].contains("above its Nyquist frequency (5 Hz)"),
+        "{:?}",
+        a.notes
+    );
+    // Naming a column that is not there lists the ones that are.
+    let e = analyse(&slow, "Current", &request).unwrap_err();
+    assert!(
+        e.contains("columns: time [s], Spindle current [A], Phase"),
+        "{e}"
+    );
+    assert!(analyse(&slow, "Phase", &request)
+        .unwrap_err()
+        .contains("holds no numbers"));
+}

@@ -24,6 +24,36 @@ pub struct LogArgs {
 enum LogCommand {
     /// Describe a log: its dialect, columns (kind, unit, role guess, statistics) and problems
     Inspect(InspectArgs),
+    /// Statistics of columns (whole and per label), an optional zero-phase low-pass, spectrum peaks
+    Analyse(AnalyseArgs),
+}
+
+#[derive(Debug, clap::Args)]
+pub struct AnalyseArgs {
+    /// The CSV file ("-" for standard input)
+    #[arg(value_name = "FILE")]
+    file: Option<String>,
+    /// A column to analyse (repeat for more)
+    #[arg(long = "column", value_name = "NAME")]
+    columns: Vec<String>,
+    /// A label column to group the statistics by
+    #[arg(long, value_name = "LABEL_COLUMN")]
+    by: Option<String>,
+    /// Zero-phase Butterworth low-pass cut-off (skipped, and said, above the log's Nyquist frequency)
+    #[arg(long, value_name = "HZ")]
+    lowpass_hz: Option<f64>,
+    /// Order of the low-pass (default 4)
+    #[arg(long, value_name = "N")]
+    order: Option<usize>,
+    /// Find the strongest peaks of each column's spectrum (Welch)
+    #[arg(long)]
+    spectrum: bool,
+    /// The sample period of a log without a time column, in seconds
+    #[arg(long, value_name = "S")]
+    sample_period_s: Option<f64>,
+    /// Print JSON instead of a table
+    #[arg(long)]
+    json: bool,
 }
 
 #[derive(Debug, clap::Args)]
@@ -43,6 +73,7 @@ pub struct InspectArgs {
 pub fn run(args: LogArgs, io: &mut Io<'_>) -> Result<(), CliError> {
     match args.command {
         Some(LogCommand::Inspect(a)) => inspect(a, io),
+        Some(LogCommand::Analyse(a)) => analyse(a, io),
         None => super::print_help(io, &["log"]),
     }
 }
@@ -217,6 +248,106 @@ fn inspect(args: InspectArgs, io: &mut Io<'_>) -> Result<(), CliError> {
             "  … and {} more problems\n",
             report.problems_not_listed
         ));
+    }
+    io.stdout.write_all(out.as_bytes())?;
+    Ok(())
+}
+
+#[derive(Serialize)]
+struct AnalyseReport {
+    rows: usize,
+    sample_period_s: Option<f64>,
+    columns: Vec<crate::log::analysis::ColumnAnalysis>,
+}
+
+fn analyse(args: AnalyseArgs, io: &mut Io<'_>) -> Result<(), CliError> {
+    let path: String = required("FILE", &args.file)?;
+    if args.columns.is_empty() {
+        return Err(CliError::new(
+            "--column: name at least one column to analyse",
+        ));
+    }
+    if args.order.is_some() && args.lowpass_hz.is_none() {
+        return Err(CliError::new("--order: give --lowpass-hz too"));
+    }
+    let lowpass = match args.lowpass_hz {
+        Some(f) if !(f.is_finite() && f > 0.0) => {
+            return Err(CliError::new(format!(
+                "--lowpass-hz: must be a positive frequency, got {f}"
+            )))
+        }
+        Some(f) => {
+            let order = args.order.unwrap_or(4);
+            if !(1..=crate::signal::butterworth::MAX_ORDER).contains(&order) {
+                return Err(CliError::new(format!(
+                    "--order: must be 1 to {}, got {order}",
+                    crate::signal::butterworth::MAX_ORDER
+                )));
+            }
+            Some((f, order))
+        }
+        None => None,
+    };
+    let log = read_log(&path, args.sample_period_s, io)?;
+    let request = crate::log::analysis::AnalysisRequest {
+        by: args.by.clone(),
+        lowpass,
+        spectrum: args.spectrum,
+    };
+    let columns = args
+        .columns
+        .iter()
+        .map(|c| crate::log::analysis::analyse(&log, c, &request).map_err(CliError::new))
+        .collect::<Result<Vec<_>, _>>()?;
+    let report = AnalyseReport {
+        rows: log.rows,
+        sample_period_s: log.sample_period_s,
+        columns,
+    };
+    if args.json {
+        return write_json(io.stdout, &report);
+    }
+    let number = |v: Option<f64>| v.map_or("—".to_string(), crate::input::readable);
+    let mut out = String::new();
+    for c in &report.columns {
+        let unit = c
+            .unit
+            .as_deref()
+            .filter(|u| !c.column.contains(u))
+            .map_or(String::new(), |u| format!(" [{u}]"));
+        out.push_str(&format!("{}{unit}", c.column));
+        if let Some((f, n)) = c.lowpass {
+            out.push_str(&format!(
+                ", low-pass {} Hz order {n} (zero-phase)",
+                crate::input::readable(f)
+            ));
+        }
+        out.push('\n');
+        for note in &c.notes {
+            out.push_str(&format!("  note: {note}\n"));
+        }
+        let line = |name: &str, s: &crate::log::analysis::Stats| {
+            format!(
+                "  {name:<24} n {:>8}  mean {:>10}  rms {:>10}  min {:>10}  max {:>10}  duration {} s\n",
+                s.count,
+                number(s.mean),
+                number(s.rms),
+                number(s.min),
+                number(s.max),
+                number(s.duration_s)
+            )
+        };
+        out.push_str(&line("all rows", &c.whole));
+        for l in &c.by_label {
+            out.push_str(&line(&l.label, &l.stats));
+        }
+        for p in &c.peaks {
+            out.push_str(&format!(
+                "  peak at {} Hz (PSD {})\n",
+                crate::input::readable(p.freq_hz),
+                crate::input::readable(p.psd)
+            ));
+        }
     }
     io.stdout.write_all(out.as_bytes())?;
     Ok(())
