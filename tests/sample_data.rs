@@ -174,3 +174,76 @@ fn calibrate_and_force_refuse_the_same_materials() {
     assert!(calibrate("sm45c").is_ok());
     assert!(force("sm45c").is_ok());
 }
+
+/// The sample teach cut rewritten as another machine's export would be — semicolons, decimal
+/// commas, a byte-order mark, CRLF, its own column names with units, a phase label — calibrates
+/// to the same line once `--map` names the columns.
+#[test]
+fn a_messy_export_of_the_teach_cut_calibrates_like_the_clean_one() {
+    let clean = read("kim-step-doc-teach-cut.csv");
+    let mut lines = clean.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let keep = [
+        "time_s",
+        "force_n",
+        "spindle_current_rms_a",
+        "spindle_speed_rpm",
+    ];
+    let names = ["Zeit [s]", "Kraft [N]", "S_Strom [A]", "S_Drehzahl (rpm)"];
+    let index: Vec<usize> = keep
+        .iter()
+        .map(|k| header.iter().position(|h| h == k).unwrap())
+        .collect();
+    let mut messy = String::from("\u{feff}");
+    messy.push_str(&names.join(";"));
+    messy.push_str(";Phase\r\n");
+    for (row, line) in lines.enumerate() {
+        let cells: Vec<&str> = line.split(',').collect();
+        let picked: Vec<String> = index.iter().map(|&i| cells[i].replace('.', ",")).collect();
+        messy.push_str(&picked.join(";"));
+        messy.push_str(if row < 20 {
+            ";\"Anfahren\"\r\n"
+        } else {
+            ";Schnitt\r\n"
+        });
+    }
+    let path = std::env::temp_dir().join("cutlab-messy-teach-cut.csv");
+    std::fs::write(&path, messy).unwrap();
+    let path = path.to_str().unwrap();
+    let fit = |args: &[&str]| -> serde_json::Value {
+        let (result, out) = common::cutlab_text(args, "");
+        serde_json::from_str(&out).unwrap_or_else(|_| panic!("{result:?}"))
+    };
+    let reference = fit(&[
+        "calibrate",
+        &format!("{DATA}kim-step-doc-teach-cut.csv"),
+        "--json",
+    ]);
+    let mapped = fit(&[
+        "calibrate",
+        path,
+        "--json",
+        "--map",
+        "time_s=Zeit [s]",
+        "--map",
+        "force_n=Kraft [N]",
+        "--map",
+        "spindle_current_rms_a=S_Strom [A]",
+        "--map",
+        "spindle_speed_rpm=S_Drehzahl (rpm)",
+    ]);
+    let sensitivity = |v: &serde_json::Value| {
+        v["spindle"]["rows"][0]["sensitivity_a_per_n"]
+            .as_f64()
+            .unwrap()
+    };
+    assert!((sensitivity(&mapped) / sensitivity(&reference) - 1.0).abs() < 1e-9);
+    // The one thing the reader notes in either file: the short last period.
+    let problems = |v: &serde_json::Value| v["log_problems"].as_array().unwrap().len();
+    assert_eq!(problems(&mapped), problems(&reference));
+    // A role or column that is not there says which ones are.
+    let (result, _) = common::cutlab_text(&["calibrate", path, "--map", "kraft=Kraft [N]"], "");
+    assert!(result.unwrap_err().contains("roles: time_s, force_n"));
+    let (result, _) = common::cutlab_text(&["calibrate", path, "--map", "force_n=Force"], "");
+    assert!(result.unwrap_err().contains("columns: Zeit [s], Kraft [N]"));
+}

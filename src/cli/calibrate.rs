@@ -63,6 +63,14 @@ pub struct CalibrateArgs {
         allow_hyphen_values = true
     )]
     mode: Option<String>,
+    #[arg(
+        long = "map",
+        help = "Read a calibration column from another column of the file (ROLE=COLUMN, repeatable; \
+         roles: time_s, force_n, feed_force_n, spindle_current_rms_a, spindle_speed_rpm, \
+         feed_current_rms_a, feed_mm_min, depth_mm, width_mm)",
+        value_name = "ROLE=COLUMN"
+    )]
+    map: Vec<String>,
 }
 
 const GEOMETRY_OPTIONS: [&str; 3] = ["diameter-mm", "teeth", "mode"];
@@ -111,6 +119,8 @@ struct JsonReport<'a> {
     file: &'a str,
     #[serde(flatten)]
     report: &'a LogCalibration,
+    /// What the log reader found wrong (damaged lines kept as gaps), by line and column.
+    log_problems: &'a [crate::log::Problem],
 }
 
 /// Runs `cutlab calibrate`.
@@ -124,10 +134,27 @@ pub fn run(args: CalibrateArgs, io: &mut Io<'_>) -> Result<(), CliError> {
             "--gear-change-rpm: must be a positive speed, got {gear_change_rpm}"
         )));
     }
-    let text = std::fs::read_to_string(file)
-        .map_err(|e| CliError::new(format!("{file}: cannot read: {e}")))?;
+    let map = args
+        .map
+        .iter()
+        .map(|m| {
+            m.split_once('=')
+                .map(|(role, column)| (role.trim().to_string(), column.trim().to_string()))
+                .ok_or_else(|| {
+                    CliError::new(format!("--map: {m:?} is not of the form ROLE=COLUMN"))
+                })
+        })
+        .collect::<Result<Vec<_>, _>>()?;
+    let bytes =
+        std::fs::read(file).map_err(|e| CliError::new(format!("{file}: cannot read: {e}")))?;
     let in_file = |e: LogError| CliError::new(format!("{file}: {e}"));
-    let table = LogTable::parse(&text).map_err(in_file)?;
+    // The messy-log reader: any delimiter, decimal comma, quotes, damaged lines kept as gaps.
+    let log = crate::log::load(&bytes, None);
+    if log.rows == 0 {
+        return Err(in_file(LogError::Empty));
+    }
+    let table =
+        LogTable::from_log(&log, &map).map_err(|e| CliError::new(format!("{file}: {e}")))?;
     let geometry = cut_geometry(&args)?;
     let report = calibrate_log(
         &table,
@@ -142,6 +169,7 @@ pub fn run(args: CalibrateArgs, io: &mut Io<'_>) -> Result<(), CliError> {
             &JsonReport {
                 file,
                 report: &report,
+                log_problems: &log.problems,
             },
         );
     }
@@ -149,6 +177,22 @@ pub fn run(args: CalibrateArgs, io: &mut Io<'_>) -> Result<(), CliError> {
         "{file}: {rows_with_force} rows with force, from {}\n",
         report.force_source
     );
+    for p in log.problems.iter().take(5) {
+        out.push_str(&format!(
+            "note: line {}{}: {}\n",
+            p.line,
+            p.column
+                .as_deref()
+                .map_or(String::new(), |c| format!(", {c}")),
+            p.message
+        ));
+    }
+    if log.problems.len() > 5 {
+        out.push_str(&format!(
+            "note: … and {} more problems (see --json)\n",
+            log.problems.len() - 5 + log.problems_not_listed
+        ));
+    }
     if let Some(pct) = report.model_vs_measured_pct {
         let _ = writeln!(
             out,

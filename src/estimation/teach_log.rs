@@ -133,6 +133,19 @@ impl fmt::Display for LogError {
 
 impl std::error::Error for LogError {}
 
+/// The columns calibration reads, by their names in cutlab's own logs.
+pub const CALIBRATION_COLUMNS: [&str; 9] = [
+    "time_s",
+    "force_n",
+    "feed_force_n",
+    "spindle_current_rms_a",
+    "spindle_speed_rpm",
+    "feed_current_rms_a",
+    "feed_mm_min",
+    "depth_mm",
+    "width_mm",
+];
+
 /// The numeric columns of a CSV log, by name.
 #[derive(Debug, Clone, PartialEq)]
 pub struct LogTable {
@@ -203,6 +216,63 @@ impl LogTable {
             header,
             columns,
             row_lines,
+        })
+    }
+
+    /// The columns calibration reads from `log` (a messy file read by [`crate::log`]): each
+    /// of [`CALIBRATION_COLUMNS`] from the column `map` names for it (`ROLE=COLUMN`, as typed
+    /// after `--map`), else from a column of that very name. Only numeric columns can be
+    /// mapped.
+    ///
+    /// ```
+    /// use cutlab::estimation::teach_log::LogTable;
+    /// let log = cutlab::log::load(b"t;F [N];I [A]\n0;1,5;2\n0,1;2,5;3\n", None);
+    /// let map = [("force_n".to_string(), "F [N]".to_string())];
+    /// let t = LogTable::from_log(&log, &map).unwrap();
+    /// assert_eq!(t.column("force_n"), Some(&[1.5, 2.5][..]));
+    /// assert!(LogTable::from_log(&log, &[("torque".into(), "F [N]".into())]).unwrap_err()
+    ///     .contains("force_n"));
+    /// ```
+    pub fn from_log(log: &crate::log::Log, map: &[(String, String)]) -> Result<Self, String> {
+        for (role, column) in map {
+            if !CALIBRATION_COLUMNS.contains(&role.as_str()) {
+                return Err(format!(
+                    "--map: unknown role {role:?}; roles: {}",
+                    CALIBRATION_COLUMNS.join(", ")
+                ));
+            }
+            if !log.columns.iter().any(|c| &c.name == column) {
+                return Err(format!(
+                    "--map {role}={column}: no such column; columns: {}",
+                    log.columns
+                        .iter()
+                        .map(|c| c.name.as_str())
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                ));
+            }
+        }
+        let mut header = Vec::new();
+        let mut columns = Vec::new();
+        for role in CALIBRATION_COLUMNS {
+            let source = map
+                .iter()
+                .find(|(r, _)| r == role)
+                .map_or(role, |(_, c)| c.as_str());
+            if let Some(column) = log.columns.iter().find(|c| c.name == source) {
+                if column.values.len() != log.rows {
+                    return Err(format!(
+                        "column {source:?} holds no numbers, so it cannot be {role}"
+                    ));
+                }
+                header.push(role.to_string());
+                columns.push(column.values.clone());
+            }
+        }
+        Ok(Self {
+            header,
+            columns,
+            row_lines: log.row_lines.iter().map(|&l| l as usize).collect(),
         })
     }
 

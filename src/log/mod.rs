@@ -133,6 +133,8 @@ pub struct Log {
     pub problems: Vec<Problem>,
     /// Problems beyond [`MAX_LISTED_PROBLEMS`], counted only.
     pub problems_not_listed: usize,
+    /// The file line (from 1) each row starts on.
+    pub row_lines: Vec<u32>,
 }
 
 /// Per column while reading: numbers as they come, text cells interned.
@@ -321,6 +323,7 @@ impl LogBuilder {
             columns,
             problems: Vec::new(),
             problems_not_listed: 0,
+            row_lines: Vec::new(),
         };
         let period = time_column.and_then(|t| self.time_steps(&mut log.columns[t]));
         log.sample_period_s = sample_period_s
@@ -328,6 +331,7 @@ impl LogBuilder {
             .or(period);
         log.problems = std::mem::take(&mut self.problems);
         log.problems_not_listed = self.problems_not_listed;
+        log.row_lines = std::mem::take(&mut self.row_lines);
         log
     }
 
