@@ -41,6 +41,12 @@ test('a sweep of two parameters fills a table and a heat map, and a search links
   await table.waitFor({ timeout: RUN_TIMEOUT });
   assert.equal(await table.getByRole('row').count(), 1 + 4);
   await page.getByRole('img', { name: /Objective over the two parameters/ }).waitFor();
+  // Every evaluation opens in Simulate, and so does a cell picked on the map (keyboard here).
+  assert.equal(await table.getByRole('link', { name: /^Open [1-4] in Simulate$/ }).count(), 4);
+  await page.getByRole('img', { name: /Objective over the two parameters/ }).press('Enter');
+  await page.waitForFunction(() => location.hash.startsWith('#/simulate'));
+  await page.goBack();
+  await page.waitForFunction(() => location.hash.startsWith('#/tune'));
 
   // A search: at most 5 evaluations of one parameter, then open the best in Simulate.
   await page.getByLabel('Tune a second parameter').uncheck();

@@ -469,8 +469,20 @@ pub fn TunePage() -> impl IntoView {
                                 )}
                                 <a href=best_href>"Open the best in Simulate"</a>
                             </p>
-                            {map.map(|m| view! {
-                                <HeatMapCanvas label="Objective over the two parameters" map=Signal::derive(move || m.clone()) on_pick=Callback::new(|_| {}) />
+                            {map.map(|m| {
+                                // Picking a cell opens the evaluation nearest to it in Simulate.
+                                let points: Vec<Vec<f64>> = tuned.evaluations.iter().map(|e| e.values.clone()).collect();
+                                let (params, spans) = (params.clone(), params.iter().map(|p| (p.hi - p.lo).max(f64::MIN_POSITIVE)).collect::<Vec<_>>());
+                                let pick = Callback::new(move |(x, y): (f64, f64)| {
+                                    let distance = |v: &Vec<f64>| ((v[0] - x) / spans[0]).powi(2) + ((v[1] - y) / spans[1]).powi(2);
+                                    if let Some(v) = points.iter().min_by(|a, b| distance(a).total_cmp(&distance(b))) {
+                                        let _ = window().location().set_href(&simulate_href(preset, k, &params, v));
+                                    }
+                                });
+                                view! {
+                                    <p class="hint">"Pick a cell (click, or Enter on the focused map) to open that point in Simulate."</p>
+                                    <HeatMapCanvas label="Objective over the two parameters" map=Signal::derive(move || m.clone()) on_pick=pick />
+                                }
                             })}
                             <table aria-label="Evaluations">
                                 <thead><tr>
@@ -479,15 +491,17 @@ pub fn TunePage() -> impl IntoView {
                                     <th scope="col">"Cycle (s)"</th>
                                     <th scope="col">"Force error (%)"</th>
                                     <th scope="col">"Pareto front"</th>
+                                    <th scope="col">"Simulate"</th>
                                 </tr></thead>
                                 <tbody>
-                                    {rows.into_iter().map(|(_, e, front)| view! {
+                                    {rows.into_iter().map(|(i, e, front)| view! {
                                         <tr>
                                             {e.values.iter().map(|v| view! { <td>{readable(*v)}</td> }).collect_view()}
                                             <td>{format!("{:.3}", e.cost)}</td>
                                             <td>{format!("{:.1}", e.cycle_time_s)}</td>
                                             <td>{format!("{:.1}", e.force_error_pct)}</td>
                                             <td>{if front { "yes" } else { "" }}</td>
+                                            <td><a href=simulate_href(preset, k, &params, &e.values)>{format!("Open {} in Simulate", i + 1)}</a></td>
                                         </tr>
                                     }).collect_view()}
                                 </tbody>
