@@ -247,3 +247,49 @@ fn a_messy_export_of_the_teach_cut_calibrates_like_the_clean_one() {
     let (result, _) = common::cutlab_text(&["calibrate", path, "--map", "force_n=Force"], "");
     assert!(result.unwrap_err().contains("columns: Zeit [s], Kraft [N]"));
 }
+
+/// The synthetic machine export in www/data (made by scripts/sample-logs): the reader finds its
+/// dialect, time and roles, and the per-phase analysis shows the controller holding the force
+/// across the depth steps the fixed feed would follow.
+#[test]
+fn the_synthetic_machine_export_reads_and_analyses_by_phase() {
+    use cutlab::log::analysis::{analyse, AnalysisRequest};
+    use cutlab::log::Role;
+    let bytes = std::fs::read(format!("{DATA}synthetic-kim-step-doc-export.csv")).unwrap();
+    let log = cutlab::log::load(&bytes, None);
+    assert_eq!(log.dialect.delimiter, b';');
+    assert!(log.dialect.decimal_comma);
+    assert_eq!(log.sample_period_s, Some(0.06));
+    let role = |name: &str| log.columns.iter().find(|c| c.name == name).unwrap().role;
+    assert_eq!(role("Zeit [s]"), Some(Role::Time));
+    assert_eq!(role("S_Strom [A]"), Some(Role::RmsCurrent));
+    assert_eq!(role("S_Drehzahl (rpm)"), Some(Role::SpindleSpeed));
+    assert_eq!(role("X_Vorschub [mm/min]"), Some(Role::Feed));
+    assert_eq!(role("Kraft [N]"), Some(Role::Force));
+    assert_eq!(role("Phase"), Some(Role::Label));
+    let a = analyse(
+        &log,
+        "Kraft [N]",
+        &AnalysisRequest {
+            by: Some("Phase".into()),
+            ..AnalysisRequest::default()
+        },
+    )
+    .unwrap();
+    let mean = |label: &str| {
+        a.by_label
+            .iter()
+            .find(|l| l.label == label)
+            .and_then(|l| l.stats.mean)
+            .unwrap()
+    };
+    assert_eq!(mean("Luftschnitt"), 0.0);
+    // 3, 4 and 5 mm deep, the force stays within 10 % of one level (the target, 372 N).
+    for depth in ["Schnitt 3 mm", "Schnitt 4 mm", "Schnitt 5 mm"] {
+        assert!(
+            (mean(depth) / 372.0 - 1.0).abs() < 0.1,
+            "{depth}: {}",
+            mean(depth)
+        );
+    }
+}
