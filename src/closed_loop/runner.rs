@@ -298,6 +298,8 @@ pub struct Calibration {
     pub periods: usize,
     /// The largest phase current (feed or spindle, raw) seen during the teach cut.
     pub max_phase_current_a: f64,
+    /// How long the teach cut ran (machine time).
+    pub duration_s: f64,
 }
 
 /// The overrides a teach cut cycles through, each held for [`TEACH_STEP_S`]: a spread of loads
@@ -681,6 +683,7 @@ impl TeachCut {
             ),
             periods: s.force_n.len(),
             max_phase_current_a: s.max_phase_current_a,
+            duration_s: self.time_s,
         })
     }
 }

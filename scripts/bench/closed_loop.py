@@ -1,0 +1,114 @@
+#!/usr/bin/env python3
+"""Simulation speed, measured side by side in one run (issue 14's benchmark):
+
+* cutlab's closed loop with the full chain (10 kHz three-phase currents of both drives, Hall
+  sensors and noise, filters, RMS, estimator, fuzzy controller, envelope) on kim-step-doc:
+  simulated seconds (teach cut + run) per wall second, natively (`cutlab sim`);
+* `cutlab compare` of six controllers with the fixed-feed references on kim-step-doc: wall time;
+* the NumPy anchor: an open-loop milling simulation vectorised with NumPy at the same 10 kHz
+  (mechanistic forces of a 2-tooth cutter, two three-phase drives with noise, RMS per period),
+  simulated seconds per wall second.
+
+Each case runs --rounds times, alternating, and keeps its best round. Prints a Markdown table.
+
+    python3 scripts/bench/closed_loop.py [--rounds 3]
+"""
+import argparse
+import json
+import os
+import subprocess
+import sys
+import tempfile
+import time
+
+import numpy as np
+
+ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+CUTLAB = os.path.join(ROOT, "target", "release", "cutlab")
+RATE_HZ = 10_000.0
+
+
+def numpy_anchor(seconds: float, seed: int = 1) -> float:
+    """Open-loop milling at 10 kHz, vectorised: returns the wall time."""
+    rng = np.random.default_rng(seed)
+    start = time.perf_counter()
+    n = int(seconds * RATE_HZ)
+    t = np.arange(n) / RATE_HZ
+    rpm, teeth, feed_per_tooth, depth = 1000.0, 2, 0.1, 2.5
+    ktc, krc, kte, kre = 2000.0, 800.0, 20.0, 25.0
+    phi = 2 * np.pi * rpm / 60.0 * t
+    fx = np.zeros(n)
+    fy = np.zeros(n)
+    for k in range(teeth):
+        angle = np.mod(phi + 2 * np.pi * k / teeth, 2 * np.pi)
+        cutting = angle < np.pi  # slot
+        h = feed_per_tooth * np.sin(angle) * cutting
+        ft = (ktc * h + kte * cutting) * depth
+        fr = (krc * h + kre * cutting) * depth
+        fx += -ft * np.cos(angle) - fr * np.sin(angle)
+        fy += ft * np.sin(angle) - fr * np.cos(angle)
+    torque = 0.01 * np.hypot(fx, fy)
+    rms = []
+    for pole_pairs, speed_hz, gain in ((2, rpm / 60.0, 0.4), (4, 4.0, 0.01)):
+        theta = 2 * np.pi * pole_pairs * speed_hz * t
+        amplitude = gain * (torque + 5.0)
+        phases = [amplitude * np.cos(theta - s) for s in (0.0, 2 * np.pi / 3, 4 * np.pi / 3)]
+        phases = [p + 0.02 * rng.standard_normal(n) for p in phases]
+        instantaneous = np.sqrt((phases[0] ** 2 + phases[1] ** 2 + phases[2] ** 2) / 3.0)
+        period = int(0.06 * RATE_HZ)
+        usable = n - n % period
+        rms.append(instantaneous[:usable].reshape(-1, period).mean(axis=1))
+    _ = float(rms[0].sum() + rms[1].sum())
+    return time.perf_counter() - start
+
+
+def cutlab_sim() -> tuple[float, float]:
+    """Wall time of `cutlab sim` and the seconds it simulated (teach cut + run)."""
+    with tempfile.TemporaryDirectory() as d:
+        report = os.path.join(d, "r.json")
+        start = time.perf_counter()
+        subprocess.run(
+            [CUTLAB, "sim", "--scenario", "kim-step-doc", "--controller", "fuzzy-dynamics",
+             "--no-references", "--json", report],
+            check=True, stdout=subprocess.DEVNULL)
+        wall = time.perf_counter() - start
+        data = json.load(open(report))
+    return wall, data["metrics"]["cycle_time_s"] + data["calibration"]["duration_s"]
+
+
+def cutlab_compare() -> float:
+    start = time.perf_counter()
+    subprocess.run(
+        [CUTLAB, "compare", "--scenario", "kim-step-doc", "--controllers",
+         "fixed,restriction,threshold,fuzzy-experience,fuzzy-dynamics,pi"],
+        check=True, stdout=subprocess.DEVNULL)
+    return time.perf_counter() - start
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser()
+    parser.add_argument("--rounds", type=int, default=3)
+    args = parser.parse_args()
+    subprocess.run(["cargo", "build", "--release", "--features", "cli", "-q"], cwd=ROOT, check=True)
+    sim_best = compare_best = anchor_best = None
+    simulated = None
+    for _ in range(args.rounds):
+        wall, simulated = cutlab_sim()
+        sim_best = wall if sim_best is None else min(sim_best, wall)
+        anchor = numpy_anchor(simulated)
+        anchor_best = anchor if anchor_best is None else min(anchor_best, anchor)
+        c = cutlab_compare()
+        compare_best = c if compare_best is None else min(compare_best, c)
+    cutlab_rate = simulated / sim_best
+    anchor_rate = simulated / anchor_best
+    print(f"simulated seconds per run: {simulated:.1f} (teach cut + cut)", file=sys.stderr)
+    print("| case | measured | target |")
+    print("|---|---:|---|")
+    print(f"| closed loop, full chain, native: simulated s per wall s | {cutlab_rate:.0f} | ≥ 2000 |")
+    print(f"| NumPy anchor (open loop, vectorised): simulated s per wall s | {anchor_rate:.0f} | — |")
+    print(f"| cutlab / NumPy anchor | {cutlab_rate / anchor_rate:.2f}× | ≥ 4.35× |")
+    print(f"| `cutlab compare`, six controllers with references: wall s | {compare_best:.1f} | ≤ 1.5 |")
+
+
+if __name__ == "__main__":
+    main()
