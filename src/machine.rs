@@ -131,6 +131,16 @@ pub struct MachineStep {
     pub truth: Option<PlantTruth>,
 }
 
+/// One sample of a block stepped by [`Machine::step_block`]: the step and the dynamometer's
+/// reading at it, if the machine has one.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct BlockStep {
+    /// What [`Machine::step`] returned.
+    pub step: MachineStep,
+    /// What [`Machine::dynamometer_force_n`] said right after.
+    pub dynamometer: Option<DynamometerReading>,
+}
+
 /// A machine the closed loop can drive, one sensor sample period at a time.
 ///
 /// Object-safe so the lab can switch between simulation, replay and hardware at run time.
@@ -156,5 +166,25 @@ pub trait Machine {
     /// ([`crate::closed_loop::runner::TeachForce::Dynamometer`]).
     fn dynamometer_force_n(&self) -> Option<DynamometerReading> {
         None
+    }
+
+    /// Steps up to `out.len()` samples under `command`, writing each step and dynamometer
+    /// reading: exactly [`Machine::step`] then [`Machine::dynamometer_force_n`], sample after
+    /// sample, stopping after the sample at which [`Machine::finished`] turns true (a finished
+    /// machine still gives one sample, its last, as `step` does). Returns how many were written
+    /// (at least one unless `out` is empty).
+    ///
+    /// The closed loop steps a control period's samples through this: one call per block instead
+    /// of a dynamic call per sample, and, compiled for a concrete machine (this default is
+    /// generated for each implementation), a loop the compiler can inline the step into.
+    fn step_block(&mut self, command: OverrideCommand, out: &mut [BlockStep]) -> usize {
+        for (i, slot) in out.iter_mut().enumerate() {
+            slot.step = self.step(command);
+            slot.dynamometer = self.dynamometer_force_n();
+            if self.finished() {
+                return i + 1;
+            }
+        }
+        out.len()
     }
 }

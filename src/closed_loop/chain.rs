@@ -12,6 +12,10 @@
 //! papers' force targets refer to — and the minimum and maximum of the raw signals for plotting.
 //!
 //! Filtering and RMS come from [`crate::signal`]; nothing here allocates after construction.
+//! The phase currents are gathered into blocks of [`BLOCK_FRAMES`] samples and filtered a block
+//! at a time (the filter bank's vector kernel, with the same bits as sample by sample), and the
+//! RMS of each sample is summed in order when the block is flushed, so a period's summary is the
+//! same whether its samples come one by one or in a slice.
 
 use crate::machine::{DynamometerReading, MachineStep};
 use crate::signal::filter::{NoChannels, SosFilterBank};
@@ -60,11 +64,17 @@ pub struct PeriodSummary {
     pub dynamometer_feed_force_n: f64,
 }
 
+/// Samples gathered before the filters run over them as one slice.
+pub const BLOCK_FRAMES: usize = 128;
+
 /// Per-sample processing and the running sums of one period.
 #[derive(Debug, Clone)]
 pub struct SignalChain {
     spindle_filter: SosFilterBank,
     feed_filter: SosFilterBank,
+    /// Phase currents not yet filtered, interleaved `u v w u v w …`.
+    spindle_block: Vec<f64>,
+    feed_block: Vec<f64>,
     sums: Sums,
 }
 
@@ -100,22 +110,25 @@ impl SignalChain {
         Ok(Self {
             spindle_filter: SosFilterBank::new(spindle_lowpass, 3)?,
             feed_filter: SosFilterBank::new(feed_lowpass, 3)?,
+            spindle_block: Vec::with_capacity(3 * BLOCK_FRAMES),
+            feed_block: Vec::with_capacity(3 * BLOCK_FRAMES),
             sums: Sums::default(),
         })
     }
 
     /// Takes one sample.
+    #[inline]
     pub fn push(&mut self, step: &MachineStep) {
         let s = &step.sensors;
-        let mut spindle = s.spindle_phase_currents_a;
-        let mut feed = s.feed_phase_currents_a;
-        self.spindle_filter.process_slice(&mut spindle);
-        self.feed_filter.process_slice(&mut feed);
+        self.spindle_block
+            .extend_from_slice(&s.spindle_phase_currents_a);
+        self.feed_block.extend_from_slice(&s.feed_phase_currents_a);
+        if self.spindle_block.len() >= 3 * BLOCK_FRAMES {
+            self.flush();
+        }
         let sums = &mut self.sums;
         sums.n += 1;
         sums.end_time_s = s.time_s;
-        sums.spindle_rms += three_phase_rms(spindle[0], spindle[1], spindle[2]);
-        sums.feed_rms += three_phase_rms(feed[0], feed[1], feed[2]);
         sums.fv += s.spindle_fv_voltage_v;
         sums.speed += s.spindle_speed_rpm;
         sums.command_rpm = s.spindle_command_rpm;
@@ -143,8 +156,24 @@ impl SignalChain {
         sums.dynamometer_feed += reading.feed_force_n;
     }
 
+    /// Filters the gathered phase currents and adds each sample's three-phase RMS to the sums.
+    fn flush(&mut self) {
+        self.spindle_filter.process_slice(&mut self.spindle_block);
+        self.feed_filter.process_slice(&mut self.feed_block);
+        let sums = &mut self.sums;
+        for i in self.spindle_block.as_chunks::<3>().0 {
+            sums.spindle_rms += three_phase_rms(i[0], i[1], i[2]);
+        }
+        for i in self.feed_block.as_chunks::<3>().0 {
+            sums.feed_rms += three_phase_rms(i[0], i[1], i[2]);
+        }
+        self.spindle_block.clear();
+        self.feed_block.clear();
+    }
+
     /// Ends the period: returns its summary and starts the next one.
     pub fn finish_period(&mut self) -> PeriodSummary {
+        self.flush();
         let s = std::mem::take(&mut self.sums);
         let n = s.n.max(1) as f64;
         let truth = |v: f64| if s.truth_seen { v / n } else { f64::NAN };
@@ -188,6 +217,8 @@ impl SignalChain {
     pub fn reset(&mut self) {
         self.spindle_filter.reset();
         self.feed_filter.reset();
+        self.spindle_block.clear();
+        self.feed_block.clear();
         self.sums = Sums::default();
     }
 }

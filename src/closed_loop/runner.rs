@@ -32,7 +32,8 @@ use crate::estimation::cut_forces::CutGeometry;
 use crate::estimation::least_squares::FitError;
 use crate::estimation::speed::FvSpeedModel;
 use crate::machine::{
-    DynamometerReading, Machine, MachineStep, OverrideCommand, SensorSample, SensorlessEstimate,
+    BlockStep, DynamometerReading, Machine, MachineStep, OverrideCommand, SensorSample,
+    SensorlessEstimate,
 };
 use crate::plant::PlantError;
 use crate::safety::{EnvelopeConfig, EnvelopeError, SafetyEnvelope, SafetyEvent};
@@ -426,6 +427,10 @@ pub trait SampleLoop {
     /// Whether the next pushed sample is the last of its control period.
     fn next_sample_ends_period(&self) -> bool;
 
+    /// How many more samples the control period under way takes (at least one): a machine can
+    /// step that many under the same command at once.
+    fn samples_left_in_period(&self) -> usize;
+
     /// The machine says its program (or log) has ended with the last sample pushed: a period
     /// under way ends with the samples it has (the machine has nothing more to say, and repeating
     /// its last reading would look like a stuck sensor), and the loop ends.
@@ -726,6 +731,12 @@ impl SampleLoop for TeachCut {
         self.samples_in_period + 1 >= self.samples_per_period
     }
 
+    fn samples_left_in_period(&self) -> usize {
+        self.samples_per_period
+            .saturating_sub(self.samples_in_period)
+            .max(1)
+    }
+
     fn end_of_program(&mut self) {
         if self.samples_in_period > 0 && !self.done {
             self.end_period(self.command.override_pct);
@@ -996,6 +1007,12 @@ impl SampleLoop for FeedbackLoop {
         self.samples_in_period + 1 >= self.samples_per_period
     }
 
+    fn samples_left_in_period(&self) -> usize {
+        self.samples_per_period
+            .saturating_sub(self.samples_in_period)
+            .max(1)
+    }
+
     fn end_of_program(&mut self) {
         if self.samples_in_period > 0 && !self.done {
             self.end_period(self.last_sensorless);
@@ -1027,7 +1044,12 @@ impl SampleLoop for FeedbackLoop {
 pub struct OnMachine<L> {
     machine: Box<dyn Machine>,
     sample_loop: L,
+    /// The samples of the block being pushed ([`Machine::step_block`]).
+    block: Vec<BlockStep>,
 }
+
+/// Samples a machine steps at once, at most (a block stays in the first-level cache).
+const MACHINE_BLOCK: usize = 64;
 
 /// The closed loop on a machine.
 pub type ClosedLoop = OnMachine<FeedbackLoop>;
@@ -1038,6 +1060,7 @@ impl<L: SampleLoop> OnMachine<L> {
         Self {
             machine,
             sample_loop,
+            block: vec![BlockStep::default(); MACHINE_BLOCK],
         }
     }
 
@@ -1061,30 +1084,42 @@ impl<L: SampleLoop> OnMachine<L> {
         (self.machine, self.sample_loop)
     }
 
-    /// Runs one control period.
+    /// Runs one control period: the machine steps the period's samples in blocks under the
+    /// period's command, and each sample is pushed into the loop in turn.
     fn period(&mut self) {
         let command = self.sample_loop.command();
         loop {
-            let step = self.machine.step(command);
+            let wanted = self.sample_loop.samples_left_in_period().min(MACHINE_BLOCK);
+            let stepped = self.machine.step_block(command, &mut self.block[..wanted]);
             let program_over = self.machine.finished();
-            let ends = program_over || self.sample_loop.next_sample_ends_period();
-            let sample = LoopSample {
-                step: &step,
-                // The power law is evaluated once per period, where the loop reads it.
-                sensorless: if ends {
-                    self.machine.sensorless_force()
-                } else {
-                    None
-                },
-                dynamometer: self.machine.dynamometer_force_n(),
-            };
-            let period_ended = self.sample_loop.push(&sample).is_some();
-            if program_over {
-                self.sample_loop.end_of_program();
-                break;
+            for (i, b) in self.block[..stepped].iter().enumerate() {
+                let last = i + 1 == stepped;
+                // A period ends at the block's last sample (the block never crosses one), or
+                // where the program does.
+                let ends = (last && program_over) || self.sample_loop.next_sample_ends_period();
+                let sample = LoopSample {
+                    step: &b.step,
+                    // The power law is evaluated once per period, where the loop reads it: at
+                    // the machine's latest sample, which is this one.
+                    sensorless: if ends && last {
+                        self.machine.sensorless_force()
+                    } else {
+                        None
+                    },
+                    dynamometer: b.dynamometer,
+                };
+                let period_ended = self.sample_loop.push(&sample).is_some();
+                if last && program_over {
+                    self.sample_loop.end_of_program();
+                    return;
+                }
+                if period_ended || self.sample_loop.finished() {
+                    return;
+                }
             }
-            if period_ended || self.sample_loop.finished() {
-                break;
+            if stepped == 0 {
+                // Not reached (a block holds at least one sample); never spin.
+                return;
             }
         }
     }

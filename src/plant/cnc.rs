@@ -356,8 +356,7 @@ impl CncConfig {
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct OverrideInput {
     mode: OverrideMode,
-    scan_samples: u64,
-    counter: u64,
+    scan: Every,
     applied: AppliedOverride,
     feed_hold: bool,
 }
@@ -372,8 +371,7 @@ impl OverrideInput {
             .apply(100.0, AppliedOverride::default());
         Ok(Self {
             mode: config.override_mode,
-            scan_samples: samples_per(config.pmc_scan_s, dt_s),
-            counter: 0,
+            scan: Every::new(samples_per(config.pmc_scan_s, dt_s)),
             applied: initial,
             feed_hold: false,
         })
@@ -382,11 +380,10 @@ impl OverrideInput {
     /// Advances one sample; at a scan, reads `command`. Returns the override in force and whether
     /// feed hold is set.
     pub fn step(&mut self, command: OverrideCommand) -> (AppliedOverride, bool) {
-        if self.counter.is_multiple_of(self.scan_samples) {
+        if self.scan.tick() {
             self.applied = self.mode.apply(command.override_pct, self.applied);
             self.feed_hold = command.feed_hold;
         }
-        self.counter += 1;
         (self.applied, self.feed_hold)
     }
 
@@ -397,9 +394,40 @@ impl OverrideInput {
 
     /// Back to the start.
     pub fn reset(&mut self) {
-        self.counter = 0;
+        self.scan.reset();
         self.applied = self.mode.apply(100.0, AppliedOverride::default());
         self.feed_hold = false;
+    }
+}
+
+/// A clock that ticks on the first sample and every `period` samples after: the same as testing
+/// a sample counter for a multiple of the period, without a division per sample.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) struct Every {
+    period: u64,
+    left: u64,
+}
+
+impl Every {
+    /// A clock of `period` samples (at least one), about to tick.
+    pub(crate) fn new(period: u64) -> Self {
+        Self {
+            period: period.max(1),
+            left: 0,
+        }
+    }
+
+    /// Advances one sample; true on the samples where the period starts.
+    #[inline]
+    pub(crate) fn tick(&mut self) -> bool {
+        let now = self.left == 0;
+        self.left = if now { self.period - 1 } else { self.left - 1 };
+        now
+    }
+
+    /// Back to about to tick.
+    pub(crate) fn reset(&mut self) {
+        self.left = 0;
     }
 }
 
@@ -561,9 +589,8 @@ pub struct FeedPlanner {
     blocks: Vec<PlanBlock>,
     junctions: Vec<Junction>,
     dt_s: f64,
-    ipo_samples: u64,
+    ipo: Every,
     loop_alpha: f64,
-    counter: u64,
     block: usize,
     commanded_mm: f64,
     commanded_mm_min: f64,
@@ -618,12 +645,11 @@ impl FeedPlanner {
         }
         Ok(Self {
             loop_alpha: 1.0 - math::exp(-config.position_loop_gain_per_s * dt_s),
-            ipo_samples: samples_per(config.interpolation_period_s, dt_s),
+            ipo: Every::new(samples_per(config.interpolation_period_s, dt_s)),
             config,
             blocks,
             junctions,
             dt_s,
-            counter: 0,
             block: 0,
             commanded_mm: 0.0,
             commanded_mm_min: 0.0,
@@ -640,7 +666,7 @@ impl FeedPlanner {
 
     /// Back to the start of the path.
     pub fn reset(&mut self) {
-        self.counter = 0;
+        self.ipo.reset();
         self.block = 0;
         self.commanded_mm = 0.0;
         self.commanded_mm_min = 0.0;
@@ -686,10 +712,9 @@ impl FeedPlanner {
     /// Advances one sample with the override in force, feed hold, and whether the spindle is
     /// ready (at speed) for motion.
     pub fn step(&mut self, override_pct: f64, feed_hold: bool, spindle_ready: bool) -> CncState {
-        if self.counter.is_multiple_of(self.ipo_samples) {
+        if self.ipo.tick() {
             self.interpolation_tick(override_pct, feed_hold, spindle_ready);
         }
-        self.counter += 1;
         // Commanded position advances linearly within the period, never past the next stop.
         if !self.waiting && !self.done {
             let stop_at = self.next_stop_mm();

@@ -20,7 +20,7 @@ use serde::{Deserialize, Serialize};
 use super::dynamics::FirstOrderLag;
 use super::{positive, PlantError};
 use crate::machine::{
-    DynamometerReading, Machine, MachineStep, OverrideCommand, SensorlessEstimate,
+    BlockStep, DynamometerReading, Machine, MachineStep, OverrideCommand, SensorlessEstimate,
 };
 use crate::rng::Rng;
 
@@ -117,13 +117,9 @@ impl WithDynamometer {
     }
 }
 
-impl Machine for WithDynamometer {
-    fn sample_rate_hz(&self) -> f64 {
-        self.machine.sample_rate_hz()
-    }
-
-    fn step(&mut self, command: OverrideCommand) -> MachineStep {
-        let step = self.machine.step(command);
+impl WithDynamometer {
+    /// The sensor's reading of the force in `step`.
+    fn read(&mut self, step: &MachineStep) {
         self.reading = step.truth.map(|truth| {
             let noise = self.noise_n;
             DynamometerReading {
@@ -132,7 +128,28 @@ impl Machine for WithDynamometer {
                 feed_force_n: self.lag_feed.step(truth.feed_force_n) + noise * self.rng.normal(),
             }
         });
+    }
+}
+
+impl Machine for WithDynamometer {
+    fn sample_rate_hz(&self) -> f64 {
+        self.machine.sample_rate_hz()
+    }
+
+    fn step(&mut self, command: OverrideCommand) -> MachineStep {
+        let step = self.machine.step(command);
+        self.read(&step);
         step
+    }
+
+    fn step_block(&mut self, command: OverrideCommand, out: &mut [BlockStep]) -> usize {
+        // The machine's block, then the sensor's reading of each sample in turn.
+        let n = self.machine.step_block(command, out);
+        for slot in &mut out[..n] {
+            self.read(&slot.step);
+            slot.dynamometer = self.reading;
+        }
+        n
     }
 
     fn finished(&self) -> bool {

@@ -31,6 +31,9 @@
 //! ```
 //!
 //! The three sum to zero (eq 5), and their RMS is I/√2·√(1 + h_5² + h_7²) — I/√2 for a clean set.
+//! θ advances with the axis, by p·2π·Δx/L_0 per sample, as a [`crate::math::Phasor`]: its cosine
+//! and sine come by rotation, and the harmonics by complex powers, so a sample needs no
+//! trigonometric call.
 //!
 //! NaN in a velocity or load propagates to the currents; the axis position stays finite only if
 //! the velocity does.
@@ -40,7 +43,7 @@ use std::f64::consts::{FRAC_PI_2, TAU};
 
 use super::dynamics::SecondOrderLag;
 use super::{in_range, non_negative, positive, PlantError, S_PER_MIN};
-use crate::math;
+use crate::math::{self, Phasor};
 
 /// Parameters of one feed axis. The defaults describe a mid-size vertical machining centre with a
 /// FANUC-class AC servo motor; paper 000 gives the equations, not the numbers.
@@ -205,23 +208,14 @@ impl FeedDriveConfig {
 pub struct ThreePhaseWaveform {
     harmonic_5th: f64,
     harmonic_7th: f64,
-    /// cos and sin of n·ψ_k for harmonic n ∈ {1, 5, 7} and phase shift ψ_k ∈ {0, +2π/3, −2π/3}.
-    shifts: [[(f64, f64); 3]; 3],
 }
 
 impl ThreePhaseWaveform {
     /// A waveform with relative 5th and 7th harmonics.
     pub fn new(harmonic_5th: f64, harmonic_7th: f64) -> Self {
-        let mut shifts = [[(1.0, 0.0); 3]; 3];
-        for (h, n) in [1.0, 5.0, 7.0].into_iter().enumerate() {
-            for (k, psi) in [0.0, TAU / 3.0, -TAU / 3.0].into_iter().enumerate() {
-                shifts[h][k] = (math::cos(n * psi), math::sin(n * psi));
-            }
-        }
         Self {
             harmonic_5th,
             harmonic_7th,
-            shifts,
         }
     }
 
@@ -230,24 +224,32 @@ impl ThreePhaseWaveform {
         self.currents_from_trig(amplitude_a, math::cos(theta_rad), math::sin(theta_rad))
     }
 
-    /// The same from cos θ and sin θ (harmonics by complex powers, no further trigonometry).
+    /// The same from cos θ and sin θ, with no further trigonometry: the harmonics by complex
+    /// powers z⁵, z⁷ of z = e^(iθ), and the phases in closed form. Phase k is
+    /// Σ_n h_n·cos(n·(θ + ψ_k)) for n ∈ {1, 5, 7}, ψ = 0, +2π/3, −2π/3; n·2π/3 is +2π/3 for
+    /// n = 1 and 7 and −2π/3 for n = 5 (mod 2π), so with
+    /// P = cos θ + h_5·cos 5θ + h_7·cos 7θ and Q = sin θ − h_5·sin 5θ + h_7·sin 7θ:
+    ///
+    /// ```text
+    /// i_u = I·P,   i_v = I·(−P/2 − (√3/2)·Q),   i_w = I·(−P/2 + (√3/2)·Q)
+    /// ```
     #[inline]
     pub fn currents_from_trig(&self, amplitude_a: f64, cos_theta: f64, sin_theta: f64) -> [f64; 3] {
+        const HALF_SQRT_3: f64 = 0.866_025_403_784_438_6;
         let mul = |a: (f64, f64), b: (f64, f64)| (a.0 * b.0 - a.1 * b.1, a.0 * b.1 + a.1 * b.0);
         let z1 = (cos_theta, sin_theta);
         let z2 = mul(z1, z1);
         let z4 = mul(z2, z2);
         let z5 = mul(z4, z1);
         let z7 = mul(z5, z2);
-        let mut out = [0.0; 3];
-        for (k, o) in out.iter_mut().enumerate() {
-            let re = |z: (f64, f64), s: (f64, f64)| z.0 * s.0 - z.1 * s.1;
-            *o = amplitude_a
-                * (re(z1, self.shifts[0][k])
-                    + self.harmonic_5th * re(z5, self.shifts[1][k])
-                    + self.harmonic_7th * re(z7, self.shifts[2][k]));
-        }
-        out
+        let p = z1.0 + self.harmonic_5th * z5.0 + self.harmonic_7th * z7.0;
+        let q = z1.1 - self.harmonic_5th * z5.1 + self.harmonic_7th * z7.1;
+        let (half_p, root_q) = (0.5 * p, HALF_SQRT_3 * q);
+        [
+            amplitude_a * p,
+            amplitude_a * (-half_p - root_q),
+            amplitude_a * (root_q - half_p),
+        ]
     }
 
     /// Time-RMS of one phase per unit amplitude, √(1 + h_5² + h_7²)/√2.
@@ -306,12 +308,56 @@ pub struct FeedDriveOutput {
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct FeedDrive {
     config: FeedDriveConfig,
-    dt_s: f64,
+    k: StepConstants,
     lag: SecondOrderLag,
     waveform: ThreePhaseWaveform,
-    torque_constant: f64,
     position_mm: f64,
+    /// θ, π/2 at position 0.
+    electrical: Phasor,
     previous_velocity_mm_min: f64,
+}
+
+/// What a step multiplies by, worked out once from the configuration and Δt (divisions are the
+/// slowest arithmetic in a 10 kHz loop).
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct StepConstants {
+    /// mm of travel per mm/min of velocity in one step, Δt/60.
+    mm_per_mm_min: f64,
+    /// mm/s² per mm/min of velocity change in one step, 1/(60·Δt).
+    mm_s2_per_mm_min: f64,
+    /// Friction and preload force at full sign, F_0 + F_p0·(1 − η_0²).
+    friction_n: f64,
+    /// 1/v_band.
+    per_friction_band: f64,
+    /// Table inertia, N per mm/s² (kg·mm/s² = 10⁻³ N).
+    mass_n_per_mm_s2: f64,
+    /// Viscous damping, N per mm/min.
+    damping_n_per_mm_min: f64,
+    /// Motor torque per newton at the nut, L_0/(2πη).
+    torque_per_force_nm_per_n: f64,
+    /// Rotor inertia torque per mm/s² of table acceleration, J_m·2π/L_0.
+    rotor_nm_per_mm_s2: f64,
+    /// 1/K_t.
+    amps_per_nm: f64,
+    /// Electrical radians per millimetre of travel, p·2π/L_0.
+    electrical_rad_per_mm: f64,
+}
+
+impl StepConstants {
+    fn new(c: &FeedDriveConfig, dt_s: f64) -> Self {
+        Self {
+            mm_per_mm_min: dt_s / S_PER_MIN,
+            mm_s2_per_mm_min: 1.0 / (S_PER_MIN * dt_s),
+            friction_n: c.friction_force_n(),
+            per_friction_band: 1.0 / c.friction_band_mm_min,
+            mass_n_per_mm_s2: c.table_mass_kg * 1e-3,
+            damping_n_per_mm_min: c.damping_n_s_per_mm / S_PER_MIN,
+            torque_per_force_nm_per_n: c.torque_per_force_nm_per_n(),
+            rotor_nm_per_mm_s2: c.rotor_inertia_kg_m2 * TAU / c.screw_pitch_mm,
+            amps_per_nm: 1.0 / c.torque_constant_nm_per_a(),
+            electrical_rad_per_mm: f64::from(c.pole_pairs) * TAU / c.screw_pitch_mm,
+        }
+    }
 }
 
 impl FeedDrive {
@@ -321,11 +367,11 @@ impl FeedDrive {
         positive("dt_s", dt_s)?;
         Ok(Self {
             config,
-            dt_s,
+            k: StepConstants::new(&config, dt_s),
             lag: SecondOrderLag::new(config.servo_bandwidth_hz, config.servo_damping_ratio, dt_s),
             waveform: config.waveform(),
-            torque_constant: config.torque_constant_nm_per_a(),
             position_mm: 0.0,
+            electrical: Phasor::new(FRAC_PI_2),
             previous_velocity_mm_min: 0.0,
         })
     }
@@ -339,36 +385,37 @@ impl FeedDrive {
     pub fn reset(&mut self) {
         self.lag.reset(0.0);
         self.position_mm = 0.0;
+        self.electrical = Phasor::new(FRAC_PI_2);
         self.previous_velocity_mm_min = 0.0;
     }
 
     /// Advances one sample: the axis moves at `velocity_mm_min` against a cutting force
     /// `load_force_n` along its direction of positive motion (positive resists positive motion)
     /// plus an external torque `shaft_torque_nm` on the motor shaft (the brake bench's load).
+    #[inline]
     pub fn step(
         &mut self,
         velocity_mm_min: f64,
         load_force_n: f64,
         shaft_torque_nm: f64,
     ) -> FeedDriveOutput {
-        let c = &self.config;
-        let accel_mm_s2 = (velocity_mm_min - self.previous_velocity_mm_min) / S_PER_MIN / self.dt_s;
+        let k = &self.k;
+        let accel_mm_s2 = (velocity_mm_min - self.previous_velocity_mm_min) * k.mm_s2_per_mm_min;
         self.previous_velocity_mm_min = velocity_mm_min;
-        self.position_mm += velocity_mm_min / S_PER_MIN * self.dt_s;
-        // Friction, preload, cut, inertia of the table (kg·mm/s² = 1e-3 N) and damping.
-        let force_n = c.friction_force_n()
-            * (velocity_mm_min / c.friction_band_mm_min).clamp(-1.0, 1.0)
+        let step_mm = velocity_mm_min * k.mm_per_mm_min;
+        self.position_mm += step_mm;
+        self.electrical.advance(k.electrical_rad_per_mm * step_mm);
+        // Friction, preload, cut, inertia of the table and damping.
+        let force_n = k.friction_n * (velocity_mm_min * k.per_friction_band).clamp(-1.0, 1.0)
             + load_force_n
-            + c.table_mass_kg * accel_mm_s2 * 1e-3
-            + c.damping_n_s_per_mm * velocity_mm_min / S_PER_MIN;
-        let rotor_accel_rad_s2 = accel_mm_s2 * TAU / c.screw_pitch_mm;
-        let torque_demand_nm = c.torque_per_force_nm_per_n() * force_n
-            + c.rotor_inertia_kg_m2 * rotor_accel_rad_s2
+            + k.mass_n_per_mm_s2 * accel_mm_s2
+            + k.damping_n_per_mm_min * velocity_mm_min;
+        let torque_demand_nm = k.torque_per_force_nm_per_n * force_n
+            + k.rotor_nm_per_mm_s2 * accel_mm_s2
             + shaft_torque_nm;
         let torque_nm = self.lag.step(torque_demand_nm);
-        let iq_a = torque_nm / self.torque_constant;
-        let turns = (self.position_mm / c.screw_pitch_mm).rem_euclid(1.0);
-        let theta = (f64::from(c.pole_pairs) * TAU * turns + FRAC_PI_2).rem_euclid(TAU);
+        let iq_a = torque_nm * k.amps_per_nm;
+        let theta = &self.electrical;
         FeedDriveOutput {
             position_mm: self.position_mm,
             velocity_mm_min,
@@ -376,8 +423,10 @@ impl FeedDrive {
             torque_demand_nm,
             torque_nm,
             iq_a,
-            phase_currents_a: self.waveform.currents(iq_a, theta),
-            electrical_angle_rad: theta,
+            phase_currents_a: self
+                .waveform
+                .currents_from_trig(iq_a, theta.cos(), theta.sin()),
+            electrical_angle_rad: theta.angle_rad(),
         }
     }
 }
@@ -420,6 +469,26 @@ mod tests {
         let clean = ThreePhaseWaveform::new(0.0, 0.0);
         let h = w.currents(1.0, theta)[1] - clean.currents(1.0, theta)[1];
         assert!((h - (5.0 * theta - TAU / 3.0).cos()).abs() < 1e-12);
+    }
+
+    #[test]
+    fn the_electrical_angle_follows_the_axis_position() {
+        // θ = p·2π·x/L_0 + π/2 (mod 2π), kept by rotation over a long run with varying speed.
+        let cfg = FeedDriveConfig::default();
+        let mut axis = FeedDrive::new(cfg, 1e-4).unwrap();
+        for k in 0..100_000 {
+            let speed = 600.0 + 400.0 * math::sin(f64::from(k) * 1e-4);
+            let out = axis.step(speed, 0.0, 0.0);
+            let turns = (out.position_mm / cfg.screw_pitch_mm).rem_euclid(1.0);
+            let exact = (4.0 * TAU * turns + FRAC_PI_2).rem_euclid(TAU);
+            let gap = (out.electrical_angle_rad - exact).abs();
+            assert!(gap.min(TAU - gap) < 1e-9, "sample {k}: {gap}");
+            let clean = ThreePhaseWaveform::new(cfg.harmonic_5th, cfg.harmonic_7th);
+            let want = clean.currents(out.iq_a, exact);
+            for (got, want) in out.phase_currents_a.iter().zip(want) {
+                assert!((got - want).abs() < 1e-9 * out.iq_a.abs().max(1.0));
+            }
+        }
     }
 
     #[test]

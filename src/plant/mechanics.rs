@@ -436,7 +436,9 @@ impl ToolForces {
     /// assert_eq!(f.resultant_n(), 5.0);
     /// ```
     pub fn resultant_n(&self) -> f64 {
-        math::hypot(self.fx_n, self.fy_n)
+        // √(x² + y²) directly (exactly rounded everywhere): cutting forces are far from the
+        // overflow `hypot` guards against, and this runs every sample.
+        (self.fx_n * self.fx_n + self.fy_n * self.fy_n).sqrt()
     }
 
     /// Cutting power T·ω at spindle speed `rpm`.
@@ -474,7 +476,16 @@ pub struct MillingForceModel {
     /// Δ_j = r_j − r_(j−1) in mm.
     chip_offset_mm: [f64; MAX_TEETH as usize],
     helix_lag_rad_per_mm: f64,
+    /// Its reciprocal (∞ for straight teeth, which never use it).
+    helix_mm_per_lag_rad: f64,
+    /// The depth [`MillingForceModel::forces_at`] last saw and the helix lag across it, with its
+    /// sine and cosine: the depth changes rarely, the lag's trigonometry need not run per sample.
+    lag_depth_mm: f64,
+    lag: Angle,
 }
+
+/// 1/2π, to count turns by a multiplication.
+const TURNS_PER_RAD: f64 = 1.0 / TAU;
 
 /// Below this lag across the whole depth (radians) the helix is treated as straight.
 const STRAIGHT_LAG_RAD: f64 = 1e-9;
@@ -508,6 +519,9 @@ impl MillingForceModel {
             tooth_radius_mm,
             chip_offset_mm,
             helix_lag_rad_per_mm: cutter.helix_lag_rad_per_mm(),
+            helix_mm_per_lag_rad: 1.0 / cutter.helix_lag_rad_per_mm(),
+            lag_depth_mm: 0.0,
+            lag: Angle::new(0.0),
         })
     }
 
@@ -526,8 +540,66 @@ impl MillingForceModel {
         feed_per_tooth_mm: f64,
         angle_rad: f64,
     ) -> ToolForces {
+        let lag = self.helix_lag(axial_depth_mm);
+        let base = Angle::new(angle_rad.rem_euclid(TAU));
+        self.forces_with(k, immersion, axial_depth_mm, feed_per_tooth_mm, base, lag)
+    }
+
+    /// [`Self::forces`] with tooth 0's angle given with its cosine and sine (the simulator keeps
+    /// them by rotation, [`crate::math::Phasor`]) and the helix lag's trigonometry kept while the
+    /// depth stays: no transcendental call per sample.
+    #[allow(clippy::too_many_arguments)]
+    #[inline]
+    pub(crate) fn forces_at(
+        &mut self,
+        k: &CuttingCoefficients,
+        immersion: &Immersion,
+        axial_depth_mm: f64,
+        feed_per_tooth_mm: f64,
+        angle_rad: f64,
+        cos_angle: f64,
+        sin_angle: f64,
+    ) -> ToolForces {
+        if axial_depth_mm != self.lag_depth_mm {
+            self.lag = self.helix_lag(axial_depth_mm);
+            self.lag_depth_mm = axial_depth_mm;
+        }
+        let base = Angle {
+            rad: math::wrap_turn(angle_rad),
+            sin: sin_angle,
+            cos: cos_angle,
+        };
+        self.forces_with(
+            k,
+            immersion,
+            axial_depth_mm,
+            feed_per_tooth_mm,
+            base,
+            self.lag,
+        )
+    }
+
+    /// The helix lag across `axial_depth_mm`, 0 for straight teeth.
+    fn helix_lag(&self, axial_depth_mm: f64) -> Angle {
+        let lag = self.helix_lag_rad_per_mm * axial_depth_mm;
+        if lag > STRAIGHT_LAG_RAD {
+            Angle::new(lag)
+        } else {
+            Angle::new(0.0)
+        }
+    }
+
+    fn forces_with(
+        &self,
+        k: &CuttingCoefficients,
+        immersion: &Immersion,
+        axial_depth_mm: f64,
+        feed_per_tooth_mm: f64,
+        base: Angle,
+        lag_angle: Angle,
+    ) -> ToolForces {
         let mut out = ToolForces::default();
-        if axial_depth_mm.is_nan() || feed_per_tooth_mm.is_nan() || angle_rad.is_nan() {
+        if axial_depth_mm.is_nan() || feed_per_tooth_mm.is_nan() || base.rad.is_nan() {
             return ToolForces {
                 fx_n: f64::NAN,
                 fy_n: f64::NAN,
@@ -545,14 +617,7 @@ impl MillingForceModel {
             return out;
         }
         let f = feed_per_tooth_mm;
-        let base = Angle::new(angle_rad.rem_euclid(TAU));
-        let lag = self.helix_lag_rad_per_mm * axial_depth_mm;
-        let helical = lag > STRAIGHT_LAG_RAD;
-        let lag_angle = if helical {
-            Angle::new(lag)
-        } else {
-            Angle::new(0.0)
-        };
+        let helical = lag_angle.rad > STRAIGHT_LAG_RAD;
         for j in 0..self.teeth {
             let delta = self.chip_offset_mm[j];
             let Some((entry, exit)) = tooth_window(immersion, delta, f) else {
@@ -564,8 +629,8 @@ impl MillingForceModel {
             if helical {
                 let top = bottom.plus(-lag_angle.rad, -lag_angle.sin, lag_angle.cos);
                 // The edge spans [top, bottom]; intersect with every turn of [entry, exit].
-                let k_min = ((top.rad - exit.rad) / TAU).ceil();
-                let k_max = ((bottom.rad - entry.rad) / TAU).floor();
+                let k_min = -floor_small((exit.rad - top.rad) * TURNS_PER_RAD);
+                let k_max = floor_small((bottom.rad - entry.rad) * TURNS_PER_RAD);
                 let mut turn = k_min;
                 let mut guard = 0;
                 while turn <= k_max && guard < MAX_EDGE_TURNS as u32 {
@@ -587,12 +652,11 @@ impl MillingForceModel {
                     turn += 1.0;
                     guard += 1;
                 }
-                let scale = 1.0 / self.helix_lag_rad_per_mm;
                 for s in sums.iter_mut() {
-                    *s *= scale;
+                    *s *= self.helix_mm_per_lag_rad;
                 }
             } else {
-                let phi = bottom.rad.rem_euclid(TAU);
+                let phi = math::wrap_turn(bottom.rad);
                 if phi >= entry.rad && phi <= exit.rad {
                     let h = f * bottom.sin + delta;
                     let ft = k.ktc_n_mm2 * h + k.kte_n_mm;
@@ -612,6 +676,19 @@ impl MillingForceModel {
             out.torque_nm += sums[3] * self.tooth_radius_mm[j] * 1e-3;
         }
         out
+    }
+}
+
+/// ⌊x⌋ for the few turns an edge spans, by rounding arithmetic ([`math::round_ties_even`]:
+/// `floor` is a library call on the baseline x86-64 target); exact for |x| < 2⁵¹, which the turn
+/// counts are far below.
+#[inline]
+fn floor_small(x: f64) -> f64 {
+    let r = math::round_ties_even(x);
+    if r > x {
+        r - 1.0
+    } else {
+        r
     }
 }
 

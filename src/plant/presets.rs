@@ -33,7 +33,7 @@ use super::signals::PlantSignals;
 use super::simulator::{SimConfig, Simulator};
 use super::{Plant, PlantError};
 use crate::input::readable;
-use crate::machine::{Machine, MachineStep, OverrideCommand, SensorlessEstimate};
+use crate::machine::{BlockStep, Machine, MachineStep, OverrideCommand, SensorlessEstimate};
 use crate::math;
 
 /// A named experiment. Serialised by its [`name`](Preset::name), e.g. `"maneerat-doc-1"`.
@@ -1292,6 +1292,16 @@ impl Machine for PresetMachine {
 
     fn sensorless_force(&self) -> Option<SensorlessEstimate> {
         self.plant().sensorless_force()
+    }
+
+    fn step_block(&mut self, command: OverrideCommand, out: &mut [BlockStep]) -> usize {
+        // One match per block; each plant's own loop inlines its step.
+        match self {
+            PresetMachine::Mill(m) => m.step_block(command, out),
+            PresetMachine::BrakeBench(m) => m.step_block(command, out),
+            PresetMachine::BondGraph(m) => m.step_block(command, out),
+            PresetMachine::SecondOrder(m) => m.step_block(command, out),
+        }
     }
 }
 

@@ -154,13 +154,28 @@ impl Profile {
 
     /// The value at `position_mm`.
     pub fn value_at(&self, position_mm: f64) -> f64 {
+        let mut hint = 0;
+        self.value_from_hint(position_mm, &mut hint)
+    }
+
+    /// [`Profile::value_at`], starting the search from the point index `hint` the call before
+    /// left there (O(1) for a monotone walk along the path, as the simulator makes one).
+    pub(crate) fn value_from_hint(&self, position_mm: f64, hint: &mut usize) -> f64 {
         if position_mm.is_nan() {
             return f64::NAN;
         }
         let p = &self.points;
         // The first point strictly beyond s: at a step (two equal positions) s takes the later
         // point's value.
-        let i = p.partition_point(|q| q.position_mm <= position_mm);
+        let h = (*hint).min(p.len());
+        let i = if (h == 0 || p[h - 1].position_mm <= position_mm)
+            && p.get(h).is_none_or(|q| q.position_mm > position_mm)
+        {
+            h
+        } else {
+            p.partition_point(|q| q.position_mm <= position_mm)
+        };
+        *hint = i;
         if i == 0 {
             return p[0].value;
         }
@@ -480,9 +495,24 @@ impl Scenario {
             .map(|r| r.material)
     }
 
-    /// Index of the region at `position_mm`, `None` in air (for the simulator's cache).
-    pub(crate) fn region_index_at(&self, position_mm: f64) -> Option<usize> {
-        let i = self.regions.partition_point(|r| r.to_mm <= position_mm);
+    /// Index of the region at `position_mm`, `None` in air (for the simulator's cache); the
+    /// search starts from `hint`, the index the call before left there.
+    pub(crate) fn region_index_from_hint(
+        &self,
+        position_mm: f64,
+        hint: &mut usize,
+    ) -> Option<usize> {
+        let r = &self.regions;
+        // The first region that ends beyond s.
+        let h = (*hint).min(r.len());
+        let i = if (h == 0 || r[h - 1].to_mm <= position_mm)
+            && r.get(h).is_none_or(|q| q.to_mm > position_mm)
+        {
+            h
+        } else {
+            r.partition_point(|q| q.to_mm <= position_mm)
+        };
+        *hint = i;
         self.regions
             .get(i)
             .filter(|r| r.from_mm <= position_mm)

@@ -25,7 +25,7 @@ use serde::{Deserialize, Serialize};
 
 use super::dynamics::FirstOrderLag;
 use super::{finite, in_range, non_negative, positive, PlantError};
-use crate::rng::Rng;
+use crate::rng::{Normal, Rng};
 
 /// A Hall-effect current transducer with its burden resistor.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -142,7 +142,8 @@ impl AdcConfig {
         Ok(())
     }
 
-    /// Quantises a voltage: clamps to the range and rounds to the nearest code.
+    /// Quantises a voltage: clamps to the range and rounds to the nearest code (ties to the even
+    /// code).
     ///
     /// ```
     /// use cutlab::plant::sensors::AdcConfig;
@@ -152,13 +153,35 @@ impl AdcConfig {
     /// assert_eq!(adc.quantise(-100.0), -8.0);
     /// ```
     pub fn quantise(&self, volts: f64) -> f64 {
-        if volts.is_nan() {
-            return f64::NAN;
+        Quantiser::new(self).code(volts) * self.lsb_v()
+    }
+}
+
+/// An ADC's quantisation with its constants worked out once: the code of a voltage.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Quantiser {
+    codes_per_volt: f64,
+    lowest_code: f64,
+    highest_code: f64,
+}
+
+impl Quantiser {
+    fn new(adc: &AdcConfig) -> Self {
+        let half = f64::from(1u32 << (adc.bits - 1));
+        Self {
+            codes_per_volt: 1.0 / adc.lsb_v(),
+            lowest_code: -half,
+            highest_code: half - 1.0,
         }
-        let lsb = self.lsb_v();
-        let half = f64::from(1u32 << (self.bits - 1));
-        let code = (volts / lsb).round().clamp(-half, half - 1.0);
-        code * lsb
+    }
+
+    /// The code of `volts`, clamped to the range (NaN stays NaN: a broken model must show).
+    /// The bounds are whole codes, so clamping before rounding equals clamping after.
+    #[inline]
+    fn code(&self, volts: f64) -> f64 {
+        crate::math::round_ties_even(
+            (volts * self.codes_per_volt).clamp(self.lowest_code, self.highest_code),
+        )
     }
 }
 
@@ -267,7 +290,18 @@ pub struct CurrentSensor {
     config: CurrentSensorConfig,
     lags: [FirstOrderLag; 3],
     rngs: [Rng; 3],
-    volts_per_amp: f64,
+    normal: Normal,
+    /// Phases with a sensor of their own: 2 (U, V) or 3.
+    measured: usize,
+    /// Volts at the ADC per primary ampere, gain error included: (1 + e)·(I_out/I_in)·R_m.
+    seen_v_per_a: f64,
+    /// Each phase's offset, in volts at the ADC.
+    offsets_v: [f64; 3],
+    /// RMS noise in volts at the ADC (0: no draw).
+    noise_v: f64,
+    quantiser: Quantiser,
+    /// Amperes per ADC code with the nominal scale: LSB/((I_out/I_in)·R_m).
+    amps_per_code: f64,
 }
 
 impl CurrentSensor {
@@ -282,11 +316,22 @@ impl CurrentSensor {
         config.validate()?;
         positive("dt_s", dt_s)?;
         let lag = FirstOrderLag::new(config.hall.bandwidth_hz, dt_s);
+        let hall = &config.hall;
+        let volts_per_amp = hall.volts_per_amp();
         Ok(Self {
             config,
             lags: [lag; 3],
             rngs: [0, 1, 2].map(|k| Rng::fork(seed, first_stream + k)),
-            volts_per_amp: config.hall.volts_per_amp(),
+            normal: Normal::new(),
+            measured: match config.wiring {
+                PhaseWiring::TwoPhases => 2,
+                PhaseWiring::ThreePhases => 3,
+            },
+            seen_v_per_a: (1.0 + hall.gain_error) * volts_per_amp,
+            offsets_v: hall.offsets_a.map(|o| o * volts_per_amp),
+            noise_v: hall.noise_a * volts_per_amp,
+            quantiser: Quantiser::new(&config.adc),
+            amps_per_code: config.adc.lsb_v() / volts_per_amp,
         })
     }
 
@@ -296,18 +341,22 @@ impl CurrentSensor {
     }
 
     /// Samples the true phase currents; returns what the ADC reads, in amperes.
+    #[inline]
     pub fn read(&mut self, currents_a: [f64; 3]) -> [f64; 3] {
-        let hall = &self.config.hall;
         let mut out = [0.0; 3];
-        for k in 0..3 {
-            // Every stream advances every sample, measured or not, so the wiring does not shift
-            // the noise of the other phases.
-            let noise_a = self.rngs[k].gaussian(hall.noise_a);
-            let seen = currents_a[k] * (1.0 + hall.gain_error) + hall.offsets_a[k];
-            let volts = self.lags[k].step(seen * self.volts_per_amp) + noise_a * self.volts_per_amp;
-            out[k] = self.config.adc.quantise(volts) / self.volts_per_amp;
+        // Each phase draws from its own stream, so an unmeasured phase (W in two-phase wiring)
+        // need not draw at all: the others' noise is the same either way.
+        for k in 0..self.measured {
+            let noise_v = if self.noise_v == 0.0 {
+                0.0
+            } else {
+                self.noise_v * self.normal.sample(&mut self.rngs[k])
+            };
+            let seen_v = currents_a[k] * self.seen_v_per_a + self.offsets_v[k];
+            let volts = self.lags[k].step(seen_v) + noise_v;
+            out[k] = self.quantiser.code(volts) * self.amps_per_code;
         }
-        if self.config.wiring == PhaseWiring::TwoPhases {
+        if self.measured == 2 {
             out[2] = -(out[0] + out[1]);
         }
         out

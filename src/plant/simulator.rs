@@ -26,7 +26,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use super::cnc::{samples_per, AppliedOverride, CncConfig, Control};
+use super::cnc::{samples_per, AppliedOverride, CncConfig, Control, Every};
 use super::feed_drive::{three_phase_rms_a, FeedDrive, FeedDriveConfig};
 use super::materials::{CuttingCoefficients, Material};
 use super::mechanics::{mean_forces, Immersion, MillingForceModel, MillingMode};
@@ -215,7 +215,7 @@ pub struct Simulator {
     scenario: Scenario,
     config: SimConfig,
     sampling: Sampling,
-    ipo_samples: u64,
+    ipo: Every,
     control: Control,
     force_model: MillingForceModel,
     region_coefficients: Vec<CuttingCoefficients>,
@@ -226,12 +226,22 @@ pub struct Simulator {
     feed_sensor: CurrentSensor,
     spindle_sensor: CurrentSensor,
     segment_hint: usize,
+    profile_hints: ProfileHints,
     immersion_width_mm: f64,
     immersion: Immersion,
     spindle_arrived_at_s: Option<f64>,
     spindle_started_at_s: Option<f64>,
     power_law_force_n: f64,
     power_law_uncertainty: f64,
+}
+
+/// Where the last sample found the tool in the scenario's profiles and material regions: the
+/// next search starts there.
+#[derive(Debug, Clone, Copy, Default)]
+struct ProfileHints {
+    region: usize,
+    depth: usize,
+    width: usize,
 }
 
 impl Simulator {
@@ -255,7 +265,7 @@ impl Simulator {
         let axis = FeedDrive::new(config.feed_drive, dt_s).map_err(|e| e.within("feed_drive"))?;
         let mut sim = Self {
             sampling,
-            ipo_samples: samples_per(config.cnc.interpolation_period_s, dt_s),
+            ipo: Every::new(samples_per(config.cnc.interpolation_period_s, dt_s)),
             control: Control::new(&config.cnc, blocks, dt_s).map_err(|e| e.within("cnc"))?,
             force_model,
             region_coefficients,
@@ -282,6 +292,7 @@ impl Simulator {
             scenario,
             config,
             segment_hint: 0,
+            profile_hints: ProfileHints::default(),
             spindle_arrived_at_s: None,
             spindle_started_at_s: None,
             power_law_force_n: 0.0,
@@ -347,7 +358,7 @@ impl PlantModel for Simulator {
 
     fn advance(&mut self, tick: Tick, command: OverrideCommand) -> PlantSample {
         let time_s = tick.time_s;
-        let ipo_tick = (tick.number - 1).is_multiple_of(self.ipo_samples);
+        let ipo_tick = self.ipo.tick();
 
         // 1–2. Override through the PMC, then the CNC.
         let block = self.planner_block();
@@ -360,9 +371,16 @@ impl PlantModel for Simulator {
         let s = cnc.position_mm;
         let point = self.scenario.point_from_hint(s, self.segment_hint);
         self.segment_hint = point.segment;
-        let region = self.scenario.region_index_at(s);
-        let depth_mm = self.scenario.depth_profile().value_at(s);
-        let width_profile_mm = self.scenario.width_profile().value_at(s);
+        let hints = &mut self.profile_hints;
+        let region = self.scenario.region_index_from_hint(s, &mut hints.region);
+        let depth_mm = self
+            .scenario
+            .depth_profile()
+            .value_from_hint(s, &mut hints.depth);
+        let width_profile_mm = self
+            .scenario
+            .width_profile()
+            .value_from_hint(s, &mut hints.width);
         if width_profile_mm != self.immersion_width_mm {
             self.immersion_width_mm = width_profile_mm;
             self.immersion = Immersion::new(
@@ -386,13 +404,21 @@ impl PlantModel for Simulator {
         };
         let (cos_a, sin_a) = (point.direction_cos, point.direction_sin);
         let forces = match region {
-            Some(r) if cutting => self.force_model.forces(
-                &self.region_coefficients[r],
-                &self.immersion,
-                depth_mm,
-                feed_per_tooth_mm,
-                self.spindle.angle_rad() + point.direction_rad,
-            ),
+            Some(r) if cutting => {
+                // The tool's angle φ = θ_spindle + α, its cosine and sine by the addition
+                // theorem from the spindle's phasor and the path's direction.
+                let spindle = self.spindle.angle();
+                let (cs, ss) = (spindle.cos(), spindle.sin());
+                self.force_model.forces_at(
+                    &self.region_coefficients[r],
+                    &self.immersion,
+                    depth_mm,
+                    feed_per_tooth_mm,
+                    spindle.angle_rad() + point.direction_rad,
+                    cs * cos_a - ss * sin_a,
+                    ss * cos_a + cs * sin_a,
+                )
+            }
             _ => Default::default(),
         };
         let force_x_n = cos_a * forces.fx_n - sin_a * forces.fy_n;
@@ -525,6 +551,7 @@ impl PlantModel for Simulator {
     }
 
     fn restart(&mut self) -> PlantSignals {
+        self.ipo.reset();
         self.control.reset();
         self.spindle.reset();
         for axis in self.axes.iter_mut() {
@@ -534,6 +561,7 @@ impl PlantModel for Simulator {
         self.spindle_sensor
             .reset(self.config.seed, SPINDLE_SENSOR_STREAM);
         self.segment_hint = 0;
+        self.profile_hints = ProfileHints::default();
         self.immersion_width_mm = f64::NAN;
         self.spindle_arrived_at_s = None;
         self.spindle_started_at_s = None;

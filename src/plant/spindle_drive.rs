@@ -32,7 +32,8 @@
 //!
 //! The phase currents are a balanced set of RMS I_rms at the stator frequency p·n_m/60 plus a
 //! slip proportional to torque, with small 5th and 7th harmonics. Changing gear stops the
-//! spindle, shifts, and restarts it.
+//! spindle, shifts, and restarts it. The stator angle and the tool's angle advance as
+//! [`crate::math::Phasor`]s, so a sample needs no trigonometric call.
 //!
 //! A NaN torque or speed command propagates to the currents.
 
@@ -42,6 +43,7 @@ use std::f64::consts::TAU;
 use super::dynamics::SecondOrderLag;
 use super::feed_drive::ThreePhaseWaveform;
 use super::{in_range, non_negative, positive, rad_s_from_rpm, rpm_from_rad_s, PlantError};
+use crate::math::Phasor;
 
 /// The gearbox range in use.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
@@ -321,13 +323,16 @@ pub struct SpindleDriveOutput {
 pub struct SpindleDrive {
     config: SpindleDriveConfig,
     dt_s: f64,
+    k: StepConstants,
     lag: SecondOrderLag,
     waveform: ThreePhaseWaveform,
     /// Motor speed, rad/s (signed).
     motor_rad_s: f64,
     gear: SpindleGear,
-    spindle_angle_rad: f64,
-    electrical_angle_rad: f64,
+    /// The tool's angle, clockwise, with its cosine and sine (the cutting forces need both).
+    spindle_angle: Phasor,
+    /// The stator current's angle.
+    electrical_angle: Phasor,
 }
 
 /// Below this motor speed (rad/s) a stopped spindle counts as at rest (gear shifts happen here).
@@ -341,12 +346,13 @@ impl SpindleDrive {
         Ok(Self {
             config,
             dt_s,
+            k: StepConstants::new(&config, dt_s),
             lag: SecondOrderLag::new(config.bandwidth_hz, config.damping_ratio, dt_s),
             waveform: ThreePhaseWaveform::new(config.harmonic_5th, config.harmonic_7th),
             motor_rad_s: 0.0,
             gear: SpindleGear::High,
-            spindle_angle_rad: 0.0,
-            electrical_angle_rad: 0.0,
+            spindle_angle: Phasor::new(0.0),
+            electrical_angle: Phasor::new(0.0),
         })
     }
 
@@ -360,8 +366,8 @@ impl SpindleDrive {
         self.lag.reset(0.0);
         self.motor_rad_s = 0.0;
         self.gear = SpindleGear::High;
-        self.spindle_angle_rad = 0.0;
-        self.electrical_angle_rad = 0.0;
+        self.spindle_angle = Phasor::new(0.0);
+        self.electrical_angle = Phasor::new(0.0);
     }
 
     /// The spindle speed now.
@@ -371,70 +377,152 @@ impl SpindleDrive {
 
     /// The spindle angle now, [0, 2π).
     pub fn angle_rad(&self) -> f64 {
-        self.spindle_angle_rad
+        self.spindle_angle.angle_rad()
+    }
+
+    /// The spindle angle now with its cosine and sine.
+    pub fn angle(&self) -> &Phasor {
+        &self.spindle_angle
     }
 
     /// Advances one sample with the speed command `command_rpm` (0 stops the spindle, clamped to
     /// the top speed) and the cutting torque `cutting_torque_nm` at the spindle.
+    #[inline]
     pub fn step(&mut self, command_rpm: f64, cutting_torque_nm: f64) -> SpindleDriveOutput {
-        let c = self.config;
-        let command_rpm = command_rpm.clamp(-c.max_spindle_rpm(), c.max_spindle_rpm());
+        let c = &self.config;
+        let k = &self.k;
+        let command_rpm = command_rpm.clamp(-k.max_spindle_rpm, k.max_spindle_rpm);
         let wanted_gear = c.gear_for(command_rpm);
         let shifting = wanted_gear != self.gear && command_rpm != 0.0;
         if shifting && self.motor_rad_s.abs() < REST_RAD_S {
             self.gear = wanted_gear;
             self.motor_rad_s = 0.0;
         }
-        let ratio = c.ratio(self.gear);
+        let gear = &k.gears[self.gear as usize];
         let target_rad_s = if wanted_gear != self.gear {
             0.0 // stop before shifting
         } else {
-            rad_s_from_rpm(command_rpm) * ratio
+            command_rpm * gear.motor_rad_s_per_spindle_rpm
         };
-        let spindle_rpm = rpm_from_rad_s(self.motor_rad_s) / ratio;
+        let spindle_rpm = self.motor_rad_s * gear.spindle_rpm_per_motor_rad_s;
         let load_torque_nm = cutting_torque_nm + c.drag_torque_at_nm(spindle_rpm);
-        let lagged_load_motor_nm = self.lag.step(load_torque_nm / (ratio * c.gear_efficiency));
-        // Speed loop: approach the target at the loop's rate, within the torque left over.
-        let base_rad_s = rad_s_from_rpm(c.base_speed_rpm);
-        let limit_nm = c.torque_limit_nm * (base_rad_s / self.motor_rad_s.abs().max(base_rad_s));
+        let lagged_load_motor_nm = self.lag.step(load_torque_nm * gear.motor_nm_per_spindle_nm);
+        // Speed loop: approach the target at the loop's rate, within the torque left over. Above
+        // base speed the torque limit falls and the magnetising current with it, as n_b/n_m.
+        let per_weakened_rad_s = 1.0 / self.motor_rad_s.abs().max(k.base_rad_s);
+        let limit_nm = k.torque_limit_base_nm * per_weakened_rad_s;
         let headroom_nm = (limit_nm - lagged_load_motor_nm.abs()).max(0.0);
-        let loop_rate = TAU * c.bandwidth_hz;
-        let accel_torque_nm = (c.inertia_kg_m2 * loop_rate * (target_rad_s - self.motor_rad_s))
+        let accel_torque_nm = (k.loop_nm_per_rad_s * (target_rad_s - self.motor_rad_s))
             .clamp(-headroom_nm, headroom_nm);
-        self.motor_rad_s += accel_torque_nm / c.inertia_kg_m2 * self.dt_s;
+        self.motor_rad_s += accel_torque_nm * k.rad_s_per_nm_step;
         let stopped = command_rpm == 0.0 && self.motor_rad_s.abs() < REST_RAD_S;
         if stopped {
             self.motor_rad_s = 0.0;
         }
         let motor_rpm = rpm_from_rad_s(self.motor_rad_s);
-        let speed_rpm = motor_rpm / ratio;
+        let speed_rpm = self.motor_rad_s * gear.spindle_rpm_per_motor_rad_s;
         let motor_torque_nm = lagged_load_motor_nm + accel_torque_nm;
         let rms_current_a = if stopped {
             0.0
         } else {
-            c.magnetizing_a(motor_rpm) + c.amps_per_motor_nm(motor_rpm) * motor_torque_nm.abs()
+            // I_mag·min(1, n_b/n_m) + max(1, n_m/n_b)/k_T·|T_m|
+            let weakening = (self.motor_rad_s.abs() * k.per_base_rad_s).max(1.0);
+            k.magnetizing_base_a * per_weakened_rad_s
+                + weakening * k.amps_per_nm * motor_torque_nm.abs()
         };
         // Clockwise seen from the spindle: the tool angle grows with positive speed.
-        self.spindle_angle_rad =
-            (self.spindle_angle_rad + rad_s_from_rpm(speed_rpm) * self.dt_s).rem_euclid(TAU);
-        let slip_hz = c.rated_slip_hz * motor_torque_nm / c.rated_torque_nm;
-        let stator_hz = f64::from(c.pole_pairs) * motor_rpm / 60.0 + slip_hz;
-        self.electrical_angle_rad =
-            (self.electrical_angle_rad + TAU * stator_hz * self.dt_s).rem_euclid(TAU);
+        self.spindle_angle
+            .advance(self.motor_rad_s * gear.spindle_step_rad_per_motor_rad_s);
+        let stator_hz =
+            k.stator_hz_per_rad_s * self.motor_rad_s + k.slip_hz_per_nm * motor_torque_nm;
+        self.electrical_angle.advance(k.step_rad_per_hz * stator_hz);
         SpindleDriveOutput {
             speed_rpm,
             motor_speed_rpm: motor_rpm,
-            angle_rad: self.spindle_angle_rad,
+            angle_rad: self.spindle_angle.angle_rad(),
             gear: (!stopped).then_some(self.gear),
             load_torque_nm,
             motor_torque_nm,
             rms_current_a,
-            phase_currents_a: self.waveform.currents(
+            phase_currents_a: self.waveform.currents_from_trig(
                 rms_current_a * std::f64::consts::SQRT_2,
-                self.electrical_angle_rad,
+                self.electrical_angle.cos(),
+                self.electrical_angle.sin(),
             ),
-            fv_voltage_v: c.fv_volts_per_krpm * motor_rpm.abs() * 1e-3,
+            fv_voltage_v: k.fv_volts_per_rpm * motor_rpm.abs(),
             running: !stopped,
+        }
+    }
+}
+
+/// What a step multiplies by, worked out once from the configuration and Δt (divisions are the
+/// slowest arithmetic in a 10 kHz loop).
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct StepConstants {
+    max_spindle_rpm: f64,
+    /// Per gear, indexed by `SpindleGear as usize`.
+    gears: [GearConstants; 2],
+    /// Base speed n_b in rad/s, and its reciprocal.
+    base_rad_s: f64,
+    per_base_rad_s: f64,
+    /// Torque limit × base speed: the limit at ω is this / max(ω, ω_b).
+    torque_limit_base_nm: f64,
+    /// Magnetising current × base speed: the current at ω is this / max(ω, ω_b).
+    magnetizing_base_a: f64,
+    /// 1/k_T.
+    amps_per_nm: f64,
+    /// Speed loop: J·2π·bandwidth, N·m per rad/s of speed error.
+    loop_nm_per_rad_s: f64,
+    /// Δt/J: the speed change per N·m of accelerating torque in one step.
+    rad_s_per_nm_step: f64,
+    /// Stator frequency per motor rad/s, p/2π, and slip frequency per N·m.
+    stator_hz_per_rad_s: f64,
+    slip_hz_per_nm: f64,
+    /// 2π·Δt: the angle step of one hertz.
+    step_rad_per_hz: f64,
+    /// F/V volts per motor rpm.
+    fv_volts_per_rpm: f64,
+}
+
+/// [`StepConstants`] of one gear with ratio r.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct GearConstants {
+    /// r·2π/60.
+    motor_rad_s_per_spindle_rpm: f64,
+    /// 60/(2π·r).
+    spindle_rpm_per_motor_rad_s: f64,
+    /// 1/(r·η_g).
+    motor_nm_per_spindle_nm: f64,
+    /// Δt/r: the tool's angle step per motor rad/s.
+    spindle_step_rad_per_motor_rad_s: f64,
+}
+
+impl StepConstants {
+    fn new(c: &SpindleDriveConfig, dt_s: f64) -> Self {
+        let gear = |g: SpindleGear| {
+            let r = c.ratio(g);
+            GearConstants {
+                motor_rad_s_per_spindle_rpm: rad_s_from_rpm(r),
+                spindle_rpm_per_motor_rad_s: rpm_from_rad_s(1.0) / r,
+                motor_nm_per_spindle_nm: 1.0 / (r * c.gear_efficiency),
+                spindle_step_rad_per_motor_rad_s: dt_s / r,
+            }
+        };
+        let base_rad_s = rad_s_from_rpm(c.base_speed_rpm);
+        Self {
+            max_spindle_rpm: c.max_spindle_rpm(),
+            gears: [gear(SpindleGear::High), gear(SpindleGear::Low)],
+            base_rad_s,
+            per_base_rad_s: 1.0 / base_rad_s,
+            torque_limit_base_nm: c.torque_limit_nm * base_rad_s,
+            magnetizing_base_a: c.magnetizing_current_a * base_rad_s,
+            amps_per_nm: 1.0 / c.torque_per_amp_nm_per_a,
+            loop_nm_per_rad_s: c.inertia_kg_m2 * TAU * c.bandwidth_hz,
+            rad_s_per_nm_step: dt_s / c.inertia_kg_m2,
+            stator_hz_per_rad_s: f64::from(c.pole_pairs) / TAU,
+            slip_hz_per_nm: c.rated_slip_hz / c.rated_torque_nm,
+            step_rad_per_hz: TAU * dt_s,
+            fv_volts_per_rpm: c.fv_volts_per_krpm * 1e-3,
         }
     }
 }
