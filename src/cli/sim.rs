@@ -9,7 +9,8 @@ use super::{write_json, CliError, Io};
 use crate::closed_loop::config::RunConfiguration;
 use crate::closed_loop::definition::{parse_texts, preset_controller, RunSetting, SettingKind};
 use crate::closed_loop::lab::{
-    apply_references, references, simulate, References, RunResult, RunSpec,
+    apply_references, teach_cut_only, LabRun, ReferenceSearch, References, RunResult, RunSpec,
+    TeachKey,
 };
 use crate::closed_loop::metrics::Metrics;
 use crate::closed_loop::runner::{Calibration, Feedback};
@@ -18,6 +19,7 @@ use crate::closed_loop::trace::write_csv;
 use crate::control::registry::{ControllerConfig, ControllerKind};
 use crate::plant::Preset;
 use crate::safety::SafetyEvent;
+use crate::work::Work;
 
 /// Options shared by `sim` and `compare`: the preset, every setting of the run definition
 /// ([`RunSetting::ALL`], the same table the browser's form is made from), and `--no-references`.
@@ -238,15 +240,80 @@ fn run_one(
     spec: &RunSpec,
     with_references: bool,
 ) -> Result<(RunResult, Option<References>), CliError> {
-    let mut result = simulate(spec).map_err(|e| CliError::new(e.to_string()))?;
-    let refs = if with_references {
-        let r = references(spec).map_err(|e| CliError::new(e.to_string()))?;
-        apply_references(&mut result, &r);
-        Some(r)
-    } else {
-        None
-    };
+    let (mut results, refs) = run_many(spec, &[(String::new(), spec.clone())], with_references)?;
+    let result = results
+        .pop()
+        .ok_or_else(|| CliError::new("the run gave no result"))?;
     Ok((result, refs))
+}
+
+/// A job of [`run_many`].
+enum Job<'a> {
+    References,
+    Run(&'a str, &'a RunSpec),
+}
+
+/// What a job gave, its error already in words.
+enum Outcome {
+    References(Result<References, String>),
+    Run(Box<Result<RunResult, String>>),
+}
+
+/// The runs of `named` (on `base`'s scenario) and, `with_references`, that scenario's fixed-feed
+/// references, their savings filled in. The teach cut is made once for every run whose teach cut
+/// it is ([`TeachKey`]: the simulation would repeat it exactly), then the runs and the reference
+/// search go side by side on every core ([`crate::work::parallel_map`]); the results are the
+/// same as one after another.
+fn run_many(
+    base: &RunSpec,
+    named: &[(String, RunSpec)],
+    with_references: bool,
+) -> Result<(Vec<RunResult>, Option<References>), CliError> {
+    let key = TeachKey::of(base).map_err(|e| CliError::new(e.to_string()))?;
+    let (_, calibration) = teach_cut_only(base).map_err(|e| CliError::new(e.to_string()))?;
+    let mut jobs = Vec::with_capacity(named.len() + 1);
+    // The reference search first: its runs are the longest, so it starts at once.
+    if with_references {
+        jobs.push(Job::References);
+    }
+    jobs.extend(named.iter().map(|(name, spec)| Job::Run(name, spec)));
+    let outcomes = crate::work::parallel_map(&jobs, |job| match job {
+        Job::References => Outcome::References(
+            ReferenceSearch::calibrated(base, calibration.clone())
+                .and_then(|search| search.run_to_end())
+                .map_err(|e| e.to_string()),
+        ),
+        Job::Run(name, spec) => {
+            let run = match TeachKey::of(spec) {
+                Ok(k) if k == key => LabRun::calibrated(spec, calibration.clone()),
+                Ok(_) => LabRun::new(spec),
+                Err(e) => Err(e),
+            };
+            Outcome::Run(Box::new(run.and_then(|run| run.run_to_end()).map_err(
+                |e| {
+                    if name.is_empty() {
+                        e.to_string()
+                    } else {
+                        format!("{name}: {e}")
+                    }
+                },
+            )))
+        }
+    });
+    let mut refs = None;
+    let mut results = Vec::with_capacity(named.len());
+    for outcome in outcomes {
+        match outcome {
+            Outcome::References(r) => refs = Some(r.map_err(CliError::new)?),
+            Outcome::Run(r) => results.push((*r).map_err(CliError::new)?),
+        }
+    }
+    if let Some(r) = &refs {
+        for result in &mut results {
+            apply_references(result, r);
+        }
+    }
+    Ok((results, refs))
 }
 
 /// The JSON report of one run (`cutlab sim --json`; `cutlab host --json` adds the link's).
@@ -410,22 +477,20 @@ pub fn run_compare(args: CompareArgs, io: &mut Io<'_>) -> Result<(), CliError> {
             )
         }
     };
-    let with_references = !args.run.no_references;
-    let refs = if with_references {
-        Some(references(&base).map_err(|e| CliError::new(e.to_string()))?)
-    } else {
-        None
-    };
-    let mut results = Vec::new();
-    for (name, config) in named {
-        let mut s = base.clone();
-        s.controller = config.clone();
-        let mut result = simulate(&s).map_err(|e| CliError::new(format!("{name}: {e}")))?;
-        if let Some(r) = &refs {
-            apply_references(&mut result, r);
-        }
-        results.push((name, config, result));
-    }
+    let specs: Vec<(String, RunSpec)> = named
+        .iter()
+        .map(|(name, config)| {
+            let mut s = base.clone();
+            s.controller = config.clone();
+            (name.clone(), s)
+        })
+        .collect();
+    let (runs, refs) = run_many(&base, &specs, !args.run.no_references)?;
+    let results: Vec<(String, ControllerConfig, RunResult)> = named
+        .into_iter()
+        .zip(runs)
+        .map(|((name, config), result)| (name, config, result))
+        .collect();
     if args.json {
         let entries: Vec<CompareEntry> = results
             .iter()
@@ -540,6 +605,8 @@ pub(crate) fn metrics_table(runs: &[(String, &RunResult)]) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    use crate::closed_loop::lab::simulate;
 
     #[test]
     fn a_controller_fault_fails_the_command_and_names_the_run() {

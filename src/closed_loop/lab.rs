@@ -557,6 +557,42 @@ pub fn settled_settings(
     Ok(settings)
 }
 
+/// What a simulated teach cut depends on: two specs with equal keys make the same teach cut, so
+/// one calibration serves both ([`LabRun::calibrated`]). A teach cut runs the preset's machine
+/// (with its edits, seeded from the run's seed) through the fixed override schedule, summarised
+/// by the signal chain at the control period, for the feedback path: the controller, the target
+/// and the safety envelope play no part in it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct TeachKey {
+    preset: Preset,
+    seed: u64,
+    plant: PlantEdits,
+    feedback: Feedback,
+    control_period_s: f64,
+    spindle_lowpass_hz: f64,
+    feed_lowpass_hz: f64,
+    lowpass_order: usize,
+    max_duration_s: f64,
+}
+
+impl TeachKey {
+    /// The key of `spec`'s teach cut.
+    pub fn of(spec: &RunSpec) -> Result<Self, LoopError> {
+        let s = default_settings(spec)?;
+        Ok(Self {
+            preset: spec.preset,
+            seed: spec.seed,
+            plant: spec.plant,
+            feedback: s.feedback,
+            control_period_s: s.control_period_s,
+            spindle_lowpass_hz: s.spindle_lowpass_hz,
+            feed_lowpass_hz: s.feed_lowpass_hz,
+            lowpass_order: s.lowpass_order,
+            max_duration_s: s.max_duration_s,
+        })
+    }
+}
+
 /// Runs only `spec`'s teach cut (on the machine a run would teach on) and returns the run's
 /// settings with the target it settles to, and the calibration: what a teach-in learns.
 pub fn teach_cut_only(spec: &RunSpec) -> Result<(LoopSettings, Calibration), LoopError> {
@@ -588,63 +624,105 @@ pub struct References {
     pub safe_fixed_cycle_time_s: f64,
 }
 
-/// Runs the fixed-feed references for `spec`'s preset and settings: 100 %, and a bisection for
-/// the highest fixed override that keeps the peak force at or below the target (to 1 %).
+/// Runs the fixed-feed references for `spec`'s preset and settings: 100 %, and a search for the
+/// highest fixed override that keeps the peak force at or below the target (to 1 %).
 pub fn references(spec: &RunSpec) -> Result<References, LoopError> {
     ReferenceSearch::new(spec)?.run_to_end()
 }
 
-/// The bisection's bracket of fixed overrides, percent.
+/// The search's bracket of fixed overrides, percent: the answer lies in [low, high), and neither
+/// end is run unless the search comes down to it.
 const REFERENCE_BRACKET_PCT: (f64, f64) = (1.0, 250.0);
 
+/// Probes the force model may place before the search falls back to halving the bracket.
+const GUIDED_PROBES: usize = 4;
+
+/// A probe that only needs a verdict is looked at after this many control periods.
+const VERDICT_CHECK_PERIODS: usize = 20;
+
 /// The reference runs of [`references`], done a piece at a time so a browser can show progress
-/// and stay responsive: the programmed feed at 100 %, then a bisection over fixed overrides.
-/// The teach cut is made once, by the first run; the others reuse its calibration (they differ
-/// from it only in controller and override band, which the teach cut does not depend on).
+/// and stay responsive: the programmed feed at 100 %, then probes of fixed overrides.
+///
+/// The peak force of a fixed-feed run grows with the override, nearly in a straight line (the
+/// chip's force with the feed per tooth, plus the edge forces), so the probes are placed where
+/// the line through the runs so far meets the target (through the origin while only one run is
+/// known), inside the bracket of the highest override that passed and the lowest that failed;
+/// after [`GUIDED_PROBES`] such probes, or when the line gives nothing, the bracket is halved.
+/// For a peak that rises with the override this finds the same answer as a bisection, in three
+/// to five runs instead of nine. Once two whole runs have fixed the line, a probe that breaks the
+/// target is stopped there (the rest of its cut cannot lower its peak). The teach cut is made
+/// once, by the first run (or given: [`ReferenceSearch::calibrated`]); the others reuse its
+/// calibration (they differ from it only in controller and override band, which the teach cut
+/// does not depend on).
 pub struct ReferenceSearch {
     spec: RunSpec,
     run: LabRun,
-    /// The fixed override of `run`, percent, and whether it is a bisection step.
+    /// The fixed override of `run`, percent, and what it is for.
     running: (f64, RunKind),
     calibration: Option<Calibration>,
     programmed_cycle_time_s: f64,
     /// The force no reference run may exceed: the target the controllers hold.
     reference_force_n: f64,
+    /// The highest override known to keep the force (the bracket's floor until one is run).
     low_pct: f64,
+    /// The lowest override known to break it (the bracket's top until one is run).
     high_pct: f64,
     best_cycle_time_s: Option<f64>,
+    /// (override, peak force) of every whole run so far: the line's points.
+    peaks: Vec<(f64, f64)>,
+    /// Rows of `run`'s trace already compared with the reference force.
+    rows_checked: usize,
+    guided_probes: usize,
     runs_done: usize,
+    /// The largest fraction shown so far (the number of runs is not known in advance).
+    shown_fraction: std::cell::Cell<f64>,
     found: Option<References>,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq)]
 enum RunKind {
     Programmed,
-    Bisection,
-    /// No bisection step stayed under the target: the lowest override, checked like the others.
+    Probe,
+    /// No probe stayed under the target: the lowest override, checked like the others.
     Lowest,
 }
 
 impl ReferenceSearch {
-    /// Runs a bisection needs from the bracket down to 1 %, plus the programmed-feed run.
-    const EXPECTED_RUNS: usize = 9;
-
-    /// Starts with the programmed-feed run.
+    /// Starts with the programmed-feed run (and its teach cut).
     pub fn new(spec: &RunSpec) -> Result<Self, LoopError> {
+        Self::starting(spec, LabRun::new(&fixed_feed_spec(spec, 100.0)?)?, None)
+    }
+
+    /// Starts with the programmed-feed run, calibrated by `calibration` (from a teach cut of a
+    /// run on the same scenario: [`TeachKey`]) instead of a teach cut of its own.
+    pub fn calibrated(spec: &RunSpec, calibration: Calibration) -> Result<Self, LoopError> {
+        let run = LabRun::calibrated(&fixed_feed_spec(spec, 100.0)?, calibration.clone())?;
+        Self::starting(spec, run, Some(calibration))
+    }
+
+    fn starting(
+        spec: &RunSpec,
+        run: LabRun,
+        calibration: Option<Calibration>,
+    ) -> Result<Self, LoopError> {
         let (low_pct, bracket_high_pct) = REFERENCE_BRACKET_PCT;
         // A dial that stops at 150 % cannot run a fixed 250 %.
         let high_pct = bracket_high_pct.min(machine_max_override_pct(spec.preset));
         Ok(Self {
-            run: LabRun::new(&fixed_feed_spec(spec, 100.0)?)?,
+            run,
             running: (100.0, RunKind::Programmed),
             spec: spec.clone(),
-            calibration: None,
+            calibration,
             programmed_cycle_time_s: f64::NAN,
             reference_force_n: f64::NAN,
             low_pct,
             high_pct,
             best_cycle_time_s: None,
+            peaks: Vec::new(),
+            rows_checked: 0,
+            guided_probes: 0,
             runs_done: 0,
+            shown_fraction: std::cell::Cell::new(0.0),
             found: None,
         })
     }
@@ -652,6 +730,98 @@ impl ReferenceSearch {
     /// The references, once found.
     pub fn found(&self) -> Option<References> {
         self.found
+    }
+
+    /// The calibration of the scenario's teach cut, once made (or given).
+    pub fn calibration(&self) -> Option<&Calibration> {
+        self.calibration.as_ref()
+    }
+
+    /// Whether the run under way has already broken the reference force, checking the rows added
+    /// since the last look.
+    fn run_broke_target(&mut self) -> bool {
+        let Some(trace) = self.run.trace() else {
+            return false;
+        };
+        let rows = &trace.rows[self.rows_checked.min(trace.rows.len())..];
+        self.rows_checked = trace.rows.len();
+        rows.iter()
+            .any(|r| r.force_n.is_finite() && r.force_n > self.reference_force_n)
+    }
+
+    /// Where the straight line through the whole runs so far (the last two; through the origin
+    /// while there is one) reaches the reference force, if it rises.
+    fn line_reaches_target_pct(&self) -> Option<f64> {
+        let target = self.reference_force_n;
+        let pct = match self.peaks.as_slice() {
+            [] => return None,
+            [(p, f)] => p * target / f,
+            [.., (p0, f0), (p1, f1)] => {
+                let slope = (f1 - f0) / (p1 - p0);
+                // A line that does not rise (or a NaN) says nothing: halve the bracket instead.
+                if slope.is_nan() || slope <= 0.0 {
+                    return None;
+                }
+                p1 + (target - f1) / slope
+            }
+        };
+        pct.is_finite().then_some(pct)
+    }
+
+    /// The next override to run, or `None` when the bracket is down to 1 %.
+    fn next_probe_pct(&mut self) -> Option<f64> {
+        if self.high_pct - self.low_pct <= 1.0 {
+            return None;
+        }
+        let (inside_low, inside_high) = (self.low_pct + 1.0, self.high_pct - 1.0);
+        let guided = (self.guided_probes < GUIDED_PROBES)
+            .then(|| self.line_reaches_target_pct())
+            .flatten();
+        let pct = match guided {
+            Some(pct) => {
+                self.guided_probes += 1;
+                pct.floor()
+            }
+            None => ((self.low_pct + self.high_pct) / 2.0).round(),
+        };
+        Some(pct.clamp(inside_low, inside_high))
+    }
+
+    /// The run after a `kind` run ended: the next probe, the lowest override's check, or the
+    /// answer.
+    fn next(&mut self, kind: RunKind) -> Result<bool, LoopError> {
+        let next = match self.next_probe_pct() {
+            Some(pct) => Some((pct, RunKind::Probe)),
+            None if self.best_cycle_time_s.is_none() && kind != RunKind::Lowest => {
+                Some((self.low_pct, RunKind::Lowest))
+            }
+            None => None,
+        };
+        match (
+            next,
+            self.best_cycle_time_s
+                .or_else(|| self.no_safe_fixed_feed(kind)),
+        ) {
+            (Some((pct, kind)), _) => {
+                let spec = fixed_feed_spec(&self.spec, pct)?;
+                self.run = match &self.calibration {
+                    Some(c) => LabRun::calibrated(&spec, c.clone())?,
+                    None => LabRun::new(&spec)?,
+                };
+                self.running = (pct, kind);
+                self.rows_checked = 0;
+                Ok(false)
+            }
+            (None, Some(best)) => {
+                self.found = Some(References {
+                    programmed_cycle_time_s: self.programmed_cycle_time_s,
+                    safe_fixed_override_pct: self.low_pct,
+                    safe_fixed_cycle_time_s: best,
+                });
+                Ok(true)
+            }
+            (None, None) => Err(LoopError::NoReference),
+        }
     }
 
     /// After the lowest override also broke the target, the answer is that no fixed feed keeps
@@ -675,77 +845,85 @@ impl Work for ReferenceSearch {
         if self.found.is_some() {
             return Ok(true);
         }
-        if !self.run.advance(periods)? {
+        let (pct, kind) = self.running;
+        // Once the line is fixed by two whole runs, a probe needs no more than a verdict: it is
+        // looked at every few periods and stopped when it breaks the target. (The answer does not
+        // depend on where it stops, nor on the budget: such a probe adds no point to the line.)
+        let verdict_only = kind == RunKind::Probe && self.peaks.len() >= 2;
+        let mut left = periods.max(1);
+        let finished = loop {
+            let piece = if verdict_only {
+                left.min(VERDICT_CHECK_PERIODS)
+            } else {
+                left
+            };
+            left -= piece;
+            if self.run.advance(piece)? {
+                break true;
+            }
+            if verdict_only && self.run_broke_target() {
+                self.runs_done += 1;
+                self.high_pct = self.high_pct.min(pct);
+                return self.next(kind);
+            }
+            if left == 0 {
+                break false;
+            }
+        };
+        if !finished {
             return Ok(false);
         }
         let result = self.run.finish()?;
         self.runs_done += 1;
-        let (pct, kind) = self.running;
+        if kind == RunKind::Programmed {
+            self.programmed_cycle_time_s = result.metrics.cycle_time_s;
+            self.reference_force_n = result.settings.target_force_n;
+            self.calibration.get_or_insert(result.calibration);
+        }
+        let peak_n = result.metrics.peak_force_n;
+        let kept = peak_n <= self.reference_force_n && result.trace.completed;
+        if result.trace.completed && (kept || !verdict_only) {
+            self.peaks.push((pct, peak_n));
+        }
         match kind {
-            RunKind::Programmed => {
-                self.programmed_cycle_time_s = result.metrics.cycle_time_s;
-                self.reference_force_n = result.settings.target_force_n;
-                self.calibration = Some(result.calibration);
-            }
-            RunKind::Bisection => {
-                if result.metrics.peak_force_n <= self.reference_force_n && result.trace.completed {
+            // The programmed feed is a probe at 100 % too.
+            RunKind::Programmed | RunKind::Probe => {
+                if kept && pct > self.low_pct {
                     self.low_pct = pct;
                     self.best_cycle_time_s = Some(result.metrics.cycle_time_s);
-                } else {
-                    self.high_pct = pct;
+                } else if !kept {
+                    self.high_pct = self.high_pct.min(pct);
                 }
             }
             RunKind::Lowest => {
-                if result.metrics.peak_force_n <= self.reference_force_n && result.trace.completed {
+                if kept {
                     self.best_cycle_time_s = Some(result.metrics.cycle_time_s);
                 }
             }
         }
-        let next = if self.high_pct - self.low_pct > 1.0 {
-            Some((
-                ((self.low_pct + self.high_pct) / 2.0).round(),
-                RunKind::Bisection,
-            ))
-        } else if self.best_cycle_time_s.is_none() && kind != RunKind::Lowest {
-            Some((self.low_pct, RunKind::Lowest))
-        } else {
-            None
-        };
-        match (
-            next,
-            self.best_cycle_time_s
-                .or_else(|| self.no_safe_fixed_feed(kind)),
-        ) {
-            (Some((pct, kind)), _) => {
-                let spec = fixed_feed_spec(&self.spec, pct)?;
-                self.run = match &self.calibration {
-                    Some(c) => LabRun::calibrated(&spec, c.clone())?,
-                    None => LabRun::new(&spec)?,
-                };
-                self.running = (pct, kind);
-                Ok(false)
-            }
-            (None, Some(best)) => {
-                self.found = Some(References {
-                    programmed_cycle_time_s: self.programmed_cycle_time_s,
-                    safe_fixed_override_pct: self.low_pct,
-                    safe_fixed_cycle_time_s: best,
-                });
-                Ok(true)
-            }
-            (None, None) => Err(LoopError::NoReference),
-        }
+        self.next(kind)
     }
 
     /// The fixed override of the current run and the rough fraction done.
     fn progress(&self) -> Progress {
-        let expected = Self::EXPECTED_RUNS.max(self.runs_done + 1);
+        // The runs still to come: about one per halving of the bracket, at most three once the
+        // line guides the probes, and the run under way.
+        let width = (self.high_pct - self.low_pct).max(1.0);
+        let remaining = if self.found.is_some() {
+            0
+        } else {
+            1 + (width.log2().ceil() as usize).min(3)
+        };
+        let expected = (self.runs_done + remaining).max(1);
         let label = format!(
             "Savings: reference run {} of about {expected}, fixed feed at {:.0} %",
             self.runs_done + 1,
             self.running.0
         );
-        let fraction = (self.runs_done as f64 + self.run.progress().fraction) / expected as f64;
+        let fraction = ((self.runs_done as f64 + self.run.progress().fraction) / expected as f64)
+            .clamp(0.0, 1.0)
+            .max(self.shown_fraction.get());
+        self.shown_fraction.set(fraction);
         Progress::new(label, fraction)
     }
 
@@ -787,18 +965,40 @@ pub struct LabRuns {
     specs: Vec<RunSpec>,
     machines: MachineFactory,
     teach_force: TeachForce,
+    /// The teach cuts made so far, when runs on the preset's simulation share them: a run whose
+    /// [`TeachKey`] is here starts from its calibration instead of cutting again.
+    calibrations: Option<Vec<(TeachKey, Calibration)>>,
     current: Option<LabRun>,
     results: Vec<std::sync::Arc<RunResult>>,
 }
 
 impl LabRuns {
     /// The runs of `specs`, in order, on their presets' simulated machines.
+    ///
+    /// Runs on the same scenario share one teach cut (their results are the same as with a teach
+    /// cut each: the simulation repeats it exactly).
     pub fn new(specs: Vec<RunSpec>) -> Self {
-        Self::on_machines(
-            specs,
-            Box::new(RunMachines::for_preset),
-            TeachForce::SimulationTruth,
-        )
+        Self {
+            calibrations: Some(Vec::new()),
+            ..Self::on_machines(
+                specs,
+                Box::new(RunMachines::for_preset),
+                TeachForce::SimulationTruth,
+            )
+        }
+    }
+
+    /// Runs that start from `calibration` when their teach cut would be the one with `key` (the
+    /// Simulate page keeps the calibration of its last run; [`LabRuns::new`] otherwise).
+    pub fn with_calibration(specs: Vec<RunSpec>, key: TeachKey, calibration: Calibration) -> Self {
+        let mut runs = Self::new(specs);
+        runs.calibrations = Some(vec![(key, calibration)]);
+        runs
+    }
+
+    /// The teach cuts made or given so far, by key (empty on other machines than the preset's).
+    pub fn calibrations(&self) -> &[(TeachKey, Calibration)] {
+        self.calibrations.as_deref().unwrap_or(&[])
     }
 
     /// The runs of `specs`, in order, each on machines made by `machines` and calibrated with
@@ -813,6 +1013,7 @@ impl LabRuns {
             specs,
             machines,
             teach_force,
+            calibrations: None,
             current: None,
         }
     }
@@ -829,16 +1030,34 @@ impl Work for LabRuns {
         let run = match &mut self.current {
             Some(run) => run,
             None => {
-                let machines = (self.machines)(spec)?;
-                self.current.insert(LabRun::on_machines(
-                    spec,
-                    machines,
-                    self.teach_force.clone(),
-                )?)
+                let known = match &self.calibrations {
+                    Some(known) => {
+                        let key = TeachKey::of(spec)?;
+                        known
+                            .iter()
+                            .find(|(k, _)| *k == key)
+                            .map(|(_, c)| c.clone())
+                    }
+                    None => None,
+                };
+                let run = match known {
+                    Some(calibration) => LabRun::calibrated(spec, calibration)?,
+                    None => {
+                        let machines = (self.machines)(spec)?;
+                        LabRun::on_machines(spec, machines, self.teach_force.clone())?
+                    }
+                };
+                self.current.insert(run)
             }
         };
         if run.advance(budget)? {
             let result = run.finish()?;
+            if let Some(known) = &mut self.calibrations {
+                let key = TeachKey::of(spec)?;
+                if !known.iter().any(|(k, _)| *k == key) {
+                    known.push((key, result.calibration.clone()));
+                }
+            }
             self.results.push(std::sync::Arc::new(result));
             self.current = None;
         }

@@ -374,33 +374,9 @@ fn nominal_duration_s(spec: &RunSpec) -> f64 {
     spec.preset.summary().nominal_duration_s
 }
 
-/// `f` over `items`, on all cores natively (one thread per item, at most the machine's
-/// parallelism at a time) and in order in wasm; the results in `items`' order either way.
+/// `f` over `items` on every core natively, in order in wasm ([`crate::work::parallel_map`]).
 fn parallel_map<T: Sync, R: Send>(items: &[T], f: impl Fn(&T) -> R + Sync) -> Vec<R> {
-    #[cfg(not(target_arch = "wasm32"))]
-    {
-        let width = std::thread::available_parallelism().map_or(1, |n| n.get());
-        if width > 1 && items.len() > 1 {
-            let mut out = Vec::with_capacity(items.len());
-            for chunk in items.chunks(width) {
-                let f = &f;
-                let results: Vec<R> = std::thread::scope(|scope| {
-                    let handles: Vec<_> = chunk
-                        .iter()
-                        .map(|item| scope.spawn(move || f(item)))
-                        .collect();
-                    handles
-                        .into_iter()
-                        .map(|h| h.join())
-                        .collect::<Result<Vec<R>, _>>()
-                })
-                .unwrap_or_else(|payload| std::panic::resume_unwind(payload));
-                out.extend(results);
-            }
-            return out;
-        }
-    }
-    items.iter().map(f).collect()
+    crate::work::parallel_map(items, f)
 }
 
 /// What a teach-in learns from one teach cut, and the settings it proposes (as commercial
