@@ -85,12 +85,53 @@ pub fn hypot(x: f64, y: f64) -> f64 {
 /// assert_eq!(round_ties_even(2.5), 2.0);
 /// assert_eq!(round_ties_even(3.5), 4.0);
 /// ```
-#[inline]
+#[inline(always)]
 pub fn round_ties_even(x: f64) -> f64 {
     // 1.5·2⁵²: the sum lies in [2⁵², 2⁵³), where the spacing of doubles is 1, so the addition
     // rounds x to an integer (ties to even, as IEEE 754 rounds) and the subtraction is exact.
     const SHIFT: f64 = 6_755_399_441_055_744.0;
     (x + SHIFT) - SHIFT
+}
+
+/// The larger of `a` and `b`, a NaN giving way to the other (as `f64::max`), by one comparison:
+/// wasm has no instruction with `f64::max`'s NaN rule, so the standard method is a library call
+/// there, and the simulation takes a few maxima every sample.
+#[inline(always)]
+pub fn max(a: f64, b: f64) -> f64 {
+    if a > b || b.is_nan() {
+        a
+    } else {
+        b
+    }
+}
+
+/// The smaller of `a` and `b`, a NaN giving way to the other (as `f64::min`); see [`max`].
+#[inline(always)]
+pub fn min(a: f64, b: f64) -> f64 {
+    if a < b || b.is_nan() {
+        a
+    } else {
+        b
+    }
+}
+
+/// `x` clamped to [`lo`, `hi`] (`lo` ≤ `hi`), NaN staying NaN (as `f64::clamp`); see [`max`].
+///
+/// ```
+/// use cutlab::math::{clamp, max, min};
+/// assert_eq!((clamp(5.0, 0.0, 1.0), clamp(-5.0, 0.0, 1.0), clamp(0.5, 0.0, 1.0)), (1.0, 0.0, 0.5));
+/// assert!(clamp(f64::NAN, 0.0, 1.0).is_nan());
+/// assert_eq!((max(f64::NAN, 2.0), max(2.0, f64::NAN), min(f64::NAN, 2.0)), (2.0, 2.0, 2.0));
+/// ```
+#[inline(always)]
+pub fn clamp(x: f64, lo: f64, hi: f64) -> f64 {
+    if x < lo {
+        lo
+    } else if x > hi {
+        hi
+    } else {
+        x
+    }
 }
 
 /// `angle_rad` brought into [0, 2π), the same bits as `angle_rad.rem_euclid(2π)`: an angle that
@@ -105,7 +146,7 @@ pub fn round_ties_even(x: f64) -> f64 {
 ///     assert_eq!(wrap_turn(a), a.rem_euclid(TAU));
 /// }
 /// ```
-#[inline]
+#[inline(always)]
 pub fn wrap_turn(angle_rad: f64) -> f64 {
     if (0.0..TAU).contains(&angle_rad) {
         angle_rad
@@ -132,7 +173,7 @@ const PHASOR_TINY_STEP_RAD: f64 = 1.0 / 32.0;
 /// cos δ and sin δ for |δ| ≤ [`PHASOR_SMALL_STEP_RAD`] by their Taylor series, the first term
 /// left out below 10⁻¹⁷ (under half an ulp): up to δ¹³ in general, up to δ⁸ for the steps of
 /// ordinary speeds (|δ| ≤ 1/32, where δ⁹/9! < 10⁻¹⁹).
-#[inline]
+#[inline(always)]
 fn small_cos_sin(d: f64) -> (f64, f64) {
     // Horner in d² with the reciprocal factorials folded into constants (no division).
     const S: [f64; 6] = [
@@ -227,7 +268,7 @@ impl Phasor {
     }
 
     /// Advances the angle by `step_rad`.
-    #[inline]
+    #[inline(always)]
     pub fn advance(&mut self, step_rad: f64) {
         if step_rad == 0.0 {
             // At rest (an axis that does not move): nothing turns, nothing accumulates.

@@ -37,7 +37,7 @@ impl Normal {
     }
 
     /// One deviate from `rng`.
-    #[inline]
+    #[inline(always)]
     pub fn sample(&self, rng: &mut Rng) -> f64 {
         rng.ziggurat(self.tables)
     }
@@ -143,7 +143,7 @@ impl Rng {
     }
 
     /// The next 64 random bits.
-    #[inline]
+    #[inline(always)]
     pub fn next_u64(&mut self) -> u64 {
         let s = &mut self.state;
         let result = s[0].wrapping_add(s[3]).rotate_left(23).wrapping_add(s[0]);
@@ -171,7 +171,7 @@ impl Rng {
     }
 
     /// [`Rng::normal`] from the ziggurat's tables (see [`Normal`]).
-    #[inline]
+    #[inline(always)]
     fn ziggurat(&mut self, z: &Ziggurat) -> f64 {
         loop {
             // One word: the low 8 bits pick the layer, the top 53 a signed position in it.

@@ -72,9 +72,11 @@ pub const BLOCK_FRAMES: usize = 128;
 pub struct SignalChain {
     spindle_filter: SosFilterBank,
     feed_filter: SosFilterBank,
-    /// Phase currents not yet filtered, interleaved `u v w u v w …`.
-    spindle_block: Vec<f64>,
-    feed_block: Vec<f64>,
+    /// Phase currents not yet filtered, interleaved `u v w u v w …`: the first `3·gathered`
+    /// values of each.
+    spindle_block: Box<[f64; 3 * BLOCK_FRAMES]>,
+    feed_block: Box<[f64; 3 * BLOCK_FRAMES]>,
+    gathered: usize,
     sums: Sums,
 }
 
@@ -110,20 +112,24 @@ impl SignalChain {
         Ok(Self {
             spindle_filter: SosFilterBank::new(spindle_lowpass, 3)?,
             feed_filter: SosFilterBank::new(feed_lowpass, 3)?,
-            spindle_block: Vec::with_capacity(3 * BLOCK_FRAMES),
-            feed_block: Vec::with_capacity(3 * BLOCK_FRAMES),
+            spindle_block: Box::new([0.0; 3 * BLOCK_FRAMES]),
+            feed_block: Box::new([0.0; 3 * BLOCK_FRAMES]),
+            gathered: 0,
             sums: Sums::default(),
         })
     }
 
     /// Takes one sample.
-    #[inline]
+    #[inline(always)]
     pub fn push(&mut self, step: &MachineStep) {
         let s = &step.sensors;
-        self.spindle_block
-            .extend_from_slice(&s.spindle_phase_currents_a);
-        self.feed_block.extend_from_slice(&s.feed_phase_currents_a);
-        if self.spindle_block.len() >= 3 * BLOCK_FRAMES {
+        let at = 3 * self.gathered;
+        for k in 0..3 {
+            self.spindle_block[at + k] = s.spindle_phase_currents_a[k];
+            self.feed_block[at + k] = s.feed_phase_currents_a[k];
+        }
+        self.gathered += 1;
+        if self.gathered == BLOCK_FRAMES {
             self.flush();
         }
         let sums = &mut self.sums;
@@ -158,17 +164,18 @@ impl SignalChain {
 
     /// Filters the gathered phase currents and adds each sample's three-phase RMS to the sums.
     fn flush(&mut self) {
-        self.spindle_filter.process_slice(&mut self.spindle_block);
-        self.feed_filter.process_slice(&mut self.feed_block);
+        let n = 3 * self.gathered;
+        self.gathered = 0;
+        let (spindle, feed) = (&mut self.spindle_block[..n], &mut self.feed_block[..n]);
+        self.spindle_filter.process_slice(spindle);
+        self.feed_filter.process_slice(feed);
         let sums = &mut self.sums;
-        for i in self.spindle_block.as_chunks::<3>().0 {
+        for i in spindle.as_chunks::<3>().0 {
             sums.spindle_rms += three_phase_rms(i[0], i[1], i[2]);
         }
-        for i in self.feed_block.as_chunks::<3>().0 {
+        for i in feed.as_chunks::<3>().0 {
             sums.feed_rms += three_phase_rms(i[0], i[1], i[2]);
         }
-        self.spindle_block.clear();
-        self.feed_block.clear();
     }
 
     /// Ends the period: returns its summary and starts the next one.
@@ -217,8 +224,7 @@ impl SignalChain {
     pub fn reset(&mut self) {
         self.spindle_filter.reset();
         self.feed_filter.reset();
-        self.spindle_block.clear();
-        self.feed_block.clear();
+        self.gathered = 0;
         self.sums = Sums::default();
     }
 }

@@ -696,6 +696,7 @@ impl TeachCut {
 impl SampleLoop for TeachCut {
     type Output = Calibration;
 
+    #[inline(always)]
     fn push(&mut self, sample: &LoopSample<'_>) -> Option<OverrideCommand> {
         if self.done {
             return None;
@@ -708,7 +709,8 @@ impl SampleLoop for TeachCut {
             .chain(&sensors.spindle_phase_currents_a)
         {
             if i.is_finite() {
-                self.samples.max_phase_current_a = self.samples.max_phase_current_a.max(i.abs());
+                self.samples.max_phase_current_a =
+                    crate::math::max(self.samples.max_phase_current_a, i.abs());
             }
         }
         if let Some(d) = &sample.dynamometer {
@@ -980,6 +982,7 @@ impl FeedbackLoop {
 impl SampleLoop for FeedbackLoop {
     type Output = Trace;
 
+    #[inline(always)]
     fn push(&mut self, sample: &LoopSample<'_>) -> Option<OverrideCommand> {
         if self.done {
             return None;

@@ -379,6 +379,7 @@ impl OverrideInput {
 
     /// Advances one sample; at a scan, reads `command`. Returns the override in force and whether
     /// feed hold is set.
+    #[inline(always)]
     pub fn step(&mut self, command: OverrideCommand) -> (AppliedOverride, bool) {
         if self.scan.tick() {
             self.applied = self.mode.apply(command.override_pct, self.applied);
@@ -418,7 +419,7 @@ impl Every {
     }
 
     /// Advances one sample; true on the samples where the period starts.
-    #[inline]
+    #[inline(always)]
     pub(crate) fn tick(&mut self) -> bool {
         let now = self.left == 0;
         self.left = if now { self.period - 1 } else { self.left - 1 };
@@ -512,6 +513,7 @@ impl Control {
     }
 
     /// Advances one sample under `command`; the axes move only once `spindle_ready`.
+    #[inline(always)]
     pub fn step(&mut self, command: OverrideCommand, spindle_ready: bool) -> ControlStep {
         let (applied, feed_hold) = self.input.step(command);
         let cnc = self.planner.step(applied.pct, feed_hold, spindle_ready);
@@ -711,6 +713,7 @@ impl FeedPlanner {
 
     /// Advances one sample with the override in force, feed hold, and whether the spindle is
     /// ready (at speed) for motion.
+    #[inline(always)]
     pub fn step(&mut self, override_pct: f64, feed_hold: bool, spindle_ready: bool) -> CncState {
         if self.ipo.tick() {
             self.interpolation_tick(override_pct, feed_hold, spindle_ready);

@@ -42,7 +42,7 @@ impl FirstOrderLag {
     }
 
     /// Advances one sample with input `u` held over it; returns the output at its end.
-    #[inline]
+    #[inline(always)]
     pub fn step(&mut self, u: f64) -> f64 {
         self.y += self.alpha * (u - self.y);
         self.y
@@ -107,7 +107,7 @@ impl SecondOrderLag {
     }
 
     /// Advances one sample with input `u` held over it; returns the output at its end.
-    #[inline]
+    #[inline(always)]
     pub fn step(&mut self, u: f64) -> f64 {
         if self.pass_through {
             self.x = [u, 0.0];

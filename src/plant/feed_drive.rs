@@ -233,7 +233,7 @@ impl ThreePhaseWaveform {
     /// ```text
     /// i_u = I·P,   i_v = I·(−P/2 − (√3/2)·Q),   i_w = I·(−P/2 + (√3/2)·Q)
     /// ```
-    #[inline]
+    #[inline(always)]
     pub fn currents_from_trig(&self, amplitude_a: f64, cos_theta: f64, sin_theta: f64) -> [f64; 3] {
         const HALF_SQRT_3: f64 = 0.866_025_403_784_438_6;
         let mul = |a: (f64, f64), b: (f64, f64)| (a.0 * b.0 - a.1 * b.1, a.0 * b.1 + a.1 * b.0);
@@ -266,6 +266,7 @@ impl ThreePhaseWaveform {
 /// use cutlab::plant::feed_drive::three_phase_rms_a;
 /// assert!((three_phase_rms_a([1.0, -0.5, -0.5]) - 0.5f64.sqrt()).abs() < 1e-15);
 /// ```
+#[inline(always)]
 pub fn three_phase_rms_a(currents_a: [f64; 3]) -> f64 {
     ((currents_a[0] * currents_a[0]
         + currents_a[1] * currents_a[1]
@@ -392,7 +393,7 @@ impl FeedDrive {
     /// Advances one sample: the axis moves at `velocity_mm_min` against a cutting force
     /// `load_force_n` along its direction of positive motion (positive resists positive motion)
     /// plus an external torque `shaft_torque_nm` on the motor shaft (the brake bench's load).
-    #[inline]
+    #[inline(always)]
     pub fn step(
         &mut self,
         velocity_mm_min: f64,
@@ -406,7 +407,7 @@ impl FeedDrive {
         self.position_mm += step_mm;
         self.electrical.advance(k.electrical_rad_per_mm * step_mm);
         // Friction, preload, cut, inertia of the table and damping.
-        let force_n = k.friction_n * (velocity_mm_min * k.per_friction_band).clamp(-1.0, 1.0)
+        let force_n = k.friction_n * math::clamp(velocity_mm_min * k.per_friction_band, -1.0, 1.0)
             + load_force_n
             + k.mass_n_per_mm_s2 * accel_mm_s2
             + k.damping_n_per_mm_min * velocity_mm_min;

@@ -319,7 +319,7 @@ impl Angle {
 
     /// This angle plus `by` (whose sine and cosine are `by_sin`, `by_cos`), by the addition
     /// theorem: no transcendental call.
-    #[inline]
+    #[inline(always)]
     fn plus(self, by_rad: f64, by_sin: f64, by_cos: f64) -> Self {
         Self {
             rad: self.rad + by_rad,
@@ -329,7 +329,7 @@ impl Angle {
     }
 
     /// The same direction shifted by whole turns (sine and cosine unchanged).
-    #[inline]
+    #[inline(always)]
     fn shifted(self, turns: f64) -> Self {
         Self {
             rad: self.rad + TAU * turns,
@@ -549,7 +549,7 @@ impl MillingForceModel {
     /// them by rotation, [`crate::math::Phasor`]) and the helix lag's trigonometry kept while the
     /// depth stays: no transcendental call per sample.
     #[allow(clippy::too_many_arguments)]
-    #[inline]
+    #[inline(always)]
     pub(crate) fn forces_at(
         &mut self,
         k: &CuttingCoefficients,
@@ -589,6 +589,7 @@ impl MillingForceModel {
         }
     }
 
+    #[inline(always)]
     fn forces_with(
         &self,
         k: &CuttingCoefficients,
@@ -682,7 +683,7 @@ impl MillingForceModel {
 /// ⌊x⌋ for the few turns an edge spans, by rounding arithmetic ([`math::round_ties_even`]:
 /// `floor` is a library call on the baseline x86-64 target); exact for |x| < 2⁵¹, which the turn
 /// counts are far below.
-#[inline]
+#[inline(always)]
 fn floor_small(x: f64) -> f64 {
     let r = math::round_ties_even(x);
     if r > x {
@@ -694,6 +695,7 @@ fn floor_small(x: f64) -> f64 {
 
 /// The part of the immersion where tooth j's chip is positive: with Δ < 0 the tooth cuts only
 /// where s_t·sin φ > −Δ. `None` if it does not cut at all.
+#[inline(always)]
 fn tooth_window(immersion: &Immersion, delta_mm: f64, f: f64) -> Option<(Angle, Angle)> {
     if delta_mm >= 0.0 {
         return Some((immersion.entry, immersion.exit));
@@ -728,7 +730,7 @@ fn tooth_window(immersion: &Immersion, delta_mm: f64, f: f64) -> Option<(Angle, 
 }
 
 /// ∫ dF dφ per unit height at `at`, for h = f·sin φ + Δ: [x, y, z, tangential].
-#[inline]
+#[inline(always)]
 fn antiderivative(k: &CuttingCoefficients, f: f64, delta: f64, at: Angle) -> [f64; 4] {
     let (phi, s, c) = (at.rad, at.sin, at.cos);
     let half_sq = 0.5 * s * s; // ∫ sin·cos

@@ -185,6 +185,7 @@ impl Sampling {
         &self.latest
     }
 
+    #[inline(always)]
     fn tick(&mut self) -> Tick {
         self.samples += 1;
         Tick {
@@ -194,6 +195,7 @@ impl Sampling {
         }
     }
 
+    #[inline(always)]
     fn machine_step(&self) -> MachineStep {
         MachineStep {
             sensors: self.latest.sensors,
@@ -207,6 +209,7 @@ impl<P: PlantModel> Machine for P {
         self.sampling().sample_rate_hz
     }
 
+    #[inline(always)]
     fn step(&mut self, command: OverrideCommand) -> MachineStep {
         if !self.sampling().latest.finished {
             let tick = self.sampling_mut().tick();

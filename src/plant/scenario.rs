@@ -160,6 +160,7 @@ impl Profile {
 
     /// [`Profile::value_at`], starting the search from the point index `hint` the call before
     /// left there (O(1) for a monotone walk along the path, as the simulator makes one).
+    #[inline(always)]
     pub(crate) fn value_from_hint(&self, position_mm: f64, hint: &mut usize) -> f64 {
         if position_mm.is_nan() {
             return f64::NAN;
@@ -497,6 +498,7 @@ impl Scenario {
 
     /// Index of the region at `position_mm`, `None` in air (for the simulator's cache); the
     /// search starts from `hint`, the index the call before left there.
+    #[inline(always)]
     pub(crate) fn region_index_from_hint(
         &self,
         position_mm: f64,
@@ -541,6 +543,7 @@ impl Scenario {
 
     /// The point at `position_mm` searching forward from segment `hint` (O(1) for a monotone
     /// walk along the path).
+    #[inline(always)]
     pub(crate) fn point_from_hint(&self, position_mm: f64, hint: usize) -> PathPoint {
         let mut i = hint.min(self.segments.len() - 1);
         if self.segments[i].start_mm > position_mm {
@@ -554,9 +557,10 @@ impl Scenario {
         self.point_in_segment(position_mm, i)
     }
 
+    #[inline(always)]
     fn point_in_segment(&self, position_mm: f64, i: usize) -> PathPoint {
         let seg = &self.segments[i];
-        let d = (position_mm - seg.start_mm).clamp(0.0, seg.length_mm);
+        let d = math::clamp(position_mm - seg.start_mm, 0.0, seg.length_mm);
         match seg.arc {
             None => {
                 let t = d / seg.length_mm;

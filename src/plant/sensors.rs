@@ -177,11 +177,13 @@ impl Quantiser {
 
     /// The code of `volts`, clamped to the range (NaN stays NaN: a broken model must show).
     /// The bounds are whole codes, so clamping before rounding equals clamping after.
-    #[inline]
+    #[inline(always)]
     fn code(&self, volts: f64) -> f64 {
-        crate::math::round_ties_even(
-            (volts * self.codes_per_volt).clamp(self.lowest_code, self.highest_code),
-        )
+        crate::math::round_ties_even(crate::math::clamp(
+            volts * self.codes_per_volt,
+            self.lowest_code,
+            self.highest_code,
+        ))
     }
 }
 
@@ -341,7 +343,7 @@ impl CurrentSensor {
     }
 
     /// Samples the true phase currents; returns what the ADC reads, in amperes.
-    #[inline]
+    #[inline(always)]
     pub fn read(&mut self, currents_a: [f64; 3]) -> [f64; 3] {
         let mut out = [0.0; 3];
         // Each phase draws from its own stream, so an unmeasured phase (W in two-phase wiring)

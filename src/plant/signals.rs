@@ -98,8 +98,18 @@ impl PlantSignals {
     /// A sample's signals with what every plant reports alike — the time, the truth, and the
     /// control's override, feed hold, block, commanded and actual feed and position — and the
     /// rest at their defaults, for the plant to fill in.
+    #[inline(always)]
     pub fn from_control(time_s: f64, truth: PlantTruth, control: &ControlStep) -> Self {
         let cnc = &control.cnc;
+        // Every field written out (no `..Default::default()`): the mill builds this every
+        // sample, and the size-optimised browser build would call the default out of line.
+        let axis = AxisSignals {
+            velocity_mm_min: 0.0,
+            load_force_n: 0.0,
+            torque_nm: 0.0,
+            iq_a: 0.0,
+            phase_currents_a: [0.0; 3],
+        };
         Self {
             time_s,
             truth,
@@ -112,7 +122,22 @@ impl PlantSignals {
             feed_hold: control.feed_hold,
             commanded_feed_mm_min: cnc.commanded_feed_mm_min,
             feed_mm_min: cnc.feed_mm_min,
-            ..Self::default()
+            spindle_command_rpm: 0.0,
+            spindle_speed_rpm: 0.0,
+            spindle_gear: None,
+            material: None,
+            entry_deg: 0.0,
+            exit_deg: 0.0,
+            power_law_force_n: 0.0,
+            axis_x: axis,
+            axis_y: axis,
+            spindle_motor_torque_nm: 0.0,
+            spindle_phase_currents_a: [0.0; 3],
+            fv_voltage_v: 0.0,
+            feed_currents_read_a: [0.0; 3],
+            spindle_currents_read_a: [0.0; 3],
+            brake_excitation_a: 0.0,
+            brake_torque_nm: 0.0,
         }
     }
 }

@@ -37,6 +37,7 @@ use super::signals::{AxisSignals, PlantSignals};
 use super::spindle_drive::{SpindleDrive, SpindleDriveConfig};
 use super::{positive, Plant, PlantError, PlantModel, PlantSample, Sampling, Tick};
 use crate::machine::{OverrideCommand, PlantTruth, SensorSample, SensorlessEstimate};
+use crate::math;
 
 /// Which feed axis the feed-current sensors are on.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
@@ -312,6 +313,7 @@ impl Simulator {
         &self.config
     }
 
+    #[inline(always)]
     fn spindle_ready(&mut self, time_s: f64, command_rpm: f64) -> bool {
         if command_rpm == 0.0 {
             return true;
@@ -333,6 +335,7 @@ impl Simulator {
                 .is_some_and(|t| time_s - t >= self.scenario.spec().spindle_start_dwell_s)
     }
 
+    #[inline(always)]
     fn planner_block(&self) -> usize {
         self.sampling
             .latest()
@@ -356,6 +359,7 @@ impl PlantModel for Simulator {
         &mut self.sampling
     }
 
+    #[inline(always)]
     fn advance(&mut self, tick: Tick, command: OverrideCommand) -> PlantSample {
         let time_s = tick.time_s;
         let ipo_tick = self.ipo.tick();
@@ -397,8 +401,10 @@ impl PlantModel for Simulator {
         let feed_mm_min = cnc.feed_mm_min;
         let cutting = region.is_some() && spindle_rpm.abs() >= MIN_CUTTING_RPM && depth_mm > 0.0;
         let feed_per_tooth_mm = if cutting {
-            (feed_mm_min.max(0.0) / (f64::from(cutter.teeth) * spindle_rpm.abs()))
-                .min(MAX_FEED_PER_TOOTH_MM)
+            math::min(
+                math::max(feed_mm_min, 0.0) / (f64::from(cutter.teeth) * spindle_rpm.abs()),
+                MAX_FEED_PER_TOOTH_MM,
+            )
         } else {
             0.0
         };
@@ -470,7 +476,7 @@ impl PlantModel for Simulator {
         let cut_width_mm = if in_work { width_mm } else { 0.0 };
         let resultant_n = forces.resultant_n();
         let power_w = forces.power_w(spindle.speed_rpm);
-        let removal = cut_depth_mm * cut_width_mm * feed_mm_min.max(0.0) / 60.0;
+        let removal = cut_depth_mm * cut_width_mm * math::max(feed_mm_min, 0.0) / 60.0;
         let feed_rms = three_phase_rms_a(measured.phase_currents_a);
         let time_since_start_s = self.spindle_started_at_s.map_or(0.0, |t| time_s - t);
 

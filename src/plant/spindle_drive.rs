@@ -43,7 +43,7 @@ use std::f64::consts::TAU;
 use super::dynamics::SecondOrderLag;
 use super::feed_drive::ThreePhaseWaveform;
 use super::{in_range, non_negative, positive, rad_s_from_rpm, rpm_from_rad_s, PlantError};
-use crate::math::Phasor;
+use crate::math::{self, Phasor};
 
 /// The gearbox range in use.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
@@ -371,6 +371,7 @@ impl SpindleDrive {
     }
 
     /// The spindle speed now.
+    #[inline(always)]
     pub fn speed_rpm(&self) -> f64 {
         rpm_from_rad_s(self.motor_rad_s) / self.config.ratio(self.gear)
     }
@@ -381,17 +382,18 @@ impl SpindleDrive {
     }
 
     /// The spindle angle now with its cosine and sine.
+    #[inline(always)]
     pub fn angle(&self) -> &Phasor {
         &self.spindle_angle
     }
 
     /// Advances one sample with the speed command `command_rpm` (0 stops the spindle, clamped to
     /// the top speed) and the cutting torque `cutting_torque_nm` at the spindle.
-    #[inline]
+    #[inline(always)]
     pub fn step(&mut self, command_rpm: f64, cutting_torque_nm: f64) -> SpindleDriveOutput {
         let c = &self.config;
         let k = &self.k;
-        let command_rpm = command_rpm.clamp(-k.max_spindle_rpm, k.max_spindle_rpm);
+        let command_rpm = math::clamp(command_rpm, -k.max_spindle_rpm, k.max_spindle_rpm);
         let wanted_gear = c.gear_for(command_rpm);
         let shifting = wanted_gear != self.gear && command_rpm != 0.0;
         if shifting && self.motor_rad_s.abs() < REST_RAD_S {
@@ -409,11 +411,14 @@ impl SpindleDrive {
         let lagged_load_motor_nm = self.lag.step(load_torque_nm * gear.motor_nm_per_spindle_nm);
         // Speed loop: approach the target at the loop's rate, within the torque left over. Above
         // base speed the torque limit falls and the magnetising current with it, as n_b/n_m.
-        let per_weakened_rad_s = 1.0 / self.motor_rad_s.abs().max(k.base_rad_s);
+        let per_weakened_rad_s = 1.0 / math::max(self.motor_rad_s.abs(), k.base_rad_s);
         let limit_nm = k.torque_limit_base_nm * per_weakened_rad_s;
-        let headroom_nm = (limit_nm - lagged_load_motor_nm.abs()).max(0.0);
-        let accel_torque_nm = (k.loop_nm_per_rad_s * (target_rad_s - self.motor_rad_s))
-            .clamp(-headroom_nm, headroom_nm);
+        let headroom_nm = math::max(limit_nm - lagged_load_motor_nm.abs(), 0.0);
+        let accel_torque_nm = math::clamp(
+            k.loop_nm_per_rad_s * (target_rad_s - self.motor_rad_s),
+            -headroom_nm,
+            headroom_nm,
+        );
         self.motor_rad_s += accel_torque_nm * k.rad_s_per_nm_step;
         let stopped = command_rpm == 0.0 && self.motor_rad_s.abs() < REST_RAD_S;
         if stopped {
@@ -426,7 +431,7 @@ impl SpindleDrive {
             0.0
         } else {
             // I_mag·min(1, n_b/n_m) + max(1, n_m/n_b)/k_T·|T_m|
-            let weakening = (self.motor_rad_s.abs() * k.per_base_rad_s).max(1.0);
+            let weakening = math::max(self.motor_rad_s.abs() * k.per_base_rad_s, 1.0);
             k.magnetizing_base_a * per_weakened_rad_s
                 + weakening * k.amps_per_nm * motor_torque_nm.abs()
         };

@@ -38,9 +38,11 @@ use std::fmt;
 use super::sos::{Biquad, Sos};
 
 /// Sections whose state a slice kernel keeps in registers at once.
+#[cfg(not(target_arch = "wasm32"))]
 const MAX_GROUP: usize = 8;
 /// On one channel, groups of at least this many sections use the skewed kernel; below it the
 /// scalar loop is latency-bound anyway and the skew's start-up costs more than it gains.
+#[cfg(not(target_arch = "wasm32"))]
 const SKEW_MIN_SECTIONS: usize = 4;
 /// Frames processed per section group before moving to the next group, when a cascade has more
 /// sections than one group: small enough that the block stays in the L1 cache.
@@ -373,9 +375,48 @@ fn widest_vectors<R>(work: impl FnOnce() -> R) -> R {
     }
 }
 
+/// Runs every section over `frames` of `C` channels held in `L ≥ C` lanes, one section at a time
+/// over each block.
+///
+/// In wasm (no vector registers to hold a group's state, and every kernel size is code the
+/// browser downloads: the sized kernels below cost ~50 KB there), the sections go one at a time
+/// over each block instead: the same arithmetic on the same values, so the same bits.
+#[cfg(target_arch = "wasm32")]
+#[inline(always)]
+fn run_cascade<const C: usize, const L: usize>(
+    table: &[Lanes<L>],
+    state: &mut [f64],
+    frames: &mut [[f64; C]],
+) {
+    for block in frames.chunks_mut(BLOCK_FRAMES) {
+        for (k, lanes) in table.iter().enumerate() {
+            let Some(s) = state.get_mut(2 * k * C..2 * (k + 1) * C) else {
+                continue;
+            };
+            // Plain loops (the size-optimised build calls array helpers out of line).
+            for c in 0..C {
+                let q = [
+                    lanes[0][c],
+                    lanes[1][c],
+                    lanes[2][c],
+                    lanes[3][c],
+                    lanes[4][c],
+                ];
+                let mut sk = [s[c], s[C + c]];
+                for frame in block.iter_mut() {
+                    frame[c] = section_step(&q, &mut sk, frame[c]);
+                }
+                s[c] = sk[0];
+                s[C + c] = sk[1];
+            }
+        }
+    }
+}
+
 /// Runs every section over `frames` of `C` channels held in `L ≥ C` lanes. With more sections
 /// than one register group holds, goes block by block so each block stays in cache while the
 /// groups pass over it.
+#[cfg(not(target_arch = "wasm32"))]
 #[inline(always)]
 fn run_cascade<const C: usize, const L: usize>(
     table: &[Lanes<L>],
@@ -406,6 +447,7 @@ fn run_cascade<const C: usize, const L: usize>(
 /// Dispatches a group of up to [`MAX_GROUP`] sections to the kernel compiled for its size: on one
 /// channel with enough sections and samples, the skewed two-lane kernel; otherwise the lane
 /// kernel.
+#[cfg(not(target_arch = "wasm32"))]
 #[inline(always)]
 fn run_group<const C: usize, const L: usize>(
     table: &[Lanes<L>],
@@ -440,16 +482,19 @@ fn run_group<const C: usize, const L: usize>(
     }
 }
 
+#[cfg(not(target_arch = "wasm32"))]
 #[inline(always)]
 fn mul<const L: usize>(a: [f64; L], b: [f64; L]) -> [f64; L] {
     std::array::from_fn(|i| a[i] * b[i])
 }
 
+#[cfg(not(target_arch = "wasm32"))]
 #[inline(always)]
 fn add<const L: usize>(a: [f64; L], b: [f64; L]) -> [f64; L] {
     std::array::from_fn(|i| a[i] + b[i])
 }
 
+#[cfg(not(target_arch = "wasm32"))]
 #[inline(always)]
 fn sub<const L: usize>(a: [f64; L], b: [f64; L]) -> [f64; L] {
     std::array::from_fn(|i| a[i] - b[i])
@@ -459,6 +504,7 @@ fn sub<const L: usize>(a: [f64; L], b: [f64; L]) -> [f64; L] {
 /// processor overlaps the `K·C` independent recurrences sample after sample, and each operation
 /// covers every channel at once. Idle lanes (`C < L`) carry zeros. Per lane, the arithmetic is
 /// exactly that of `process`, so the bits agree.
+#[cfg(not(target_arch = "wasm32"))]
 #[inline(always)]
 fn kernel<const K: usize, const C: usize, const L: usize>(
     table: &[Lanes<L>],
@@ -522,6 +568,7 @@ fn section_step(q: &[f64; 5], s: &mut [f64; 2], x: f64) -> f64 {
 /// extra work is shifting the outputs by one lane. A triangle of scalar steps enters the skew at
 /// the start and leaves it at the end, so each section still sees every sample once, in order:
 /// the bits equal [`SosFilter::process`] on each sample.
+#[cfg(not(target_arch = "wasm32"))]
 fn skewed<const K: usize, const V: usize, const C: usize, const L: usize>(
     table: &[Lanes<L>],
     state: &mut [f64],

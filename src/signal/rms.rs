@@ -67,6 +67,7 @@ pub fn block_rms(samples: &[f64]) -> Option<f64> {
 ///     assert!((three_phase_rms(u, v, w) - amplitude_a / 2f64.sqrt()).abs() < 1e-12);
 /// }
 /// ```
+#[inline(always)]
 pub fn three_phase_rms(i_u: f64, i_v: f64, i_w: f64) -> f64 {
     ((i_u * i_u + i_v * i_v + i_w * i_w) / 3.0).sqrt()
 }

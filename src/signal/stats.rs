@@ -50,12 +50,12 @@ impl MinMeanMax {
     }
 
     /// Takes one sample.
-    #[inline]
+    #[inline(always)]
     pub fn push(&mut self, x: f64) {
         self.count += 1;
         self.sum += x;
-        self.min = self.min.min(x);
-        self.max = self.max.max(x);
+        self.min = crate::math::min(self.min, x);
+        self.max = crate::math::max(self.max, x);
     }
 
     /// Samples pushed.

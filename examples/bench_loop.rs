@@ -1,0 +1,70 @@
+//! The closed-loop benchmark's workload, natively: kim-step-doc with fuzzy-dynamics (the full
+//! chain: teach cut, then the loop), run through the library exactly as `cutlab sim --scenario
+//! kim-step-doc --controller fuzzy-dynamics --no-references` runs it, timed in the process.
+//!
+//! Driven by `scripts/bench/closed_loop.py` (see docs/benchmarks.md); `examples/bench_loop_wasm.rs`
+//! is the same workload compiled to wasm and timed under node. On its own:
+//!
+//! ```text
+//! cargo run --release --example bench_loop -- [--repeats 3]
+//! ```
+//!
+//! Prints the best repeat as one JSON line: `{"simulated_s": …, "wall_s": …, "cpu_s": …}`; the
+//! CPU time (Linux: this thread's time on a processor, from /proc) tells on a shared machine how
+//! much of the wall time was spent waiting for a core.
+
+use std::time::Instant;
+
+use cutlab::closed_loop::lab::{simulate, RunSpec};
+use cutlab::control::registry::ControllerKind;
+use cutlab::plant::Preset;
+
+fn main() {
+    let mut args = std::env::args().skip(1);
+    let mut repeats = 3usize;
+    while let Some(arg) = args.next() {
+        match (arg.as_str(), args.next().and_then(|v| v.parse().ok())) {
+            ("--repeats", Some(n)) => repeats = n,
+            _ => {
+                eprintln!("usage: bench_loop [--repeats N]");
+                std::process::exit(2);
+            }
+        }
+    }
+    let spec = RunSpec::new(Preset::KimStepDoc, ControllerKind::FuzzyDynamics);
+    let mut best_s = f64::INFINITY;
+    let mut best_cpu_s = f64::INFINITY;
+    let mut simulated_s = f64::NAN;
+    for _ in 0..repeats.max(1) {
+        let start = Instant::now();
+        let cpu_start = thread_cpu_s();
+        match simulate(&spec) {
+            Ok(result) => {
+                best_s = best_s.min(start.elapsed().as_secs_f64());
+                best_cpu_s = best_cpu_s.min(thread_cpu_s() - cpu_start);
+                simulated_s = result.metrics.cycle_time_s + result.calibration.duration_s;
+            }
+            Err(e) => {
+                eprintln!("bench_loop: {e}");
+                std::process::exit(1);
+            }
+        }
+    }
+    println!(
+        "{{\"simulated_s\": {simulated_s}, \"wall_s\": {best_s}, \"cpu_s\": {}}}",
+        if best_cpu_s.is_finite() {
+            best_cpu_s.to_string()
+        } else {
+            "null".to_string()
+        }
+    );
+}
+
+/// Seconds this thread has run on a processor (Linux's /proc/thread-self/schedstat; NaN
+/// elsewhere).
+fn thread_cpu_s() -> f64 {
+    std::fs::read_to_string("/proc/thread-self/schedstat")
+        .ok()
+        .and_then(|s| s.split_whitespace().next()?.parse::<f64>().ok())
+        .map_or(f64::NAN, |ns| ns * 1e-9)
+}

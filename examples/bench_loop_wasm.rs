@@ -1,0 +1,34 @@
+//! The closed-loop benchmark's workload in wasm: the same run as `examples/bench_loop.rs`
+//! (kim-step-doc, fuzzy-dynamics, teach cut and loop), exported to JavaScript so that
+//! `scripts/bench/closed_loop.py` can time it under node:
+//!
+//! ```text
+//! cargo build --release --target wasm32-unknown-unknown --example bench_loop_wasm
+//! wasm-bindgen --target nodejs --out-dir target/bench-wasm \
+//!     target/wasm32-unknown-unknown/release/examples/bench_loop_wasm.wasm
+//! node scripts/bench/wasm_loop.mjs target/bench-wasm
+//! ```
+//!
+//! Natively the example is empty (it exists for the wasm build).
+
+#[cfg(target_arch = "wasm32")]
+mod wasm {
+    use wasm_bindgen::prelude::wasm_bindgen;
+
+    use cutlab::closed_loop::lab::{simulate, RunSpec};
+    use cutlab::control::registry::ControllerKind;
+    use cutlab::plant::Preset;
+
+    /// Runs the workload once; returns the simulated seconds (teach cut + run), or NaN if the
+    /// run failed (the caller reports it).
+    #[wasm_bindgen]
+    pub fn run_kim_step_doc_fuzzy_dynamics() -> f64 {
+        simulate(&RunSpec::new(
+            Preset::KimStepDoc,
+            ControllerKind::FuzzyDynamics,
+        ))
+        .map_or(f64::NAN, |r| {
+            r.metrics.cycle_time_s + r.calibration.duration_s
+        })
+    }
+}
