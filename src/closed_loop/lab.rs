@@ -435,6 +435,27 @@ impl LabRun {
         }
     }
 
+    /// The run so far as a result: the trace up to now and its metrics, once the closed loop has
+    /// started (`None` during the teach cut).
+    pub fn partial_result(&self) -> Option<RunResult> {
+        match &self.stage {
+            Stage::Running { run, calibration } => {
+                let settings = run.settings().clone();
+                let trace = run.trace().clone();
+                let metrics = compute(&trace, &metrics_config(self.spec.preset, &settings));
+                Some(RunResult {
+                    spec: self.spec.clone(),
+                    settings,
+                    calibration: calibration.clone(),
+                    trace,
+                    metrics,
+                })
+            }
+            Stage::Done(r) => Some((**r).clone()),
+            _ => None,
+        }
+    }
+
     /// The result, once complete.
     pub fn into_result(self) -> Option<RunResult> {
         match self.stage {
@@ -988,11 +1009,23 @@ impl LabRuns {
         }
     }
 
-    /// Runs that start from `calibration` when their teach cut would be the one with `key` (the
-    /// Simulate page keeps the calibration of its last run; [`LabRuns::new`] otherwise).
-    pub fn with_calibration(specs: Vec<RunSpec>, key: TeachKey, calibration: Calibration) -> Self {
+    /// Runs that start from a known calibration when their teach cut would be the one of its
+    /// key (the Simulate page keeps the calibrations of its last runs, so an edit that leaves
+    /// the teach cut alone re-runs only the loop); [`LabRuns::new`] otherwise.
+    pub fn with_calibrations(specs: Vec<RunSpec>, known: Vec<(TeachKey, Calibration)>) -> Self {
         let mut runs = Self::new(specs);
-        runs.calibrations = Some(vec![(key, calibration)]);
+        runs.calibrations = Some(known);
+        runs
+    }
+
+    /// The runs finished so far and, once the run under way has started its closed loop, that
+    /// run up to now (its trace so far, with the metrics of that part): what a page draws while
+    /// the work goes on.
+    pub fn partial(&self) -> Vec<std::sync::Arc<RunResult>> {
+        let mut runs = self.results.clone();
+        if let Some(run) = self.current.as_ref().and_then(LabRun::partial_result) {
+            runs.push(std::sync::Arc::new(run));
+        }
         runs
     }
 

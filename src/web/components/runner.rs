@@ -1,24 +1,30 @@
 //! Runs long computations in the browser without freezing the page.
 //!
 //! Any core [`Work`] advances a little at a time; between chunks the browser gets control back (a
-//! zero-delay timeout), so input, painting and the Cancel button stay responsive. The chunk size
+//! message the page posts to itself, which starts a new task without the ≥ 4 ms a nested
+//! zero-delay timeout waits), so input, painting and the Cancel button stay responsive. The chunk size
 //! adapts so each chunk takes about [`CHUNK_BUDGET_MS`], well under the 100 ms a person notices.
 //! Starting a new job or cancelling bumps a generation counter; a pump that sees a newer
 //! generation stops, so a stale job never overwrites a fresh result, and a job whose page was left
 //! ends quietly.
 
 use std::cell::RefCell;
+use std::collections::VecDeque;
 use std::rc::Rc;
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::Arc;
 use std::time::Duration;
 
 use leptos::prelude::*;
+use wasm_bindgen::prelude::{Closure, JsCast, JsValue};
 
 use crate::work::{Progress, Work};
 
 /// Target duration of one chunk of work.
 pub const CHUNK_BUDGET_MS: f64 = 30.0;
+
+/// How often a job's output so far is shown while it runs ([`Runner::start_previewing`]).
+pub const PREVIEW_EVERY_MS: f64 = 200.0;
 
 /// What a runner is doing.
 #[derive(Debug, Clone, PartialEq)]
@@ -44,6 +50,10 @@ pub enum RunStatus<T> {
 pub struct Runner<T: Send + Sync + 'static> {
     /// The status, for the page to show.
     pub status: RwSignal<RunStatus<T>>,
+    /// The output so far of a job started with [`Runner::start_previewing`], refreshed every
+    /// [`PREVIEW_EVERY_MS`] while it runs and set to its output when it is done; `None` for
+    /// other jobs, before the first preview, and after a failure or cancel.
+    pub preview: RwSignal<Option<T>>,
     generation: Arc<AtomicU64>,
 }
 
@@ -51,6 +61,7 @@ impl<T: Send + Sync + 'static> Clone for Runner<T> {
     fn clone(&self) -> Self {
         Self {
             status: self.status,
+            preview: self.preview,
             generation: self.generation.clone(),
         }
     }
@@ -66,6 +77,7 @@ impl<T: Clone + Send + Sync + 'static> Runner<T> {
         });
         Self {
             status: RwSignal::new(RunStatus::Idle),
+            preview: RwSignal::new(None),
             generation,
         }
     }
@@ -89,6 +101,7 @@ impl<T: Clone + Send + Sync + 'static> Runner<T> {
     /// Cancels whatever is running.
     pub fn cancel(&self) {
         self.generation.fetch_add(1, Ordering::SeqCst);
+        let _ = self.preview.try_set(None);
         if matches!(
             self.status.try_get_untracked(),
             Some(RunStatus::Running { .. })
@@ -98,12 +111,40 @@ impl<T: Clone + Send + Sync + 'static> Runner<T> {
     }
 
     /// Starts `job`, replacing anything running.
-    pub fn start(&self, job: impl Work<Output = T> + 'static) {
+    pub fn start<J: Work<Output = T> + 'static>(&self, job: J) {
+        self.start_with(job, None);
+    }
+
+    /// Starts `job`, replacing anything running, and publishes `preview(&job)` — its output so
+    /// far — in [`Runner::preview`] as it goes, so a page can draw a run while it advances.
+    pub fn start_previewing<J: Work<Output = T> + 'static>(
+        &self,
+        job: J,
+        preview: fn(&J) -> Option<T>,
+    ) {
+        self.start_with(job, Some(preview));
+    }
+
+    fn start_with<J: Work<Output = T> + 'static>(
+        &self,
+        job: J,
+        preview: Option<fn(&J) -> Option<T>>,
+    ) {
         let generation = self.generation.fetch_add(1, Ordering::SeqCst) + 1;
         let Progress { stage, fraction } = job.progress();
         let _ = self.status.try_set(RunStatus::Running { stage, fraction });
-        let state = Rc::new(RefCell::new(Pumped { job, budget: 1 }));
-        pump(state, self.status, self.generation.clone(), generation);
+        let _ = self.preview.try_set(None);
+        let state = Rc::new(RefCell::new(Pumped {
+            job,
+            budget: 1,
+            preview,
+            previewed_at_ms: now_ms(),
+        }));
+        let signals = Published {
+            status: self.status,
+            preview: self.preview,
+        };
+        pump(state, signals, self.generation.clone(), generation);
     }
 }
 
@@ -113,10 +154,29 @@ impl<T: Clone + Send + Sync + 'static> Default for Runner<T> {
     }
 }
 
-struct Pumped<J> {
+/// How a job shows its output so far.
+type PreviewOf<J> = fn(&J) -> Option<<J as Work>::Output>;
+
+struct Pumped<J: Work> {
     job: J,
     budget: usize,
+    preview: Option<PreviewOf<J>>,
+    previewed_at_ms: f64,
 }
+
+/// Where a pump publishes.
+struct Published<T: Send + Sync + 'static> {
+    status: RwSignal<RunStatus<T>>,
+    preview: RwSignal<Option<T>>,
+}
+
+impl<T: Send + Sync + 'static> Clone for Published<T> {
+    fn clone(&self) -> Self {
+        *self
+    }
+}
+
+impl<T: Send + Sync + 'static> Copy for Published<T> {}
 
 fn now_ms() -> f64 {
     window().performance().map_or(0.0, |p| p.now())
@@ -125,15 +185,17 @@ fn now_ms() -> f64 {
 /// Does one chunk of work, publishes progress, and schedules the next chunk.
 fn pump<J: Work + 'static>(
     state: Rc<RefCell<Pumped<J>>>,
-    status: RwSignal<RunStatus<J::Output>>,
+    published: Published<J::Output>,
     generation: Arc<AtomicU64>,
     mine: u64,
 ) where
-    J::Output: Send + Sync + 'static,
+    J::Output: Clone + Send + Sync + 'static,
 {
+    let status = published.status;
     if generation.load(Ordering::SeqCst) != mine {
         return;
     }
+    let mut preview = None;
     let next = {
         let mut s = state.borrow_mut();
         let started = now_ms();
@@ -166,18 +228,88 @@ fn pump<J: Work + 'static>(
                 Err(e) => RunStatus::Failed(e.to_string()),
             },
             None => {
+                if let Some(show) = s.preview {
+                    let now = now_ms();
+                    if now - s.previewed_at_ms >= PREVIEW_EVERY_MS {
+                        s.previewed_at_ms = now;
+                        preview = show(&s.job);
+                    }
+                }
                 let Progress { stage, fraction } = s.job.progress();
                 RunStatus::Running { stage, fraction }
             }
         }
     };
     let running = matches!(next, RunStatus::Running { .. });
+    match &next {
+        // A previewed job's final output is its last preview, so the page shows it at once.
+        RunStatus::Done(output) if state.borrow().preview.is_some() => {
+            let _ = published.preview.try_set(Some(output.clone()));
+        }
+        RunStatus::Running { .. } if preview.is_some() => {
+            let _ = published.preview.try_set(preview);
+        }
+        RunStatus::Running { .. } => {}
+        _ => {
+            let _ = published.preview.try_set(None);
+        }
+    }
     // The page may have been left meanwhile: a disposed status ends the job quietly.
     if status.try_set(next).is_none() && running {
-        set_timeout(
-            move || pump(state, status, generation, mine),
-            Duration::ZERO,
-        );
+        next_task(move || pump(state, published, generation, mine));
+    }
+}
+
+/// Callbacks waiting for their task, and the channel whose messages start them.
+struct TaskQueue {
+    pending: Rc<RefCell<VecDeque<Box<dyn FnOnce()>>>>,
+    sender: web_sys::MessagePort,
+    /// Kept alive as long as the queue: the receiving port's handler.
+    _on_message: Closure<dyn FnMut(web_sys::MessageEvent)>,
+}
+
+thread_local! {
+    static TASKS: Option<TaskQueue> = {
+        web_sys::MessageChannel::new().ok().map(|channel| {
+            let pending: Rc<RefCell<VecDeque<Box<dyn FnOnce()>>>> = Rc::default();
+            let queue = pending.clone();
+            let on_message = Closure::<dyn FnMut(web_sys::MessageEvent)>::new(
+                move |_: web_sys::MessageEvent| {
+                    let next = queue.borrow_mut().pop_front();
+                    if let Some(task) = next {
+                        task();
+                    }
+                },
+            );
+            channel
+                .port1()
+                .set_onmessage(Some(on_message.as_ref().unchecked_ref()));
+            TaskQueue {
+                pending,
+                sender: channel.port2(),
+                _on_message: on_message,
+            }
+        })
+    };
+}
+
+/// Runs `task` as a task of its own once the browser has handled input and painting: a message
+/// the page posts to itself, which (unlike a zero-delay timeout, held back ≥ 4 ms once timeouts
+/// nest) starts as soon as the browser is free. Falls back to a timeout without a channel.
+fn next_task(task: impl FnOnce() + 'static) {
+    let posted = TASKS.with(|queue| match queue {
+        Some(q) => {
+            q.pending.borrow_mut().push_back(Box::new(task));
+            if q.sender.post_message(&JsValue::NULL).is_ok() {
+                None
+            } else {
+                q.pending.borrow_mut().pop_back()
+            }
+        }
+        None => Some(Box::new(task) as Box<dyn FnOnce()>),
+    });
+    if let Some(task) = posted {
+        set_timeout(task, Duration::ZERO);
     }
 }
 

@@ -1,6 +1,6 @@
 //! The savings rows of the metrics tables. A saving compares a run's cycle time with reference
 //! runs at a fixed feed (the programmed feed, and the fastest fixed feed that keeps the force
-//! under the limit), which take about ten runs. They depend on the scenario, not on the
+//! under the limit), which take three to five runs (on the teach cut of the run that asked). They depend on the scenario, not on the
 //! controller, so they run in the background after a result is shown, once per scenario, and
 //! the answers of the last few scenarios are kept: retuning a controller never waits for them.
 
@@ -9,8 +9,9 @@ use std::sync::Arc;
 use leptos::prelude::*;
 
 use crate::closed_loop::lab::{
-    apply_references, fixed_feed_spec, ReferenceSearch, References, RunResult, RunSpec,
+    apply_references, fixed_feed_spec, ReferenceSearch, References, RunResult, RunSpec, TeachKey,
 };
+use crate::closed_loop::runner::Calibration;
 use crate::web::components::run_view::NamedRun;
 use crate::web::components::runner::{RunProgress, RunStatus, Runner};
 
@@ -63,8 +64,10 @@ impl Savings {
             .with(|k| k.iter().find(|(s, _)| s == scenario).map(|(_, r)| *r))
     }
 
-    /// Starts the reference runs for the scenario of `spec`, unless they are known or under way.
-    pub fn request(&self, spec: &RunSpec) {
+    /// Starts the reference runs for the scenario of `spec`, unless they are known or under way;
+    /// `calibration`, the teach cut of a run of `spec`, spares the search its own when it is the
+    /// same teach cut ([`TeachKey`]).
+    pub fn request(&self, spec: &RunSpec, calibration: Option<&Calibration>) {
         let Some(scenario) = scenario_of(spec) else {
             return;
         };
@@ -81,7 +84,15 @@ impl Savings {
         if running && self.started.get_value().as_ref() == Some(&scenario) {
             return;
         }
-        match ReferenceSearch::new(&scenario) {
+        let same_teach_cut = match (TeachKey::of(spec), TeachKey::of(&scenario)) {
+            (Ok(a), Ok(b)) => a == b,
+            _ => false,
+        };
+        let search = match calibration {
+            Some(c) if same_teach_cut => ReferenceSearch::calibrated(&scenario, c.clone()),
+            _ => ReferenceSearch::new(&scenario),
+        };
+        match search {
             Ok(search) => {
                 self.started.set_value(Some(scenario));
                 self.runner.start(search);

@@ -6,9 +6,9 @@ use std::time::Duration;
 use leptos::prelude::*;
 
 use crate::closed_loop::definition::RunSetting;
-use crate::closed_loop::lab::LabRuns;
-use crate::closed_loop::lab::{RunResult, RunSpec};
+use crate::closed_loop::lab::{LabRuns, RunResult, RunSpec, TeachKey};
 use crate::closed_loop::metrics::metrics_csv_columns;
+use crate::closed_loop::runner::Calibration;
 use crate::closed_loop::trace::write_csv_runs;
 use crate::control::registry::ControllerKind;
 use crate::plant::Preset;
@@ -21,7 +21,16 @@ use crate::web::components::runner::{Debounce, RunProgress, Runner};
 use crate::web::components::savings::Savings;
 use crate::web::route::{query_params, replace_query, Page};
 
-const RERUN_DELAY: Duration = Duration::from_millis(350);
+/// Wait after the last edit before re-running (a new run cancels the one under way).
+const RERUN_DELAY: Duration = Duration::from_millis(40);
+
+/// Teach cuts whose calibrations the page keeps, so an edit of a controller re-runs only loops.
+const KEPT_CALIBRATIONS: usize = 4;
+
+/// The runs so far while a comparison advances (the one under way up to now).
+fn runs_so_far(runs: &LabRuns) -> Option<Vec<Arc<RunResult>>> {
+    Some(runs.partial()).filter(|r| !r.is_empty())
+}
 const VARIANT_PREFIXES: [&str; 4] = ["a.", "b.", "c.", "d."];
 const VARIANT_NAMES: [&str; 4] = ["A", "B", "C", "D"];
 
@@ -174,7 +183,9 @@ pub fn ComparePage() -> impl IntoView {
             .collect::<Option<Vec<_>>>()
     });
 
+    let calibrations = StoredValue::new(Vec::<(TeachKey, Calibration)>::new());
     let debounce = Debounce::new(RERUN_DELAY);
+    let first_run = StoredValue::new(true);
     let savings_for_edits = savings.clone();
     let runner_for_effect = runner.clone();
     Effect::new(move |_| {
@@ -191,30 +202,60 @@ pub fn ComparePage() -> impl IntoView {
             savings_for_edits.keep_only(first);
         }
         let runner = runner_for_effect.clone();
-        debounce.request(move || runner.start(LabRuns::new(specs)));
+        let start = move || {
+            let runs = LabRuns::with_calibrations(specs, calibrations.get_value());
+            runner.start_previewing(runs, runs_so_far);
+        };
+        if first_run.get_value() {
+            first_run.set_value(false);
+            start();
+        } else {
+            debounce.request(start);
+        }
     });
 
-    let done = runner.finished();
-    let results = Memo::new(move |_| {
-        done.get()
-            .unwrap_or_default()
-            .into_iter()
-            .enumerate()
+    let named = |runs: Vec<Arc<RunResult>>| {
+        runs.into_iter()
             .zip(VARIANT_NAMES)
-            .map(|((_, r), variant)| (format!("{variant}: {}", r.spec.controller.kind().name()), r))
+            .map(|(r, variant)| (format!("{variant}: {}", r.spec.controller.kind().name()), r))
             .collect::<Vec<NamedRun>>()
-    });
-    // Every variant shares the scenario, so one set of reference runs serves them all.
+    };
+    let done = runner.finished();
+    let results = Memo::new(move |_| named(done.get().unwrap_or_default()));
+    // Every variant shares the scenario, so one set of reference runs serves them all, on the
+    // variants' teach cut.
     let savings_for_effect = savings.clone();
     Effect::new(move |_| {
         results.with(|runs| {
             if let Some((_, first)) = runs.first() {
-                savings_for_effect.request(&first.spec);
+                if let Ok(key) = TeachKey::of(&first.spec) {
+                    calibrations.update_value(|known| {
+                        known.retain(|(k, _)| *k != key);
+                        known.push((key, first.calibration.clone()));
+                        let excess = known.len().saturating_sub(KEPT_CALIBRATIONS);
+                        known.drain(..excess);
+                    });
+                }
+                savings_for_effect.request(&first.spec, Some(&first.calibration));
             }
         });
     });
     let savings_for_runs = savings.clone();
     let runs = Signal::derive(move || savings_for_runs.apply_all(results.get()));
+    // The charts draw the runs as they advance, then the finished comparison with its savings.
+    let preview = runner.preview;
+    let status = runner.status;
+    // Only the start and end of a run matter here, not every progress tick.
+    let running = Memo::new(move |_| {
+        matches!(
+            status.get(),
+            crate::web::components::runner::RunStatus::Running { .. }
+        )
+    });
+    let drawn = Signal::derive(move || match preview.get() {
+        Some(so_far) if running.get() => named(so_far),
+        _ => runs.get(),
+    });
 
     let (export_error, set_export_error) = signal(None::<String>);
     let export_traces = move |_| {
@@ -327,7 +368,7 @@ pub fn ComparePage() -> impl IntoView {
                     </fieldset>
                 </form>
                 <div class="results">
-                    <RunCharts runs=runs />
+                    <RunCharts runs=drawn />
                     {savings.progress()}
                     <MetricsTable runs=runs />
                 </div>

@@ -5,9 +5,9 @@ use std::time::Duration;
 
 use leptos::prelude::*;
 
-use crate::closed_loop::lab::LabRuns;
-use crate::closed_loop::lab::{RunResult, RunSpec};
+use crate::closed_loop::lab::{LabRuns, RunResult, RunSpec, TeachKey};
 use crate::closed_loop::metrics::metrics_csv;
+use crate::closed_loop::runner::Calibration;
 use crate::closed_loop::trace::write_csv;
 use crate::control::registry::ControllerKind;
 use crate::web::components::download::{download_configuration, download_text, download_written};
@@ -19,8 +19,19 @@ use crate::web::components::runner::{Debounce, RunProgress, Runner};
 use crate::web::components::savings::Savings;
 use crate::web::route::{query_params, replace_query, Page};
 
-/// Wait after the last edit before re-running, so typing "150" does not start three runs.
-const RERUN_DELAY: Duration = Duration::from_millis(350);
+/// Wait after the last edit before re-running: a burst of events (a key held down, a spinner)
+/// starts one run. Typing "150" may start "1" and "15" too, but each new run cancels the one
+/// before, so only the last one costs anything; the page answers within a frame of the edit.
+const RERUN_DELAY: Duration = Duration::from_millis(40);
+
+/// Teach cuts whose calibrations the page keeps: an edit that leaves the teach cut as it was (a
+/// controller parameter, the target, the envelope) re-runs only the loop.
+const KEPT_CALIBRATIONS: usize = 4;
+
+/// What the page shows while a run advances: the runs so far (the closed loop up to now).
+fn runs_so_far(runs: &LabRuns) -> Option<Vec<Arc<RunResult>>> {
+    Some(runs.partial()).filter(|r| !r.is_empty())
+}
 
 /// The Simulate page.
 #[component]
@@ -55,10 +66,22 @@ pub fn SimulatePage() -> impl IntoView {
         })
     });
 
-    // Keep the URL in step with the form, and re-run (debounced) when a valid spec changes.
+    // The calibrations of the last teach cuts, newest last.
+    let calibrations = StoredValue::new(Vec::<(TeachKey, Calibration)>::new());
+    let start_run = {
+        let runner = runner.clone();
+        move |spec: RunSpec| {
+            let known = calibrations.get_value();
+            runner.start_previewing(LabRuns::with_calibrations(vec![spec], known), runs_so_far);
+        }
+    };
+
+    // Keep the URL in step with the form, and re-run when a valid spec changes: the first run at
+    // once, edits after a short debounce.
     let debounce = Debounce::new(RERUN_DELAY);
+    let first_run = StoredValue::new(true);
     let savings_for_edits = savings.clone();
-    let runner_for_effect = runner.clone();
+    let start_for_effect = start_run.clone();
     Effect::new(move |_| {
         let mut q = scenario.query();
         q.extend(controller.query(""));
@@ -67,27 +90,49 @@ pub fn SimulatePage() -> impl IntoView {
             return;
         };
         savings_for_edits.keep_only(&spec);
-        let runner = runner_for_effect.clone();
-        debounce.request(move || runner.start(LabRuns::new(vec![spec])));
+        let start = start_for_effect.clone();
+        if first_run.get_value() {
+            first_run.set_value(false);
+            start(spec);
+        } else {
+            debounce.request(move || start(spec));
+        }
     });
 
-    // The last finished run stays on screen while the next one computes; its savings fill in
-    // when the reference runs of its scenario are done.
+    // The last finished run stays on screen while the next one computes (its charts fill in as
+    // it advances); its savings fill in when the reference runs of its scenario are done.
     let done = runner.finished();
     let finished = Memo::new(move |_| done.get().and_then(|mut runs| runs.pop()));
     let savings_for_effect = savings.clone();
     Effect::new(move |_| {
         if let Some(r) = finished.get() {
-            savings_for_effect.request(&r.spec);
+            if let Ok(key) = TeachKey::of(&r.spec) {
+                calibrations.update_value(|known| {
+                    known.retain(|(k, _)| *k != key);
+                    known.push((key, r.calibration.clone()));
+                    let excess = known.len().saturating_sub(KEPT_CALIBRATIONS);
+                    known.drain(..excess);
+                });
+            }
+            savings_for_effect.request(&r.spec, Some(&r.calibration));
         }
     });
     let savings_for_result = savings.clone();
     let result = Memo::new(move |_| finished.get().map(|r| savings_for_result.apply(r)));
-    let runs = Signal::derive(move || {
-        result
-            .get()
-            .map(|r| vec![(r.spec.controller.kind().label().to_string(), r) as NamedRun])
-            .unwrap_or_default()
+    let name_of = |r: Arc<RunResult>| (r.spec.controller.kind().label().to_string(), r) as NamedRun;
+    let runs = Signal::derive(move || result.get().map(name_of).into_iter().collect::<Vec<_>>());
+    // The charts draw the run under way as it advances, then the finished run with its savings.
+    let preview = runner.preview;
+    let drawn = Signal::derive(move || {
+        let running = preview.get().and_then(|mut runs| runs.pop());
+        match (running, result.get()) {
+            // The run that just finished: shown with its savings.
+            (Some(r), Some(done)) if r.spec == done.spec && r.trace == done.trace => {
+                vec![name_of(done)]
+            }
+            (Some(r), _) => vec![name_of(r)],
+            (None, done) => done.map(name_of).into_iter().collect(),
+        }
     });
     let (export_error, set_export_error) = signal(None::<String>);
     let export_csv = move |_| {
@@ -125,10 +170,9 @@ pub fn SimulatePage() -> impl IntoView {
                 .err(),
         );
     };
-    let runner_for_button = runner.clone();
     let run_now = move |_| {
         if let Some(s) = spec.get_untracked() {
-            runner_for_button.start(LabRuns::new(vec![s]));
+            start_run(s);
         }
     };
 
@@ -169,7 +213,7 @@ pub fn SimulatePage() -> impl IntoView {
                     </fieldset>
                 </form>
                 <div class="results">
-                    <RunCharts runs=runs />
+                    <RunCharts runs=drawn />
                     {savings.progress()}
                     <MetricsTable runs=runs />
                     <EventLog run=Signal::derive(move || result.get()) />
