@@ -2,26 +2,33 @@
 //!
 //! xoshiro256++ (Blackman & Vigna, 2019) seeded through SplitMix64, written out here rather than
 //! taken from a crate so that the stream is fixed forever: a saved seed must reproduce a run in a
-//! later version of cutlab, natively and in wasm alike. Normal deviates come from the ziggurat
-//! method (Marsaglia & Tsang, 2000, with 256 layers drawn from one 64-bit word as in Doornik's
-//! ZIGNOR, 2005): a table lookup, a multiplication and a comparison for 99 % of them, the rest
-//! by the exact wedge and tail tests with [`crate::math`]'s functions, so they are
-//! bit-identical on every target. (Box–Muller, used before, needs a logarithm, a sine and a
-//! cosine per pair: the sensors draw four deviates per 10 kHz sample, and the ziggurat is about
-//! five times faster.)
+//! later version of cutlab, natively and in wasm alike.
+//!
+//! Two normal generators, both exact and bit-identical on every target (their transcendental
+//! functions come from [`crate::math`]):
+//!
+//! * [`Rng::normal`], the Box–Muller transform (a logarithm, a sine and a cosine per pair): every
+//!   draw outside the 10 kHz loop (the bench's friction, a dynamometer, test signals), whose
+//!   streams stay as they were;
+//! * [`Normal`], the ziggurat method (Marsaglia & Tsang, 2000, with 256 layers drawn from one
+//!   64-bit word as in Doornik's ZIGNOR, 2005): a table lookup, a multiplication and a comparison
+//!   for 99 % of draws, the rest by the exact wedge and tail tests. About five times faster: the
+//!   current sensors draw four deviates per sample at 10 kHz.
 
 use std::sync::OnceLock;
 
 use crate::math;
 
-/// The standard normal distribution, to draw from any [`Rng`]: [`Rng::normal`] with the
-/// ziggurat's tables looked up once, for a loop that draws millions (a sensor's noise).
+/// The standard normal distribution by the ziggurat method, to draw from any [`Rng`] in a loop
+/// that draws millions (a sensor's noise); its tables are looked up once.
 ///
 /// ```
 /// use cutlab::rng::{Normal, Rng};
 /// let normal = Normal::new();
 /// let (mut a, mut b) = (Rng::seed_from(3), Rng::seed_from(3));
-/// assert_eq!(normal.sample(&mut a), b.normal());
+/// assert_eq!(normal.sample(&mut a), normal.sample(&mut b));
+/// let x: Vec<f64> = (0..10_000).map(|_| normal.sample(&mut a)).collect();
+/// assert!((x.iter().sum::<f64>() / 1e4).abs() < 0.05);
 /// ```
 #[derive(Clone, Copy)]
 pub struct Normal {
@@ -75,6 +82,7 @@ impl PartialEq for Normal {
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct Rng {
     state: [u64; 4],
+    spare_normal: Option<u64>,
 }
 
 /// Layers of the ziggurat.
@@ -132,7 +140,10 @@ impl Rng {
             splitmix64(&mut x),
             splitmix64(&mut x),
         ];
-        Self { state }
+        Self {
+            state,
+            spare_normal: None,
+        }
     }
 
     /// An independent generator for a sub-system (e.g. one sensor), derived from this one's seed
@@ -165,12 +176,19 @@ impl Rng {
         ((self.next_u64() >> 11) as i64) as f64 * (1.0 / (1u64 << 53) as f64)
     }
 
-    /// A standard normal deviate (mean 0, standard deviation 1), by the ziggurat method.
+    /// A standard normal deviate (mean 0, standard deviation 1), by the Box–Muller transform.
     pub fn normal(&mut self) -> f64 {
-        Normal::new().sample(self)
+        if let Some(bits) = self.spare_normal.take() {
+            return f64::from_bits(bits);
+        }
+        // 1 - uniform() lies in (0, 1], so the logarithm is finite.
+        let radius = (-2.0 * math::ln(1.0 - self.uniform())).sqrt();
+        let angle = std::f64::consts::TAU * self.uniform();
+        self.spare_normal = Some((radius * math::sin(angle)).to_bits());
+        radius * math::cos(angle)
     }
 
-    /// [`Rng::normal`] from the ziggurat's tables (see [`Normal`]).
+    /// A standard normal deviate by the ziggurat method (see [`Normal`]).
     #[inline(always)]
     fn ziggurat(&mut self, z: &Ziggurat) -> f64 {
         loop {
@@ -266,12 +284,13 @@ mod tests {
     }
 
     #[test]
-    fn normal_deviates_follow_the_normal_distribution_into_the_tails() {
+    fn ziggurat_deviates_follow_the_normal_distribution_into_the_tails() {
         // Kolmogorov–Smirnov against the closed-form CDF Φ(x) = (1 + erf(x/√2))/2 (libm's erf,
         // not cutlab's), and the tail counts beyond r and beyond 4 against 2·(1 − Φ).
         let mut r = Rng::seed_from(17);
+        let normal = Normal::new();
         let n = 400_000;
-        let mut xs: Vec<f64> = (0..n).map(|_| r.normal()).collect();
+        let mut xs: Vec<f64> = (0..n).map(|_| normal.sample(&mut r)).collect();
         xs.sort_by(f64::total_cmp);
         let cdf = |x: f64| 0.5 * (1.0 + libm::erf(x / std::f64::consts::SQRT_2));
         let d = xs
