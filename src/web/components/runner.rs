@@ -139,6 +139,7 @@ impl<T: Clone + Send + Sync + 'static> Runner<T> {
             budget: 1,
             preview,
             previewed_at_ms: now_ms(),
+            phase: Phase::Working,
         }));
         let signals = Published {
             status: self.status,
@@ -162,6 +163,16 @@ struct Pumped<J: Work> {
     budget: usize,
     preview: Option<PreviewOf<J>>,
     previewed_at_ms: f64,
+    phase: Phase,
+}
+
+/// Where a pumped job is.
+#[derive(Clone, Copy, PartialEq)]
+enum Phase {
+    /// More work to do.
+    Working,
+    /// The work is done; its output is published next.
+    Finished,
 }
 
 /// Where a pump publishes.
@@ -195,48 +206,38 @@ fn pump<J: Work + 'static>(
     if generation.load(Ordering::SeqCst) != mine {
         return;
     }
-    let mut preview = None;
-    let next = {
-        let mut s = state.borrow_mut();
-        let started = now_ms();
-        // Work in small steps until the chunk's time is used up: the cost of a step can jump
-        // (a run enters the cut and the force model wakes up), and checking the clock between
-        // steps keeps the chunk near its budget whatever the step costs.
-        let outcome = loop {
-            let step_started = now_ms();
-            let budget = s.budget;
-            match s.job.advance(budget) {
-                Err(e) => break Some(Err(e.to_string())),
-                Ok(true) => break Some(Ok(())),
-                Ok(false) => {}
-            }
-            // Aim each step at an eighth of the chunk; grow at most 2× at a time.
-            let elapsed = (now_ms() - step_started).max(0.05);
-            let b = budget as f64;
-            s.budget = (b * CHUNK_BUDGET_MS / 8.0 / elapsed)
-                .clamp(b / 4.0, b * 2.0)
-                .round()
-                .clamp(1.0, 1e9) as usize;
-            if now_ms() - started >= CHUNK_BUDGET_MS {
-                break None;
-            }
-        };
-        match outcome {
-            Some(Err(e)) => RunStatus::Failed(e),
-            Some(Ok(())) => match s.job.finish() {
+    // What the page redraws — a preview of the work so far, or the finished output — is
+    // published in a task of its own, not after a chunk of work: the redraw runs in the task that
+    // sets the signals, and a chunk plus a redraw could exceed the 50 ms a task should take.
+    let phase = state.borrow().phase;
+    let next = match phase {
+        Phase::Finished => {
+            let finished = state.borrow_mut().job.finish();
+            match finished {
                 Ok(out) => RunStatus::Done(out),
                 Err(e) => RunStatus::Failed(e.to_string()),
-            },
-            None => {
-                if let Some(show) = s.preview {
-                    let now = now_ms();
-                    if now - s.previewed_at_ms >= PREVIEW_EVERY_MS {
-                        s.previewed_at_ms = now;
-                        preview = show(&s.job);
+            }
+        }
+        Phase::Working => {
+            let preview = {
+                let mut s = state.borrow_mut();
+                match s.preview {
+                    Some(show) if now_ms() - s.previewed_at_ms >= PREVIEW_EVERY_MS => {
+                        s.previewed_at_ms = now_ms();
+                        Some(show(&s.job))
                     }
+                    _ => None,
                 }
-                let Progress { stage, fraction } = s.job.progress();
-                RunStatus::Running { stage, fraction }
+            };
+            match preview {
+                Some(so_far) => {
+                    if so_far.is_some() {
+                        let _ = published.preview.try_set(so_far);
+                    }
+                    let Progress { stage, fraction } = state.borrow().job.progress();
+                    RunStatus::Running { stage, fraction }
+                }
+                None => work_chunk(&mut state.borrow_mut()),
             }
         }
     };
@@ -245,9 +246,6 @@ fn pump<J: Work + 'static>(
         // A previewed job's final output is its last preview, so the page shows it at once.
         RunStatus::Done(output) if state.borrow().preview.is_some() => {
             let _ = published.preview.try_set(Some(output.clone()));
-        }
-        RunStatus::Running { .. } if preview.is_some() => {
-            let _ = published.preview.try_set(preview);
         }
         RunStatus::Running { .. } => {}
         _ => {
@@ -260,9 +258,45 @@ fn pump<J: Work + 'static>(
     }
 }
 
+/// One chunk of work of about [`CHUNK_BUDGET_MS`]; the status to show after it (still running
+/// when the work is done: the output is published by the next task).
+fn work_chunk<J: Work>(s: &mut Pumped<J>) -> RunStatus<J::Output> {
+    let started = now_ms();
+    // Work in small steps until the chunk's time is used up: the cost of a step can jump (a run
+    // enters the cut and the force model wakes up), and checking the clock between steps keeps
+    // the chunk near its budget whatever the step costs.
+    loop {
+        let step_started = now_ms();
+        let budget = s.budget;
+        match s.job.advance(budget) {
+            Err(e) => return RunStatus::Failed(e.to_string()),
+            Ok(true) => {
+                s.phase = Phase::Finished;
+                break;
+            }
+            Ok(false) => {}
+        }
+        // Aim each step at an eighth of the chunk; grow at most 2× at a time.
+        let elapsed = (now_ms() - step_started).max(0.05);
+        let b = budget as f64;
+        s.budget = (b * CHUNK_BUDGET_MS / 8.0 / elapsed)
+            .clamp(b / 4.0, b * 2.0)
+            .round()
+            .clamp(1.0, 1e9) as usize;
+        if now_ms() - started >= CHUNK_BUDGET_MS {
+            break;
+        }
+    }
+    let Progress { stage, fraction } = s.job.progress();
+    RunStatus::Running { stage, fraction }
+}
+
+/// Callbacks waiting for their task, first in first out.
+type Pending = Rc<RefCell<VecDeque<Box<dyn FnOnce()>>>>;
+
 /// Callbacks waiting for their task, and the channel whose messages start them.
 struct TaskQueue {
-    pending: Rc<RefCell<VecDeque<Box<dyn FnOnce()>>>>,
+    pending: Pending,
     sender: web_sys::MessagePort,
     /// Kept alive as long as the queue: the receiving port's handler.
     _on_message: Closure<dyn FnMut(web_sys::MessageEvent)>,
@@ -271,7 +305,7 @@ struct TaskQueue {
 thread_local! {
     static TASKS: Option<TaskQueue> = {
         web_sys::MessageChannel::new().ok().map(|channel| {
-            let pending: Rc<RefCell<VecDeque<Box<dyn FnOnce()>>>> = Rc::default();
+            let pending: Pending = Rc::default();
             let queue = pending.clone();
             let on_message = Closure::<dyn FnMut(web_sys::MessageEvent)>::new(
                 move |_: web_sys::MessageEvent| {
