@@ -69,15 +69,22 @@ async function simulateRound(browser, base) {
   const field = page.getByLabel('K_p (% per %)');
   await field.waitFor();
   const edit = await field.evaluate((input) => new Promise((resolve) => {
-    // From the edit to the frame after the run that it started has ended and been drawn.
+    // From the edit until the run it started has ended and the force chart shows it: the first
+    // animation frame after the end at which the chart's pixels differ from before the edit.
+    const chart = document.querySelector('canvas[aria-label="Cutting force"]') ?? document.querySelector('canvas');
+    const before = chart.toDataURL();
     const started = performance.now();
     let seenRunning = false;
+    const redrawn = () => requestAnimationFrame(() => {
+      if (chart.toDataURL() !== before) resolve(performance.now() - started);
+      else redrawn();
+    });
     const check = () => {
       const busy = [...document.querySelectorAll('[role=status]')].some((e) => /Running|teach cut|closed loop/.test(e.textContent));
       if (busy) seenRunning = true;
       if (seenRunning && !busy) {
-        requestAnimationFrame(() => resolve(performance.now() - started));
         observer.disconnect();
+        redrawn();
       }
     };
     const observer = new MutationObserver(check);

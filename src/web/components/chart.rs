@@ -18,6 +18,7 @@ use plotters_canvas::CanvasBackend;
 use crate::charts::view::{nearest, pan, visible, zoom};
 use crate::charts::{draw_line_chart, ChartStyle, LineChart, PlotGeometry};
 use crate::web::components::download::{download_canvas_png, png_name};
+use crate::web::components::runner::next_task;
 
 /// Formats a readout value with a sensible number of digits.
 fn readout(value: f64) -> String {
@@ -71,34 +72,45 @@ pub fn ChartCanvas(
         chart.with(|c| hidden.with(|h| visible(c, x_view.get().as_ref(), h, 2 * width_px)))
     });
 
+    // Each chart draws in a task of its own (a page redraws five at once when a run ends, and
+    // together they took longer than a task should); a draw superseded before it ran is skipped.
+    let draws = StoredValue::new(0u64);
     Effect::new(move |_| {
         let shown = shown.get();
-        let Some(canvas) = canvas_ref.get() else {
-            return;
-        };
-        let pixel_ratio = window().device_pixel_ratio().clamp(1.0, 4.0);
-        ratio.set_value(pixel_ratio);
-        let css_width = f64::from(canvas.client_width().max(120));
-        canvas.set_width((css_width * pixel_ratio).round() as u32);
-        canvas.set_height((f64::from(height_px) * pixel_ratio).round() as u32);
-        let Some(backend) = CanvasBackend::with_canvas_object(canvas) else {
-            set_draw_error.set(Some("This browser gave no 2-D canvas to draw on.".into()));
-            return;
-        };
-        let area = backend.into_drawing_area();
-        let result = draw_line_chart(&area, &shown, ChartStyle { pixel_ratio });
-        let result = match result {
-            Ok(g) => {
-                geometry.set_value(Some(g));
-                area.present()
+        draws.update_value(|n| *n += 1);
+        let mine = draws.get_value();
+        next_task(move || {
+            if draws.try_get_value() != Some(mine) {
+                return;
             }
-            Err(e) => Err(e),
-        };
-        set_draw_error.set(
-            result
-                .err()
-                .map(|e| format!("The chart could not be drawn: {e}")),
-        );
+            let Some(canvas) = canvas_ref.get_untracked() else {
+                return;
+            };
+            let pixel_ratio = window().device_pixel_ratio().clamp(1.0, 4.0);
+            ratio.set_value(pixel_ratio);
+            let css_width = f64::from(canvas.client_width().max(120));
+            canvas.set_width((css_width * pixel_ratio).round() as u32);
+            canvas.set_height((f64::from(height_px) * pixel_ratio).round() as u32);
+            let Some(backend) = CanvasBackend::with_canvas_object(canvas) else {
+                let _ = set_draw_error
+                    .try_set(Some("This browser gave no 2-D canvas to draw on.".into()));
+                return;
+            };
+            let area = backend.into_drawing_area();
+            let result = draw_line_chart(&area, &shown, ChartStyle { pixel_ratio });
+            let result = match result {
+                Ok(g) => {
+                    geometry.set_value(Some(g));
+                    area.present()
+                }
+                Err(e) => Err(e),
+            };
+            let _ = set_draw_error.try_set(
+                result
+                    .err()
+                    .map(|e| format!("The chart could not be drawn: {e}")),
+            );
+        });
     });
 
     // Pointer position in backend pixels → data x, if inside the plotting area.

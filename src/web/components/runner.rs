@@ -330,7 +330,7 @@ thread_local! {
 /// Runs `task` as a task of its own once the browser has handled input and painting: a message
 /// the page posts to itself, which (unlike a zero-delay timeout, held back ≥ 4 ms once timeouts
 /// nest) starts as soon as the browser is free. Falls back to a timeout without a channel.
-fn next_task(task: impl FnOnce() + 'static) {
+pub fn next_task(task: impl FnOnce() + 'static) {
     let posted = TASKS.with(|queue| match queue {
         Some(q) => {
             q.pending.borrow_mut().push_back(Box::new(task));
