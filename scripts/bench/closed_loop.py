@@ -4,14 +4,17 @@
 * cutlab's closed loop with the full chain (10 kHz three-phase currents of both drives, Hall
   sensors and noise, filters, RMS, estimator, fuzzy controller, envelope) on kim-step-doc:
   simulated seconds (teach cut + run) per wall second, natively (`cutlab sim`);
+* the same closed loop compiled to wasm32 and run under node (examples/bench_loop_wasm.rs,
+  scripts/bench/wasm_loop.mjs), simulated seconds per wall second;
 * `cutlab compare` of six controllers with the fixed-feed references on kim-step-doc: wall time;
 * the NumPy anchor: an open-loop milling simulation vectorised with NumPy at the same 10 kHz
   (mechanistic forces of a 2-tooth cutter, two three-phase drives with noise, RMS per period),
   simulated seconds per wall second.
 
-Each case runs --rounds times, alternating, and keeps its best round. Prints a Markdown table.
+Each case runs --rounds times, alternating, and keeps its best round. Prints a Markdown table and
+one JSON line (for scripts/bench/run).
 
-    python3 scripts/bench/closed_loop.py [--rounds 3]
+    python3 scripts/bench/closed_loop.py [--rounds 3] [--no-wasm]
 """
 import argparse
 import json
@@ -25,6 +28,7 @@ import numpy as np
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 CUTLAB = os.path.join(ROOT, "target", "release", "cutlab")
+WASM_DIR = os.path.join(ROOT, "target", "bench-wasm")
 RATE_HZ = 10_000.0
 
 
@@ -76,6 +80,25 @@ def cutlab_sim() -> tuple[float, float]:
     return wall, data["metrics"]["cycle_time_s"] + data["calibration"]["duration_s"]
 
 
+def build_wasm() -> None:
+    """The wasm workload, release profile, bound for node by wasm-bindgen."""
+    subprocess.run(
+        ["cargo", "build", "--release", "--target", "wasm32-unknown-unknown", "--example",
+         "bench_loop_wasm", "-q"], cwd=ROOT, check=True)
+    wasm = os.path.join(ROOT, "target", "wasm32-unknown-unknown", "release", "examples",
+                        "bench_loop_wasm.wasm")
+    subprocess.run(["wasm-bindgen", "--target", "nodejs", "--out-dir", WASM_DIR, wasm], check=True)
+
+
+def cutlab_wasm() -> tuple[float, float]:
+    """Wall time of one run of the workload in wasm under node, and the seconds it simulated."""
+    out = subprocess.run(
+        ["node", os.path.join(ROOT, "scripts", "bench", "wasm_loop.mjs"), WASM_DIR, "1"],
+        check=True, capture_output=True, text=True).stdout
+    data = json.loads(out.strip().splitlines()[-1])
+    return data["wall_s"], data["simulated_s"]
+
+
 def cutlab_compare() -> float:
     start = time.perf_counter()
     subprocess.run(
@@ -88,15 +111,23 @@ def cutlab_compare() -> float:
 def main() -> None:
     parser = argparse.ArgumentParser()
     parser.add_argument("--rounds", type=int, default=3)
+    parser.add_argument("--no-wasm", action="store_true", help="skip the wasm case")
     args = parser.parse_args()
     subprocess.run(["cargo", "build", "--release", "--features", "cli", "-q"], cwd=ROOT, check=True)
-    sim_best = compare_best = anchor_best = None
+    if not args.no_wasm:
+        build_wasm()
+    sim_best = compare_best = anchor_best = wasm_best = None
     simulated = None
     for _ in range(args.rounds):
         wall, simulated = cutlab_sim()
         sim_best = wall if sim_best is None else min(sim_best, wall)
         anchor = numpy_anchor(simulated)
         anchor_best = anchor if anchor_best is None else min(anchor_best, anchor)
+        if not args.no_wasm:
+            w, wasm_simulated = cutlab_wasm()
+            if abs(wasm_simulated - simulated) > 1e-6:
+                sys.exit(f"wasm simulated {wasm_simulated} s, native {simulated} s: not the same run")
+            wasm_best = w if wasm_best is None else min(wasm_best, w)
         c = cutlab_compare()
         compare_best = c if compare_best is None else min(compare_best, c)
     cutlab_rate = simulated / sim_best
@@ -105,9 +136,21 @@ def main() -> None:
     print("| case | measured | target |")
     print("|---|---:|---|")
     print(f"| closed loop, full chain, native: simulated s per wall s | {cutlab_rate:.0f} | ≥ 2000 |")
+    if wasm_best is not None:
+        print(f"| closed loop, full chain, wasm under node: simulated s per wall s | {simulated / wasm_best:.0f} | ≥ 1000 |")
     print(f"| NumPy anchor (open loop, vectorised): simulated s per wall s | {anchor_rate:.0f} | — |")
-    print(f"| cutlab / NumPy anchor | {cutlab_rate / anchor_rate:.2f}× | ≥ 4.35× |")
-    print(f"| `cutlab compare`, six controllers with references: wall s | {compare_best:.1f} | ≤ 1.5 |")
+    print(f"| cutlab native / NumPy anchor | {cutlab_rate / anchor_rate:.2f}× | ≥ 4.35× |")
+    if wasm_best is not None:
+        print(f"| cutlab wasm / NumPy anchor | {simulated / wasm_best / anchor_rate:.2f}× | — |")
+    print(f"| `cutlab compare`, six controllers with references: wall s | {compare_best:.2f} | ≤ 1.5 |")
+    print(json.dumps({
+        "simulated_s": simulated,
+        "native_sim_s_per_s": cutlab_rate,
+        "wasm_sim_s_per_s": None if wasm_best is None else simulated / wasm_best,
+        "numpy_sim_s_per_s": anchor_rate,
+        "native_over_numpy": cutlab_rate / anchor_rate,
+        "compare_wall_s": compare_best,
+    }))
 
 
 if __name__ == "__main__":
