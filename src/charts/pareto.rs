@@ -52,6 +52,11 @@ pub fn trade_off_chart(
         Series::new("best objective", PALETTE[7], chosen).with_stroke(Stroke::Points),
     ];
     chart.fit();
+    // Dots at the ends of the x range would be cut in half by the plot's edge: leave room, as
+    // the fit does vertically.
+    let (start, end) = (chart.x.range.start, chart.x.range.end);
+    let pad = 0.05 * (end - start);
+    chart.x.range = (start - pad)..(end + pad);
     chart
 }
 
@@ -80,7 +85,8 @@ mod tests {
         );
         assert_eq!(chart.series[0].points.len(), 4);
         assert!(chart.series[0].points.windows(2).all(|w| w[0].0 <= w[1].0));
-        assert_eq!(chart.x.range, 10.0..15.0);
+        // The results span 10–15 s; 5 % of that on each side keeps the end dots whole.
+        assert_eq!(chart.x.range, 9.75..15.25);
         let mut svg = String::new();
         {
             let area = SVGBackend::with_string(&mut svg, (480, 320)).into_drawing_area();
