@@ -112,7 +112,9 @@ fn the_override_before_arming_is_refused_outside_the_band_and_the_default_follow
     .unwrap_err();
     assert_eq!(e[0].setting, RunSetting::ArmingOverride);
     assert!(
-        e[0].problem.to_string().contains("outside this run's override band 10–120 %"),
+        e[0].problem
+            .to_string()
+            .contains("outside this run's override band 10–120 %"),
         "{}",
         e[0].problem
     );

@@ -468,31 +468,30 @@ impl RunSetting {
             return Ok(());
         }
         let spec = self.spec();
-        let problem = if matches!(self, RunSetting::MaxOverride | RunSetting::ArmingOverride)
-            && v > max
-        {
-            Problem::AboveMachine {
-                value: v,
-                max,
-                what: if self == RunSetting::MaxOverride {
-                    "highest override"
-                } else {
-                    "override before arming"
-                },
-            }
-        } else if v <= 0.0 && min > 0.0 && !spec.unit.is_empty() {
-            Problem::NotPositive(v)
-        } else if v < 0.0 && min == 0.0 {
-            Problem::Negative(v)
-        } else {
-            Problem::OutOfRange {
-                value: v,
-                min,
-                max,
-                unit: spec.unit,
-                noun: if spec.unit.is_empty() { spec.label } else { "" },
-            }
-        };
+        let problem =
+            if matches!(self, RunSetting::MaxOverride | RunSetting::ArmingOverride) && v > max {
+                Problem::AboveMachine {
+                    value: v,
+                    max,
+                    what: if self == RunSetting::MaxOverride {
+                        "highest override"
+                    } else {
+                        "override before arming"
+                    },
+                }
+            } else if v <= 0.0 && min > 0.0 && !spec.unit.is_empty() {
+                Problem::NotPositive(v)
+            } else if v < 0.0 && min == 0.0 {
+                Problem::Negative(v)
+            } else {
+                Problem::OutOfRange {
+                    value: v,
+                    min,
+                    max,
+                    unit: spec.unit,
+                    noun: if spec.unit.is_empty() { spec.label } else { "" },
+                }
+            };
         Err(SettingError {
             setting: self,
             problem,
@@ -914,6 +913,11 @@ mod tests {
             for v in [min, max] {
                 let parsed = s.parse(&v.to_string(), p).unwrap().unwrap();
                 let mut spec = RunSpec::new(p, ControllerKind::Pi);
+                // The override before arming must also lie in the run's band, which starts at
+                // 10 % unless the lowest override is lowered (tests/run_definition.rs).
+                if s == RunSetting::ArmingOverride {
+                    spec.settings.min_override_pct = Some(0.0);
+                }
                 s.apply(&mut spec, Some(parsed));
                 assert_eq!(s.value_in(&spec), Some(parsed), "{s:?}");
                 assert_eq!(check_spec(&spec), Ok(()));
@@ -991,7 +995,7 @@ mod tests {
         let e = check_spec(&spec).unwrap_err();
         assert_eq!(
             e.to_string(),
-            "arming_override_pct: 400 % is outside 0–255 %"
+            "override before arming 400 % is more than this machine applies (255 %)"
         );
     }
 }

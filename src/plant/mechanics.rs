@@ -67,8 +67,8 @@ use std::f64::consts::{PI, TAU};
 
 use super::materials::CuttingCoefficients;
 use super::{finite, in_range, non_negative, positive, PlantError};
-use crate::math;
 use crate::input::readable;
+use crate::math;
 
 /// The most turns of the cutter a helical edge may wrap within the cut (see
 /// [`Cutter::max_axial_depth_mm`]); a real flute wraps less than one.
