@@ -276,6 +276,11 @@ impl Recorder {
         Some((index, std::mem::take(&mut self.text)))
     }
 
+    /// Sets the run's summary (a closed loop ended within it).
+    pub fn set_summary(&mut self, summary: &str) {
+        self.meta.summary = summary.to_string();
+    }
+
     /// Marks it closed with `end` (its last chunk is still to be taken) and the run's summary.
     pub fn finish(&mut self, end: &str, summary: Option<String>) {
         self.meta.finished = true;
