@@ -7,10 +7,14 @@
 // Test code: unwrapping and panicking on a broken expectation is the point.
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
 
+use cutlab::closed_loop::calibration_file::CalibrationFile;
 use cutlab::closed_loop::lab::{simulate, RunSpec};
+use cutlab::closed_loop::runner::Feedback;
 use cutlab::control::registry::ControllerKind;
 use cutlab::hardware::recording::{LiveRow, Recorder, RecordingMeta};
-use cutlab::hardware::session::{HardwareSession, LinkState, SessionOptions, Stage};
+use cutlab::hardware::session::{
+    HardwareSession, LinkState, SessionOptions, Stage, TaughtCalibration,
+};
 use cutlab::log::{load, ColumnKind, Role};
 use cutlab::plant::Preset;
 use cutlab::protocol::codec::{encode_frame, Decoder, MAX_FRAME_LEN};
@@ -355,11 +359,21 @@ fn a_device_of_another_major_version_is_refused_and_arming_needs_a_calibration()
         .arm(&spec(), 0.2)
         .unwrap_err()
         .starts_with("no calibration yet"));
-    // A real bridge sends no truth: the teach cut says why it cannot run.
+    // A real bridge sends no truth: the teach cut takes the model of a cut of one depth, and
+    // says why it cannot run on a program whose depth steps.
+    let limits = s.teach_limits(&spec()).unwrap();
+    assert!(
+        limits
+            .lines
+            .iter()
+            .any(|l| l.contains("the model of the preset's cut (1 mm deep")),
+        "{limits:?}"
+    );
+    let steps = RunSpec::new(Preset::KimStepDoc, ControllerKind::Threshold);
     assert!(s
-        .teach_limits(&spec())
+        .teach_limits(&steps)
         .unwrap_err()
-        .contains("sends no force"));
+        .contains("load a saved calibration instead"));
     // A safe override the device cannot apply is refused before anything is armed.
     let mut dial = caps(1);
     dial.max_override_cpct = 15000;
@@ -433,4 +447,42 @@ fn a_recording_reads_back_through_the_log_reader_with_each_roles_guess() {
     assert_eq!(time.kind, ColumnKind::Time);
     // 1 kHz, in device time.
     assert!((log.sample_period_s.unwrap() - 0.001).abs() < 1e-9);
+}
+
+#[test]
+fn a_device_without_truth_is_taught_from_the_cut_model_and_a_saved_calibration_needs_no_teach_cut()
+{
+    let mut config = maneerat(0.5);
+    config.sim_truth = false;
+    let mut b = Bench::new(config, SessionOptions::default());
+    assert!(!b.session.device().unwrap().sim_truth);
+    b.teach_and_arm(&spec());
+    b.run_until(|b| b.session.stage() == Stage::Idle, 60.0);
+    let taught = b.session.calibration().unwrap().clone();
+    let run = b.session.result().unwrap();
+    assert!(run.metrics.completed, "{}", b.events());
+    // No truth on the rows either.
+    assert!(b.rows.iter().all(|r| r.force_n.is_nan()));
+
+    // The calibration saved as a file and loaded into a fresh session arms at once.
+    let file = CalibrationFile::new(taught.calibration.clone(), "teach cut over the link");
+    let read = CalibrationFile::from_json(&file.to_json()).unwrap();
+    let mut b = Bench::new(maneerat(0.5), SessionOptions::default());
+    b.session.set_calibration(TaughtCalibration {
+        calibration: read.calibration,
+        settings: None,
+        source: "a file".into(),
+    });
+    b.session.arm(&spec(), b.now_s).unwrap();
+    b.run_until(|b| b.session.stage() == Stage::Idle, 60.0);
+    assert!(b.session.result().unwrap().metrics.completed);
+    assert_eq!(b.device.stats().parts, 1, "no teach cut");
+    // A calibration of another feedback path is refused, saying so.
+    let mut feed = spec();
+    feed.settings.feedback = Some(Feedback::FeedCurrent);
+    let why = b.session.arm(&feed, b.now_s).unwrap_err();
+    assert!(
+        why.starts_with("the calibration is for spindle feedback but the run measures with feed"),
+        "{why}"
+    );
 }

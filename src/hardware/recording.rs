@@ -44,6 +44,10 @@ pub struct LiveRow {
     pub commanded_override_pct: f64,
     /// The latest control period's force estimate (closed loop only).
     pub force_est_n: f64,
+    /// The safety envelope had armed at that period's end: before, the estimate reads the
+    /// spindle's starting current, thousands of newtons of nothing (the chart leaves it out; the
+    /// recording keeps it).
+    pub envelope_armed: bool,
     /// The latest period's spindle RMS current (closed loop only).
     pub spindle_current_rms_a: f64,
     /// The latest period's feed RMS current (closed loop only).
@@ -309,6 +313,7 @@ mod tests {
             applied_override_pct: 95.0,
             commanded_override_pct: f64::NAN,
             force_est_n: f64::NAN,
+            envelope_armed: false,
             spindle_current_rms_a: f64::NAN,
             feed_current_rms_a: f64::NAN,
             target_force_n: f64::NAN,

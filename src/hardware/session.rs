@@ -43,11 +43,11 @@ use std::fmt::Write as _;
 
 use super::recording::LiveRow;
 use crate::closed_loop::lab::{
-    default_settings, feedback_loop, metrics_config, RunResult, RunSpec,
+    cut_model_teach_force, default_settings, feedback_loop, metrics_config, RunResult, RunSpec,
 };
 use crate::closed_loop::metrics::compute;
 use crate::closed_loop::runner::{
-    Calibration, Feedback, FeedbackLoop, LoopSample, LoopSettings, SampleLoop, TeachCut,
+    Calibration, Feedback, FeedbackLoop, LoopError, LoopSample, LoopSettings, SampleLoop, TeachCut,
     TeachForce, TEACH_OVERRIDES_PCT, TEACH_STEP_S,
 };
 use crate::machine::OverrideCommand;
@@ -176,17 +176,29 @@ pub struct SessionEvent {
 pub struct TaughtCalibration {
     /// The fitted model.
     pub calibration: Calibration,
-    /// The settings of the teach cut: a run must measure the force the same way.
-    pub settings: LoopSettings,
+    /// The settings of the teach cut when it was made over this link: a run must measure the
+    /// force the same way. `None` for a saved calibration, whose file keeps only the model.
+    pub settings: Option<LoopSettings>,
     /// Where it came from.
     pub source: String,
 }
 
 impl TaughtCalibration {
-    /// Why a run with `settings` cannot use this calibration, if it cannot: the signal chain and
-    /// the feedback path must be the teach cut's (the fitted line holds for those only).
+    /// Why a run with `settings` cannot use this calibration, if it cannot: the feedback path
+    /// must be the calibration's, and after a teach cut over this link the signal chain too (the
+    /// fitted line holds for those only).
     pub fn mismatch(&self, settings: &LoopSettings) -> Option<String> {
-        let t = &self.settings;
+        let feedback = self.calibration.estimator.feedback();
+        if feedback != settings.feedback {
+            return Some(
+                LoopError::CalibrationFeedback {
+                    calibration: feedback,
+                    run: settings.feedback,
+                }
+                .to_string(),
+            );
+        }
+        let t = self.settings.as_ref()?;
         let differs = |a: f64, b: f64| (a - b).abs() > 1e-9 * a.abs().max(b.abs()).max(1.0);
         let field = if t.feedback != settings.feedback {
             Some(format!(
@@ -256,6 +268,8 @@ enum Activity {
 #[derive(Debug, Clone, Copy)]
 struct PeriodValues {
     force_est_n: f64,
+    /// The envelope had armed (the controller in charge) at the period's end.
+    armed: bool,
     spindle_current_rms_a: f64,
     feed_current_rms_a: f64,
     target_force_n: f64,
@@ -263,6 +277,7 @@ struct PeriodValues {
 
 const NO_PERIOD: PeriodValues = PeriodValues {
     force_est_n: f64::NAN,
+    armed: false,
     spindle_current_rms_a: f64::NAN,
     feed_current_rms_a: f64::NAN,
     target_force_n: f64::NAN,
@@ -578,14 +593,7 @@ impl HardwareSession {
     /// The limits a teach cut will be run with, for the confirmation.
     pub fn teach_limits(&self, spec: &RunSpec) -> Result<ArmLimits, String> {
         let caps = self.ready_to_arm()?;
-        if !DeviceSummary::of(&caps).sim_truth {
-            return Err(
-                "this device sends no force (simulation truth), and a teach cut needs a force \
-                 to fit the current against; load a saved calibration instead (a teach cut \
-                 with a dynamometer or the cut model over the link is not implemented yet)"
-                    .into(),
-            );
-        }
+        let force = teach_force(&caps, spec)?;
         let settings = default_settings(spec).map_err(|e| e.to_string())?;
         let schedule = TEACH_OVERRIDES_PCT
             .iter()
@@ -598,6 +606,23 @@ impl HardwareSession {
                  held {TEACH_STEP_S} s, again and again until the program ends: no controller, \
                  no envelope."
             ),
+            match force {
+                TeachForce::SimulationTruth => {
+                    "The force the current is fitted against: the simulation's truth, which \
+                     this device sends."
+                        .to_string()
+                }
+                TeachForce::CutModel {
+                    depth_mm, width_mm, ..
+                } => format!(
+                    "The force the current is fitted against: the model of the preset's cut \
+                     ({depth_mm} mm deep, {width_mm} mm wide, from each period's feed and \
+                     speed): the machine must cut exactly that."
+                ),
+                TeachForce::Dynamometer => {
+                    "The force the current is fitted against: the dynamometer's.".to_string()
+                }
+            },
             format!(
                 "Current measured: {}; control period {} s; low-passes {} Hz (spindle) and {} Hz \
                  (feed), order {}.",
@@ -718,7 +743,7 @@ impl HardwareSession {
         let teach = TeachCut::new(
             f64::from(caps.sample_rate_hz),
             &settings,
-            TeachForce::SimulationTruth,
+            teach_force(&caps, spec)?,
         )
         .map_err(|e| e.to_string())?;
         self.activity = Activity::Teach(Box::new(Teaching { teach, settings }));
@@ -973,6 +998,7 @@ impl HardwareSession {
                     if let Some(row) = r.run.trace().rows.last() {
                         self.period = PeriodValues {
                             force_est_n: row.force_est_n,
+                            armed: row.armed,
                             spindle_current_rms_a: row.spindle_current_rms_a,
                             feed_current_rms_a: row.feed_current_rms_a,
                             target_force_n: row.target_force_n,
@@ -1021,6 +1047,7 @@ impl HardwareSession {
             applied_override_pct: sensors.applied_override_pct,
             commanded_override_pct: self.command().map_or(f64::NAN, |c| c.override_pct),
             force_est_n: self.period.force_est_n,
+            envelope_armed: self.period.armed,
             spindle_current_rms_a: self.period.spindle_current_rms_a,
             feed_current_rms_a: self.period.feed_current_rms_a,
             target_force_n: self.period.target_force_n,
@@ -1066,7 +1093,7 @@ impl HardwareSession {
                 );
                 self.calibration = Some(TaughtCalibration {
                     calibration,
-                    settings: t.settings,
+                    settings: Some(t.settings),
                     source: format!("teach cut over the link (part {})", self.host.part()),
                 });
                 self.end_part(program_end, text, now_s);
@@ -1180,6 +1207,20 @@ impl HardwareSession {
         }
         self.set_state(LinkState::Alarm, text);
     }
+}
+
+/// Where a teach cut on this device takes its force: the simulation's truth when the device
+/// sends it, else the model of the preset's cut when the program cuts one depth, width and
+/// material (as `cutlab host` decides).
+fn teach_force(caps: &Capabilities, spec: &RunSpec) -> Result<TeachForce, String> {
+    if DeviceSummary::of(caps).sim_truth {
+        return Ok(TeachForce::SimulationTruth);
+    }
+    cut_model_teach_force(spec.preset).ok_or_else(|| {
+        "this device sends no force and the preset's cut changes along the path, so a teach cut \
+         has nothing to fit the current against: load a saved calibration instead"
+            .to_string()
+    })
 }
 
 fn feedback_name(feedback: Feedback) -> &'static str {

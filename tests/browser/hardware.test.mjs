@@ -350,8 +350,8 @@ test('the virtual device with injected faults: counters, the device watchdog, th
   await context.close();
 });
 
-test('without WebSerial the page says why and what works instead, and the virtual device runs', async () => {
-  const { page, problems, context } = await openWith('#/hardware', () => {
+test('without WebSerial the page says why and what works instead; the virtual device runs from a saved calibration, and Escape returns to the safe override', async () => {
+  const { page, problems, context } = await openWith('#/hardware?preset=maneerat-doc-1', () => {
     delete Navigator.prototype.serial;
   });
   const note = page.getByRole('note');
@@ -360,19 +360,45 @@ test('without WebSerial the page says why and what works instead, and the virtua
   assert.match(await note.textContent(), /the virtual device below/);
   assert.match(await note.textContent(), /cutlab host --port/);
   assert.ok(await page.getByRole('button', { name: 'Connect to a serial port…' }).isDisabled());
-  // The virtual device is one click away. Escape during a teach cut returns the override to
-  // the safe value (the device's fallback, 50 %) at once.
+
+  // A calibration saved by the command line: the run needs no teach cut.
+  await mkdir(artifacts, { recursive: true });
+  const saved = join(artifacts, 'hardware-calibration.json');
+  execFileSync(cutlab, ['sim', '--scenario', 'maneerat-doc-1', '--controller', 'fixed', '--save-calibration', saved]);
+  const broken = join(artifacts, 'hardware-calibration-broken.json');
+  await writeFile(broken, '{"format": "cutlab-calibration", "version": 1, "calibration": 3}');
+  await page.getByLabel('Load a calibration file (cutlab-calibration JSON)').setInputFiles(broken);
+  await page.getByText(/hardware-calibration-broken\.json: /).waitFor();
+  await page.getByLabel('Load a calibration file (cutlab-calibration JSON)').setInputFiles(saved);
+  await page.getByText(/In use: file hardware-calibration\.json .*spindle feedback/).waitFor();
+
+  // The virtual device, as a real bridge's twin (no truth), is one click away.
+  await page.getByLabel("Send the simulation's truth (off: a real bridge's twin)").uncheck();
   await page.getByLabel('Time scale').fill('4');
   await page.getByRole('button', { name: 'Start the virtual device' }).click();
   await page.getByText('Link state: streaming').waitFor({ timeout: LONG });
-  await confirm(page, 'Teach cut…', 'Start the teach cut', [/teach-cut overrides/]);
+  const features = page.getByRole('definition').filter({ hasText: /^none$/ });
+  await features.waitFor();
+  await confirm(page, 'Arm…', 'Arm now', [/holding 150 N/]);
   await page.getByText('Link state: armed').waitFor();
-  await page.waitForFunction(() => /recording “.*teach cut”: (\d{4,}) rows/.test(document.body.innerText), null, { timeout: LONG });
+  await page.waitForFunction(() => /recording “.*closed loop”: (\d{4,}) rows/.test(document.body.innerText), null, { timeout: LONG });
+  // Escape: the safe override (the device's fallback, 50 %) at once.
   await page.keyboard.press('Escape');
   await page.getByText('Link state: streaming').waitFor();
   await page.getByText('Why: Escape pressed: the override held at 50 % (the safe value) until the part ends').waitFor();
   await page.getByText(/Override commanded 50\.0 %, applied 50\.0 %/).waitFor({ timeout: LONG });
   assert.ok(await page.getByRole('button', { name: 'Disarm (Esc)' }).isDisabled());
+  await page.getByRole('table', { name: /Metrics of the run/ }).waitFor();
+  // The calibration goes back out as a file the command line reads.
+  const [download] = await Promise.all([
+    page.waitForEvent('download'),
+    page.getByRole('button', { name: 'Save the calibration (JSON)' }).click(),
+  ]);
+  assert.equal(download.suggestedFilename(), 'cutlab-calibration.json');
+  const again = join(artifacts, 'hardware-calibration-again.json');
+  await writeFile(again, await readFile(await download.path()));
+  const run = execFileSync(cutlab, ['sim', '--scenario', 'maneerat-doc-1', '--controller', 'threshold', '--calibration', again]).toString();
+  assert.match(run, /Cycle time/);
   await page.getByRole('button', { name: 'Disconnect' }).click();
   await page.getByText('Link state: closed').waitFor();
   assert.deepEqual(problems, []);

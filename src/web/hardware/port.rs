@@ -131,10 +131,8 @@ impl SerialLink {
                 }
             })
         };
-        let _ = port.add_event_listener_with_callback(
-            "disconnect",
-            on_disconnect.as_ref().unchecked_ref(),
-        );
+        let _ = port
+            .add_event_listener_with_callback("disconnect", on_disconnect.as_ref().unchecked_ref());
         let link = SerialLink {
             port,
             writer,

@@ -6,6 +6,7 @@ use std::collections::VecDeque;
 use std::sync::Arc;
 
 use crate::charts::{Axis, LineChart, Series, PALETTE};
+use crate::closed_loop::calibration_file::CalibrationFile;
 use crate::closed_loop::lab::{RunResult, RunSpec};
 use crate::hardware::recording::{LiveRow, Recorder, RecordingMeta};
 use crate::hardware::session::{
@@ -119,10 +120,7 @@ impl Station {
         self.generation = generation;
         let mut session = HardwareSession::new(self.options, now_s());
         if let Some(c) = &self.calibration {
-            session.set_calibration(TaughtCalibration {
-                source: format!("{} (kept from the previous connection)", c.source),
-                ..c.clone()
-            });
+            session.set_calibration(c.clone());
         }
         port.write(&session.take_output());
         self.session = Some(session);
@@ -313,6 +311,34 @@ impl Station {
         }
     }
 
+    /// Uses `calibration` from now on, in this connection and the next.
+    pub fn set_calibration(&mut self, calibration: TaughtCalibration) {
+        if let Some(s) = &mut self.session {
+            s.set_calibration(calibration.clone());
+        }
+        self.calibration = Some(calibration);
+    }
+
+    /// The calibration at hand, as a file.
+    pub fn calibration_file(&self) -> Option<CalibrationFile> {
+        self.calibration
+            .as_ref()
+            .map(|c| CalibrationFile::new(c.calibration.clone(), c.source.clone()))
+    }
+
+    /// The calibration at hand, described (also before any connection).
+    pub fn calibration_text(&self) -> Option<String> {
+        self.calibration.as_ref().map(|c| {
+            format!(
+                "{}: {} periods fitted over {:.1} s, {} feedback",
+                c.source,
+                c.calibration.periods,
+                c.calibration.duration_s,
+                c.calibration.estimator.feedback().name()
+            )
+        })
+    }
+
     /// The recording under way, if any.
     pub fn recording(&self) -> Option<&RecordingMeta> {
         self.recorder.as_ref().map(Recorder::meta)
@@ -441,10 +467,12 @@ impl Station {
                 m.name, m.rows, m.duration_s
             )
         });
+        let calibration = self.calibration_text();
         let Some(s) = &self.session else {
             return Snapshot {
                 recording,
                 port,
+                calibration,
                 ..Snapshot::default()
             };
         };
@@ -463,12 +491,7 @@ impl Station {
             commanded_pct: latest.map_or(f64::NAN, |r| r.commanded_override_pct),
             applied_pct: latest.map_or(f64::NAN, |r| r.applied_override_pct),
             fallback: s.in_fallback(),
-            calibration: s.calibration().map(|c| {
-                format!(
-                    "{}: {} periods fitted over {:.1} s",
-                    c.source, c.calibration.periods, c.calibration.duration_s
-                )
-            }),
+            calibration,
             safe_override_pct: s.safe_override_pct(),
             events: events
                 .iter()
@@ -631,7 +654,13 @@ pub fn live_charts(rows: &VecDeque<LiveRow>) -> [LineChart; 4] {
         Series::new(
             "estimated from current",
             PALETTE[1],
-            series(rows, |r| r.force_est_n),
+            series(rows, |r| {
+                if r.envelope_armed {
+                    r.force_est_n
+                } else {
+                    f64::NAN
+                }
+            }),
         ),
         Series::new("target", PALETTE[7], series(rows, |r| r.target_force_n)).dashed(),
     ];

@@ -5,7 +5,9 @@
 
 use js_sys::{Array, Function, Promise};
 use wasm_bindgen::{JsCast, JsValue};
-use web_sys::{IdbDatabase, IdbKeyRange, IdbObjectStore, IdbRequest, IdbTransaction, IdbTransactionMode};
+use web_sys::{
+    IdbDatabase, IdbKeyRange, IdbObjectStore, IdbRequest, IdbTransaction, IdbTransactionMode,
+};
 
 use crate::hardware::recording::RecordingMeta;
 
@@ -19,7 +21,11 @@ fn describe(value: &JsValue) -> String {
     value
         .dyn_ref::<web_sys::DomException>()
         .map(|e| format!("{}: {}", e.name(), e.message()))
-        .or_else(|| value.dyn_ref::<js_sys::Error>().map(|e| String::from(e.message())))
+        .or_else(|| {
+            value
+                .dyn_ref::<js_sys::Error>()
+                .map(|e| String::from(e.message()))
+        })
         .or_else(|| value.as_string())
         .unwrap_or_else(|| "an unknown error".to_string())
 }
@@ -48,14 +54,19 @@ async fn committed(transaction: &IdbTransaction) -> Result<(), String> {
     });
     match wasm_bindgen_futures::JsFuture::from(promise).await {
         Ok(_) => Ok(()),
-        Err(_) => Err(transaction
-            .error()
-            .map_or_else(|| "the transaction was aborted".to_string(), |e| describe(&e.into()))),
+        Err(_) => Err(transaction.error().map_or_else(
+            || "the transaction was aborted".to_string(),
+            |e| describe(&e.into()),
+        )),
     }
 }
 
 fn chunk_key(id: u64, index: u32) -> JsValue {
-    Array::of2(&JsValue::from_f64(id as f64), &JsValue::from_f64(f64::from(index))).into()
+    Array::of2(
+        &JsValue::from_f64(id as f64),
+        &JsValue::from_f64(f64::from(index)),
+    )
+    .into()
 }
 
 fn chunk_range(id: u64) -> Result<IdbKeyRange, String> {
@@ -130,7 +141,11 @@ impl Store {
     }
 
     /// Writes `meta` and, if given, one chunk of its text, in one transaction.
-    pub async fn put(&self, meta: &RecordingMeta, chunk: Option<(u32, String)>) -> Result<(), String> {
+    pub async fn put(
+        &self,
+        meta: &RecordingMeta,
+        chunk: Option<(u32, String)>,
+    ) -> Result<(), String> {
         let (transaction, recordings, chunks) = self.stores(IdbTransactionMode::Readwrite)?;
         if let Some((index, text)) = chunk {
             chunks

@@ -17,18 +17,22 @@ use leptos::prelude::*;
 use wasm_bindgen::JsCast;
 
 use crate::charts::{Axis, LineChart};
+use crate::closed_loop::calibration_file::CalibrationFile;
 use crate::closed_loop::definition::RunSetting;
 use crate::closed_loop::lab::{RunResult, RunSpec};
 use crate::control::registry::ControllerKind;
 use crate::hardware::recording::RecordingMeta;
-use crate::hardware::session::{LinkState, SessionOptions, Stage};
+use crate::hardware::session::{LinkState, SessionOptions, Stage, TaughtCalibration};
 use crate::input::{parse_count, parse_number, parse_seed};
 use crate::plant::presets::PlantEdits;
 use crate::plant::Preset;
 use crate::protocol::device::{DeviceConfig, DeviceEmulator, FaultInjection};
 use crate::web::components::chart::ChartCanvas;
+use crate::web::components::download::download_text;
 use crate::web::components::fields::{NumberField, SelectField};
-use crate::web::components::run_form::{ControllerFields, ControllerForm, ScenarioForm, SettingFields};
+use crate::web::components::run_form::{
+    ControllerFields, ControllerForm, ScenarioForm, SettingFields,
+};
 use crate::web::components::run_view::{MetricsTable, NamedRun};
 use crate::web::hardware::port::{
     describe, now_s, web_serial_unavailable, Port, PortEvent, SerialLink, SerialSettings, Sink,
@@ -101,10 +105,11 @@ impl Ui {
         }
         self.active_recording.set(active.as_ref().map(|m| m.id));
         if let Some(meta) = active {
-            self.recordings.update(|list| match list.iter_mut().find(|m| m.id == meta.id) {
-                Some(m) => *m = meta,
-                None => list.push(meta),
-            });
+            self.recordings
+                .update(|list| match list.iter_mut().find(|m| m.id == meta.id) {
+                    Some(m) => *m = meta,
+                    None => list.push(meta),
+                });
         }
     }
 
@@ -253,6 +258,8 @@ struct VirtualForm {
     unplug_at: RwSignal<String>,
     watchdog: RwSignal<String>,
     fallback: RwSignal<String>,
+    /// Send the simulation's truth (off: a real bridge's twin, `cutlab device --no-truth`).
+    truth: RwSignal<bool>,
 }
 
 /// A field's number, `None` when blank.
@@ -277,6 +284,7 @@ impl VirtualForm {
             unplug_at: RwSignal::new(String::new()),
             watchdog: RwSignal::new("0.5".into()),
             fallback: RwSignal::new("50".into()),
+            truth: RwSignal::new(true),
         }
     }
 
@@ -305,11 +313,10 @@ impl VirtualForm {
     fn parse(&self) -> Result<(DeviceEmulator, f64), String> {
         let preset = Preset::from_name(&self.preset.get())
             .ok_or_else(|| "choose the virtual device's program".to_string())?;
-        let field = |name: &str, text: &str| {
-            parse_number(text).map_err(|e| format!("{name}: {e}"))
-        };
+        let field = |name: &str, text: &str| parse_number(text).map_err(|e| format!("{name}: {e}"));
         let opt = |name: &str, text: &str| optional(text).map_err(|e| format!("{name}: {e}"));
         let mut config = DeviceConfig::new(preset);
+        config.sim_truth = self.truth.get();
         config.seed = parse_seed(&self.seed.get()).map_err(|e| format!("seed: {e}"))?;
         config.watchdog_timeout_s = field("device watchdog", &self.watchdog.get())?;
         config.fallback_override_pct = field("fallback override", &self.fallback.get())?;
@@ -423,14 +430,19 @@ pub fn HardwarePage() -> impl IntoView {
         ) else {
             return;
         };
-        let result = SessionOptions::new(timeout, safe)
-            .and_then(|o| station.try_update_value(|s| s.set_options(o)).unwrap_or(Ok(())));
+        let result = SessionOptions::new(timeout, safe).and_then(|o| {
+            station
+                .try_update_value(|s| s.set_options(o))
+                .unwrap_or(Ok(()))
+        });
         options_error.set(result.err());
     });
 
     // The device's program names the preset whose settings the run takes, as in cutlab host.
     Effect::new(move |previous: Option<Option<String>>| {
-        let program = ui.snapshot.with(|s| s.device.as_ref().map(|d| d.program.clone()));
+        let program = ui
+            .snapshot
+            .with(|s| s.device.as_ref().map(|d| d.program.clone()));
         if program != previous.clone().flatten() {
             if let Some(p) = program.as_deref().and_then(Preset::from_name) {
                 scenario.preset.set(p.name().to_string());
@@ -547,14 +559,74 @@ pub fn HardwarePage() -> impl IntoView {
         station.try_with_value(Station::unplug_virtual);
     };
 
+    // Calibrations: loaded from a file (cutlab sim/host --save-calibration, cutlab calibrate),
+    // saved after a teach cut over the link.
+    let calibration_error = RwSignal::new(None::<String>);
+    let load_calibration = move |ev: leptos::ev::Event| {
+        let Some(input) = ev
+            .target()
+            .and_then(|t| t.dyn_into::<web_sys::HtmlInputElement>().ok())
+        else {
+            return;
+        };
+        let Some(file) = input.files().and_then(|f| f.get(0)) else {
+            return;
+        };
+        let name = file.name();
+        let promise = file.text();
+        leptos::task::spawn_local(async move {
+            let text = match wasm_bindgen_futures::JsFuture::from(promise).await {
+                Ok(t) => t.as_string().unwrap_or_default(),
+                Err(e) => {
+                    calibration_error
+                        .set(Some(format!("{name} could not be read: {}", describe(&e))));
+                    return;
+                }
+            };
+            match CalibrationFile::from_json(&text) {
+                Ok(file) => {
+                    let source = if file.source.is_empty() {
+                        format!("file {name}")
+                    } else {
+                        format!("file {name} ({})", file.source)
+                    };
+                    station.try_update_value(|s| {
+                        s.set_calibration(TaughtCalibration {
+                            calibration: file.calibration,
+                            settings: None,
+                            source,
+                        })
+                    });
+                    calibration_error.set(None);
+                    ui.publish(station, true);
+                }
+                Err(e) => calibration_error.set(Some(format!("{name}: {e}"))),
+            }
+        });
+    };
+    let save_calibration = move |_| {
+        let Some(file) = station.try_with_value(Station::calibration_file).flatten() else {
+            return;
+        };
+        calibration_error.set(
+            download_text(
+                "cutlab-calibration.json",
+                "application/json",
+                &file.to_json(),
+            )
+            .err(),
+        );
+    };
+
     // Teach cut and arming, through the confirmation.
     let dialog_ref = NodeRef::<leptos::html::Dialog>::new();
     let pending = RwSignal::new(None::<Confirm>);
     let ask = move |teach: bool| {
         ui.message.set(None);
         let Some(spec) = spec.get_untracked() else {
-            ui.message
-                .set(Some("Fix the settings marked in the Control panel first.".into()));
+            ui.message.set(Some(
+                "Fix the settings marked in the Control panel first.".into(),
+            ));
             return;
         };
         match station.try_with_value(|s| s.limits(teach, &spec)) {
@@ -609,10 +681,7 @@ pub fn HardwarePage() -> impl IntoView {
     let state = Memo::new(move |_| ui.snapshot.with(|s| s.state));
     let stage = Memo::new(move |_| ui.snapshot.with(|s| s.stage));
     let connected = Memo::new(move |_| ui.snapshot.with(|s| s.port.is_some()));
-    let is_virtual = Memo::new(move |_| {
-        ui.snapshot
-            .with(|s| s.port == Some("the virtual device"))
-    });
+    let is_virtual = Memo::new(move |_| ui.snapshot.with(|s| s.port == Some("the virtual device")));
     let x_view = RwSignal::new(None::<std::ops::Range<f64>>);
     let chart = |i: usize| Signal::derive(move || ui.charts[i].get());
 
@@ -713,6 +782,14 @@ pub fn HardwarePage() -> impl IntoView {
                                     }
                                 })
                                 .collect_view()}
+                            <label class="check">
+                                <input
+                                    type="checkbox"
+                                    prop:checked=move || virtual_form.truth.get()
+                                    on:change=move |ev| virtual_form.truth.set(event_target_checked(&ev))
+                                />
+                                "Send the simulation's truth (off: a real bridge's twin)"
+                            </label>
                             <div class="button-row">
                                 <button type="button" on:click=start_virtual disabled=move || connected.get()>
                                     "Start the virtual device"
@@ -766,11 +843,34 @@ pub fn HardwarePage() -> impl IntoView {
                         <SettingFields form=scenario legend="Signal chain" settings=SIGNAL_SETTINGS.to_vec() />
                         <fieldset>
                             <legend>"Calibration"</legend>
-                            <p>
-                                {move || ui.snapshot.with(|s| s.calibration.clone()).unwrap_or_else(|| {
-                                    "None yet: make a teach cut over the link (a simulated device), or connect again after one.".to_string()
-                                })}
+                            <p class="calibration">
+                                {move || ui.snapshot.with(|s| s.calibration.clone()).map_or_else(
+                                    || "None yet: make a teach cut over the link, or load a saved calibration.".to_string(),
+                                    |c| format!("In use: {c}"),
+                                )}
                             </p>
+                            <div class="field">
+                                <label for="hw-calibration-file">"Load a calibration file (cutlab-calibration JSON)"</label>
+                                <input
+                                    id="hw-calibration-file"
+                                    type="file"
+                                    accept=".json,application/json"
+                                    on:change=load_calibration
+                                    aria-describedby="hw-calibration-error"
+                                />
+                                <p class="field-error" id="hw-calibration-error" aria-live="polite">
+                                    {move || calibration_error.get().unwrap_or_default()}
+                                </p>
+                            </div>
+                            <div class="button-row">
+                                <button
+                                    type="button"
+                                    on:click=save_calibration
+                                    disabled=move || ui.snapshot.with(|s| s.calibration.is_none())
+                                >
+                                    "Save the calibration (JSON)"
+                                </button>
+                            </div>
                         </fieldset>
                     </form>
                 </div>
@@ -853,14 +953,29 @@ fn LinkPanel(ui: Ui, children: Children) -> impl IntoView {
                 ("Frames received", st.frames_received.to_string()),
                 ("Samples lost (sequence gaps)", st.frames_lost.to_string()),
                 ("Samples out of order", st.frames_reordered.to_string()),
-                ("Frames rejected (CRC, COBS, size)", st.frames_rejected.to_string()),
-                ("Bytes dropped while resynchronising", st.bytes_dropped.to_string()),
+                (
+                    "Frames rejected (CRC, COBS, size)",
+                    st.frames_rejected.to_string(),
+                ),
+                (
+                    "Bytes dropped while resynchronising",
+                    st.bytes_dropped.to_string(),
+                ),
                 ("Frames of unknown type", st.frames_unknown.to_string()),
                 ("Commands sent", st.commands_sent.to_string()),
-                ("Commands acknowledged", st.commands_acknowledged.to_string()),
+                (
+                    "Commands acknowledged",
+                    st.commands_acknowledged.to_string(),
+                ),
                 ("Heartbeats sent", st.heartbeats_sent.to_string()),
-                ("Device watchdog fallbacks", st.watchdog_fallbacks.to_string()),
-                ("Link losses (host watchdog, port lost)", st.link_losses.to_string()),
+                (
+                    "Device watchdog fallbacks",
+                    st.watchdog_fallbacks.to_string(),
+                ),
+                (
+                    "Link losses (host watchdog, port lost)",
+                    st.link_losses.to_string(),
+                ),
                 ("Device faults", st.device_faults.to_string()),
                 (
                     "Command round trip, mean / max (ms)",
@@ -961,7 +1076,8 @@ fn download_chunks(file_name: &str, chunks: &js_sys::Array) -> Result<(), String
     options.set_type("text/csv");
     let blob = web_sys::Blob::new_with_str_sequence_and_options(chunks, &options)
         .map_err(|e| fail(&describe(&e)))?;
-    let url = web_sys::Url::create_object_url_with_blob(&blob).map_err(|_| fail("no object URL"))?;
+    let url =
+        web_sys::Url::create_object_url_with_blob(&blob).map_err(|_| fail("no object URL"))?;
     let anchor: web_sys::HtmlAnchorElement = document()
         .create_element("a")
         .map_err(|_| fail("no anchor"))?
