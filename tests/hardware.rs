@@ -6,6 +6,9 @@
 //! `SCALE` device seconds per wall second, so each test takes a fraction of a second of compute.
 // Test code: unwrapping and panicking on a broken expectation is the point.
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
+// The page runs this core in wasm: the same tests run there too.
+#[cfg(target_arch = "wasm32")]
+use wasm_bindgen_test::wasm_bindgen_test as test;
 
 use cutlab::closed_loop::calibration_file::CalibrationFile;
 use cutlab::closed_loop::lab::{simulate, RunSpec};

@@ -82,7 +82,7 @@ async function confirm(page, opener, confirmName, mentions) {
 // the test (window.__fakeSerial.push) and whose writable stream hands every chunk to the test
 // (cutlabSerialWrite); window.__fakeSerial.unplug() makes it fail as an unplugged USB adapter does.
 const fakeSerial = () => {
-  const state = { controller: null, opened: null };
+  const state = { controller: null, opened: null, unplugged: false };
   const toBase64 = (bytes) => {
     let s = '';
     for (const b of bytes) s += String.fromCharCode(b);
@@ -98,6 +98,7 @@ const fakeSerial = () => {
       return { usbVendorId: 0x1209, usbProductId: 0xc0de };
     }
     async open(options) {
+      state.unplugged = false;
       state.opened = {
         baudRate: options.baudRate, dataBits: options.dataBits, stopBits: options.stopBits,
         parity: options.parity, flowControl: options.flowControl, bufferSize: options.bufferSize,
@@ -109,7 +110,8 @@ const fakeSerial = () => {
       await window.cutlabSerialOpened(JSON.stringify(state.opened));
     }
     async close() {
-      await window.cutlabSerialClosed();
+      // Closing a port whose cable is out reaches nothing.
+      if (!state.unplugged) await window.cutlabSerialClosed();
     }
   }
   const port = new FakePort();
@@ -125,6 +127,7 @@ const fakeSerial = () => {
       state.controller?.enqueue(bytes);
     },
     unplug() {
+      state.unplugged = true;
       state.controller?.error(new DOMException('The device has been lost.', 'NetworkError'));
       port.dispatchEvent(new Event('disconnect'));
     },
@@ -137,59 +140,92 @@ function decode(bytes) {
   return out.toString().trim().split('\n').map((l) => JSON.parse(l));
 }
 
-test('a real device behind a fake serial port: handshake, teach cut, arm, acknowledgements, unplug, recordings after a reload, export', async () => {
-  const toDevice = [];
-  const fromDevice = [];
-  let device = null;
-  let deviceLog = '';
-  let unplugged = false;
-  let opened = null;
-  let pageRef = null;
-  let pending = [];
-  let pump = null;
-  const startDevice = () => {
-    device = spawn(cutlab, [
-      'device', '--stdio', '--scenario', 'maneerat-doc-1', '--time-scale', '4', '--watchdog-s', '2',
-    ]);
-    device.stderr.on('data', (d) => { deviceLog += d.toString(); });
-    device.stdout.on('data', (d) => {
-      if (unplugged) return;
-      fromDevice.push(d);
-      pending.push(d);
+/**
+ * The node end of the fake port: each opening of the port starts a `cutlab device --stdio`
+ * child; its stdout goes to the page in batches (one evaluate at a time), the page's writes go
+ * to its stdin, and both directions are kept for decoding.
+ */
+class Bridge {
+  constructor(args) {
+    this.args = args;
+    this.page = null;
+    this.sessions = [];
+  }
+
+  get current() {
+    return this.sessions[this.sessions.length - 1];
+  }
+
+  open(json) {
+    const session = {
+      opened: JSON.parse(json), toDevice: [], fromDevice: [], log: '', pending: [], unplugged: false,
+      device: spawn(cutlab, this.args),
+    };
+    this.sessions.push(session);
+    session.device.stderr.on('data', (d) => { session.log += d.toString(); });
+    session.device.stdout.on('data', (d) => {
+      if (session.unplugged) return;
+      session.fromDevice.push(d);
+      session.pending.push(d);
     });
-    // The device's bytes go to the page in batches, one evaluate at a time.
-    pump = (async () => {
-      while (device && !unplugged) {
-        if (pending.length && pageRef) {
-          const batch = Buffer.concat(pending).toString('base64');
-          pending = [];
-          await pageRef.evaluate((b64) => window.__fakeSerial.push(b64), batch).catch(() => {});
+    session.pump = (async () => {
+      while (!session.unplugged) {
+        if (session.pending.length && this.page) {
+          const batch = Buffer.concat(session.pending).toString('base64');
+          session.pending = [];
+          await this.page.evaluate((b64) => window.__fakeSerial.push(b64), batch).catch(() => {});
         } else {
           await new Promise((r) => setTimeout(r, 10));
         }
       }
     })();
-  };
+  }
+
+  write(b64) {
+    const session = this.current;
+    if (!session || session.unplugged) return;
+    const bytes = Buffer.from(b64, 'base64');
+    session.toDevice.push(bytes);
+    session.device.stdin.write(bytes);
+  }
+
+  /** The cable is out: nothing crosses any more (the device runs on, hearing nothing). */
+  unplug() {
+    if (this.current) this.current.unplugged = true;
+  }
+
+  /** Ends the current device (its input closes, as when the port is closed). */
+  async close() {
+    const session = this.current;
+    if (!session) return;
+    session.unplugged = true;
+    session.device.stdin.end();
+    await session.pump;
+  }
+
+  kill() {
+    for (const s of this.sessions) {
+      s.unplugged = true;
+      s.device.kill();
+    }
+  }
+}
+
+test('a real device behind a fake serial port: handshake, teach cut, arm, acknowledgements, unplug, reconnect, recordings after a reload, export', async () => {
+  const bridge = new Bridge(['device', '--stdio', '--scenario', 'maneerat-doc-1', '--time-scale', '4', '--watchdog-s', '2']);
   const { page, problems, context } = await openWith('#/hardware?preset=maneerat-doc-1', fakeSerial, async (ctx) => {
-    await ctx.exposeFunction('cutlabSerialWrite', (b64) => {
-      if (unplugged || !device) return;
-      const bytes = Buffer.from(b64, 'base64');
-      toDevice.push(bytes);
-      device.stdin.write(bytes);
-    });
-    await ctx.exposeFunction('cutlabSerialOpened', (json) => {
-      opened = JSON.parse(json);
-      startDevice();
-    });
-    await ctx.exposeFunction('cutlabSerialClosed', () => {});
+    await ctx.exposeFunction('cutlabSerialWrite', (b64) => bridge.write(b64));
+    await ctx.exposeFunction('cutlabSerialOpened', (json) => bridge.open(json));
+    await ctx.exposeFunction('cutlabSerialClosed', () => bridge.close());
   });
-  pageRef = page;
+  bridge.page = page;
   try {
     // Connect with the serial settings typed beside the button.
     await page.getByLabel('Baud rate').fill('460800');
     await page.getByLabel('Parity').selectOption('even');
     await page.getByRole('button', { name: 'Connect to a serial port…' }).click();
     await page.getByText('Link state: streaming').waitFor({ timeout: LONG });
+    const { opened } = bridge.current;
     assert.equal(opened.baudRate, 460800);
     assert.equal(opened.parity, 'even');
     assert.equal(opened.dataBits, 8);
@@ -216,7 +252,7 @@ test('a real device behind a fake serial port: handshake, teach cut, arm, acknow
     await page.getByText(/recording “.*closed loop”: \d+ rows/).waitFor();
     await page.waitForFunction(() => /recording “.*closed loop”: (\d{4,}) rows/.test(document.body.innerText), null, { timeout: LONG });
     await screenshot(page, 'hardware-armed');
-    unplugged = true;
+    bridge.unplug();
     await page.evaluate(() => window.__fakeSerial.unplug());
     await page.getByText('Link state: alarm').waitFor();
     await page.getByRole('alert').filter({ hasText: /link lost: .*unplugged|link lost: reading the port failed/ }).first().waitFor();
@@ -224,18 +260,18 @@ test('a real device behind a fake serial port: handshake, teach cut, arm, acknow
     await page.getByText(/the device applies its fallback override \(50 %\) on its own/).first().waitFor();
     assert.ok((await longestTask()) < 200, `the page froze for ${await longestTask()} ms`);
     // The device, hearing nothing more, falls back on its own watchdog (2 s of device time).
+    const first = bridge.current;
     const until = Date.now() + LONG;
-    while (!/watchdog: nothing from the host/.test(deviceLog) && Date.now() < until) {
+    while (!/watchdog: nothing from the host/.test(first.log) && Date.now() < until) {
       await new Promise((r) => setTimeout(r, 50));
     }
-    assert.match(deviceLog, /watchdog: nothing from the host for 2 s; fallback override 50 % applied/);
-    device.stdin.end();
-    await pump;
+    assert.match(first.log, /watchdog: nothing from the host for 2 s; fallback override 50 % applied/);
+    await bridge.close();
 
     // What crossed the line, decoded by the core's own tool: Arms and SetOverrides went out,
     // Acks with the applied value came back.
-    const sent = decode(Buffer.concat(toDevice)).filter((f) => f.type);
-    const received = decode(Buffer.concat(fromDevice)).filter((f) => f.type);
+    const sent = decode(Buffer.concat(first.toDevice)).filter((f) => f.type);
+    const received = decode(Buffer.concat(first.fromDevice)).filter((f) => f.type);
     assert.ok(sent.filter((f) => f.type === 'arm').length >= 2);
     const overrides = sent.filter((f) => f.type === 'set-override');
     assert.ok(overrides.length >= 5, `${overrides.length} set-override frames`);
@@ -243,6 +279,16 @@ test('a real device behind a fake serial port: handshake, teach cut, arm, acknow
     assert.ok(acks.length >= 5);
     assert.ok(acks.every((a) => a.result === 'applied' || a.result === 'limited'));
     assert.ok(acks.some((a) => overrides.some((o) => o.seq === a.seq)));
+
+    // Plugged in again: Connect, without a reload (the lost port is closed already); the
+    // calibration is kept.
+    assert.ok(await page.getByRole('button', { name: 'Disconnect' }).isDisabled());
+    await page.getByRole('button', { name: 'Connect to a serial port…' }).click();
+    await page.getByText('Link state: streaming').waitFor({ timeout: LONG });
+    assert.equal(bridge.sessions.length, 2);
+    await page.getByText(/In use: teach cut over the link \(part 1\)/).waitFor();
+    await page.getByRole('button', { name: 'Disconnect' }).click();
+    await page.getByText('Link state: closed').waitFor();
 
     // The recordings survive a reload, intact.
     const listed = page.getByRole('table', { name: 'Stored recordings' });
@@ -281,8 +327,7 @@ test('a real device behind a fake serial port: handshake, teach cut, arm, acknow
     assert.equal(role('phase'), 'label');
     assert.deepEqual(problems, []);
   } finally {
-    unplugged = true;
-    device?.kill();
+    bridge.kill();
     await context.close();
   }
 });
@@ -325,7 +370,13 @@ test('the virtual device with injected faults: counters, the device watchdog, th
   assert.ok(stored >= rowsShown - 4000 && stored > 0, `${stored} rows stored of ${rowsShown} shown`);
   await offered.getByRole('button', { name: /^Keep / }).click();
   await offered.waitFor({ state: 'detached' });
-  await page.getByRole('table', { name: 'Stored recordings' }).getByText(/cut short: the page closed/).waitFor();
+  const kept = page.getByRole('table', { name: 'Stored recordings' }).getByRole('row').filter({ hasText: /cut short: the page closed/ });
+  await kept.waitFor();
+  // Deleted, it is gone from the list, which is read back from the store.
+  const recordings = await page.getByRole('table', { name: 'Stored recordings' }).getByRole('row').count();
+  await kept.getByRole('button', { name: /^Delete / }).click();
+  await kept.waitFor({ state: 'detached' });
+  assert.equal(await page.getByRole('table', { name: 'Stored recordings' }).getByRole('row').count(), recordings - 1);
 
   // Again, to the host's watchdog: the virtual cable comes out at 22 s of device time, during
   // the closed loop's part (the teach cut's part ends about 17 s after power-on).

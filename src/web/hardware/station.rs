@@ -77,6 +77,9 @@ pub struct Station {
     calibration: Option<TaughtCalibration>,
     /// The IndexedDB store, once open.
     pub store: Option<Store>,
+    /// Recordings kept in memory when there is no store (IndexedDB unavailable): their chunks,
+    /// so they can still be exported before the page is left.
+    memory: std::collections::BTreeMap<u64, (RecordingMeta, Vec<String>)>,
     /// The latest run's result, when it changes.
     result: Option<Arc<RunResult>>,
     result_changed: bool,
@@ -337,6 +340,33 @@ impl Station {
                 c.calibration.estimator.feedback().name()
             )
         })
+    }
+
+    /// Keeps a recording's write in memory (no store).
+    pub fn keep_in_memory(&mut self, meta: RecordingMeta, chunk: Option<(u32, String)>) {
+        let entry = self
+            .memory
+            .entry(meta.id)
+            .or_insert_with(|| (meta.clone(), Vec::new()));
+        entry.0 = meta;
+        if let Some((_, text)) = chunk {
+            entry.1.push(text);
+        }
+    }
+
+    /// The recordings kept in memory.
+    pub fn memory_list(&self) -> Vec<RecordingMeta> {
+        self.memory.values().map(|(m, _)| m.clone()).collect()
+    }
+
+    /// The chunks of a recording kept in memory.
+    pub fn memory_chunks(&self, id: u64) -> Option<Vec<String>> {
+        self.memory.get(&id).map(|(_, chunks)| chunks.clone())
+    }
+
+    /// Forgets a recording kept in memory.
+    pub fn memory_delete(&mut self, id: u64) {
+        self.memory.remove(&id);
     }
 
     /// The recording under way, if any.

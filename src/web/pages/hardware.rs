@@ -131,11 +131,9 @@ impl Ui {
                         }
                     });
                 }
-                None => self.recordings.update(|list| {
-                    if let Some(m) = list.iter_mut().find(|m| m.id == meta.id) {
-                        *m = meta;
-                    }
-                }),
+                None => {
+                    station.try_update_value(|s| s.keep_in_memory(meta, chunk));
+                }
             }
         }
         if effects.recording_closed {
@@ -147,6 +145,9 @@ impl Ui {
     /// Reads the list of recordings from the store again.
     fn refresh_recordings(self, station: StationRef) {
         let Some(store) = station.try_with_value(|s| s.store.clone()).flatten() else {
+            if let Some(list) = station.try_with_value(Station::memory_list) {
+                self.recordings.set(list);
+            }
             return;
         };
         let ui = self;
@@ -470,8 +471,8 @@ pub fn HardwarePage() -> impl IntoView {
                 ui.refresh_recordings(station);
             }
             Err(e) => ui.store_error.set(Some(format!(
-                "Recordings cannot be kept in this browser ({e}): export each before leaving \
-                 the page."
+                "Recordings cannot be stored in this browser ({e}): they are kept in this page's \
+                 memory only; export each before leaving the page."
             ))),
         }
     });
@@ -1101,8 +1102,25 @@ fn Recordings(ui: Ui, station: StationRef) -> impl IntoView {
             }
         }
         let Some(store) = station.try_with_value(|s| s.store.clone()).flatten() else {
-            ui.store_error
-                .set(Some("No store: this browser keeps no recordings.".into()));
+            // No IndexedDB: the recording is in memory.
+            let chunks = station
+                .try_with_value(|s| s.memory_chunks(meta.id))
+                .flatten()
+                .unwrap_or_default();
+            let array: js_sys::Array = chunks
+                .iter()
+                .map(|c| wasm_bindgen::JsValue::from_str(c))
+                .collect();
+            let result = if chunks.is_empty() {
+                Err("nothing of it was kept yet".to_string())
+            } else {
+                download_chunks(&meta.file_name(), &array)
+            };
+            ui.store_error.set(
+                result
+                    .err()
+                    .map(|e| format!("“{}” could not be exported: {e}", meta.name)),
+            );
             return;
         };
         leptos::task::spawn_local(async move {
@@ -1129,6 +1147,8 @@ fn Recordings(ui: Ui, station: StationRef) -> impl IntoView {
             return;
         }
         let Some(store) = station.try_with_value(|s| s.store.clone()).flatten() else {
+            station.try_update_value(|s| s.memory_delete(meta.id));
+            ui.refresh_recordings(station);
             return;
         };
         leptos::task::spawn_local(async move {
