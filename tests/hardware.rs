@@ -489,3 +489,37 @@ fn a_device_without_truth_is_taught_from_the_cut_model_and_a_saved_calibration_n
         "{why}"
     );
 }
+
+#[test]
+fn an_overload_feed_hold_alarms_and_stays_in_force_with_the_safe_override() {
+    let mut b = Bench::new(maneerat(0.5), SessionOptions::default());
+    // A target far below the cut's force: the envelope's overload limit (3 × target) is crossed
+    // as soon as the tool enters, and it holds the feed.
+    let mut low = spec();
+    low.settings.target_force_n = Some(10.0);
+    b.teach_and_arm(&low);
+    b.run_until(|b| b.session.state() == LinkState::Alarm, 30.0);
+    let events = b.events();
+    assert_eq!(b.session.state(), LinkState::Alarm, "{events}");
+    assert!(
+        b.session
+            .reason()
+            .starts_with("overload: the envelope held the feed"),
+        "{}",
+        b.session.reason()
+    );
+    assert_eq!(b.session.stage(), Stage::HoldingSafe);
+    // The feed stays held (the device acknowledges the hold) at the safe override.
+    b.rows.clear();
+    b.run_until(|b| b.rows.len() > 500, 5.0);
+    assert!(
+        b.rows.iter().all(|r| r.feed_mm_min.abs() < 1e-6),
+        "{events}"
+    );
+    assert!(b.rows.iter().all(|r| r.commanded_override_pct == 50.0));
+    assert_eq!(
+        b.session.last_ack().unwrap().flags & 1,
+        1,
+        "feed hold in force"
+    );
+}

@@ -96,6 +96,12 @@ pub const COLUMNS: [&str; 22] = [
 const COMMON_COLUMNS: usize = 20;
 
 /// The header line of a recording.
+///
+/// ```
+/// use cutlab::hardware::recording::csv_header;
+/// assert_eq!(csv_header(false).split(',').count(), 20);
+/// assert!(csv_header(true).starts_with("time [s],part,phase,S_I_U [A]"));
+/// ```
 pub fn csv_header(sim_truth: bool) -> String {
     let n = if sim_truth {
         COLUMNS.len()

@@ -143,6 +143,12 @@ impl Default for SessionOptions {
 impl SessionOptions {
     /// Options with a host watchdog of `link_timeout_s` and a safe override (`None`: the
     /// device's fallback); the handshake may take five times the watchdog, as `cutlab host`'s.
+    ///
+    /// ```
+    /// use cutlab::hardware::session::SessionOptions;
+    /// assert_eq!(SessionOptions::new(2.0, None).unwrap().handshake_timeout_s, 10.0);
+    /// assert!(SessionOptions::new(2.0, Some(-5.0)).is_err());
+    /// ```
     pub fn new(link_timeout_s: f64, safe_override_pct: Option<f64>) -> Result<Self, String> {
         if !(link_timeout_s.is_finite() && (0.1..=60.0).contains(&link_timeout_s)) {
             return Err(format!(
@@ -290,6 +296,20 @@ const MAX_PENDING_EVENT_TEXT: usize = 2048;
 const HELLO_INTERVAL_S: f64 = 0.25;
 
 /// The host's end of a link. See the module docs.
+///
+/// ```
+/// use cutlab::hardware::session::{HardwareSession, LinkState, SessionOptions};
+/// use cutlab::plant::Preset;
+/// use cutlab::protocol::device::{DeviceConfig, DeviceEmulator};
+/// let mut device = DeviceEmulator::new(DeviceConfig::new(Preset::ManeeratDoc1)).unwrap();
+/// let mut host = HardwareSession::new(SessionOptions::default(), 0.0);
+/// let mut answer = Vec::new();
+/// device.receive(&host.take_output(), &mut answer); // the Hello, answered with Capabilities
+/// host.receive(&answer, 0.01);
+/// assert_eq!(host.state(), LinkState::Streaming);
+/// assert_eq!(host.device().unwrap().sample_rate_hz, 1000.0);
+/// assert_eq!(host.safe_override_pct(), 50.0); // the device's fallback, by default
+/// ```
 pub struct HardwareSession {
     host: HostSession,
     options: SessionOptions,

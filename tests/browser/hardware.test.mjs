@@ -350,7 +350,7 @@ test('the virtual device with injected faults: counters, the device watchdog, th
   await waitForCounter(page, 'Frames rejected (CRC, COBS, size)', (n) => n > 5);
   await waitForCounter(page, 'Bytes dropped while resynchronising', (n) => n > 0);
   // The stall: the device falls back, the host sees it and re-arms.
-  await waitForCounter(page, 'Device watchdog fallbacks', (n) => n === 1);
+  await waitForCounter(page, 'Device watchdog fallbacks', (n) => n >= 1);
   await page.getByText(/re-arming the device after its watchdog fallback/).first().waitFor();
   await page.getByText(/device back under the host's control/).first().waitFor({ timeout: LONG });
   await page.getByText(/teach cut over the link/).first().waitFor({ timeout: LONG });

@@ -44,6 +44,9 @@ use crate::web::route::{query_params, replace_query, Page};
 
 /// How often the station's clock ticks (watchdogs, heartbeats, the store's flush).
 const TICK: Duration = Duration::from_millis(100);
+/// The fastest virtual device: at 20× real time it simulates 200 000 plant samples a second in
+/// the page, beside the host's loop and the charts.
+const MAX_TIME_SCALE: f64 = 20.0;
 /// The page redraws the live view at most this often.
 const PUBLISH_INTERVAL_S: f64 = 0.25;
 
@@ -295,8 +298,8 @@ impl VirtualForm {
         match field {
             "seed" => parse_seed(&self.seed.get()).err(),
             "time_scale" => match parse_number(&self.time_scale.get()) {
-                Ok(k) if (0.1..=50.0).contains(&k) => None,
-                Ok(k) => Some(format!("{k} is outside 0.1–50")),
+                Ok(k) if (0.1..=MAX_TIME_SCALE).contains(&k) => None,
+                Ok(k) => Some(format!("{k} is outside 0.1–{MAX_TIME_SCALE}")),
                 Err(e) => Some(e),
             },
             "drop_rate" => number(self.drop_rate),
@@ -336,8 +339,10 @@ impl VirtualForm {
             unplug_at_s: opt("unplug at", &self.unplug_at.get())?,
         };
         let scale = parse_number(&self.time_scale.get()).map_err(|e| format!("time scale: {e}"))?;
-        if !(0.1..=50.0).contains(&scale) {
-            return Err(format!("time scale: {scale} is outside 0.1–50"));
+        if !(0.1..=MAX_TIME_SCALE).contains(&scale) {
+            return Err(format!(
+                "time scale: {scale} is outside 0.1–{MAX_TIME_SCALE}"
+            ));
         }
         let device = DeviceEmulator::new(config).map_err(|e| e.to_string())?;
         Ok((device, scale))
@@ -418,6 +423,8 @@ pub fn HardwarePage() -> impl IntoView {
         replace_query(Page::Hardware, &q);
     });
 
+    let state = Memo::new(move |_| ui.snapshot.with(|s| s.state));
+
     // The host's own safety settings.
     let safe_text = RwSignal::new(String::new());
     let watchdog_text = RwSignal::new("2".to_string());
@@ -425,6 +432,8 @@ pub fn HardwarePage() -> impl IntoView {
     let watchdog_error = Signal::derive(move || parse_number(&watchdog_text.get()).err());
     let options_error = RwSignal::new(None::<String>);
     Effect::new(move |_| {
+        // Also when the link state changes: a change refused while armed applies after.
+        state.track();
         let (Ok(safe), Ok(timeout)) = (
             optional(&safe_text.get()),
             parse_number(&watchdog_text.get()),
@@ -679,7 +688,6 @@ pub fn HardwarePage() -> impl IntoView {
         None => {}
     };
 
-    let state = Memo::new(move |_| ui.snapshot.with(|s| s.state));
     let stage = Memo::new(move |_| ui.snapshot.with(|s| s.stage));
     let connected = Memo::new(move |_| ui.snapshot.with(|s| s.port.is_some()));
     let is_virtual = Memo::new(move |_| ui.snapshot.with(|s| s.port == Some("the virtual device")));
