@@ -1005,10 +1005,16 @@ fn LinkPanel(ui: Ui, children: Children) -> impl IntoView {
                 <strong class=move || format!("state state-{}", state_name())>{state_name}</strong>
                 {move || s.with(|s| s.port.map(|p| format!(" — {p}")))}
             </p>
-            <p class="link-reason">{move || s.with(|s| if s.reason.is_empty() { "Not connected.".to_string() } else { format!("Why: {}", s.reason) })}</p>
-            {move || (s.with(|s| s.state) == Some(LinkState::Alarm)).then(|| view! {
-                <p role="alert" class="run-error">"Alarm: " {s.with(|s| s.reason.clone())}</p>
-            })}
+            {move || {
+                let (state, reason) = s.with(|s| (s.state, s.reason.clone()));
+                if state == Some(LinkState::Alarm) {
+                    view! { <p role="alert" class="link-reason run-error">"Alarm: " {reason}</p> }.into_any()
+                } else if reason.is_empty() {
+                    view! { <p class="link-reason">"Not connected."</p> }.into_any()
+                } else {
+                    view! { <p class="link-reason">"Why: " {reason}</p> }.into_any()
+                }
+            }}
             {children()}
             <p class="overrides">
                 {move || s.with(|s| format!(
