@@ -5,7 +5,8 @@
 use serde::{Deserialize, Serialize};
 
 use super::definition::{
-    check_spec, machine_max_override_pct, PAPER_002_CONTROL_PERIOD_S, PAPER_002_OUTPUT_RANGE_PCT,
+    check_spec, default_override_band_pct, machine_max_override_pct, PAPER_002_CONTROL_PERIOD_S,
+    PAPER_002_OUTPUT_RANGE_PCT,
 };
 use super::metrics::{compute, with_savings, Metrics, MetricsConfig};
 use super::runner::{
@@ -16,7 +17,7 @@ use super::trace::Trace;
 use crate::control::registry::{ControllerConfig, ControllerKind, RunContext};
 use crate::estimation::cut_forces::CutGeometry;
 use crate::machine::Machine;
-use crate::plant::cnc::{OverrideMode, MAX_OVERRIDE_PCT};
+use crate::plant::cnc::OverrideMode;
 use crate::plant::dynamometer::{DynamometerConfig, WithDynamometer};
 use crate::plant::presets::PlantEdits;
 use crate::plant::presets::PlantKind;
@@ -170,11 +171,7 @@ pub fn default_settings(spec: &RunSpec) -> Result<LoopSettings, LoopError> {
     if preset.plant_kind() == PlantKind::BrakeBench {
         envelope.arming_trigger = ArmingTrigger::ProgrammedFeed;
     }
-    // Paper 003's override is a byte in percent, 0–255 %: its experiments (the 1 mm entry, the
-    // aluminium section, the taper's light corner) need the room above FANUC's 150 % dial.
-    if matches!(preset.override_mode(), OverrideMode::WholePercent) {
-        envelope.max_override_pct = MAX_OVERRIDE_PCT;
-    }
+    (envelope.min_override_pct, envelope.max_override_pct) = default_override_band_pct(preset);
     // Paper 002's fuzzy law moves the feed by up to k_u·6 = 100 % in one sampling period; the
     // envelope on its preset lets that action through (the mills keep 100 %/s).
     if preset.plant_kind() == PlantKind::BondGraph {
@@ -189,8 +186,15 @@ pub fn default_settings(spec: &RunSpec) -> Result<LoopSettings, LoopError> {
     if let Some(v) = o.max_rate_pct_per_s {
         envelope.max_rate_pct_per_s = v;
     }
-    if let Some(v) = o.arming_override_pct {
-        envelope.arming_override_pct = v;
+    match o.arming_override_pct {
+        // check_spec refused one outside the band.
+        Some(v) => envelope.arming_override_pct = v,
+        // The default (100 %) follows a band set below or above it.
+        None => {
+            envelope.arming_override_pct = envelope
+                .arming_override_pct
+                .clamp(envelope.min_override_pct, envelope.max_override_pct);
+        }
     }
     let mut settings = LoopSettings {
         feedback,
