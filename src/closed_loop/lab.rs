@@ -10,7 +10,8 @@ use super::definition::{
 };
 use super::metrics::{compute, with_savings, Metrics, MetricsConfig};
 use super::runner::{
-    Calibration, ClosedLoop, Feedback, LoopError, LoopSettings, OnMachine, TeachCut, TeachForce,
+    Calibration, ClosedLoop, Feedback, FeedbackLoop, LoopError, LoopSettings, OnMachine, TeachCut,
+    TeachForce,
 };
 use super::trace::Trace;
 use crate::control::registry::{ControllerConfig, ControllerKind, RunContext};
@@ -468,31 +469,13 @@ impl LabRun {
         machine: Box<dyn Machine>,
         calibration: &Calibration,
     ) -> Result<ClosedLoop, LoopError> {
-        let mut settings = self.settings.clone();
-        let summary = self.spec.preset.summary();
-        settle_target(&self.spec, &mut settings, calibration);
-        if !(settings.target_force_n.is_finite() && settings.target_force_n > 0.0) {
-            return Err(LoopError::NoTarget);
-        }
-        settings.envelope.air_cut_force_n =
-            air_cut_force_n(settings.target_force_n, calibration.air_force_estimate_n);
-        // A phase current beyond twice anything the teach cut saw (its overrides reach 140 %) is
-        // a sensor fault, whatever the machine's size.
-        if calibration.max_phase_current_a > 0.0 {
-            settings.envelope.max_current_a = 2.0 * calibration.max_phase_current_a;
-        }
-        let controller = self
-            .spec
-            .controller
-            .build(&RunContext {
-                target_force_n: settings.target_force_n,
-                control_period_s: settings.control_period_s,
-                amps_per_newton: calibration
-                    .estimator
-                    .sensitivity_a_per_n(summary.spindle_rpm.unwrap_or(0.0)),
-            })
-            .map_err(LoopError::Controller)?;
-        ClosedLoop::new(machine, controller, calibration.estimator.clone(), settings)
+        let feedback_loop = feedback_loop(
+            &self.spec,
+            &self.settings,
+            calibration,
+            machine.sample_rate_hz(),
+        )?;
+        Ok(OnMachine::new_with(machine, feedback_loop))
     }
 
     /// Stops the closed loop after `duration_s` of machine time if that comes before the
@@ -601,6 +584,47 @@ impl Work for LabRun {
             }
         }
     }
+}
+
+/// The closed loop of `spec` with `settings` once `calibration` is known, for samples at
+/// `sample_rate_hz`, without a machine: the target settled, the sensor-fault current limit taken
+/// from the teach cut, the controller built. [`LabRun`] runs it on its machine; a host that gets
+/// samples as they arrive (the browser's Hardware page) pushes them into it.
+pub fn feedback_loop(
+    spec: &RunSpec,
+    settings: &LoopSettings,
+    calibration: &Calibration,
+    sample_rate_hz: f64,
+) -> Result<FeedbackLoop, LoopError> {
+    let mut settings = settings.clone();
+    let summary = spec.preset.summary();
+    settle_target(spec, &mut settings, calibration);
+    if !(settings.target_force_n.is_finite() && settings.target_force_n > 0.0) {
+        return Err(LoopError::NoTarget);
+    }
+    settings.envelope.air_cut_force_n =
+        air_cut_force_n(settings.target_force_n, calibration.air_force_estimate_n);
+    // A phase current beyond twice anything the teach cut saw (its overrides reach 140 %) is
+    // a sensor fault, whatever the machine's size.
+    if calibration.max_phase_current_a > 0.0 {
+        settings.envelope.max_current_a = 2.0 * calibration.max_phase_current_a;
+    }
+    let controller = spec
+        .controller
+        .build(&RunContext {
+            target_force_n: settings.target_force_n,
+            control_period_s: settings.control_period_s,
+            amps_per_newton: calibration
+                .estimator
+                .sensitivity_a_per_n(summary.spindle_rpm.unwrap_or(0.0)),
+        })
+        .map_err(LoopError::Controller)?;
+    FeedbackLoop::new(
+        sample_rate_hz,
+        controller,
+        calibration.estimator.clone(),
+        settings,
+    )
 }
 
 /// The teach cut's seed is the run's plus this, so its noise differs from the run's.
