@@ -80,7 +80,7 @@ impl clap::Args for RunOptions {
         for setting in RunSetting::ALL {
             let spec = setting.spec();
             let placeholder = match spec.kind {
-                SettingKind::Feedback => "spindle|feed",
+                SettingKind::Feedback => "spindle|feed|dynamometer",
                 SettingKind::Material => "NAME",
                 SettingKind::Count { .. } | SettingKind::Seed => "N",
                 SettingKind::Number { .. } if spec.unit.is_empty() => "X",

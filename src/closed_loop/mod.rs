@@ -8,6 +8,7 @@ pub mod definition;
 pub mod file_format;
 pub mod lab;
 pub mod metrics;
+pub mod paper_comparisons;
 pub mod runner;
 pub mod summary;
 pub mod trace;

@@ -316,6 +316,14 @@ impl Estimator {
 pub struct Calibration {
     /// The fitted estimator.
     pub estimator: Estimator,
+    /// The largest force the estimator read while the teach cut's tool was in air (NaN if the
+    /// teach cut had no air, or a saved calibration predates this field): the safety envelope
+    /// takes the tool for in air below a margin above it.
+    #[serde(
+        default = "crate::estimation::nan",
+        deserialize_with = "crate::estimation::null_as_nan"
+    )]
+    pub air_force_estimate_n: f64,
     /// Median regulated force over the cutting periods of the teach cut at 100 % override.
     #[serde(deserialize_with = "crate::estimation::null_as_nan")]
     pub median_force_at_full_override_n: f64,
@@ -488,6 +496,9 @@ struct TeachSamples {
     full_override_at: Vec<usize>,
     full_override_ratios: Vec<f64>,
     max_phase_current_a: f64,
+    /// Every settled period, whatever its force, with its force: the air periods among them tell
+    /// what the fitted model reads with the tool in air ([`Calibration::air_force_estimate_n`]).
+    settled: Vec<(PeriodSummary, f64)>,
 }
 
 /// A period whose current is within this fraction of the teach cut's lowest is taken for air by
@@ -520,6 +531,7 @@ impl TeachSamples {
             full_override_at: full.iter().map(|&k| self.full_override_at[k]).collect(),
             full_override_ratios: pick_full(&self.full_override_ratios),
             max_phase_current_a: self.max_phase_current_a,
+            settled: Vec::new(),
         }
     }
 }
@@ -620,11 +632,14 @@ impl TeachCut {
             speed_change_rpm > TEACH_STEADY_SPEED_FRACTION * period.spindle_speed_rpm.abs();
         self.previous_speed_rpm = period.spindle_speed_rpm;
         let samples = &mut self.samples;
-        let skipped = !spindle_settled
-            || accelerating
-            || since_change_s < TEACH_SETTLE_AFTER_CHANGE_S
-            || !(force_n.is_finite() && force_n > 0.0)
-            || period.feed_mm_min.abs() < 1e-6;
+        let settled = spindle_settled
+            && !accelerating
+            && since_change_s >= TEACH_SETTLE_AFTER_CHANGE_S
+            && period.feed_mm_min.abs() >= 1e-6;
+        if settled {
+            samples.settled.push((period, force_n));
+        }
+        let skipped = !(settled && force_n.is_finite() && force_n > 0.0);
         if !skipped {
             if command_pct == 100.0 {
                 samples.full_override_at.push(samples.current_a.len());
@@ -700,9 +715,13 @@ impl TeachCut {
             sorted.sort_by(f64::total_cmp);
             sorted.get(sorted.len() / 2).copied().unwrap_or(f64::NAN)
         };
+        let median_force_at_full_override_n = median(&s.full_override_forces_n);
+        let air_force_estimate_n =
+            self.air_force_estimate_n(&estimator, median_force_at_full_override_n);
         Ok(Calibration {
             estimator,
-            median_force_at_full_override_n: median(&s.full_override_forces_n),
+            air_force_estimate_n,
+            median_force_at_full_override_n,
             regulated_per_resultant: median(
                 &s.full_override_ratios
                     .iter()
@@ -714,6 +733,36 @@ impl TeachCut {
             max_phase_current_a: s.max_phase_current_a,
             duration_s: self.time_s,
         })
+    }
+}
+
+impl TeachCut {
+    /// The largest force `estimator` reads over the teach cut's air periods (NaN if it saw none):
+    /// a spindle current's line fitted in the cut seldom passes through the idle current (an
+    /// induction motor's magnetising current makes the current convex in the load), so "no
+    /// force" reads as tens of newtons. The periods in air are those whose force source said
+    /// (next to) nothing — below 2 % of the force at 100 % override — or, for the model of the cut,
+    /// which gives a force wherever the axes feed, those whose current is the idle one.
+    fn air_force_estimate_n(&self, estimator: &Estimator, full_override_force_n: f64) -> f64 {
+        let settled = &self.samples.settled;
+        let current = |p: &PeriodSummary| match self.feedback {
+            Feedback::FeedCurrent => p.feed_current_rms_a,
+            Feedback::SpindleCurrent | Feedback::Dynamometer => p.spindle_current_rms_a,
+        };
+        let idle_a = settled
+            .iter()
+            .map(|(p, _)| current(p))
+            .fold(f64::INFINITY, f64::min);
+        let in_air = |p: &PeriodSummary, force_n: f64| match self.force_source {
+            TeachForce::CutModel { .. } => current(p) <= idle_a * (1.0 + AIR_CURRENT_MARGIN),
+            _ => force_n.is_finite() && force_n.abs() < 0.02 * full_override_force_n,
+        };
+        settled
+            .iter()
+            .filter(|(p, f)| in_air(p, *f))
+            .map(|(p, _)| estimator.estimate(p).force_n)
+            .filter(|f| f.is_finite())
+            .fold(f64::NAN, f64::max)
     }
 }
 

@@ -21,3 +21,8 @@ pub(crate) fn null_as_nan<'de, D: serde::Deserializer<'de>>(d: D) -> Result<f64,
     use serde::Deserialize;
     Ok(Option::<f64>::deserialize(d)?.unwrap_or(f64::NAN))
 }
+
+/// NaN, the default of a number a saved file may leave out.
+pub(crate) fn nan() -> f64 {
+    f64::NAN
+}

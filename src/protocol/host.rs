@@ -23,8 +23,8 @@ use serde::Serialize;
 use super::codec::{encode_frame, Decoder, MAX_FRAME_LEN};
 use super::device::cpct;
 use super::frame::{
-    command_flag, feature, sample_flag, text_field, Arm, Capabilities, Disarm, FaultKind, Frame,
-    Heartbeat, Hello, OverrideModeCode, Sample, SetOverride, SimTruth, VERSION_MAJOR,
+    command_flag, feature, sample_flag, text_field, Ack, Arm, Capabilities, Disarm, FaultKind,
+    Frame, Heartbeat, Hello, OverrideModeCode, Sample, SetOverride, SimTruth, VERSION_MAJOR,
     VERSION_MINOR,
 };
 use crate::machine::{MachineStep, OverrideCommand, PlantTruth, SensorSample};
@@ -111,6 +111,7 @@ pub struct HostSession {
     command_seq: u32,
     heartbeat_seq: u32,
     last_ack_seq: Option<u32>,
+    last_ack: Option<Ack>,
     device_armed: bool,
     fallback: bool,
     stats: LinkStats,
@@ -143,6 +144,7 @@ impl HostSession {
             command_seq: 0,
             heartbeat_seq: 0,
             last_ack_seq: None,
+            last_ack: None,
             device_armed: false,
             fallback: false,
             stats: LinkStats::default(),
@@ -212,6 +214,11 @@ impl HostSession {
     pub fn acknowledged(&self, seq: u32) -> bool {
         self.last_ack_seq
             .is_some_and(|a| a.wrapping_sub(seq) < 1 << 31)
+    }
+
+    /// The latest acknowledgement: which command, its result and the override the device applied.
+    pub fn last_ack(&self) -> Option<Ack> {
+        self.last_ack
     }
 
     /// The next sample for the loop, if one is ready.
@@ -323,6 +330,7 @@ impl HostSession {
             Frame::Ack(a) => {
                 self.stats.commands_acknowledged += 1;
                 self.last_ack_seq = Some(a.seq);
+                self.last_ack = Some(a);
             }
             Frame::Fault(f) => {
                 let raised = f.active != 0;
@@ -534,6 +542,100 @@ fn truth_values(t: &PlantTruth) -> [f64; 16] {
         t.feed_current_rms_a,
         t.spindle_current_rms_a,
     ]
+}
+
+/// What a host keeps sending while it holds the device (docs/protocol.md §4 and §5): the command
+/// in force whenever it changes or has gone unacknowledged for two heartbeat intervals, a
+/// Heartbeat when nothing else went out for one interval (a fifth of the device's watchdog
+/// timeout), and an Arm every interval while the device reports its watchdog fallback.
+///
+/// Times are the device's, read from its samples, so a device that runs faster than real time
+/// (an emulator's `--time-scale`) is kept up in its own time. The native host
+/// ([`super::link::HostLink`]) and the browser's Hardware page both keep up through this.
+#[derive(Debug, Clone, PartialEq)]
+pub struct KeepUp {
+    heartbeat_interval_s: f64,
+    /// The command in force, and the sequence number and time it was last sent with.
+    command: Option<OverrideCommand>,
+    command_seq: u32,
+    command_sent_s: f64,
+    /// The latest command's round trip is still to be measured.
+    latency_pending: bool,
+    /// When the host last sent anything.
+    last_sent_s: f64,
+    last_arm_s: f64,
+}
+
+impl KeepUp {
+    /// Keeping up a device with `capabilities`.
+    pub fn new(capabilities: &Capabilities) -> Self {
+        Self {
+            heartbeat_interval_s: (f64::from(capabilities.watchdog_timeout_ms) / 5000.0).max(0.005),
+            command: None,
+            command_seq: 0,
+            command_sent_s: 0.0,
+            latency_pending: false,
+            last_sent_s: 0.0,
+            last_arm_s: f64::NEG_INFINITY,
+        }
+    }
+
+    /// The heartbeat interval: a fifth of the device's watchdog timeout.
+    pub fn heartbeat_interval_s(&self) -> f64 {
+        self.heartbeat_interval_s
+    }
+
+    /// The device was armed at `now_s`: the next command goes out whatever it is, and a fallback
+    /// is not re-armed before an interval has passed.
+    pub fn armed(&mut self, now_s: f64) {
+        self.command = None;
+        self.last_arm_s = now_s;
+    }
+
+    /// Bytes went out at `now_s`.
+    pub fn sent(&mut self, now_s: f64) {
+        self.last_sent_s = now_s;
+    }
+
+    /// Appends to `out` what is due at `now_s` while `command` is in force (the caller sends it
+    /// and calls [`KeepUp::sent`]).
+    pub fn keep_up(
+        &mut self,
+        session: &mut HostSession,
+        command: OverrideCommand,
+        now_s: f64,
+        out: &mut Vec<u8>,
+    ) {
+        let interval = self.heartbeat_interval_s;
+        if self.latency_pending && session.acknowledged(self.command_seq) {
+            self.latency_pending = false;
+            session.record_latency(now_s - self.command_sent_s);
+        }
+        if session.in_fallback() && now_s - self.last_arm_s >= interval {
+            self.last_arm_s = now_s;
+            session.event("re-arming the device after its watchdog fallback");
+            session.arm(out);
+        }
+        let changed = self.command != Some(command);
+        let unacknowledged = !session.acknowledged(self.command_seq)
+            && now_s - self.command_sent_s >= 2.0 * interval;
+        if changed || unacknowledged {
+            self.command = Some(command);
+            self.command_seq = session.set_override(command, out);
+            self.command_sent_s = now_s;
+            self.latency_pending = true;
+        } else if now_s - self.last_sent_s >= interval {
+            session.heartbeat(out);
+        }
+    }
+
+    /// Appends a Heartbeat to `out` if nothing went out for an interval before `now_s` (a host
+    /// that holds no device keeps the line alive).
+    pub fn heartbeat_if_due(&mut self, session: &mut HostSession, now_s: f64, out: &mut Vec<u8>) {
+        if now_s - self.last_sent_s >= self.heartbeat_interval_s {
+            session.heartbeat(out);
+        }
+    }
 }
 
 /// A short description of a device's capabilities, for the report.

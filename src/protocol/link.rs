@@ -13,7 +13,7 @@ use std::time::{Duration, Instant};
 
 use super::device::DeviceEmulator;
 use super::frame::{Capabilities, VERSION_MAJOR};
-use super::host::{DeviceSummary, HostSession, LinkEvent, LinkSample, LinkStats};
+use super::host::{DeviceSummary, HostSession, KeepUp, LinkEvent, LinkSample, LinkStats};
 use crate::closed_loop::lab::{
     cut_model_teach_force, metrics_config, LabRun, RunMachines, RunResult, RunSpec,
 };
@@ -181,15 +181,8 @@ pub struct HostLink {
     lost: bool,
     /// A part's samples are streaming.
     part_running: bool,
-    /// The command in force, and the sequence number and device time it was last sent with.
-    command: Option<OverrideCommand>,
-    command_seq: u32,
-    command_sent_s: f64,
-    /// The latest command's round trip is still to be measured.
-    latency_pending: bool,
-    /// Device time the host last sent anything.
-    last_sent_s: f64,
-    last_arm_s: f64,
+    /// The command, heartbeats and re-arming, in device time.
+    keep_up: KeepUp,
     /// Device time of the latest sample.
     device_time_s: f64,
     out: Vec<u8>,
@@ -263,12 +256,7 @@ impl HostLink {
             capabilities,
             lost: false,
             part_running: false,
-            command: None,
-            command_seq: 0,
-            command_sent_s: 0.0,
-            latency_pending: false,
-            last_sent_s: 0.0,
-            last_arm_s: f64::NEG_INFINITY,
+            keep_up: KeepUp::new(&capabilities),
             device_time_s: 0.0,
             out: Vec::with_capacity(1024),
         })
@@ -300,7 +288,7 @@ impl HostLink {
             .write_all(&self.out)
             .and_then(|()| self.writer.flush());
         self.out.clear();
-        self.last_sent_s = self.device_time_s;
+        self.keep_up.sent(self.device_time_s);
         if let Err(e) = result {
             self.lose(format!("cannot write to the device ({e}): link lost"));
         }
@@ -312,11 +300,6 @@ impl HostLink {
             self.part_running = false;
             self.session.link_lost(text);
         }
-    }
-
-    /// The heartbeat interval: a fifth of the device's watchdog timeout.
-    fn heartbeat_interval_s(&self) -> f64 {
-        (f64::from(self.capabilities.watchdog_timeout_ms) / 5000.0).max(0.005)
     }
 
     /// The next sample of the running part, waiting for it up to the host's watchdog.
@@ -375,8 +358,7 @@ impl HostLink {
         }
         self.session.start_part();
         self.session.event("arm (cycle start)");
-        self.command = None;
-        self.last_arm_s = self.device_time_s;
+        self.keep_up.armed(self.device_time_s);
         self.session.arm(&mut self.out);
         self.flush_out();
         self.part_running = !self.lost;
@@ -384,31 +366,14 @@ impl HostLink {
     }
 
     /// Sends `command` if it changed or went unacknowledged, a heartbeat when due, and an Arm
-    /// while the device is in its watchdog fallback.
+    /// while the device is in its watchdog fallback ([`KeepUp`]).
     fn keep_up(&mut self, command: OverrideCommand) {
-        let now = self.device_time_s;
-        let interval = self.heartbeat_interval_s();
-        if self.latency_pending && self.session.acknowledged(self.command_seq) {
-            self.latency_pending = false;
-            self.session.record_latency(now - self.command_sent_s);
-        }
-        if self.session.in_fallback() && now - self.last_arm_s >= interval {
-            self.last_arm_s = now;
-            self.session
-                .event("re-arming the device after its watchdog fallback");
-            self.session.arm(&mut self.out);
-        }
-        let changed = self.command != Some(command);
-        let unacknowledged = !self.session.acknowledged(self.command_seq)
-            && now - self.command_sent_s >= 2.0 * interval;
-        if changed || unacknowledged {
-            self.command = Some(command);
-            self.command_seq = self.session.set_override(command, &mut self.out);
-            self.command_sent_s = now;
-            self.latency_pending = true;
-        } else if now - self.last_sent_s >= interval {
-            self.session.heartbeat(&mut self.out);
-        }
+        self.keep_up.keep_up(
+            &mut self.session,
+            command,
+            self.device_time_s,
+            &mut self.out,
+        );
         self.flush_out();
     }
 

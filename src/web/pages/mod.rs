@@ -2,6 +2,7 @@
 
 pub mod compare;
 pub mod fuzzy;
+pub mod hardware;
 pub mod learn;
 pub mod plant;
 pub mod signal_chain;
