@@ -34,6 +34,7 @@ pub struct CalibrateArgs {
 /// How a logged teach cut is read: the options `cutlab calibrate` and `cutlab tune --teach-in
 /// --log` share.
 #[derive(Debug, clap::Args)]
+#[command(next_help_heading = "Reading a logged teach cut")]
 pub struct LogCalibrationArgs {
     #[arg(
         long = "gear-change-rpm",

@@ -89,14 +89,14 @@ pub struct TuneArgs {
     /// With --teach-in: a saved calibration (cutlab host/sim --save-calibration)
     #[arg(long, value_name = "FILE")]
     calibration: Option<String>,
-    #[command(flatten)]
-    log_options: LogCalibrationArgs,
     /// Print no progress on stderr
     #[arg(long)]
     quiet: bool,
     /// Print JSON instead of a table
     #[arg(long)]
     json: bool,
+    #[command(flatten)]
+    log_options: LogCalibrationArgs,
 }
 
 #[derive(Serialize)]
