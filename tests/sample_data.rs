@@ -48,6 +48,39 @@ fn the_saved_comparison_and_the_teach_cut_log_load() {
     assert!(r2 > 0.95, "R² {r2}");
 }
 
+/// The saved calibration is kim-step-doc's teach cut as made today, and a teach-in proposes
+/// from it what the teach cut itself proposes.
+#[test]
+fn the_saved_calibration_is_kim_step_docs_teach_cut() {
+    use cutlab::closed_loop::calibration_file::CalibrationFile;
+    use cutlab::closed_loop::lab::{teach_cut_only, RunSpec};
+    use cutlab::control::registry::ControllerKind;
+    use cutlab::plant::Preset;
+    let saved = CalibrationFile::from_json(&read("kim-step-doc-calibration.json")).unwrap();
+    let spec = RunSpec::new(Preset::KimStepDoc, ControllerKind::Fixed);
+    let (_, fresh) = teach_cut_only(&spec).unwrap();
+    // Debug text compares every bit, and NaN (written null) equal to NaN.
+    assert_eq!(
+        format!("{:?}", saved.calibration),
+        format!("{fresh:?}"),
+        "kim-step-doc-calibration.json is stale"
+    );
+    let path = format!("{DATA}kim-step-doc-calibration.json");
+    let (result, out) = common::cutlab_text(
+        &[
+            "tune",
+            "--teach-in",
+            "--calibration",
+            &path,
+            "--scenarios",
+            "kim-step-doc",
+        ],
+        "",
+    );
+    result.unwrap();
+    assert!(out.contains("proposed target 357 N"), "{out}");
+}
+
 /// Calibration without a dynamometer: the forces modelled from the log's feed, speed, depth and
 /// width give the line the measured forces give (the simulated mill's mean force is the
 /// mechanistic model's, so here the two must agree closely).
