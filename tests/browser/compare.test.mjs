@@ -115,7 +115,7 @@ test("the fuzzy rule bases' comparison starts from the paper's own settings", as
   // The finding is measured from the runs on the page, and its figures are the table's.
   const settlingOf = async () => {
     const row = table.getByRole('row').filter({ has: page.getByRole('rowheader', { name: 'Max settling time (s)' }) });
-    return (await row.getByRole('cell').allTextContents()).map((t) => t.replace('*', '').trim());
+    return (await row.getByRole('cell').allTextContents()).map((t) => t.replace(/[*★]/g, '').trim());
   };
   const finding = page.getByRole('status').filter({ hasText: 'Measured:' });
   await finding.filter({ hasText: 'Not reproduced.' }).waitFor({ timeout: RUN_TIMEOUT });
