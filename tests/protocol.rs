@@ -242,6 +242,73 @@ fn a_longer_payload_from_a_newer_minor_version_decodes_and_an_unknown_type_is_sk
     assert_eq!(d.stats().frames_rejected, 1);
 }
 
+/// Framing vectors from implementations cutlab did not write: zlib's CRC-32 and the PyPI
+/// package `cobs` (scripts/reference/protocol_reference.py; tests/reference/protocol/README.md).
+const FRAMING: &str = include_str!("reference/protocol/framing.json");
+
+fn unhex(text: &str) -> Vec<u8> {
+    (0..text.len())
+        .step_by(2)
+        .map(|i| u8::from_str_radix(&text[i..i + 2], 16).unwrap())
+        .collect()
+}
+
+#[test]
+fn crc32_agrees_with_zlib() {
+    use cutlab::protocol::crc::crc32;
+    let v: serde_json::Value = serde_json::from_str(FRAMING).unwrap();
+    let cases = v["crc32"].as_array().unwrap();
+    assert!(cases.len() > 100);
+    for case in cases {
+        let data = unhex(case["data"].as_str().unwrap());
+        assert_eq!(
+            u64::from(crc32(&data)),
+            case["crc32"].as_u64().unwrap(),
+            "{case}"
+        );
+    }
+    // The catalogue's check value is the first case.
+    assert_eq!(cases[0]["crc32"], 0xCBF4_3926u32);
+}
+
+#[test]
+fn cobs_agrees_with_an_independent_encoder_and_decodes_its_output() {
+    use cutlab::protocol::cobs::{decode, encode, max_encoded_len};
+    let v: serde_json::Value = serde_json::from_str(FRAMING).unwrap();
+    let cases = v["cobs"].as_array().unwrap();
+    assert!(cases.len() > 80);
+    for case in cases {
+        let data = unhex(case["data"].as_str().unwrap());
+        let expected = unhex(case["encoded"].as_str().unwrap());
+        let mut out = vec![0u8; max_encoded_len(data.len())];
+        let n = encode(&data, &mut out).unwrap();
+        assert_eq!(out[..n], expected[..], "{case}");
+        let mut back = vec![0u8; data.len() + 1];
+        let m = decode(&expected, &mut back).unwrap();
+        assert_eq!(back[..m], data[..], "{case}");
+    }
+}
+
+#[test]
+fn every_frame_type_goes_on_the_wire_as_zlib_and_cobs_compose_it() {
+    let v: serde_json::Value = serde_json::from_str(FRAMING).unwrap();
+    let cases = v["frames"].as_array().unwrap();
+    let mut types = std::collections::BTreeSet::new();
+    for case in cases {
+        let payload = unhex(case["payload"].as_str().unwrap());
+        let wire = unhex(case["wire"].as_str().unwrap());
+        let frame = Frame::read_payload(&payload).unwrap();
+        assert_eq!(frame.frame_type().name(), case["type"], "{case}");
+        types.insert(frame.frame_type().name());
+        assert_eq!(encoded(&frame), wire, "{case}");
+        let (got, _) = decode_all(&wire);
+        assert_eq!(got.len(), 1);
+        // Compared by bytes: a random f32 field may be a NaN.
+        assert_eq!(encoded(got[0].as_ref().unwrap()), wire, "{case}");
+    }
+    assert_eq!(types.len(), FrameType::ALL.len());
+}
+
 /// Mutates a valid stream the ways a serial line does: flipped bits, lost, repeated and inserted
 /// bytes, and cuts.
 fn mutate(stream: &mut Vec<u8>, r: &mut Rng) {
