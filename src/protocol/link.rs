@@ -1,9 +1,14 @@
 //! Byte links in real time (native only): the device emulator driven by the wall clock, the
-//! host's end of a link with its watchdog, each part the device runs as a [`Machine`], and the
-//! closed loop over a link ([`run_on_link`]). Both ends read on a thread of their own so that a
-//! blocking `Read` (a pipe, a child's stdout, a serial port opened as a file) can be waited on
-//! with a timeout; both are generic over `Read`/`Write`, so tests connect them in-process with
-//! pipes.
+//! host's end of a link with its watchdog and its answers to the device's faults, each part the
+//! device runs as a [`Machine`], and the closed loop over a link ([`run_on_link`]).
+//!
+//! Both ends read on a thread of their own ([`spawn_reader`]) so that a blocking `Read` (a pipe,
+//! a child's stdout, a serial port opened as a file) can be waited on with a timeout; the queue
+//! between that thread and its end is bounded, so a sender faster than the receiver is held back
+//! rather than filling memory. Both are generic over `Read`/`Write`, so tests connect them
+//! in-process with pipes. The host speaks over a [`Line`]: that threaded reader and a writer, or a
+//! [`LockstepLine`] to an emulator in the same process with no latency and no clock, which makes
+//! a run over the protocol deterministic (docs/protocol.md §8, "What the protocol costs").
 
 use std::cell::RefCell;
 use std::io::{Read, Write};
@@ -128,7 +133,7 @@ pub struct DeviceRun {
 
 /// Runs `device` in real time scaled by `time_scale` (device seconds per wall second) until
 /// `input` ends: what arrives on `input` is handed to the device as it comes — at most
-/// [`MAX_CHUNKS_PER_PASS`] chunks between two runs of the frames that are due, so no flood
+/// two chunks between two runs of the frames that are due, so no flood
 /// starves its clock — what the device sends is written to `output` and flushed after every
 /// burst, its diagnostics go to `diagnostics` a line at a time. Device timestamps stay in device
 /// time.
