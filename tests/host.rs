@@ -634,7 +634,8 @@ fn the_binary_runs_the_host_against_the_binary_device() {
     let _one = ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner());
     let exe = env!("CARGO_BIN_EXE_cutlab");
     let dir = scratch("binary");
-    let device = format!("{exe} device --stdio --scenario maneerat-doc-1 --time-scale 20");
+    let device =
+        format!("{exe} device --stdio --scenario maneerat-doc-1 --time-scale 20 --watchdog-s 5");
     let (out, report) = cutlab_host(&dir, &["--device-cmd", &device, "--controller", "pi"]);
     let stdout = String::from_utf8_lossy(&out.stdout);
     let stderr = String::from_utf8_lossy(&out.stderr);
