@@ -523,3 +523,51 @@ fn an_overload_feed_hold_alarms_and_stays_in_force_with_the_safe_override() {
         "feed hold in force"
     );
 }
+
+/// docs/protocol.md §5, as the page does it: an over-current the device reports stops the run and
+/// the safe override is held until the part ends; an E-stop stops the run and hands the device
+/// back at once (it refuses commands and its axes stopped).
+#[test]
+fn a_device_fault_alarms_an_over_current_holds_the_safe_override_an_e_stop_hands_back() {
+    // The teach cut's part ends about 15 s into device time: the faults come 5 s into the run.
+    let mut config = maneerat(5.0);
+    config.faults.over_current_at_s = Some(20.0);
+    config.faults.over_current_s = 0.2;
+    let mut b = Bench::new(config, SessionOptions::default());
+    b.teach_and_arm(&spec());
+    b.run_until(|b| b.session.state() == LinkState::Alarm, 30.0);
+    let events = b.events();
+    assert_eq!(b.session.state(), LinkState::Alarm, "{events}");
+    assert!(
+        b.session
+            .reason()
+            .contains("device fault over-current raised"),
+        "{}",
+        b.session.reason()
+    );
+    assert_eq!(b.session.stage(), Stage::HoldingSafe);
+    assert!(!b.session.result().unwrap().metrics.completed);
+    b.rows.clear();
+    b.run_until(|b| !b.session.holding(), 30.0);
+    assert!(b.rows.iter().any(|r| r.program_end), "{}", b.events());
+    assert!(b
+        .rows
+        .iter()
+        .all(|r| r.commanded_override_pct == 50.0 || r.commanded_override_pct.is_nan()));
+
+    let mut config = maneerat(5.0);
+    config.faults.estop_at_s = Some(20.0);
+    let mut b = Bench::new(config, SessionOptions::default());
+    b.teach_and_arm(&spec());
+    b.run_until(|b| b.session.state() == LinkState::Alarm, 30.0);
+    let events = b.events();
+    assert_eq!(b.session.state(), LinkState::Alarm, "{events}");
+    assert!(
+        b.session.reason().contains("device fault e-stop raised"),
+        "{}",
+        b.session.reason()
+    );
+    assert!(!b.session.holding(), "{events}");
+    assert!(!b.session.result().unwrap().metrics.completed);
+    assert!(events.contains("disarm: E-stop"), "{events}");
+}

@@ -44,7 +44,22 @@ pub struct DeviceArgs {
     /// Pull the cable at this device time: nothing in or out from then on
     #[arg(long = "unplug-at-s", value_name = "T", allow_hyphen_values = true)]
     unplug_at_s: Option<String>,
-    /// Device seconds per wall second (default 1: real time)
+    /// Read an over-current from this device time (with --over-current-s) while a part runs
+    #[arg(
+        long = "over-current-at-s",
+        value_name = "T",
+        allow_hyphen_values = true
+    )]
+    over_current_at_s: Option<String>,
+    /// Length of the over-current, device seconds
+    #[arg(long = "over-current-s", value_name = "D", allow_hyphen_values = true)]
+    over_current_s: Option<String>,
+    /// Make the E-stop input active at this device time (it stays active; the device then
+    /// declares an E-stop input)
+    #[arg(long = "estop-at-s", value_name = "T", allow_hyphen_values = true)]
+    estop_at_s: Option<String>,
+    /// Device seconds per wall second (default 1: real time; the device's watchdog, in device
+    /// time, is then that much shorter in wall time: 0.5 s is 10 ms at 50)
     #[arg(long = "time-scale", value_name = "K", allow_hyphen_values = true)]
     time_scale: Option<String>,
     /// The device's watchdog timeout, device seconds (default 0.5)
@@ -80,12 +95,23 @@ pub fn emulator_from(args: &DeviceArgs) -> Result<DeviceEmulator, CliError> {
             "--stall-at-s and --stall-s go together: when the stall starts and how long it lasts",
         ));
     }
+    let over_current_at_s = value("over-current-at-s", &args.over_current_at_s)?;
+    let over_current_s: Option<f64> = value("over-current-s", &args.over_current_s)?;
+    if over_current_at_s.is_some() != over_current_s.is_some() {
+        return Err(CliError::new(
+            "--over-current-at-s and --over-current-s go together: when the over-current starts \
+             and how long it lasts",
+        ));
+    }
     config.faults = FaultInjection {
         drop_rate: value_or("drop-rate", &args.drop_rate, 0.0)?,
         noise_rate: value_or("noise-rate", &args.noise_rate, 0.0)?,
         stall_at_s,
         stall_s: stall_s.unwrap_or(0.0),
         unplug_at_s: value("unplug-at-s", &args.unplug_at_s)?,
+        estop_at_s: value("estop-at-s", &args.estop_at_s)?,
+        over_current_at_s,
+        over_current_s: over_current_s.unwrap_or(0.0),
     };
     DeviceEmulator::new(config).map_err(|e| CliError::new(e.to_string()))
 }

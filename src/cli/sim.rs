@@ -384,7 +384,7 @@ pub fn run_sim(args: SimArgs, io: &mut Io<'_>) -> Result<(), CliError> {
 
 /// A run whose controller asked for a non-finite override completed only because the envelope
 /// held the override: its results are printed, and the command still fails so a script notices.
-fn fail_on_controller_faults<'a>(
+pub(crate) fn fail_on_controller_faults<'a>(
     runs: impl IntoIterator<Item = (&'a str, &'a RunResult)>,
 ) -> Result<(), CliError> {
     let faulted: Vec<String> = runs

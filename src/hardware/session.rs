@@ -28,7 +28,9 @@
 //!   part runs under the host, or no frame at all while connected → alarm (a link loss).
 //! * The **device's watchdog** fallback (its Fault, or the fallback flag) is answered by re-arming
 //!   it, as docs/protocol.md §5 says, and counted.
-//! * A **device fault** raised (sensor, over-current, E-stop) → alarm.
+//! * A **device fault** raised (sensor, over-current) → alarm; an **E-stop** (its fault, or the
+//!   E-stop flag in a sample) → alarm, and the device handed back at once: it refuses commands
+//!   and its axes stopped.
 //! * The **port closing** (unplugged, read error: [`HardwareSession::link_lost`]) → alarm; nothing
 //!   can be sent, and the device falls back on its own watchdog.
 //!
@@ -51,7 +53,7 @@ use crate::closed_loop::runner::{
     TeachForce, TEACH_OVERRIDES_PCT, TEACH_STEP_S,
 };
 use crate::machine::OverrideCommand;
-use crate::protocol::frame::{sample_flag, Ack, Capabilities, FrameType, VERSION_MAJOR};
+use crate::protocol::frame::{sample_flag, Ack, Capabilities, FaultKind, FrameType, VERSION_MAJOR};
 use crate::protocol::host::{DeviceSummary, HostSession, KeepUp, LinkSample, LinkStats};
 use crate::safety::OverrideResolution;
 
@@ -322,7 +324,6 @@ pub struct HardwareSession {
     last_frame_s: f64,
     /// Wall time of the latest sample, or of the Arm while the part's first is awaited.
     last_sample_s: f64,
-    device_faults_seen: u64,
     activity: Activity,
     /// The host holds the device: it sent Arm and no Disarm since (and the link was not lost).
     holding: bool,
@@ -359,7 +360,6 @@ impl HardwareSession {
             last_hello_s: now_s,
             last_frame_s: now_s,
             last_sample_s: now_s,
-            device_faults_seen: 0,
             activity: Activity::Idle,
             holding: false,
             port_gone: false,
@@ -947,20 +947,33 @@ impl HardwareSession {
         );
     }
 
-    /// A device fault (not the watchdog's, which the host answers by re-arming) raises an alarm.
+    /// A device fault (not the watchdog's, which the host answers by re-arming) raises an alarm
+    /// (docs/protocol.md §5): after an over-current or a sensor fault the safe override is held
+    /// until the part ends; after an E-stop — commands refused, the axes stopped — the device is
+    /// handed back at once, so that after the reset the machine's own dial applies.
     fn watch_device_faults(&mut self, now_s: f64) {
-        let s = self.host.stats();
-        let others = s.device_faults.saturating_sub(s.watchdog_fallbacks);
-        if others > self.device_faults_seen {
-            self.device_faults_seen = others;
-            let last = self
-                .host
-                .events()
-                .iter()
-                .rev()
-                .find(|e| e.text.starts_with("device fault"))
-                .map_or_else(|| "device fault".to_string(), |e| e.text.clone());
-            self.alarm(last, now_s);
+        let Some(kind) = self.host.take_alarm_faults().first().copied() else {
+            return;
+        };
+        let text = self
+            .host
+            .events()
+            .iter()
+            .rev()
+            .find(|e| e.text.starts_with("device fault") || e.text.contains("E-stop input"))
+            .map_or_else(
+                || format!("device fault {}", kind.name()),
+                |e| e.text.clone(),
+            );
+        if kind == FaultKind::EStop {
+            self.stop_work(&text, false);
+            self.release("E-stop: commands are refused and the axes stopped");
+            self.set_state(
+                LinkState::Alarm,
+                format!("{text}; the device handed back to the machine's own dial"),
+            );
+        } else {
+            self.alarm(text, now_s);
         }
     }
 

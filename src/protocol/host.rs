@@ -114,6 +114,10 @@ pub struct HostSession {
     last_ack: Option<Ack>,
     device_armed: bool,
     fallback: bool,
+    /// Faults raised that call for the host's alarm (all but the watchdog's), not yet taken.
+    alarm_faults: Vec<FaultKind>,
+    /// The E-stop flag of the latest sample.
+    estop: bool,
     stats: LinkStats,
     latencies: u64,
     events: Vec<LinkEvent>,
@@ -147,6 +151,8 @@ impl HostSession {
             last_ack: None,
             device_armed: false,
             fallback: false,
+            alarm_faults: Vec::new(),
+            estop: false,
             stats: LinkStats::default(),
             latencies: 0,
             events: Vec::new(),
@@ -194,6 +200,15 @@ impl HostSession {
     /// Whether the device reports its watchdog fallback (until the host re-arms it).
     pub fn in_fallback(&self) -> bool {
         self.fallback
+    }
+
+    /// The faults raised since the last call that call for an alarm (docs/protocol.md §5): a
+    /// sensor, over-current or E-stop fault, or one of a kind this version does not know —
+    /// everything but the watchdog's, which the host answers by re-arming. A sample that shows
+    /// the E-stop input active counts as an E-stop fault raised, in case its Fault frame was
+    /// lost on the line.
+    pub fn take_alarm_faults(&mut self) -> Vec<FaultKind> {
+        std::mem::take(&mut self.alarm_faults)
     }
 
     /// Whether the device's latest sample said the host is in control.
@@ -340,6 +355,12 @@ impl HostSession {
                 if f.kind == FaultKind::Watchdog && raised {
                     self.stats.watchdog_fallbacks += 1;
                     self.fallback = true;
+                } else if raised {
+                    self.alarm_faults.push(f.kind);
+                }
+                if f.kind == FaultKind::EStop {
+                    // Its samples' flag then says nothing new.
+                    self.estop = raised;
                 }
                 self.event(format!(
                     "device fault {} {} (override now {} %)",
@@ -443,6 +464,12 @@ impl HostSession {
         }
         self.last = Some(sample);
         self.device_armed = s.flags & sample_flag::ARMED != 0;
+        let estop = s.flags & sample_flag::ESTOP != 0;
+        if estop && !self.estop {
+            self.event("the device's samples show its E-stop input active (its fault report lost)");
+            self.alarm_faults.push(FaultKind::EStop);
+        }
+        self.estop = estop;
         let fallback = s.flags & sample_flag::FALLBACK != 0;
         if self.fallback && !fallback {
             self.event("device back under the host's control");
@@ -795,6 +822,51 @@ mod tests {
         assert_eq!(drain(&mut s).len(), 3);
         assert_eq!(s.stats().frames_reordered, 1);
         assert_eq!(s.stats().frames_lost, 0);
+    }
+
+    #[test]
+    fn faults_other_than_the_watchdog_call_for_an_alarm_once_and_an_e_stop_flag_counts_too() {
+        use crate::protocol::frame::Fault;
+        let fault = |seq, kind, active| {
+            Frame::Fault(Fault {
+                seq,
+                time_us: 0,
+                kind,
+                active,
+                channel: 0xFF,
+                applied_override_cpct: 5000,
+            })
+        };
+        let mut s = session_with(&[
+            fault(1, FaultKind::Watchdog, 1),
+            fault(2, FaultKind::OverCurrent, 1),
+            fault(3, FaultKind::OverCurrent, 0),
+            fault(4, FaultKind::EStop, 1),
+            // Its samples show the E-stop the fault reported: nothing new.
+            Frame::Sample(Sample {
+                flags: sample_flag::ESTOP,
+                ..sample(1, 1000, 0)
+            }),
+        ]);
+        assert_eq!(
+            s.take_alarm_faults(),
+            [FaultKind::OverCurrent, FaultKind::EStop]
+        );
+        assert!(s.take_alarm_faults().is_empty());
+        assert_eq!(s.stats().watchdog_fallbacks, 1);
+        // An E-stop whose fault report was lost: the samples' flag raises it.
+        let mut s = session_with(&[
+            Frame::Sample(sample(1, 1000, 0)),
+            Frame::Sample(Sample {
+                flags: sample_flag::ESTOP,
+                ..sample(2, 2000, 0)
+            }),
+            Frame::Sample(Sample {
+                flags: sample_flag::ESTOP,
+                ..sample(3, 3000, 0)
+            }),
+        ]);
+        assert_eq!(s.take_alarm_faults(), [FaultKind::EStop]);
     }
 
     #[test]

@@ -337,6 +337,7 @@ impl VirtualForm {
             stall_at_s,
             stall_s: stall_s.unwrap_or(0.0),
             unplug_at_s: opt("unplug at", &self.unplug_at.get())?,
+            ..FaultInjection::default()
         };
         let scale = parse_number(&self.time_scale.get()).map_err(|e| format!("time scale: {e}"))?;
         if !(0.1..=MAX_TIME_SCALE).contains(&scale) {
