@@ -13,6 +13,8 @@
 
 pub mod analysis;
 pub mod csv;
+pub mod mapping;
+pub mod replay;
 
 use serde::Serialize;
 
