@@ -11,7 +11,9 @@
 
 use std::sync::Mutex;
 
+use cutlab::closed_loop::calibration_file::CalibrationFile;
 use cutlab::closed_loop::lab::{simulate, RunResult, RunSpec};
+use cutlab::closed_loop::runner::Calibration;
 use cutlab::control::registry::ControllerKind;
 use cutlab::plant::Preset;
 use cutlab::protocol::device::{DeviceConfig, DeviceEmulator, DeviceStats, FaultInjection};
@@ -27,6 +29,16 @@ fn host_against_emulator(
     config: DeviceConfig,
     spec: &RunSpec,
     options: HostOptions,
+) -> (LinkRun, DeviceStats, String) {
+    host_against_emulator_calibrated(config, spec, options, None)
+}
+
+/// As [`host_against_emulator`], starting from `calibration` (no teach cut) when given.
+fn host_against_emulator_calibrated(
+    config: DeviceConfig,
+    spec: &RunSpec,
+    options: HostOptions,
+    calibration: Option<Calibration>,
 ) -> (LinkRun, DeviceStats, String) {
     let _one = ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner());
     let (host_to_device_r, host_to_device_w) = std::io::pipe().unwrap();
@@ -47,7 +59,7 @@ fn host_against_emulator(
         )
     });
     let link = HostLink::connect(device_to_host_r, Box::new(host_to_device_w), options).unwrap();
-    let run = run_on_link(link, spec, None);
+    let run = run_on_link(link, spec, None, calibration);
     let (stats, diagnostics) = device.join().unwrap();
     (run, stats, diagnostics)
 }
@@ -120,6 +132,76 @@ fn the_closed_loop_over_the_protocol_matches_the_simulation() {
     assert!(s.commands_acknowledged + 1 >= s.commands_sent, "{s:?}");
     assert!(s.command_latency_mean_s < 0.06, "{s:?}");
     assert_eq!(run.device.protocol_version, "1.0");
+}
+
+#[test]
+fn a_saved_calibration_replaces_the_teach_cut_over_the_link() {
+    let spec = kim_threshold();
+    let sim = simulate(&spec).unwrap();
+    // Through the file, as `cutlab host --calibration` reads it.
+    let saved = CalibrationFile::new(sim.calibration.clone(), "sim teach cut").to_json();
+    let calibration = CalibrationFile::from_json(&saved).unwrap().calibration;
+    let (run, device, diagnostics) = host_against_emulator_calibrated(
+        kim_device(5.0),
+        &spec,
+        HostOptions::default(),
+        Some(calibration),
+    );
+    // No teach part: the device's first part was the run, which finished with the target the
+    // calibration gives. (How closely a run over the link follows the simulation is the test
+    // above's; this one is about where the calibration came from.)
+    assert_eq!(device.parts, 1, "{diagnostics}");
+    let link = run.result.as_ref().unwrap();
+    assert!(link.metrics.completed, "{diagnostics}");
+    assert!(within(
+        sim.metrics.removed_volume_mm3,
+        link.metrics.removed_volume_mm3,
+        0.01
+    ));
+    assert_eq!(sim.settings.target_force_n, link.settings.target_force_n);
+    assert_eq!(
+        format!("{:?}", link.calibration),
+        format!("{:?}", sim.calibration)
+    );
+}
+
+#[test]
+fn a_bridge_without_truth_is_taught_by_the_cut_model_or_needs_a_calibration() {
+    // maneerat-doc-1 cuts one depth in one material: the model of the cut gives the teach force.
+    let spec = RunSpec::new(Preset::ManeeratDoc1, ControllerKind::Pi);
+    let sim = simulate(&spec).unwrap();
+    let mut config = DeviceConfig::new(Preset::ManeeratDoc1);
+    config.watchdog_timeout_s = 5.0;
+    config.sim_truth = false;
+    let (run, device, diagnostics) =
+        host_against_emulator(config.clone(), &spec, HostOptions::default());
+    assert!(!run.device.sim_truth);
+    let link = run.result.as_ref().unwrap();
+    assert!(link.metrics.completed, "{diagnostics}");
+    assert_eq!(device.parts, 2);
+    // No truth crossed the line: the trace has estimates, not forces.
+    assert!(link.trace.rows.iter().all(|r| r.force_n.is_nan()));
+    let mid = &sim.trace.rows[sim.trace.rows.len() / 2];
+    let at = |r: &RunResult| {
+        r.calibration.estimator.force_for_current_n(
+            mid.spindle_current_rms_a,
+            mid.spindle_speed_rpm,
+            mid.feed_mm_min,
+        )
+    };
+    assert!(
+        within(at(link), at(&sim), 0.1),
+        "cut model {} N vs truth {} N",
+        at(link),
+        at(&sim)
+    );
+
+    // kim-step-doc's depth steps along the part: without truth the host refuses to guess.
+    let mut config = kim_device(5.0);
+    config.sim_truth = false;
+    let (run, _, _) = host_against_emulator(config, &kim_threshold(), HostOptions::default());
+    let e = run.result.unwrap_err().to_string();
+    assert!(e.contains("--calibration FILE"), "{e}");
 }
 
 #[test]

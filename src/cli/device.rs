@@ -53,6 +53,10 @@ pub struct DeviceArgs {
     /// The override the watchdog applies, % (default 50)
     #[arg(long = "fallback-pct", value_name = "PCT", allow_hyphen_values = true)]
     fallback_pct: Option<String>,
+    /// Send no simulation truth, as a real bridge: the host must calibrate from the cut model or
+    /// a saved calibration
+    #[arg(long = "no-truth")]
+    no_truth: bool,
 }
 
 /// The emulator the options describe.
@@ -68,6 +72,7 @@ pub fn emulator_from(args: &DeviceArgs) -> Result<DeviceEmulator, CliError> {
     config.seed = value_or("seed", &args.seed, config.seed)?;
     config.watchdog_timeout_s = value_or("watchdog-s", &args.watchdog_s, 0.5)?;
     config.fallback_override_pct = value_or("fallback-pct", &args.fallback_pct, 50.0)?;
+    config.sim_truth = !args.no_truth;
     let stall_at_s = value("stall-at-s", &args.stall_at_s)?;
     let stall_s: Option<f64> = value("stall-s", &args.stall_s)?;
     if stall_at_s.is_some() != stall_s.is_some() {

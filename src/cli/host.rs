@@ -63,6 +63,13 @@ pub struct HostArgs {
     /// handshake waits five times as long for a device to answer)
     #[arg(long = "link-timeout-s", value_name = "S", allow_hyphen_values = true)]
     link_timeout_s: Option<String>,
+    /// Start from a saved calibration (cutlab-calibration JSON) instead of a teach cut: the
+    /// device's first part is then the run
+    #[arg(long, value_name = "FILE")]
+    calibration: Option<String>,
+    /// Write the run's calibration (the teach cut's, or the one given) as a calibration file
+    #[arg(long = "save-calibration", value_name = "FILE")]
+    save_calibration: Option<String>,
     /// Write the closed loop's trace as CSV
     #[arg(long, value_name = "FILE")]
     csv: Option<String>,
@@ -194,6 +201,11 @@ pub fn run(args: HostArgs, io: &mut Io<'_>) -> Result<(), CliError> {
             )));
         }
     }
+    let calibration = args
+        .calibration
+        .as_deref()
+        .map(super::read_calibration)
+        .transpose()?;
     let options = HostOptions {
         link_timeout_s,
         handshake_timeout_s: 5.0 * link_timeout_s,
@@ -226,7 +238,7 @@ pub fn run(args: HostArgs, io: &mut Io<'_>) -> Result<(), CliError> {
         },
         ..RunSpec::new(preset, kind)
     };
-    let run = run_on_link(link, &spec, duration_s);
+    let run = run_on_link(link, &spec, duration_s, calibration.map(|c| c.calibration));
     reap(child);
     let result = run.result.map_err(|e| {
         let last = run
@@ -236,6 +248,18 @@ pub fn run(args: HostArgs, io: &mut Io<'_>) -> Result<(), CliError> {
             .unwrap_or_default();
         CliError::new(format!("{e}{last}"))
     })?;
+    if let Some(path) = args.save_calibration.as_deref() {
+        let source = match args.calibration.as_deref() {
+            Some(from) => format!("{from}, used by cutlab host with {}", run.device.device_id),
+            None => format!(
+                "teach cut over the link on {} ({}), {} feedback",
+                run.device.device_id,
+                spec.preset.name(),
+                result.settings.feedback.name()
+            ),
+        };
+        super::save_calibration(path, &result.calibration, source)?;
+    }
     if let Some(path) = args.csv.as_deref() {
         let mut file = std::fs::File::create(path)
             .map_err(|e| CliError::new(format!("--csv: cannot create {path:?}: {e}")))?;

@@ -9,7 +9,7 @@ use super::{write_json, CliError, Io};
 use crate::closed_loop::config::RunConfiguration;
 use crate::closed_loop::definition::{parse_texts, preset_controller, RunSetting, SettingKind};
 use crate::closed_loop::lab::{
-    apply_references, references, simulate, References, RunResult, RunSpec,
+    apply_references, references, simulate, LabRun, References, RunResult, RunSpec,
 };
 use crate::closed_loop::metrics::Metrics;
 use crate::closed_loop::runner::{Calibration, Feedback};
@@ -18,6 +18,7 @@ use crate::closed_loop::trace::write_csv;
 use crate::control::registry::{ControllerConfig, ControllerKind};
 use crate::plant::Preset;
 use crate::safety::SafetyEvent;
+use crate::work::Work;
 
 /// Options shared by `sim` and `compare`: the preset, every setting of the run definition
 /// ([`RunSetting::ALL`], the same table the browser's form is made from), and `--no-references`.
@@ -131,6 +132,12 @@ pub struct SimArgs {
     json: Option<String>,
     #[arg(long, value_name = "FILE", help = CONFIG_HELP)]
     config: Option<String>,
+    /// Start from a saved calibration (cutlab-calibration JSON) instead of a teach cut
+    #[arg(long, value_name = "FILE")]
+    calibration: Option<String>,
+    /// Write the run's calibration (the teach cut's, or the one given) as a calibration file
+    #[arg(long = "save-calibration", value_name = "FILE")]
+    save_calibration: Option<String>,
 }
 
 /// Run several controllers (or tunings: pi:kp=0.5) on one preset with the same seed and print
@@ -236,9 +243,14 @@ pub fn controller_with_settings(text: &str, preset: Preset) -> Result<Controller
 
 fn run_one(
     spec: &RunSpec,
+    calibration: Option<Calibration>,
     with_references: bool,
 ) -> Result<(RunResult, Option<References>), CliError> {
-    let mut result = simulate(spec).map_err(|e| CliError::new(e.to_string()))?;
+    let run = match calibration {
+        Some(c) => LabRun::calibrated(spec, c).and_then(Work::run_to_end),
+        None => simulate(spec),
+    };
+    let mut result = run.map_err(|e| CliError::new(e.to_string()))?;
     let refs = if with_references {
         let r = references(spec).map_err(|e| CliError::new(e.to_string()))?;
         apply_references(&mut result, &r);
@@ -331,7 +343,28 @@ pub fn run_sim(args: SimArgs, io: &mut Io<'_>) -> Result<(), CliError> {
             spec(&args.run, controller)?
         }
     };
-    let (result, refs) = run_one(&spec, !args.run.no_references)?;
+    let calibration = args
+        .calibration
+        .as_deref()
+        .map(super::read_calibration)
+        .transpose()?;
+    let (result, refs) = run_one(
+        &spec,
+        calibration.map(|c| c.calibration),
+        !args.run.no_references,
+    )?;
+    if let Some(path) = args.save_calibration.as_deref() {
+        let source = match args.calibration.as_deref() {
+            Some(from) => format!("{from}, used by cutlab sim on {}", spec.preset.name()),
+            None => format!(
+                "teach cut on {}, seed {}, {} feedback",
+                spec.preset.name(),
+                spec.seed,
+                result.settings.feedback.name()
+            ),
+        };
+        super::save_calibration(path, &result.calibration, source)?;
+    }
     if let Some(path) = args.csv.as_deref() {
         let mut file = std::fs::File::create(path)
             .map_err(|e| CliError::new(format!("--csv: cannot create {path:?}: {e}")))?;

@@ -13,6 +13,7 @@ use super::runner::{
 };
 use super::trace::Trace;
 use crate::control::registry::{ControllerConfig, ControllerKind, RunContext};
+use crate::estimation::cut_forces::CutGeometry;
 use crate::machine::Machine;
 use crate::plant::cnc::{OverrideMode, MAX_OVERRIDE_PCT};
 use crate::plant::dynamometer::{DynamometerConfig, WithDynamometer};
@@ -263,6 +264,31 @@ fn settle_target(spec: &RunSpec, settings: &mut LoopSettings, calibration: &Cali
     set_target(settings, target);
 }
 
+/// The teach force a machine without simulation truth or dynamometer can use: the model of the
+/// preset's cut, when the whole program cuts one depth, one width and one material (the model
+/// takes each period's feed and speed from the machine, but not where on the part the tool is).
+/// `None` for a program whose cut changes along the path: such a machine needs a saved
+/// calibration ([`super::calibration_file`]).
+pub fn cut_model_teach_force(preset: Preset) -> Option<TeachForce> {
+    let scenario = preset.scenario_spec()?;
+    let single = |points: &[(f64, f64)]| -> Option<f64> {
+        let first = points.first()?.1;
+        points.iter().all(|p| p.1 == first).then_some(first)
+    };
+    let [material] = scenario.materials.as_slice() else {
+        return None;
+    };
+    Some(TeachForce::CutModel {
+        geometry: CutGeometry {
+            cutter: scenario.cutter,
+            mode: scenario.mode,
+            coefficients: material.material.coefficients(),
+        },
+        depth_mm: single(&scenario.depth_mm)?,
+        width_mm: single(&scenario.width_mm)?,
+    })
+}
+
 /// The machines a run uses: a simulation makes a fresh pass for the teach cut and another for the
 /// run (differently seeded, like two parts); a real machine or a replayed log does both in turn.
 pub enum RunMachines {
@@ -372,12 +398,30 @@ impl LabRun {
     /// spec with the same preset, seed, machine and signal chain (the teach cut depends on those
     /// alone, so the result is the same as [`LabRun::new`]'s, for less work).
     pub fn calibrated(spec: &RunSpec, calibration: Calibration) -> Result<Self, LoopError> {
-        let machine = preset_machine(spec, spec.seed)?;
+        Self::calibrated_on(spec, preset_machine(spec, spec.seed)?, calibration)
+    }
+
+    /// Starts the closed loop on any machine from a calibration made elsewhere (a saved
+    /// calibration file, a logged cut): no teach cut. Refused when the calibration reads another
+    /// feedback path than the run's settings.
+    pub fn calibrated_on(
+        spec: &RunSpec,
+        machine: Box<dyn Machine>,
+        calibration: Calibration,
+    ) -> Result<Self, LoopError> {
+        let settings = default_settings(spec)?;
+        let calibration_feedback = calibration.estimator.feedback();
+        if calibration_feedback != settings.feedback {
+            return Err(LoopError::CalibrationFeedback {
+                calibration: calibration_feedback,
+                run: settings.feedback,
+            });
+        }
         let mut run = Self {
             nominal_duration_s: spec.preset.summary().nominal_duration_s.max(1.0),
             calibrated: true,
             stage: Stage::Empty,
-            settings: default_settings(spec)?,
+            settings,
             spec: spec.clone(),
         };
         let closed_loop = run.start_loop(machine, &calibration)?;

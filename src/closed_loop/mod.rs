@@ -1,9 +1,11 @@
 //! The closed loop: scenario → machine → signal chain → estimator → controller → safety envelope
 //! → override, recorded as a trace and judged by metrics.
 
+pub mod calibration_file;
 pub mod chain;
 pub mod config;
 pub mod definition;
+pub mod file_format;
 pub mod lab;
 pub mod metrics;
 pub mod runner;

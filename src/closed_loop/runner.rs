@@ -134,6 +134,16 @@ pub enum LoopError {
     Machine(PlantError),
     /// The teach cut did not give a usable model.
     Calibration(FitError),
+    /// A given calibration measures force through another path than the run's feedback.
+    CalibrationFeedback {
+        /// The path the calibration was made for.
+        calibration: Feedback,
+        /// The path the run measures with.
+        run: Feedback,
+    },
+    /// A teach cut on a machine that reports no force (no simulation truth, no dynamometer) and
+    /// whose cut changes along the path, so the model of the cut cannot stand in.
+    NoTeachForce,
     /// Feed-current feedback on a cut that never loads the feed drive.
     NoFeedLoad,
     /// The control period is below one sample or absurdly long at this sample rate.
@@ -162,6 +172,21 @@ impl fmt::Display for LoopError {
             LoopError::Controller(e) => write!(f, "controller: {e}"),
             LoopError::Machine(e) => write!(f, "{e}"),
             LoopError::Calibration(e) => write!(f, "calibration (teach cut): {e}"),
+            LoopError::CalibrationFeedback { calibration, run } => write!(
+                f,
+                "the calibration is for {} feedback but the run measures with {}; choose \
+                 feedback {} or calibrate for {}",
+                calibration.name(),
+                run.name(),
+                calibration.name(),
+                run.name()
+            ),
+            LoopError::NoTeachForce => f.write_str(
+                "the machine reports no force (no simulation truth, no dynamometer) and the \
+                 program's cut changes along the path, so a teach cut has no force to learn \
+                 from: give a saved calibration (--calibration FILE, from cutlab calibrate or an \
+                 earlier run's --save-calibration)",
+            ),
             LoopError::NoFeedLoad => f.write_str(
                 "feed-current feedback needs a cut that loads the feed drive, and this one never \
                  pushed back against the feed (in down milling the cutting force pulls the table \
@@ -190,8 +215,8 @@ impl fmt::Display for LoopError {
 impl std::error::Error for LoopError {}
 
 /// A calibrated current-to-force estimator.
-#[derive(Debug, Clone, PartialEq, Serialize)]
-#[serde(tag = "feedback", rename_all = "kebab-case")]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "feedback", rename_all = "kebab-case", deny_unknown_fields)]
 pub enum Estimator {
     /// Paper 003's spindle model with F/V speed identification.
     Spindle {
@@ -286,15 +311,19 @@ impl Estimator {
     }
 }
 
-/// What a teach cut produced.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+/// What a teach cut produced. Saved and read back as a calibration file
+/// ([`super::calibration_file`]).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct Calibration {
     /// The fitted estimator.
     pub estimator: Estimator,
     /// Median regulated force over the cutting periods of the teach cut at 100 % override.
+    #[serde(deserialize_with = "crate::estimation::null_as_nan")]
     pub median_force_at_full_override_n: f64,
     /// Median of regulated force ÷ mean resultant force over those periods: converts a
     /// resultant-force target into the regulated force (1 for spindle feedback).
+    #[serde(deserialize_with = "crate::estimation::null_as_nan")]
     pub regulated_per_resultant: f64,
     /// Periods used for the fit.
     pub periods: usize,

@@ -95,6 +95,10 @@ pub struct DeviceConfig {
     pub over_current_a: f64,
     /// Faults to inject.
     pub faults: FaultInjection,
+    /// Whether to send the simulation's truth (SimTruth frames, the SIM_TRUTH feature). Off, the
+    /// emulator is a real bridge's twin: the host sees currents, speed and feed only, and a
+    /// teach cut must take its force from elsewhere.
+    pub sim_truth: bool,
 }
 
 impl DeviceConfig {
@@ -109,6 +113,7 @@ impl DeviceConfig {
             fallback_override_pct: 50.0,
             over_current_a: 150.0,
             faults: FaultInjection::default(),
+            sim_truth: true,
         }
     }
 }
@@ -338,7 +343,11 @@ impl DeviceEmulator {
             watchdog_timeout_ms: (config.watchdog_timeout_s * 1000.0).round() as u16,
             fallback_override_cpct: cpct(config.fallback_override_pct),
             over_current_a: config.over_current_a as f32,
-            features: feature::SIM_TRUTH,
+            features: if config.sim_truth {
+                feature::SIM_TRUTH
+            } else {
+                0
+            },
         };
         Ok(Self {
             rng: Rng::fork(config.seed, 0xDE71CE),
@@ -743,7 +752,7 @@ impl DeviceEmulator {
         self.watch_currents(over_current, sensor_fault, out);
         let n = block.n.max(1) as f64;
         self.sample_seq = self.sample_seq.wrapping_add(1);
-        if block.truth_seen {
+        if block.truth_seen && self.config.sim_truth {
             let mut v: [f32; 16] = core::array::from_fn(|i| (block.truth[i] / n) as f32);
             // Positions are where the tool is at the block's end, not on average.
             let t = &block.last_truth;

@@ -14,9 +14,11 @@ use std::time::{Duration, Instant};
 use super::device::DeviceEmulator;
 use super::frame::{Capabilities, VERSION_MAJOR};
 use super::host::{DeviceSummary, HostSession, LinkEvent, LinkSample, LinkStats};
-use crate::closed_loop::lab::{metrics_config, LabRun, RunMachines, RunResult, RunSpec};
+use crate::closed_loop::lab::{
+    cut_model_teach_force, metrics_config, LabRun, RunMachines, RunResult, RunSpec,
+};
 use crate::closed_loop::metrics::compute;
-use crate::closed_loop::runner::{LoopError, TeachForce};
+use crate::closed_loop::runner::{Calibration, LoopError, TeachForce};
 use crate::machine::{Machine, MachineStep, OverrideCommand};
 use crate::work::Work;
 
@@ -498,33 +500,38 @@ pub struct LinkRun {
 }
 
 /// Runs `spec`'s teach cut and closed loop on the device at the other end of `link`, through the
-/// same [`LabRun`] `cutlab sim` uses: the first part is the teach cut, the second the run.
-/// `duration_s` stops the closed loop early.
-pub fn run_on_link(mut link: HostLink, spec: &RunSpec, duration_s: Option<f64>) -> LinkRun {
+/// same [`LabRun`] `cutlab sim` uses: the first part is the teach cut, the second the run. With
+/// `calibration` (a saved calibration file) there is no teach cut: the first part is the run.
+/// The teach cut takes its force from the simulation's truth when the device sends it, otherwise
+/// from the model of the preset's cut ([`cut_model_teach_force`]); a program whose cut changes
+/// along the path needs a calibration. `duration_s` stops the closed loop early.
+pub fn run_on_link(
+    link: HostLink,
+    spec: &RunSpec,
+    duration_s: Option<f64>,
+    calibration: Option<Calibration>,
+) -> LinkRun {
     let device = DeviceSummary::of(link.capabilities());
     let teach_force = if device.sim_truth {
-        TeachForce::SimulationTruth
+        Some(TeachForce::SimulationTruth)
     } else {
-        link.finish();
-        let session = link.session();
-        return LinkRun {
-            result: Err(HostError(
-                "the device sends no simulation truth, and a teach cut on a real machine (a \
-                 dynamometer or the cut model over the link) is not implemented yet"
-                    .to_string(),
-            )),
-            stats: session.stats(),
-            events: session.events().to_vec(),
-            link_lost: link.lost(),
-            device,
-        };
+        cut_model_teach_force(spec.preset)
     };
     let link = Rc::new(RefCell::new(link));
-    let machines = RunMachines::Separate {
-        teach: Box::new(LinkPart::new(Rc::clone(&link))),
-        run: Box::new(LinkPart::new(Rc::clone(&link))),
+    let part = || Box::new(LinkPart::new(Rc::clone(&link)));
+    let run = match (calibration, teach_force) {
+        (Some(calibration), _) => LabRun::calibrated_on(spec, part(), calibration),
+        (None, Some(teach_force)) => LabRun::on_machines(
+            spec,
+            RunMachines::Separate {
+                teach: part(),
+                run: part(),
+            },
+            teach_force,
+        ),
+        (None, None) => Err(LoopError::NoTeachForce),
     };
-    let result = LabRun::on_machines(spec, machines, teach_force).and_then(|mut run| {
+    let result = run.and_then(|mut run| {
         if let Some(d) = duration_s {
             run.limit_duration_s(d);
         }
