@@ -125,11 +125,40 @@ impl Channel {
     }
 }
 
-/// Which column is which channel, by column name.
+/// Which column is which channel, by column name. Saved as
+/// `[{"column": "S_I_U [A]", "channel": "spindle-phase"}, …]`.
 #[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[serde(into = "Vec<MappedColumn>", from = "Vec<MappedColumn>")]
 pub struct Mapping {
     /// `(column name, channel)`, in the log's column order.
     pub columns: Vec<(String, Channel)>,
+}
+
+/// One column of a saved mapping.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MappedColumn {
+    /// The column's name.
+    pub column: String,
+    /// Its channel.
+    pub channel: Channel,
+}
+
+impl From<Mapping> for Vec<MappedColumn> {
+    fn from(m: Mapping) -> Self {
+        m.columns
+            .into_iter()
+            .map(|(column, channel)| MappedColumn { column, channel })
+            .collect()
+    }
+}
+
+impl From<Vec<MappedColumn>> for Mapping {
+    fn from(columns: Vec<MappedColumn>) -> Self {
+        Mapping {
+            columns: columns.into_iter().map(|c| (c.column, c.channel)).collect(),
+        }
+    }
 }
 
 /// A mapping that does not fit its log; the message names the column.

@@ -380,21 +380,14 @@ fn column_mean(log: &Log, column: Option<usize>) -> f64 {
         .map_or(f64::NAN, |c| c.min_max_mean().2)
 }
 
-/// The feedback path an estimator reads.
-fn estimator_feedback(estimator: &Estimator) -> Feedback {
-    match estimator {
-        Estimator::Spindle { .. } => Feedback::SpindleCurrent,
-        Estimator::Feed { .. } => Feedback::FeedCurrent,
-        Estimator::Dynamometer => Feedback::Dynamometer,
-    }
-}
-
 /// An estimator that reads the current itself as the "force" (1 A ≙ 1 unit), flagged outside any
 /// calibrated range: the controllers then regulate the current.
 fn current_as_force(feedback: Feedback, spindle_rpm: f64) -> Estimator {
+    // No calibrated range: every estimate is outside it (so the loop never takes the current
+    // for a cut before arming either).
     let unbounded = Range {
-        min: -f64::MAX,
-        max: f64::MAX,
+        min: f64::NAN,
+        max: f64::NAN,
     };
     let quality = FitQuality {
         r_squared: f64::NAN,
@@ -446,6 +439,7 @@ fn current_as_force(feedback: Feedback, spindle_rpm: f64) -> Estimator {
 fn chain_lowpass(
     cutoff_hz: f64,
     motor: &str,
+    feedback_motor: bool,
     has_phases: bool,
     has_rms: bool,
     sample_rate_hz: f64,
@@ -453,7 +447,7 @@ fn chain_lowpass(
 ) -> f64 {
     let readable = crate::input::readable;
     if !has_phases {
-        if has_rms {
+        if has_rms && feedback_motor {
             notes.push(format!(
                 "the {motor} current is an RMS value in the log: the chain's low-pass and \
                  three-phase RMS stages are skipped (they act on phase currents); the period mean \
@@ -463,13 +457,15 @@ fn chain_lowpass(
         return f64::INFINITY;
     }
     if cutoff_hz >= 0.5 * sample_rate_hz {
-        notes.push(format!(
+        if feedback_motor {
+            notes.push(format!(
             "the log samples at {} Hz: the {motor} low-pass at {} Hz is at or above its Nyquist \
              frequency ({} Hz), so that stage is skipped",
             readable(sample_rate_hz),
             readable(cutoff_hz),
             readable(0.5 * sample_rate_hz)
-        ));
+            ));
+        }
         return f64::INFINITY;
     }
     cutoff_hz
@@ -550,6 +546,7 @@ fn prepare(
     let spindle_lowpass_hz = chain_lowpass(
         settings.spindle_lowpass_hz,
         "spindle",
+        feedback != Feedback::FeedCurrent,
         spindle_phases,
         columns.column(Channel::SpindleCurrent).is_some(),
         rate_hz,
@@ -558,6 +555,7 @@ fn prepare(
     let feed_lowpass_hz = chain_lowpass(
         settings.feed_lowpass_hz,
         "feed-drive",
+        feedback == Feedback::FeedCurrent,
         feed_phases,
         columns.column(Channel::FeedCurrent).is_some(),
         rate_hz,
@@ -616,10 +614,10 @@ fn prepare(
     // The estimator and the target.
     let (estimator, calibrated) = match calibration {
         Some(c) => {
-            if estimator_feedback(&c.estimator) != feedback {
+            if c.estimator.feedback() != feedback {
                 return Err(setting(format!(
                     "the calibration is for {} feedback, the replay measures with {}",
-                    estimator_feedback(&c.estimator).name(),
+                    c.estimator.feedback().name(),
                     feedback.name()
                 )));
             }
