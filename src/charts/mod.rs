@@ -50,6 +50,8 @@ pub enum Stroke {
     Solid,
     /// A dashed line, for targets and limits.
     Dashed,
+    /// A dot at each point and no line: a scatter (a calibration's points).
+    Dots,
 }
 
 /// One named line.
@@ -79,6 +81,12 @@ impl Series {
     /// The same series drawn dashed.
     pub fn dashed(mut self) -> Self {
         self.stroke = Stroke::Dashed;
+        self
+    }
+
+    /// The same series drawn as dots.
+    pub fn dots(mut self) -> Self {
+        self.stroke = Stroke::Dots;
         self
     }
 }
@@ -457,6 +465,10 @@ where
                         line_style,
                     ))?;
                 }
+                Stroke::Dots => {
+                    let radius = style.px(2.5);
+                    ctx.draw_series(run.iter().map(|p| Circle::new(*p, radius, color.filled())))?;
+                }
             }
         }
     }
@@ -602,6 +614,22 @@ mod tests {
         assert_eq!(chart.x.range, 0.0..1.99);
         assert!(chart.y.range.start < -0.99 && chart.y.range.start > -1.2);
         assert!(chart.y.range.end > 0.99 && chart.y.range.end < 1.2);
+    }
+
+    #[test]
+    fn a_dotted_series_is_one_circle_per_point_and_no_line() {
+        let mut chart = LineChart::new(Axis::linear("force (N)"), Axis::linear("current (A)"));
+        chart.series.push(
+            Series::new(
+                "periods",
+                PALETTE[0],
+                vec![(100.0, 5.0), (200.0, 6.0), (f64::NAN, 1.0), (300.0, 7.0)],
+            )
+            .dots(),
+        );
+        chart.fit();
+        let (svg, _) = render(&chart);
+        assert_eq!(svg.matches("<circle").count(), 3, "{svg}");
     }
 
     #[test]

@@ -1286,246 +1286,359 @@ pub fn fit_calibration(
     settings: &ReplaySettings,
     force: &ForceSource,
 ) -> Result<LogFit, ReplayError> {
-    if settings.feedback == Feedback::Dynamometer {
-        return Err(setting(
-            "a dynamometer reads the force itself: there is no current model to fit",
+    LogFitWork::new(log, mapping, settings, force)?.run_to_end()
+}
+
+/// [`fit_calibration`] done a piece at a time: the chain runs a budget of control periods per
+/// call, the fit at the end.
+pub struct LogFitWork {
+    machine: LogMachine,
+    chain: SignalChain,
+    per_period: usize,
+    feedback: Feedback,
+    force: ForceSource,
+    force_source: String,
+    notes: Vec<String>,
+    has_fv: bool,
+    rms_only: bool,
+    periods: Vec<(PeriodSummary, f64)>,
+    /// Per period: whether the override changed less than [`SETTLE_AFTER_CHANGE_S`] before its end.
+    settling: Vec<bool>,
+    last_override_pct: f64,
+    last_change_s: f64,
+    max_phase_a: f64,
+    output: Option<LogFit>,
+    done: bool,
+}
+
+/// Periods ending this soon after the logged override changed are left out of a fit: the feed and
+/// the currents are still moving to the new level (as in the lab's teach cut).
+const SETTLE_AFTER_CHANGE_S: f64 = 0.5;
+
+impl LogFitWork {
+    /// Sets up the chain; a missing column or setting is an error saying what to give.
+    pub fn new(
+        log: &Arc<Log>,
+        mapping: &Mapping,
+        settings: &ReplaySettings,
+        force: &ForceSource,
+    ) -> Result<Self, ReplayError> {
+        if settings.feedback == Feedback::Dynamometer {
+            return Err(setting(
+                "a dynamometer reads the force itself: there is no current model to fit",
+            ));
+        }
+        let columns = mapping.resolve(log)?;
+        let force_source = match force {
+            ForceSource::Measured => {
+                let Some(c) = columns.column(Channel::Force) else {
+                    return Err(setting(
+                        "the log has no measured force mapped: map a force column, or model the \
+                         force from the cut",
+                    ));
+                };
+                format!("the log's measured force ({})", log.columns[c].name)
+            }
+            ForceSource::CutModel {
+                geometry,
+                depth_mm,
+                width_mm,
+            } => {
+                if depth_mm.is_none() && columns.column(Channel::Depth).is_none() {
+                    return Err(setting(
+                        "the cut model needs the depth: give it, or map a depth column",
+                    ));
+                }
+                if columns.column(Channel::Feed).is_none() {
+                    return Err(setting("the cut model needs the feed: map a feed column"));
+                }
+                format!(
+                    "the mechanistic model of the cut (Ø{} mm, {} teeth, {} milling, depth {}, \
+                     width {} mm)",
+                    crate::input::readable(geometry.cutter.diameter_mm),
+                    geometry.cutter.teeth,
+                    geometry.mode.name(),
+                    depth_mm.map_or("from the log".to_string(), |d| format!(
+                        "{} mm",
+                        crate::input::readable(d)
+                    )),
+                    crate::input::readable(*width_mm)
+                )
+            }
+        };
+        let mut calibration_settings = settings.clone();
+        calibration_settings.calibration = None;
+        let p = prepare(log, mapping, &calibration_settings, true)?;
+        let mut notes = p.notes;
+        notes.retain(|n| !n.starts_with("no calibration"));
+        let sample_rate_hz = p.machine.sample_rate_hz();
+        let s = &p.settings;
+        let lowpass = |cutoff_hz: f64| -> Result<crate::signal::sos::Sos, ReplayError> {
+            if cutoff_hz == f64::INFINITY {
+                return crate::signal::sos::Sos::from_rows(&[[1.0, 0.0, 0.0, 1.0, 0.0, 0.0]])
+                    .map_err(|e| setting(format!("low-pass: {e}")));
+            }
+            crate::signal::butterworth::butter(&crate::signal::butterworth::ButterworthSpec {
+                kind: crate::signal::butterworth::FilterKind::Lowpass,
+                order: s.lowpass_order,
+                cutoff_hz: crate::signal::butterworth::Cutoff::Single(cutoff_hz),
+                sample_rate_hz,
+            })
+            .map_err(|e| setting(format!("low-pass: {e}")))
+        };
+        let chain = SignalChain::new(
+            &lowpass(s.spindle_lowpass_hz)?,
+            &lowpass(s.feed_lowpass_hz)?,
+        )
+        .map_err(|_| setting("the signal chain has no channels"))?;
+        let per_period = (s.control_period_s * sample_rate_hz).round().max(1.0) as usize;
+        // An RMS column stands for three phases of its own value; a phase's peak is √2 of it.
+        let rms_only = columns
+            .columns(match settings.feedback {
+                Feedback::FeedCurrent => Channel::FeedPhase,
+                _ => Channel::SpindlePhase,
+            })
+            .is_empty();
+        Ok(Self {
+            machine: p.machine,
+            chain,
+            per_period,
+            feedback: settings.feedback,
+            force: force.clone(),
+            force_source,
+            notes,
+            has_fv: columns.column(Channel::FvVoltage).is_some(),
+            rms_only,
+            periods: Vec::new(),
+            settling: Vec::new(),
+            last_override_pct: f64::NAN,
+            last_change_s: f64::NEG_INFINITY,
+            max_phase_a: 0.0,
+            output: None,
+            done: false,
+        })
+    }
+
+    /// Runs the chain over one control period of the log.
+    fn period(&mut self) {
+        let mut override_sum = 0.0;
+        let mut n = 0usize;
+        while n < self.per_period && !self.machine.finished() {
+            let step = self.machine.step(OverrideCommand::default());
+            for i in step
+                .sensors
+                .spindle_phase_currents_a
+                .iter()
+                .chain(&step.sensors.feed_phase_currents_a)
+            {
+                if i.is_finite() {
+                    self.max_phase_a = self.max_phase_a.max(i.abs());
+                }
+            }
+            self.chain.push(&step);
+            let pct = step.sensors.applied_override_pct;
+            if self.last_override_pct.is_finite() && pct != self.last_override_pct {
+                self.last_change_s = step.sensors.time_s;
+            }
+            self.last_override_pct = pct;
+            override_sum += pct;
+            n += 1;
+        }
+        if n > 0 {
+            let period = self.chain.finish_period();
+            self.settling
+                .push(period.end_time_s - self.last_change_s < SETTLE_AFTER_CHANGE_S);
+            self.periods.push((period, override_sum / n as f64));
+        }
+    }
+
+    /// Pairs each period's current with its force and fits.
+    fn fit(&mut self) -> Result<LogFit, ReplayError> {
+        let periods = std::mem::take(&mut self.periods);
+        let feedback = self.feedback;
+        let force = &self.force;
+        let fv_model = if self.has_fv {
+            let commands: Vec<f64> = periods.iter().map(|(p, _)| p.spindle_command_rpm).collect();
+            let speeds: Vec<f64> = periods.iter().map(|(p, _)| p.spindle_speed_rpm).collect();
+            let volts: Vec<f64> = periods
+                .iter()
+                .map(|(p, _)| p.spindle_fv_voltage_v)
+                .collect();
+            FvSpeedModel::calibrate(&commands, &speeds, &volts, GEAR_CHANGE_RPM)
+        } else {
+            FvSpeedModel {
+                gear_change_rpm: GEAR_CHANGE_RPM,
+                low_range_v_per_rpm: f64::NAN,
+                high_range_v_per_rpm: f64::NAN,
+            }
+        };
+        let current_of = |p: &PeriodSummary| match feedback {
+            Feedback::FeedCurrent => p.feed_current_rms_a,
+            _ => p.spindle_current_rms_a,
+        };
+        let force_of = |p: &PeriodSummary| match force {
+            ForceSource::Measured => p.force_mean_resultant_n,
+            ForceSource::CutModel {
+                geometry,
+                depth_mm,
+                width_mm,
+            } => geometry
+                .mean_forces(
+                    p.feed_mm_min,
+                    p.spindle_speed_rpm,
+                    depth_mm.unwrap_or(p.depth_mm),
+                    *width_mm,
+                )
+                .map_or(f64::NAN, |f| match feedback {
+                    Feedback::FeedCurrent => -f.fx_n,
+                    _ => f.resultant_n(),
+                }),
+        };
+        let air_a = periods
+            .iter()
+            .map(|(p, _)| current_of(p))
+            .filter(|i| i.is_finite())
+            .fold(f64::INFINITY, f64::min);
+        let mut points = Vec::new();
+        let mut full_override_forces = Vec::new();
+        let mut previous_rpm = f64::NAN;
+        let (mut accelerating, mut air, mut no_force, mut settling) = (0, 0, 0, 0usize);
+        for (k, (p, mean_override)) in periods.iter().enumerate() {
+            let current_a = current_of(p);
+            let force_n = force_of(p);
+            let speed_rpm = fv_model.speed_rpm(p.spindle_fv_voltage_v, p.spindle_command_rpm);
+            let steady = !(previous_rpm.is_finite()
+                && (p.spindle_speed_rpm - previous_rpm).abs()
+                    > STEADY_SPEED_FRACTION * p.spindle_speed_rpm.abs());
+            previous_rpm = p.spindle_speed_rpm;
+            if !(current_a.is_finite() && force_n.is_finite() && force_n > 0.0) {
+                no_force += 1;
+                continue;
+            }
+            if !steady {
+                accelerating += 1;
+                continue;
+            }
+            if self.settling.get(k).copied().unwrap_or(false) {
+                settling += 1;
+                continue;
+            }
+            if matches!(force, ForceSource::CutModel { .. })
+                && current_a <= air_a * (1.0 + AIR_CURRENT_MARGIN)
+            {
+                air += 1;
+                continue;
+            }
+            if (mean_override - 100.0).abs() < 0.5 {
+                full_override_forces.push(force_n);
+            }
+            points.push(FitPoint {
+                time_s: p.end_time_s,
+                current_a,
+                force_n,
+                speed_rpm,
+                feed_mm_min: p.feed_mm_min,
+            });
+        }
+        let mut notes = std::mem::take(&mut self.notes);
+        notes.push(format!(
+            "{} of {} control periods used ({no_force} without a positive force, {accelerating} \
+             with the spindle changing speed, {settling} within {} s of an override change{})",
+            points.len(),
+            periods.len(),
+            SETTLE_AFTER_CHANGE_S,
+            if matches!(force, ForceSource::CutModel { .. }) {
+                format!(", {air} in air")
+            } else {
+                String::new()
+            }
         ));
-    }
-    let columns = mapping.resolve(log)?;
-    let force_source = match force {
-        ForceSource::Measured => {
-            let Some(c) = columns.column(Channel::Force) else {
-                return Err(setting(
-                    "the log has no measured force mapped: map a force column, or model the \
-                     force from the cut",
-                ));
-            };
-            format!("the log's measured force ({})", log.columns[c].name)
-        }
-        ForceSource::CutModel {
-            geometry,
-            depth_mm,
-            width_mm,
-        } => {
-            if depth_mm.is_none() && columns.column(Channel::Depth).is_none() {
-                return Err(setting(
-                    "the cut model needs the depth: give it, or map a depth column",
-                ));
+        let currents: Vec<f64> = points.iter().map(|p| p.current_a).collect();
+        let forces: Vec<f64> = points.iter().map(|p| p.force_n).collect();
+        let estimator = match feedback {
+            Feedback::FeedCurrent => {
+                let feeds: Vec<f64> = points.iter().map(|p| p.feed_mm_min).collect();
+                Estimator::Feed {
+                    model: FeedCurrentModel::calibrate(&currents, &feeds, &forces)
+                        .map_err(|e| setting(format!("the fit failed: {e}")))?,
+                }
             }
-            if columns.column(Channel::Feed).is_none() {
-                return Err(setting("the cut model needs the feed: map a feed column"));
-            }
-            format!(
-                "the mechanistic model of the cut (Ø{} mm, {} teeth, {} milling, depth {}, \
-                 width {} mm)",
-                crate::input::readable(geometry.cutter.diameter_mm),
-                geometry.cutter.teeth,
-                geometry.mode.name(),
-                depth_mm.map_or("from the log".to_string(), |d| format!(
-                    "{} mm",
-                    crate::input::readable(d)
-                )),
-                crate::input::readable(*width_mm)
-            )
-        }
-    };
-    let mut calibration_settings = settings.clone();
-    calibration_settings.calibration = None;
-    let p = prepare(log, mapping, &calibration_settings, true)?;
-    let mut notes = p.notes;
-    notes.retain(|n| !n.starts_with("no calibration"));
-    let mut machine = p.machine;
-    let sample_rate_hz = machine.sample_rate_hz();
-    let s = &p.settings;
-    let lowpass = |cutoff_hz: f64| -> Result<crate::signal::sos::Sos, ReplayError> {
-        if cutoff_hz == f64::INFINITY {
-            return crate::signal::sos::Sos::from_rows(&[[1.0, 0.0, 0.0, 1.0, 0.0, 0.0]])
-                .map_err(|e| setting(format!("low-pass: {e}")));
-        }
-        crate::signal::butterworth::butter(&crate::signal::butterworth::ButterworthSpec {
-            kind: crate::signal::butterworth::FilterKind::Lowpass,
-            order: s.lowpass_order,
-            cutoff_hz: crate::signal::butterworth::Cutoff::Single(cutoff_hz),
-            sample_rate_hz,
-        })
-        .map_err(|e| setting(format!("low-pass: {e}")))
-    };
-    let mut chain = SignalChain::new(
-        &lowpass(s.spindle_lowpass_hz)?,
-        &lowpass(s.feed_lowpass_hz)?,
-    )
-    .map_err(|_| setting("the signal chain has no channels"))?;
-    let per_period = (s.control_period_s * sample_rate_hz).round().max(1.0) as usize;
-    let mut periods: Vec<(PeriodSummary, f64)> = Vec::new();
-    let mut in_period = 0;
-    let mut max_phase_a: f64 = 0.0;
-    let mut override_sum = 0.0;
-    let mut override_n = 0usize;
-    while !machine.finished() {
-        let step = machine.step(OverrideCommand::default());
-        for i in step
-            .sensors
-            .spindle_phase_currents_a
-            .iter()
-            .chain(&step.sensors.feed_phase_currents_a)
-        {
-            if i.is_finite() {
-                max_phase_a = max_phase_a.max(i.abs());
-            }
-        }
-        chain.push(&step);
-        override_sum += step.sensors.applied_override_pct;
-        override_n += 1;
-        in_period += 1;
-        if in_period == per_period || machine.finished() {
-            let mean_override = override_sum / override_n.max(1) as f64;
-            periods.push((chain.finish_period(), mean_override));
-            in_period = 0;
-            override_sum = 0.0;
-            override_n = 0;
-        }
-    }
-    let fv_model = if columns.column(Channel::FvVoltage).is_some() {
-        let commands: Vec<f64> = periods.iter().map(|(p, _)| p.spindle_command_rpm).collect();
-        let speeds: Vec<f64> = periods.iter().map(|(p, _)| p.spindle_speed_rpm).collect();
-        let volts: Vec<f64> = periods
-            .iter()
-            .map(|(p, _)| p.spindle_fv_voltage_v)
-            .collect();
-        FvSpeedModel::calibrate(&commands, &speeds, &volts, GEAR_CHANGE_RPM)
-    } else {
-        FvSpeedModel {
-            gear_change_rpm: GEAR_CHANGE_RPM,
-            low_range_v_per_rpm: f64::NAN,
-            high_range_v_per_rpm: f64::NAN,
-        }
-    };
-    let current_of = |p: &PeriodSummary| match settings.feedback {
-        Feedback::FeedCurrent => p.feed_current_rms_a,
-        _ => p.spindle_current_rms_a,
-    };
-    let force_of = |p: &PeriodSummary| match force {
-        ForceSource::Measured => p.force_mean_resultant_n,
-        ForceSource::CutModel {
-            geometry,
-            depth_mm,
-            width_mm,
-        } => geometry
-            .mean_forces(
-                p.feed_mm_min,
-                p.spindle_speed_rpm,
-                depth_mm.unwrap_or(p.depth_mm),
-                *width_mm,
-            )
-            .map_or(f64::NAN, |f| match settings.feedback {
-                Feedback::FeedCurrent => -f.fx_n,
-                _ => f.resultant_n(),
-            }),
-    };
-    let air_a = periods
-        .iter()
-        .map(|(p, _)| current_of(p))
-        .filter(|i| i.is_finite())
-        .fold(f64::INFINITY, f64::min);
-    let mut points = Vec::new();
-    let mut full_override_forces = Vec::new();
-    let mut previous_rpm = f64::NAN;
-    let (mut accelerating, mut air, mut no_force) = (0usize, 0usize, 0usize);
-    for (p, mean_override) in &periods {
-        let current_a = current_of(p);
-        let force_n = force_of(p);
-        let speed_rpm = fv_model.speed_rpm(p.spindle_fv_voltage_v, p.spindle_command_rpm);
-        let steady = !(previous_rpm.is_finite()
-            && (p.spindle_speed_rpm - previous_rpm).abs()
-                > STEADY_SPEED_FRACTION * p.spindle_speed_rpm.abs());
-        previous_rpm = p.spindle_speed_rpm;
-        if !(current_a.is_finite() && force_n.is_finite() && force_n > 0.0) {
-            no_force += 1;
-            continue;
-        }
-        if !steady {
-            accelerating += 1;
-            continue;
-        }
-        if matches!(force, ForceSource::CutModel { .. })
-            && current_a <= air_a * (1.0 + AIR_CURRENT_MARGIN)
-        {
-            air += 1;
-            continue;
-        }
-        if (mean_override - 100.0).abs() < 0.5 {
-            full_override_forces.push(force_n);
-        }
-        points.push(FitPoint {
-            time_s: p.end_time_s,
-            current_a,
-            force_n,
-            speed_rpm,
-            feed_mm_min: p.feed_mm_min,
-        });
-    }
-    notes.push(format!(
-        "{} of {} control periods used ({no_force} without a positive force, {accelerating} \
-         with the spindle changing speed{})",
-        points.len(),
-        periods.len(),
-        if matches!(force, ForceSource::CutModel { .. }) {
-            format!(", {air} in air")
-        } else {
-            String::new()
-        }
-    ));
-    let currents: Vec<f64> = points.iter().map(|p| p.current_a).collect();
-    let forces: Vec<f64> = points.iter().map(|p| p.force_n).collect();
-    let estimator = match settings.feedback {
-        Feedback::FeedCurrent => {
-            let feeds: Vec<f64> = points.iter().map(|p| p.feed_mm_min).collect();
-            Estimator::Feed {
-                model: FeedCurrentModel::calibrate(&currents, &feeds, &forces)
+            _ => {
+                let speeds: Vec<f64> = points.iter().map(|p| p.speed_rpm).collect();
+                Estimator::Spindle {
+                    model: SpindleCurrentModel::calibrate(
+                        &currents,
+                        &speeds,
+                        &forces,
+                        GEAR_CHANGE_RPM,
+                    )
                     .map_err(|e| setting(format!("the fit failed: {e}")))?,
+                    speed: fv_model,
+                }
             }
-        }
-        _ => {
-            let speeds: Vec<f64> = points.iter().map(|p| p.speed_rpm).collect();
-            Estimator::Spindle {
-                model: SpindleCurrentModel::calibrate(&currents, &speeds, &forces, GEAR_CHANGE_RPM)
-                    .map_err(|e| setting(format!("the fit failed: {e}")))?,
-                speed: fv_model,
-            }
-        }
-    };
-    let median = |values: &mut Vec<f64>| {
-        values.sort_by(f64::total_cmp);
-        values.get(values.len() / 2).copied().unwrap_or(f64::NAN)
-    };
-    let mut reference = if full_override_forces.is_empty() {
-        forces.clone()
-    } else {
-        full_override_forces
-    };
-    // An RMS column stands for three phases of its own value; a phase's peak is √2 of it.
-    let rms_only = columns
-        .columns(match settings.feedback {
-            Feedback::FeedCurrent => Channel::FeedPhase,
-            _ => Channel::SpindlePhase,
-        })
-        .is_empty();
-    let calibration = Calibration {
-        estimator,
-        median_force_at_full_override_n: median(&mut reference),
-        regulated_per_resultant: 1.0,
-        periods: points.len(),
-        max_phase_current_a: if rms_only {
-            max_phase_a * std::f64::consts::SQRT_2
+        };
+        let median = |values: &mut Vec<f64>| {
+            values.sort_by(f64::total_cmp);
+            values.get(values.len() / 2).copied().unwrap_or(f64::NAN)
+        };
+        let mut reference = if full_override_forces.is_empty() {
+            forces.clone()
         } else {
-            max_phase_a
-        },
-        duration_s: periods.last().map_or(0.0, |(p, _)| p.end_time_s),
-    };
-    Ok(LogFit {
-        calibration,
-        points,
-        notes,
-        force_source,
-    })
+            full_override_forces
+        };
+        let calibration = Calibration {
+            estimator,
+            median_force_at_full_override_n: median(&mut reference),
+            regulated_per_resultant: 1.0,
+            periods: points.len(),
+            max_phase_current_a: if self.rms_only {
+                self.max_phase_a * std::f64::consts::SQRT_2
+            } else {
+                self.max_phase_a
+            },
+            duration_s: periods.last().map_or(0.0, |(p, _)| p.end_time_s),
+        };
+        Ok(LogFit {
+            calibration,
+            points,
+            notes,
+            force_source: self.force_source.clone(),
+        })
+    }
+}
+
+impl Work for LogFitWork {
+    type Output = LogFit;
+    type Error = ReplayError;
+
+    /// Runs the chain over at most `budget` control periods; the fit once the log has ended.
+    fn advance(&mut self, budget: usize) -> Result<bool, ReplayError> {
+        if self.done {
+            return Ok(true);
+        }
+        for _ in 0..budget.max(1) {
+            if self.machine.finished() {
+                break;
+            }
+            self.period();
+        }
+        if self.machine.finished() {
+            self.output = Some(self.fit()?);
+            self.done = true;
+        }
+        Ok(self.done)
+    }
+
+    fn progress(&self) -> Progress {
+        Progress::new(
+            "Calibrating",
+            self.machine.row() as f64 / self.machine.rows().max(1) as f64,
+        )
+    }
+
+    fn finish(&mut self) -> Result<LogFit, ReplayError> {
+        self.output
+            .take()
+            .ok_or(ReplayError::Loop(LoopError::NotFinished))
+    }
 }

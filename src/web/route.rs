@@ -18,16 +18,19 @@ pub enum Page {
     Plant,
     /// Teach-in, sweeps and automatic tuning.
     Tune,
+    /// Engineers' own machine logs: analysis, calibration, replay.
+    Logs,
     /// The guided path through the ideas.
     Learn,
 }
 
 impl Page {
     /// Every page, in navigation order.
-    pub const ALL: [Page; 7] = [
+    pub const ALL: [Page; 8] = [
         Page::Simulate,
         Page::Compare,
         Page::Tune,
+        Page::Logs,
         Page::Fuzzy,
         Page::Plant,
         Page::SignalChain,
@@ -46,6 +49,7 @@ impl Page {
             Page::Fuzzy => "fuzzy",
             Page::Plant => "plant",
             Page::Tune => "tune",
+            Page::Logs => "logs",
             Page::Learn => "learn",
         }
     }
@@ -59,6 +63,7 @@ impl Page {
             Page::Fuzzy => "Fuzzy rules",
             Page::Plant => "Machine",
             Page::Tune => "Tune",
+            Page::Logs => "Logs",
             Page::Learn => "Learn",
         }
     }
