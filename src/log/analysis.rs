@@ -288,8 +288,13 @@ pub struct ChainWork {
     rms: Vec<f64>,
     window: usize,
     spectrum: (Vec<f64>, Vec<f64>),
+    spectrum_cursor: usize,
+    spectrum_weight: f64,
     output: Option<ChainOutput>,
 }
+
+/// Samples of the column one call of the spectrum stage takes (64 segments of 1024).
+const SPECTRUM_BLOCK: usize = 1 << 16;
 
 impl ChainWork {
     /// The chain of `request` on `log`; an unknown or text column is an error naming it.
@@ -313,6 +318,8 @@ impl ChainWork {
             rms: Vec::new(),
             window: 1,
             spectrum: (Vec::new(), Vec::new()),
+            spectrum_cursor: 0,
+            spectrum_weight: 0.0,
             output: None,
         })
     }
@@ -390,15 +397,49 @@ impl ChainWork {
                 }
             }
             2 => {
-                if let Some(p) = period {
-                    if !self.filtered.is_empty() {
-                        let psd = welch(&self.filtered, 1.0 / p, SEGMENT)
-                            .map_err(|e| format!("spectrum: {e}"))?;
-                        self.spectrum = (psd.freq_hz, psd.psd);
-                    }
-                } else {
+                // Welch's average over the column, a block of segments per call: each block's
+                // PSD weighted by its segments (segments across a block's edge are left out).
+                let Some(p) = period else {
                     self.notes
                         .push("the spectrum needs the sample period: skipped".into());
+                    self.stage += 1;
+                    return Ok(());
+                };
+                let start = self.spectrum_cursor;
+                let end = (start + SPECTRUM_BLOCK).min(self.filtered.len());
+                // A short last block joins the one before it.
+                let end = if self.filtered.len() - end < SEGMENT {
+                    self.filtered.len()
+                } else {
+                    end
+                };
+                if end > start {
+                    let psd = welch(&self.filtered[start..end], 1.0 / p, SEGMENT)
+                        .map_err(|e| format!("spectrum: {e}"))?;
+                    let weight = psd.segments as f64;
+                    if self.spectrum.0.is_empty() || self.spectrum.0.len() != psd.freq_hz.len() {
+                        if self.spectrum.0.is_empty() {
+                            self.spectrum =
+                                (psd.freq_hz, psd.psd.iter().map(|v| v * weight).collect());
+                            self.spectrum_weight = weight;
+                        }
+                    } else {
+                        for (sum, v) in self.spectrum.1.iter_mut().zip(&psd.psd) {
+                            *sum += v * weight;
+                        }
+                        self.spectrum_weight += weight;
+                    }
+                }
+                self.spectrum_cursor = end;
+                if end < self.filtered.len() {
+                    // More blocks: stay in this stage.
+                    return Ok(());
+                }
+                if self.spectrum_weight > 0.0 {
+                    let w = self.spectrum_weight;
+                    for v in &mut self.spectrum.1 {
+                        *v /= w;
+                    }
                 }
             }
             _ => {

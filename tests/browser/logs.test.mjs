@@ -4,7 +4,8 @@
 // Cancel, and the page never freezes.
 import { test, before, after } from 'node:test';
 import assert from 'node:assert/strict';
-import { readFile } from 'node:fs/promises';
+import { readFile, writeFile, mkdtemp, rm } from 'node:fs/promises';
+import { tmpdir } from 'node:os';
 import { join } from 'node:path';
 import { serveDist, launchBrowser, openLab, screenshot, watchLongTasks, root } from './harness.mjs';
 
@@ -65,9 +66,12 @@ test('two sample logs are opened, mapped, filtered, calibrated from, replayed an
   const force = page.getByRole('combobox', { name: 'F [N]' });
   assert.equal(await force.inputValue(), 'force');
   assert.equal(await page.getByRole('combobox', { name: 'S_I_W [A]' }).inputValue(), 'spindle-phase');
+  // The force is one column: choosing Phase takes it from F [N], and Phase holds no numbers.
   await page.getByRole('combobox', { name: 'Phase' }).selectOption('force');
   await page.getByRole('alert').filter({ hasText: 'column "Phase" holds no numbers' }).waitFor();
+  assert.equal(await force.inputValue(), '');
   await page.getByRole('combobox', { name: 'Phase' }).selectOption('label');
+  await force.selectOption('force');
   await page.getByRole('alert').filter({ hasText: 'holds no numbers' }).waitFor({ state: 'detached' });
 
   // The signal chain: a 100 Hz zero-phase low-pass on i_u, statistics per phase, the spectrum
@@ -138,13 +142,16 @@ test('a big file streams with a progress bar and can be cancelled', async () => 
   const rows = [];
   for (let i = 0; i < 20_000; i++) rows.push(`${(i / 1e4).toFixed(4)},${(10 * Math.sin(i / 7)).toFixed(5)},${(1000 + (i % 13)).toFixed(2)}`);
   const block = rows.join('\n') + '\n';
-  const text = 'time [s],S_I [A],S_speed [rpm]\n' + block.repeat(90);
-  await page.getByLabel('Open log files').setInputFiles({ name: 'big.csv', mimeType: 'text/csv', buffer: Buffer.from(text) });
+  const dir = await mkdtemp(join(tmpdir(), 'cutlab-logs-'));
+  const file = join(dir, 'big.csv');
+  await writeFile(file, 'time [s],S_I [A],S_speed [rpm]\n' + block.repeat(90));
+  await page.getByLabel('Open log files').setInputFiles(file);
   const progress = page.getByRole('progressbar', { name: 'Loading big.csv' });
   await progress.waitFor({ timeout: TIMEOUT });
   await page.getByRole('button', { name: 'Cancel loading' }).click();
   await page.getByRole('status').filter({ hasText: 'Cancelled: big.csv was not loaded.' }).waitFor({ timeout: TIMEOUT });
   assert.equal(await page.getByLabel('Analyse big.csv').count(), 0);
+  await rm(dir, { recursive: true });
   const longest = await longestTask();
   assert.ok(longest < 100, `the page froze for ${longest} ms`);
   assert.deepEqual(problems, []);
