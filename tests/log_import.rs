@@ -371,3 +371,84 @@ fn a_slow_rms_log_and_a_fast_phase_log_load_with_their_rates() {
     let a = analyse(&fast, "S_I_U [A]", &request).unwrap();
     assert_eq!(a.lowpass, Some((260.0, 4)));
 }
+
+#[test]
+fn the_pages_chain_filters_takes_the_rms_finds_the_line_and_groups_by_label_in_stages() {
+    use cutlab::log::analysis::{analyse, AnalysisRequest, ChainRequest, ChainWork};
+    use cutlab::work::Work;
+    let log = std::sync::Arc::new(load(sine_log(1000.0, 4000).as_bytes(), None));
+    let request = ChainRequest {
+        column: "Spindle current [A]".into(),
+        lowpass: Some((10.0, 4)),
+        rms_window_s: 0.1,
+        by: Some("Phase".into()),
+        sample_period_s: None,
+    };
+    let mut work = ChainWork::new(log.clone(), request.clone()).unwrap();
+    let mut calls = 0;
+    while !work.advance(1).unwrap() {
+        calls += 1;
+    }
+    assert!(calls >= 4, "one stage per call: {calls}");
+    let out = work.finish().unwrap();
+    assert!(out.lowpass_applied);
+    // The per-label statistics are the CLI's (the same zero-phase low-pass).
+    let cli = analyse(
+        &log,
+        "Spindle current [A]",
+        &AnalysisRequest {
+            by: Some("Phase".into()),
+            lowpass: Some((10.0, 4)),
+            spectrum: false,
+        },
+    )
+    .unwrap();
+    assert_eq!(out.analysis.by_label, cli.by_label);
+    assert_eq!(out.analysis.whole, cli.whole);
+    // Unfiltered: a 2 A sine on 10 A has an RMS of √(10² + 2²/2) over whole periods, and the
+    // strongest line is at 50 Hz.
+    let raw = ChainWork::new(
+        log,
+        ChainRequest {
+            lowpass: None,
+            ..request
+        },
+    )
+    .unwrap()
+    .run_to_end()
+    .unwrap();
+    let expected = (100.0f64 + 2.0).sqrt();
+    assert!((raw.rms[1000] - expected).abs() < 1e-9, "{}", raw.rms[1000]);
+    let strongest = raw
+        .analysis
+        .peaks
+        .iter()
+        .max_by(|a, b| a.psd.total_cmp(&b.psd))
+        .unwrap();
+    assert!(
+        (strongest.freq_hz - 50.0).abs() < 1.0,
+        "{:?}",
+        raw.analysis.peaks
+    );
+    // A cut-off above the Nyquist frequency is a skipped stage, said.
+    let slow = std::sync::Arc::new(load(sine_log(10.0, 100).as_bytes(), None));
+    let skipped = ChainWork::new(
+        slow,
+        ChainRequest {
+            column: "Spindle current [A]".into(),
+            lowpass: Some((10.0, 4)),
+            rms_window_s: 1.0,
+            by: None,
+            sample_period_s: None,
+        },
+    )
+    .unwrap()
+    .run_to_end()
+    .unwrap();
+    assert!(!skipped.lowpass_applied);
+    assert!(
+        skipped.analysis.notes[0].contains("Nyquist"),
+        "{:?}",
+        skipped.analysis.notes
+    );
+}

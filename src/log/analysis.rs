@@ -290,6 +290,7 @@ pub struct ChainWork {
     spectrum: (Vec<f64>, Vec<f64>),
     spectrum_cursor: usize,
     spectrum_weight: f64,
+    whole: Stats,
     output: Option<ChainOutput>,
 }
 
@@ -320,6 +321,7 @@ impl ChainWork {
             spectrum: (Vec::new(), Vec::new()),
             spectrum_cursor: 0,
             spectrum_weight: 0.0,
+            whole: Stats::of([].iter(), 0, None),
             output: None,
         })
     }
@@ -442,52 +444,63 @@ impl ChainWork {
                     }
                 }
             }
+            3 => {
+                // The statistics of what the chain made (filtered); per label in the next stage.
+                self.whole = Stats::of(self.filtered.iter(), self.log.rows, period);
+            }
             _ => {
-                let mut analysis = analyse(
-                    &self.log,
-                    &self.request.column,
-                    &AnalysisRequest {
-                        by: self.request.by.clone(),
-                        lowpass: None,
-                        spectrum: false,
-                    },
-                )?;
-                // The statistics of what the chain made (filtered), the peaks of its spectrum.
                 let values = &self.filtered;
-                analysis.whole = Stats::of(values.iter(), self.log.rows, period);
+                let mut by_label = Vec::new();
                 if let Some(by) = &self.request.by {
-                    if let Some(labels) = self.log.columns.iter().find(|c| &c.name == by) {
-                        analysis.by_label = labels
-                            .label_names
-                            .iter()
-                            .enumerate()
-                            .map(|(id, label)| {
-                                let rows: Vec<f64> = labels
-                                    .labels
-                                    .iter()
-                                    .zip(values)
-                                    .filter(|(l, _)| **l == id as u32)
-                                    .map(|(_, v)| *v)
-                                    .collect();
-                                LabelStats {
-                                    label: label.clone(),
-                                    stats: Stats::of(rows.iter(), rows.len(), period),
-                                }
-                            })
-                            .collect();
+                    let labels = self
+                        .log
+                        .columns
+                        .iter()
+                        .find(|c| &c.name == by)
+                        .ok_or_else(|| format!("no label column {by:?}"))?;
+                    if labels.kind != ColumnKind::Text {
+                        return Err(format!("column {by:?} holds no labels"));
                     }
+                    // One pass: each row's value into its label's list.
+                    let mut per_label: Vec<Vec<f64>> = vec![Vec::new(); labels.label_names.len()];
+                    for (l, v) in labels.labels.iter().zip(values) {
+                        if let Some(list) = per_label.get_mut(*l as usize) {
+                            list.push(*v);
+                        }
+                    }
+                    by_label = labels
+                        .label_names
+                        .iter()
+                        .zip(&per_label)
+                        .map(|(label, rows)| LabelStats {
+                            label: label.clone(),
+                            stats: Stats::of(rows.iter(), rows.len(), period),
+                        })
+                        .collect();
                 }
                 let (freq, psd) = &self.spectrum;
                 let lowest = freq.get(1).copied().unwrap_or(0.0);
-                analysis.peaks = find_peaks(freq, psd, lowest, PEAKS)
+                let peaks = find_peaks(freq, psd, lowest, PEAKS)
                     .into_iter()
                     .map(|peak| SpectrumPeak {
                         freq_hz: peak.interpolated_freq_hz,
                         psd: peak.value,
                     })
                     .collect();
-                analysis.lowpass = self.request.lowpass.filter(|_| self.lowpass_applied);
-                analysis.notes = std::mem::take(&mut self.notes);
+                let column = self
+                    .log
+                    .columns
+                    .iter()
+                    .find(|c| c.name == self.request.column);
+                let analysis = ColumnAnalysis {
+                    column: self.request.column.clone(),
+                    unit: column.and_then(|c| c.unit.clone()),
+                    lowpass: self.request.lowpass.filter(|_| self.lowpass_applied),
+                    notes: std::mem::take(&mut self.notes),
+                    whole: self.whole,
+                    by_label,
+                    peaks,
+                };
                 self.output = Some(ChainOutput {
                     filtered: std::mem::take(&mut self.filtered),
                     lowpass_applied: self.lowpass_applied,
@@ -516,13 +529,19 @@ impl crate::work::Work for ChainWork {
     }
 
     fn progress(&self) -> crate::work::Progress {
-        let stage = ["Low-pass", "Moving RMS", "Spectrum", "Statistics"];
+        let stage = [
+            "Low-pass",
+            "Moving RMS",
+            "Spectrum",
+            "Statistics",
+            "Statistics per label",
+        ];
         crate::work::Progress::new(
             format!(
                 "Signal chain: {}",
                 stage.get(self.stage).copied().unwrap_or("done")
             ),
-            self.stage as f64 / 4.0,
+            self.stage as f64 / 5.0,
         )
     }
 

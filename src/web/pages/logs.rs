@@ -45,7 +45,7 @@ use crate::web::components::work_job::Shared;
 /// At most this many logs are open (and overlaid) at once.
 const MAX_LOGS: usize = 4;
 /// The file is read this many bytes at a time: one chunk is one task of a few tens of ms.
-const CHUNK_BYTES: f64 = 2.0 * 1024.0 * 1024.0;
+const CHUNK_BYTES: f64 = 1024.0 * 1024.0;
 /// Points per series a chart is given (the chart decimates further to its width).
 const CHART_POINTS: usize = 4000;
 
@@ -128,7 +128,20 @@ async fn read_blob(
     if generation.try_get_value() != Some(mine) {
         return Ok(None);
     }
-    Ok(Some(builder.finish(None)))
+    // The last chunk's task has ended; finishing (the time column's steps over every row) gets
+    // a task of its own, and so does what the page makes of the log.
+    next_task().await;
+    let log = builder.finish(None);
+    next_task().await;
+    Ok(Some(log))
+}
+
+/// Lets the browser run its other tasks (input, painting) before going on.
+async fn next_task() {
+    let promise = js_sys::Promise::new(&mut |resolve, _| {
+        let _ = window().set_timeout_with_callback(&resolve);
+    });
+    let _ = wasm_bindgen_futures::JsFuture::from(promise).await;
 }
 
 /// Fetches a sample log from the server as a blob.
@@ -316,11 +329,18 @@ fn overlay_chart(
     let mut chart = LineChart::new(Axis::linear("time (s)"), Axis::linear(y_label));
     for (k, l) in logs.iter().enumerate() {
         if let Some(column) = channel_column(l, channels) {
-            let times = row_times(&l.log, None);
+            let generated;
+            let times: &[f64] = match l.log.time_column.and_then(|t| l.log.columns.get(t)) {
+                Some(t) => &t.values,
+                None => {
+                    generated = row_times(&l.log, None);
+                    &generated
+                }
+            };
             chart.series.push(Series::new(
                 format!("{}: {}", l.name, column.name),
                 PALETTE[k % PALETTE.len()],
-                points(&times, &column.values, view),
+                points(times, &column.values, view),
             ));
         }
     }
