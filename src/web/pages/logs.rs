@@ -423,10 +423,13 @@ fn fit_chart(fit: &LogFit) -> LineChart {
     chart
 }
 
+/// A value of a replay's trace row.
+type RowValue = fn(&crate::closed_loop::trace::TraceRow) -> f64;
+
 fn replay_chart(
     results: &[Arc<ReplayResult>],
-    value: fn(&crate::closed_loop::trace::TraceRow) -> f64,
-    logged: Option<(&str, fn(&crate::closed_loop::trace::TraceRow) -> f64)>,
+    value: RowValue,
+    logged: Option<(&str, RowValue)>,
     y_label: &str,
     view: Option<&Range<f64>>,
 ) -> LineChart {
