@@ -17,7 +17,8 @@ use crate::work::Work;
 /// The long help of `cutlab log`.
 pub const ABOUT: &str = "Read a machine's CSV log as it is: comma, semicolon or tab delimited \
 (detected), a decimal comma, quoted fields, a byte-order mark, CRLF, a header with units or none, \
-text columns kept as labels. Damaged lines are reported by line and column and kept as gaps.";
+text columns kept as labels. Damaged lines are reported by line and column and kept as gaps. \
+Inspect it, analyse its columns, or replay a controller on it (docs/logs.md).";
 
 /// The options of `cutlab log`: a subcommand.
 #[derive(Debug, clap::Args)]

@@ -173,6 +173,14 @@ impl std::fmt::Display for MappingError {
 
 impl std::error::Error for MappingError {}
 
+/// A label in running text: "Measured force (N)" → "measured force (N)".
+fn lower_first(label: &str) -> String {
+    let mut chars = label.chars();
+    chars
+        .next()
+        .map_or(String::new(), |c| c.to_lowercase().chain(chars).collect())
+}
+
 /// Whether a column name starts with a feed axis (`X_`, `Y_`, `Z_`, also `X.`, `X-`, `X `).
 fn feed_axis(name: &str) -> bool {
     let lower = name.trim().to_ascii_lowercase();
@@ -301,7 +309,7 @@ impl Mapping {
             if channel.numeric() && !numeric {
                 return Err(MappingError(format!(
                     "column {name:?} holds no numbers, so it cannot be the {}",
-                    channel.label().to_lowercase()
+                    lower_first(channel.label())
                 )));
             }
             if !channel.numeric() && column.kind != ColumnKind::Text {
@@ -314,7 +322,7 @@ impl Mapping {
                 return Err(MappingError(format!(
                     "{} columns are the {}: {}; choose {}",
                     slot.len() + 1,
-                    channel.label().to_lowercase(),
+                    lower_first(channel.label()),
                     self.columns_of(*channel).join(", "),
                     if channel.max_columns() == 1 {
                         "one".to_string()
@@ -390,7 +398,11 @@ mod tests {
         assert_eq!(r.column(Channel::Time), Some(0));
         m.set("Phase", Some(Channel::Force));
         let e = m.resolve(&log).unwrap_err().to_string();
-        assert!(e.contains("\"Phase\" holds no numbers"), "{e}");
+        assert!(
+            e.ends_with("\"Phase\" holds no numbers, so it cannot be the measured force (N)"),
+            "{e}"
+        );
+        m.set("Phase", Some(Channel::Label));
         m.columns.push(("Torque".into(), Channel::Force));
         let e = m.resolve(&log).unwrap_err().to_string();
         assert!(e.contains("no column \"Torque\""), "{e}");
