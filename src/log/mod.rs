@@ -176,7 +176,7 @@ struct ColumnBuilder {
 /// builder.push(b"1;2,5\n");
 /// let log = builder.finish(None);
 /// assert_eq!(log.columns[1].values, [1.5, 2.5]);
-/// assert_eq!(log.sample_period_s, Some(0.001));
+/// assert_eq!(log.sample_period_s, Some(0.01));
 /// ```
 #[derive(Debug, Default)]
 pub struct LogBuilder {
