@@ -35,6 +35,7 @@
 //! |---|---|
 //! | [`plant`] | the simulated machine: milling mechanics, feed and spindle drives, motor currents, sensors, the FANUC-style CNC, scenarios and the papers' presets |
 //! | [`machine`] | the one interface between the closed loop and a machine: simulated, replayed or real |
+//! | [`log`] | engineers' own CSV logs: the fast incremental reader (any dialect, damaged lines by line and column), analysis, the column → channel mapping, a log as a machine (replay of controllers) and calibration from a log |
 //! | [`protocol`] | the serial protocol to a bridge device: COBS/CRC-32 framing and frames (a `no_std` codec), the device emulator and the native host |
 //! | [`signal`] | Butterworth design (second-order sections), biquad-cascade filtering, zero-phase filtering, RMS, Clarke/Park, spectra, min/max decimation |
 //! | [`estimation`] | current → force: paper 000's feed-drive and paper 003's spindle models, F/V speed identification, teach-cut calibration by least squares |

@@ -326,3 +326,41 @@ fn the_synthetic_machine_export_reads_and_analyses_by_phase() {
         );
     }
 }
+
+/// The synthetic 1 kHz DAQ capture in www/data (made by scripts/sample-logs from
+/// examples/sample_daq_log.rs): time in ms, three spindle phase currents, a dynamometer; its
+/// columns map themselves, and its force calibrates the spindle current it was recorded with.
+#[test]
+fn the_synthetic_daq_capture_maps_itself_and_calibrates() {
+    use cutlab::log::mapping::{Channel, Mapping};
+    use cutlab::log::replay::{fit_calibration, ForceSource, ReplaySettings};
+    let bytes = std::fs::read(format!("{DATA}synthetic-maneerat-doc-2-daq.csv")).unwrap();
+    let log = std::sync::Arc::new(cutlab::log::load(&bytes, None));
+    assert_eq!(log.rows, 12_000);
+    assert_eq!(log.sample_period_s, Some(0.001));
+    assert!(log.problems.is_empty(), "{:?}", log.problems);
+    let mapping = Mapping::guess(&log);
+    assert_eq!(mapping.count(Channel::SpindlePhase), 3);
+    for (channel, column) in [
+        (Channel::Time, "Time [ms]"),
+        (Channel::SpindleSpeed, "S_speed [rpm]"),
+        (Channel::Feed, "X_feed [mm/min]"),
+        (Channel::Override, "Override [%]"),
+        (Channel::Force, "F [N]"),
+        (Channel::Label, "Phase"),
+    ] {
+        assert_eq!(mapping.columns_of(channel), [column], "{channel:?}");
+    }
+    let fit = fit_calibration(
+        &log,
+        &mapping,
+        &ReplaySettings::default(),
+        &ForceSource::Measured,
+    )
+    .unwrap();
+    let cutlab::closed_loop::runner::Estimator::Spindle { model, .. } = &fit.calibration.estimator
+    else {
+        panic!("a spindle model");
+    };
+    assert!(model.rows[0].quality.r_squared > 0.95, "{}", fit.quality());
+}

@@ -621,6 +621,22 @@ mod tests {
     }
 
     #[test]
+    fn a_dotted_series_is_one_circle_per_point_and_no_line() {
+        let mut chart = LineChart::new(Axis::linear("force (N)"), Axis::linear("current (A)"));
+        chart.series.push(
+            Series::new(
+                "periods",
+                PALETTE[0],
+                vec![(100.0, 5.0), (200.0, 6.0), (f64::NAN, 1.0), (300.0, 7.0)],
+            )
+            .with_stroke(Stroke::Points),
+        );
+        chart.fit();
+        let (svg, _) = render(&chart);
+        assert_eq!(svg.matches("<circle").count(), 3, "{svg}");
+    }
+
+    #[test]
     fn draws_axes_labels_and_lines() {
         let (svg, geometry) = render(&sine_chart());
         assert!(svg.contains("time (s)"));

@@ -9,8 +9,9 @@ use serde::Serialize;
 
 use super::args::{required, value_or};
 use super::{write_json, CliError, Io};
-use crate::closed_loop::runner::GEAR_CHANGE_RPM;
+use crate::closed_loop::runner::{Calibration, Estimator, GEAR_CHANGE_RPM};
 use crate::estimation::cut_forces::{cutting_material, CutGeometry};
+use crate::estimation::speed::FvSpeedModel;
 use crate::estimation::teach_log::{calibrate_log, LogCalibration, LogError, LogTable};
 use crate::plant::mechanics::{Cutter, MillingMode};
 
@@ -29,6 +30,20 @@ pub struct CalibrateArgs {
     json: bool,
     #[command(flatten)]
     log: LogCalibrationArgs,
+    #[arg(
+        long = "save-calibration",
+        help = "Write the fitted model as a calibration file that cutlab sim/host --calibration, \
+         cutlab log replay --calibration and the browser read (the spindle model, or the feed \
+         model with --feedback feed)",
+        value_name = "FILE"
+    )]
+    save_calibration: Option<String>,
+    #[arg(
+        long = "feedback",
+        help = "Which model --save-calibration writes: spindle (default when fitted) or feed",
+        value_name = "spindle|feed"
+    )]
+    feedback: Option<String>,
 }
 
 /// How a logged teach cut is read: the options `cutlab calibrate` and `cutlab tune --teach-in
@@ -229,6 +244,21 @@ pub fn run(args: CalibrateArgs, io: &mut Io<'_>) -> Result<(), CliError> {
     )
     .map_err(in_file)?;
     let rows_with_force = report.rows_with_force;
+    if let Some(path) = args.save_calibration.as_deref() {
+        let (calibration, which) = saved_calibration(&report, &table, args.feedback.as_deref())?;
+        super::save_calibration(
+            path,
+            &calibration,
+            format!(
+                "cutlab calibrate {file}, {which} model, force from {}",
+                report.force_source
+            ),
+        )?;
+    } else if args.feedback.is_some() {
+        return Err(CliError::new(
+            "--feedback only applies with --save-calibration",
+        ));
+    }
     if args.json {
         return write_json(
             io.stdout,
@@ -293,4 +323,90 @@ pub fn run(args: CalibrateArgs, io: &mut Io<'_>) -> Result<(), CliError> {
     }
     io.stdout.write_all(out.as_bytes())?;
     Ok(())
+}
+
+/// The calibration a fitted log makes: one model (the spindle's unless `feedback` says feed), no
+/// F/V slope (the estimator then reads the programmed speed; a log of a speed column has no
+/// converter voltage), the median force it was fitted to as the force at full override, and
+/// √2 × the largest RMS current as the largest phase current (the peak of a sine).
+fn saved_calibration(
+    report: &LogCalibration,
+    table: &LogTable,
+    feedback: Option<&str>,
+) -> Result<(Calibration, &'static str), CliError> {
+    let largest = |name: &str| {
+        table.column(name).map_or(0.0, |values| {
+            values
+                .iter()
+                .copied()
+                .filter(|v| v.is_finite())
+                .fold(0.0, f64::max)
+        })
+    };
+    let duration_s = table.column("time_s").map_or(0.0, |t| {
+        let finite: Vec<f64> = t.iter().copied().filter(|v| v.is_finite()).collect();
+        match (finite.first(), finite.last()) {
+            (Some(a), Some(b)) => (b - a).max(0.0),
+            _ => 0.0,
+        }
+    });
+    let want_feed = match feedback.map(str::trim) {
+        None => report.spindle.is_none(),
+        Some("spindle") => false,
+        Some("feed") => true,
+        Some(other) => {
+            return Err(CliError::new(format!(
+                "--feedback: expected spindle or feed, got {other:?}"
+            )))
+        }
+    };
+    if want_feed {
+        let model = report.feed.ok_or_else(|| {
+            CliError::new(format!(
+                "--save-calibration: no feed model was fitted ({})",
+                report.feed_error.as_deref().unwrap_or("no reason given")
+            ))
+        })?;
+        Ok((
+            Calibration {
+                estimator: Estimator::Feed { model },
+                // A log's rows carry no air periods this fit saw; the envelope falls back to
+                // its fixed fraction of the target.
+                air_force_estimate_n: f64::NAN,
+                median_force_at_full_override_n: report.median_feed_force_n,
+                regulated_per_resultant: 1.0,
+                periods: model.quality.samples,
+                max_phase_current_a: std::f64::consts::SQRT_2 * largest("feed_current_rms_a"),
+                duration_s,
+            },
+            "feed",
+        ))
+    } else {
+        let model = report.spindle.clone().ok_or_else(|| {
+            CliError::new(format!(
+                "--save-calibration: no spindle model was fitted ({})",
+                report.spindle_error.as_deref().unwrap_or("no reason given")
+            ))
+        })?;
+        let periods = model.rows.iter().map(|r| r.quality.samples).sum();
+        Ok((
+            Calibration {
+                estimator: Estimator::Spindle {
+                    speed: FvSpeedModel {
+                        gear_change_rpm: model.gear_change_rpm,
+                        low_range_v_per_rpm: f64::NAN,
+                        high_range_v_per_rpm: f64::NAN,
+                    },
+                    model,
+                },
+                air_force_estimate_n: f64::NAN,
+                median_force_at_full_override_n: report.median_force_n,
+                regulated_per_resultant: 1.0,
+                periods,
+                max_phase_current_a: std::f64::consts::SQRT_2 * largest("spindle_current_rms_a"),
+                duration_s,
+            },
+            "spindle",
+        ))
+    }
 }

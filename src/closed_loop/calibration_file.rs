@@ -169,17 +169,12 @@ fn check_calibration(c: &Calibration) -> Result<(), String> {
                 ("high_range_v_per_rpm", speed.high_range_v_per_rpm),
             ];
             for (name, slope) in slopes {
-                // NaN is a gear range the teach cut never ran in: the estimator then takes the
+                // NaN is a gear range the teach cut never ran in (or, for both, a calibration
+                // from a log without an F/V converter's voltage): the estimator then takes the
                 // programmed speed. Anything else must be a real slope.
                 if !slope.is_nan() {
                     positive(&format!("{at}.{name}"), slope)?;
                 }
-            }
-            if slopes.iter().all(|(_, s)| s.is_nan()) {
-                return Err(format!(
-                    "{at}: neither gear range has an F/V slope (both null); the speed cannot be \
-                     identified"
-                ));
             }
         }
         Estimator::Feed { model } => {
@@ -345,13 +340,18 @@ mod tests {
         let e = edit(&rows, serde_json::json!([]));
         assert!(e.contains("rows: empty"), "{e}");
         // kim-step-doc runs above the gear change only: the low range's slope is null (never
-        // calibrated), which is allowed; without the high range's too, no speed is known.
+        // calibrated), which is allowed.
         assert!(text.contains("\"low_range_v_per_rpm\": null"), "{text}");
-        let e = edit(
-            &["calibration", "estimator", "speed", "high_range_v_per_rpm"],
-            serde_json::Value::Null,
-        );
-        assert!(e.contains("neither gear range"), "{e}");
+        // Without either slope (a calibration from a log without the F/V voltage) the estimator
+        // reads the programmed speed: allowed.
+        let mut no_fv = json.clone();
+        no_fv["calibration"]["estimator"]["speed"]["high_range_v_per_rpm"] =
+            serde_json::Value::Null;
+        let read = CalibrationFile::from_json(&no_fv.to_string()).unwrap();
+        let Estimator::Spindle { speed, .. } = &read.calibration.estimator else {
+            panic!("a spindle model");
+        };
+        assert_eq!(speed.speed_rpm(4.2, 1000.0), 1000.0);
         let e = edit(
             &["calibration", "estimator", "speed", "high_range_v_per_rpm"],
             0.into(),

@@ -2,6 +2,7 @@
 //! → override, recorded as a trace and judged by metrics.
 
 pub mod calibration_file;
+pub mod calibration_store;
 pub mod chain;
 pub mod config;
 pub mod definition;

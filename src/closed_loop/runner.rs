@@ -97,9 +97,11 @@ pub struct LoopSettings {
     pub feedback: Feedback,
     /// The controller's period.
     pub control_period_s: f64,
-    /// Low-pass on the spindle phase currents (paper 003's analog filter: 260 Hz).
+    /// Low-pass on the spindle phase currents (paper 003's analog filter: 260 Hz). Infinite:
+    /// no low-pass (a replayed log whose current is already an RMS value, or one sampled too
+    /// slowly for the cut-off: [`crate::log::replay`]).
     pub spindle_lowpass_hz: f64,
-    /// Low-pass on the feed phase currents (paper 003: 50 Hz).
+    /// Low-pass on the feed phase currents (paper 003: 50 Hz); infinite: none.
     pub feed_lowpass_hz: f64,
     /// Order of both Butterworth low-passes.
     pub lowpass_order: usize,
@@ -361,6 +363,11 @@ fn lowpass(
     order: usize,
     sample_rate_hz: f64,
 ) -> Result<crate::signal::sos::Sos, LoopError> {
+    if cutoff_hz == f64::INFINITY {
+        // No low-pass: one section that passes every sample through unchanged.
+        return crate::signal::sos::Sos::from_rows(&[[1.0, 0.0, 0.0, 1.0, 0.0, 0.0]])
+            .map_err(|_| LoopError::Filter(DesignError::Order { order: 0 }));
+    }
     butter(&ButterworthSpec {
         kind: FilterKind::Lowpass,
         order,

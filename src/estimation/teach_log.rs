@@ -327,6 +327,10 @@ impl LogTable {
 pub struct LogCalibration {
     /// Rows with a positive force.
     pub rows_with_force: usize,
+    /// Median of the positive forces the spindle model was fitted to (NaN without any).
+    pub median_force_n: f64,
+    /// Median of the positive feed forces the feed model was fitted to (NaN without any).
+    pub median_feed_force_n: f64,
     /// Where the spindle model's force came from.
     pub force_source: String,
     /// Where the feed model's force came from.
@@ -552,8 +556,22 @@ pub fn calibrate_log(
 ) -> Result<LogCalibration, LogError> {
     let forces = forces(table, geometry)?;
     let force = forces.resultant_n.as_slice();
+    let median_positive = |values: &[f64]| {
+        let mut positive: Vec<f64> = values
+            .iter()
+            .copied()
+            .filter(|f| f.is_finite() && *f > 0.0)
+            .collect();
+        positive.sort_by(f64::total_cmp);
+        positive
+            .get(positive.len() / 2)
+            .copied()
+            .unwrap_or(f64::NAN)
+    };
     let mut report = LogCalibration {
         rows_with_force: force.iter().filter(|f| f.is_finite() && **f > 0.0).count(),
+        median_force_n: median_positive(force),
+        median_feed_force_n: median_positive(&forces.feed_n),
         force_source: forces.source.clone(),
         feed_force_source: forces.feed_source.clone(),
         model_vs_measured_pct: forces.model_vs_measured_pct,

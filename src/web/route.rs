@@ -20,17 +20,20 @@ pub enum Page {
     Tune,
     /// A real machine over WebSerial, or the virtual device.
     Hardware,
+    /// Engineers' own machine logs: analysis, calibration, replay.
+    Logs,
     /// The guided path through the ideas.
     Learn,
 }
 
 impl Page {
     /// Every page, in navigation order.
-    pub const ALL: [Page; 8] = [
+    pub const ALL: [Page; 9] = [
         Page::Simulate,
         Page::Compare,
         Page::Tune,
         Page::Hardware,
+        Page::Logs,
         Page::Fuzzy,
         Page::Plant,
         Page::SignalChain,
@@ -50,6 +53,7 @@ impl Page {
             Page::Plant => "plant",
             Page::Tune => "tune",
             Page::Hardware => "hardware",
+            Page::Logs => "logs",
             Page::Learn => "learn",
         }
     }
@@ -64,6 +68,7 @@ impl Page {
             Page::Plant => "Machine",
             Page::Tune => "Tune",
             Page::Hardware => "Hardware",
+            Page::Logs => "Logs",
             Page::Learn => "Learn",
         }
     }
