@@ -35,13 +35,15 @@
 //! |---|---|
 //! | [`plant`] | the simulated machine: milling mechanics, feed and spindle drives, motor currents, sensors, the FANUC-style CNC, scenarios and the papers' presets |
 //! | [`machine`] | the one interface between the closed loop and a machine: simulated, replayed or real |
+//! | [`log`] | engineers' own CSV logs: the fast incremental reader (any dialect, damaged lines by line and column), analysis, the column → channel mapping, a log as a machine (replay of controllers) and calibration from a log |
 //! | [`protocol`] | the serial protocol to a bridge device: COBS/CRC-32 framing and frames (a `no_std` codec), the device emulator and the native host |
 //! | [`signal`] | Butterworth design (second-order sections), biquad-cascade filtering, zero-phase filtering, RMS, Clarke/Park, spectra, min/max decimation |
 //! | [`estimation`] | current → force: paper 000's feed-drive and paper 003's spindle models, F/V speed identification, teach-cut calibration by least squares |
 //! | [`control`] | the controller interface and registry: fixed feed, current restriction, threshold-proportional, fuzzy (a Mamdani engine with FLL), PI with anti-windup, Lyapunov MRAC |
 //! | [`safety`] | the safety envelope after every controller: limits, rate limit, quantisation, arming, sensor faults, overload |
 //! | [`closed_loop`] | the one loop that wires them, fed by pushed samples: the run definition, teach cut, signal chain, trace, metrics and the table of them, and the lab runs the CLI and the browser share |
-//! | [`tuning`] | sweeps and Nelder–Mead over a controller's parameters across scenarios, on the loop above |
+//! | [`tuning`] | sweeps and Nelder–Mead over a controller's parameters across scenarios, on the loop above, and the teach-in proposal from a simulated, logged or saved teach cut |
+//! | [`hardware`] | a machine (or the emulator) driven from the lab as it runs: link state, both watchdogs, arming, the same loop fed by pushed samples, recordings as CSV chunks |
 //! | [`input`] | numbers typed into forms, parsed with messages for the field |
 //! | [`rng`] | the seeded random source every simulation draws from |
 //! | [`math`] | transcendental functions that give the same bits natively and in wasm |
@@ -60,6 +62,7 @@
 pub mod closed_loop;
 pub mod control;
 pub mod estimation;
+pub mod hardware;
 pub mod input;
 pub mod log;
 pub mod machine;

@@ -1,10 +1,10 @@
 //! The boundary every closed loop talks through.
 //!
 //! A [`Machine`] takes the feed-override command of one sample period and returns what its sensors
-//! read in that period. The simulated FANUC machine ([`crate::plant`]) implements it today; a
-//! replayed CSV log and a real machine behind the serial protocol (the next milestones) will
-//! implement the same trait, so the signal chain, estimator, controllers and safety envelope above
-//! it stay one code path in every mode.
+//! read in that period. The simulated FANUC machine ([`crate::plant`]), a replayed CSV log
+//! ([`crate::log::replay::LogMachine`]) and a real machine behind the serial protocol implement
+//! it, so the signal chain, estimator, controllers and safety envelope above it stay one code path
+//! in every mode.
 //!
 //! [`SensorSample`] holds only what a real installation can measure; what only a simulation knows
 //! (the true force, the depth of cut) travels beside it in [`PlantTruth`], used for plots and

@@ -5,14 +5,16 @@
 //!
 //! 1. holds a fixed *arming* override until the spindle has run for the arming delay (its
 //!    starting current says nothing about the cut, paper 003);
-//! 2. clamps the request to `[min, max]` and rate-limits it (a continuous internal value moves
+//! 2. holds the override at most at the entry override while the estimated force says the tool
+//!    is in air ([`EnvelopeConfig::air_cut_force_n`]), so no controller enters a cut wound up;
+//! 3. clamps the request to `[min, max]` and rate-limits it (a continuous internal value moves
 //!    by at most `max_rate_pct_per_s · dt` per period);
-//! 3. quantises it to what the machine can take (a 16-position dial, 1 % steps, or continuous),
+//! 4. quantises it to what the machine can take (a 16-position dial, 1 % steps, or continuous),
 //!    never outside `[min, max]`;
-//! 4. watches the sensors ([`SafetyEnvelope::observe`], every sample): non-finite, stuck or
+//! 5. watches the sensors ([`SafetyEnvelope::observe`], every sample): non-finite, stuck or
 //!    out-of-range currents and missing samples raise a fault, during which the override is held
 //!    (or moves to a fallback value) and the controller's request is ignored;
-//! 5. raises an overload alarm when the estimated force stays above a hard limit for longer than
+//! 6. raises an overload alarm when the estimated force stays above a hard limit for longer than
 //!    a set time, and then latches feed hold.
 //!
 //! Each of these emits a [`SafetyEvent`] for the event log.
@@ -111,6 +113,12 @@ pub struct EnvelopeConfig {
     pub recover_after_s: f64,
     /// What to do during a fault.
     pub fault_action: FaultAction,
+    /// An estimated force below this is the tool in air (before it enters the part, between
+    /// cuts): the override is then held at most at [`EnvelopeConfig::entry_override_pct`]. 0 turns
+    /// the rule off.
+    pub air_cut_force_n: f64,
+    /// The highest override while the tool is in air: the one it enters the next cut with.
+    pub entry_override_pct: f64,
     /// The hard force limit of the overload alarm.
     pub overload_limit_n: f64,
     /// How long the force may exceed the hard limit before feed hold.
@@ -130,6 +138,11 @@ pub enum ArmingTrigger {
     ProgrammedFeed,
 }
 
+/// Below this fraction of the target, an estimated force is the tool in air: the idle current's
+/// residual scatter (a few percent of a cut's current) stays well under it, and a tool entering a
+/// cut passes it within a fraction of the tool radius.
+pub const AIR_CUT_FRACTION: f64 = 0.2;
+
 impl EnvelopeConfig {
     /// Defaults for a force target: override 10–150 % at up to 100 %/s on FANUC's 16-position
     /// dial (0, 10, …, 150 %), arming 3 s after spindle start (paper 003), overload at 1.5 × target
@@ -148,6 +161,8 @@ impl EnvelopeConfig {
             max_gap_periods: 3.0,
             recover_after_s: 0.1,
             fault_action: FaultAction::Hold,
+            air_cut_force_n: AIR_CUT_FRACTION * target_force_n,
+            entry_override_pct: 100.0,
             overload_limit_n: 1.5 * target_force_n,
             overload_time_s: 0.2,
         }
@@ -232,6 +247,15 @@ pub enum SafetyEvent {
         /// The estimated force then.
         force_n: f64,
     },
+    /// The tool is in air and the controller asked for more than the entry override: the
+    /// envelope holds the entry override until the estimate shows a cut again (once per stretch
+    /// of air).
+    AirCut {
+        /// When.
+        time_s: f64,
+        /// The override held.
+        entry_override_pct: f64,
+    },
 }
 
 impl SafetyEvent {
@@ -243,6 +267,7 @@ impl SafetyEvent {
             | SafetyEvent::FaultCleared { time_s }
             | SafetyEvent::Overload { time_s, .. }
             | SafetyEvent::CutBeforeArming { time_s, .. }
+            | SafetyEvent::AirCut { time_s, .. }
             | SafetyEvent::ControllerFault { time_s } => time_s,
         }
     }
@@ -264,6 +289,11 @@ impl SafetyEvent {
             SafetyEvent::CutBeforeArming { force_n, .. } => format!(
                 "warning: cutting ({force_n:.0} N) before the loop armed; the controller enters \
                  the cut uncontrolled (approach in air until the arming delay has passed)"
+            ),
+            SafetyEvent::AirCut {
+                entry_override_pct, ..
+            } => format!(
+                "air cut: override held at {entry_override_pct:.0} % until the tool enters the cut"
             ),
         }
     }
@@ -288,6 +318,8 @@ pub struct SafetyEnvelope {
     programmed_feed_s: f64,
     /// Whether the controller's last request was not a number (reported once per episode).
     controller_fault: bool,
+    /// Whether the air-cut rule is holding the override (for one event per stretch of air).
+    holding_in_air: bool,
     events: Vec<SafetyEvent>,
 }
 
@@ -312,6 +344,8 @@ impl SafetyEnvelope {
             c.recover_after_s,
             c.overload_limit_n,
             c.overload_time_s,
+            c.air_cut_force_n,
+            c.entry_override_pct,
             sample_rate_hz,
         ]
         .iter()
@@ -330,6 +364,9 @@ impl SafetyEnvelope {
         }
         if sample_rate_hz <= 0.0 {
             return err("the sample rate must be positive".into());
+        }
+        if c.air_cut_force_n < 0.0 {
+            return err("the air-cut force must not be negative (0 turns the rule off)".into());
         }
         if c.max_current_a <= 0.0 || c.overload_limit_n <= 0.0 {
             return err("the current range and the overload limit must be positive".into());
@@ -382,6 +419,7 @@ impl SafetyEnvelope {
             overload_s: 0.0,
             programmed_feed_s: 0.0,
             controller_fault: false,
+            holding_in_air: false,
             events: Vec::with_capacity(EVENT_CAPACITY),
             config,
         };
@@ -576,8 +614,27 @@ impl SafetyEnvelope {
                 (None, _) => self.continuous_pct,
             }
         };
+        // In air a controller sees no force and asks for ever more feed; entering the next cut at
+        // that feed would load the tool far beyond the target before any loop could react. The
+        // tool enters at the entry override, as commercial adaptive feed controls do (they do not
+        // adapt in air), and the controller takes over from there.
+        let in_air = self.armed
+            && self.fault.is_none()
+            && force_n.is_finite()
+            && force_n < c.air_cut_force_n;
+        let entry_override_pct = c.entry_override_pct;
+        let holds = in_air && wanted > entry_override_pct;
+        let wanted = if holds { entry_override_pct } else { wanted };
         let wanted = wanted.clamp(c.min_override_pct, c.max_override_pct);
         let max_step = c.max_rate_pct_per_s * dt_s;
+        if holds && !self.holding_in_air {
+            self.emit(SafetyEvent::AirCut {
+                time_s,
+                entry_override_pct,
+            });
+        }
+        // One event per stretch of air: only a cut ends it, not a controller asking for less.
+        self.holding_in_air = in_air && (self.holding_in_air || holds);
         self.continuous_pct += (wanted - self.continuous_pct).clamp(-max_step, max_step);
         self.output_pct = self.quantize(self.continuous_pct);
         OverrideCommand {
@@ -606,6 +663,51 @@ mod tests {
 
     fn envelope(config: EnvelopeConfig) -> SafetyEnvelope {
         SafetyEnvelope::new(config, 1000.0).unwrap()
+    }
+
+    #[test]
+    fn in_air_the_override_stays_at_the_entry_override_whatever_the_controller_asks() {
+        // Target 300 N: below 60 N the tool is in air.
+        let mut env = envelope(EnvelopeConfig::for_target(300.0));
+        let mut t = 0.0;
+        let mut step = |env: &mut SafetyEnvelope, request: f64, force_n: f64| {
+            t += 0.1;
+            env.command(request, force_n, t, 0.1, &running_sample(t))
+                .override_pct
+        };
+        // A controller that sees no force asks for the most it may: the envelope holds 100 %,
+        // and says so once.
+        for _ in 0..30 {
+            assert_eq!(step(&mut env, 150.0, 5.0), 100.0);
+        }
+        let mut seen = Vec::new();
+        let mut air_events = |env: &mut SafetyEnvelope| {
+            env.drain_events(&mut seen);
+            seen.iter()
+                .filter(|e| matches!(e, SafetyEvent::AirCut { .. }))
+                .count()
+        };
+        assert_eq!(air_events(&mut env), 1);
+        // Asking for less is granted in air too (rate-limited: 10 % per 0.1 s).
+        assert_eq!(step(&mut env, 50.0, 5.0), 90.0);
+        // In the cut the controller has the whole band again.
+        let mut last = 0.0;
+        for _ in 0..20 {
+            last = step(&mut env, 150.0, 250.0);
+        }
+        assert_eq!(last, 150.0);
+        // The next stretch of air is a new event.
+        step(&mut env, 150.0, 5.0);
+        assert_eq!(air_events(&mut env), 2);
+        // Off: the air cut rule does nothing.
+        let mut config = EnvelopeConfig::for_target(300.0);
+        config.air_cut_force_n = 0.0;
+        let mut env = envelope(config);
+        let mut last = 0.0;
+        for _ in 0..20 {
+            last = step(&mut env, 150.0, 5.0);
+        }
+        assert_eq!(last, 150.0);
     }
 
     #[test]

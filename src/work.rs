@@ -83,40 +83,63 @@ const RUN_TO_END_BUDGET: usize = 10_000;
 /// If `f` panics on an item (a bug), the panic is carried to the caller once the other threads
 /// have stopped.
 pub fn parallel_map<T: Sync, R: Send>(items: &[T], f: impl Fn(&T) -> R + Sync) -> Vec<R> {
+    parallel_map_reporting(items, available_threads(), f, |_, _| {})
+}
+
+/// The threads this machine runs at once (1 in wasm, or if the system will not say).
+pub fn available_threads() -> usize {
     #[cfg(not(target_arch = "wasm32"))]
-    {
+    return std::thread::available_parallelism().map_or(1, |n| n.get());
+    #[cfg(target_arch = "wasm32")]
+    1
+}
+
+/// `f` over `items` on up to `threads` threads natively (each thread takes the next item as soon
+/// as it is free, so one slow item does not hold the others back), in order in wasm. `done(i,
+/// &result)` is called on the calling thread as each result comes in, in the order they finish;
+/// the results are returned in `items`' order whatever the threads.
+pub fn parallel_map_reporting<T: Sync, R: Send>(
+    items: &[T],
+    threads: usize,
+    f: impl Fn(&T) -> R + Sync,
+    mut done: impl FnMut(usize, &R),
+) -> Vec<R> {
+    #[cfg(not(target_arch = "wasm32"))]
+    if threads > 1 && items.len() > 1 {
         use std::sync::atomic::{AtomicUsize, Ordering};
-        use std::sync::Mutex;
-        let width = std::thread::available_parallelism()
-            .map_or(1, |n| n.get())
-            .min(items.len());
-        if width > 1 {
-            let next = AtomicUsize::new(0);
-            let slots: Vec<Mutex<Option<R>>> = items.iter().map(|_| Mutex::new(None)).collect();
-            std::thread::scope(|scope| {
-                for _ in 0..width {
-                    scope.spawn(|| loop {
-                        let i = next.fetch_add(1, Ordering::Relaxed);
-                        let Some(item) = items.get(i) else {
-                            break;
-                        };
-                        let result = f(item);
-                        // Each slot is written once, by the one thread that took its index.
-                        if let Ok(mut slot) = slots[i].lock() {
-                            *slot = Some(result);
-                        }
-                    });
-                }
-            });
-            // Every index below items.len() was taken by a thread that finished (a panic in one
-            // is resumed by `scope` above), so every slot is filled.
-            return slots
-                .into_iter()
-                .filter_map(|slot| slot.into_inner().ok().flatten())
-                .collect();
-        }
+        let next = AtomicUsize::new(0);
+        let mut slots: Vec<Option<R>> = std::iter::repeat_with(|| None).take(items.len()).collect();
+        std::thread::scope(|scope| {
+            let (sender, results) = std::sync::mpsc::channel();
+            for _ in 0..threads.min(items.len()) {
+                let (sender, next, f) = (sender.clone(), &next, &f);
+                scope.spawn(move || loop {
+                    let i = next.fetch_add(1, Ordering::Relaxed);
+                    let Some(item) = items.get(i) else { break };
+                    if sender.send((i, f(item))).is_err() {
+                        break;
+                    }
+                });
+            }
+            // The loop below ends once every thread has finished (or panicked: the scope then
+            // passes the panic on).
+            drop(sender);
+            for (i, result) in results {
+                done(i, &result);
+                slots[i] = Some(result);
+            }
+        });
+        return slots.into_iter().flatten().collect();
     }
-    items.iter().map(f).collect()
+    items
+        .iter()
+        .enumerate()
+        .map(|(i, item)| {
+            let result = f(item);
+            done(i, &result);
+            result
+        })
+        .collect()
 }
 
 #[cfg(test)]

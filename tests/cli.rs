@@ -271,6 +271,7 @@ fn tune_sweeps_and_searches_and_says_what_is_wrong() {
     let (result, out) = cutlab(
         &[
             "tune",
+            "--quiet",
             "--controller",
             "threshold",
             "--scenarios",
@@ -293,6 +294,7 @@ fn tune_sweeps_and_searches_and_says_what_is_wrong() {
     let (result, out) = cutlab(
         &[
             "tune",
+            "--quiet",
             "--controller",
             "pi",
             "--scenarios",
@@ -312,6 +314,7 @@ fn tune_sweeps_and_searches_and_says_what_is_wrong() {
         (
             &[
                 "tune",
+                "--quiet",
                 "--controller",
                 "pi",
                 "--scenarios",
@@ -324,6 +327,7 @@ fn tune_sweeps_and_searches_and_says_what_is_wrong() {
         (
             &[
                 "tune",
+                "--quiet",
                 "--controller",
                 "pi",
                 "--scenarios",
@@ -336,6 +340,7 @@ fn tune_sweeps_and_searches_and_says_what_is_wrong() {
         (
             &[
                 "tune",
+                "--quiet",
                 "--controller",
                 "pi",
                 "--scenarios",
@@ -348,6 +353,7 @@ fn tune_sweeps_and_searches_and_says_what_is_wrong() {
         (
             &[
                 "tune",
+                "--quiet",
                 "--controller",
                 "pi",
                 "--scenarios",
@@ -363,12 +369,331 @@ fn tune_sweeps_and_searches_and_says_what_is_wrong() {
             &["tune", "--scenarios", "maneerat-doc-1", "--param", "kp=0:1"][..],
             "--controller",
         ),
+        (
+            &[
+                "tune",
+                "--quiet",
+                "--controller",
+                "pi",
+                "--scenarios",
+                "maneerat-doc-1",
+                "--param",
+                "kp=0:1",
+                "--param",
+                "kp=0.2:0.5",
+            ][..],
+            "--param: kp is given twice (0:1 and 0.2:0.5)",
+        ),
+        (
+            &[
+                "tune",
+                "--quiet",
+                "--teach-in",
+                "--scenarios",
+                "maneerat-doc-1",
+                "--param",
+                "kp=0:1",
+            ][..],
+            "--param does not apply to --teach-in",
+        ),
+        (
+            &[
+                "tune",
+                "--quiet",
+                "--teach-in",
+                "--scenarios",
+                "maneerat-doc-1",
+                "--controller",
+                "pi",
+            ][..],
+            "--controller does not apply to --teach-in",
+        ),
+        (
+            &[
+                "tune",
+                "--quiet",
+                "--teach-in",
+                "--scenarios",
+                "maneerat-doc-1",
+                "--objective",
+                "error=2",
+            ][..],
+            "--objective does not apply to --teach-in",
+        ),
+        (
+            &[
+                "tune",
+                "--quiet",
+                "--teach-in",
+                "--scenarios",
+                "maneerat-doc-1",
+                "--sweep",
+                "3",
+            ][..],
+            "--sweep does not apply to --teach-in",
+        ),
+        (
+            &["tune", "--teach-in"][..],
+            "--teach-in needs a teach cut: --scenarios A,B (simulated), --log FILE or \
+             --calibration FILE",
+        ),
+        (
+            &[
+                "tune",
+                "--quiet",
+                "--teach-in",
+                "--scenarios",
+                "maneerat-doc-1",
+                "--map",
+                "force_n=F",
+            ][..],
+            "--map only applies to a teach-in from a log (--log FILE)",
+        ),
+        (
+            &[
+                "tune",
+                "--quiet",
+                "--controller",
+                "pi",
+                "--scenarios",
+                "maneerat-doc-1",
+                "--param",
+                "kp=0:1",
+                "--log",
+                "x.csv",
+            ][..],
+            "--log only applies with --teach-in",
+        ),
+        (
+            &[
+                "tune",
+                "--quiet",
+                "--teach-in",
+                "--log",
+                "tests/reference/tuning/teach_cut_log.csv",
+                "--scenarios",
+                "maneerat-doc-1",
+            ][..],
+            "--scenarios does not apply to a teach-in from a log",
+        ),
+        (
+            &[
+                "tune",
+                "--quiet",
+                "--teach-in",
+                "--calibration",
+                "x.json",
+                "--scenarios",
+                "maneerat-doc-1,maneerat-doc-2",
+            ][..],
+            "--scenarios: a calibration was taught on one program; name one preset",
+        ),
+        (
+            &[
+                "tune",
+                "--quiet",
+                "--controller",
+                "pi",
+                "--scenarios",
+                "maneerat-doc-1",
+                "--param",
+                "kp=0:1",
+                "--sweep",
+                "2",
+                "--max-evals",
+                "4",
+            ][..],
+            "--max-evals applies to the search",
+        ),
     ] {
         let (result, _) = cutlab(args, "");
         let e = result.unwrap_err();
         assert!(e.contains(message), "{args:?}: {e}");
         assert!(!e.contains('\n'));
     }
+}
+
+/// Progress is on stderr, one line per teach cut and per evaluation; stdout holds only the
+/// result (JSON that parses), and --quiet silences the progress.
+#[test]
+fn tune_prints_progress_on_stderr_and_keeps_stdout_clean() {
+    use std::process::Command;
+    let run = |extra: &[&str]| {
+        let out = Command::new(env!("CARGO_BIN_EXE_cutlab"))
+            .args([
+                "tune",
+                "--controller",
+                "threshold",
+                "--scenarios",
+                "maneerat-doc-1",
+                "--param",
+                "kp=0.2:1",
+            ])
+            .args(extra)
+            .output()
+            .unwrap();
+        assert!(out.status.success(), "{out:?}");
+        (
+            String::from_utf8(out.stdout).unwrap(),
+            String::from_utf8(out.stderr).unwrap(),
+        )
+    };
+    let (stdout, stderr) = run(&["--sweep", "2", "--json"]);
+    let report: serde_json::Value = serde_json::from_str(&stdout).unwrap();
+    assert_eq!(report["points"].as_array().unwrap().len(), 2);
+    let lines: Vec<&str> = stderr.lines().collect();
+    assert_eq!(lines.len(), 3, "{stderr}");
+    assert_eq!(lines[0], "tune: teach cut 1 of 1 done (maneerat-doc-1)");
+    assert!(
+        lines[1].starts_with("tune: point 1 of 2 (50 %): kp="),
+        "{stderr}"
+    );
+    assert!(
+        lines[2].starts_with("tune: point 2 of 2 (100 %): kp="),
+        "{stderr}"
+    );
+    assert!(lines[2].contains("→ objective "), "{stderr}");
+
+    let (stdout, stderr) = run(&["--max-evals", "3"]);
+    assert!(stdout.contains("best: kp="), "{stdout}");
+    assert!(!stdout.contains("tune:"), "{stdout}");
+    for n in 1..=3 {
+        assert!(
+            stderr.contains(&format!("tune: evaluation {n} of at most 3: kp=")),
+            "{stderr}"
+        );
+    }
+    assert!(!stderr.contains("evaluation 4"), "{stderr}");
+
+    let (_, stderr) = run(&["--max-evals", "2", "--quiet"]);
+    assert_eq!(stderr, "");
+}
+
+const TEACH_LOG: &str = "tests/reference/tuning/teach_cut_log.csv";
+
+#[test]
+fn tune_teach_in_reads_a_logged_teach_cut_as_calibrate_does() {
+    let expected: serde_json::Value =
+        serde_json::from_str(include_str!("reference/tuning/teach_in.json")).unwrap();
+    let expected = &expected["log"];
+    let args = [
+        "tune",
+        "--teach-in",
+        "--log",
+        TEACH_LOG,
+        "--map",
+        "spindle_current_rms_a=S_Strom [A]",
+        "--map",
+        "spindle_speed_rpm=S_Drehzahl (rpm)",
+        "--map",
+        "force_n=Kraft [N]",
+        "--map",
+        "override_pct=Override [%]",
+    ];
+    let (result, out) = cutlab(&[&args[..], &["--json"]].concat(), "");
+    result.unwrap();
+    let report: serde_json::Value = serde_json::from_str(&out).unwrap();
+    let target = report["proposal"]["target_n"].as_f64().unwrap();
+    let expected_target = expected["target_n"].as_f64().unwrap();
+    assert!(
+        (target - expected_target).abs() < 1e-9 * expected_target,
+        "{out}"
+    );
+    assert_eq!(report["learned"]["feedback"], "spindle-current");
+    assert!(
+        report["log_problems"].as_array().unwrap().is_empty(),
+        "{out}"
+    );
+    let (result, out) = cutlab(&args, "");
+    result.unwrap();
+    assert!(out.starts_with("note: feed model not fitted"), "{out}");
+    assert!(
+        out.contains(&format!(
+            "proposed target {expected_target:.0} N (80 % of the force at 100 % override)"
+        )),
+        "{out}"
+    );
+    assert!(out.contains("threshold:gap_pct=11.9"), "{out}");
+    // A column that is not there is named with the ones that are.
+    let (result, _) = cutlab(
+        &[
+            "tune",
+            "--teach-in",
+            "--log",
+            TEACH_LOG,
+            "--map",
+            "force_n=Force",
+        ],
+        "",
+    );
+    let e = result.unwrap_err();
+    assert!(e.contains("--map force_n=Force: no such column"), "{e}");
+    assert!(e.starts_with(TEACH_LOG), "{e}");
+}
+
+/// The hardware path as a person types it: a teach cut over the link (`cutlab host` against the
+/// device with no simulation truth, the force modelled from the cut) saved with
+/// --save-calibration, then proposed from by `cutlab tune --teach-in --calibration`.
+#[cfg(unix)]
+#[test]
+fn tune_teach_in_proposes_from_a_calibration_saved_by_the_host() {
+    use std::process::Command;
+    let exe = env!("CARGO_BIN_EXE_cutlab");
+    let dir = std::env::temp_dir().join(format!("cutlab-tune-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let saved = dir.join("machine.json");
+    let out = Command::new(exe)
+        .args([
+            "host",
+            "--device-cmd",
+            &format!(
+                "{exe} device --stdio --scenario maneerat-doc-1 --time-scale 40 --no-truth \
+                 --watchdog-s 2"
+            ),
+            "--controller",
+            "threshold",
+            "--duration-s",
+            "1",
+            "--save-calibration",
+            saved.to_str().unwrap(),
+        ])
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{out:?}");
+    let (result, text) = cutlab(
+        &[
+            "tune",
+            "--teach-in",
+            "--calibration",
+            saved.to_str().unwrap(),
+            "--scenarios",
+            "maneerat-doc-1",
+            "--json",
+        ],
+        "",
+    );
+    result.unwrap();
+    let report: serde_json::Value = serde_json::from_str(&text).unwrap();
+    let t = &report[0];
+    assert!(
+        t["source"]
+            .as_str()
+            .unwrap()
+            .contains("teach cut over the link"),
+        "{text}"
+    );
+    // The force the link's teach cut learned at 100 % is the cut's mean resultant (Altintas,
+    // tests/reference/tuning); the proposal is 80 % of it, the paper's 150 N beside it.
+    let expected: serde_json::Value =
+        serde_json::from_str(include_str!("reference/tuning/teach_in.json")).unwrap();
+    let expected = expected["mills"]["maneerat-doc-1"]["force_at_full_override_n"]
+        .as_f64()
+        .unwrap();
+    let learned = t["learned"]["force_at_full_override_n"].as_f64().unwrap();
+    assert!((learned - expected).abs() < 0.02 * expected, "{text}");
+    assert_eq!(t["proposal"]["target_n"].as_f64().unwrap(), 0.8 * learned);
+    assert_eq!(t["paper"]["target_n"], 150.0);
+    std::fs::remove_dir_all(&dir).ok();
 }
 
 #[test]

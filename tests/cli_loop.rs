@@ -338,3 +338,64 @@ fn a_saved_configuration_reproduces_the_runs_it_describes() {
     }
     std::fs::remove_dir_all(dir).ok();
 }
+
+#[test]
+fn a_saved_calibration_reproduces_the_teach_cut_run_and_is_refused_for_another_feedback() {
+    let dir = scratch("calibration");
+    let saved = dir.join("kim.json");
+    let (json_a, json_b) = (dir.join("a.json"), dir.join("b.json"));
+    let run = |extra: &[&str], json: &std::path::Path| {
+        let mut args = vec![
+            "sim",
+            "--scenario",
+            "kim-step-doc",
+            "--controller",
+            "threshold",
+            "--no-references",
+            "--json",
+            json.to_str().unwrap(),
+        ];
+        args.extend_from_slice(extra);
+        cutlab(&args)
+    };
+    let (result, _) = run(&["--save-calibration", saved.to_str().unwrap()], &json_a);
+    result.unwrap();
+    let file = std::fs::read_to_string(&saved).unwrap();
+    assert!(
+        file.contains("\"format\": \"cutlab-calibration\""),
+        "{file}"
+    );
+    assert!(file.contains("teach cut on kim-step-doc, seed 1"), "{file}");
+    let (result, _) = run(&["--calibration", saved.to_str().unwrap()], &json_b);
+    result.unwrap();
+    // The teach cut depends only on the preset, seed and chain: starting from its saved result
+    // gives the same run, metric for metric.
+    let report = |path: &std::path::Path| -> serde_json::Value {
+        serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
+    };
+    let (a, b) = (report(&json_a), report(&json_b));
+    assert_eq!(a["metrics"], b["metrics"]);
+    assert_eq!(a["calibration"], b["calibration"]);
+
+    let (result, _) = run(
+        &[
+            "--calibration",
+            saved.to_str().unwrap(),
+            "--feedback",
+            "feed",
+        ],
+        &json_b,
+    );
+    let e = result.unwrap_err();
+    assert!(
+        e.contains("the calibration is for spindle feedback but the run measures with feed"),
+        "{e}"
+    );
+    std::fs::write(&saved, file.replace("\"periods\"", "\"period\"")).unwrap();
+    let (result, _) = run(&["--calibration", saved.to_str().unwrap()], &json_b);
+    let e = result.unwrap_err();
+    assert!(
+        e.contains("--calibration") && e.contains("unknown field `period`"),
+        "{e}"
+    );
+}

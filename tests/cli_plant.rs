@@ -223,10 +223,24 @@ fn force_refuses_absurd_cuts_and_overflow() {
         }
         cutlab(&args).0
     };
-    let cases: [(&[(&str, &str)], &str); 4] = [
+    let cases: [(&[(&str, &str)], &str); 7] = [
         (
             &[("--diameter-mm", "1e6")],
             "--diameter-mm: 1000000 mm is larger than any end mill",
+        ),
+        // Numbers in messages read as a person writes them, not as 300 digits.
+        (
+            &[("--axial-depth-mm", "1e300")],
+            "--axial-depth-mm: 1e300 mm is deeper than a 20 mm cutter with a 30° helix",
+        ),
+        (
+            &[("--feed-per-tooth-mm", "1e308")],
+            "--feed-per-tooth-mm: 1e308 mm is beyond any feed per tooth",
+        ),
+        // A spindle speed no mill has: was accepted, with a feed of 4e299 mm/min.
+        (
+            &[("--rpm", "1e300")],
+            "--rpm: 1e300 rev/min is beyond any milling spindle",
         ),
         (
             &[

@@ -1,21 +1,35 @@
-//! The native host against the device emulator, in-process over pipes (and once as processes):
-//! the closed loop over the protocol matches `cutlab sim`, survives a lossy line counting its
-//! losses, and both watchdogs do what docs/protocol.md says.
+//! The native host against the device emulator, in-process over pipes or a line without latency,
+//! and as processes: the closed loop over the protocol keeps `cutlab sim`'s metrics (what it
+//! costs: docs/protocol.md §8), survives a lossy line counting its losses and a flood on the
+//! device's input, both watchdogs and the device's faults do what docs/protocol.md §5 says, and
+//! the command line reports whatever happened.
 //!
 //! The device keeps scaled real time, so these tests take their time (about 7 s each at 20× real
 //! time) and run one at a time: two machines in parallel on a small runner could starve a host,
-//! and a starved host trips the device's watchdog, which is what one of the tests is about.
+//! and a starved host trips the device's watchdog, which is what one of the tests is about. The
+//! tests over a [`LockstepLine`] (no latency, no clock) are deterministic; they take the same
+//! turn so as not to starve the others.
 #![cfg(not(target_arch = "wasm32"))]
 // Test code: unwrapping and panicking on a broken expectation is the point.
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
 
+use std::cell::RefCell;
+use std::rc::Rc;
+use std::sync::mpsc::RecvTimeoutError;
 use std::sync::Mutex;
 
+use cutlab::closed_loop::calibration_file::CalibrationFile;
 use cutlab::closed_loop::lab::{simulate, RunResult, RunSpec};
+use cutlab::closed_loop::runner::Calibration;
 use cutlab::control::registry::ControllerKind;
 use cutlab::plant::Preset;
+use cutlab::protocol::codec::{encode_frame, MAX_FRAME_LEN};
 use cutlab::protocol::device::{DeviceConfig, DeviceEmulator, DeviceStats, FaultInjection};
-use cutlab::protocol::link::{run_device, run_on_link, HostLink, HostOptions, LinkRun};
+use cutlab::protocol::frame::{Capabilities, FaultKind, Frame};
+use cutlab::protocol::link::{
+    run_device, run_on_link, DeviceExit, HostLink, HostOptions, Line, LinkRun, LockstepLine,
+    DEVICE_QUEUE_CHUNKS, READ_CHUNK,
+};
 
 /// One closed loop against the emulator at a time.
 static ONE_AT_A_TIME: Mutex<()> = Mutex::new(());
@@ -27,6 +41,16 @@ fn host_against_emulator(
     config: DeviceConfig,
     spec: &RunSpec,
     options: HostOptions,
+) -> (LinkRun, DeviceStats, String) {
+    host_against_emulator_calibrated(config, spec, options, None)
+}
+
+/// As [`host_against_emulator`], starting from `calibration` (no teach cut) when given.
+fn host_against_emulator_calibrated(
+    config: DeviceConfig,
+    spec: &RunSpec,
+    options: HostOptions,
+    calibration: Option<Calibration>,
 ) -> (LinkRun, DeviceStats, String) {
     let _one = ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner());
     let (host_to_device_r, host_to_device_w) = std::io::pipe().unwrap();
@@ -47,7 +71,7 @@ fn host_against_emulator(
         )
     });
     let link = HostLink::connect(device_to_host_r, Box::new(host_to_device_w), options).unwrap();
-    let run = run_on_link(link, spec, None);
+    let run = run_on_link(link, spec, None, calibration);
     let (stats, diagnostics) = device.join().unwrap();
     (run, stats, diagnostics)
 }
@@ -69,12 +93,14 @@ fn within(a: f64, b: f64, rel: f64) -> bool {
     (a - b).abs() <= rel * a.abs().max(b.abs())
 }
 
-/// The metrics a run over the link must share with the simulation. The protocol adds a
-/// 1 kHz signal chain, 5 mA current counts and a few milliseconds of latency; the removed volume,
-/// removal rate and peak force stay within 3 %, the cycle time within 5 % (a test machine busy
-/// with other work delays the host, and every delay is latency in the loop), the mean force error
-/// within three points. (The force IAE of the threshold controller is not compared: it moves by 9 % between
-/// two seeds of the simulation itself, as the controller's limit cycle locks in differently.)
+/// What a run over the link in real time is sure to share with the simulation, busy machine or
+/// not (docs/protocol.md §8, "What the protocol costs"): the program's metrics — removed volume
+/// within 0.5 %, peak force (the depth step's, met at the override before it) within 2 %, cycle
+/// time and mean removal rate within 5 % (a busy test machine delays the host, and every delay
+/// is latency in the loop) — and a force held near its target. The force error itself is not
+/// compared: the threshold controller's limit cycle locks in differently after any small
+/// perturbation (the 1 kHz chain alone, or another seed of the simulation), which moves its
+/// force IAE by up to ±28 % (the lockstep tests below hold the rest to 1–2 %).
 fn assert_like_sim(sim: &RunResult, run: &LinkRun) {
     let link = run.result.as_ref().unwrap();
     let (s, l) = (&sim.metrics, &link.metrics);
@@ -82,23 +108,108 @@ fn assert_like_sim(sim: &RunResult, run: &LinkRun) {
     assert!(l.completed, "{report}");
     assert!(within(s.cycle_time_s, l.cycle_time_s, 0.05), "{report}");
     assert!(
-        within(s.removed_volume_mm3, l.removed_volume_mm3, 0.01),
+        within(s.removed_volume_mm3, l.removed_volume_mm3, 0.005),
         "{report}"
     );
     assert!(
         within(
             s.mean_material_removal_mm3_s,
             l.mean_material_removal_mm3_s,
-            0.03
+            0.05
         ),
         "{report}"
     );
-    assert!(within(s.peak_force_n, l.peak_force_n, 0.03), "{report}");
-    assert!(
-        (s.force_mean_abs_error_pct - l.force_mean_abs_error_pct).abs() <= 3.0,
-        "{report}"
-    );
+    assert!(within(s.peak_force_n, l.peak_force_n, 0.02), "{report}");
+    assert!(l.force_mean_abs_error_pct < 10.0, "{report}");
     assert_eq!(sim.settings.target_force_n, link.settings.target_force_n);
+}
+
+/// `spec` run over a [`LockstepLine`] to the emulator: the protocol's bytes, 1 kHz block means
+/// and 5 mA counts with no latency and no clock — deterministic and quick.
+fn lockstep(config: DeviceConfig, spec: &RunSpec, calibration: Option<Calibration>) -> LinkRun {
+    lockstep_for(config, spec, None, calibration).0
+}
+
+/// As [`lockstep`], with a duration limit, and the device afterwards.
+fn lockstep_for(
+    config: DeviceConfig,
+    spec: &RunSpec,
+    duration_s: Option<f64>,
+    calibration: Option<Calibration>,
+) -> (LinkRun, DeviceEmulator) {
+    let device = Rc::new(RefCell::new(DeviceEmulator::new(config).unwrap()));
+    let line = Box::new(LockstepLine::new(Rc::clone(&device)));
+    let link = HostLink::connect_line(line, HostOptions::default()).unwrap();
+    let run = run_on_link(link, spec, duration_s, calibration);
+    let device = Rc::try_unwrap(device).ok().unwrap().into_inner();
+    (run, device)
+}
+
+fn kim_seed_1(controller: ControllerKind) -> RunSpec {
+    RunSpec::new(Preset::KimStepDoc, controller)
+}
+
+/// Without a line's latency, the protocol costs a continuous controller nothing measurable:
+/// every metric, the force error's too, within 1 % of `cutlab sim`'s (0.9 % at most over seeds
+/// 1–4). What the protocol changes is the chain: 1 kHz block means of the 10 kHz currents in
+/// 5 mA counts, which the teach cut over the same link calibrates.
+#[test]
+fn without_latency_the_protocol_costs_a_pi_loop_under_one_percent_on_every_metric() {
+    // Not timed, but heavy: the tests in real time must not be starved by it.
+    let _one = ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner());
+    let spec = kim_seed_1(ControllerKind::Pi);
+    let sim = simulate(&spec).unwrap();
+    let run = lockstep(kim_device(5.0), &spec, None);
+    let (s, l) = (&sim.metrics, &run.result.as_ref().unwrap().metrics);
+    let report = format!("sim {s:#?}\nlockstep {l:#?}");
+    assert!(l.completed && run.stats.frames_lost == 0, "{report}");
+    for (what, a, b) in [
+        ("cycle time", s.cycle_time_s, l.cycle_time_s),
+        ("volume", s.removed_volume_mm3, l.removed_volume_mm3),
+        (
+            "removal rate",
+            s.mean_material_removal_mm3_s,
+            l.mean_material_removal_mm3_s,
+        ),
+        ("peak force", s.peak_force_n, l.peak_force_n),
+        ("force IAE", s.force_iae_n_s, l.force_iae_n_s),
+        ("force RMS error", s.force_rms_error_n, l.force_rms_error_n),
+        (
+            "mean |error|",
+            s.force_mean_abs_error_pct,
+            l.force_mean_abs_error_pct,
+        ),
+    ] {
+        assert!(within(a, b, 0.01), "{what}: {a} vs {b}\n{report}");
+    }
+}
+
+/// The threshold controller over the protocol without latency: the program's metrics within
+/// 2 % of `cutlab sim`'s (1.3 % at most over seeds 1–4); its force error is left out — it moved
+/// by up to 13 % over those seeds with the chain alone, as it does between two seeds of the
+/// simulation.
+#[test]
+fn without_latency_a_threshold_loop_keeps_the_programs_metrics_within_two_percent() {
+    // Not timed, but heavy: the tests in real time must not be starved by it.
+    let _one = ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner());
+    let spec = kim_seed_1(ControllerKind::Threshold);
+    let sim = simulate(&spec).unwrap();
+    let run = lockstep(kim_device(5.0), &spec, None);
+    let (s, l) = (&sim.metrics, &run.result.as_ref().unwrap().metrics);
+    let report = format!("sim {s:#?}\nlockstep {l:#?}");
+    assert!(l.completed, "{report}");
+    for (what, a, b) in [
+        ("cycle time", s.cycle_time_s, l.cycle_time_s),
+        ("volume", s.removed_volume_mm3, l.removed_volume_mm3),
+        (
+            "removal rate",
+            s.mean_material_removal_mm3_s,
+            l.mean_material_removal_mm3_s,
+        ),
+        ("peak force", s.peak_force_n, l.peak_force_n),
+    ] {
+        assert!(within(a, b, 0.02), "{what}: {a} vs {b}\n{report}");
+    }
 }
 
 #[test]
@@ -120,6 +231,76 @@ fn the_closed_loop_over_the_protocol_matches_the_simulation() {
     assert!(s.commands_acknowledged + 1 >= s.commands_sent, "{s:?}");
     assert!(s.command_latency_mean_s < 0.06, "{s:?}");
     assert_eq!(run.device.protocol_version, "1.0");
+}
+
+#[test]
+fn a_saved_calibration_replaces_the_teach_cut_over_the_link() {
+    let spec = kim_threshold();
+    let sim = simulate(&spec).unwrap();
+    // Through the file, as `cutlab host --calibration` reads it.
+    let saved = CalibrationFile::new(sim.calibration.clone(), "sim teach cut").to_json();
+    let calibration = CalibrationFile::from_json(&saved).unwrap().calibration;
+    let (run, device, diagnostics) = host_against_emulator_calibrated(
+        kim_device(5.0),
+        &spec,
+        HostOptions::default(),
+        Some(calibration),
+    );
+    // No teach part: the device's first part was the run, which finished with the target the
+    // calibration gives. (How closely a run over the link follows the simulation is the test
+    // above's; this one is about where the calibration came from.)
+    assert_eq!(device.parts, 1, "{diagnostics}");
+    let link = run.result.as_ref().unwrap();
+    assert!(link.metrics.completed, "{diagnostics}");
+    assert!(within(
+        sim.metrics.removed_volume_mm3,
+        link.metrics.removed_volume_mm3,
+        0.01
+    ));
+    assert_eq!(sim.settings.target_force_n, link.settings.target_force_n);
+    assert_eq!(
+        format!("{:?}", link.calibration),
+        format!("{:?}", sim.calibration)
+    );
+}
+
+#[test]
+fn a_bridge_without_truth_is_taught_by_the_cut_model_or_needs_a_calibration() {
+    // maneerat-doc-1 cuts one depth in one material: the model of the cut gives the teach force.
+    let spec = RunSpec::new(Preset::ManeeratDoc1, ControllerKind::Pi);
+    let sim = simulate(&spec).unwrap();
+    let mut config = DeviceConfig::new(Preset::ManeeratDoc1);
+    config.watchdog_timeout_s = 5.0;
+    config.sim_truth = false;
+    let (run, device, diagnostics) =
+        host_against_emulator(config.clone(), &spec, HostOptions::default());
+    assert!(!run.device.sim_truth);
+    let link = run.result.as_ref().unwrap();
+    assert!(link.metrics.completed, "{diagnostics}");
+    assert_eq!(device.parts, 2);
+    // No truth crossed the line: the trace has estimates, not forces.
+    assert!(link.trace.rows.iter().all(|r| r.force_n.is_nan()));
+    let mid = &sim.trace.rows[sim.trace.rows.len() / 2];
+    let at = |r: &RunResult| {
+        r.calibration.estimator.force_for_current_n(
+            mid.spindle_current_rms_a,
+            mid.spindle_speed_rpm,
+            mid.feed_mm_min,
+        )
+    };
+    assert!(
+        within(at(link), at(&sim), 0.1),
+        "cut model {} N vs truth {} N",
+        at(link),
+        at(&sim)
+    );
+
+    // kim-step-doc's depth steps along the part: without truth the host refuses to guess.
+    let mut config = kim_device(5.0);
+    config.sim_truth = false;
+    let (run, _, _) = host_against_emulator(config, &kim_threshold(), HostOptions::default());
+    let e = run.result.unwrap_err().to_string();
+    assert!(e.contains("--calibration FILE"), "{e}");
 }
 
 #[test]
@@ -211,37 +392,260 @@ fn a_stalled_receiver_fires_the_device_watchdog_and_both_sides_report_it() {
         .any(|r| (r.applied_override_pct - 50.0).abs() < 1e-9));
 }
 
+/// maneerat-doc-1's PI run (an 11 s program) from the simulation's calibration, so the device's
+/// first part is the run; the emulator with a watchdog that only the tests about it trip.
+fn maneerat_calibrated() -> (RunSpec, RunResult, DeviceConfig) {
+    let spec = RunSpec::new(Preset::ManeeratDoc1, ControllerKind::Pi);
+    let sim = simulate(&spec).unwrap();
+    let mut config = DeviceConfig::new(Preset::ManeeratDoc1);
+    config.watchdog_timeout_s = 5.0;
+    (spec, sim, config)
+}
+
+fn texts(run: &LinkRun) -> Vec<&str> {
+    run.events.iter().map(|e| e.text.as_str()).collect()
+}
+
+/// docs/protocol.md §5: an over-current (or a sensor fault) the device reports while the host
+/// holds it stops the loop there; the host commands the device's fallback override (its safe
+/// override), holds it until the part ends, and only then disarms.
+#[test]
+fn an_over_current_stops_the_loop_and_the_safe_override_is_held_until_the_part_ends() {
+    // Not timed, but heavy: the tests in real time must not be starved by it.
+    let _one = ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner());
+    let (spec, sim, mut config) = maneerat_calibrated();
+    config.faults.over_current_at_s = Some(6.0);
+    config.faults.over_current_s = 0.2;
+    let (run, device) = lockstep_for(config, &spec, None, Some(sim.calibration.clone()));
+    let alarm = run.alarm.clone().unwrap();
+    assert_eq!((alarm.kind, alarm.part), (FaultKind::OverCurrent, 1));
+    let result = run.result.as_ref().unwrap();
+    assert!(!result.metrics.completed);
+    let end_s = result.trace.rows.last().unwrap().time_s;
+    assert!((5.9..6.1).contains(&end_s), "the loop ran to {end_s} s");
+    let texts = texts(&run);
+    let at = |needle: &str| {
+        texts
+            .iter()
+            .position(|t| t.contains(needle))
+            .unwrap_or_else(|| panic!("no {needle:?} in {texts:?}"))
+    };
+    assert!(at("alarm: device fault over-current raised") < at("holding the safe override (50 %)"));
+    assert!(at("holding the safe override") < at("program end"));
+    // The rest of the program at 50 %: it ended well after the loop's whole run would have.
+    let end = run.events.iter().find(|e| e.text == "program end").unwrap();
+    assert!(
+        end.time_s > sim.metrics.cycle_time_s + 3.0,
+        "{}",
+        end.time_s
+    );
+    assert!(!device.in_cycle() && !device.armed());
+    assert_eq!(device.stats().parts, 1);
+}
+
+/// docs/protocol.md §5: under an E-stop the device refuses commands and the machine's axes stop,
+/// so there is nothing to hold: the host stops the loop and disarms at once.
+#[test]
+fn an_e_stop_stops_the_loop_and_the_host_disarms_at_once() {
+    // Not timed, but heavy: the tests in real time must not be starved by it.
+    let _one = ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner());
+    let (spec, sim, mut config) = maneerat_calibrated();
+    config.faults.estop_at_s = Some(6.0);
+    let (run, device) = lockstep_for(config, &spec, None, Some(sim.calibration.clone()));
+    let alarm = run.alarm.clone().unwrap();
+    assert_eq!(alarm.kind, FaultKind::EStop);
+    assert!(alarm.text.contains("disarms"), "{}", alarm.text);
+    let result = run.result.as_ref().unwrap();
+    assert!(!result.metrics.completed);
+    let end_s = result.trace.rows.last().unwrap().time_s;
+    assert!((5.9..6.1).contains(&end_s), "the loop ran to {end_s} s");
+    assert!(
+        texts(&run).iter().all(|t| !t.contains("holding")),
+        "{:?}",
+        texts(&run)
+    );
+    // Disarmed with its part stopped by the E-stop: the operator takes over at the machine.
+    assert!(device.in_cycle() && !device.armed());
+}
+
+/// A loop stopped by its time limit hands the device back at once (the machine's own dial runs
+/// the rest), as the teach cut's part is handed back after its schedule.
+#[test]
+fn a_duration_limit_hands_the_device_back_at_once() {
+    // Not timed, but heavy: the tests in real time must not be starved by it.
+    let _one = ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner());
+    let (spec, sim, config) = maneerat_calibrated();
+    let (run, device) = lockstep_for(config, &spec, Some(5.0), Some(sim.calibration.clone()));
+    let result = run.result.as_ref().unwrap();
+    assert!(!result.metrics.completed && run.alarm.is_none() && !run.link_lost);
+    assert!((4.9..5.1).contains(&result.trace.rows.last().unwrap().time_s));
+    assert!(texts(&run).iter().all(|t| !t.contains("holding")));
+    assert!(device.in_cycle() && !device.armed());
+}
+
+/// A line that plays back canned bytes from a device and swallows what the host sends.
+struct Canned(Vec<u8>);
+
+impl Line for Canned {
+    fn send(&mut self, _: &[u8]) -> std::io::Result<()> {
+        Ok(())
+    }
+
+    fn receive(&mut self, _: std::time::Duration) -> Result<Vec<u8>, RecvTimeoutError> {
+        if self.0.is_empty() {
+            Err(RecvTimeoutError::Timeout)
+        } else {
+            Ok(std::mem::take(&mut self.0))
+        }
+    }
+}
+
+fn capabilities_bytes(version_major: u8, version_minor: u8) -> Vec<u8> {
+    let device = DeviceEmulator::new(DeviceConfig::new(Preset::KimStepDoc)).unwrap();
+    let caps = Capabilities {
+        version_major,
+        version_minor,
+        ..*device.capabilities()
+    };
+    let mut out = [0u8; MAX_FRAME_LEN];
+    let n = encode_frame(&Frame::Capabilities(caps), &mut out).unwrap();
+    out[..n].to_vec()
+}
+
+/// docs/protocol.md §6: a host refuses a device of another major version before arming it, and
+/// says which versions met; a newer minor version of its own major is accepted.
+#[test]
+fn a_device_of_another_major_version_is_refused_naming_both_versions() {
+    let options = HostOptions {
+        handshake_timeout_s: 1.0,
+        ..HostOptions::default()
+    };
+    let e = HostLink::connect_line(Box::new(Canned(capabilities_bytes(2, 3))), options)
+        .err()
+        .unwrap();
+    assert!(
+        e.0.contains("the device speaks protocol 2.3; this host speaks 1.0"),
+        "{e}"
+    );
+    let link = HostLink::connect_line(Box::new(Canned(capabilities_bytes(1, 7))), options).unwrap();
+    assert_eq!(link.capabilities().version_minor, 7);
+}
+
+/// `cat /dev/urandom | cutlab device --stdio` once grew to 1.2 GB in 5 s and starved the
+/// device's clock: its reader queued every chunk it could read, and the device took every queued
+/// chunk before it stepped the machine. Now the reader waits when 16 chunks are queued (the pipe
+/// and the writer wait with it) and the device takes at most two chunks between two runs of the
+/// frames that are due. A flood of random bytes for one second of wall time, in-process.
+#[test]
+fn a_flood_on_the_device_input_is_held_back_and_the_device_keeps_its_clock() {
+    use std::io::Write;
+    use std::time::Instant;
+    let _one = ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner());
+    const FLOOD_S: f64 = 1.0;
+    let (reader, mut writer) = std::io::pipe().unwrap();
+    let flooder = std::thread::spawn(move || {
+        let mut rng = cutlab::rng::Rng::seed_from(9);
+        let junk: Vec<u8> = (0..65_536).map(|_| rng.next_u64() as u8).collect();
+        let start = Instant::now();
+        let mut written = 0u64;
+        while start.elapsed().as_secs_f64() < FLOOD_S {
+            match writer.write(&junk) {
+                Ok(n) => written += n as u64,
+                Err(_) => break,
+            }
+        }
+        // The writer is dropped here: the device's input ends.
+        written
+    });
+    let mut device = DeviceEmulator::new(kim_device(5.0)).unwrap();
+    let (mut out, mut diagnostics) = (Vec::new(), Vec::new());
+    let start = Instant::now();
+    let run = run_device(&mut device, reader, &mut out, &mut diagnostics, TIME_SCALE);
+    let wall_s = start.elapsed().as_secs_f64();
+    let written = flooder.join().unwrap();
+    let diagnostics = String::from_utf8_lossy(&diagnostics);
+    assert_eq!(run.exit, DeviceExit::InputClosed);
+    // Memory: never more than the queue and the chunk the reader holds.
+    assert!(
+        run.peak_queued_bytes <= (DEVICE_QUEUE_CHUNKS + 1) * READ_CHUNK,
+        "{run:?}"
+    );
+    // A flood it was, and every byte of it went through the device's decoder.
+    assert!(written > 1_000_000, "{written} bytes");
+    assert_eq!(device.decoder_stats().bytes_received, written);
+    assert!(
+        diagnostics.contains("bytes of input queued"),
+        "{diagnostics}"
+    );
+    // The clock kept pace with the wall clock, and the heartbeats with it: one per 0.1 s of
+    // device time. (Starved, it made 15 % of them; half leaves room for a busy machine.)
+    let expected = wall_s * TIME_SCALE / 0.1;
+    let heartbeats = cutlab::protocol::codec::Decoder::new()
+        .frames(&out)
+        .filter(|f| matches!(f, Ok(cutlab::protocol::frame::Frame::Heartbeat(_))))
+        .count() as f64;
+    println!(
+        "flood: {written} bytes in {wall_s:.2} s, {heartbeats} heartbeats of {expected:.0}, \
+         {:.1} s of device time, at most {} bytes queued",
+        device.time_s(),
+        run.peak_queued_bytes
+    );
+    assert!(
+        heartbeats >= 0.5 * expected && device.time_s() >= 0.5 * wall_s * TIME_SCALE,
+        "{heartbeats} heartbeats and {} s of device time in {wall_s} s at {TIME_SCALE}x",
+        device.time_s()
+    );
+}
+
+/// A scratch directory for one test's files.
+#[cfg(feature = "cli")]
+fn scratch(name: &str) -> std::path::PathBuf {
+    let dir = std::env::temp_dir().join(format!("cutlab-host-{name}-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+/// `cutlab host ARGS… --json DIR/host.json` as a process: its output and the report, if any.
+#[cfg(feature = "cli")]
+fn cutlab_host(
+    dir: &std::path::Path,
+    args: &[&str],
+) -> (std::process::Output, Option<serde_json::Value>) {
+    let json = dir.join("host.json");
+    let _ = std::fs::remove_file(&json);
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_cutlab"))
+        .arg("host")
+        .args(args)
+        .args(["--json", json.to_str().unwrap()])
+        .output()
+        .unwrap();
+    let report = std::fs::read_to_string(&json)
+        .ok()
+        .map(|text| serde_json::from_str(&text).unwrap());
+    (out, report)
+}
+
 /// The whole thing as a person types it: `cutlab host --device-cmd "cutlab device …"`, two
-/// processes, a short closed loop.
+/// processes, a teach cut and a closed loop to the program's end, and the savings against the
+/// simulated preset's fixed-feed references.
 #[cfg(feature = "cli")]
 #[test]
 fn the_binary_runs_the_host_against_the_binary_device() {
     let _one = ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner());
     let exe = env!("CARGO_BIN_EXE_cutlab");
-    let dir = std::env::temp_dir().join(format!("cutlab-host-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let json = dir.join("host.json");
-    let out = std::process::Command::new(exe)
-        .args([
-            "host",
-            "--device-cmd",
-            &format!("{exe} device --stdio --scenario kim-step-doc --time-scale 40 --watchdog-s 2"),
-            "--controller",
-            "threshold",
-            "--duration-s",
-            "10",
-            "--json",
-            json.to_str().unwrap(),
-        ])
-        .output()
-        .unwrap();
+    let dir = scratch("binary");
+    let device =
+        format!("{exe} device --stdio --scenario maneerat-doc-1 --time-scale 20 --watchdog-s 5");
+    let (out, report) = cutlab_host(&dir, &["--device-cmd", &device, "--controller", "pi"]);
     let stdout = String::from_utf8_lossy(&out.stdout);
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(out.status.success(), "{stdout}\n{stderr}");
     assert!(stdout.contains("link: protocol 1.0"), "{stdout}");
+    assert!(stdout.contains("references: simulated"), "{stdout}");
+    // The device's diagnostics, and the host's events as they happened.
     assert!(stderr.contains("part 2: cycle start"), "{stderr}");
-    let report: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    assert!(stderr.contains("host: part 2"), "{stderr}");
+    let report = report.unwrap();
     for key in [
         "protocol_version",
         "frames_received",
@@ -259,8 +663,151 @@ fn the_binary_runs_the_host_against_the_binary_device() {
     }
     assert_eq!(report["protocol_version"], "1.0");
     assert_eq!(report["link_losses"], 0);
-    // Stopped at 10 s of machine time, not at the program's end.
+    assert_eq!(report["error"], serde_json::Value::Null);
+    assert_eq!(report["metrics"]["completed"], true);
+    // Savings against the simulated preset's references, and the report says they are simulated.
+    assert!(
+        report["references"]["programmed_cycle_time_s"]
+            .as_f64()
+            .unwrap()
+            > 0.0
+    );
+    assert!(
+        report["metrics"]["saving_vs_programmed_pct"].is_f64(),
+        "{report}"
+    );
+    assert!(report["references_source"]
+        .as_str()
+        .unwrap()
+        .starts_with("simulated"));
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// A device command that answers Hello with `caps` (from a file, through `cutlab protocol
+/// encode`) and then says nothing more for a second.
+#[cfg(feature = "cli")]
+fn canned_device(dir: &std::path::Path, caps: &Capabilities) -> String {
+    let path = dir.join("caps.jsonl");
+    let line = cutlab::protocol::json::frame_to_json(&Frame::Capabilities(*caps));
+    std::fs::write(&path, format!("{line}\n")).unwrap();
+    format!(
+        "{} protocol encode < {}; sleep 1",
+        env!("CARGO_BIN_EXE_cutlab"),
+        path.display()
+    )
+}
+
+/// A link lost before the run (a device that shakes hands and then sends no sample) fails the
+/// command, and `--json` still gets the report: the link's counts, its events and the error. A
+/// device of protocol 2.x is refused, naming both versions, and gets a report too.
+#[cfg(feature = "cli")]
+#[test]
+fn the_report_is_written_when_the_link_is_lost_in_the_teach_cut_or_the_device_is_refused() {
+    let dir = scratch("no-run");
+    let emulator = DeviceEmulator::new(DeviceConfig::new(Preset::KimStepDoc)).unwrap();
+    let caps = *emulator.capabilities();
+    let device = canned_device(&dir, &caps);
+    let args = [
+        "--device-cmd",
+        &device,
+        "--controller",
+        "threshold",
+        "--link-timeout-s",
+        "0.3",
+    ];
+    let (out, report) = cutlab_host(&dir, &args);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success());
+    assert!(
+        stderr.contains("the teach cut (part 1) was abandoned"),
+        "{stderr}"
+    );
+    let report = report.unwrap();
+    assert_eq!(report["protocol_version"], "1.0");
+    assert_eq!(report["frames_received"], 1);
+    assert_eq!(report["link_losses"], 1);
+    assert_eq!(report["link_lost"], true);
+    assert_eq!(report["metrics"], serde_json::Value::Null);
+    assert!(
+        report["error"].as_str().unwrap().contains("host watchdog"),
+        "{report}"
+    );
+    let events = report["events"].as_array().unwrap();
+    assert!(
+        events
+            .iter()
+            .any(|e| e["event"].as_str().unwrap().contains("arm (cycle start)")),
+        "{report}"
+    );
+
+    let newer = Capabilities {
+        version_major: 2,
+        version_minor: 0,
+        ..caps
+    };
+    let device = canned_device(&dir, &newer);
+    let (out, report) = cutlab_host(&dir, &["--device-cmd", &device, "--controller", "pi"]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success());
+    assert!(
+        stderr.contains("the device speaks protocol 2.0; this host speaks 1.0"),
+        "{stderr}"
+    );
+    let report = report.unwrap();
+    assert_eq!(report["device"], serde_json::Value::Null);
+    assert_eq!(report["frames_received"], serde_json::Value::Null);
+    assert!(report["error"].as_str().unwrap().contains("protocol 2.0"));
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// A link lost in the closed loop: the results up to there are printed and written, and the
+/// command fails, as `cutlab sim` fails on a controller fault.
+#[cfg(feature = "cli")]
+#[test]
+fn a_link_lost_in_the_closed_loop_fails_the_command_with_the_results_written() {
+    let _one = ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner());
+    let exe = env!("CARGO_BIN_EXE_cutlab");
+    let dir = scratch("lost");
+    // The teach cut's part takes about 15 s of device time: the cable goes 7 s into the run.
+    let device = format!(
+        "{exe} device --stdio --scenario maneerat-doc-1 --time-scale 20 --watchdog-s 5 \
+         --unplug-at-s 22"
+    );
+    let (out, report) = cutlab_host(
+        &dir,
+        &[
+            "--device-cmd",
+            &device,
+            "--controller",
+            "pi",
+            "--link-timeout-s",
+            "0.5",
+        ],
+    );
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success(), "{stdout}\n{stderr}");
+    assert!(stdout.contains("Cycle time"), "{stdout}");
+    assert!(
+        stdout.contains("references: none: the run did not complete"),
+        "{stdout}"
+    );
+    assert!(
+        stderr.contains("the program did not finish under control"),
+        "{stderr}"
+    );
+    let report = report.unwrap();
+    assert_eq!(report["link_lost"], true);
     assert_eq!(report["metrics"]["completed"], false);
+    let cycle_time_s = report["metrics"]["cycle_time_s"].as_f64().unwrap();
+    assert!((5.0..8.0).contains(&cycle_time_s), "{report}");
+    assert!(
+        report["metrics"]["controlled_cutting_time_s"]
+            .as_f64()
+            .unwrap()
+            > 1.0
+    );
+    assert_eq!(report["error"], serde_json::Value::Null);
     let _ = std::fs::remove_dir_all(&dir);
 }
 

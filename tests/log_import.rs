@@ -13,6 +13,11 @@ const COMMA: &[u8] = include_bytes!("data/logs/comma.csv");
 const SEMICOLON: &[u8] = include_bytes!("data/logs/semicolon_decimal_comma.csv");
 const TAB: &[u8] = include_bytes!("data/logs/tab.csv");
 const MESSY: &[u8] = include_bytes!("data/logs/messy_no_header.csv");
+const COMMA_BOM_CRLF: &[u8] = include_bytes!("data/logs/comma_bom_crlf.csv");
+const QUOTED: &[u8] = include_bytes!("data/logs/quoted_units.csv");
+const FIFTY: &[u8] = include_bytes!("data/logs/fifty_columns.csv");
+const SLOW: &[u8] = include_bytes!("data/logs/slow_10hz_rms.csv");
+const FAST: &[u8] = include_bytes!("data/logs/fast_10khz_phases.tsv");
 
 /// Values compared bit for bit, NaN equal to NaN.
 fn same(a: &[f64], b: &[f64]) -> bool {
@@ -46,6 +51,7 @@ fn every_dialect_gives_the_same_numbers_labels_and_roles() {
     for (name, bytes) in [
         ("semicolon, decimal comma, BOM, CRLF", SEMICOLON),
         ("tab, no final newline", TAB),
+        ("comma, BOM, CRLF", COMMA_BOM_CRLF),
     ] {
         let log = load(bytes, None);
         assert_eq!(log.rows, reference.rows, "{name}");
@@ -119,7 +125,16 @@ fn load_in_chunks(bytes: &[u8], chunk: usize) -> Log {
 
 #[test]
 fn any_chunking_gives_the_same_log() {
-    for bytes in [COMMA, SEMICOLON, TAB, MESSY] {
+    for bytes in [
+        COMMA,
+        SEMICOLON,
+        TAB,
+        MESSY,
+        COMMA_BOM_CRLF,
+        QUOTED,
+        FIFTY,
+        SLOW,
+    ] {
         let whole = load(bytes, None);
         for chunk in [1, 2, 3, 5, 7, 64] {
             let pieces = load_in_chunks(bytes, chunk);
@@ -249,4 +264,191 @@ fn analysis_groups_by_label_filters_below_nyquist_and_finds_the_spectral_line() 
     assert!(analyse(&slow, "Phase", &request)
         .unwrap_err()
         .contains("holds no numbers"));
+}
+
+#[test]
+fn quoted_fields_keep_delimiters_quotes_and_line_breaks_and_units_come_in_every_style() {
+    let log = load(QUOTED, None);
+    assert_eq!(log.rows, 4);
+    assert!(log.problems.is_empty(), "{:?}", log.problems);
+    let names: Vec<&str> = log.columns.iter().map(|c| c.name.as_str()).collect();
+    assert_eq!(
+        names,
+        [
+            "Time [s]",
+            "Current [A]",
+            "I_A",
+            "speed(rpm)",
+            "Note, free text"
+        ]
+    );
+    let units: Vec<Option<&str>> = log.columns.iter().map(|c| c.unit.as_deref()).collect();
+    assert_eq!(units, [Some("s"), Some("A"), None, Some("rpm"), None]);
+    let roles: Vec<Option<Role>> = log.columns.iter().map(|c| c.role).collect();
+    assert_eq!(
+        roles,
+        [
+            Some(Role::Time),
+            Some(Role::RmsCurrent),
+            Some(Role::PhaseCurrent),
+            Some(Role::SpindleSpeed),
+            Some(Role::Label)
+        ]
+    );
+    let notes = &log.columns[4];
+    let label = |row: usize| notes.label_names[notes.labels[row] as usize].as_str();
+    assert_eq!(
+        [label(0), label(1), label(2), label(3)],
+        ["a, b", "said \"stop\"", "two\nlines", "plain"]
+    );
+    // The record with the line break spans lines 4–5: the last row is line 6.
+    assert_eq!(log.row_lines, [2, 3, 4, 6]);
+    assert_eq!(log.columns[3].values, [1000.0, 1001.0, 1002.0, 1003.0]);
+}
+
+#[test]
+fn fifty_columns_with_axis_prefixes_a_pass_fail_flag_and_time_in_ms_from_its_step() {
+    use cutlab::log::mapping::{Channel, Mapping};
+    let log = load(FIFTY, None);
+    assert_eq!(log.columns.len(), 50);
+    assert_eq!(log.rows, 20);
+    // No unit, and a step of 2: read as milliseconds, and said.
+    assert_eq!(log.sample_period_s, Some(0.002));
+    assert_eq!(log.columns[0].values[3], 0.006);
+    assert!(
+        log.problems
+            .iter()
+            .any(|p| p.message.contains("read as milliseconds")
+                && p.column.as_deref() == Some("Time")),
+        "{:?}",
+        log.problems
+    );
+    let check = log.columns.iter().find(|c| c.name == "Check").unwrap();
+    assert_eq!(check.kind, ColumnKind::Text);
+    assert_eq!(check.label_names, ["fail", "pass"]);
+    let mapping = Mapping::guess(&log);
+    // The spindle's (S_) phases and current, the X axis's: the first of each channel.
+    assert_eq!(
+        mapping.columns_of(Channel::SpindlePhase),
+        ["S_I_U", "S_I_V", "S_I_W"]
+    );
+    assert_eq!(
+        mapping.columns_of(Channel::FeedPhase),
+        ["X_I_U", "X_I_V", "X_I_W"]
+    );
+    assert_eq!(
+        mapping.columns_of(Channel::SpindleCurrent),
+        ["S_Current [A]"]
+    );
+    assert_eq!(mapping.columns_of(Channel::FeedCurrent), ["X_Current [A]"]);
+    assert_eq!(mapping.columns_of(Channel::SpindleSpeed), ["S_Speed [rpm]"]);
+    assert_eq!(mapping.columns_of(Channel::Feed), ["X_Feed [mm/min]"]);
+    assert_eq!(mapping.columns_of(Channel::Label), ["Check"]);
+}
+
+#[test]
+fn a_slow_rms_log_and_a_fast_phase_log_load_with_their_rates() {
+    let slow = load(SLOW, None);
+    assert_eq!((slow.rows, slow.sample_period_s), (60, Some(0.1)));
+    assert!(slow.dialect.decimal_comma);
+    assert_eq!(slow.columns[1].role, Some(Role::RmsCurrent));
+    assert_eq!(slow.columns[1].values[59], 12.0);
+    let fast = load(FAST, None);
+    assert_eq!(fast.dialect.delimiter, b'\t');
+    assert_eq!((fast.rows, fast.sample_period_s), (400, Some(0.0001)));
+    assert!(fast.columns[1..]
+        .iter()
+        .all(|c| c.role == Some(Role::PhaseCurrent)));
+    // The 10 Hz log cannot take the lab's 260 Hz low-pass; the 10 kHz one can (replay's chain
+    // adapts: tests/log_replay.rs).
+    use cutlab::log::analysis::{analyse, AnalysisRequest};
+    let request = AnalysisRequest {
+        lowpass: Some((260.0, 4)),
+        ..AnalysisRequest::default()
+    };
+    let a = analyse(&slow, "S_Strom [A]", &request).unwrap();
+    assert!(a.lowpass.is_none() && a.notes[0].contains("Nyquist"));
+    let a = analyse(&fast, "S_I_U [A]", &request).unwrap();
+    assert_eq!(a.lowpass, Some((260.0, 4)));
+}
+
+#[test]
+fn the_pages_chain_filters_takes_the_rms_finds_the_line_and_groups_by_label_in_stages() {
+    use cutlab::log::analysis::{analyse, AnalysisRequest, ChainRequest, ChainWork};
+    use cutlab::work::Work;
+    let log = std::sync::Arc::new(load(sine_log(1000.0, 4000).as_bytes(), None));
+    let request = ChainRequest {
+        column: "Spindle current [A]".into(),
+        lowpass: Some((10.0, 4)),
+        rms_window_s: 0.1,
+        by: Some("Phase".into()),
+        sample_period_s: None,
+    };
+    let mut work = ChainWork::new(log.clone(), request.clone()).unwrap();
+    let mut calls = 0;
+    while !work.advance(1).unwrap() {
+        calls += 1;
+    }
+    assert!(calls >= 4, "one stage per call: {calls}");
+    let out = work.finish().unwrap();
+    assert!(out.lowpass_applied);
+    // The per-label statistics are the CLI's (the same zero-phase low-pass).
+    let cli = analyse(
+        &log,
+        "Spindle current [A]",
+        &AnalysisRequest {
+            by: Some("Phase".into()),
+            lowpass: Some((10.0, 4)),
+            spectrum: false,
+        },
+    )
+    .unwrap();
+    assert_eq!(out.analysis.by_label, cli.by_label);
+    assert_eq!(out.analysis.whole, cli.whole);
+    // Unfiltered: a 2 A sine on 10 A has an RMS of √(10² + 2²/2) over whole periods, and the
+    // strongest line is at 50 Hz.
+    let raw = ChainWork::new(
+        log,
+        ChainRequest {
+            lowpass: None,
+            ..request
+        },
+    )
+    .unwrap()
+    .run_to_end()
+    .unwrap();
+    let expected = (100.0f64 + 2.0).sqrt();
+    assert!((raw.rms[1000] - expected).abs() < 1e-9, "{}", raw.rms[1000]);
+    let strongest = raw
+        .analysis
+        .peaks
+        .iter()
+        .max_by(|a, b| a.psd.total_cmp(&b.psd))
+        .unwrap();
+    assert!(
+        (strongest.freq_hz - 50.0).abs() < 1.0,
+        "{:?}",
+        raw.analysis.peaks
+    );
+    // A cut-off above the Nyquist frequency is a skipped stage, said.
+    let slow = std::sync::Arc::new(load(sine_log(10.0, 100).as_bytes(), None));
+    let skipped = ChainWork::new(
+        slow,
+        ChainRequest {
+            column: "Spindle current [A]".into(),
+            lowpass: Some((10.0, 4)),
+            rms_window_s: 1.0,
+            by: None,
+            sample_period_s: None,
+        },
+    )
+    .unwrap()
+    .run_to_end()
+    .unwrap();
+    assert!(!skipped.lowpass_applied);
+    assert!(
+        skipped.analysis.notes[0].contains("Nyquist"),
+        "{:?}",
+        skipped.analysis.notes
+    );
 }

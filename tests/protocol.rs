@@ -242,6 +242,73 @@ fn a_longer_payload_from_a_newer_minor_version_decodes_and_an_unknown_type_is_sk
     assert_eq!(d.stats().frames_rejected, 1);
 }
 
+/// Framing vectors from implementations cutlab did not write: zlib's CRC-32 and the PyPI
+/// package `cobs` (scripts/reference/protocol_reference.py; tests/reference/protocol/README.md).
+const FRAMING: &str = include_str!("reference/protocol/framing.json");
+
+fn unhex(text: &str) -> Vec<u8> {
+    (0..text.len())
+        .step_by(2)
+        .map(|i| u8::from_str_radix(&text[i..i + 2], 16).unwrap())
+        .collect()
+}
+
+#[test]
+fn crc32_agrees_with_zlib() {
+    use cutlab::protocol::crc::crc32;
+    let v: serde_json::Value = serde_json::from_str(FRAMING).unwrap();
+    let cases = v["crc32"].as_array().unwrap();
+    assert!(cases.len() > 100);
+    for case in cases {
+        let data = unhex(case["data"].as_str().unwrap());
+        assert_eq!(
+            u64::from(crc32(&data)),
+            case["crc32"].as_u64().unwrap(),
+            "{case}"
+        );
+    }
+    // The catalogue's check value is the first case.
+    assert_eq!(cases[0]["crc32"], 0xCBF4_3926u32);
+}
+
+#[test]
+fn cobs_agrees_with_an_independent_encoder_and_decodes_its_output() {
+    use cutlab::protocol::cobs::{decode, encode, max_encoded_len};
+    let v: serde_json::Value = serde_json::from_str(FRAMING).unwrap();
+    let cases = v["cobs"].as_array().unwrap();
+    assert!(cases.len() > 80);
+    for case in cases {
+        let data = unhex(case["data"].as_str().unwrap());
+        let expected = unhex(case["encoded"].as_str().unwrap());
+        let mut out = vec![0u8; max_encoded_len(data.len())];
+        let n = encode(&data, &mut out).unwrap();
+        assert_eq!(out[..n], expected[..], "{case}");
+        let mut back = vec![0u8; data.len() + 1];
+        let m = decode(&expected, &mut back).unwrap();
+        assert_eq!(back[..m], data[..], "{case}");
+    }
+}
+
+#[test]
+fn every_frame_type_goes_on_the_wire_as_zlib_and_cobs_compose_it() {
+    let v: serde_json::Value = serde_json::from_str(FRAMING).unwrap();
+    let cases = v["frames"].as_array().unwrap();
+    let mut types = std::collections::BTreeSet::new();
+    for case in cases {
+        let payload = unhex(case["payload"].as_str().unwrap());
+        let wire = unhex(case["wire"].as_str().unwrap());
+        let frame = Frame::read_payload(&payload).unwrap();
+        assert_eq!(frame.frame_type().name(), case["type"], "{case}");
+        types.insert(frame.frame_type().name());
+        assert_eq!(encoded(&frame), wire, "{case}");
+        let (got, _) = decode_all(&wire);
+        assert_eq!(got.len(), 1);
+        // Compared by bytes: a random f32 field may be a NaN.
+        assert_eq!(encoded(got[0].as_ref().unwrap()), wire, "{case}");
+    }
+    assert_eq!(types.len(), FrameType::ALL.len());
+}
+
 /// Mutates a valid stream the ways a serial line does: flipped bits, lost, repeated and inserted
 /// bytes, and cuts.
 fn mutate(stream: &mut Vec<u8>, r: &mut Rng) {
@@ -301,7 +368,9 @@ fn random_and_mutated_streams_never_panic_and_the_counts_add_up() {
 }
 
 /// The bounded fuzz run: random and mutated streams for a few seconds (native only: wasm32 has
-/// no clock), each checked like the test above. FUZZ_SECONDS sets the budget (default 3).
+/// no clock), each checked like the test above. FUZZ_SECONDS sets the budget (default 3). The
+/// seed comes from the clock, so every run explores new streams; a failure names the seed, the
+/// stream's number and its bytes, and `CUTLAB_FUZZ_SEED=…` replays that seed's streams.
 #[cfg(not(target_arch = "wasm32"))]
 #[test]
 fn fuzz_the_decoder_for_a_few_seconds() {
@@ -309,22 +378,65 @@ fn fuzz_the_decoder_for_a_few_seconds() {
         .ok()
         .and_then(|s| s.parse().ok())
         .unwrap_or(3.0);
+    let seed: u64 = match std::env::var("CUTLAB_FUZZ_SEED") {
+        Ok(text) => text
+            .parse()
+            .unwrap_or_else(|e| panic!("CUTLAB_FUZZ_SEED={text:?}: {e}")),
+        Err(_) => std::time::SystemTime::now()
+            .duration_since(std::time::UNIX_EPOCH)
+            .map_or(1, |d| d.as_nanos() as u64),
+    };
+    // Shown by cargo test only when the test fails.
+    println!("fuzz seed {seed} (replay with CUTLAB_FUZZ_SEED={seed})");
     let start = std::time::Instant::now();
-    let mut r = Rng::seed_from(start.elapsed().subsec_nanos().into());
+    let mut r = Rng::seed_from(seed);
     let mut streams = 0u64;
     while start.elapsed().as_secs_f64() < budget_s {
-        let mut stream: Vec<u8> = (0..1 + r.next_u64() % 30)
-            .flat_map(|_| encoded(&any_frame(&mut r)))
-            .collect();
-        if r.uniform() < 0.2 {
-            let len = (r.next_u64() % 600) as usize;
-            stream = (0..len).map(|_| u8r(&mut r)).collect();
+        let stream = fuzz_stream(&mut r);
+        let checked = std::panic::catch_unwind(|| check_stream(&stream));
+        if let Err(cause) = checked {
+            let why = cause
+                .downcast_ref::<String>()
+                .cloned()
+                .or_else(|| cause.downcast_ref::<&str>().map(|s| (*s).to_string()))
+                .unwrap_or_default();
+            panic!(
+                "fuzz stream {streams} of seed {seed} failed (replay with \
+                 CUTLAB_FUZZ_SEED={seed}): {why}\nthe stream ({} bytes): {}",
+                stream.len(),
+                hex(&stream)
+            );
         }
-        mutate(&mut stream, &mut r);
-        check_stream(&stream);
         streams += 1;
     }
     assert!(streams > 100, "only {streams} streams in {budget_s} s");
+}
+
+/// The fuzz run's next stream: valid frames, mutated, or (one time in five) random bytes,
+/// mutated.
+#[cfg(not(target_arch = "wasm32"))]
+fn fuzz_stream(r: &mut Rng) -> Vec<u8> {
+    let mut stream: Vec<u8> = (0..1 + r.next_u64() % 30)
+        .flat_map(|_| encoded(&any_frame(r)))
+        .collect();
+    if r.uniform() < 0.2 {
+        let len = (r.next_u64() % 600) as usize;
+        stream = (0..len).map(|_| u8r(r)).collect();
+    }
+    mutate(&mut stream, r);
+    stream
+}
+
+/// The same seed gives the same streams, so a failure's seed replays it.
+#[cfg(not(target_arch = "wasm32"))]
+#[test]
+fn a_fuzz_seed_replays_the_same_streams() {
+    let streams = |seed| {
+        let mut r = Rng::seed_from(seed);
+        (0..20).map(|_| fuzz_stream(&mut r)).collect::<Vec<_>>()
+    };
+    assert_eq!(streams(42), streams(42));
+    assert_ne!(streams(42), streams(43));
 }
 
 #[test]
@@ -387,11 +499,44 @@ fn the_command_line_encodes_and_decodes_json_lines() {
     assert_eq!(decoded, lines.lines().collect::<Vec<_>>());
     assert_eq!(summary["summary"]["bytes_dropped"], 9);
     assert_eq!(summary["summary"]["frames_decoded"], frames.len());
-    let (result, _) = common::cutlab_bytes(&["protocol", "encode"], b"{\"type\": \"arm\"}\nnope\n");
+    let (result, _) = common::cutlab_bytes(
+        &["protocol", "encode"],
+        b"{\"type\": \"arm\", \"seq\": 1}\nnope\n",
+    );
     assert_eq!(
         result.unwrap_err(),
         "line 2: not JSON: expected ident at line 1 column 2"
     );
+}
+
+/// `cutlab protocol encode` refuses what it would once have zero-filled: a misspelt field (an
+/// 80 % override that became a feed stop) and a frame with fields left out; only a `flags` byte
+/// may be left out. The message names the line, the frame type and the field.
+#[cfg(feature = "cli")]
+#[test]
+fn encode_refuses_unknown_and_missing_fields_naming_line_type_and_field() {
+    let encode = |text: &str| common::cutlab_bytes(&["protocol", "encode"], text.as_bytes());
+    let (result, out) = encode("{\"type\":\"set-override\",\"seq\":1,\"override_pct\":80}\n");
+    assert_eq!(
+        result.unwrap_err(),
+        "line 1: set-override: unknown field \"override_pct\"; a set-override frame has seq, \
+         override_cpct, flags"
+    );
+    assert!(out.is_empty());
+    let (result, _) = encode("{\"type\":\"arm\",\"seq\":1}\n\n{\"type\":\"capabilities\"}\n");
+    assert_eq!(
+        result.unwrap_err(),
+        "line 3: capabilities: missing field \"version_major\""
+    );
+    // flags left out: no bit set.
+    let (result, out) = encode("{\"type\":\"set-override\",\"seq\":42,\"override_cpct\":8760}\n");
+    result.unwrap();
+    let example = Frame::SetOverride(SetOverride {
+        seq: 42,
+        override_cpct: 8760,
+        flags: 0,
+    });
+    assert_eq!(out, encoded(&example));
 }
 
 /// The worked examples of docs/protocol.md, one per frame type.

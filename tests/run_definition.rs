@@ -83,3 +83,64 @@ fn every_setting_has_its_option_in_the_help() {
         assert!(out.contains(&option), "sim --help lacks {option}");
     }
 }
+
+#[test]
+fn the_override_before_arming_is_refused_outside_the_band_and_the_default_follows_it() {
+    use cutlab::closed_loop::config::RunConfiguration;
+    use cutlab::closed_loop::lab::default_settings;
+    let texts = |preset: Preset, pairs: &[(RunSetting, &str)]| {
+        parse_texts(preset, ControllerConfig::new(ControllerKind::Pi), pairs)
+    };
+    // Above what the brake bench's 150 % dial applies: was silently run at 150 %.
+    let e = texts(
+        Preset::WangBrakeBench,
+        &[(RunSetting::ArmingOverride, "200")],
+    )
+    .unwrap_err();
+    assert_eq!(
+        e[0].problem.to_string(),
+        "override before arming 200 % is more than this machine applies (150 %)"
+    );
+    // Above the run's own highest override: was silently run at 120 %.
+    let e = texts(
+        Preset::ManeeratDoc1,
+        &[
+            (RunSetting::ArmingOverride, "130"),
+            (RunSetting::MaxOverride, "120"),
+        ],
+    )
+    .unwrap_err();
+    assert_eq!(e[0].setting, RunSetting::ArmingOverride);
+    assert!(
+        e[0].problem
+            .to_string()
+            .contains("outside this run's override band 10–120 %"),
+        "{}",
+        e[0].problem
+    );
+    // The same from the command line, naming the option.
+    let args: Vec<String> = [
+        "--scenario",
+        "maneerat-doc-1",
+        "--arming-override",
+        "130",
+        "--max-override",
+        "120",
+    ]
+    .map(String::from)
+    .to_vec();
+    let e = spec_from_args(&args).unwrap_err().to_string();
+    assert!(e.starts_with("--arming-override: 130 % is outside"), "{e}");
+    // And from a saved configuration.
+    let mut spec = texts(Preset::ManeeratDoc1, &[(RunSetting::MaxOverride, "120")]).unwrap();
+    spec.settings.arming_override_pct = Some(130.0);
+    let text = RunConfiguration::new(vec![spec.clone()], None).to_json();
+    let run = RunConfiguration::from_json(&text).unwrap().runs.remove(0);
+    let e = default_settings(&run).unwrap_err().to_string();
+    assert!(e.contains("arming_override_pct: 130 % is outside"), "{e}");
+    // Left at its default, the override before arming follows a band below 100 %.
+    spec.settings.arming_override_pct = None;
+    spec.settings.max_override_pct = Some(80.0);
+    let settings = default_settings(&spec).unwrap();
+    assert_eq!(settings.envelope.arming_override_pct, 80.0);
+}

@@ -48,6 +48,39 @@ fn the_saved_comparison_and_the_teach_cut_log_load() {
     assert!(r2 > 0.95, "R² {r2}");
 }
 
+/// The saved calibration is kim-step-doc's teach cut as made today, and a teach-in proposes
+/// from it what the teach cut itself proposes.
+#[test]
+fn the_saved_calibration_is_kim_step_docs_teach_cut() {
+    use cutlab::closed_loop::calibration_file::CalibrationFile;
+    use cutlab::closed_loop::lab::{teach_cut_only, RunSpec};
+    use cutlab::control::registry::ControllerKind;
+    use cutlab::plant::Preset;
+    let saved = CalibrationFile::from_json(&read("kim-step-doc-calibration.json")).unwrap();
+    let spec = RunSpec::new(Preset::KimStepDoc, ControllerKind::Fixed);
+    let (_, fresh) = teach_cut_only(&spec).unwrap();
+    // Debug text compares every bit, and NaN (written null) equal to NaN.
+    assert_eq!(
+        format!("{:?}", saved.calibration),
+        format!("{fresh:?}"),
+        "kim-step-doc-calibration.json is stale"
+    );
+    let path = format!("{DATA}kim-step-doc-calibration.json");
+    let (result, out) = common::cutlab_text(
+        &[
+            "tune",
+            "--teach-in",
+            "--calibration",
+            &path,
+            "--scenarios",
+            "kim-step-doc",
+        ],
+        "",
+    );
+    result.unwrap();
+    assert!(out.contains("proposed target 357 N"), "{out}");
+}
+
 /// Calibration without a dynamometer: the forces modelled from the log's feed, speed, depth and
 /// width give the line the measured forces give (the simulated mill's mean force is the
 /// mechanistic model's, so here the two must agree closely).
@@ -292,4 +325,42 @@ fn the_synthetic_machine_export_reads_and_analyses_by_phase() {
             mean(depth)
         );
     }
+}
+
+/// The synthetic 1 kHz DAQ capture in www/data (made by scripts/sample-logs from
+/// examples/sample_daq_log.rs): time in ms, three spindle phase currents, a dynamometer; its
+/// columns map themselves, and its force calibrates the spindle current it was recorded with.
+#[test]
+fn the_synthetic_daq_capture_maps_itself_and_calibrates() {
+    use cutlab::log::mapping::{Channel, Mapping};
+    use cutlab::log::replay::{fit_calibration, ForceSource, ReplaySettings};
+    let bytes = std::fs::read(format!("{DATA}synthetic-maneerat-doc-2-daq.csv")).unwrap();
+    let log = std::sync::Arc::new(cutlab::log::load(&bytes, None));
+    assert_eq!(log.rows, 12_000);
+    assert_eq!(log.sample_period_s, Some(0.001));
+    assert!(log.problems.is_empty(), "{:?}", log.problems);
+    let mapping = Mapping::guess(&log);
+    assert_eq!(mapping.count(Channel::SpindlePhase), 3);
+    for (channel, column) in [
+        (Channel::Time, "Time [ms]"),
+        (Channel::SpindleSpeed, "S_speed [rpm]"),
+        (Channel::Feed, "X_feed [mm/min]"),
+        (Channel::Override, "Override [%]"),
+        (Channel::Force, "F [N]"),
+        (Channel::Label, "Phase"),
+    ] {
+        assert_eq!(mapping.columns_of(channel), [column], "{channel:?}");
+    }
+    let fit = fit_calibration(
+        &log,
+        &mapping,
+        &ReplaySettings::default(),
+        &ForceSource::Measured,
+    )
+    .unwrap();
+    let cutlab::closed_loop::runner::Estimator::Spindle { model, .. } = &fit.calibration.estimator
+    else {
+        panic!("a spindle model");
+    };
+    assert!(model.rows[0].quality.r_squared > 0.95, "{}", fit.quality());
 }

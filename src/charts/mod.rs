@@ -9,6 +9,7 @@
 //! sample never draws a line to infinity. On a logarithmic axis, points at or below zero are gaps
 //! too.
 
+pub mod pareto;
 pub mod view;
 
 use std::ops::Range;
@@ -50,6 +51,10 @@ pub enum Stroke {
     Solid,
     /// A dashed line, for targets and limits.
     Dashed,
+    /// A dot at each point and no line, for a scatter of results.
+    Points,
+    /// A continuous line with a dot at each point, for a few results that form a curve.
+    LinePoints,
 }
 
 /// One named line.
@@ -79,6 +84,12 @@ impl Series {
     /// The same series drawn dashed.
     pub fn dashed(mut self) -> Self {
         self.stroke = Stroke::Dashed;
+        self
+    }
+
+    /// The same series drawn with another stroke.
+    pub fn with_stroke(mut self, stroke: Stroke) -> Self {
+        self.stroke = stroke;
         self
     }
 }
@@ -444,9 +455,14 @@ where
     for series in &chart.series {
         let color = series.color.plotters();
         let line_style = color.stroke_width(width);
+        let dot = style.px(3.5);
         for run in drawable_runs(&series.points, x_axis.scale, y_axis.scale) {
+            if matches!(series.stroke, Stroke::Points | Stroke::LinePoints) {
+                ctx.draw_series(run.iter().map(|&p| Circle::new(p, dot, color.filled())))?;
+            }
             match series.stroke {
-                Stroke::Solid => {
+                Stroke::Points => {}
+                Stroke::Solid | Stroke::LinePoints => {
                     ctx.draw_series(LineSeries::new(run.iter().copied(), line_style))?;
                 }
                 Stroke::Dashed => {
@@ -605,6 +621,22 @@ mod tests {
     }
 
     #[test]
+    fn a_dotted_series_is_one_circle_per_point_and_no_line() {
+        let mut chart = LineChart::new(Axis::linear("force (N)"), Axis::linear("current (A)"));
+        chart.series.push(
+            Series::new(
+                "periods",
+                PALETTE[0],
+                vec![(100.0, 5.0), (200.0, 6.0), (f64::NAN, 1.0), (300.0, 7.0)],
+            )
+            .with_stroke(Stroke::Points),
+        );
+        chart.fit();
+        let (svg, _) = render(&chart);
+        assert_eq!(svg.matches("<circle").count(), 3, "{svg}");
+    }
+
+    #[test]
     fn draws_axes_labels_and_lines() {
         let (svg, geometry) = render(&sine_chart());
         assert!(svg.contains("time (s)"));
@@ -638,6 +670,35 @@ mod tests {
             .filter(|l| l.contains("<polyline") && l.contains("#E69F00"))
             .count();
         assert_eq!(series_lines, 2, "{svg}");
+    }
+
+    #[test]
+    fn points_draw_dots_without_a_line_and_line_points_both() {
+        let mut chart = LineChart::new(Axis::linear("x"), Axis::linear("y"));
+        let points = vec![(0.0, 1.0), (1.0, 3.0), (2.0, f64::NAN), (3.0, 2.0)];
+        chart
+            .series
+            .push(Series::new("dots", PALETTE[1], points.clone()).with_stroke(Stroke::Points));
+        chart.fit();
+        let (svg, _) = render(&chart);
+        let count = |svg: &str, tag: &str| {
+            svg.lines()
+                .filter(|l| l.contains(tag) && l.contains("#E69F00"))
+                .count()
+        };
+        assert_eq!(
+            (count(&svg, "<circle"), count(&svg, "<polyline")),
+            (3, 0),
+            "{svg}"
+        );
+        chart.series[0].stroke = Stroke::LinePoints;
+        let (svg, _) = render(&chart);
+        // The gap splits the line in two and leaves its point out.
+        assert_eq!(
+            (count(&svg, "<circle"), count(&svg, "<polyline")),
+            (3, 2),
+            "{svg}"
+        );
     }
 
     #[test]

@@ -9,8 +9,9 @@ use serde::Serialize;
 
 use super::args::{required, value_or};
 use super::{write_json, CliError, Io};
-use crate::closed_loop::runner::GEAR_CHANGE_RPM;
+use crate::closed_loop::runner::{Calibration, Estimator, GEAR_CHANGE_RPM};
 use crate::estimation::cut_forces::{cutting_material, CutGeometry};
+use crate::estimation::speed::FvSpeedModel;
 use crate::estimation::teach_log::{calibrate_log, LogCalibration, LogError, LogTable};
 use crate::plant::mechanics::{Cutter, MillingMode};
 
@@ -27,6 +28,29 @@ pub struct CalibrateArgs {
     files: Vec<String>,
     #[arg(long = "json", help = "Print the fitted models as JSON")]
     json: bool,
+    #[command(flatten)]
+    log: LogCalibrationArgs,
+    #[arg(
+        long = "save-calibration",
+        help = "Write the fitted model as a calibration file that cutlab sim/host --calibration, \
+         cutlab log replay --calibration and the browser read (the spindle model, or the feed \
+         model with --feedback feed)",
+        value_name = "FILE"
+    )]
+    save_calibration: Option<String>,
+    #[arg(
+        long = "feedback",
+        help = "Which model --save-calibration writes: spindle (default when fitted) or feed",
+        value_name = "spindle|feed"
+    )]
+    feedback: Option<String>,
+}
+
+/// How a logged teach cut is read: the options `cutlab calibrate` and `cutlab tune --teach-in
+/// --log` share.
+#[derive(Debug, clap::Args)]
+#[command(next_help_heading = "Reading a logged teach cut")]
+pub struct LogCalibrationArgs {
     #[arg(
         long = "gear-change-rpm",
         help = "Spindle speed of the gear change (default 900, paper 003)",
@@ -67,7 +91,7 @@ pub struct CalibrateArgs {
         long = "map",
         help = "Read a calibration column from another column of the file (ROLE=COLUMN, repeatable; \
          roles: time_s, force_n, feed_force_n, spindle_current_rms_a, spindle_speed_rpm, \
-         feed_current_rms_a, feed_mm_min, depth_mm, width_mm)",
+         feed_current_rms_a, feed_mm_min, depth_mm, width_mm, and override_pct for a teach-in)",
         value_name = "ROLE=COLUMN"
     )]
     map: Vec<String>,
@@ -75,41 +99,119 @@ pub struct CalibrateArgs {
 
 const GEOMETRY_OPTIONS: [&str; 3] = ["diameter-mm", "teeth", "mode"];
 
-/// The cut from `--material` and its companions, if given, with a description for the report.
-fn cut_geometry(args: &CalibrateArgs) -> Result<Option<(CutGeometry, String)>, CliError> {
-    let Some(name) = args.material.as_deref() else {
-        let given = [&args.diameter_mm, &args.teeth, &args.mode].map(Option::is_some);
-        if let Some((stray, _)) = GEOMETRY_OPTIONS.iter().zip(given).find(|(_, g)| *g) {
+impl LogCalibrationArgs {
+    /// The options given, as typed (`--map`, …), for refusing them where they do not apply.
+    pub fn given(&self) -> Vec<&'static str> {
+        [
+            ("--gear-change-rpm", self.gear_change_rpm.is_some()),
+            ("--material", self.material.is_some()),
+            ("--diameter-mm", self.diameter_mm.is_some()),
+            ("--teeth", self.teeth.is_some()),
+            ("--mode", self.mode.is_some()),
+            ("--map", !self.map.is_empty()),
+        ]
+        .into_iter()
+        .filter_map(|(name, given)| given.then_some(name))
+        .collect()
+    }
+
+    /// `--gear-change-rpm`, checked.
+    pub fn gear_change_rpm(&self) -> Result<f64, CliError> {
+        let rpm: f64 = value_or("gear-change-rpm", &self.gear_change_rpm, GEAR_CHANGE_RPM)?;
+        if !(rpm.is_finite() && rpm > 0.0) {
             return Err(CliError::new(format!(
-                "--{stray} only applies with --material (modelled forces)"
+                "--gear-change-rpm: must be a positive speed, got {rpm}"
             )));
         }
-        return Ok(None);
-    };
-    let material = cutting_material(name).map_err(|e| CliError::new(format!("--material: {e}")))?;
-    let diameter_mm: f64 = required("diameter-mm", &args.diameter_mm)?;
-    let teeth: u32 = required("teeth", &args.teeth)?;
-    let mode_text: String = required("mode", &args.mode)?;
-    let mode = MillingMode::from_name(&mode_text).ok_or_else(|| {
-        CliError::new(format!(
-            "--mode: expected up, down or slot, got {mode_text:?}"
-        ))
-    })?;
-    let cutter = Cutter::new(diameter_mm, teeth, 0.0)
-        .map_err(|e| CliError::new(format!("--diameter-mm/--teeth: {e}")))?;
-    let description = format!(
-        "the mechanistic model (material {}, Ø{diameter_mm} mm, {teeth} teeth, {} milling)",
-        material.name(),
-        mode.name()
-    );
-    Ok(Some((
-        CutGeometry {
-            cutter,
-            mode,
-            coefficients: material.coefficients(),
-        },
-        description,
-    )))
+        Ok(rpm)
+    }
+
+    /// The `--map ROLE=COLUMN` pairs.
+    pub fn map(&self) -> Result<Vec<(String, String)>, CliError> {
+        self.map
+            .iter()
+            .map(|m| {
+                m.split_once('=')
+                    .map(|(role, column)| (role.trim().to_string(), column.trim().to_string()))
+                    .ok_or_else(|| {
+                        CliError::new(format!("--map: {m:?} is not of the form ROLE=COLUMN"))
+                    })
+            })
+            .collect()
+    }
+
+    /// The cut from `--material` and its companions, if given, with a description for the
+    /// report.
+    pub fn geometry(&self) -> Result<Option<(CutGeometry, String)>, CliError> {
+        let Some(name) = self.material.as_deref() else {
+            let given = [&self.diameter_mm, &self.teeth, &self.mode].map(Option::is_some);
+            if let Some((stray, _)) = GEOMETRY_OPTIONS.iter().zip(given).find(|(_, g)| *g) {
+                return Err(CliError::new(format!(
+                    "--{stray} only applies with --material (modelled forces)"
+                )));
+            }
+            return Ok(None);
+        };
+        let material =
+            cutting_material(name).map_err(|e| CliError::new(format!("--material: {e}")))?;
+        let diameter_mm: f64 = required("diameter-mm", &self.diameter_mm)?;
+        let teeth: u32 = required("teeth", &self.teeth)?;
+        let mode_text: String = required("mode", &self.mode)?;
+        let mode = MillingMode::from_name(&mode_text).ok_or_else(|| {
+            CliError::new(format!(
+                "--mode: expected up, down or slot, got {mode_text:?}"
+            ))
+        })?;
+        let cutter = Cutter::new(diameter_mm, teeth, 0.0)
+            .map_err(|e| CliError::new(format!("--diameter-mm/--teeth: {e}")))?;
+        let description = format!(
+            "the mechanistic model (material {}, Ø{diameter_mm} mm, {teeth} teeth, {} milling)",
+            material.name(),
+            mode.name()
+        );
+        Ok(Some((
+            CutGeometry {
+                cutter,
+                mode,
+                coefficients: material.coefficients(),
+            },
+            description,
+        )))
+    }
+}
+
+/// Reads `file` with the messy-log reader (any delimiter, decimal comma, quotes, damaged lines
+/// kept as gaps); a file without data rows is refused.
+pub fn read_log(file: &str) -> Result<crate::log::Log, CliError> {
+    let bytes =
+        std::fs::read(file).map_err(|e| CliError::new(format!("{file}: cannot read: {e}")))?;
+    let log = crate::log::load(&bytes, None);
+    if log.rows == 0 {
+        return Err(CliError::new(format!("{file}: {}", LogError::Empty)));
+    }
+    Ok(log)
+}
+
+/// Notes on the log reader's problems (damaged lines kept as gaps), at most five lines.
+pub fn problem_notes(log: &crate::log::Log) -> String {
+    let mut out = String::new();
+    for p in log.problems.iter().take(5) {
+        out.push_str(&format!(
+            "note: line {}{}: {}\n",
+            p.line,
+            p.column
+                .as_deref()
+                .map_or(String::new(), |c| format!(", {c}")),
+            p.message
+        ));
+    }
+    if log.problems.len() > 5 {
+        out.push_str(&format!(
+            "note: … and {} more problems (see --json)\n",
+            log.problems.len() - 5 + log.problems_not_listed
+        ));
+    }
+    out
 }
 
 /// The forces the fits use, and where they came from.
@@ -128,34 +230,13 @@ pub fn run(args: CalibrateArgs, io: &mut Io<'_>) -> Result<(), CliError> {
     let [file] = args.files.as_slice() else {
         return Err(CliError::new("name exactly one CSV file to calibrate from"));
     };
-    let gear_change_rpm: f64 = value_or("gear-change-rpm", &args.gear_change_rpm, GEAR_CHANGE_RPM)?;
-    if !(gear_change_rpm.is_finite() && gear_change_rpm > 0.0) {
-        return Err(CliError::new(format!(
-            "--gear-change-rpm: must be a positive speed, got {gear_change_rpm}"
-        )));
-    }
-    let map = args
-        .map
-        .iter()
-        .map(|m| {
-            m.split_once('=')
-                .map(|(role, column)| (role.trim().to_string(), column.trim().to_string()))
-                .ok_or_else(|| {
-                    CliError::new(format!("--map: {m:?} is not of the form ROLE=COLUMN"))
-                })
-        })
-        .collect::<Result<Vec<_>, _>>()?;
-    let bytes =
-        std::fs::read(file).map_err(|e| CliError::new(format!("{file}: cannot read: {e}")))?;
+    let gear_change_rpm = args.log.gear_change_rpm()?;
+    let map = args.log.map()?;
+    let log = read_log(file)?;
     let in_file = |e: LogError| CliError::new(format!("{file}: {e}"));
-    // The messy-log reader: any delimiter, decimal comma, quotes, damaged lines kept as gaps.
-    let log = crate::log::load(&bytes, None);
-    if log.rows == 0 {
-        return Err(in_file(LogError::Empty));
-    }
     let table =
         LogTable::from_log(&log, &map).map_err(|e| CliError::new(format!("{file}: {e}")))?;
-    let geometry = cut_geometry(&args)?;
+    let geometry = args.log.geometry()?;
     let report = calibrate_log(
         &table,
         geometry.as_ref().map(|(g, source)| (g, source.as_str())),
@@ -163,6 +244,21 @@ pub fn run(args: CalibrateArgs, io: &mut Io<'_>) -> Result<(), CliError> {
     )
     .map_err(in_file)?;
     let rows_with_force = report.rows_with_force;
+    if let Some(path) = args.save_calibration.as_deref() {
+        let (calibration, which) = saved_calibration(&report, &table, args.feedback.as_deref())?;
+        super::save_calibration(
+            path,
+            &calibration,
+            format!(
+                "cutlab calibrate {file}, {which} model, force from {}",
+                report.force_source
+            ),
+        )?;
+    } else if args.feedback.is_some() {
+        return Err(CliError::new(
+            "--feedback only applies with --save-calibration",
+        ));
+    }
     if args.json {
         return write_json(
             io.stdout,
@@ -177,22 +273,7 @@ pub fn run(args: CalibrateArgs, io: &mut Io<'_>) -> Result<(), CliError> {
         "{file}: {rows_with_force} rows with force, from {}\n",
         report.force_source
     );
-    for p in log.problems.iter().take(5) {
-        out.push_str(&format!(
-            "note: line {}{}: {}\n",
-            p.line,
-            p.column
-                .as_deref()
-                .map_or(String::new(), |c| format!(", {c}")),
-            p.message
-        ));
-    }
-    if log.problems.len() > 5 {
-        out.push_str(&format!(
-            "note: … and {} more problems (see --json)\n",
-            log.problems.len() - 5 + log.problems_not_listed
-        ));
-    }
+    out.push_str(&problem_notes(&log));
     if let Some(pct) = report.model_vs_measured_pct {
         let _ = writeln!(
             out,
@@ -242,4 +323,90 @@ pub fn run(args: CalibrateArgs, io: &mut Io<'_>) -> Result<(), CliError> {
     }
     io.stdout.write_all(out.as_bytes())?;
     Ok(())
+}
+
+/// The calibration a fitted log makes: one model (the spindle's unless `feedback` says feed), no
+/// F/V slope (the estimator then reads the programmed speed; a log of a speed column has no
+/// converter voltage), the median force it was fitted to as the force at full override, and
+/// √2 × the largest RMS current as the largest phase current (the peak of a sine).
+fn saved_calibration(
+    report: &LogCalibration,
+    table: &LogTable,
+    feedback: Option<&str>,
+) -> Result<(Calibration, &'static str), CliError> {
+    let largest = |name: &str| {
+        table.column(name).map_or(0.0, |values| {
+            values
+                .iter()
+                .copied()
+                .filter(|v| v.is_finite())
+                .fold(0.0, f64::max)
+        })
+    };
+    let duration_s = table.column("time_s").map_or(0.0, |t| {
+        let finite: Vec<f64> = t.iter().copied().filter(|v| v.is_finite()).collect();
+        match (finite.first(), finite.last()) {
+            (Some(a), Some(b)) => (b - a).max(0.0),
+            _ => 0.0,
+        }
+    });
+    let want_feed = match feedback.map(str::trim) {
+        None => report.spindle.is_none(),
+        Some("spindle") => false,
+        Some("feed") => true,
+        Some(other) => {
+            return Err(CliError::new(format!(
+                "--feedback: expected spindle or feed, got {other:?}"
+            )))
+        }
+    };
+    if want_feed {
+        let model = report.feed.ok_or_else(|| {
+            CliError::new(format!(
+                "--save-calibration: no feed model was fitted ({})",
+                report.feed_error.as_deref().unwrap_or("no reason given")
+            ))
+        })?;
+        Ok((
+            Calibration {
+                estimator: Estimator::Feed { model },
+                // A log's rows carry no air periods this fit saw; the envelope falls back to
+                // its fixed fraction of the target.
+                air_force_estimate_n: f64::NAN,
+                median_force_at_full_override_n: report.median_feed_force_n,
+                regulated_per_resultant: 1.0,
+                periods: model.quality.samples,
+                max_phase_current_a: std::f64::consts::SQRT_2 * largest("feed_current_rms_a"),
+                duration_s,
+            },
+            "feed",
+        ))
+    } else {
+        let model = report.spindle.clone().ok_or_else(|| {
+            CliError::new(format!(
+                "--save-calibration: no spindle model was fitted ({})",
+                report.spindle_error.as_deref().unwrap_or("no reason given")
+            ))
+        })?;
+        let periods = model.rows.iter().map(|r| r.quality.samples).sum();
+        Ok((
+            Calibration {
+                estimator: Estimator::Spindle {
+                    speed: FvSpeedModel {
+                        gear_change_rpm: model.gear_change_rpm,
+                        low_range_v_per_rpm: f64::NAN,
+                        high_range_v_per_rpm: f64::NAN,
+                    },
+                    model,
+                },
+                air_force_estimate_n: f64::NAN,
+                median_force_at_full_override_n: report.median_force_n,
+                regulated_per_resultant: 1.0,
+                periods,
+                max_phase_current_a: std::f64::consts::SQRT_2 * largest("spindle_current_rms_a"),
+                duration_s,
+            },
+            "spindle",
+        ))
+    }
 }

@@ -44,7 +44,22 @@ pub struct DeviceArgs {
     /// Pull the cable at this device time: nothing in or out from then on
     #[arg(long = "unplug-at-s", value_name = "T", allow_hyphen_values = true)]
     unplug_at_s: Option<String>,
-    /// Device seconds per wall second (default 1: real time)
+    /// Read an over-current from this device time (with --over-current-s) while a part runs
+    #[arg(
+        long = "over-current-at-s",
+        value_name = "T",
+        allow_hyphen_values = true
+    )]
+    over_current_at_s: Option<String>,
+    /// Length of the over-current, device seconds
+    #[arg(long = "over-current-s", value_name = "D", allow_hyphen_values = true)]
+    over_current_s: Option<String>,
+    /// Make the E-stop input active at this device time (it stays active; the device then
+    /// declares an E-stop input)
+    #[arg(long = "estop-at-s", value_name = "T", allow_hyphen_values = true)]
+    estop_at_s: Option<String>,
+    /// Device seconds per wall second (default 1: real time; the device's watchdog, in device
+    /// time, is then that much shorter in wall time: 0.5 s is 10 ms at 50)
     #[arg(long = "time-scale", value_name = "K", allow_hyphen_values = true)]
     time_scale: Option<String>,
     /// The device's watchdog timeout, device seconds (default 0.5)
@@ -53,6 +68,10 @@ pub struct DeviceArgs {
     /// The override the watchdog applies, % (default 50)
     #[arg(long = "fallback-pct", value_name = "PCT", allow_hyphen_values = true)]
     fallback_pct: Option<String>,
+    /// Send no simulation truth, as a real bridge: the host must calibrate from the cut model or
+    /// a saved calibration
+    #[arg(long = "no-truth")]
+    no_truth: bool,
 }
 
 /// The emulator the options describe.
@@ -68,11 +87,20 @@ pub fn emulator_from(args: &DeviceArgs) -> Result<DeviceEmulator, CliError> {
     config.seed = value_or("seed", &args.seed, config.seed)?;
     config.watchdog_timeout_s = value_or("watchdog-s", &args.watchdog_s, 0.5)?;
     config.fallback_override_pct = value_or("fallback-pct", &args.fallback_pct, 50.0)?;
+    config.sim_truth = !args.no_truth;
     let stall_at_s = value("stall-at-s", &args.stall_at_s)?;
     let stall_s: Option<f64> = value("stall-s", &args.stall_s)?;
     if stall_at_s.is_some() != stall_s.is_some() {
         return Err(CliError::new(
             "--stall-at-s and --stall-s go together: when the stall starts and how long it lasts",
+        ));
+    }
+    let over_current_at_s = value("over-current-at-s", &args.over_current_at_s)?;
+    let over_current_s: Option<f64> = value("over-current-s", &args.over_current_s)?;
+    if over_current_at_s.is_some() != over_current_s.is_some() {
+        return Err(CliError::new(
+            "--over-current-at-s and --over-current-s go together: when the over-current starts \
+             and how long it lasts",
         ));
     }
     config.faults = FaultInjection {
@@ -81,6 +109,9 @@ pub fn emulator_from(args: &DeviceArgs) -> Result<DeviceEmulator, CliError> {
         stall_at_s,
         stall_s: stall_s.unwrap_or(0.0),
         unplug_at_s: value("unplug-at-s", &args.unplug_at_s)?,
+        estop_at_s: value("estop-at-s", &args.estop_at_s)?,
+        over_current_at_s,
+        over_current_s: over_current_s.unwrap_or(0.0),
     };
     DeviceEmulator::new(config).map_err(|e| CliError::new(e.to_string()))
 }

@@ -6,6 +6,7 @@ use serde::Serialize;
 use super::args::{reject_extra, required, value, value_or};
 use super::{write_json, CliError, Io};
 use crate::estimation::cut_forces::cutting_material;
+use crate::input::readable;
 use crate::plant::materials::CuttingCoefficients;
 use crate::plant::mechanics::{
     mean_forces, Cutter, Immersion, MillingForceModel, MillingMode, ToolForces, MAX_EDGE_TURNS,
@@ -158,6 +159,10 @@ pub struct ForceArgs {
     extra: Vec<String>,
 }
 
+/// The fastest spindle a mill has (high-speed spindles reach 60 000–100 000 rev/min); beyond it a
+/// speed is a typing mistake, and the feed and power it implies overflow.
+const MAX_SPINDLE_RPM: f64 = 200_000.0;
+
 const COEFFICIENT_OPTIONS: [&str; 6] = ["ktc", "krc", "kac", "kte", "kre", "kae"];
 
 #[derive(Serialize)]
@@ -290,8 +295,9 @@ pub fn run(args: ForceArgs, io: &mut Io<'_>) -> Result<(), CliError> {
     let axial_depth_mm = positive_option("axial-depth-mm", &args.axial_depth_mm)?;
     if axial_depth_mm > cutter.max_axial_depth_mm() {
         return Err(CliError::new(format!(
-            "--axial-depth-mm: {axial_depth_mm} mm is deeper than a {} mm cutter with a {}° helix \
+            "--axial-depth-mm: {} mm is deeper than a {} mm cutter with a {}° helix \
              can be modelled (at most {:.0} mm, where the edge wraps {} turns)",
+            readable(axial_depth_mm),
             cutter.diameter_mm,
             cutter.helix_deg,
             cutter.max_axial_depth_mm(),
@@ -316,6 +322,12 @@ pub fn run(args: ForceArgs, io: &mut Io<'_>) -> Result<(), CliError> {
             _ => CliError::new(format!("--feed-per-tooth-mm: {}", e.message)),
         })?;
     let rpm = positive_option("rpm", &args.rpm)?;
+    if rpm > MAX_SPINDLE_RPM {
+        return Err(CliError::new(format!(
+            "--rpm: {} rev/min is beyond any milling spindle (at most {MAX_SPINDLE_RPM} rev/min)",
+            readable(rpm)
+        )));
+    }
     let (material, k) = coefficients(&args)?;
     let revolutions: u32 = value_or("revolutions", &args.revolutions, 4)?;
     let steps_per_rev: u32 = value_or("steps-per-rev", &args.steps_per_rev, 7200)?;

@@ -15,14 +15,17 @@ use std::time::{Duration, Instant};
 use serde::Serialize;
 
 use super::args::{required, value, value_or};
-use super::sim::{metrics_table, EventLine, SimReport};
+use super::sim::{fail_on_controller_faults, metrics_table, EventLine, SimReport};
 use super::{write_json, CliError, Io};
-use crate::closed_loop::lab::{RunSpec, SettingsOverrides};
+use crate::closed_loop::calibration_file::CalibrationFile;
+use crate::closed_loop::definition::preset_controller;
+use crate::closed_loop::lab::{
+    apply_references, references, References, RunResult, RunSpec, SettingsOverrides,
+};
 use crate::closed_loop::trace::write_csv;
 use crate::control::registry::{ControllerConfig, ControllerKind};
 use crate::plant::Preset;
-use crate::protocol::frame::text_field;
-use crate::protocol::host::{DeviceSummary, LinkStats};
+use crate::protocol::host::{DeviceSummary, LinkEvent, LinkStats};
 use crate::protocol::link::{run_on_link, HostLink, HostOptions};
 
 /// Help of `cutlab host`.
@@ -30,7 +33,13 @@ pub const ABOUT: &str = "Run the closed loop (teach cut, controller, safety enve
 device over the feed-override protocol (docs/protocol.md): handshake, arm, stream, command, \
 disarm. The device is a command speaking the protocol on stdin/stdout (--device-cmd, e.g. \
 \"cutlab device --stdio --scenario kim-step-doc --time-scale 20\") or a serial port (--port). \
-Prints the metrics as cutlab sim does and what crossed the link; --json writes both.";
+Prints the metrics as cutlab sim does and what crossed the link, and the link's events on stderr \
+as they happen; --json writes both, whatever happens (a run that never came about gets the \
+counts, the events and the error). The savings are measured against cutlab sim's simulated \
+fixed-feed references of the preset the device runs (--no-references skips them). A device fault \
+(over-current, sensor, E-stop) stops the loop: the host holds the device's fallback override \
+until the part ends (after an E-stop it disarms at once). The command fails after a link loss or \
+a device fault's alarm, with the results up to there printed and written.";
 
 /// Options of `cutlab host`.
 #[derive(Debug, clap::Args)]
@@ -63,30 +72,153 @@ pub struct HostArgs {
     /// handshake waits five times as long for a device to answer)
     #[arg(long = "link-timeout-s", value_name = "S", allow_hyphen_values = true)]
     link_timeout_s: Option<String>,
+    /// Start from a saved calibration (cutlab-calibration JSON) instead of a teach cut: the
+    /// device's first part is then the run
+    #[arg(long, value_name = "FILE")]
+    calibration: Option<String>,
+    /// Write the run's calibration (the teach cut's, or the one given) as a calibration file
+    #[arg(long = "save-calibration", value_name = "FILE")]
+    save_calibration: Option<String>,
     /// Write the closed loop's trace as CSV
     #[arg(long, value_name = "FILE")]
     csv: Option<String>,
-    /// Write the metrics, calibration, events and link counts as JSON
+    /// Write the metrics, calibration, events and link counts as JSON (whatever happens: a run
+    /// that never came about gets the link's counts, events and the error)
     #[arg(long, value_name = "FILE")]
     json: Option<String>,
+    /// Skip the simulated fixed-feed reference runs (no savings; faster)
+    #[arg(long = "no-references")]
+    no_references: bool,
 }
 
 /// The report `--json` writes: the link's counts, then everything `cutlab sim --json` reports.
+/// It is written whatever happened, with what is known: before the handshake there is no
+/// device and no counts, and a run that never came about (a teach cut abandoned, a program the
+/// host cannot take) has no metrics and no calibration — `error` says why.
 #[derive(Serialize)]
 struct HostReport<'a> {
-    protocol_version: String,
-    device: &'a DeviceSummary,
-    frames_received: u64,
-    frames_lost: u64,
-    frames_rejected: u64,
-    bytes_dropped: u64,
-    commands_sent: u64,
-    commands_acknowledged: u64,
-    watchdog_fallbacks: u64,
-    link_losses: u64,
-    link: &'a LinkStats,
+    protocol_version: Option<&'a str>,
+    device: Option<&'a DeviceSummary>,
+    frames_received: Option<u64>,
+    frames_lost: Option<u64>,
+    frames_rejected: Option<u64>,
+    bytes_dropped: Option<u64>,
+    commands_sent: Option<u64>,
+    commands_acknowledged: Option<u64>,
+    watchdog_fallbacks: Option<u64>,
+    link_losses: Option<u64>,
+    link: Option<&'a LinkStats>,
+    /// Whether the host's watchdog (or an I/O error) lost the link.
+    link_lost: bool,
+    /// The device fault that stopped the loop, if one did.
+    alarm: Option<&'a str>,
+    /// Why there is no run, if there is none.
+    error: Option<&'a str>,
+    /// Where the savings' references come from (they are simulated), or why there are none.
+    references_source: &'a str,
     #[serde(flatten)]
-    run: SimReport<'a>,
+    run: RunPart<'a>,
+}
+
+/// The run's part of the report: `cutlab sim`'s, or what is known without a run.
+#[derive(Serialize)]
+#[serde(untagged)]
+enum RunPart<'a> {
+    Done(Box<SimReport<'a>>),
+    None(NoRun<'a>),
+}
+
+/// The report's run fields when there is no run: the same keys, empty, and the link's events.
+#[derive(Serialize)]
+struct NoRun<'a> {
+    scenario: Option<&'static str>,
+    controller: &'a ControllerConfig,
+    metrics: Option<()>,
+    references: Option<()>,
+    calibration: Option<()>,
+    events: Vec<EventLine>,
+}
+
+/// What a host run came to, whatever happened.
+struct Outcome {
+    spec: Option<RunSpec>,
+    device: Option<DeviceSummary>,
+    stats: Option<LinkStats>,
+    events: Vec<LinkEvent>,
+    link_lost: bool,
+    alarm: Option<String>,
+    result: Result<RunResult, String>,
+    references: Option<References>,
+    references_source: String,
+}
+
+impl Outcome {
+    /// Nothing but the reason: the link never came up.
+    fn failed(error: String) -> Self {
+        Self {
+            spec: None,
+            device: None,
+            stats: None,
+            events: Vec::new(),
+            link_lost: false,
+            alarm: None,
+            result: Err(error),
+            references: None,
+            references_source: "none: there is no run".to_string(),
+        }
+    }
+}
+
+fn link_events(events: &[LinkEvent]) -> impl Iterator<Item = EventLine> + '_ {
+    events.iter().map(|e| EventLine {
+        time_s: e.time_s,
+        event: format!("link, part {}: {}", e.part, e.text),
+    })
+}
+
+fn write_report(
+    path: &str,
+    outcome: &Outcome,
+    controller: &ControllerConfig,
+) -> Result<(), CliError> {
+    let s = outcome.stats.as_ref();
+    let count = |f: fn(&LinkStats) -> u64| s.map(f);
+    let run = match (&outcome.result, &outcome.spec) {
+        (Ok(result), Some(spec)) => {
+            let mut report = SimReport::new(spec, result, outcome.references);
+            report.events.extend(link_events(&outcome.events));
+            RunPart::Done(Box::new(report))
+        }
+        _ => RunPart::None(NoRun {
+            scenario: outcome.spec.as_ref().map(|s| s.preset.name()),
+            controller: outcome.spec.as_ref().map_or(controller, |s| &s.controller),
+            metrics: None,
+            references: None,
+            calibration: None,
+            events: link_events(&outcome.events).collect(),
+        }),
+    };
+    let report = HostReport {
+        protocol_version: outcome.device.as_ref().map(|d| d.protocol_version.as_str()),
+        device: outcome.device.as_ref(),
+        frames_received: count(|s| s.frames_received),
+        frames_lost: count(|s| s.frames_lost),
+        frames_rejected: count(|s| s.frames_rejected),
+        bytes_dropped: count(|s| s.bytes_dropped),
+        commands_sent: count(|s| s.commands_sent),
+        commands_acknowledged: count(|s| s.commands_acknowledged),
+        watchdog_fallbacks: count(|s| s.watchdog_fallbacks),
+        link_losses: count(|s| s.link_losses),
+        link: s,
+        link_lost: outcome.link_lost,
+        alarm: outcome.alarm.as_deref(),
+        error: outcome.result.as_ref().err().map(String::as_str),
+        references_source: &outcome.references_source,
+        run,
+    };
+    let mut file = std::fs::File::create(path)
+        .map_err(|e| CliError::new(format!("--json: cannot create {path:?}: {e}")))?;
+    write_json(&mut file, &report)
 }
 
 /// The device's end of the line, and the child process behind it, if any.
@@ -168,17 +300,21 @@ fn reap(child: Option<Child>) {
     let _ = child.wait();
 }
 
-/// Runs `cutlab host`.
-pub fn run(args: HostArgs, io: &mut Io<'_>) -> Result<(), CliError> {
+/// The run's settings from the options, checked before anything is connected.
+struct Plan {
+    kind: ControllerKind,
+    target_n: Option<f64>,
+    duration_s: Option<f64>,
+    calibration: Option<CalibrationFile>,
+    options: HostOptions,
+}
+
+fn plan(args: &HostArgs) -> Result<Plan, CliError> {
     let kind: ControllerKind = required::<String>("controller", &args.controller)?
         .parse()
         .map_err(|e| CliError::new(format!("--controller: {e}")))?;
-    let mut controller = ControllerConfig::new(kind);
-    for assignment in &args.set {
-        controller
-            .set_text(assignment)
-            .map_err(|e| CliError::new(format!("--set: {e}")))?;
-    }
+    // Checked now, applied once the preset (and its paper's parameters) is known.
+    controller_for(Preset::ALL[0], kind, &args.set)?;
     let target_n: Option<f64> = value("target-n", &args.target_n)?;
     let duration_s: Option<f64> = value("duration-s", &args.duration_s)?;
     let link_timeout_s: f64 = value_or("link-timeout-s", &args.link_timeout_s, 2.0)?;
@@ -194,19 +330,57 @@ pub fn run(args: HostArgs, io: &mut Io<'_>) -> Result<(), CliError> {
             )));
         }
     }
-    let options = HostOptions {
-        link_timeout_s,
-        handshake_timeout_s: 5.0 * link_timeout_s,
+    let calibration = args
+        .calibration
+        .as_deref()
+        .map(super::read_calibration)
+        .transpose()?;
+    Ok(Plan {
+        kind,
+        target_n,
+        duration_s,
+        calibration,
+        options: HostOptions {
+            link_timeout_s,
+            handshake_timeout_s: 5.0 * link_timeout_s,
+        },
+    })
+}
+
+/// `preset`'s controller of `kind` (the paper's parameters where it states them, as `cutlab sim`
+/// takes them) with the `--set` assignments.
+fn controller_for(
+    preset: Preset,
+    kind: ControllerKind,
+    assignments: &[String],
+) -> Result<ControllerConfig, CliError> {
+    let mut controller = preset_controller(preset, kind);
+    for assignment in assignments {
+        controller
+            .set_text(assignment)
+            .map_err(|e| CliError::new(format!("--set: {e}")))?;
+    }
+    Ok(controller)
+}
+
+/// Connects, runs the teach cut and the loop, and makes the references: whatever happens, the
+/// outcome says what is known.
+fn host_run(args: &HostArgs, plan: Plan) -> Outcome {
+    let Connection { mut link, child } = match connect(args, plan.options) {
+        Ok(c) => c,
+        Err(e) => return Outcome::failed(e.0),
     };
-    let Connection { link, child } = connect(&args, options)?;
-    let program = text_field(&link.capabilities().program)
-        .unwrap_or_default()
-        .to_string();
+    // A run on a machine takes minutes: its events (arming, faults, the program's end) go to
+    // stderr as they happen.
+    link.log_events_to(Box::new(std::io::stderr()));
+    let device = DeviceSummary::of(link.capabilities());
+    let program = device.program.clone();
     let preset_name = args.scenario.clone().unwrap_or(program.clone());
     let Some(preset) = Preset::from_name(&preset_name) else {
+        let (stats, events) = (link.session().stats(), link.session().events().to_vec());
         drop(link);
         reap(child);
-        return Err(CliError::new(match &args.scenario {
+        let error = match &args.scenario {
             Some(name) => format!(
                 "--scenario: unknown preset {name:?}; presets: {}",
                 Preset::names()
@@ -216,17 +390,36 @@ pub fn run(args: HostArgs, io: &mut Io<'_>) -> Result<(), CliError> {
                  settings to use with --scenario ({})",
                 Preset::names()
             ),
-        }));
+        };
+        return Outcome {
+            device: Some(device),
+            stats: Some(stats),
+            events,
+            ..Outcome::failed(error)
+        };
+    };
+    let controller = match controller_for(preset, plan.kind, &args.set) {
+        Ok(c) => c,
+        Err(e) => {
+            drop(link);
+            reap(child);
+            return Outcome::failed(e.0);
+        }
     };
     let spec = RunSpec {
         controller,
         settings: SettingsOverrides {
-            target_force_n: target_n,
+            target_force_n: plan.target_n,
             ..SettingsOverrides::default()
         },
-        ..RunSpec::new(preset, kind)
+        ..RunSpec::new(preset, plan.kind)
     };
-    let run = run_on_link(link, &spec, duration_s);
+    let run = run_on_link(
+        link,
+        &spec,
+        plan.duration_s,
+        plan.calibration.map(|c| c.calibration),
+    );
     reap(child);
     let result = run.result.map_err(|e| {
         let last = run
@@ -234,48 +427,109 @@ pub fn run(args: HostArgs, io: &mut Io<'_>) -> Result<(), CliError> {
             .last()
             .map(|e| format!(" (last on the link: {})", e.text))
             .unwrap_or_default();
-        CliError::new(format!("{e}{last}"))
-    })?;
-    if let Some(path) = args.csv.as_deref() {
+        format!("{e}{last}")
+    });
+    let mut outcome = Outcome {
+        spec: Some(spec),
+        device: Some(run.device),
+        stats: Some(run.stats),
+        events: run.events,
+        link_lost: run.link_lost,
+        alarm: run.alarm.map(|a| a.text),
+        result,
+        references: None,
+        references_source: String::new(),
+    };
+    fill_references(&mut outcome, &program, args.no_references);
+    outcome
+}
+
+/// The savings' references: `cutlab sim`'s fixed-feed runs of the preset, simulated — when the
+/// device runs that preset's program and the run completed (a cycle time cut short saves
+/// nothing), unless `--no-references`.
+fn fill_references(outcome: &mut Outcome, program: &str, no_references: bool) {
+    let (Some(spec), Ok(result)) = (&outcome.spec, &mut outcome.result) else {
+        outcome.references_source = "none: there is no run".to_string();
+        return;
+    };
+    let preset = spec.preset.name();
+    outcome.references_source = if no_references {
+        "none: --no-references".to_string()
+    } else if program != preset {
+        format!(
+            "none: the device runs {program:?}, not the preset {preset}, so the simulated \
+             preset's fixed-feed runs say nothing about its cycle time"
+        )
+    } else if !result.metrics.completed {
+        "none: the run did not complete".to_string()
+    } else {
+        match references(spec) {
+            Ok(r) => {
+                apply_references(result, &r);
+                outcome.references = Some(r);
+                format!(
+                    "simulated: cutlab sim's fixed-feed runs of {preset} (seed {}) on the \
+                     simulated machine, not runs on this device",
+                    spec.seed
+                )
+            }
+            Err(e) => format!("none: the simulated reference runs failed: {e}"),
+        }
+    };
+}
+
+/// Runs `cutlab host`.
+pub fn run(args: HostArgs, io: &mut Io<'_>) -> Result<(), CliError> {
+    let plan = plan(&args)?;
+    let fallback_controller = ControllerConfig::new(plan.kind);
+    let from_file = args.calibration.clone();
+    let outcome = host_run(&args, plan);
+    if let Some(path) = args.json.as_deref() {
+        write_report(path, &outcome, &fallback_controller)?;
+    }
+    if let (Some(path), Ok(result), Some(device), Some(spec)) = (
+        args.save_calibration.as_deref(),
+        &outcome.result,
+        &outcome.device,
+        &outcome.spec,
+    ) {
+        let source = match from_file.as_deref() {
+            Some(from) => format!("{from}, used by cutlab host with {}", device.device_id),
+            None => format!(
+                "teach cut over the link on {} ({}), {} feedback",
+                device.device_id,
+                spec.preset.name(),
+                result.settings.feedback.name()
+            ),
+        };
+        super::save_calibration(path, &result.calibration, source)?;
+    }
+    if let (Some(path), Ok(result)) = (args.csv.as_deref(), &outcome.result) {
         let mut file = std::fs::File::create(path)
             .map_err(|e| CliError::new(format!("--csv: cannot create {path:?}: {e}")))?;
         write_csv(&result.trace, &mut file)
             .map_err(|e| CliError::new(format!("--csv: cannot write {path:?}: {e}")))?;
     }
-    let s = run.stats;
-    if let Some(path) = args.json.as_deref() {
-        let mut report = SimReport::new(&spec, &result, None);
-        report.events.extend(run.events.iter().map(|e| EventLine {
-            time_s: e.time_s,
-            event: format!("link, part {}: {}", e.part, e.text),
-        }));
-        let report = HostReport {
-            protocol_version: run.device.protocol_version.clone(),
-            device: &run.device,
-            frames_received: s.frames_received,
-            frames_lost: s.frames_lost,
-            frames_rejected: s.frames_rejected,
-            bytes_dropped: s.bytes_dropped,
-            commands_sent: s.commands_sent,
-            commands_acknowledged: s.commands_acknowledged,
-            watchdog_fallbacks: s.watchdog_fallbacks,
-            link_losses: s.link_losses,
-            link: &s,
-            run: report,
-        };
-        let mut file = std::fs::File::create(path)
-            .map_err(|e| CliError::new(format!("--json: cannot create {path:?}: {e}")))?;
-        write_json(&mut file, &report)?;
-    }
-    let table = metrics_table(&[(spec.controller.kind().name().to_string(), &result)]);
+    let (result, device, stats, spec) = match (
+        &outcome.result,
+        &outcome.device,
+        &outcome.stats,
+        &outcome.spec,
+    ) {
+        (Ok(r), Some(d), Some(s), Some(spec)) => (r, d, s, spec),
+        (Err(e), ..) => return Err(CliError::new(e.clone())),
+        _ => return Err(CliError::new("no run")),
+    };
+    let table = metrics_table(&[(spec.controller.kind().name().to_string(), result)]);
     io.stdout.write_all(table.as_bytes())?;
+    let s = stats;
     writeln!(
         io.stdout,
         "link: protocol {}, device {} ({}), {} frames received, {} lost, {} rejected, {} bytes \
          dropped, {}/{} commands acknowledged, {} device watchdog fallbacks, {} link losses",
-        run.device.protocol_version,
-        run.device.device_id,
-        run.device.program,
+        device.protocol_version,
+        device.device_id,
+        device.program,
         s.frames_received,
         s.frames_lost,
         s.frames_rejected,
@@ -285,11 +539,24 @@ pub fn run(args: HostArgs, io: &mut Io<'_>) -> Result<(), CliError> {
         s.watchdog_fallbacks,
         s.link_losses
     )?;
-    if run.link_lost {
-        writeln!(
-            io.stdout,
-            "link lost: the host alarmed and disarmed; the program did not finish under control"
-        )?;
+    writeln!(io.stdout, "references: {}", outcome.references_source)?;
+    // The results are printed and written; a run the host could not finish under control still
+    // fails the command, so a script notices (as `cutlab sim` does on a controller fault).
+    if outcome.link_lost {
+        let why = outcome
+            .events
+            .iter()
+            .rev()
+            .find(|e| e.text.contains("link lost"))
+            .map_or("link lost", |e| e.text.as_str());
+        return Err(CliError::new(format!(
+            "{why}; the program did not finish under control: the results above stop there"
+        )));
     }
-    Ok(())
+    if let Some(alarm) = &outcome.alarm {
+        return Err(CliError::new(format!(
+            "{alarm}; the results above stop at the alarm"
+        )));
+    }
+    fail_on_controller_faults([(spec.controller.kind().name(), result)])
 }

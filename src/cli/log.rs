@@ -1,17 +1,24 @@
 //! `cutlab log`: engineers' own CSV logs, as they are (see [`crate::log`]).
 
 use std::io::Read;
+use std::sync::Arc;
 
 use serde::Serialize;
 
 use super::args::required;
 use super::{write_json, CliError, Io};
+use crate::closed_loop::runner::Feedback;
+use crate::control::registry::{ControllerConfig, ControllerKind};
+use crate::log::mapping::{Channel, Mapping};
+use crate::log::replay::{write_replay_csv, ReplayRun, ReplaySettings, Target};
 use crate::log::{ColumnKind, LogBuilder, Role};
+use crate::work::Work;
 
 /// The long help of `cutlab log`.
 pub const ABOUT: &str = "Read a machine's CSV log as it is: comma, semicolon or tab delimited \
 (detected), a decimal comma, quoted fields, a byte-order mark, CRLF, a header with units or none, \
-text columns kept as labels. Damaged lines are reported by line and column and kept as gaps.";
+text columns kept as labels. Damaged lines are reported by line and column and kept as gaps. \
+Inspect it, analyse its columns, or replay a controller on it (docs/logs.md).";
 
 /// The options of `cutlab log`: a subcommand.
 #[derive(Debug, clap::Args)]
@@ -26,7 +33,22 @@ enum LogCommand {
     Inspect(InspectArgs),
     /// Statistics of columns (whole and per label), an optional zero-phase low-pass, spectrum peaks
     Analyse(AnalyseArgs),
+    /// Replay a controller on the log: the override it would have commanded, what the safety
+    /// envelope would have done, the force estimate (open-loop: the log cannot react)
+    #[command(long_about = REPLAY_ABOUT)]
+    Replay(ReplayArgs),
 }
+
+/// The long help of `cutlab log replay`.
+const REPLAY_ABOUT: &str = "Replay a controller on a machine log. The log becomes one more \
+machine: each row is a sensor sample at the log's rate, fed through the lab's own closed loop \
+(signal chain, estimator, controller, safety envelope). Replay is open-loop: it shows the \
+override the controller would have commanded on the signals the log holds, when the envelope \
+would have acted (arming, override limits and rate limit, sensor faults, overload) and the force \
+estimate, not what the machine would have done after that. A log of RMS values (e.g. a 10 Hz \
+drive export) skips the chain's low-pass and RMS stages; a low-pass above the log's Nyquist \
+frequency is skipped too; the notes say which. Without --calibration the controllers regulate \
+the current itself (give --target-a). docs/logs.md describes it.";
 
 #[derive(Debug, clap::Args)]
 pub struct AnalyseArgs {
@@ -57,6 +79,63 @@ pub struct AnalyseArgs {
 }
 
 #[derive(Debug, clap::Args)]
+pub struct ReplayArgs {
+    /// The CSV file ("-" for standard input)
+    #[arg(value_name = "FILE")]
+    file: Option<String>,
+    /// The current column the force is measured from: an RMS/feedback value, or a phase current
+    /// (give two or three phases with --current each)
+    #[arg(long = "current", value_name = "NAME")]
+    current: Vec<String>,
+    /// The spindle-speed column (else guessed from the names; without one the speed is the
+    /// calibration's)
+    #[arg(long, value_name = "NAME")]
+    speed: Option<String>,
+    /// The feed column (else guessed from the names)
+    #[arg(long, value_name = "NAME")]
+    feed: Option<String>,
+    /// Any other column's channel, CHANNEL=COLUMN (repeatable; channels: time, spindle-phase,
+    /// feed-phase, spindle-current, feed-current, spindle-speed, spindle-command, fv-voltage,
+    /// feed, programmed-feed, override, force, depth, label; an empty COLUMN unmaps the channel)
+    #[arg(long = "map", value_name = "CHANNEL=COLUMN")]
+    map: Vec<String>,
+    /// The sample period of a log without a time column, in seconds
+    #[arg(long, value_name = "S")]
+    sample_period_s: Option<f64>,
+    /// Which current measures the force: spindle or feed (default: the calibration's, else the
+    /// axis prefix of the current column: X_/Y_/Z_ is the feed drive's)
+    #[arg(long, value_name = "spindle|feed")]
+    feedback: Option<String>,
+    /// The controller to replay (see cutlab controllers)
+    #[arg(long, value_name = "NAME")]
+    controller: Option<String>,
+    /// A controller parameter, key=value (repeatable)
+    #[arg(long = "set", value_name = "K=V")]
+    set: Vec<String>,
+    /// The force to hold, N (needs --calibration)
+    #[arg(long, value_name = "N", conflicts_with = "target_a")]
+    target_n: Option<f64>,
+    /// The current to hold, A (through the calibration a force; without one the current itself)
+    #[arg(long, value_name = "A")]
+    target_a: Option<f64>,
+    /// The control period, s (default: a whole number of log samples and spindle revolutions,
+    /// at least 40 ms)
+    #[arg(long, value_name = "S")]
+    period_s: Option<f64>,
+    /// A saved calibration file (cutlab sim/calibrate --save-calibration) turning current into
+    /// force
+    #[arg(long, value_name = "FILE")]
+    calibration: Option<String>,
+    /// Write one row per control period: time_s, current_a, force_est_n (calibrated),
+    /// requested_override_pct, override_pct, envelope_state, logged_override_pct, force_n
+    #[arg(long, value_name = "OUT")]
+    csv: Option<String>,
+    /// Write the settings, the notes, the envelope's events and a summary as JSON
+    #[arg(long, value_name = "OUT")]
+    json: Option<String>,
+}
+
+#[derive(Debug, clap::Args)]
 pub struct InspectArgs {
     /// The CSV file ("-" for standard input)
     #[arg(value_name = "FILE")]
@@ -74,6 +153,7 @@ pub fn run(args: LogArgs, io: &mut Io<'_>) -> Result<(), CliError> {
     match args.command {
         Some(LogCommand::Inspect(a)) => inspect(a, io),
         Some(LogCommand::Analyse(a)) => analyse(a, io),
+        Some(LogCommand::Replay(a)) => replay(a, io),
         None => super::print_help(io, &["log"]),
     }
 }
@@ -125,13 +205,17 @@ fn read_log(
         }
     }
     let mut builder = LogBuilder::new();
-    let mut buffer = vec![0u8; 1 << 16];
+    // A megabyte at a time: few system calls, and little beside the columns in memory.
+    let mut buffer = vec![0u8; 1 << 20];
     let mut file;
     let reader: &mut dyn Read = if path == "-" {
         &mut io.stdin
     } else {
         file = std::fs::File::open(path)
             .map_err(|e| CliError::new(format!("{path}: cannot open: {e}")))?;
+        if let Ok(meta) = file.metadata() {
+            builder = LogBuilder::with_expected_bytes(meta.len());
+        }
         &mut file
     };
     loop {
@@ -349,6 +433,317 @@ fn analyse(args: AnalyseArgs, io: &mut Io<'_>) -> Result<(), CliError> {
             ));
         }
     }
+    io.stdout.write_all(out.as_bytes())?;
+    Ok(())
+}
+
+/// The mapping of `cutlab log replay`: guessed, then the options' columns. Returns it and the
+/// feedback path.
+fn replay_mapping(
+    args: &ReplayArgs,
+    log: &crate::log::Log,
+    calibration_feedback: Option<Feedback>,
+) -> Result<(Mapping, Feedback), CliError> {
+    let column = |option: &str, name: &str| -> Result<usize, CliError> {
+        log.columns
+            .iter()
+            .position(|c| c.name == name)
+            .ok_or_else(|| {
+                CliError::new(format!(
+                    "--{option}: no column {name:?}; columns: {}",
+                    log.columns
+                        .iter()
+                        .map(|c| c.name.as_str())
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                ))
+            })
+    };
+    if args.current.is_empty() {
+        return Err(CliError::new(
+            "--current: name the current column the force is measured from (see cutlab log \
+             inspect)",
+        ));
+    }
+    if args.current.len() > 3 {
+        return Err(CliError::new(format!(
+            "--current: at most three phases, got {}",
+            args.current.len()
+        )));
+    }
+    for name in &args.current {
+        column("current", name)?;
+    }
+    let feedback = match args.feedback.as_deref().map(str::trim) {
+        Some("spindle") => Feedback::SpindleCurrent,
+        Some("feed") => Feedback::FeedCurrent,
+        Some(other) => {
+            return Err(CliError::new(format!(
+                "--feedback: expected spindle or feed, got {other:?}"
+            )))
+        }
+        None => calibration_feedback.unwrap_or_else(|| {
+            let first = args.current[0].trim().to_ascii_lowercase();
+            if ["x_", "y_", "z_"].iter().any(|p| first.starts_with(p)) {
+                Feedback::FeedCurrent
+            } else {
+                Feedback::SpindleCurrent
+            }
+        }),
+    };
+    if feedback == Feedback::Dynamometer {
+        return Err(CliError::new(
+            "the calibration is a dynamometer's: a replay measures the force from a current",
+        ));
+    }
+    let (phase, rms) = match feedback {
+        Feedback::FeedCurrent => (Channel::FeedPhase, Channel::FeedCurrent),
+        _ => (Channel::SpindlePhase, Channel::SpindleCurrent),
+    };
+    let mut mapping = Mapping::guess(log);
+    // The named currents replace whatever was guessed for this motor.
+    for (name, channel) in mapping.columns.clone() {
+        if channel == phase || channel == rms {
+            mapping.set(&name, None);
+        }
+    }
+    let phases = args.current.len() > 1
+        || log
+            .columns
+            .iter()
+            .find(|c| c.name == args.current[0])
+            .is_some_and(|c| c.role == Some(crate::log::Role::PhaseCurrent));
+    for name in &args.current {
+        mapping.set(name, Some(if phases { phase } else { rms }));
+    }
+    for (option, channel, name) in [
+        ("speed", Channel::SpindleSpeed, &args.speed),
+        ("feed", Channel::Feed, &args.feed),
+    ] {
+        if let Some(name) = name {
+            column(option, name)?;
+            for other in mapping
+                .columns_of(channel)
+                .into_iter()
+                .map(String::from)
+                .collect::<Vec<_>>()
+            {
+                mapping.set(&other, None);
+            }
+            mapping.set(name, Some(channel));
+        }
+    }
+    for assignment in &args.map {
+        let Some((channel, name)) = assignment.split_once('=') else {
+            return Err(CliError::new(format!(
+                "--map: {assignment:?} is not of the form CHANNEL=COLUMN"
+            )));
+        };
+        let channel = Channel::from_name(channel).ok_or_else(|| {
+            CliError::new(format!(
+                "--map: unknown channel {:?}; channels: {}",
+                channel.trim(),
+                Channel::ALL.map(Channel::name).join(", ")
+            ))
+        })?;
+        let name = name.trim();
+        if name.is_empty() {
+            for other in mapping
+                .columns_of(channel)
+                .into_iter()
+                .map(String::from)
+                .collect::<Vec<_>>()
+            {
+                mapping.set(&other, None);
+            }
+        } else {
+            column("map", name)?;
+            mapping.set(name, Some(channel));
+        }
+    }
+    Ok((mapping, feedback))
+}
+
+#[derive(Serialize)]
+struct ReplaySettingsReport<'a> {
+    file: &'a str,
+    rows: usize,
+    sample_period_s: Option<f64>,
+    mapping: &'a Mapping,
+    feedback: &'static str,
+    controller: &'a crate::control::registry::ControllerConfig,
+    control_period_s: f64,
+    spindle_lowpass_hz: Option<f64>,
+    feed_lowpass_hz: Option<f64>,
+    lowpass_order: usize,
+    target: Target,
+    target_force_n: f64,
+    calibration: Option<&'a str>,
+    calibrated: bool,
+    min_override_pct: f64,
+    max_override_pct: f64,
+    max_rate_pct_per_s: f64,
+    arming_delay_s: f64,
+    overload_limit_n: f64,
+}
+
+#[derive(Serialize)]
+struct ReplayReport<'a> {
+    settings: ReplaySettingsReport<'a>,
+    notes: &'a [String],
+    events: Vec<crate::log::replay::EventReport>,
+    summary: &'a crate::log::replay::ReplaySummary,
+    log_problems: &'a [crate::log::Problem],
+}
+
+fn replay(args: ReplayArgs, io: &mut Io<'_>) -> Result<(), CliError> {
+    let path: String = required("FILE", &args.file)?;
+    let controller_name: String = required("controller", &args.controller)?;
+    let kind: ControllerKind = controller_name
+        .parse()
+        .map_err(|e| CliError::new(format!("--controller: {e}")))?;
+    let mut controller = ControllerConfig::new(kind);
+    for assignment in &args.set {
+        controller
+            .set_text(assignment)
+            .map_err(|e| CliError::new(format!("--set: {e}")))?;
+    }
+    for (option, value) in [
+        ("target-n", args.target_n),
+        ("target-a", args.target_a),
+        ("period-s", args.period_s),
+    ] {
+        if let Some(v) = value {
+            if !(v.is_finite() && v > 0.0) {
+                return Err(CliError::new(format!(
+                    "--{option}: must be a positive number, got {v}"
+                )));
+            }
+        }
+    }
+    let calibration = args
+        .calibration
+        .as_deref()
+        .map(super::read_calibration)
+        .transpose()?;
+    let log = Arc::new(read_log(&path, args.sample_period_s, io)?);
+    if log.rows == 0 {
+        return Err(CliError::new(format!("{path}: no rows to replay")));
+    }
+    let (mapping, feedback) =
+        replay_mapping(&args, &log, calibration.as_ref().map(|c| c.feedback()))?;
+    let target = match (args.target_n, args.target_a) {
+        (Some(n), _) => Some(Target::ForceN(n)),
+        (None, Some(a)) => Some(Target::CurrentA(a)),
+        (None, None) => None,
+    };
+    let settings = ReplaySettings {
+        feedback,
+        control_period_s: args.period_s,
+        sample_period_s: args.sample_period_s,
+        target,
+        calibration: calibration.as_ref().map(|c| c.calibration.clone()),
+        ..ReplaySettings::default()
+    };
+    let result = ReplayRun::new(&log, &mapping, &settings, &controller)
+        .and_then(|run| run.run_to_end())
+        .map_err(|e| CliError::new(format!("{path}: {e}")))?;
+    if let Some(out) = args.csv.as_deref() {
+        let mut file = std::fs::File::create(out)
+            .map_err(|e| CliError::new(format!("--csv: cannot create {out:?}: {e}")))?;
+        write_replay_csv(&[&result], &mut file)
+            .map_err(|e| CliError::new(format!("--csv: cannot write {out:?}: {e}")))?;
+    }
+    let events = crate::log::replay::events(&result.trace);
+    let finite = |v: f64| v.is_finite().then_some(v);
+    let s = &result.settings;
+    if let Some(out) = args.json.as_deref() {
+        let report = ReplayReport {
+            settings: ReplaySettingsReport {
+                file: &path,
+                rows: log.rows,
+                sample_period_s: log.sample_period_s.or(args.sample_period_s),
+                mapping: &mapping,
+                feedback: s.feedback.name(),
+                controller: &result.controller,
+                control_period_s: s.control_period_s,
+                spindle_lowpass_hz: finite(s.spindle_lowpass_hz),
+                feed_lowpass_hz: finite(s.feed_lowpass_hz),
+                lowpass_order: s.lowpass_order,
+                target: result.target,
+                target_force_n: s.target_force_n,
+                calibration: args.calibration.as_deref(),
+                calibrated: result.calibrated,
+                min_override_pct: s.envelope.min_override_pct,
+                max_override_pct: s.envelope.max_override_pct,
+                max_rate_pct_per_s: s.envelope.max_rate_pct_per_s,
+                arming_delay_s: s.envelope.arming_delay_s,
+                overload_limit_n: s.envelope.overload_limit_n,
+            },
+            notes: &result.notes,
+            events: events.clone(),
+            summary: &result.summary,
+            log_problems: &log.problems,
+        };
+        let mut file = std::fs::File::create(out)
+            .map_err(|e| CliError::new(format!("--json: cannot create {out:?}: {e}")))?;
+        write_json(&mut file, &report)?;
+    }
+    // The brief for a terminal.
+    let readable = crate::input::readable;
+    let number = |v: Option<f64>| v.map_or("—".to_string(), readable);
+    let sum = &result.summary;
+    let mut out = format!(
+        "{path}: {} replayed on {} rows, {} control periods of {} s ({} feedback, {})\n",
+        result.name,
+        log.rows,
+        sum.periods,
+        readable(s.control_period_s),
+        s.feedback.name(),
+        match (result.calibrated, result.target) {
+            (true, Target::ForceN(f)) => format!("target {} N", readable(f)),
+            (true, Target::CurrentA(a)) => format!(
+                "target {} A = {} N through the calibration",
+                readable(a),
+                readable(s.target_force_n)
+            ),
+            (false, _) => format!("uncalibrated: holding {} A", readable(s.target_force_n)),
+        }
+    );
+    for note in &result.notes {
+        out.push_str(&format!("note: {note}\n"));
+    }
+    for p in log.problems.iter().take(5) {
+        out.push_str(&format!(
+            "log: line {}{}: {}\n",
+            p.line,
+            p.column
+                .as_deref()
+                .map_or(String::new(), |c| format!(", {c}")),
+            p.message
+        ));
+    }
+    for e in &events {
+        out.push_str(&format!("{:>9} s  {}\n", readable(e.time_s), e.message));
+    }
+    out.push_str(&format!(
+        "override while armed: min {} %, mean {} %, max {} % (the log's own: mean {} %); \
+         {} periods limited by the envelope; {} s under a sensor fault",
+        number(sum.override_min_pct),
+        number(sum.override_mean_pct),
+        number(sum.override_max_pct),
+        number(sum.logged_override_mean_pct),
+        sum.periods_limited,
+        readable(sum.sensor_fault_s)
+    ));
+    if result.calibrated {
+        out.push_str(&format!(
+            "; force estimate mean {} N, max {} N",
+            number(sum.force_est_mean_n),
+            number(sum.force_est_max_n)
+        ));
+    }
+    out.push('\n');
     io.stdout.write_all(out.as_bytes())?;
     Ok(())
 }

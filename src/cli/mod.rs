@@ -23,6 +23,9 @@ use std::io::{BufRead, Write};
 
 use clap::{CommandFactory, Parser, Subcommand};
 
+use crate::closed_loop::calibration_file::CalibrationFile;
+use crate::closed_loop::runner::Calibration;
+
 pub use args::CliError;
 
 /// The standard streams a command reads and writes.
@@ -196,6 +199,25 @@ pub fn write_json<T: serde::Serialize>(out: &mut dyn Write, value: &T) -> Result
         .map_err(|e| CliError::new(format!("cannot write JSON: {e}")))?;
     writeln!(out)?;
     Ok(())
+}
+
+/// Reads the calibration file `--calibration PATH` names.
+pub fn read_calibration(path: &str) -> Result<CalibrationFile, CliError> {
+    let text = std::fs::read_to_string(path)
+        .map_err(|e| CliError::new(format!("--calibration: cannot read {path:?}: {e}")))?;
+    CalibrationFile::from_json(&text)
+        .map_err(|e| CliError::new(format!("--calibration {path}: {e}")))
+}
+
+/// Writes `calibration`, made by `source`, to the file `--save-calibration PATH` names.
+pub fn save_calibration(
+    path: &str,
+    calibration: &Calibration,
+    source: String,
+) -> Result<(), CliError> {
+    let text = CalibrationFile::new(calibration.clone(), source).to_json();
+    std::fs::write(path, text + "\n")
+        .map_err(|e| CliError::new(format!("--save-calibration: cannot write {path:?}: {e}")))
 }
 
 #[cfg(test)]

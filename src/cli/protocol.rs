@@ -12,7 +12,9 @@ use crate::protocol::json::{frame_from_json, frame_to_json};
 pub const ABOUT: &str = "The feed-override protocol's frames (docs/protocol.md) between bytes \
 and JSON lines. `decode` reads bytes on stdin as they come and prints one JSON object per frame, \
 then a summary of what the decoder dropped; `encode` reads one JSON object per line (the form \
-decode prints) and writes the frames' bytes.";
+decode prints) and writes the frames' bytes. Encode is strict: every field of the frame type is \
+required (but a `flags` byte, 0 when left out) and a field the type does not have is an error; \
+the error names the line, the frame type and the field.";
 
 /// `cutlab protocol`: decode or encode.
 #[derive(Debug, clap::Args)]
@@ -109,8 +111,9 @@ fn encode(io: &mut Io<'_>) -> Result<(), CliError> {
         }
         let value: serde_json::Value = serde_json::from_str(text)
             .map_err(|e| CliError::new(format!("line {number}: not JSON: {e}")))?;
-        // decode's summary line is not a frame: skipped, so decode | encode round-trips.
-        if value.get("summary").is_some() {
+        // decode's summary line and its --rejects lines are not frames: skipped, so
+        // decode | encode round-trips.
+        if value.get("summary").is_some() || value.get("type") == Some(&json!("rejected")) {
             continue;
         }
         let frame =

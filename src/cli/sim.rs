@@ -81,7 +81,7 @@ impl clap::Args for RunOptions {
         for setting in RunSetting::ALL {
             let spec = setting.spec();
             let placeholder = match spec.kind {
-                SettingKind::Feedback => "spindle|feed",
+                SettingKind::Feedback => "spindle|feed|dynamometer",
                 SettingKind::Material => "NAME",
                 SettingKind::Count { .. } | SettingKind::Seed => "N",
                 SettingKind::Number { .. } if spec.unit.is_empty() => "X",
@@ -133,6 +133,12 @@ pub struct SimArgs {
     json: Option<String>,
     #[arg(long, value_name = "FILE", help = CONFIG_HELP)]
     config: Option<String>,
+    /// Start from a saved calibration (cutlab-calibration JSON) instead of a teach cut
+    #[arg(long, value_name = "FILE")]
+    calibration: Option<String>,
+    /// Write the run's calibration (the teach cut's, or the one given) as a calibration file
+    #[arg(long = "save-calibration", value_name = "FILE")]
+    save_calibration: Option<String>,
 }
 
 /// Run several controllers (or tunings: pi:kp=0.5) on one preset with the same seed and print
@@ -238,9 +244,15 @@ pub fn controller_with_settings(text: &str, preset: Preset) -> Result<Controller
 
 fn run_one(
     spec: &RunSpec,
+    calibration: Option<Calibration>,
     with_references: bool,
 ) -> Result<(RunResult, Option<References>), CliError> {
-    let (mut results, refs) = run_many(spec, &[(String::new(), spec.clone())], with_references)?;
+    let (mut results, refs) = run_many(
+        spec,
+        &[(String::new(), spec.clone())],
+        calibration,
+        with_references,
+    )?;
     let result = results
         .pop()
         .ok_or_else(|| CliError::new("the run gave no result"))?;
@@ -263,14 +275,24 @@ enum Outcome {
 /// references, their savings filled in. The teach cut is made once for every run whose teach cut
 /// it is ([`TeachKey`]: the simulation would repeat it exactly), then the runs and the reference
 /// search go side by side on every core ([`crate::work::parallel_map`]); the results are the
-/// same as one after another.
+/// same as one after another. A `given` calibration (a saved one) replaces the runs' teach cut;
+/// the references still learn theirs, as they would on the machine.
 fn run_many(
     base: &RunSpec,
     named: &[(String, RunSpec)],
+    given: Option<Calibration>,
     with_references: bool,
 ) -> Result<(Vec<RunResult>, Option<References>), CliError> {
     let key = TeachKey::of(base).map_err(|e| CliError::new(e.to_string()))?;
-    let (_, calibration) = teach_cut_only(base).map_err(|e| CliError::new(e.to_string()))?;
+    let taught = if given.is_none() || with_references {
+        Some(
+            teach_cut_only(base)
+                .map_err(|e| CliError::new(e.to_string()))?
+                .1,
+        )
+    } else {
+        None
+    };
     let mut jobs = Vec::with_capacity(named.len() + 1);
     // The reference search first: its runs are the longest, so it starts at once.
     if with_references {
@@ -278,16 +300,18 @@ fn run_many(
     }
     jobs.extend(named.iter().map(|(name, spec)| Job::Run(name, spec)));
     let outcomes = crate::work::parallel_map(&jobs, |job| match job {
-        Job::References => Outcome::References(
-            ReferenceSearch::calibrated(base, calibration.clone())
+        Job::References => Outcome::References(match &taught {
+            Some(calibration) => ReferenceSearch::calibrated(base, calibration.clone())
                 .and_then(|search| search.run_to_end())
                 .map_err(|e| e.to_string()),
-        ),
+            None => Err("the references need a teach cut".into()),
+        }),
         Job::Run(name, spec) => {
-            let run = match TeachKey::of(spec) {
-                Ok(k) if k == key => LabRun::calibrated(spec, calibration.clone()),
-                Ok(_) => LabRun::new(spec),
-                Err(e) => Err(e),
+            let run = match (&given, &taught, TeachKey::of(spec)) {
+                (Some(given), _, _) => LabRun::calibrated(spec, given.clone()),
+                (None, Some(taught), Ok(k)) if k == key => LabRun::calibrated(spec, taught.clone()),
+                (_, _, Ok(_)) => LabRun::new(spec),
+                (_, _, Err(e)) => Err(e),
             };
             Outcome::Run(Box::new(run.and_then(|run| run.run_to_end()).map_err(
                 |e| {
@@ -398,7 +422,28 @@ pub fn run_sim(args: SimArgs, io: &mut Io<'_>) -> Result<(), CliError> {
             spec(&args.run, controller)?
         }
     };
-    let (result, refs) = run_one(&spec, !args.run.no_references)?;
+    let calibration = args
+        .calibration
+        .as_deref()
+        .map(super::read_calibration)
+        .transpose()?;
+    let (result, refs) = run_one(
+        &spec,
+        calibration.map(|c| c.calibration),
+        !args.run.no_references,
+    )?;
+    if let Some(path) = args.save_calibration.as_deref() {
+        let source = match args.calibration.as_deref() {
+            Some(from) => format!("{from}, used by cutlab sim on {}", spec.preset.name()),
+            None => format!(
+                "teach cut on {}, seed {}, {} feedback",
+                spec.preset.name(),
+                spec.seed,
+                result.settings.feedback.name()
+            ),
+        };
+        super::save_calibration(path, &result.calibration, source)?;
+    }
     if let Some(path) = args.csv.as_deref() {
         let mut file = std::fs::File::create(path)
             .map_err(|e| CliError::new(format!("--csv: cannot create {path:?}: {e}")))?;
@@ -418,7 +463,7 @@ pub fn run_sim(args: SimArgs, io: &mut Io<'_>) -> Result<(), CliError> {
 
 /// A run whose controller asked for a non-finite override completed only because the envelope
 /// held the override: its results are printed, and the command still fails so a script notices.
-fn fail_on_controller_faults<'a>(
+pub(crate) fn fail_on_controller_faults<'a>(
     runs: impl IntoIterator<Item = (&'a str, &'a RunResult)>,
 ) -> Result<(), CliError> {
     let faulted: Vec<String> = runs
@@ -485,7 +530,7 @@ pub fn run_compare(args: CompareArgs, io: &mut Io<'_>) -> Result<(), CliError> {
             (name.clone(), s)
         })
         .collect();
-    let (runs, refs) = run_many(&base, &specs, !args.run.no_references)?;
+    let (runs, refs) = run_many(&base, &specs, None, !args.run.no_references)?;
     let results: Vec<(String, ControllerConfig, RunResult)> = named
         .into_iter()
         .zip(runs)

@@ -1,22 +1,33 @@
 //! `cutlab tune`: a controller's parameters swept over a grid or searched by Nelder–Mead across
-//! scenarios (see [`crate::tuning`]).
+//! scenarios, or a teach-in's proposal from a simulated, logged or saved teach cut (see
+//! [`crate::tuning`]). Results go to stdout; progress goes to stderr, one line per teach cut and
+//! per evaluation, so `--json` output stays clean.
 
 use std::fmt::Write as _;
+use std::io::Write as _;
 
 use serde::Serialize;
 
 use super::args::required;
+use super::calibrate::{problem_notes, read_log, LogCalibrationArgs};
 use super::sim::controller_with_settings;
 use super::{write_json, CliError, Io};
 use crate::closed_loop::definition::DEFAULT_SEED;
 use crate::closed_loop::lab::RunSpec;
+use crate::closed_loop::runner::Feedback;
 use crate::control::registry::ControllerKind;
 use crate::plant::Preset;
 use crate::tuning::nelder_mead::NelderMead;
-use crate::tuning::{teach_in, Evaluation, Objective, ParamRange, TeachIn, Tuner, TuningProblem};
+use crate::tuning::teach_in::{
+    teach_in_calibration, teach_in_log, teach_in_scenarios, LogTeachIn, TeachIn,
+};
+use crate::tuning::{
+    default_threads, Evaluation, Objective, ParamRange, Report, Tuner, TuningProblem,
+};
 
 /// The long help of `cutlab tune`.
-pub const ABOUT: &str = "Tune a controller's parameters over one or more scenarios.
+pub const ABOUT: &str = "Tune a controller's parameters over one or more scenarios, or propose \
+settings from a teach cut.
 
 With --sweep N every combination of N values per parameter runs on every scenario (a grid of at \
 most 400 points); without it, Nelder-Mead searches the parameters' box for the lowest objective \
@@ -26,10 +37,24 @@ most 400 points); without it, Nelder-Mead searches the parameters' box for the l
       + activity·(override total variation / 100 %)
 
 averaged over the scenarios; T0 is the program's duration at 100 % override. Each scenario's \
-teach cut runs once; natively the scenarios run on all cores.
+teach cut runs once and keeps its preset's own controller values for the parameters not tuned; \
+natively every run of a sweep, and the scenarios of each search evaluation, share all cores.
 
-Example: cutlab tune --controller pi --scenarios maneerat-doc-1,maneerat-doc-2 \
---param kp=0.05:1.5 --param ki_per_s=0.1:5";
+--teach-in proposes a force target (80 % of the force the teach cut measured at 100 % override, \
+kept inside the calibrated currents), its reference current and a threshold gap (±3 σ of the \
+estimate's noise, at least 5 %), beside the preset's own target. The teach cut is each \
+scenario's on the simulated machine, a logged one (--log FILE, read as cutlab calibrate reads \
+it, with --map and --material), or a saved calibration (--calibration FILE, as cutlab host \
+--save-calibration writes it after a teach cut on the machine; --scenarios names its program).
+
+Progress goes to stderr (--quiet silences it); results to stdout.
+
+Examples:
+  cutlab tune --controller pi --scenarios maneerat-doc-1,maneerat-doc-2 \\
+    --param kp=0.05:1.5 --param ki_per_s=0.1:5
+  cutlab tune --teach-in --scenarios kim-step-doc,maneerat-doc-2
+  cutlab tune --teach-in --log export.csv --map spindle_current_rms_a='S_Strom [A]' ...
+  cutlab tune --teach-in --calibration machine.json --scenarios kim-step-doc";
 
 /// Tune a controller's parameters (grid sweep or Nelder–Mead) across scenarios
 #[derive(Debug, clap::Args)]
@@ -37,10 +62,10 @@ pub struct TuneArgs {
     /// The controller to tune, with fixed parameters as NAME:key=value:…
     #[arg(long, value_name = "NAME")]
     controller: Option<String>,
-    /// The presets to tune on, comma separated
+    /// The presets to tune on (or to teach in), comma separated
     #[arg(long, value_name = "A,B,...")]
     scenarios: Option<String>,
-    /// A parameter to tune and its bounds (repeat for more)
+    /// A parameter to tune and its bounds (repeat for more; each parameter once)
     #[arg(long = "param", value_name = "KEY=LO:HI")]
     params: Vec<String>,
     /// Weights of the objective's terms: cycle, error, above, activity (default 1,1,1,0.1)
@@ -55,12 +80,23 @@ pub struct TuneArgs {
     /// Seed of every run (default 1)
     #[arg(long, value_name = "N")]
     seed: Option<u64>,
-    /// Only run each scenario's teach cut and propose a target, reference current and threshold gap
+    /// Propose a target, reference current and threshold gap from a teach cut instead of tuning
     #[arg(long)]
     teach_in: bool,
+    /// With --teach-in: the CSV log of a teach cut (any delimiter, decimal comma, …)
+    #[arg(long, value_name = "FILE", conflicts_with = "calibration")]
+    log: Option<String>,
+    /// With --teach-in: a saved calibration (cutlab host/sim --save-calibration)
+    #[arg(long, value_name = "FILE")]
+    calibration: Option<String>,
+    /// Print no progress on stderr
+    #[arg(long)]
+    quiet: bool,
     /// Print JSON instead of a table
     #[arg(long)]
     json: bool,
+    #[command(flatten)]
+    log_options: LogCalibrationArgs,
 }
 
 #[derive(Serialize)]
@@ -84,10 +120,63 @@ struct TuneReport<'a> {
     evaluations: usize,
 }
 
-/// Runs `cutlab tune`.
-pub fn run(args: TuneArgs, io: &mut Io<'_>) -> Result<(), CliError> {
-    let scenario_text: String = required("scenarios", &args.scenarios)?;
-    let presets = scenario_text
+/// Progress lines on stderr (nothing with --quiet).
+struct Progress {
+    quiet: bool,
+    params: Vec<String>,
+}
+
+impl Progress {
+    fn line(&self, text: &str) {
+        if !self.quiet {
+            // Progress is a courtesy: a closed stderr must not stop the work.
+            let _ = writeln!(std::io::stderr(), "tune: {text}");
+        }
+    }
+
+    fn report(&self, report: &Report<'_>) {
+        if self.quiet {
+            return;
+        }
+        match report {
+            Report::Taught {
+                preset,
+                done,
+                total,
+            } => self.line(&format!("teach cut {done} of {total} done ({preset})")),
+            Report::Evaluated {
+                done,
+                total,
+                at_most,
+                evaluation,
+            } => {
+                let mut values = String::new();
+                for (key, value) in self.params.iter().zip(&evaluation.values) {
+                    let _ = write!(values, " {key}={}", crate::input::readable(*value));
+                }
+                let what = if *at_most {
+                    format!("evaluation {done} of at most {total}")
+                } else {
+                    format!(
+                        "point {done} of {total} ({:.0} %)",
+                        100.0 * *done as f64 / (*total).max(1) as f64
+                    )
+                };
+                self.line(&format!(
+                    "{what}:{values} → objective {:.3}",
+                    evaluation.cost
+                ));
+            }
+        }
+    }
+}
+
+/// The presets of `--scenarios`, if given.
+fn presets(args: &TuneArgs) -> Result<Option<Vec<Preset>>, CliError> {
+    let Some(text) = &args.scenarios else {
+        return Ok(None);
+    };
+    let presets = text
         .split(',')
         .map(|name| {
             Preset::from_name(name).ok_or_else(|| {
@@ -99,54 +188,110 @@ pub fn run(args: TuneArgs, io: &mut Io<'_>) -> Result<(), CliError> {
             })
         })
         .collect::<Result<Vec<_>, _>>()?;
-    let first = presets
-        .first()
-        .copied()
-        .ok_or_else(|| CliError::new("--scenarios: name at least one preset"))?;
+    Ok(Some(presets))
+}
+
+/// Runs `cutlab tune`.
+pub fn run(args: TuneArgs, io: &mut Io<'_>) -> Result<(), CliError> {
+    let presets = presets(&args)?;
     let seed = args.seed.unwrap_or(DEFAULT_SEED);
     if args.teach_in {
-        return run_teach_in(&presets, seed, args.json, io);
+        return run_teach_in(&args, presets, seed, io);
     }
+    let only_teach_in = [
+        ("--log", args.log.is_some()),
+        ("--calibration", args.calibration.is_some()),
+    ]
+    .into_iter()
+    .filter_map(|(name, given)| given.then_some(name))
+    .chain(args.log_options.given());
+    if let Some(name) = only_teach_in.into_iter().next() {
+        return Err(CliError::new(format!(
+            "{name} only applies with --teach-in (a teach-in from a log or a saved calibration)"
+        )));
+    }
+    let Some(presets) = presets else {
+        return Err(CliError::new("missing required option --scenarios"));
+    };
     let controller_text: String = required("controller", &args.controller)?;
-    let controller = controller_with_settings(&controller_text, first)
-        .map_err(|e| CliError::new(format!("--controller: {e}")))?;
+    // Each scenario runs its own preset's paper values with the caller's settings on top.
+    let controllers = presets
+        .iter()
+        .map(|&p| {
+            controller_with_settings(&controller_text, p)
+                .map_err(|e| CliError::new(format!("--controller: {e}")))
+        })
+        .collect::<Result<Vec<_>, _>>()?;
+    let controller = controllers[0].clone();
     let params = args
         .params
         .iter()
         .map(|p| ParamRange::parse(p).map_err(|e| CliError::new(format!("--param: {e}"))))
         .collect::<Result<Vec<_>, _>>()?;
+    for (i, range) in params.iter().enumerate() {
+        if let Some(earlier) = params[..i].iter().find(|r| r.key == range.key) {
+            return Err(CliError::new(format!(
+                "--param: {} is given twice ({}:{} and {}:{}); give each parameter once",
+                range.key, earlier.lo, earlier.hi, range.lo, range.hi
+            )));
+        }
+    }
     let objective = match &args.objective {
         Some(text) => {
             Objective::parse(text).map_err(|e| CliError::new(format!("--objective: {e}")))?
         }
         None => Objective::default(),
     };
+    if args.sweep == Some(0) {
+        return Err(CliError::new(
+            "--sweep: give at least 1 value per parameter",
+        ));
+    }
+    if args.sweep.is_some() && args.max_evals.is_some() {
+        return Err(CliError::new(
+            "--max-evals applies to the search; a sweep (--sweep) runs every grid point",
+        ));
+    }
+    let search = NelderMead {
+        max_evaluations: args
+            .max_evals
+            .unwrap_or(NelderMead::default().max_evaluations),
+        ..NelderMead::default()
+    };
+    if search.max_evaluations == 0 {
+        return Err(CliError::new("--max-evals: give at least 1"));
+    }
     let scenarios: Vec<RunSpec> = presets
         .iter()
-        .map(|&p| {
+        .zip(controllers)
+        .map(|(&p, controller)| {
             let mut spec = RunSpec::new(p, controller.kind());
+            spec.controller = controller;
             spec.seed = seed;
             spec
         })
         .collect();
     let names: Vec<&'static str> = presets.iter().map(|p| p.name()).collect();
-    let tuner = Tuner::new(TuningProblem {
-        controller: controller.clone(),
-        params: params.clone(),
-        scenarios,
-        objective,
-    })
+    let progress = Progress {
+        quiet: args.quiet,
+        params: params.iter().map(|p| p.key.clone()).collect(),
+    };
+    let tuner = Tuner::with_threads(
+        TuningProblem {
+            controller: controller.clone(),
+            params: params.clone(),
+            scenarios,
+            objective,
+        },
+        default_threads(),
+        &mut |r| progress.report(r),
+    )
     .map_err(|e| CliError::new(e.to_string()))?;
     let kind = controller.kind().name();
 
     if let Some(steps) = args.sweep {
-        if steps == 0 {
-            return Err(CliError::new(
-                "--sweep: give at least 1 value per parameter",
-            ));
-        }
         let points = tuner
-            .sweep(steps)
+            .sweep_reporting(steps, &mut |r| progress.report(r))
             .map_err(|e| CliError::new(e.to_string()))?;
         if args.json {
             return write_json(
@@ -178,17 +323,8 @@ pub fn run(args: TuneArgs, io: &mut Io<'_>) -> Result<(), CliError> {
         return Ok(());
     }
 
-    let search = NelderMead {
-        max_evaluations: args
-            .max_evals
-            .unwrap_or(NelderMead::default().max_evaluations),
-        ..NelderMead::default()
-    };
-    if search.max_evaluations == 0 {
-        return Err(CliError::new("--max-evals: give at least 1"));
-    }
     let tuned = tuner
-        .tune(&search)
+        .tune_reporting(&search, &mut |r| progress.report(r))
         .map_err(|e| CliError::new(e.to_string()))?;
     if args.json {
         return write_json(
@@ -237,51 +373,175 @@ pub fn run(args: TuneArgs, io: &mut Io<'_>) -> Result<(), CliError> {
     Ok(())
 }
 
-/// `cutlab tune --teach-in`: each scenario's teach cut and what it proposes.
+/// `cutlab tune --teach-in`: a proposal from each scenario's simulated teach cut, a logged teach
+/// cut or a saved calibration.
 fn run_teach_in(
-    presets: &[Preset],
+    args: &TuneArgs,
+    presets: Option<Vec<Preset>>,
     seed: u64,
-    json: bool,
     io: &mut Io<'_>,
 ) -> Result<(), CliError> {
-    let taught = presets
-        .iter()
-        .map(|&p| {
-            let mut spec = RunSpec::new(p, ControllerKind::Threshold);
-            spec.seed = seed;
-            teach_in(&spec).map_err(|e| CliError::new(e.to_string()))
-        })
-        .collect::<Result<Vec<TeachIn>, _>>()?;
-    if json {
+    let tuning_options = [
+        ("--controller", args.controller.is_some()),
+        ("--param", !args.params.is_empty()),
+        ("--sweep", args.sweep.is_some()),
+        ("--objective", args.objective.is_some()),
+        ("--max-evals", args.max_evals.is_some()),
+    ];
+    if let Some((name, _)) = tuning_options.iter().find(|(_, given)| *given) {
+        return Err(CliError::new(format!(
+            "{name} does not apply to --teach-in, which tunes nothing: it proposes a target, \
+             reference current and threshold gap from a teach cut"
+        )));
+    }
+    if args.log.is_none() {
+        if let Some(name) = args.log_options.given().first() {
+            return Err(CliError::new(format!(
+                "{name} only applies to a teach-in from a log (--log FILE)"
+            )));
+        }
+    }
+    let spec_of = |preset: Preset| {
+        let mut spec = RunSpec::new(preset, ControllerKind::Threshold);
+        spec.seed = seed;
+        spec
+    };
+    let progress = Progress {
+        quiet: args.quiet,
+        params: Vec::new(),
+    };
+    if let Some(file) = &args.log {
+        if presets.is_some() {
+            return Err(CliError::new(
+                "--scenarios does not apply to a teach-in from a log: the log is the program",
+            ));
+        }
+        let log = read_log(file)?;
+        let map = args.log_options.map()?;
+        let geometry = args.log_options.geometry()?;
+        let logged = teach_in_log(
+            &log,
+            file,
+            LogTeachIn {
+                map: &map,
+                geometry: geometry.as_ref().map(|(g, d)| (g, d.as_str())),
+                gear_change_rpm: args.log_options.gear_change_rpm()?,
+            },
+        )
+        .map_err(|e| CliError::new(e.to_string()))?;
+        if args.json {
+            #[derive(Serialize)]
+            struct LogReport<'a> {
+                #[serde(flatten)]
+                logged: &'a crate::tuning::teach_in::LoggedTeachIn,
+                log_problems: &'a [crate::log::Problem],
+            }
+            return write_json(
+                io.stdout,
+                &LogReport {
+                    logged: &logged,
+                    log_problems: &log.problems,
+                },
+            );
+        }
+        let mut out = problem_notes(&log);
+        for note in &logged.notes {
+            let _ = writeln!(out, "note: {note}");
+        }
+        out.push_str(&describe(&logged.teach_in));
+        io.stdout.write_all(out.as_bytes())?;
+        return Ok(());
+    }
+    let taught: Vec<TeachIn> = if let Some(file) = &args.calibration {
+        let program = match presets.as_deref() {
+            None => None,
+            Some([one]) => Some(spec_of(*one)),
+            Some(_) => {
+                return Err(CliError::new(
+                    "--scenarios: a calibration was taught on one program; name one preset",
+                ))
+            }
+        };
+        let saved = super::read_calibration(file)?;
+        vec![teach_in_calibration(&saved, file, program.as_ref())
+            .map_err(|e| CliError::new(e.to_string()))?]
+    } else {
+        let presets = presets.ok_or_else(|| {
+            CliError::new(
+                "--teach-in needs a teach cut: --scenarios A,B (simulated), --log FILE or \
+                 --calibration FILE",
+            )
+        })?;
+        let specs: Vec<RunSpec> = presets.into_iter().map(spec_of).collect();
+        teach_in_scenarios(&specs, default_threads(), &mut |r| progress.report(r))
+            .map_err(|e| CliError::new(e.to_string()))?
+    };
+    if args.json {
         return write_json(io.stdout, &taught);
     }
-    let mut out = String::new();
-    for t in &taught {
-        let reference = if t.reference_current_a.is_finite() {
-            format!("reference current {:.3} A", t.reference_current_a)
-        } else {
-            "a dynamometer measures it: no current".to_string()
-        };
-        let _ = writeln!(
-            out,
-            "{}: {} periods taught; force at 100 % override {:.0} N; target {:.0} N \
-             ({reference}); estimate noise {:.1} N (1 σ); threshold gap {:.1} % \
-             (threshold:gap_pct={:.1})",
-            t.preset,
-            t.calibration.periods,
-            t.force_at_full_override_n,
-            t.proposed_target_n,
-            t.estimate_noise_n,
-            t.proposed_gap_pct,
-            t.proposed_gap_pct
-        );
-    }
+    let out: String = taught.iter().map(describe).collect();
     io.stdout.write_all(out.as_bytes())?;
     Ok(())
 }
 
-/// One row per evaluation: its parameters, objective, cycle time, force error and time above the
-/// limit (summed over the scenarios); `best` is marked with `*`.
+/// A teach-in for people: what was learned, what is proposed, the preset's own target.
+fn describe(t: &TeachIn) -> String {
+    let l = &t.learned;
+    let p = &t.proposal;
+    let mut out = String::new();
+    let at = match l.feedback {
+        Feedback::SpindleCurrent => format!("spindle current at {:.0} rpm", l.at.spindle_rpm),
+        Feedback::FeedCurrent => format!("feed current at {:.0} mm/min", l.at.feed_mm_min),
+        Feedback::Dynamometer => "a dynamometer's force".to_string(),
+    };
+    let _ = writeln!(out, "{}: {at}, fitted on {} samples", t.source, l.periods);
+    let calibrated = if p.calibrated_force_n.min.is_finite() {
+        format!(
+            "; the calibrated currents cover {:.0} to {:.0} N",
+            p.calibrated_force_n.min, p.calibrated_force_n.max
+        )
+    } else {
+        String::new()
+    };
+    let _ = writeln!(
+        out,
+        "  force at 100 % override {:.0} N{calibrated}",
+        l.force_at_full_override_n
+    );
+    let current = |a: f64| {
+        if a.is_finite() {
+            format!("reference current {a:.3} A")
+        } else {
+            "read by the dynamometer: no current".to_string()
+        }
+    };
+    let _ = writeln!(
+        out,
+        "  proposed target {:.0} N ({}), {}",
+        p.target_n,
+        p.basis.describe(),
+        current(p.reference_current_a)
+    );
+    let _ = writeln!(
+        out,
+        "  estimate noise {:.1} N (1 σ); threshold gap {:.1} % (threshold:gap_pct={:.1})",
+        p.estimate_noise_n, p.gap_pct, p.gap_pct
+    );
+    if let Some(paper) = &t.paper {
+        let _ = writeln!(
+            out,
+            "  for comparison, {}: {:.0} N, {}",
+            paper.what,
+            paper.target_n,
+            current(paper.reference_current_a)
+        );
+    }
+    out
+}
+
+/// One row per evaluation: its parameters, then the objective and the means over the
+/// scenarios of cycle time, force error, time above the limit and override activity; `best`
+/// is marked with `*`.
 fn evaluation_table<'a>(
     params: &[ParamRange],
     rows: impl Iterator<Item = (usize, &'a Evaluation)>,
@@ -289,24 +549,33 @@ fn evaluation_table<'a>(
 ) -> String {
     let mut out = String::new();
     let widths: Vec<usize> = params.iter().map(|p| p.key.len().max(12) + 2).collect();
+    let keys: usize = widths.iter().sum();
+    let header = format!(
+        "{:keys$}{:11}{:^49}",
+        "", "", "── means over the scenarios ──"
+    );
+    let _ = writeln!(out, "{}", header.trim_end());
     for (p, width) in params.iter().zip(&widths) {
         let _ = write!(out, "{:>width$}", p.key);
     }
     let _ = writeln!(
         out,
-        "{:>11}{:>11}{:>12}{:>12}",
-        "objective", "cycle (s)", "error (%)", "above (s)"
+        "{:>11}{:>11}{:>12}{:>12}{:>14}",
+        "objective", "cycle (s)", "error (%)", "above (s)", "activity (%)"
     );
     for (i, e) in rows {
         for (v, width) in e.values.iter().zip(&widths) {
             let _ = write!(out, "{:>width$}", crate::input::readable(*v));
         }
-        let above: f64 = e.metrics.iter().map(|m| m.time_above_limit_s).sum();
         let mark = if best == Some(i) { "*" } else { " " };
         let _ = writeln!(
             out,
-            "{:>10.3}{mark}{:>11.1}{:>12.1}{:>12.1}",
-            e.cost, e.cycle_time_s, e.force_error_pct, above
+            "{:>10.3}{mark}{:>11.1}{:>12.1}{:>12.2}{:>14.0}",
+            e.cost,
+            e.cycle_time_s,
+            e.force_error_pct,
+            e.time_above_limit_s,
+            e.override_activity_pct
         );
     }
     out

@@ -23,6 +23,7 @@ use std::fmt;
 
 use serde::{Deserialize, Serialize};
 
+use super::file_format::check_format;
 use super::lab::RunSpec;
 
 /// The `format` every saved configuration carries.
@@ -90,44 +91,7 @@ impl RunConfiguration {
     /// assert!(e.to_string().contains("line 2"), "{e}");
     /// ```
     pub fn from_json(text: &str) -> Result<Self, ConfigError> {
-        // The envelope first, so a file of another kind gets a message about that rather than
-        // about its first field.
-        #[derive(Deserialize)]
-        struct Envelope {
-            format: Option<String>,
-            version: Option<serde_json::Value>,
-        }
-        let envelope: Envelope = serde_json::from_str(text)
-            .map_err(|e| ConfigError(format!("not a cutlab configuration: {e}")))?;
-        if envelope.format.as_deref() != Some(FORMAT) {
-            return Err(ConfigError(format!(
-                "not a cutlab configuration: \"format\" must be \"{FORMAT}\", found {}",
-                envelope
-                    .format
-                    .map_or("nothing".to_string(), |f| format!("{f:?}"))
-            )));
-        }
-        match envelope
-            .version
-            .as_ref()
-            .and_then(serde_json::Value::as_u64)
-        {
-            Some(v) if v == u64::from(VERSION) => {}
-            Some(v) if v > u64::from(VERSION) => {
-                return Err(ConfigError(format!(
-                    "this configuration is version {v}, written by a newer cutlab; this one reads \
-                     version {VERSION}"
-                )))
-            }
-            _ => {
-                return Err(ConfigError(format!(
-                    "\"version\" must be {VERSION}, found {}",
-                    envelope
-                        .version
-                        .map_or("nothing".to_string(), |v| v.to_string())
-                )))
-            }
-        }
+        check_format(text, FORMAT, VERSION, "configuration").map_err(|e| ConfigError(e.0))?;
         let config: Self = serde_json::from_str(text).map_err(|e| ConfigError(e.to_string()))?;
         if config.runs.is_empty() {
             return Err(ConfigError("\"runs\" is empty: nothing to run".into()));

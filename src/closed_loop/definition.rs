@@ -24,6 +24,7 @@ use crate::plant::materials::Material;
 use crate::plant::mechanics::MAX_TEETH;
 use crate::plant::presets::PlantKind;
 use crate::plant::Preset;
+use crate::safety::EnvelopeConfig;
 
 /// Which group of the form a setting belongs to.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -240,7 +241,8 @@ impl RunSetting {
                 "%",
                 number(0.0, MAX_OVERRIDE_PCT),
                 Scenario,
-                "override held until the envelope arms (default 100)",
+                "override held until the envelope arms, within the lowest–highest band (default \
+                 100, or the nearer end of the band)",
             ),
             RunSetting::ControlPeriod => (
                 "control_period_s",
@@ -385,7 +387,9 @@ impl RunSetting {
     /// machine cannot follow (the highest override a dial or override input applies).
     pub fn range(self, preset: Preset) -> Option<(f64, f64)> {
         match self.spec().kind {
-            SettingKind::Number { min, max } if self == RunSetting::MaxOverride => {
+            SettingKind::Number { min, max }
+                if matches!(self, RunSetting::MaxOverride | RunSetting::ArmingOverride) =>
+            {
                 Some((min, max.min(machine_max_override_pct(preset))))
             }
             SettingKind::Number { min, max } => Some((min, max)),
@@ -464,21 +468,30 @@ impl RunSetting {
             return Ok(());
         }
         let spec = self.spec();
-        let problem = if self == RunSetting::MaxOverride && v > max {
-            Problem::AboveMachine { value: v, max }
-        } else if v <= 0.0 && min > 0.0 && !spec.unit.is_empty() {
-            Problem::NotPositive(v)
-        } else if v < 0.0 && min == 0.0 {
-            Problem::Negative(v)
-        } else {
-            Problem::OutOfRange {
-                value: v,
-                min,
-                max,
-                unit: spec.unit,
-                noun: if spec.unit.is_empty() { spec.label } else { "" },
-            }
-        };
+        let problem =
+            if matches!(self, RunSetting::MaxOverride | RunSetting::ArmingOverride) && v > max {
+                Problem::AboveMachine {
+                    value: v,
+                    max,
+                    what: if self == RunSetting::MaxOverride {
+                        "highest override"
+                    } else {
+                        "override before arming"
+                    },
+                }
+            } else if v <= 0.0 && min > 0.0 && !spec.unit.is_empty() {
+                Problem::NotPositive(v)
+            } else if v < 0.0 && min == 0.0 {
+                Problem::Negative(v)
+            } else {
+                Problem::OutOfRange {
+                    value: v,
+                    min,
+                    max,
+                    unit: spec.unit,
+                    noun: if spec.unit.is_empty() { spec.label } else { "" },
+                }
+            };
         Err(SettingError {
             setting: self,
             problem,
@@ -601,6 +614,7 @@ pub fn parse_texts<T: AsRef<str>>(
         }
     }
     if errors.is_empty() {
+        check_arming_in_band(&spec).map_err(|e| vec![e])?;
         Ok(spec)
     } else {
         Err(errors)
@@ -667,15 +681,49 @@ pub fn machine_max_override_pct(preset: Preset) -> f64 {
     }
 }
 
-/// Checks every setting `spec` holds against the table: a saved configuration is held to the
-/// same ranges as the form and the command line.
+/// The override band a run of `preset` allows unless its settings move it: 10–150 % (FANUC's
+/// dial), and up to 255 % on paper 003's machine, whose override is a byte in percent (its
+/// experiments — the 1 mm entry, the aluminium section, the taper's light corner — need the room
+/// above 150 %).
+pub fn default_override_band_pct(preset: Preset) -> (f64, f64) {
+    let defaults = EnvelopeConfig::for_target(1.0);
+    let max = match preset.override_mode() {
+        OverrideMode::WholePercent => MAX_OVERRIDE_PCT,
+        _ => defaults.max_override_pct,
+    };
+    (defaults.min_override_pct, max)
+}
+
+/// Checks every setting `spec` holds against the table, then the settings that constrain each
+/// other: a saved configuration is held to the same ranges as the form and the command line.
 pub fn check_spec(spec: &RunSpec) -> Result<(), SettingError> {
     for setting in RunSetting::ALL {
         if let Some(value) = setting.value_in(spec) {
             setting.check(value, spec.preset)?;
         }
     }
-    Ok(())
+    check_arming_in_band(spec)
+}
+
+/// The override held before arming is one the run allows: refused, not clamped, when outside the
+/// lowest–highest band (the run's own, or the preset's where it leaves them).
+fn check_arming_in_band(spec: &RunSpec) -> Result<(), SettingError> {
+    let s = &spec.settings;
+    let Some(value) = s.arming_override_pct else {
+        return Ok(());
+    };
+    let (default_min, default_max) = default_override_band_pct(spec.preset);
+    let (min, max) = (
+        s.min_override_pct.unwrap_or(default_min),
+        s.max_override_pct.unwrap_or(default_max),
+    );
+    if value >= min && value <= max {
+        return Ok(());
+    }
+    Err(SettingError {
+        setting: RunSetting::ArmingOverride,
+        problem: Problem::OutsideBand { value, min, max },
+    })
 }
 
 /// What is wrong with a value.
@@ -713,6 +761,17 @@ pub enum Problem {
         value: f64,
         /// The machine's highest override.
         max: f64,
+        /// Which override ("highest override").
+        what: &'static str,
+    },
+    /// An override outside the run's own lowest–highest band.
+    OutsideBand {
+        /// The value given.
+        value: f64,
+        /// The run's lowest override.
+        min: f64,
+        /// The run's highest override.
+        max: f64,
     },
 }
 
@@ -748,9 +807,16 @@ impl fmt::Display for Problem {
                 let (value, min, max) = (readable(*value), readable(*min), readable(*max));
                 write!(f, "{value} {unit} is outside {min}–{max} {unit}")
             }
-            Problem::AboveMachine { value, max } => write!(
+            Problem::AboveMachine { value, max, what } => write!(
                 f,
-                "highest override {value} % is more than this machine applies ({max} %)"
+                "{what} {value} % is more than this machine applies ({max} %)"
+            ),
+            Problem::OutsideBand { value, min, max } => write!(
+                f,
+                "{} % is outside this run's override band {}–{} % (lowest and highest override)",
+                readable(*value),
+                readable(*min),
+                readable(*max)
             ),
         }
     }
@@ -847,6 +913,11 @@ mod tests {
             for v in [min, max] {
                 let parsed = s.parse(&v.to_string(), p).unwrap().unwrap();
                 let mut spec = RunSpec::new(p, ControllerKind::Pi);
+                // The override before arming must also lie in the run's band, which starts at
+                // 10 % unless the lowest override is lowered (tests/run_definition.rs).
+                if s == RunSetting::ArmingOverride {
+                    spec.settings.min_override_pct = Some(0.0);
+                }
                 s.apply(&mut spec, Some(parsed));
                 assert_eq!(s.value_in(&spec), Some(parsed), "{s:?}");
                 assert_eq!(check_spec(&spec), Ok(()));
@@ -924,7 +995,7 @@ mod tests {
         let e = check_spec(&spec).unwrap_err();
         assert_eq!(
             e.to_string(),
-            "arming_override_pct: 400 % is outside 0–255 %"
+            "override before arming 400 % is more than this machine applies (255 %)"
         );
     }
 }

@@ -5,21 +5,24 @@
 use serde::{Deserialize, Serialize};
 
 use super::definition::{
-    check_spec, machine_max_override_pct, PAPER_002_CONTROL_PERIOD_S, PAPER_002_OUTPUT_RANGE_PCT,
+    check_spec, default_override_band_pct, machine_max_override_pct, PAPER_002_CONTROL_PERIOD_S,
+    PAPER_002_OUTPUT_RANGE_PCT,
 };
 use super::metrics::{compute, with_savings, Metrics, MetricsConfig};
 use super::runner::{
-    Calibration, ClosedLoop, Feedback, LoopError, LoopSettings, OnMachine, TeachCut, TeachForce,
+    Calibration, ClosedLoop, Feedback, FeedbackLoop, LoopError, LoopSettings, OnMachine, TeachCut,
+    TeachForce,
 };
 use super::trace::Trace;
 use crate::control::registry::{ControllerConfig, ControllerKind, RunContext};
+use crate::estimation::cut_forces::CutGeometry;
 use crate::machine::Machine;
-use crate::plant::cnc::{OverrideMode, MAX_OVERRIDE_PCT};
+use crate::plant::cnc::OverrideMode;
 use crate::plant::dynamometer::{DynamometerConfig, WithDynamometer};
 use crate::plant::presets::PlantEdits;
 use crate::plant::presets::PlantKind;
 use crate::plant::Preset;
-use crate::safety::{ArmingTrigger, EnvelopeConfig, OverrideResolution};
+use crate::safety::{ArmingTrigger, EnvelopeConfig, OverrideResolution, AIR_CUT_FRACTION};
 use crate::work::{Progress, Work};
 
 /// Everything that defines a run; the same spec and seed give the same trace. Its JSON form is
@@ -168,11 +171,7 @@ pub fn default_settings(spec: &RunSpec) -> Result<LoopSettings, LoopError> {
     if preset.plant_kind() == PlantKind::BrakeBench {
         envelope.arming_trigger = ArmingTrigger::ProgrammedFeed;
     }
-    // Paper 003's override is a byte in percent, 0–255 %: its experiments (the 1 mm entry, the
-    // aluminium section, the taper's light corner) need the room above FANUC's 150 % dial.
-    if matches!(preset.override_mode(), OverrideMode::WholePercent) {
-        envelope.max_override_pct = MAX_OVERRIDE_PCT;
-    }
+    (envelope.min_override_pct, envelope.max_override_pct) = default_override_band_pct(preset);
     // Paper 002's fuzzy law moves the feed by up to k_u·6 = 100 % in one sampling period; the
     // envelope on its preset lets that action through (the mills keep 100 %/s).
     if preset.plant_kind() == PlantKind::BondGraph {
@@ -187,9 +186,17 @@ pub fn default_settings(spec: &RunSpec) -> Result<LoopSettings, LoopError> {
     if let Some(v) = o.max_rate_pct_per_s {
         envelope.max_rate_pct_per_s = v;
     }
-    if let Some(v) = o.arming_override_pct {
-        envelope.arming_override_pct = v;
+    match o.arming_override_pct {
+        // check_spec refused one outside the band.
+        Some(v) => envelope.arming_override_pct = v,
+        // The default (100 %) follows a band set below or above it.
+        None => {
+            envelope.arming_override_pct = envelope
+                .arming_override_pct
+                .clamp(envelope.min_override_pct, envelope.max_override_pct);
+        }
     }
+    let max_duration_s = time_limit_s(spec, envelope.min_override_pct);
     let mut settings = LoopSettings {
         feedback,
         control_period_s: period,
@@ -199,23 +206,24 @@ pub fn default_settings(spec: &RunSpec) -> Result<LoopSettings, LoopError> {
         target_force_n: f64::NAN,
         force_limit_n: f64::NAN,
         envelope,
-        max_duration_s: time_limit_s(spec),
+        max_duration_s,
         cross_check_tolerance: 0.3,
     };
     set_target(&mut settings, target);
     Ok(settings)
 }
 
-/// The time a run may take before it is stopped: three times the program's nominal duration, and
-/// for a fixed feed below 100 % that much longer again (a reference run at 20 % takes five times
-/// the program's time and must still finish to count).
-fn time_limit_s(spec: &RunSpec) -> f64 {
+/// The time a run may take before it is stopped: three times the program's nominal duration,
+/// and for a fixed feed below 100 % that much longer again (a reference run at 20 % takes five
+/// times the program's time and must still finish to count); and at least half again the time
+/// the program takes at the envelope's lowest override, which a controller may hold for long
+/// stretches (feed-current feedback on a mill holds 10–20 % through paper 003's deep steps).
+fn time_limit_s(spec: &RunSpec, min_override_pct: f64) -> f64 {
     let nominal_s = spec.preset.summary().nominal_duration_s.max(1.0);
-    let slowdown = spec
-        .controller
-        .fixed_override_pct()
-        .map_or(1.0, |pct| (100.0 / pct.max(1.0)).max(1.0));
-    3.0 * nominal_s * slowdown + 10.0
+    let slowdown = |pct: f64| (100.0 / pct.max(1.0)).max(1.0);
+    let fixed = spec.controller.fixed_override_pct().map_or(1.0, slowdown);
+    let slowest = 1.5 * slowdown(min_override_pct);
+    nominal_s * (3.0 * fixed).max(slowest) + 10.0
 }
 
 /// The metrics' force limit, as a multiple of the target.
@@ -224,11 +232,36 @@ const FORCE_LIMIT_FACTOR: f64 = 1.2;
 /// the target, so a fixed-feed baseline through a deep step still completes for the comparison.
 const OVERLOAD_FACTOR: f64 = 3.0;
 
+/// Above the air estimate by this factor, an estimated force is a cut.
+const AIR_MARGIN: f64 = 1.5;
+/// The air-cut threshold never rises above this fraction of the target: a model that reads a
+/// large force in air still leaves the controller the light cuts (paper 003's 1 mm entry cuts at
+/// 40 % of the target at 100 %).
+const MAX_AIR_CUT_FRACTION: f64 = 0.35;
+
+/// The estimated force below which the safety envelope takes the tool for in air: a fifth of
+/// the target, raised to half again the force the calibrated model read in the teach cut's air
+/// (its bias there), but never above [`MAX_AIR_CUT_FRACTION`] of the target.
+///
+/// ```
+/// use cutlab::closed_loop::lab::air_cut_force_n;
+/// assert_eq!(air_cut_force_n(320.0, f64::NAN), 64.0);   // no air seen: 20 %
+/// assert_eq!(air_cut_force_n(320.0, 68.0), 102.0);      // 1.5 × the air reading
+/// assert_eq!(air_cut_force_n(320.0, 300.0), 112.0);     // at most 35 %
+/// ```
+pub fn air_cut_force_n(target_force_n: f64, air_force_estimate_n: f64) -> f64 {
+    let base = AIR_CUT_FRACTION * target_force_n;
+    let biased = AIR_MARGIN * air_force_estimate_n;
+    let threshold = if biased > base { biased } else { base };
+    threshold.min(MAX_AIR_CUT_FRACTION * target_force_n)
+}
+
 /// Sets the target and the limits that follow from it (NaN leaves them unset).
 fn set_target(settings: &mut LoopSettings, target_force_n: f64) {
     settings.target_force_n = target_force_n;
     settings.force_limit_n = FORCE_LIMIT_FACTOR * target_force_n;
     settings.envelope.overload_limit_n = OVERLOAD_FACTOR * target_force_n;
+    settings.envelope.air_cut_force_n = AIR_CUT_FRACTION * target_force_n;
 }
 
 /// Sets the target (and what derives from it) once the teach cut is known: the preset's own
@@ -261,6 +294,31 @@ fn settle_target(spec: &RunSpec, settings: &mut LoopSettings, calibration: &Cali
         .filter(|f| f.is_finite() && *f > 0.0)
         .unwrap_or(0.8 * calibration.median_force_at_full_override_n);
     set_target(settings, target);
+}
+
+/// The teach force a machine without simulation truth or dynamometer can use: the model of the
+/// preset's cut, when the whole program cuts one depth, one width and one material (the model
+/// takes each period's feed and speed from the machine, but not where on the part the tool is).
+/// `None` for a program whose cut changes along the path: such a machine needs a saved
+/// calibration ([`super::calibration_file`]).
+pub fn cut_model_teach_force(preset: Preset) -> Option<TeachForce> {
+    let scenario = preset.scenario_spec()?;
+    let single = |points: &[(f64, f64)]| -> Option<f64> {
+        let first = points.first()?.1;
+        points.iter().all(|p| p.1 == first).then_some(first)
+    };
+    let [material] = scenario.materials.as_slice() else {
+        return None;
+    };
+    Some(TeachForce::CutModel {
+        geometry: CutGeometry {
+            cutter: scenario.cutter,
+            mode: scenario.mode,
+            coefficients: material.material.coefficients(),
+        },
+        depth_mm: single(&scenario.depth_mm)?,
+        width_mm: single(&scenario.width_mm)?,
+    })
 }
 
 /// The machines a run uses: a simulation makes a fresh pass for the teach cut and another for the
@@ -372,12 +430,30 @@ impl LabRun {
     /// spec with the same preset, seed, machine and signal chain (the teach cut depends on those
     /// alone, so the result is the same as [`LabRun::new`]'s, for less work).
     pub fn calibrated(spec: &RunSpec, calibration: Calibration) -> Result<Self, LoopError> {
-        let machine = preset_machine(spec, spec.seed)?;
+        Self::calibrated_on(spec, preset_machine(spec, spec.seed)?, calibration)
+    }
+
+    /// Starts the closed loop on any machine from a calibration made elsewhere (a saved
+    /// calibration file, a logged cut): no teach cut. Refused when the calibration reads another
+    /// feedback path than the run's settings.
+    pub fn calibrated_on(
+        spec: &RunSpec,
+        machine: Box<dyn Machine>,
+        calibration: Calibration,
+    ) -> Result<Self, LoopError> {
+        let settings = default_settings(spec)?;
+        let calibration_feedback = calibration.estimator.feedback();
+        if calibration_feedback != settings.feedback {
+            return Err(LoopError::CalibrationFeedback {
+                calibration: calibration_feedback,
+                run: settings.feedback,
+            });
+        }
         let mut run = Self {
             nominal_duration_s: spec.preset.summary().nominal_duration_s.max(1.0),
             calibrated: true,
             stage: Stage::Empty,
-            settings: default_settings(spec)?,
+            settings,
             spec: spec.clone(),
         };
         let closed_loop = run.start_loop(machine, &calibration)?;
@@ -393,29 +469,13 @@ impl LabRun {
         machine: Box<dyn Machine>,
         calibration: &Calibration,
     ) -> Result<ClosedLoop, LoopError> {
-        let mut settings = self.settings.clone();
-        let summary = self.spec.preset.summary();
-        settle_target(&self.spec, &mut settings, calibration);
-        if !(settings.target_force_n.is_finite() && settings.target_force_n > 0.0) {
-            return Err(LoopError::NoTarget);
-        }
-        // A phase current beyond twice anything the teach cut saw (its overrides reach 140 %) is
-        // a sensor fault, whatever the machine's size.
-        if calibration.max_phase_current_a > 0.0 {
-            settings.envelope.max_current_a = 2.0 * calibration.max_phase_current_a;
-        }
-        let controller = self
-            .spec
-            .controller
-            .build(&RunContext {
-                target_force_n: settings.target_force_n,
-                control_period_s: settings.control_period_s,
-                amps_per_newton: calibration
-                    .estimator
-                    .sensitivity_a_per_n(summary.spindle_rpm.unwrap_or(0.0)),
-            })
-            .map_err(LoopError::Controller)?;
-        ClosedLoop::new(machine, controller, calibration.estimator.clone(), settings)
+        let feedback_loop = feedback_loop(
+            &self.spec,
+            &self.settings,
+            calibration,
+            machine.sample_rate_hz(),
+        )?;
+        Ok(OnMachine::new_with(machine, feedback_loop))
     }
 
     /// Stops the closed loop after `duration_s` of machine time if that comes before the
@@ -547,6 +607,47 @@ impl Work for LabRun {
     }
 }
 
+/// The closed loop of `spec` with `settings` once `calibration` is known, for samples at
+/// `sample_rate_hz`, without a machine: the target settled, the sensor-fault current limit taken
+/// from the teach cut, the controller built. [`LabRun`] runs it on its machine; a host that gets
+/// samples as they arrive (the browser's Hardware page) pushes them into it.
+pub fn feedback_loop(
+    spec: &RunSpec,
+    settings: &LoopSettings,
+    calibration: &Calibration,
+    sample_rate_hz: f64,
+) -> Result<FeedbackLoop, LoopError> {
+    let mut settings = settings.clone();
+    let summary = spec.preset.summary();
+    settle_target(spec, &mut settings, calibration);
+    if !(settings.target_force_n.is_finite() && settings.target_force_n > 0.0) {
+        return Err(LoopError::NoTarget);
+    }
+    settings.envelope.air_cut_force_n =
+        air_cut_force_n(settings.target_force_n, calibration.air_force_estimate_n);
+    // A phase current beyond twice anything the teach cut saw (its overrides reach 140 %) is
+    // a sensor fault, whatever the machine's size.
+    if calibration.max_phase_current_a > 0.0 {
+        settings.envelope.max_current_a = 2.0 * calibration.max_phase_current_a;
+    }
+    let controller = spec
+        .controller
+        .build(&RunContext {
+            target_force_n: settings.target_force_n,
+            control_period_s: settings.control_period_s,
+            amps_per_newton: calibration
+                .estimator
+                .sensitivity_a_per_n(summary.spindle_rpm.unwrap_or(0.0)),
+        })
+        .map_err(LoopError::Controller)?;
+    FeedbackLoop::new(
+        sample_rate_hz,
+        controller,
+        calibration.estimator.clone(),
+        settings,
+    )
+}
+
 /// The teach cut's seed is the run's plus this, so its noise differs from the run's.
 const TEACH_SEED_OFFSET: u64 = 0x7EAC;
 
@@ -554,7 +655,14 @@ const TEACH_SEED_OFFSET: u64 = 0x7EAC;
 pub fn metrics_config(preset: Preset, settings: &LoopSettings) -> MetricsConfig {
     MetricsConfig {
         force_limit_n: settings.force_limit_n,
-        settling_band_pct: 10.0,
+        // Paper 002 judges its load step by how soon the current stays near I_ref (Fig. 7): ±2 %.
+        // The mills' depth steps are judged at ±10 %, their force's tooth-passing and noise
+        // spread alone being a few percent.
+        settling_band_pct: if preset.plant_kind() == PlantKind::BondGraph {
+            2.0
+        } else {
+            10.0
+        },
         depth_step_mm: 0.2,
         load_step_times_s: preset.load_step_times_s(),
     }

@@ -70,6 +70,12 @@ pub struct Metrics {
     pub max_settling_time_s: Option<f64>,
     /// Number of depth steps after which the force never stayed inside the settling band.
     pub steps_not_settled: usize,
+    /// The settling band the settling times were measured to, ± percent of target.
+    pub settling_band_pct: f64,
+    /// How much the force still wanders once the controller has had its time: the standard
+    /// deviation of force ÷ target over the last [`FLUCTUATION_WINDOW_S`] of controlled cutting,
+    /// percent (paper 002's "fluctuates less", Fig. 7). NaN with fewer than two such periods.
+    pub late_force_fluctuation_pct: f64,
     /// Each depth step's response.
     pub steps: Vec<StepResponse>,
     /// Total variation of the commanded override, Σ|Δu|.
@@ -86,6 +92,9 @@ pub struct Metrics {
     /// limit, percent.
     pub saving_vs_safe_fixed_pct: Option<f64>,
 }
+
+/// The window at the end of the controlled cut over which the force's fluctuation is measured.
+pub const FLUCTUATION_WINDOW_S: f64 = 10.0;
 
 /// Whether a row counts for the force metrics.
 fn controlled_cut(row: &TraceRow) -> bool {
@@ -167,6 +176,8 @@ pub fn compute(trace: &Trace, config: &MetricsConfig) -> Metrics {
         .filter_map(|s| s.settling_time_s)
         .reduce(f64::max);
 
+    let late_force_fluctuation_pct = late_fluctuation_pct(rows);
+
     let mut total_variation = 0.0;
     let mut changes = 0;
     for pair in rows.windows(2) {
@@ -199,6 +210,8 @@ pub fn compute(trace: &Trace, config: &MetricsConfig) -> Metrics {
         max_overshoot_pct,
         max_settling_time_s,
         steps_not_settled,
+        settling_band_pct: config.settling_band_pct,
+        late_force_fluctuation_pct,
         steps,
         override_total_variation_pct: total_variation,
         override_changes: changes,
@@ -211,6 +224,35 @@ pub fn compute(trace: &Trace, config: &MetricsConfig) -> Metrics {
         saving_vs_programmed_pct: None,
         saving_vs_safe_fixed_pct: None,
     }
+}
+
+/// The standard deviation of force ÷ target over the last [`FLUCTUATION_WINDOW_S`] of the
+/// controlled cut, percent (population form, as a steady signal's spread; NaN with fewer than two
+/// periods).
+fn late_fluctuation_pct(rows: &[TraceRow]) -> f64 {
+    let Some(end_s) = rows
+        .iter()
+        .rev()
+        .find(|r| controlled_cut(r))
+        .map(|r| r.time_s)
+    else {
+        return f64::NAN;
+    };
+    let (mut n, mut sum, mut sum_sq) = (0.0, 0.0, 0.0);
+    for r in rows
+        .iter()
+        .filter(|r| controlled_cut(r) && r.time_s > end_s - FLUCTUATION_WINDOW_S)
+    {
+        let x = r.force_n / r.target_force_n;
+        n += 1.0;
+        sum += x;
+        sum_sq += x * x;
+    }
+    if n < 2.0 {
+        return f64::NAN;
+    }
+    let mean = sum / n;
+    100.0 * (sum_sq / n - mean * mean).max(0.0).sqrt()
 }
 
 /// Fills the savings from the cycle times of the reference runs: the programmed feed at 100 %
@@ -254,7 +296,7 @@ pub fn metrics_csv(metrics: &Metrics) -> String {
 /// ```
 pub fn metrics_csv_columns(runs: &[(&str, &Metrics)]) -> String {
     let value = |v: Option<f64>| v.map_or(String::new(), |v| v.to_string());
-    let table: Vec<[(&str, Option<f64>); 20]> =
+    let table: Vec<[(&str, Option<f64>); 22]> =
         runs.iter().map(|(_, m)| metric_values(m)).collect();
     let mut out = String::from("metric");
     for (name, _) in runs {
@@ -277,7 +319,7 @@ pub fn metrics_csv_columns(runs: &[(&str, &Metrics)]) -> String {
 }
 
 /// Every metric as (CSV name, value), in the CSV's order.
-fn metric_values(metrics: &Metrics) -> [(&'static str, Option<f64>); 20] {
+fn metric_values(metrics: &Metrics) -> [(&'static str, Option<f64>); 22] {
     [
         ("cycle_time_s", Some(metrics.cycle_time_s)),
         ("completed", Some(f64::from(u8::from(metrics.completed)))),
@@ -317,6 +359,11 @@ fn metric_values(metrics: &Metrics) -> [(&'static str, Option<f64>); 20] {
         ("saving_vs_programmed_pct", metrics.saving_vs_programmed_pct),
         ("saving_vs_safe_fixed_pct", metrics.saving_vs_safe_fixed_pct),
         ("steps_not_settled", Some(metrics.steps_not_settled as f64)),
+        ("settling_band_pct", Some(metrics.settling_band_pct)),
+        (
+            "late_force_fluctuation_pct",
+            Some(metrics.late_force_fluctuation_pct).filter(|v| v.is_finite()),
+        ),
     ]
 }
 
@@ -369,10 +416,12 @@ fn depth_step_spans(rows: &[TraceRow], threshold_mm: f64) -> Vec<(usize, usize)>
 /// no armed cutting row in their window: the controller was not in charge.
 fn step_responses(rows: &[TraceRow], config: &MetricsConfig) -> Vec<StepResponse> {
     let mut spans = depth_step_spans(rows, config.depth_step_mm);
+    let mut load_step_starts = Vec::new();
     for &t in &config.load_step_times_s {
         // The first row at or after the step: its period saw the new load.
         if let Some(i) = rows.iter().position(|r| r.time_s >= t).filter(|&i| i > 0) {
             spans.push((i, i));
+            load_step_starts.push(i);
         }
     }
     spans.sort_unstable();
@@ -382,9 +431,16 @@ fn step_responses(rows: &[TraceRow], config: &MetricsConfig) -> Vec<StepResponse
         .enumerate()
         .filter_map(|(k, &(start, last))| {
             let next_step = spans.get(k + 1).map_or(rows.len(), |next| next.0);
-            let end = (last + 1..next_step)
-                .find(|&i| path_slowdown(&rows[i]))
-                .unwrap_or(next_step);
+            // A scheduled load step slows the feed drive itself (paper 002's axis droops by a
+            // quarter under the added resistance): that is the response being measured, not the
+            // path slowing down, so only the next step ends its window.
+            let end = if load_step_starts.contains(&start) {
+                next_step
+            } else {
+                (last + 1..next_step)
+                    .find(|&i| path_slowdown(&rows[i]))
+                    .unwrap_or(next_step)
+            };
             let depth_after_mm = rows[last].depth_mm;
             // NaN (no depth known) is not a step out of the cut.
             if depth_after_mm <= 0.0 {

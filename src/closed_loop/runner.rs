@@ -98,9 +98,11 @@ pub struct LoopSettings {
     pub feedback: Feedback,
     /// The controller's period.
     pub control_period_s: f64,
-    /// Low-pass on the spindle phase currents (paper 003's analog filter: 260 Hz).
+    /// Low-pass on the spindle phase currents (paper 003's analog filter: 260 Hz). Infinite:
+    /// no low-pass (a replayed log whose current is already an RMS value, or one sampled too
+    /// slowly for the cut-off: [`crate::log::replay`]).
     pub spindle_lowpass_hz: f64,
-    /// Low-pass on the feed phase currents (paper 003: 50 Hz).
+    /// Low-pass on the feed phase currents (paper 003: 50 Hz); infinite: none.
     pub feed_lowpass_hz: f64,
     /// Order of both Butterworth low-passes.
     pub lowpass_order: usize,
@@ -133,6 +135,16 @@ pub enum LoopError {
     Machine(PlantError),
     /// The teach cut did not give a usable model.
     Calibration(FitError),
+    /// A given calibration measures force through another path than the run's feedback.
+    CalibrationFeedback {
+        /// The path the calibration was made for.
+        calibration: Feedback,
+        /// The path the run measures with.
+        run: Feedback,
+    },
+    /// A teach cut on a machine that reports no force (no simulation truth, no dynamometer) and
+    /// whose cut changes along the path, so the model of the cut cannot stand in.
+    NoTeachForce,
     /// Feed-current feedback on a cut that never loads the feed drive.
     NoFeedLoad,
     /// The control period is below one sample or absurdly long at this sample rate.
@@ -161,6 +173,21 @@ impl fmt::Display for LoopError {
             LoopError::Controller(e) => write!(f, "controller: {e}"),
             LoopError::Machine(e) => write!(f, "{e}"),
             LoopError::Calibration(e) => write!(f, "calibration (teach cut): {e}"),
+            LoopError::CalibrationFeedback { calibration, run } => write!(
+                f,
+                "the calibration is for {} feedback but the run measures with {}; choose \
+                 feedback {} or calibrate for {}",
+                calibration.name(),
+                run.name(),
+                calibration.name(),
+                run.name()
+            ),
+            LoopError::NoTeachForce => f.write_str(
+                "the machine reports no force (no simulation truth, no dynamometer) and the \
+                 program's cut changes along the path, so a teach cut has no force to learn \
+                 from: give a saved calibration (--calibration FILE, from cutlab calibrate or an \
+                 earlier run's --save-calibration)",
+            ),
             LoopError::NoFeedLoad => f.write_str(
                 "feed-current feedback needs a cut that loads the feed drive, and this one never \
                  pushed back against the feed (in down milling the cutting force pulls the table \
@@ -189,8 +216,8 @@ impl fmt::Display for LoopError {
 impl std::error::Error for LoopError {}
 
 /// A calibrated current-to-force estimator.
-#[derive(Debug, Clone, PartialEq, Serialize)]
-#[serde(tag = "feedback", rename_all = "kebab-case")]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "feedback", rename_all = "kebab-case", deny_unknown_fields)]
 pub enum Estimator {
     /// Paper 003's spindle model with F/V speed identification.
     Spindle {
@@ -285,15 +312,27 @@ impl Estimator {
     }
 }
 
-/// What a teach cut produced.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+/// What a teach cut produced. Saved and read back as a calibration file
+/// ([`super::calibration_file`]).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct Calibration {
     /// The fitted estimator.
     pub estimator: Estimator,
+    /// The largest force the estimator read while the teach cut's tool was in air (NaN if the
+    /// teach cut had no air, or a saved calibration predates this field): the safety envelope
+    /// takes the tool for in air below a margin above it.
+    #[serde(
+        default = "crate::estimation::nan",
+        deserialize_with = "crate::estimation::null_as_nan"
+    )]
+    pub air_force_estimate_n: f64,
     /// Median regulated force over the cutting periods of the teach cut at 100 % override.
+    #[serde(deserialize_with = "crate::estimation::null_as_nan")]
     pub median_force_at_full_override_n: f64,
     /// Median of regulated force ÷ mean resultant force over those periods: converts a
     /// resultant-force target into the regulated force (1 for spindle feedback).
+    #[serde(deserialize_with = "crate::estimation::null_as_nan")]
     pub regulated_per_resultant: f64,
     /// Periods used for the fit.
     pub periods: usize,
@@ -325,6 +364,11 @@ fn lowpass(
     order: usize,
     sample_rate_hz: f64,
 ) -> Result<crate::signal::sos::Sos, LoopError> {
+    if cutoff_hz == f64::INFINITY {
+        // No low-pass: one section that passes every sample through unchanged.
+        return crate::signal::sos::Sos::from_rows(&[[1.0, 0.0, 0.0, 1.0, 0.0, 0.0]])
+            .map_err(|_| LoopError::Filter(DesignError::Order { order: 0 }));
+    }
     butter(&ButterworthSpec {
         kind: FilterKind::Lowpass,
         order,
@@ -464,6 +508,9 @@ struct TeachSamples {
     full_override_at: Vec<usize>,
     full_override_ratios: Vec<f64>,
     max_phase_current_a: f64,
+    /// Every settled period, whatever its force, with its force: the air periods among them tell
+    /// what the fitted model reads with the tool in air ([`Calibration::air_force_estimate_n`]).
+    settled: Vec<(PeriodSummary, f64)>,
 }
 
 /// A period whose current is within this fraction of the teach cut's lowest is taken for air by
@@ -496,6 +543,7 @@ impl TeachSamples {
             full_override_at: full.iter().map(|&k| self.full_override_at[k]).collect(),
             full_override_ratios: pick_full(&self.full_override_ratios),
             max_phase_current_a: self.max_phase_current_a,
+            settled: Vec::new(),
         }
     }
 }
@@ -596,11 +644,14 @@ impl TeachCut {
             speed_change_rpm > TEACH_STEADY_SPEED_FRACTION * period.spindle_speed_rpm.abs();
         self.previous_speed_rpm = period.spindle_speed_rpm;
         let samples = &mut self.samples;
-        let skipped = !spindle_settled
-            || accelerating
-            || since_change_s < TEACH_SETTLE_AFTER_CHANGE_S
-            || !(force_n.is_finite() && force_n > 0.0)
-            || period.feed_mm_min.abs() < 1e-6;
+        let settled = spindle_settled
+            && !accelerating
+            && since_change_s >= TEACH_SETTLE_AFTER_CHANGE_S
+            && period.feed_mm_min.abs() >= 1e-6;
+        if settled {
+            samples.settled.push((period, force_n));
+        }
+        let skipped = !(settled && force_n.is_finite() && force_n > 0.0);
         if !skipped {
             if command_pct == 100.0 {
                 samples.full_override_at.push(samples.current_a.len());
@@ -676,9 +727,13 @@ impl TeachCut {
             sorted.sort_by(f64::total_cmp);
             sorted.get(sorted.len() / 2).copied().unwrap_or(f64::NAN)
         };
+        let median_force_at_full_override_n = median(&s.full_override_forces_n);
+        let air_force_estimate_n =
+            self.air_force_estimate_n(&estimator, median_force_at_full_override_n);
         Ok(Calibration {
             estimator,
-            median_force_at_full_override_n: median(&s.full_override_forces_n),
+            air_force_estimate_n,
+            median_force_at_full_override_n,
             regulated_per_resultant: median(
                 &s.full_override_ratios
                     .iter()
@@ -690,6 +745,36 @@ impl TeachCut {
             max_phase_current_a: s.max_phase_current_a,
             duration_s: self.time_s,
         })
+    }
+}
+
+impl TeachCut {
+    /// The largest force `estimator` reads over the teach cut's air periods (NaN if it saw none):
+    /// a spindle current's line fitted in the cut seldom passes through the idle current (an
+    /// induction motor's magnetising current makes the current convex in the load), so "no
+    /// force" reads as tens of newtons. The periods in air are those whose force source said
+    /// (next to) nothing — below 2 % of the force at 100 % override — or, for the model of the cut,
+    /// which gives a force wherever the axes feed, those whose current is the idle one.
+    fn air_force_estimate_n(&self, estimator: &Estimator, full_override_force_n: f64) -> f64 {
+        let settled = &self.samples.settled;
+        let current = |p: &PeriodSummary| match self.feedback {
+            Feedback::FeedCurrent => p.feed_current_rms_a,
+            Feedback::SpindleCurrent | Feedback::Dynamometer => p.spindle_current_rms_a,
+        };
+        let idle_a = settled
+            .iter()
+            .map(|(p, _)| current(p))
+            .fold(f64::INFINITY, f64::min);
+        let in_air = |p: &PeriodSummary, force_n: f64| match self.force_source {
+            TeachForce::CutModel { .. } => current(p) <= idle_a * (1.0 + AIR_CURRENT_MARGIN),
+            _ => force_n.is_finite() && force_n.abs() < 0.02 * full_override_force_n,
+        };
+        settled
+            .iter()
+            .filter(|(p, f)| in_air(p, *f))
+            .map(|(p, _)| estimator.estimate(p).force_n)
+            .filter(|f| f.is_finite())
+            .fold(f64::NAN, f64::max)
     }
 }
 

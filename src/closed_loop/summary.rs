@@ -75,7 +75,7 @@ fn if_controlled(r: &RunResult, value: f64) -> Option<f64> {
 }
 
 /// The rows, in the order shown.
-pub const METRIC_ROWS: [MetricRow; 18] = [
+pub const METRIC_ROWS: [MetricRow; 19] = [
     row("Target force", "N", Better::Neither, |r| {
         Some(r.settings.target_force_n)
     }),
@@ -130,6 +130,12 @@ pub const METRIC_ROWS: [MetricRow; 18] = [
     row("Max settling time", "s", Better::Lower, |r| {
         r.metrics.max_settling_time_s
     }),
+    row(
+        "Force fluctuation, last 10 s",
+        "% of target",
+        Better::Lower,
+        |r| if_controlled(r, r.metrics.late_force_fluctuation_pct),
+    ),
     row("Depth steps never settled", "", Better::Lower, |r| {
         (!r.metrics.steps.is_empty()).then_some(r.metrics.steps_not_settled as f64)
     }),
@@ -143,6 +149,24 @@ pub const METRIC_ROWS: [MetricRow; 18] = [
         (r.metrics.removed_volume_mm3 > 0.0).then_some(r.metrics.mean_material_removal_mm3_s)
     }),
 ];
+
+/// A metric as the browser's table shows it: whole numbers and values from 100 up without
+/// decimals, others with two. The papers' findings quote figures in the same form, so a reader
+/// finds them in the table.
+///
+/// ```
+/// use cutlab::closed_loop::summary::format_metric;
+/// assert_eq!(format_metric(5.0), "5");
+/// assert_eq!(format_metric(16.54), "16.54");
+/// assert_eq!(format_metric(844.6), "845");
+/// ```
+pub fn format_metric(v: f64) -> String {
+    if v.fract() == 0.0 || v.abs() >= 100.0 {
+        format!("{v:.0}")
+    } else {
+        format!("{v:.2}")
+    }
+}
 
 /// Which of `values` are the best, judged as they are shown (`shown` formats a value): values
 /// that print alike are marked alike, so a reader never sees two equal numbers of which only one

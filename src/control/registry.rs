@@ -154,7 +154,7 @@ tuning! {
         error_range_pct: ("Error range", "% of target", 100.0, 1.0, 1000.0, "|E| that saturates the error input (paper 002: 25 A of 25 A, k_e = 6/25)"),
         change_range_pct: ("Error-change range", "% of target", 200.0, 1.0, 2000.0, "|EC| per control period that saturates the change input (paper 002: k_ec = 3/25)"),
         output_range_pct: ("Output range", "%", 20.0, 0.1, 255.0, "override change per period at |U| = 6 (paper 002's k_u = 250 of 1500 mm/min is 100 %, \
-         which chatters at cutlab's 40–60 ms periods; the paper's period is not stated)"),
+         the default on its own preset; 20 % on the mills, whose 40–60 ms periods run under a 100 %/s rate limit)"),
     }
 }
 

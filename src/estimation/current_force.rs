@@ -18,7 +18,9 @@
 //!
 //! Non-finite inputs give a non-finite force, which the safety envelope treats as a sensor fault.
 
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
+
+use super::null_as_nan;
 
 use super::least_squares::{fit, Fit, FitError};
 use super::speed::in_high_speed_range;
@@ -34,11 +36,14 @@ pub struct ForceEstimate {
 }
 
 /// A closed interval of values seen during calibration.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct Range {
-    /// Smallest value seen.
+    /// Smallest value seen (+∞ when none was: written as null).
+    #[serde(deserialize_with = "null_as_nan")]
     pub min: f64,
-    /// Largest value seen.
+    /// Largest value seen (−∞ when none was: written as null).
+    #[serde(deserialize_with = "null_as_nan")]
     pub max: f64,
 }
 
@@ -60,13 +65,17 @@ impl Range {
 }
 
 /// How well a calibration fits.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct FitQuality {
     /// Coefficient of determination of the current model.
+    #[serde(deserialize_with = "null_as_nan")]
     pub r_squared: f64,
     /// Residual standard deviation of the current.
+    #[serde(deserialize_with = "null_as_nan")]
     pub residual_std_a: f64,
     /// The same residual expressed as force (residual current / sensitivity).
+    #[serde(deserialize_with = "null_as_nan")]
     pub residual_std_n: f64,
     /// Samples used.
     pub samples: usize,
@@ -84,7 +93,8 @@ impl FitQuality {
 }
 
 /// Paper 000's feed-drive model: I_rms = i₀ + i_v·|v| + s·F_feed.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct FeedCurrentModel {
     /// Idle current at standstill, i₀.
     pub idle_current_a: f64,
@@ -159,7 +169,8 @@ impl FeedCurrentModel {
 }
 
 /// One calibrated spindle speed of paper 003's model.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct SpindleSpeedRow {
     /// Spindle speed of this row.
     pub speed_rpm: f64,
@@ -174,7 +185,8 @@ pub struct SpindleSpeedRow {
 }
 
 /// Paper 003's spindle model: I_rms = I_idle(n) + S(n)·F_peak, per gear.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct SpindleCurrentModel {
     /// The spindle speed at which the gearbox changes range (paper 003: 900 rpm); rows on either
     /// side are never mixed.

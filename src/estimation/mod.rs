@@ -13,3 +13,16 @@ pub mod cut_forces;
 pub mod least_squares;
 pub mod speed;
 pub mod teach_log;
+
+/// Reads a number that JSON wrote as `null` because it was not finite (serde_json writes NaN and
+/// ±∞ as null) back as NaN, so a saved model round-trips; the reader of a saved calibration then
+/// decides which of its numbers must be finite.
+pub(crate) fn null_as_nan<'de, D: serde::Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
+    use serde::Deserialize;
+    Ok(Option::<f64>::deserialize(d)?.unwrap_or(f64::NAN))
+}
+
+/// NaN, the default of a number a saved file may leave out.
+pub(crate) fn nan() -> f64 {
+    f64::NAN
+}

@@ -6,16 +6,21 @@
 //! acceleration and any droop under load — comes from the voltage. The slopes are calibrated from
 //! the teach cut by a least-squares line through the origin in each gear.
 
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
+
+use super::null_as_nan;
 
 /// Speed identification from the F/V voltage, one slope per gear range.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct FvSpeedModel {
     /// Programmed speeds at or below this use the low-speed (high-ratio) range.
     pub gear_change_rpm: f64,
-    /// Volts per spindle rpm in the low-speed range; NaN if never calibrated.
+    /// Volts per spindle rpm in the low-speed range; NaN (written as null) if never calibrated.
+    #[serde(deserialize_with = "null_as_nan")]
     pub low_range_v_per_rpm: f64,
-    /// Volts per spindle rpm in the high-speed range; NaN if never calibrated.
+    /// Volts per spindle rpm in the high-speed range; NaN (written as null) if never calibrated.
+    #[serde(deserialize_with = "null_as_nan")]
     pub high_range_v_per_rpm: f64,
 }
 

@@ -133,8 +133,9 @@ impl fmt::Display for LogError {
 
 impl std::error::Error for LogError {}
 
-/// The columns calibration reads, by their names in cutlab's own logs.
-pub const CALIBRATION_COLUMNS: [&str; 9] = [
+/// The columns calibration reads, by their names in cutlab's own logs (`override_pct` only by
+/// a teach-in, to find the rows cut at 100 %).
+pub const CALIBRATION_COLUMNS: [&str; 10] = [
     "time_s",
     "force_n",
     "feed_force_n",
@@ -144,6 +145,7 @@ pub const CALIBRATION_COLUMNS: [&str; 9] = [
     "feed_mm_min",
     "depth_mm",
     "width_mm",
+    "override_pct",
 ];
 
 /// The numeric columns of a CSV log, by name.
@@ -325,6 +327,10 @@ impl LogTable {
 pub struct LogCalibration {
     /// Rows with a positive force.
     pub rows_with_force: usize,
+    /// Median of the positive forces the spindle model was fitted to (NaN without any).
+    pub median_force_n: f64,
+    /// Median of the positive feed forces the feed model was fitted to (NaN without any).
+    pub median_feed_force_n: f64,
     /// Where the spindle model's force came from.
     pub force_source: String,
     /// Where the feed model's force came from.
@@ -450,6 +456,84 @@ fn describe_time_steps(table: &LogTable) -> Option<String> {
     })
 }
 
+/// A row is at 100 % override when its `override_pct` is within this of 100.
+pub const FULL_OVERRIDE_TOLERANCE_PCT: f64 = 0.5;
+
+/// The load a logged teach cut shows at 100 % override: medians over the cutting rows there.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct FullOverride {
+    /// Whether the log has an `override_pct` column; without one every cutting row counts.
+    pub override_column: bool,
+    /// Cutting rows (resultant force > 0) at 100 % override.
+    pub rows: usize,
+    /// Median resultant force over those rows (measured or modelled, as the calibration's).
+    pub resultant_n: f64,
+    /// Median feed force over those with a positive one.
+    pub feed_n: f64,
+    /// Median spindle speed over those rows (NaN without the column).
+    pub spindle_rpm: f64,
+    /// Median feed over those rows (NaN without the column).
+    pub feed_mm_min: f64,
+}
+
+/// The median of the finite values (the mean of the two middle ones for an even count; NaN for
+/// none), as numpy and pandas take it.
+fn median(values: impl Iterator<Item = f64>) -> f64 {
+    let mut sorted: Vec<f64> = values.filter(|v| v.is_finite()).collect();
+    sorted.sort_by(f64::total_cmp);
+    let n = sorted.len();
+    match n {
+        0 => f64::NAN,
+        _ if n % 2 == 1 => sorted[n / 2],
+        _ => 0.5 * (sorted[n / 2 - 1] + sorted[n / 2]),
+    }
+}
+
+/// The rows of a logged teach cut at 100 % override and the load they show, with the forces
+/// [`calibrate_log`] fits against (`geometry` as there).
+///
+/// ```
+/// use cutlab::estimation::teach_log::{full_override_rows, LogTable};
+/// let csv = "override_pct,force_n,spindle_speed_rpm\n100,0,1000\n100,300,990\n30,90,1000\n\
+///            100,320,980\n100,310,985\n";
+/// let full = full_override_rows(&LogTable::parse(csv).unwrap(), None).unwrap();
+/// assert_eq!((full.rows, full.resultant_n, full.spindle_rpm), (3, 310.0, 985.0));
+/// ```
+pub fn full_override_rows(
+    table: &LogTable,
+    geometry: Option<(&CutGeometry, &str)>,
+) -> Result<FullOverride, LogError> {
+    let forces = forces(table, geometry)?;
+    let override_pct = table.fit_column("override_pct")?;
+    let rows: Vec<usize> = (0..forces.resultant_n.len())
+        .filter(|&i| {
+            let force = forces.resultant_n[i];
+            let at_full = override_pct.is_none_or(|o| {
+                o.get(i)
+                    .is_some_and(|o| (o - 100.0).abs() <= FULL_OVERRIDE_TOLERANCE_PCT)
+            });
+            at_full && force.is_finite() && force > 0.0
+        })
+        .collect();
+    let over = |column: Option<&[f64]>| {
+        column.map_or(f64::NAN, |c| {
+            median(rows.iter().filter_map(|&i| c.get(i).copied()))
+        })
+    };
+    Ok(FullOverride {
+        override_column: override_pct.is_some(),
+        rows: rows.len(),
+        resultant_n: over(Some(&forces.resultant_n)),
+        feed_n: median(
+            rows.iter()
+                .map(|&i| forces.feed_n.get(i).copied().unwrap_or(f64::NAN))
+                .filter(|f| *f > 0.0),
+        ),
+        spindle_rpm: over(table.fit_column("spindle_speed_rpm")?),
+        feed_mm_min: over(table.fit_column("feed_mm_min")?),
+    })
+}
+
 /// Fits both current-to-force models from a logged teach cut. `geometry` models the force from
 /// the cut instead of the `force_n` column (with a description of the cut for the report).
 ///
@@ -472,8 +556,22 @@ pub fn calibrate_log(
 ) -> Result<LogCalibration, LogError> {
     let forces = forces(table, geometry)?;
     let force = forces.resultant_n.as_slice();
+    let median_positive = |values: &[f64]| {
+        let mut positive: Vec<f64> = values
+            .iter()
+            .copied()
+            .filter(|f| f.is_finite() && *f > 0.0)
+            .collect();
+        positive.sort_by(f64::total_cmp);
+        positive
+            .get(positive.len() / 2)
+            .copied()
+            .unwrap_or(f64::NAN)
+    };
     let mut report = LogCalibration {
         rows_with_force: force.iter().filter(|f| f.is_finite() && **f > 0.0).count(),
+        median_force_n: median_positive(force),
+        median_feed_force_n: median_positive(&forces.feed_n),
         force_source: forces.source.clone(),
         feed_force_source: forces.feed_source.clone(),
         model_vs_measured_pct: forces.model_vs_measured_pct,

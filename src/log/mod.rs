@@ -13,10 +13,12 @@
 
 pub mod analysis;
 pub mod csv;
+pub mod mapping;
+pub mod replay;
 
 use serde::Serialize;
 
-use csv::{parse_cell, CsvReader, Dialect, Record};
+use csv::{parse_number, Cell, CsvReader, Dialect, RecordView};
 
 /// A column with at least this share of numbers (among its non-empty cells) is numeric; its
 /// other cells are gaps, each reported. Below it the column is text (labels).
@@ -97,18 +99,36 @@ pub struct Column {
 impl Column {
     /// Smallest, largest and mean of the finite values (NaN when there are none).
     pub fn min_max_mean(&self) -> (f64, f64, f64) {
-        let finite = self.values.iter().copied().filter(|v| v.is_finite());
-        let (mut lo, mut hi, mut sum, mut n) = (f64::INFINITY, f64::NEG_INFINITY, 0.0, 0usize);
-        for v in finite {
-            lo = lo.min(v);
-            hi = hi.max(v);
-            sum += v;
-            n += 1;
+        // Four independent lanes: the additions of one do not wait for another's.
+        let (mut lo, mut hi) = ([f64::INFINITY; 4], [f64::NEG_INFINITY; 4]);
+        let (mut sum, mut n) = ([0.0; 4], [0usize; 4]);
+        let mut lanes = self.values.chunks_exact(4);
+        for four in &mut lanes {
+            for k in 0..4 {
+                let v = four[k];
+                if v.is_finite() {
+                    lo[k] = if v < lo[k] { v } else { lo[k] };
+                    hi[k] = if v > hi[k] { v } else { hi[k] };
+                    sum[k] += v;
+                    n[k] += 1;
+                }
+            }
         }
-        if n == 0 {
+        for &v in lanes.remainder() {
+            if v.is_finite() {
+                lo[0] = lo[0].min(v);
+                hi[0] = hi[0].max(v);
+                sum[0] += v;
+                n[0] += 1;
+            }
+        }
+        let count: usize = n.iter().sum();
+        if count == 0 {
             (f64::NAN, f64::NAN, f64::NAN)
         } else {
-            (lo, hi, sum / n as f64)
+            let lo = lo.iter().copied().fold(f64::INFINITY, f64::min);
+            let hi = hi.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+            (lo, hi, (sum[0] + sum[1] + (sum[2] + sum[3])) / count as f64)
         }
     }
 }
@@ -148,10 +168,27 @@ struct ColumnBuilder {
 }
 
 /// Reads a log from chunks of bytes.
+///
+/// ```
+/// use cutlab::log::LogBuilder;
+/// let mut builder = LogBuilder::new();
+/// builder.push(b"time [s];I [A]\n0;1,5\n0,0");
+/// builder.push(b"1;2,5\n");
+/// let log = builder.finish(None);
+/// assert_eq!(log.columns[1].values, [1.5, 2.5]);
+/// assert_eq!(log.sample_period_s, Some(0.01));
+/// ```
 #[derive(Debug, Default)]
 pub struct LogBuilder {
     reader: CsvReader,
-    first: Option<Record>,
+    sink: Sink,
+}
+
+/// Everything but the reader, so the reader's callback can borrow it.
+#[derive(Debug, Default)]
+struct Sink {
+    /// The first record, waiting for the second to say whether it is a header.
+    first: Option<(usize, Vec<Vec<u8>>)>,
     names: Vec<String>,
     header: Option<bool>,
     columns: Vec<ColumnBuilder>,
@@ -162,16 +199,30 @@ pub struct LogBuilder {
     row_lines: Vec<u32>,
     problems: Vec<Problem>,
     problems_not_listed: usize,
-    decimal_comma: bool,
+    reported_utf8: bool,
+    /// The file's size, when the caller knows it: the columns reserve their room once.
+    expected_bytes: Option<u64>,
+    reserved: bool,
 }
+
+/// Rows read before the columns reserve room for the whole file (when its size is known).
+const ROWS_BEFORE_RESERVING: usize = 1000;
 
 impl LogBuilder {
     /// A builder for a new file.
     pub fn new() -> Self {
         Self {
             reader: CsvReader::new(),
-            ..Self::default()
+            sink: Sink::default(),
         }
+    }
+
+    /// A builder for a file of `bytes` bytes: once the first rows show how long a row is, the
+    /// columns reserve room for all of them, so memory grows once instead of doubling.
+    pub fn with_expected_bytes(bytes: u64) -> Self {
+        let mut builder = Self::new();
+        builder.sink.expected_bytes = Some(bytes);
+        builder
     }
 
     /// Bytes taken so far.
@@ -179,15 +230,49 @@ impl LogBuilder {
         self.reader.bytes_read()
     }
 
+    /// Rows read so far.
+    pub fn rows(&self) -> usize {
+        self.sink.rows
+    }
+
     /// Takes the next chunk of the file.
     pub fn push(&mut self, chunk: &[u8]) {
-        let mut records = Vec::new();
-        self.reader.push(chunk, &mut |r| records.push(r));
-        for r in records {
-            self.record(r);
+        let sink = &mut self.sink;
+        self.reader.push(chunk, &mut |r| sink.record(&r));
+        if !sink.reserved && sink.rows >= ROWS_BEFORE_RESERVING {
+            sink.reserve(self.reader.bytes_read());
         }
     }
 
+    /// Ends the file. `sample_period_s`, when given, is the period of a log without a time
+    /// column (and overrides the time column's).
+    pub fn finish(mut self, sample_period_s: Option<f64>) -> Log {
+        let sink = &mut self.sink;
+        self.reader.finish(&mut |r| sink.record(&r));
+        let dialect = self.reader.dialect().unwrap_or(Dialect {
+            delimiter: b',',
+            decimal_comma: false,
+        });
+        // A file of one record: it is data if it is all numbers, else a header alone.
+        if let Some((line, first)) = sink.first.take() {
+            let numeric = first.iter().all(|f| {
+                parse_number(f, dialect.decimal_comma).is_some() || f.trim_ascii().is_empty()
+            });
+            sink.start_columns(line, &first, !numeric);
+            if numeric {
+                sink.data(line, first.len(), dialect.decimal_comma, |i| {
+                    Cell::Bytes(first.get(i).map_or(&[][..], Vec::as_slice))
+                });
+            }
+        }
+        for p in self.reader.take_problems() {
+            sink.problem(p.line, None, p.message);
+        }
+        sink.finish(dialect, sample_period_s)
+    }
+}
+
+impl Sink {
     fn problem(&mut self, line: usize, column: Option<String>, message: String) {
         if self.problems.len() < MAX_LISTED_PROBLEMS {
             self.problems.push(Problem {
@@ -200,35 +285,77 @@ impl LogBuilder {
         }
     }
 
-    fn record(&mut self, record: Record) {
-        if let Some(dialect) = self.reader.dialect() {
-            self.decimal_comma = dialect.decimal_comma;
+    /// Reserves room for the rows a file of the expected size holds, at the rate seen so far
+    /// (and a little more).
+    fn reserve(&mut self, bytes_read: u64) {
+        self.reserved = true;
+        let Some(total) = self.expected_bytes else {
+            return;
+        };
+        if bytes_read == 0 {
+            return;
         }
-        if self.header.is_none() {
-            // The first record waits for the second: together they say whether it is a header.
-            let Some(first) = self.first.take() else {
-                self.first = Some(record);
-                return;
-            };
-            let header = is_header(&first.fields, &record.fields, self.decimal_comma);
-            self.start_columns(&first, header);
-            if !header {
-                self.data(first);
+        let estimate = (self.rows as f64 * total as f64 / bytes_read as f64 * 1.02) as usize + 16;
+        // A wild estimate (a file with a huge first line) must not reserve absurd amounts.
+        let extra = estimate.saturating_sub(self.rows).min(1 << 28);
+        self.row_lines.reserve_exact(extra);
+        for c in &mut self.columns {
+            c.values.reserve_exact(extra);
+        }
+    }
+
+    /// Text from the file's bytes; bytes that are not UTF-8 are replaced, and the first time
+    /// that happens it is reported.
+    fn text(&mut self, bytes: &[u8], line: usize) -> String {
+        match std::str::from_utf8(bytes) {
+            Ok(t) => t.to_string(),
+            Err(_) => {
+                if !self.reported_utf8 {
+                    self.reported_utf8 = true;
+                    self.problem(
+                        line,
+                        None,
+                        "bytes that are not UTF-8 were replaced (is the file Latin-1?)".into(),
+                    );
+                }
+                String::from_utf8_lossy(bytes).into_owned()
             }
         }
-        self.data(record);
+    }
+
+    fn record(&mut self, record: &RecordView<'_>) {
+        let decimal_comma = record.dialect().decimal_comma;
+        if self.header.is_none() {
+            // The first record waits for the second: together they say whether it is a header.
+            let Some((line, first)) = self.first.take() else {
+                self.first = Some((record.line, record.fields().map(<[u8]>::to_vec).collect()));
+                return;
+            };
+            let second: Vec<&[u8]> = record.fields().collect();
+            let header = is_header(&first, &second, decimal_comma);
+            self.start_columns(line, &first, header);
+            if !header {
+                self.data(line, first.len(), decimal_comma, |i| {
+                    Cell::Bytes(first.get(i).map_or(&[][..], Vec::as_slice))
+                });
+            }
+        }
+        self.data(record.line, record.len(), decimal_comma, |i| record.cell(i));
     }
 
     /// Names the columns from the first record (a header) or by number.
-    fn start_columns(&mut self, first: &Record, header: bool) {
+    fn start_columns(&mut self, line: usize, first: &[Vec<u8>], header: bool) {
         self.header = Some(header);
         self.names = first
-            .fields
             .iter()
             .enumerate()
-            .map(|(i, n)| match n.trim() {
-                n if header && !n.is_empty() => n.to_string(),
-                _ => format!("column {}", i + 1),
+            .map(|(i, n)| {
+                let name = self.text(n.trim_ascii(), line);
+                if header && !name.is_empty() {
+                    name
+                } else {
+                    format!("column {}", i + 1)
+                }
             })
             .collect();
         self.columns = (0..self.names.len())
@@ -236,16 +363,22 @@ impl LogBuilder {
             .collect();
     }
 
-    fn data(&mut self, record: Record) {
+    /// One data row of `fields` fields, field `i` given by `cell(i)`.
+    fn data<'a>(
+        &mut self,
+        line: usize,
+        fields: usize,
+        decimal_comma: bool,
+        cell: impl Fn(usize) -> Cell<'a>,
+    ) {
         let width = self.columns.len();
-        if record.fields.len() != width {
+        if fields != width {
             self.problem(
-                record.line,
+                line,
                 None,
                 format!(
-                    "{} fields where the header has {width}; {}",
-                    record.fields.len(),
-                    if record.fields.len() < width {
+                    "{fields} fields where the header has {width}; {}",
+                    if fields < width {
                         "the missing cells are gaps"
                     } else {
                         "the extra fields are ignored"
@@ -254,59 +387,58 @@ impl LogBuilder {
             );
         }
         let row = self.rows as u32;
-        for (c, builder) in self.columns.iter_mut().enumerate() {
-            let cell = record.fields.get(c).map_or("", String::as_str);
-            match parse_cell(cell, self.decimal_comma) {
-                Some(v) => {
+        for c in 0..width {
+            let cell = match if c < fields {
+                cell(c)
+            } else {
+                Cell::Bytes(&[])
+            } {
+                Cell::Number(v) => {
+                    let builder = &mut self.columns[c];
                     builder.values.push(v);
                     builder.numbers += 1;
+                    continue;
                 }
-                None if cell.trim().is_empty() => {
-                    builder.values.push(f64::NAN);
-                    builder.empty += 1;
-                }
-                None => {
-                    builder.values.push(f64::NAN);
-                    let next = self.label_names.len() as u32;
-                    let id = *self.interned.entry(cell.trim().to_string()).or_insert(next);
-                    if id == next {
-                        self.label_names.push(cell.trim().to_string());
-                    }
-                    builder.text.push((row, id));
-                }
+                Cell::Bytes(bytes) => bytes,
+            };
+            if let Some(v) = parse_number(cell, decimal_comma) {
+                let builder = &mut self.columns[c];
+                builder.values.push(v);
+                builder.numbers += 1;
+                continue;
             }
+            let cell = cell.trim_ascii();
+            if cell.is_empty() {
+                let builder = &mut self.columns[c];
+                builder.values.push(f64::NAN);
+                builder.empty += 1;
+                continue;
+            }
+            // Text: interned, so a label repeated a million times is stored once.
+            let id = match std::str::from_utf8(cell)
+                .ok()
+                .and_then(|t| self.interned.get(t))
+            {
+                Some(&id) => id,
+                None => {
+                    let text = self.text(cell, line);
+                    let next = self.label_names.len() as u32;
+                    let id = *self.interned.entry(text.clone()).or_insert(next);
+                    if id == next {
+                        self.label_names.push(text);
+                    }
+                    id
+                }
+            };
+            let builder = &mut self.columns[c];
+            builder.values.push(f64::NAN);
+            builder.text.push((row, id));
         }
         self.rows += 1;
-        self.row_lines
-            .push(record.line.min(u32::MAX as usize) as u32);
+        self.row_lines.push(line.min(u32::MAX as usize) as u32);
     }
 
-    /// Ends the file. `sample_period_s`, when given, is the period of a log without a time
-    /// column (and overrides the time column's).
-    pub fn finish(mut self, sample_period_s: Option<f64>) -> Log {
-        let mut records = Vec::new();
-        self.reader.finish(&mut |r| records.push(r));
-        for r in records {
-            self.record(r);
-        }
-        // A file of one record: it is data if it is all numbers, else a header alone.
-        if let Some(first) = self.first.take() {
-            let numeric = first
-                .fields
-                .iter()
-                .all(|f| parse_cell(f, self.decimal_comma).is_some() || f.trim().is_empty());
-            self.start_columns(&first, !numeric);
-            if numeric {
-                self.data(first);
-            }
-        }
-        for p in self.reader.take_problems() {
-            self.problem(p.line, None, p.message);
-        }
-        let dialect = self.reader.dialect().unwrap_or(Dialect {
-            delimiter: b',',
-            decimal_comma: false,
-        });
+    fn finish(&mut self, dialect: Dialect, sample_period_s: Option<f64>) -> Log {
         let builders = std::mem::take(&mut self.columns);
         let names = std::mem::take(&mut self.names);
         let mut columns = Vec::with_capacity(builders.len());
@@ -415,27 +547,55 @@ impl LogBuilder {
     /// Converts a time column to seconds (a unit or name in ms says milliseconds), and returns
     /// the median step; uneven steps and gaps are reported by line.
     fn time_steps(&mut self, column: &mut Column) -> Option<f64> {
-        let in_ms = column
-            .unit
-            .as_deref()
-            .is_some_and(|u| u.eq_ignore_ascii_case("ms"))
-            || column.name.to_ascii_lowercase().contains("ms");
-        if in_ms {
+        let unit = column.unit.as_deref().map(str::to_ascii_lowercase);
+        let name = column.name.to_ascii_lowercase();
+        let scale = match unit.as_deref() {
+            Some("ms") => 1e-3,
+            Some("us" | "µs" | "μs") => 1e-6,
+            Some(_) => 1.0,
+            None if name.contains("ms") => 1e-3,
+            None if name.contains("us") && !name.contains("s_") => 1e-6,
+            None => 1.0,
+        };
+        if scale != 1.0 {
+            for v in &mut column.values {
+                *v *= scale;
+            }
+            column.unit = Some(if scale == 1e-3 { "ms" } else { "µs" }.into());
+        }
+        // The median step, found in linear time (a million-row log would spend a tenth of its
+        // load sorting otherwise).
+        let mut steps: Vec<f64> = column
+            .values
+            .windows(2)
+            .map(|w| w[1] - w[0])
+            .filter(|d| d.is_finite())
+            .collect();
+        if steps.is_empty() {
+            return None;
+        }
+        let middle = steps.len() / 2;
+        let median = *steps.select_nth_unstable_by(middle, f64::total_cmp).1;
+        drop(steps);
+        // Nothing says the unit and the usual step is a second or more: no machine log samples
+        // that slowly (the slowest ones log at 10 Hz), but a DAQ's counter of milliseconds does.
+        let mut median = median;
+        if scale == 1.0 && unit.is_none() && median >= 1.0 && !name.contains("sec") {
             for v in &mut column.values {
                 *v *= 1e-3;
             }
+            median *= 1e-3;
             column.unit = Some("ms".into());
+            self.problem(
+                1,
+                Some(column.name.clone()),
+                format!(
+                    "the time column gives no unit and steps by {}: read as milliseconds \
+                     (write \"[s]\" in its name if they are seconds)",
+                    crate::input::readable(median * 1e3)
+                ),
+            );
         }
-        let steps: Vec<(usize, f64)> = column
-            .values
-            .windows(2)
-            .enumerate()
-            .map(|(i, w)| (i + 1, w[1] - w[0]))
-            .filter(|(_, d)| d.is_finite())
-            .collect();
-        let mut sorted: Vec<f64> = steps.iter().map(|(_, d)| *d).collect();
-        sorted.sort_by(f64::total_cmp);
-        let median = *sorted.get(sorted.len() / 2)?;
         if median <= 0.0 {
             self.problem(
                 0,
@@ -445,7 +605,15 @@ impl LogBuilder {
             return None;
         }
         let mut uneven = 0;
-        for &(row, d) in &steps {
+        let steps = column
+            .values
+            .windows(2)
+            .enumerate()
+            .map(|(i, w)| (i + 1, w[1] - w[0]));
+        for (row, d) in steps {
+            if !d.is_finite() {
+                continue;
+            }
             let line = self.row_lines.get(row).copied().unwrap_or(0) as usize;
             if d > 1.5 * median {
                 self.problem(
@@ -479,11 +647,11 @@ impl LogBuilder {
 
 /// Whether `first` names the columns: it has a non-empty cell that is not a number where the
 /// second record has a number, or every cell is text while the second record has a number.
-fn is_header(first: &[String], second: &[String], decimal_comma: bool) -> bool {
-    let number = |f: &String| parse_cell(f, decimal_comma).is_some();
-    let text = |f: &String| !f.trim().is_empty() && !number(f);
+fn is_header(first: &[Vec<u8>], second: &[&[u8]], decimal_comma: bool) -> bool {
+    let number = |f: &[u8]| parse_number(f, decimal_comma).is_some();
+    let text = |f: &[u8]| !f.trim_ascii().is_empty() && !number(f);
     first.iter().zip(second).any(|(a, b)| text(a) && number(b))
-        || (first.iter().all(text) && second.iter().any(number))
+        || (first.iter().all(|f| text(f)) && second.iter().any(|f| number(f)))
 }
 
 /// The unit in a column name: `Current [A]`, `speed(rpm)`, `F / N`.

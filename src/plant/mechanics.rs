@@ -67,6 +67,7 @@ use std::f64::consts::{PI, TAU};
 
 use super::materials::CuttingCoefficients;
 use super::{finite, in_range, non_negative, positive, PlantError};
+use crate::input::readable;
 use crate::math;
 
 /// The most turns of the cutter a helical edge may wrap within the cut (see
@@ -191,9 +192,11 @@ impl Cutter {
             return Err(PlantError::new(
                 "axial_depth_mm",
                 format!(
-                    "{axial_depth_mm} mm is deeper than the flute of a {} mm end mill (at most \
-                     {deepest_mm} mm, {MAX_DEPTH_DIAMETERS} diameters)",
-                    self.diameter_mm
+                    "{} mm is deeper than the flute of a {} mm end mill (at most {} mm, \
+                     {MAX_DEPTH_DIAMETERS} diameters)",
+                    readable(axial_depth_mm),
+                    readable(self.diameter_mm),
+                    readable(deepest_mm)
                 ),
             ));
         }
@@ -201,8 +204,8 @@ impl Cutter {
             return Err(PlantError::new(
                 "feed_per_tooth_mm",
                 format!(
-                    "{feed_per_tooth_mm} mm is beyond any feed per tooth (at most \
-                     {MAX_FEED_PER_TOOTH_MM} mm)"
+                    "{} mm is beyond any feed per tooth (at most {MAX_FEED_PER_TOOTH_MM} mm)",
+                    readable(feed_per_tooth_mm)
                 ),
             ));
         }

@@ -29,7 +29,9 @@
 //!   itself, reports a watchdog [`Fault`], ignores override commands (acknowledged "not armed")
 //!   and stays there until the host arms again.
 //! * **Faults.** A phase current beyond the over-current limit, or a non-finite one, raises an
-//!   over-current or sensor fault, cleared when the currents are back.
+//!   over-current or sensor fault, cleared when the currents are back. The device only reports
+//!   them; the host decides (docs/protocol.md §5). An active E-stop input (injected) holds the
+//!   feed, as the control stops its axes, and refuses every SetOverride and Arm (result 3).
 //!
 //! ## Fault injection ([`FaultInjection`])
 //!
@@ -40,6 +42,10 @@
 //!   every received byte is discarded (its watchdog fires if the window exceeds the timeout).
 //! * `unplug_at_s`: from this device time on, the cable is out: nothing is received or sent;
 //!   the machine runs on, and the watchdog applies the fallback.
+//! * `estop_at_s`: from this device time on, the E-stop input is active (the device then
+//!   declares one in its features).
+//! * `over_current_at_s`, `over_current_s`: for this window of device time the device reads an
+//!   over-current (while a part runs), as a crashed or broken tool would make it.
 
 use super::codec::{encode_frame, Decoder, MAX_FRAME_LEN};
 use super::frame::{
@@ -76,6 +82,14 @@ pub struct FaultInjection {
     pub stall_s: f64,
     /// When the cable is pulled, device time.
     pub unplug_at_s: Option<f64>,
+    /// When the E-stop input goes active (and stays so), device time. With it the device
+    /// declares an E-stop input (features bit 1).
+    pub estop_at_s: Option<f64>,
+    /// Start of an over-current, device time: the device reads a phase current beyond its limit
+    /// (as a crash or a broken tool would make it) for `over_current_s`.
+    pub over_current_at_s: Option<f64>,
+    /// Length of the over-current.
+    pub over_current_s: f64,
 }
 
 /// What the emulator emulates.
@@ -95,6 +109,10 @@ pub struct DeviceConfig {
     pub over_current_a: f64,
     /// Faults to inject.
     pub faults: FaultInjection,
+    /// Whether to send the simulation's truth (SimTruth frames, the SIM_TRUTH feature). Off, the
+    /// emulator is a real bridge's twin: the host sees currents, speed and feed only, and a
+    /// teach cut must take its force from elsewhere.
+    pub sim_truth: bool,
 }
 
 impl DeviceConfig {
@@ -109,6 +127,7 @@ impl DeviceConfig {
             fallback_override_pct: 50.0,
             over_current_a: 150.0,
             faults: FaultInjection::default(),
+            sim_truth: true,
         }
     }
 }
@@ -282,7 +301,18 @@ impl DeviceEmulator {
         if !(f.stall_s.is_finite() && f.stall_s >= 0.0) {
             return Err(bad("the stall's length", f.stall_s));
         }
-        for t in [f.stall_at_s, f.unplug_at_s].into_iter().flatten() {
+        if !(f.over_current_s.is_finite() && f.over_current_s >= 0.0) {
+            return Err(bad("the over-current's length", f.over_current_s));
+        }
+        for t in [
+            f.stall_at_s,
+            f.unplug_at_s,
+            f.estop_at_s,
+            f.over_current_at_s,
+        ]
+        .into_iter()
+        .flatten()
+        {
             if !(t.is_finite() && t >= 0.0) {
                 return Err(bad("a fault's time", t));
             }
@@ -338,7 +368,15 @@ impl DeviceEmulator {
             watchdog_timeout_ms: (config.watchdog_timeout_s * 1000.0).round() as u16,
             fallback_override_cpct: cpct(config.fallback_override_pct),
             over_current_a: config.over_current_a as f32,
-            features: feature::SIM_TRUTH,
+            features: if config.sim_truth {
+                feature::SIM_TRUTH
+            } else {
+                0
+            } | if config.faults.estop_at_s.is_some() {
+                feature::ESTOP_INPUT
+            } else {
+                0
+            },
         };
         Ok(Self {
             rng: Rng::fork(config.seed, 0xDE71CE),
@@ -419,6 +457,11 @@ impl DeviceEmulator {
     /// Diagnostic lines since the last call (for stderr).
     pub fn drain_diagnostics(&mut self) -> Vec<String> {
         std::mem::take(&mut self.diagnostics)
+    }
+
+    /// Whether the host holds the override (armed, and not in the watchdog's fallback).
+    pub fn armed(&self) -> bool {
+        self.armed && !self.fallback
     }
 
     /// Whether a part's program is running.
@@ -574,8 +617,10 @@ impl DeviceEmulator {
         self.applied = self.mode.apply(pct, self.applied);
     }
 
+    /// The feed is held while the E-stop input is active (the control stops the axes), and
+    /// while the host asks for it.
     fn feed_hold(&self) -> bool {
-        self.armed && !self.fallback && self.requested.feed_hold
+        self.estop || (self.armed && !self.fallback && self.requested.feed_hold)
     }
 
     fn start_part(&mut self) {
@@ -661,6 +706,20 @@ impl DeviceEmulator {
     pub fn step_frame(&mut self, out: &mut Vec<u8>) {
         self.update_link_faults();
         let start_s = self.time_s();
+        if !self.estop
+            && self
+                .config
+                .faults
+                .estop_at_s
+                .is_some_and(|at| start_s >= at)
+        {
+            self.estop = true;
+            self.apply_override();
+            self.log(
+                "E-stop input active (injected): the feed stops; commands refused".to_string(),
+            );
+            self.report_fault(FaultKind::EStop, true, out);
+        }
         if self.armed
             && !self.fallback
             && start_s - self.last_host_frame_s > self.config.watchdog_timeout_s
@@ -740,10 +799,15 @@ impl DeviceEmulator {
                 }
             }
         }
+        let f = self.config.faults;
+        let t = self.time_s();
+        over_current |= f
+            .over_current_at_s
+            .is_some_and(|at| t > at && t <= at + f.over_current_s);
         self.watch_currents(over_current, sensor_fault, out);
         let n = block.n.max(1) as f64;
         self.sample_seq = self.sample_seq.wrapping_add(1);
-        if block.truth_seen {
+        if block.truth_seen && self.config.sim_truth {
             let mut v: [f32; 16] = core::array::from_fn(|i| (block.truth[i] / n) as f32);
             // Positions are where the tool is at the block's end, not on average.
             let t = &block.last_truth;

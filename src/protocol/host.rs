@@ -23,8 +23,8 @@ use serde::Serialize;
 use super::codec::{encode_frame, Decoder, MAX_FRAME_LEN};
 use super::device::cpct;
 use super::frame::{
-    command_flag, feature, sample_flag, text_field, Arm, Capabilities, Disarm, FaultKind, Frame,
-    Heartbeat, Hello, OverrideModeCode, Sample, SetOverride, SimTruth, VERSION_MAJOR,
+    command_flag, feature, sample_flag, text_field, Ack, Arm, Capabilities, Disarm, FaultKind,
+    Frame, Heartbeat, Hello, OverrideModeCode, Sample, SetOverride, SimTruth, VERSION_MAJOR,
     VERSION_MINOR,
 };
 use crate::machine::{MachineStep, OverrideCommand, PlantTruth, SensorSample};
@@ -111,8 +111,13 @@ pub struct HostSession {
     command_seq: u32,
     heartbeat_seq: u32,
     last_ack_seq: Option<u32>,
+    last_ack: Option<Ack>,
     device_armed: bool,
     fallback: bool,
+    /// Faults raised that call for the host's alarm (all but the watchdog's), not yet taken.
+    alarm_faults: Vec<FaultKind>,
+    /// The E-stop flag of the latest sample.
+    estop: bool,
     stats: LinkStats,
     latencies: u64,
     events: Vec<LinkEvent>,
@@ -143,8 +148,11 @@ impl HostSession {
             command_seq: 0,
             heartbeat_seq: 0,
             last_ack_seq: None,
+            last_ack: None,
             device_armed: false,
             fallback: false,
+            alarm_faults: Vec::new(),
+            estop: false,
             stats: LinkStats::default(),
             latencies: 0,
             events: Vec::new(),
@@ -194,6 +202,15 @@ impl HostSession {
         self.fallback
     }
 
+    /// The faults raised since the last call that call for an alarm (docs/protocol.md §5): a
+    /// sensor, over-current or E-stop fault, or one of a kind this version does not know —
+    /// everything but the watchdog's, which the host answers by re-arming. A sample that shows
+    /// the E-stop input active counts as an E-stop fault raised, in case its Fault frame was
+    /// lost on the line.
+    pub fn take_alarm_faults(&mut self) -> Vec<FaultKind> {
+        std::mem::take(&mut self.alarm_faults)
+    }
+
     /// Whether the device's latest sample said the host is in control.
     pub fn device_armed(&self) -> bool {
         self.device_armed
@@ -212,6 +229,11 @@ impl HostSession {
     pub fn acknowledged(&self, seq: u32) -> bool {
         self.last_ack_seq
             .is_some_and(|a| a.wrapping_sub(seq) < 1 << 31)
+    }
+
+    /// The latest acknowledgement: which command, its result and the override the device applied.
+    pub fn last_ack(&self) -> Option<Ack> {
+        self.last_ack
     }
 
     /// The next sample for the loop, if one is ready.
@@ -323,6 +345,7 @@ impl HostSession {
             Frame::Ack(a) => {
                 self.stats.commands_acknowledged += 1;
                 self.last_ack_seq = Some(a.seq);
+                self.last_ack = Some(a);
             }
             Frame::Fault(f) => {
                 let raised = f.active != 0;
@@ -332,6 +355,12 @@ impl HostSession {
                 if f.kind == FaultKind::Watchdog && raised {
                     self.stats.watchdog_fallbacks += 1;
                     self.fallback = true;
+                } else if raised {
+                    self.alarm_faults.push(f.kind);
+                }
+                if f.kind == FaultKind::EStop {
+                    // Its samples' flag then says nothing new.
+                    self.estop = raised;
                 }
                 self.event(format!(
                     "device fault {} {} (override now {} %)",
@@ -435,6 +464,12 @@ impl HostSession {
         }
         self.last = Some(sample);
         self.device_armed = s.flags & sample_flag::ARMED != 0;
+        let estop = s.flags & sample_flag::ESTOP != 0;
+        if estop && !self.estop {
+            self.event("the device's samples show its E-stop input active (its fault report lost)");
+            self.alarm_faults.push(FaultKind::EStop);
+        }
+        self.estop = estop;
         let fallback = s.flags & sample_flag::FALLBACK != 0;
         if self.fallback && !fallback {
             self.event("device back under the host's control");
@@ -534,6 +569,100 @@ fn truth_values(t: &PlantTruth) -> [f64; 16] {
         t.feed_current_rms_a,
         t.spindle_current_rms_a,
     ]
+}
+
+/// What a host keeps sending while it holds the device (docs/protocol.md §4 and §5): the command
+/// in force whenever it changes or has gone unacknowledged for two heartbeat intervals, a
+/// Heartbeat when nothing else went out for one interval (a fifth of the device's watchdog
+/// timeout), and an Arm every interval while the device reports its watchdog fallback.
+///
+/// Times are the device's, read from its samples, so a device that runs faster than real time
+/// (an emulator's `--time-scale`) is kept up in its own time. The native host
+/// ([`super::link::HostLink`]) and the browser's Hardware page both keep up through this.
+#[derive(Debug, Clone, PartialEq)]
+pub struct KeepUp {
+    heartbeat_interval_s: f64,
+    /// The command in force, and the sequence number and time it was last sent with.
+    command: Option<OverrideCommand>,
+    command_seq: u32,
+    command_sent_s: f64,
+    /// The latest command's round trip is still to be measured.
+    latency_pending: bool,
+    /// When the host last sent anything.
+    last_sent_s: f64,
+    last_arm_s: f64,
+}
+
+impl KeepUp {
+    /// Keeping up a device with `capabilities`.
+    pub fn new(capabilities: &Capabilities) -> Self {
+        Self {
+            heartbeat_interval_s: (f64::from(capabilities.watchdog_timeout_ms) / 5000.0).max(0.005),
+            command: None,
+            command_seq: 0,
+            command_sent_s: 0.0,
+            latency_pending: false,
+            last_sent_s: 0.0,
+            last_arm_s: f64::NEG_INFINITY,
+        }
+    }
+
+    /// The heartbeat interval: a fifth of the device's watchdog timeout.
+    pub fn heartbeat_interval_s(&self) -> f64 {
+        self.heartbeat_interval_s
+    }
+
+    /// The device was armed at `now_s`: the next command goes out whatever it is, and a fallback
+    /// is not re-armed before an interval has passed.
+    pub fn armed(&mut self, now_s: f64) {
+        self.command = None;
+        self.last_arm_s = now_s;
+    }
+
+    /// Bytes went out at `now_s`.
+    pub fn sent(&mut self, now_s: f64) {
+        self.last_sent_s = now_s;
+    }
+
+    /// Appends to `out` what is due at `now_s` while `command` is in force (the caller sends it
+    /// and calls [`KeepUp::sent`]).
+    pub fn keep_up(
+        &mut self,
+        session: &mut HostSession,
+        command: OverrideCommand,
+        now_s: f64,
+        out: &mut Vec<u8>,
+    ) {
+        let interval = self.heartbeat_interval_s;
+        if self.latency_pending && session.acknowledged(self.command_seq) {
+            self.latency_pending = false;
+            session.record_latency(now_s - self.command_sent_s);
+        }
+        if session.in_fallback() && now_s - self.last_arm_s >= interval {
+            self.last_arm_s = now_s;
+            session.event("re-arming the device after its watchdog fallback");
+            session.arm(out);
+        }
+        let changed = self.command != Some(command);
+        let unacknowledged = !session.acknowledged(self.command_seq)
+            && now_s - self.command_sent_s >= 2.0 * interval;
+        if changed || unacknowledged {
+            self.command = Some(command);
+            self.command_seq = session.set_override(command, out);
+            self.command_sent_s = now_s;
+            self.latency_pending = true;
+        } else if now_s - self.last_sent_s >= interval {
+            session.heartbeat(out);
+        }
+    }
+
+    /// Appends a Heartbeat to `out` if nothing went out for an interval before `now_s` (a host
+    /// that holds no device keeps the line alive).
+    pub fn heartbeat_if_due(&mut self, session: &mut HostSession, now_s: f64, out: &mut Vec<u8>) {
+        if now_s - self.last_sent_s >= self.heartbeat_interval_s {
+            session.heartbeat(out);
+        }
+    }
 }
 
 /// A short description of a device's capabilities, for the report.
@@ -693,6 +822,51 @@ mod tests {
         assert_eq!(drain(&mut s).len(), 3);
         assert_eq!(s.stats().frames_reordered, 1);
         assert_eq!(s.stats().frames_lost, 0);
+    }
+
+    #[test]
+    fn faults_other_than_the_watchdog_call_for_an_alarm_once_and_an_e_stop_flag_counts_too() {
+        use crate::protocol::frame::Fault;
+        let fault = |seq, kind, active| {
+            Frame::Fault(Fault {
+                seq,
+                time_us: 0,
+                kind,
+                active,
+                channel: 0xFF,
+                applied_override_cpct: 5000,
+            })
+        };
+        let mut s = session_with(&[
+            fault(1, FaultKind::Watchdog, 1),
+            fault(2, FaultKind::OverCurrent, 1),
+            fault(3, FaultKind::OverCurrent, 0),
+            fault(4, FaultKind::EStop, 1),
+            // Its samples show the E-stop the fault reported: nothing new.
+            Frame::Sample(Sample {
+                flags: sample_flag::ESTOP,
+                ..sample(1, 1000, 0)
+            }),
+        ]);
+        assert_eq!(
+            s.take_alarm_faults(),
+            [FaultKind::OverCurrent, FaultKind::EStop]
+        );
+        assert!(s.take_alarm_faults().is_empty());
+        assert_eq!(s.stats().watchdog_fallbacks, 1);
+        // An E-stop whose fault report was lost: the samples' flag raises it.
+        let mut s = session_with(&[
+            Frame::Sample(sample(1, 1000, 0)),
+            Frame::Sample(Sample {
+                flags: sample_flag::ESTOP,
+                ..sample(2, 2000, 0)
+            }),
+            Frame::Sample(Sample {
+                flags: sample_flag::ESTOP,
+                ..sample(3, 3000, 0)
+            }),
+        ]);
+        assert_eq!(s.take_alarm_faults(), [FaultKind::EStop]);
     }
 
     #[test]

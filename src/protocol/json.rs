@@ -5,8 +5,10 @@
 //! the structs in [`super::frame`], in wire units (counts, hundredths of a percent, µs).
 //! Text fields (`device_id`, `program`) are strings; enumerations (`override_mode`, `result`,
 //! `kind`) are names, or numbers for codes this version does not know; `f32` fields are numbers
-//! (NaN and ±∞ are `null`, which encodes as NaN). Encoding takes the same objects; a field left
-//! out is zero.
+//! (NaN and ±∞ are `null`, which encodes as NaN). Encoding takes the same objects, strictly: a
+//! field the frame type does not have is an error listing the fields it has ([`field_names`]),
+//! and so is a field left out, except a `flags` byte, which then has no bit set
+//! ([`DEFAULT_ZERO_FIELD`]).
 //!
 //! ```
 //! use cutlab::protocol::frame::{Frame, Arm};
@@ -132,30 +134,120 @@ pub fn frame_to_json(frame: &Frame) -> Value {
     v
 }
 
-/// Reads the fields of one object, naming the field in errors.
+/// The fields of a frame type's JSON object, in wire order (`"type"` aside).
+///
+/// ```
+/// use cutlab::protocol::frame::FrameType;
+/// use cutlab::protocol::json::field_names;
+/// assert_eq!(field_names(FrameType::SetOverride), ["seq", "override_cpct", "flags"]);
+/// ```
+pub fn field_names(frame_type: FrameType) -> &'static [&'static str] {
+    match frame_type {
+        FrameType::Hello => &["version_major", "version_minor"],
+        FrameType::Capabilities => &[
+            "version_major",
+            "version_minor",
+            "device_id",
+            "program",
+            "channel_mask",
+            "spindle_current_a_per_count",
+            "feed_current_a_per_count",
+            "fv_v_per_count",
+            "sample_rate_hz",
+            "override_mode",
+            "min_override_cpct",
+            "max_override_cpct",
+            "dial_cpct",
+            "watchdog_timeout_ms",
+            "fallback_override_cpct",
+            "over_current_a",
+            "features",
+        ],
+        FrameType::Sample => &[
+            "seq",
+            "time_us",
+            "flags",
+            "spindle_current_counts",
+            "feed_current_counts",
+            "fv_counts",
+            "spindle_speed_rpm",
+            "spindle_command_rpm",
+            "programmed_feed_mm_min",
+            "feed_mm_min",
+            "applied_override_cpct",
+            "dial_code",
+        ],
+        FrameType::SimTruth => &SIM_TRUTH_FIELDS,
+        FrameType::SetOverride => &["seq", "override_cpct", "flags"],
+        FrameType::Arm | FrameType::Disarm => &["seq"],
+        FrameType::Ack => &["seq", "command", "result", "applied_override_cpct", "flags"],
+        FrameType::Fault => &[
+            "seq",
+            "time_us",
+            "kind",
+            "active",
+            "channel",
+            "applied_override_cpct",
+        ],
+        FrameType::Heartbeat => &["seq", "time_us"],
+    }
+}
+
+/// `seq` and the sixteen values of a SimTruth.
+const SIM_TRUTH_FIELDS: [&str; 17] = {
+    let mut names = ["seq"; 17];
+    let mut i = 0;
+    while i < 16 {
+        names[i + 1] = SimTruth::NAMES[i];
+        i += 1;
+    }
+    names
+};
+
+/// The one field that may be left out of an object: a `flags` byte, which then has no bit set
+/// (no feed hold, no state). Every other field is required: a value left out is far more often a
+/// typo than a wish for zero, and a zero override is a feed stop.
+pub const DEFAULT_ZERO_FIELD: &str = "flags";
+
+/// Reads the fields of one object of a known frame type, naming the type and the field in
+/// errors.
 struct Fields<'a> {
     map: &'a Map<String, Value>,
+    type_name: &'static str,
 }
 
 impl Fields<'_> {
-    fn int<T: TryFrom<i64>>(&self, name: &str) -> Result<T, String> {
+    /// The value of field `name`: `None` only for the field that defaults to zero.
+    fn get(&self, name: &str) -> Result<Option<&Value>, String> {
         match self.map.get(name) {
-            None => T::try_from(0).map_err(|_| format!("{name}: out of range")),
+            Some(v) => Ok(Some(v)),
+            None if name == DEFAULT_ZERO_FIELD => Ok(None),
+            None => Err(format!("{}: missing field {name:?}", self.type_name)),
+        }
+    }
+
+    fn bad(&self, name: &str, what: impl std::fmt::Display) -> String {
+        format!("{}: {name}: {what}", self.type_name)
+    }
+
+    fn int<T: TryFrom<i64>>(&self, name: &str) -> Result<T, String> {
+        match self.get(name)? {
+            None => T::try_from(0).map_err(|_| self.bad(name, "out of range")),
             Some(v) => v
                 .as_i64()
                 .and_then(|i| T::try_from(i).ok())
-                .ok_or_else(|| format!("{name}: {v} is not an integer in range")),
+                .ok_or_else(|| self.bad(name, format!("{v} is not an integer in range"))),
         }
     }
 
     fn f32(&self, name: &str) -> Result<f32, String> {
-        match self.map.get(name) {
+        match self.get(name)? {
             None => Ok(0.0),
             Some(Value::Null) => Ok(f32::NAN),
             Some(v) => v
                 .as_f64()
                 .map(|x| x as f32)
-                .ok_or_else(|| format!("{name}: {v} is not a number")),
+                .ok_or_else(|| self.bad(name, format!("{v} is not a number"))),
         }
     }
 
@@ -164,34 +256,36 @@ impl Fields<'_> {
         name: &str,
     ) -> Result<[T; N], String> {
         let mut out = [T::default(); N];
-        let Some(v) = self.map.get(name) else {
+        let Some(v) = self.get(name)? else {
             return Ok(out);
         };
         let items = v
             .as_array()
             .filter(|a| a.len() == N)
-            .ok_or_else(|| format!("{name}: expected an array of {N} integers, got {v}"))?;
+            .ok_or_else(|| self.bad(name, format!("expected an array of {N} integers, got {v}")))?;
         for (slot, item) in out.iter_mut().zip(items) {
             *slot = item
                 .as_i64()
                 .and_then(|i| T::try_from(i).ok())
-                .ok_or_else(|| format!("{name}: {item} is not an integer in range"))?;
+                .ok_or_else(|| self.bad(name, format!("{item} is not an integer in range")))?;
         }
         Ok(out)
     }
 
     fn text<const N: usize>(&self, name: &str) -> Result<[u8; N], String> {
-        match self.map.get(name) {
+        match self.get(name)? {
             None => Ok([0; N]),
             Some(Value::String(s)) if s.len() <= N => Ok(padded(s)),
-            Some(Value::String(s)) => Err(format!("{name}: {s:?} is longer than {N} bytes")),
+            Some(Value::String(s)) => {
+                Err(self.bad(name, format!("{s:?} is longer than {N} bytes")))
+            }
             Some(_) => self.ints(name),
         }
     }
 
     /// A name from `names` (code, name) or a number.
     fn code(&self, name: &str, names: &[(u8, &str)]) -> Result<u8, String> {
-        match self.map.get(name) {
+        match self.get(name)? {
             None => Ok(0),
             Some(Value::String(s)) => names
                 .iter()
@@ -199,7 +293,7 @@ impl Fields<'_> {
                 .map(|(c, _)| *c)
                 .ok_or_else(|| {
                     let known: Vec<&str> = names.iter().map(|(_, n)| *n).collect();
-                    format!("{name}: unknown {s:?}; known: {}", known.join(", "))
+                    self.bad(name, format!("unknown {s:?}; known: {}", known.join(", ")))
                 }),
             Some(_) => self.int(name),
         }
@@ -219,7 +313,22 @@ pub fn frame_from_json(value: &Value) -> Result<Frame, String> {
         let names: Vec<&str> = FrameType::ALL.iter().map(|t| t.name()).collect();
         format!("unknown type {type_name:?}; types: {}", names.join(", "))
     })?;
-    let f = Fields { map };
+    let type_name = frame_type.name();
+    let known = field_names(frame_type);
+    let unknown: Vec<String> = map
+        .keys()
+        .filter(|k| k.as_str() != "type" && !known.contains(&k.as_str()))
+        .map(|k| format!("{k:?}"))
+        .collect();
+    if !unknown.is_empty() {
+        return Err(format!(
+            "{type_name}: unknown field{} {}; a {type_name} frame has {}",
+            if unknown.len() > 1 { "s" } else { "" },
+            unknown.join(", "),
+            known.join(", ")
+        ));
+    }
+    let f = Fields { map, type_name };
     let modes = [(0, "dial16"), (1, "whole-percent"), (2, "continuous")];
     let results = [
         (0, "applied"),
@@ -309,4 +418,87 @@ pub fn frame_from_json(value: &Value) -> Result<Frame, String> {
             time_us: f.int("time_us")?,
         }),
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::protocol::frame::padded;
+
+    fn zero_frame(t: FrameType) -> Frame {
+        let payload = [0u8; 250];
+        let mut p = payload;
+        p[0] = t as u8;
+        match Frame::read_payload(&p) {
+            Ok(f) => f,
+            Err(e) => panic!("{e}"),
+        }
+    }
+
+    #[test]
+    fn the_field_lists_are_the_keys_decode_prints() {
+        for t in FrameType::ALL {
+            let v = frame_to_json(&zero_frame(t));
+            let mut printed: Vec<&str> = v
+                .as_object()
+                .unwrap()
+                .keys()
+                .map(String::as_str)
+                .filter(|k| *k != "type")
+                .collect();
+            let mut listed = field_names(t).to_vec();
+            printed.sort_unstable();
+            listed.sort_unstable();
+            assert_eq!(printed, listed, "{}", t.name());
+        }
+    }
+
+    #[test]
+    fn a_missing_field_is_an_error_naming_the_type_and_the_field() {
+        let e =
+            frame_from_json(&json!({"type": "set-override", "seq": 1, "flags": 0})).unwrap_err();
+        assert_eq!(e, "set-override: missing field \"override_cpct\"");
+        // Once an all-zero frame: now the first field it lacks.
+        let e = frame_from_json(&json!({"type": "capabilities"})).unwrap_err();
+        assert_eq!(e, "capabilities: missing field \"version_major\"");
+        let e = frame_from_json(&json!({"type": "heartbeat", "seq": 3})).unwrap_err();
+        assert_eq!(e, "heartbeat: missing field \"time_us\"");
+    }
+
+    #[test]
+    fn an_unknown_field_is_an_error_listing_the_fields_of_the_type() {
+        let e = frame_from_json(&json!({"type": "set-override", "seq": 1, "override_pct": 80}))
+            .unwrap_err();
+        assert_eq!(
+            e,
+            "set-override: unknown field \"override_pct\"; a set-override frame has seq, \
+             override_cpct, flags"
+        );
+        let e = frame_from_json(&json!({"type": "arm", "seq": 1, "a": 1, "b": 2})).unwrap_err();
+        assert!(e.starts_with("arm: unknown fields \"a\", \"b\";"), "{e}");
+    }
+
+    #[test]
+    fn only_a_flags_byte_may_be_left_out_and_it_is_then_zero() {
+        let f = frame_from_json(&json!({"type": "set-override", "seq": 1, "override_cpct": 8000}));
+        assert_eq!(
+            f,
+            Ok(Frame::SetOverride(SetOverride {
+                seq: 1,
+                override_cpct: 8000,
+                flags: 0
+            }))
+        );
+        let mut caps = frame_to_json(&zero_frame(FrameType::Capabilities));
+        caps["device_id"] = json!("bridge");
+        let Ok(Frame::Capabilities(c)) = frame_from_json(&caps) else {
+            panic!("{caps}")
+        };
+        assert_eq!(c.device_id, padded::<DEVICE_ID_LEN>("bridge"));
+        caps.as_object_mut().unwrap().remove("features");
+        assert_eq!(
+            frame_from_json(&caps).unwrap_err(),
+            "capabilities: missing field \"features\""
+        );
+    }
 }

@@ -1,38 +1,95 @@
 //! Byte links in real time (native only): the device emulator driven by the wall clock, the
-//! host's end of a link with its watchdog, each part the device runs as a [`Machine`], and the
-//! closed loop over a link ([`run_on_link`]). Both ends read on a thread of their own so that a
-//! blocking `Read` (a pipe, a child's stdout, a serial port opened as a file) can be waited on
-//! with a timeout; both are generic over `Read`/`Write`, so tests connect them in-process with
-//! pipes.
+//! host's end of a link with its watchdog and its answers to the device's faults, each part the
+//! device runs as a [`Machine`], and the closed loop over a link ([`run_on_link`]).
+//!
+//! Both ends read on a thread of their own ([`spawn_reader`]) so that a blocking `Read` (a pipe,
+//! a child's stdout, a serial port opened as a file) can be waited on with a timeout; the queue
+//! between that thread and its end is bounded, so a sender faster than the receiver is held back
+//! rather than filling memory. Both are generic over `Read`/`Write`, so tests connect them
+//! in-process with pipes. The host speaks over a [`Line`]: that threaded reader and a writer, or a
+//! [`LockstepLine`] to an emulator in the same process with no latency and no clock, which makes
+//! a run over the protocol deterministic (docs/protocol.md §8, "What the protocol costs").
 
 use std::cell::RefCell;
 use std::io::{Read, Write};
 use std::rc::Rc;
+use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::mpsc::{self, Receiver, RecvTimeoutError, TryRecvError};
+use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 use super::device::DeviceEmulator;
-use super::frame::{Capabilities, VERSION_MAJOR};
-use super::host::{DeviceSummary, HostSession, LinkEvent, LinkSample, LinkStats};
-use crate::closed_loop::lab::{metrics_config, LabRun, RunMachines, RunResult, RunSpec};
+use super::frame::{Capabilities, FaultKind, VERSION_MAJOR, VERSION_MINOR};
+use super::host::{DeviceSummary, HostSession, KeepUp, LinkEvent, LinkSample, LinkStats};
+use crate::closed_loop::lab::{
+    cut_model_teach_force, metrics_config, LabRun, RunMachines, RunResult, RunSpec,
+};
 use crate::closed_loop::metrics::compute;
-use crate::closed_loop::runner::{LoopError, TeachForce};
+use crate::closed_loop::runner::{Calibration, LoopError, TeachForce};
 use crate::machine::{Machine, MachineStep, OverrideCommand};
 use crate::work::Work;
 
 /// Bytes read at most per chunk.
-const READ_CHUNK: usize = 4096;
+pub const READ_CHUNK: usize = 4096;
 
-/// Reads `input` on a thread of its own and hands the chunks over a channel, which disconnects
-/// at end of file or on a read error.
-pub fn spawn_reader<R: Read + Send + 'static>(mut input: R) -> Receiver<Vec<u8>> {
-    let (tx, rx) = mpsc::channel();
+/// Chunks the device's reader queues before it waits (64 KiB): a host sends a few frames per
+/// control period, so a full queue is a flood, and the reader stops reading until the device has
+/// caught up — the pipe, then the writer, wait with it, and memory stays bounded.
+pub const DEVICE_QUEUE_CHUNKS: usize = 16;
+
+/// Chunks the host's reader queues before it waits (1 MiB: 0.4 s of a 1 kHz emulator at 20×
+/// real time with its SimTruth frames), enough to ride out a busy moment of the host without
+/// holding the device up, and bounded all the same.
+pub const HOST_QUEUE_CHUNKS: usize = 256;
+
+/// The receiving end of [`spawn_reader`]: chunks in the order they were read, and how many bytes
+/// are queued (read but not yet taken).
+pub struct ChunkReceiver {
+    rx: Receiver<Vec<u8>>,
+    queued_bytes: Arc<AtomicUsize>,
+}
+
+impl ChunkReceiver {
+    fn taken(&self, chunk: Vec<u8>) -> Vec<u8> {
+        self.queued_bytes.fetch_sub(chunk.len(), Ordering::Relaxed);
+        chunk
+    }
+
+    /// The next chunk if one is queued.
+    pub fn try_recv(&self) -> Result<Vec<u8>, TryRecvError> {
+        self.rx.try_recv().map(|c| self.taken(c))
+    }
+
+    /// The next chunk, waiting up to `timeout` for it.
+    pub fn recv_timeout(&self, timeout: Duration) -> Result<Vec<u8>, RecvTimeoutError> {
+        self.rx.recv_timeout(timeout).map(|c| self.taken(c))
+    }
+
+    /// Bytes read and not yet taken: the queue, and the chunk the reader holds while it waits
+    /// for room. At most `(capacity + 1) × READ_CHUNK`.
+    pub fn queued_bytes(&self) -> usize {
+        self.queued_bytes.load(Ordering::Relaxed)
+    }
+}
+
+/// Reads `input` on a thread of its own and hands the chunks over a channel of
+/// `capacity_chunks` chunks, which disconnects at end of file or on a read error. When the
+/// channel is full the reader waits for room before it reads again, so a writer faster than the
+/// consumer is held back instead of filling memory.
+pub fn spawn_reader<R: Read + Send + 'static>(
+    mut input: R,
+    capacity_chunks: usize,
+) -> ChunkReceiver {
+    let (tx, rx) = mpsc::sync_channel(capacity_chunks);
+    let queued_bytes = Arc::new(AtomicUsize::new(0));
+    let counter = Arc::clone(&queued_bytes);
     std::thread::spawn(move || {
         let mut buf = vec![0u8; READ_CHUNK];
         loop {
             match input.read(&mut buf) {
                 Ok(0) => break,
                 Ok(n) => {
+                    counter.fetch_add(n, Ordering::Relaxed);
                     if tx.send(buf.get(..n).unwrap_or_default().to_vec()).is_err() {
                         break;
                     }
@@ -42,12 +99,18 @@ pub fn spawn_reader<R: Read + Send + 'static>(mut input: R) -> Receiver<Vec<u8>>
             }
         }
     });
-    rx
+    ChunkReceiver { rx, queued_bytes }
 }
 
 /// Frames the device runs at most before it looks at its input again: when it has fallen behind
 /// the clock and catches up, a command still waits no more than 5 ms of device time.
 const MAX_FRAMES_PER_BURST: usize = 5;
+
+/// Chunks of input the device takes at most before it runs the frames that are due (and one
+/// more while it waits for the next frame): a flood on its input costs it a bounded time per
+/// frame, so its clock, its samples and its heartbeats keep their rate. A host's frames for one
+/// pass fit in one chunk many times over.
+const MAX_CHUNKS_PER_PASS: usize = 2;
 
 /// Why the device stopped.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -58,24 +121,38 @@ pub enum DeviceExit {
     OutputClosed,
 }
 
+/// How a device run ended, and what its input queue held at most.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct DeviceRun {
+    /// Why it stopped.
+    pub exit: DeviceExit,
+    /// The most bytes ever read from the input and not yet handed to the device (bounded by
+    /// [`DEVICE_QUEUE_CHUNKS`] + 1 chunks, however fast the input comes).
+    pub peak_queued_bytes: usize,
+}
+
 /// Runs `device` in real time scaled by `time_scale` (device seconds per wall second) until
-/// `input` ends: what arrives on `input` is handed to the device as it comes, what the device
-/// sends is written to `output` and flushed after every burst, its diagnostics go to
-/// `diagnostics` a line at a time. Device timestamps stay in device time.
+/// `input` ends: what arrives on `input` is handed to the device as it comes — at most
+/// two chunks between two runs of the frames that are due, so no flood
+/// starves its clock — what the device sends is written to `output` and flushed after every
+/// burst, its diagnostics go to `diagnostics` a line at a time. Device timestamps stay in device
+/// time.
 pub fn run_device<R: Read + Send + 'static>(
     device: &mut DeviceEmulator,
     input: R,
     output: &mut dyn Write,
     diagnostics: &mut dyn Write,
     time_scale: f64,
-) -> DeviceExit {
-    let rx = spawn_reader(input);
+) -> DeviceRun {
+    let rx = spawn_reader(input, DEVICE_QUEUE_CHUNKS);
     let start = Instant::now();
     let mut out = Vec::with_capacity(64 * 1024);
+    let mut peak_queued_bytes = 0;
     let exit = loop {
-        // Everything that has arrived.
+        peak_queued_bytes = peak_queued_bytes.max(rx.queued_bytes());
+        // What has arrived, up to the pass's share.
         let mut closed = false;
-        loop {
+        for _ in 0..MAX_CHUNKS_PER_PASS {
             match rx.try_recv() {
                 Ok(bytes) => device.receive(&bytes, &mut out),
                 Err(TryRecvError::Empty) => break,
@@ -124,7 +201,7 @@ pub fn run_device<R: Read + Send + 'static>(
         diagnostics,
         "device: {} parts, {} frames sent ({} dropped, {} corrupted by injection), {} received, \
          {} bytes dropped by the decoder, {} discarded by a stall or unplug, {} watchdog \
-         fallbacks",
+         fallbacks; at most {} bytes of input queued",
         s.parts,
         s.frames_sent,
         s.frames_dropped,
@@ -132,9 +209,13 @@ pub fn run_device<R: Read + Send + 'static>(
         s.frames_received,
         d.bytes_dropped,
         s.bytes_discarded,
-        s.watchdog_fallbacks
+        s.watchdog_fallbacks,
+        peak_queued_bytes
     );
-    exit
+    DeviceRun {
+        exit,
+        peak_queued_bytes,
+    }
 }
 
 /// Settings of the host's end of a link.
@@ -168,29 +249,108 @@ impl std::fmt::Display for HostError {
 
 impl std::error::Error for HostError {}
 
+/// The host's side of a line to a device: bytes out, chunks of bytes in.
+pub trait Line {
+    /// Writes `bytes` and flushes them.
+    fn send(&mut self, bytes: &[u8]) -> std::io::Result<()>;
+    /// The next bytes that arrived, waiting up to `timeout` for them.
+    fn receive(&mut self, timeout: Duration) -> Result<Vec<u8>, RecvTimeoutError>;
+}
+
+/// A line over a reader, read on a thread of its own ([`spawn_reader`]), and a writer: a pipe to
+/// a child process, a serial port opened as a file.
+struct ThreadedLine {
+    rx: ChunkReceiver,
+    writer: Box<dyn Write + Send>,
+}
+
+impl Line for ThreadedLine {
+    fn send(&mut self, bytes: &[u8]) -> std::io::Result<()> {
+        self.writer.write_all(bytes)?;
+        self.writer.flush()
+    }
+
+    fn receive(&mut self, timeout: Duration) -> Result<Vec<u8>, RecvTimeoutError> {
+        self.rx.recv_timeout(timeout)
+    }
+}
+
+/// The device emulator at the end of a line with no latency and no clock of its own: what the
+/// host sends reaches the device at once, and waiting for bytes runs the device's frames until
+/// it sends some. A run over it is deterministic — the same bytes, quantisation and host as
+/// over a real line, without the line's delays — so it tells what the protocol's 1 kHz samples
+/// and counts cost apart from what its latency costs (docs/protocol.md §8). Timeouts count in
+/// device seconds.
+pub struct LockstepLine {
+    device: Rc<RefCell<DeviceEmulator>>,
+    pending: Vec<u8>,
+}
+
+impl LockstepLine {
+    /// A line to `device` (shared, so the caller can read its counts afterwards).
+    pub fn new(device: Rc<RefCell<DeviceEmulator>>) -> Self {
+        Self {
+            device,
+            pending: Vec::new(),
+        }
+    }
+}
+
+impl Line for LockstepLine {
+    fn send(&mut self, bytes: &[u8]) -> std::io::Result<()> {
+        self.device.borrow_mut().receive(bytes, &mut self.pending);
+        Ok(())
+    }
+
+    fn receive(&mut self, timeout: Duration) -> Result<Vec<u8>, RecvTimeoutError> {
+        let mut device = self.device.borrow_mut();
+        let until_s = device.time_s() + timeout.as_secs_f64();
+        while self.pending.is_empty() {
+            if device.time_s() >= until_s {
+                return Err(RecvTimeoutError::Timeout);
+            }
+            device.step_frame(&mut self.pending);
+        }
+        Ok(std::mem::take(&mut self.pending))
+    }
+}
+
 /// The host's end of a byte link to a device, after the handshake.
 pub struct HostLink {
     session: HostSession,
-    rx: Receiver<Vec<u8>>,
-    writer: Box<dyn Write + Send>,
+    line: Box<dyn Line>,
     options: HostOptions,
     capabilities: Capabilities,
     /// The link is dead (host watchdog, end of file, write error): every part ends at once.
     lost: bool,
+    /// The part under way when it died.
+    lost_in_part: Option<u32>,
     /// A part's samples are streaming.
     part_running: bool,
-    /// The command in force, and the sequence number and device time it was last sent with.
-    command: Option<OverrideCommand>,
-    command_seq: u32,
-    command_sent_s: f64,
-    /// The latest command's round trip is still to be measured.
-    latency_pending: bool,
-    /// Device time the host last sent anything.
-    last_sent_s: f64,
-    last_arm_s: f64,
+    /// The command, heartbeats and re-arming, in device time.
+    keep_up: KeepUp,
     /// Device time of the latest sample.
     device_time_s: f64,
     out: Vec<u8>,
+    /// The device fault that made the host stop the loop (docs/protocol.md §5), and the part
+    /// it came in.
+    alarm: Option<HostAlarm>,
+    /// The loop's latest command.
+    last_command: OverrideCommand,
+    /// Where events go as they happen (the command line: stderr), and how many went.
+    event_log: Option<Box<dyn Write + Send>>,
+    events_logged: usize,
+}
+
+/// A device fault the host answered with an alarm: the loop stopped there.
+#[derive(Debug, Clone, PartialEq)]
+pub struct HostAlarm {
+    /// The fault.
+    pub kind: FaultKind,
+    /// The part it came in (1 = the first armed).
+    pub part: u32,
+    /// What the host did, in words.
+    pub text: String,
 }
 
 impl HostLink {
@@ -201,9 +361,17 @@ impl HostLink {
         writer: Box<dyn Write + Send>,
         options: HostOptions,
     ) -> Result<Self, HostError> {
-        let rx = spawn_reader(reader);
+        let line = ThreadedLine {
+            rx: spawn_reader(reader, HOST_QUEUE_CHUNKS),
+            writer,
+        };
+        Self::connect_line(Box::new(line), options)
+    }
+
+    /// Says Hello over `line` and waits for the device's Capabilities, as
+    /// [`HostLink::connect`] does.
+    pub fn connect_line(mut line: Box<dyn Line>, options: HostOptions) -> Result<Self, HostError> {
         let mut session = HostSession::new();
-        let mut writer = writer;
         let start = Instant::now();
         let mut out = Vec::new();
         let capabilities = loop {
@@ -220,9 +388,7 @@ impl HostLink {
             }
             out.clear();
             session.hello(&mut out);
-            writer
-                .write_all(&out)
-                .and_then(|()| writer.flush())
+            line.send(&out)
                 .map_err(|e| HostError(format!("cannot write to the device: {e}")))?;
             let until = Instant::now() + Duration::from_millis(250);
             while session.capabilities().is_none() {
@@ -230,7 +396,7 @@ impl HostLink {
                 if left.is_zero() {
                     break;
                 }
-                match rx.recv_timeout(left) {
+                match line.receive(left) {
                     Ok(bytes) => session.receive(&bytes),
                     Err(RecvTimeoutError::Timeout) => break,
                     Err(RecvTimeoutError::Disconnected) => {
@@ -243,7 +409,9 @@ impl HostLink {
         };
         if capabilities.version_major != VERSION_MAJOR {
             return Err(HostError(format!(
-                "the device speaks protocol {}.{}; this host speaks {VERSION_MAJOR}.x",
+                "the device speaks protocol {}.{}; this host speaks \
+                 {VERSION_MAJOR}.{VERSION_MINOR} and refuses another major version \
+                 (docs/protocol.md §6)",
                 capabilities.version_major, capabilities.version_minor
             )));
         }
@@ -255,21 +423,77 @@ impl HostLink {
         }
         Ok(Self {
             session,
-            rx,
-            writer,
+            line,
             options,
             capabilities,
             lost: false,
+            lost_in_part: None,
             part_running: false,
-            command: None,
-            command_seq: 0,
-            command_sent_s: 0.0,
-            latency_pending: false,
-            last_sent_s: 0.0,
-            last_arm_s: f64::NEG_INFINITY,
+            keep_up: KeepUp::new(&capabilities),
             device_time_s: 0.0,
             out: Vec::with_capacity(1024),
+            alarm: None,
+            last_command: OverrideCommand::default(),
+            event_log: None,
+            events_logged: 0,
         })
+    }
+
+    /// Writes every event to `log` as it happens (a run on a real machine takes minutes; the
+    /// operator wants to see an alarm when it comes, not at the end).
+    pub fn log_events_to(&mut self, log: Box<dyn Write + Send>) {
+        self.event_log = Some(log);
+        self.write_events();
+    }
+
+    fn write_events(&mut self) {
+        let Some(log) = self.event_log.as_mut() else {
+            return;
+        };
+        for e in self.session.events().iter().skip(self.events_logged) {
+            let _ = writeln!(log, "host: part {}, {:.3} s: {}", e.part, e.time_s, e.text);
+        }
+        let _ = log.flush();
+        self.events_logged = self.session.events().len();
+    }
+
+    /// The alarm a device fault raised, if one did.
+    pub fn alarm(&self) -> Option<&HostAlarm> {
+        self.alarm.as_ref()
+    }
+
+    /// The override the host holds when it stops a loop before the program's end: the device's
+    /// own fallback override, which its builder chose as safe to cut at.
+    pub fn safe_override_pct(&self) -> f64 {
+        f64::from(self.capabilities.fallback_override_cpct) / 100.0
+    }
+
+    /// Answers the faults the device raised (docs/protocol.md §5): the first one while the host
+    /// holds the device stops the loop (the part ends for it) and is kept as the alarm.
+    fn watch_faults(&mut self) {
+        for kind in self.session.take_alarm_faults() {
+            if self.alarm.is_some() {
+                continue;
+            }
+            let text = match kind {
+                FaultKind::EStop => "alarm: the device's E-stop input is active: the loop stops; \
+                     the host disarms the device (commands are refused under E-stop, and after \
+                     the reset the machine's own dial applies)"
+                    .to_string(),
+                k => format!(
+                    "alarm: device fault {} raised: the loop stops; the host holds the safe \
+                     override ({} %) until the part ends, then disarms",
+                    k.name(),
+                    self.safe_override_pct()
+                ),
+            };
+            self.session.event(text.clone());
+            self.alarm = Some(HostAlarm {
+                kind,
+                part: self.session.part(),
+                text,
+            });
+        }
     }
 
     /// What the device said it is.
@@ -293,12 +517,9 @@ impl HostLink {
             self.out.clear();
             return;
         }
-        let result = self
-            .writer
-            .write_all(&self.out)
-            .and_then(|()| self.writer.flush());
+        let result = self.line.send(&self.out);
         self.out.clear();
-        self.last_sent_s = self.device_time_s;
+        self.keep_up.sent(self.device_time_s);
         if let Err(e) = result {
             self.lose(format!("cannot write to the device ({e}): link lost"));
         }
@@ -307,14 +528,21 @@ impl HostLink {
     fn lose(&mut self, text: String) {
         if !self.lost {
             self.lost = true;
+            self.lost_in_part = Some(self.session.part());
             self.part_running = false;
             self.session.link_lost(text);
+            self.write_events();
         }
     }
 
-    /// The heartbeat interval: a fifth of the device's watchdog timeout.
-    fn heartbeat_interval_s(&self) -> f64 {
-        (f64::from(self.capabilities.watchdog_timeout_ms) / 5000.0).max(0.005)
+    /// The event that recorded the link's loss.
+    fn lost_reason(&self) -> String {
+        self.session
+            .events()
+            .iter()
+            .rev()
+            .find(|e| e.text.contains("link lost"))
+            .map_or_else(|| "link lost".to_string(), |e| e.text.clone())
     }
 
     /// The next sample of the running part, waiting for it up to the host's watchdog.
@@ -326,19 +554,18 @@ impl HostLink {
             }
             if let Some(s) = self.session.next_sample() {
                 self.device_time_s = s.device_time_s;
+                self.watch_faults();
+                self.write_events();
                 return Some(s);
             }
             let left = deadline.saturating_duration_since(Instant::now());
-            match self.rx.recv_timeout(left) {
+            match self.line.receive(left) {
                 Ok(bytes) => self.session.receive(&bytes),
                 Err(RecvTimeoutError::Timeout) => {
                     // Best effort: the line may be dead, but a device that only lost its
                     // sending side hears the Disarm.
                     self.session.disarm(&mut self.out);
-                    let _ = self
-                        .writer
-                        .write_all(&self.out)
-                        .and_then(|()| self.writer.flush());
+                    let _ = self.line.send(&self.out);
                     self.out.clear();
                     self.lose(format!(
                         "host watchdog: no sample for {} s: link lost; alarm, disarm, the part \
@@ -352,12 +579,17 @@ impl HostLink {
                     return None;
                 }
             }
+            self.write_events();
         }
     }
 
     /// Arms the device for a new part. A part still running (a loop that stopped before its
     /// program's end) is handed back to the machine's own dial and left to end first.
     fn begin_part(&mut self) -> bool {
+        if self.alarm.is_some() {
+            // After an alarm the host arms nothing more.
+            return false;
+        }
         if self.part_running {
             self.session
                 .event("the previous part is still running: disarm, wait for its end");
@@ -373,48 +605,79 @@ impl HostLink {
         }
         self.session.start_part();
         self.session.event("arm (cycle start)");
-        self.command = None;
-        self.last_arm_s = self.device_time_s;
+        self.keep_up.armed(self.device_time_s);
         self.session.arm(&mut self.out);
         self.flush_out();
+        self.write_events();
         self.part_running = !self.lost;
         self.part_running
     }
 
     /// Sends `command` if it changed or went unacknowledged, a heartbeat when due, and an Arm
-    /// while the device is in its watchdog fallback.
+    /// while the device is in its watchdog fallback ([`KeepUp`]).
     fn keep_up(&mut self, command: OverrideCommand) {
-        let now = self.device_time_s;
-        let interval = self.heartbeat_interval_s();
-        if self.latency_pending && self.session.acknowledged(self.command_seq) {
-            self.latency_pending = false;
-            self.session.record_latency(now - self.command_sent_s);
-        }
-        if self.session.in_fallback() && now - self.last_arm_s >= interval {
-            self.last_arm_s = now;
-            self.session
-                .event("re-arming the device after its watchdog fallback");
-            self.session.arm(&mut self.out);
-        }
-        let changed = self.command != Some(command);
-        let unacknowledged = !self.session.acknowledged(self.command_seq)
-            && now - self.command_sent_s >= 2.0 * interval;
-        if changed || unacknowledged {
-            self.command = Some(command);
-            self.command_seq = self.session.set_override(command, &mut self.out);
-            self.command_sent_s = now;
-            self.latency_pending = true;
-        } else if now - self.last_sent_s >= interval {
-            self.session.heartbeat(&mut self.out);
-        }
+        self.last_command = command;
+        self.keep_up.keep_up(
+            &mut self.session,
+            command,
+            self.device_time_s,
+            &mut self.out,
+        );
         self.flush_out();
     }
 
-    /// Ends the session: disarms the device.
+    /// Ends the session and disarms the device. A part the loop left before its program's end
+    /// after a device fault's alarm, or with the envelope's feed hold in force, is first held
+    /// at the safe override — the feed hold kept — until it ends (docs/protocol.md §5); after
+    /// an E-stop, or when the loop reached its time limit, the device is handed back at once.
     pub fn finish(&mut self) {
+        if !self.lost && self.part_running {
+            let estop = self
+                .alarm
+                .as_ref()
+                .is_some_and(|a| a.kind == FaultKind::EStop);
+            let feed_hold = self.last_command.feed_hold;
+            if !estop && (self.alarm.is_some() || feed_hold) {
+                self.hold_until_part_ends(feed_hold);
+            }
+        }
         if !self.lost {
             self.session.disarm(&mut self.out);
             self.flush_out();
+        }
+        self.write_events();
+    }
+
+    /// Commands the safe override (with `feed_hold`) and keeps it up until the running part
+    /// ends or the link is lost.
+    fn hold_until_part_ends(&mut self, feed_hold: bool) {
+        let hold = OverrideCommand {
+            override_pct: self.safe_override_pct(),
+            feed_hold,
+        };
+        self.session.event(if feed_hold {
+            format!(
+                "holding the feed hold and the safe override ({} %) until the part ends: the \
+                 operator ends the cycle at the machine (interrupting the host leaves the device \
+                 to its watchdog's fallback)",
+                hold.override_pct
+            )
+        } else {
+            format!(
+                "holding the safe override ({} %) until the part ends",
+                hold.override_pct
+            )
+        });
+        while self.part_running {
+            self.keep_up(hold);
+            match self.next_sample() {
+                Some(s) if s.program_end => {
+                    self.part_running = false;
+                    self.session.event("program end");
+                }
+                Some(_) => {}
+                None => break,
+            }
         }
     }
 }
@@ -427,6 +690,10 @@ pub struct LinkPart {
     started: bool,
     done: bool,
     last: MachineStep,
+    /// The part ends for the loop at this machine time (a duration limit).
+    stop_at_s: Option<f64>,
+    /// It did end there.
+    stopped_at_limit: Rc<RefCell<bool>>,
 }
 
 impl LinkPart {
@@ -439,6 +706,8 @@ impl LinkPart {
             started: false,
             done: false,
             last: MachineStep::default(),
+            stop_at_s: None,
+            stopped_at_limit: Rc::new(RefCell::new(false)),
         }
     }
 }
@@ -468,6 +737,12 @@ impl Machine for LinkPart {
                     self.done = true;
                     link.part_running = false;
                     link.session.event("program end");
+                } else if link.alarm.is_some() {
+                    // A device fault: the loop ends with this sample; the link holds the part.
+                    self.done = true;
+                } else if self.stop_at_s.is_some_and(|t| s.step.sensors.time_s >= t) {
+                    self.done = true;
+                    *self.stopped_at_limit.borrow_mut() = true;
                 }
                 s.step
             }
@@ -493,38 +768,59 @@ pub struct LinkRun {
     pub events: Vec<LinkEvent>,
     /// Whether the host's watchdog (or an I/O error) ended it.
     pub link_lost: bool,
+    /// The device fault that stopped the loop, if one did.
+    pub alarm: Option<HostAlarm>,
     /// The device.
     pub device: DeviceSummary,
 }
 
 /// Runs `spec`'s teach cut and closed loop on the device at the other end of `link`, through the
-/// same [`LabRun`] `cutlab sim` uses: the first part is the teach cut, the second the run.
-/// `duration_s` stops the closed loop early.
-pub fn run_on_link(mut link: HostLink, spec: &RunSpec, duration_s: Option<f64>) -> LinkRun {
+/// same [`LabRun`] `cutlab sim` uses: the first part is the teach cut, the second the run. With
+/// `calibration` (a saved calibration file) there is no teach cut: the first part is the run.
+/// The teach cut takes its force from the simulation's truth when the device sends it, otherwise
+/// from the model of the preset's cut ([`cut_model_teach_force`]); a program whose cut changes
+/// along the path needs a calibration. `duration_s` stops the closed loop early.
+///
+/// A link lost or a device fault's alarm (docs/protocol.md §5) during the teach cut is an error
+/// (no calibration, no run); during the run, the result holds the run up to there, its trace
+/// marked incomplete, and [`LinkRun::link_lost`] or [`LinkRun::alarm`] says why.
+pub fn run_on_link(
+    link: HostLink,
+    spec: &RunSpec,
+    duration_s: Option<f64>,
+    calibration: Option<Calibration>,
+) -> LinkRun {
     let device = DeviceSummary::of(link.capabilities());
+    // The part the closed loop runs on: the second, after the teach cut's.
+    let run_part = if calibration.is_some() { 1 } else { 2 };
     let teach_force = if device.sim_truth {
-        TeachForce::SimulationTruth
+        Some(TeachForce::SimulationTruth)
     } else {
-        link.finish();
-        let session = link.session();
-        return LinkRun {
-            result: Err(HostError(
-                "the device sends no simulation truth, and a teach cut on a real machine (a \
-                 dynamometer or the cut model over the link) is not implemented yet"
-                    .to_string(),
-            )),
-            stats: session.stats(),
-            events: session.events().to_vec(),
-            link_lost: link.lost(),
-            device,
-        };
+        cut_model_teach_force(spec.preset)
     };
     let link = Rc::new(RefCell::new(link));
-    let machines = RunMachines::Separate {
-        teach: Box::new(LinkPart::new(Rc::clone(&link))),
-        run: Box::new(LinkPart::new(Rc::clone(&link))),
+    let part = || Box::new(LinkPart::new(Rc::clone(&link)));
+    // A loop that starts at once from a calibration is built before `limit_duration_s` can
+    // reach it, so its part ends at the limit instead.
+    let stopped_at_limit = Rc::new(RefCell::new(false));
+    let run = match (calibration, teach_force) {
+        (Some(calibration), _) => {
+            let mut run_part = part();
+            run_part.stop_at_s = duration_s;
+            run_part.stopped_at_limit = Rc::clone(&stopped_at_limit);
+            LabRun::calibrated_on(spec, run_part, calibration)
+        }
+        (None, Some(teach_force)) => LabRun::on_machines(
+            spec,
+            RunMachines::Separate {
+                teach: part(),
+                run: part(),
+            },
+            teach_force,
+        ),
+        (None, None) => Err(LoopError::NoTeachForce),
     };
-    let result = LabRun::on_machines(spec, machines, teach_force).and_then(|mut run| {
+    let result = run.and_then(|mut run| {
         if let Some(d) = duration_s {
             run.limit_duration_s(d);
         }
@@ -534,20 +830,43 @@ pub fn run_on_link(mut link: HostLink, spec: &RunSpec, duration_s: Option<f64>) 
     let mut link = link.borrow_mut();
     link.finish();
     let lost = link.lost();
-    let result = result.map(|mut r| {
-        if lost {
-            // The loop saw the part end; it ended because the link did.
+    let alarm = link.alarm().cloned();
+    // What ended the session before the run's program could end, and in which part.
+    let stopped = match (&alarm, link.lost_in_part) {
+        (Some(a), _) => Some((a.part, a.text.clone())),
+        (None, Some(part)) => Some((part, link.lost_reason())),
+        (None, None) => None,
+    };
+    let result = match (result, stopped) {
+        (result, Some((part, why))) if part < run_part => {
+            let then = match result {
+                Err(HostError(e)) => format!(" ({e})"),
+                Ok(_) => String::new(),
+            };
+            Err(HostError(format!(
+                "the teach cut (part {part}) was abandoned, so there is no run: {why}{then}"
+            )))
+        }
+        (Ok(mut r), Some(_)) => {
+            // The loop saw the part end; it ended because the link or the alarm did.
             r.trace.completed = false;
             r.metrics = compute(&r.trace, &metrics_config(r.spec.preset, &r.settings));
+            Ok(r)
         }
-        r
-    });
+        (Ok(mut r), None) if *stopped_at_limit.borrow() => {
+            r.trace.completed = false;
+            r.metrics = compute(&r.trace, &metrics_config(r.spec.preset, &r.settings));
+            Ok(r)
+        }
+        (result, _) => result,
+    };
     let session = link.session();
     LinkRun {
         result,
         stats: session.stats(),
         events: session.events().to_vec(),
         link_lost: lost,
+        alarm,
         device,
     }
 }

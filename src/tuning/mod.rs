@@ -1,5 +1,5 @@
 //! Tuning: a controller's parameters chosen by sweeping a grid or by minimising an objective over
-//! several scenarios.
+//! several scenarios, and the settings a teach-in proposes.
 //!
 //! ```text
 //! TuningProblem (controller, 1–n parameter ranges, scenarios, objective)
@@ -7,15 +7,19 @@
 //!   └─ tune(search)   Nelder–Mead in the parameters' box          → Tuned { best, evaluations, pareto }
 //! Evaluation = the parameters, each scenario's metrics, their objective, the mean cycle time and
 //!              force error (the two axes of the Pareto front)
+//! teach_in          a teach cut (simulated, logged or saved) → a target, reference current, gap
 //! ```
 //!
 //! Every evaluation runs the same closed loop as Simulate ([`crate::closed_loop::lab`]); each
 //! scenario's teach cut runs once and its calibration is reused for every parameter set, since it
-//! does not depend on the controller. Natively the scenarios of one evaluation, and the points of
-//! a sweep, run on all cores; the results do not depend on how many.
+//! does not depend on the controller. Each scenario runs its own controller settings (its preset's
+//! paper values and the caller's) with the tuned parameters set. Natively every (point, scenario)
+//! run of a sweep, and the scenarios of each search evaluation, share the machine's cores through
+//! one queue; the results are in the same order, bit for bit, however many threads ran them.
 
 pub mod nelder_mead;
 pub mod objective;
+pub mod teach_in;
 
 use serde::Serialize;
 
@@ -23,9 +27,10 @@ use crate::closed_loop::lab::{LabRun, RunSpec};
 use crate::closed_loop::metrics::Metrics;
 use crate::closed_loop::runner::{Calibration, LoopError};
 use crate::control::registry::{ControllerConfig, ParamError};
-use crate::work::Work;
+use crate::work::{parallel_map_reporting as parallel_map, Work};
 use nelder_mead::NelderMead;
 pub use objective::Objective;
+pub use teach_in::{teach_in, TeachIn, TeachInWork};
 
 /// One parameter to tune and its bounds.
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -86,6 +91,19 @@ pub enum TuningError {
         /// Why.
         error: LoopError,
     },
+    /// A teach-in could not propose anything; the message names the source.
+    TeachIn(String),
+}
+
+impl TuningError {
+    /// The error with `source` (a log, a calibration file) named in front of a teach-in's
+    /// message.
+    pub fn within(self, source: &str) -> Self {
+        match self {
+            TuningError::TeachIn(message) => TuningError::TeachIn(format!("{source}: {message}")),
+            other => other,
+        }
+    }
 }
 
 impl std::fmt::Display for TuningError {
@@ -94,6 +112,7 @@ impl std::fmt::Display for TuningError {
             TuningError::Param(e) => write!(f, "{e}"),
             TuningError::Setup(message) => f.write_str(message),
             TuningError::Run { preset, error } => write!(f, "{preset}: {error}"),
+            TuningError::TeachIn(message) => f.write_str(message),
         }
     }
 }
@@ -106,11 +125,13 @@ pub const MAX_SWEEP_POINTS: usize = 400;
 /// What to tune, where, and by what measure.
 #[derive(Debug, Clone)]
 pub struct TuningProblem {
-    /// The controller with every parameter not tuned at its chosen value.
+    /// The controller tuned: its kind, and the values the search starts from.
     pub controller: ControllerConfig,
     /// The parameters tuned, each within its range.
     pub params: Vec<ParamRange>,
-    /// The scenarios, each a run definition (its own controller is replaced).
+    /// The scenarios, each a run definition. Its controller (the same kind as `controller`)
+    /// runs with the tuned parameters set and every other parameter as it is there, so each
+    /// preset keeps its own paper values (paper 002's output range on its own preset only).
     pub scenarios: Vec<RunSpec>,
     /// What "better" means.
     pub objective: Objective,
@@ -127,6 +148,10 @@ pub struct Evaluation {
     pub cycle_time_s: f64,
     /// Mean |force error| over the scenarios, percent of target.
     pub force_error_pct: f64,
+    /// Mean time above the force limit over the scenarios.
+    pub time_above_limit_s: f64,
+    /// Mean override activity (total variation Σ|Δu|) over the scenarios, percent.
+    pub override_activity_pct: f64,
     /// Each scenario's metrics, in the problem's order.
     pub metrics: Vec<Metrics>,
 }
@@ -144,26 +169,73 @@ pub struct Tuned {
     pub converged: bool,
 }
 
+/// What a tuning reports while it runs (the command line prints it on stderr).
+#[derive(Debug, Clone, Copy)]
+pub enum Report<'a> {
+    /// A scenario's teach cut finished.
+    Taught {
+        /// The scenario.
+        preset: &'static str,
+        /// Teach cuts done so far.
+        done: usize,
+        /// Teach cuts in all.
+        total: usize,
+    },
+    /// A parameter set has run on every scenario.
+    Evaluated {
+        /// Evaluations done so far (a sweep's finish out of grid order).
+        done: usize,
+        /// Evaluations in all: the grid's points, or the search's budget.
+        total: usize,
+        /// True for a search, which may stop before its budget.
+        at_most: bool,
+        /// The evaluation.
+        evaluation: &'a Evaluation,
+    },
+}
+
+/// The threads tuning uses natively: one per core.
+pub fn default_threads() -> usize {
+    crate::work::available_threads()
+}
+
 /// Runs evaluations of a problem, reusing each scenario's teach cut.
 pub struct Tuner {
     problem: TuningProblem,
     calibrations: Vec<Calibration>,
+    threads: usize,
 }
 
 impl Tuner {
-    /// Checks the problem and runs each scenario's teach cut once.
+    /// Checks the problem and runs each scenario's teach cut once, on all cores.
     pub fn new(problem: TuningProblem) -> Result<Self, TuningError> {
+        Self::with_threads(problem, default_threads(), &mut |_| {})
+    }
+
+    /// [`Tuner::new`] on at most `threads` threads (natively; wasm has one), telling `report`
+    /// as each teach cut finishes. The results do not depend on `threads`.
+    pub fn with_threads(
+        problem: TuningProblem,
+        threads: usize,
+        report: &mut dyn FnMut(&Report<'_>),
+    ) -> Result<Self, TuningError> {
         check(&problem)?;
-        let calibrations = parallel_map(&problem.scenarios, |spec| {
-            let mut spec = spec.clone();
-            spec.controller = problem.controller.clone();
-            calibrate(&spec)
+        let total = problem.scenarios.len();
+        let mut done = 0;
+        let calibrations = parallel_map(&problem.scenarios, threads, calibrate, |i, _| {
+            done += 1;
+            report(&Report::Taught {
+                preset: problem.scenarios[i].preset.name(),
+                done,
+                total,
+            });
         })
         .into_iter()
         .collect::<Result<Vec<_>, _>>()?;
         Ok(Self {
             problem,
             calibrations,
+            threads: threads.max(1),
         })
     }
 
@@ -172,23 +244,24 @@ impl Tuner {
         &self.problem
     }
 
-    /// Runs `values` (one per tuned parameter) on every scenario.
+    /// Scenario `index`'s run definition with `values` set on its controller.
+    fn spec_at(&self, index: usize, values: &[f64]) -> Result<RunSpec, TuningError> {
+        spec_with(&self.problem, index, values)
+    }
+
+    /// Runs `values` (one per tuned parameter) on every scenario, in parallel.
     pub fn evaluate(&self, values: &[f64]) -> Result<Evaluation, TuningError> {
-        let mut controller = self.problem.controller.clone();
-        for (range, &v) in self.problem.params.iter().zip(values) {
-            controller.set(&range.key, v).map_err(TuningError::Param)?;
-        }
-        let jobs: Vec<(&RunSpec, &Calibration)> = self
-            .problem
-            .scenarios
-            .iter()
-            .zip(&self.calibrations)
-            .collect();
-        let metrics = parallel_map(&jobs, |(spec, calibration)| {
-            let mut spec = (*spec).clone();
-            spec.controller = controller.clone();
-            run_calibrated(&spec, (*calibration).clone())
-        })
+        let specs = (0..self.problem.scenarios.len())
+            .map(|i| self.spec_at(i, values))
+            .collect::<Result<Vec<_>, _>>()?;
+        let jobs: Vec<(RunSpec, &Calibration)> =
+            specs.into_iter().zip(&self.calibrations).collect();
+        let metrics = parallel_map(
+            &jobs,
+            self.threads,
+            |(spec, calibration)| run_calibrated(spec, (*calibration).clone()),
+            |_, _| {},
+        )
         .into_iter()
         .collect::<Result<Vec<Metrics>, _>>()?;
         Ok(summarise(&self.problem, values.to_vec(), metrics))
@@ -197,24 +270,77 @@ impl Tuner {
     /// Every point of the grid with `steps` values per parameter (lo … hi evenly, both ends
     /// included; one step takes the middle), the first parameter varying slowest.
     ///
-    /// The grid's points run in parallel natively; the result is in grid order either way.
+    /// Natively every (point, scenario) run goes into one queue the threads take from, so all
+    /// cores stay busy until the grid is done; the result is in grid order either way.
     pub fn sweep(&self, steps: usize) -> Result<Vec<Evaluation>, TuningError> {
-        // The scenarios of each point already run in parallel: points go one at a time.
-        grid_points(&self.problem.params, steps)?
-            .iter()
-            .map(|p| self.evaluate(p))
+        self.sweep_reporting(steps, &mut |_| {})
+    }
+
+    /// [`Tuner::sweep`], telling `report` as each point's last run finishes (in the order they
+    /// finish, on the calling thread).
+    pub fn sweep_reporting(
+        &self,
+        steps: usize,
+        report: &mut dyn FnMut(&Report<'_>),
+    ) -> Result<Vec<Evaluation>, TuningError> {
+        let points = grid_points(&self.problem.params, steps)?;
+        let scenarios = self.problem.scenarios.len();
+        let mut jobs = Vec::with_capacity(points.len() * scenarios);
+        for point in &points {
+            for (index, calibration) in self.calibrations.iter().enumerate() {
+                jobs.push((self.spec_at(index, point)?, calibration));
+            }
+        }
+        // Each point's metrics as its runs come in; a point is reported once all are there.
+        let mut pending: Vec<Vec<Option<Metrics>>> = vec![vec![None; scenarios]; points.len()];
+        let mut done = 0;
+        let results = parallel_map(
+            &jobs,
+            self.threads,
+            |(spec, calibration)| run_calibrated(spec, (*calibration).clone()),
+            |job, result| {
+                let (point, scenario) = (job / scenarios, job % scenarios);
+                let Ok(metrics) = result else { return };
+                pending[point][scenario] = Some(metrics.clone());
+                if pending[point].iter().all(Option::is_some) {
+                    let metrics = pending[point].iter_mut().filter_map(Option::take).collect();
+                    let evaluation = summarise(&self.problem, points[point].clone(), metrics);
+                    done += 1;
+                    report(&Report::Evaluated {
+                        done,
+                        total: points.len(),
+                        at_most: false,
+                        evaluation: &evaluation,
+                    });
+                }
+            },
+        );
+        let mut results = results.into_iter();
+        points
+            .into_iter()
+            .map(|point| {
+                let metrics = results
+                    .by_ref()
+                    .take(scenarios)
+                    .collect::<Result<Vec<Metrics>, _>>()?;
+                Ok(summarise(&self.problem, point, metrics))
+            })
             .collect()
     }
 
     /// Minimises the objective with `search` from the controller's current values.
     pub fn tune(&self, search: &NelderMead) -> Result<Tuned, TuningError> {
+        self.tune_reporting(search, &mut |_| {})
+    }
+
+    /// [`Tuner::tune`], telling `report` after each evaluation.
+    pub fn tune_reporting(
+        &self,
+        search: &NelderMead,
+        report: &mut dyn FnMut(&Report<'_>),
+    ) -> Result<Tuned, TuningError> {
         let bounds: Vec<(f64, f64)> = self.problem.params.iter().map(|r| (r.lo, r.hi)).collect();
-        let start: Vec<f64> = self
-            .problem
-            .params
-            .iter()
-            .map(|r| self.problem.controller.get(&r.key).unwrap_or(r.lo))
-            .collect();
+        let start = start_point(&self.problem);
         let mut evaluations = Vec::new();
         let mut failure = None;
         let minimum = search.minimize(
@@ -222,6 +348,12 @@ impl Tuner {
                 Ok(e) => {
                     let cost = e.cost;
                     evaluations.push(e);
+                    report(&Report::Evaluated {
+                        done: evaluations.len(),
+                        total: search.max_evaluations,
+                        at_most: true,
+                        evaluation: &evaluations[evaluations.len() - 1],
+                    });
                     cost
                 }
                 Err(e) => {
@@ -253,6 +385,30 @@ impl Tuner {
             converged: minimum.converged,
         })
     }
+}
+
+/// Where a search starts: the problem's controller's values of the tuned parameters.
+fn start_point(problem: &TuningProblem) -> Vec<f64> {
+    problem
+        .params
+        .iter()
+        .map(|r| problem.controller.get(&r.key).unwrap_or(r.lo))
+        .collect()
+}
+
+/// Scenario `index`'s run definition with `values` set on its own controller.
+fn spec_with(
+    problem: &TuningProblem,
+    index: usize,
+    values: &[f64],
+) -> Result<RunSpec, TuningError> {
+    let mut spec = problem.scenarios[index].clone();
+    for (range, &v) in problem.params.iter().zip(values) {
+        spec.controller
+            .set(&range.key, v)
+            .map_err(TuningError::Param)?;
+    }
+    Ok(spec)
 }
 
 /// Every point of the grid with `steps` values per parameter, the first varying slowest.
@@ -338,6 +494,7 @@ fn calibrate(spec: &RunSpec) -> Result<Calibration, TuningError> {
 /// An evaluation's summary: the objective and the means over the scenarios.
 fn summarise(problem: &TuningProblem, values: Vec<f64>, metrics: Vec<Metrics>) -> Evaluation {
     let n = metrics.len().max(1) as f64;
+    let mean = |f: fn(&Metrics) -> f64| metrics.iter().map(f).sum::<f64>() / n;
     let cost = problem
         .scenarios
         .iter()
@@ -348,12 +505,10 @@ fn summarise(problem: &TuningProblem, values: Vec<f64>, metrics: Vec<Metrics>) -
     Evaluation {
         values,
         cost,
-        cycle_time_s: metrics.iter().map(|m| m.cycle_time_s).sum::<f64>() / n,
-        force_error_pct: metrics
-            .iter()
-            .map(|m| m.force_mean_abs_error_pct)
-            .sum::<f64>()
-            / n,
+        cycle_time_s: mean(|m| m.cycle_time_s),
+        force_error_pct: mean(|m| m.force_mean_abs_error_pct),
+        time_above_limit_s: mean(|m| m.time_above_limit_s),
+        override_activity_pct: mean(|m| m.override_total_variation_pct),
         metrics,
     }
 }
@@ -372,154 +527,6 @@ fn run_calibrated(spec: &RunSpec, calibration: Calibration) -> Result<Metrics, T
 
 fn nominal_duration_s(spec: &RunSpec) -> f64 {
     spec.preset.summary().nominal_duration_s
-}
-
-/// `f` over `items` on every core natively, in order in wasm ([`crate::work::parallel_map`]).
-fn parallel_map<T: Sync, R: Send>(items: &[T], f: impl Fn(&T) -> R + Sync) -> Vec<R> {
-    crate::work::parallel_map(items, f)
-}
-
-/// What a teach-in learns from one teach cut, and the settings it proposes (as commercial
-/// adaptive feed controls do: cut once at known overrides, then start from what was measured).
-#[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct TeachIn {
-    /// The preset taught.
-    pub preset: &'static str,
-    /// The calibrated estimator and what the teach cut saw.
-    pub calibration: Calibration,
-    /// The median force of the teach cut at 100 % override.
-    pub force_at_full_override_n: f64,
-    /// The force to hold: the paper's target where the preset has one, else 80 % of the force
-    /// at 100 % override.
-    pub proposed_target_n: f64,
-    /// The current the calibrated model expects at that force and the program's speed: the
-    /// reference current to hold, as papers 000, 002 and 003 state their targets (NaN with a
-    /// dynamometer).
-    pub reference_current_a: f64,
-    /// The spread of one period's force estimate about the calibration line (1 σ).
-    pub estimate_noise_n: f64,
-    /// A threshold gap (% of target) wide enough that estimate noise alone does not cross it:
-    /// ±3 σ, at least [`MIN_PROPOSED_GAP_PCT`].
-    pub proposed_gap_pct: f64,
-}
-
-/// The narrowest threshold gap a teach-in proposes, % of target.
-pub const MIN_PROPOSED_GAP_PCT: f64 = 5.0;
-
-/// Runs `spec`'s teach cut and proposes a target, its reference current and a threshold gap.
-///
-/// ```
-/// use cutlab::closed_loop::lab::RunSpec;
-/// use cutlab::control::registry::ControllerKind;
-/// use cutlab::plant::Preset;
-/// let t = cutlab::tuning::teach_in(&RunSpec::new(Preset::ManeeratDoc1, ControllerKind::Threshold))
-///     .unwrap();
-/// assert_eq!(t.proposed_target_n, 150.0); // paper 001's own target
-/// assert!(t.reference_current_a > 0.0 && t.proposed_gap_pct >= 5.0);
-/// ```
-pub fn teach_in(spec: &RunSpec) -> Result<TeachIn, TuningError> {
-    let (_, calibration) =
-        crate::closed_loop::lab::teach_cut_only(spec).map_err(|error| TuningError::Run {
-            preset: spec.preset.name(),
-            error,
-        })?;
-    propose(spec, calibration)
-}
-
-/// What a teach-in proposes from `spec`'s teach-cut `calibration`.
-fn propose(spec: &RunSpec, calibration: Calibration) -> Result<TeachIn, TuningError> {
-    let settings =
-        crate::closed_loop::lab::settled_settings(spec, &calibration).map_err(|error| {
-            TuningError::Run {
-                preset: spec.preset.name(),
-                error,
-            }
-        })?;
-    let summary = spec.preset.summary();
-    let rpm = summary.spindle_rpm.unwrap_or(0.0);
-    let feed = summary.programmed_feed_mm_min.unwrap_or(0.0);
-    let target = settings.target_force_n;
-    let estimate_noise_n = calibration.estimator.residual_std_n(rpm);
-    let reference_current_a = calibration.estimator.current_for_force_a(target, rpm, feed);
-    let gap = if target > 0.0 && estimate_noise_n.is_finite() {
-        (600.0 * estimate_noise_n / target).max(MIN_PROPOSED_GAP_PCT)
-    } else {
-        MIN_PROPOSED_GAP_PCT
-    };
-    Ok(TeachIn {
-        preset: spec.preset.name(),
-        force_at_full_override_n: calibration.median_force_at_full_override_n,
-        calibration,
-        proposed_target_n: target,
-        reference_current_a,
-        estimate_noise_n,
-        proposed_gap_pct: gap,
-    })
-}
-
-/// A teach-in of several scenarios done a piece at a time (for the browser).
-pub struct TeachInWork {
-    specs: Vec<RunSpec>,
-    current:
-        Option<Box<crate::closed_loop::runner::OnMachine<crate::closed_loop::runner::TeachCut>>>,
-    taught: Vec<TeachIn>,
-}
-
-impl TeachInWork {
-    /// The teach-ins of `specs`, in order.
-    pub fn new(specs: Vec<RunSpec>) -> Self {
-        Self {
-            specs,
-            current: None,
-            taught: Vec::new(),
-        }
-    }
-}
-
-impl Work for TeachInWork {
-    type Output = Vec<TeachIn>;
-    type Error = TuningError;
-
-    fn advance(&mut self, periods: usize) -> Result<bool, TuningError> {
-        let Some(spec) = self.specs.get(self.taught.len()) else {
-            return Ok(true);
-        };
-        let failed = |error| TuningError::Run {
-            preset: spec.preset.name(),
-            error,
-        };
-        let teach = match &mut self.current {
-            Some(teach) => teach,
-            None => self.current.insert(Box::new(
-                crate::closed_loop::lab::teach_cut_work(spec).map_err(failed)?,
-            )),
-        };
-        if teach.advance(periods).map_err(failed)? {
-            let calibration = teach.finish().map_err(failed)?;
-            self.current = None;
-            self.taught.push(propose(spec, calibration)?);
-        }
-        Ok(self.taught.len() >= self.specs.len())
-    }
-
-    fn progress(&self) -> crate::work::Progress {
-        let total = self.specs.len().max(1);
-        let part = self.current.as_ref().map_or(0.0, |t| t.progress().fraction);
-        crate::work::Progress::new(
-            format!(
-                "Teach cut {} of {total}",
-                (self.taught.len() + 1).min(total)
-            ),
-            (self.taught.len() as f64 + part) / total as f64,
-        )
-    }
-
-    fn finish(&mut self) -> Result<Vec<TeachIn>, TuningError> {
-        if self.taught.len() < self.specs.len() {
-            return Err(TuningError::Setup("the teach-in has not finished".into()));
-        }
-        Ok(std::mem::take(&mut self.taught))
-    }
 }
 
 /// How a [`TuningWork`] chooses its points.
@@ -568,12 +575,7 @@ impl TuningWork {
             },
             TuningMode::Search(search) => {
                 let bounds: Vec<(f64, f64)> = problem.params.iter().map(|r| (r.lo, r.hi)).collect();
-                let start: Vec<f64> = problem
-                    .params
-                    .iter()
-                    .map(|r| problem.controller.get(&r.key).unwrap_or(r.lo))
-                    .collect();
-                Points::Search(search.search(&bounds, &start))
+                Points::Search(search.search(&bounds, &start_point(&problem)))
             }
         };
         let first = start_teach_cut(&problem, 0)?;
@@ -615,13 +617,7 @@ impl TuningWork {
 
     /// The run of `values` on scenario `index`, with its teach cut's calibration.
     fn start_run(&self, values: &[f64], index: usize) -> Result<Box<LabRun>, TuningError> {
-        let mut spec = self.problem.scenarios[index].clone();
-        spec.controller = self.problem.controller.clone();
-        for (range, &v) in self.problem.params.iter().zip(values) {
-            spec.controller
-                .set(&range.key, v)
-                .map_err(TuningError::Param)?;
-        }
+        let spec = spec_with(&self.problem, index, values)?;
         LabRun::calibrated(&spec, self.calibrations[index].clone())
             .map(Box::new)
             .map_err(|error| TuningError::Run {
@@ -654,7 +650,26 @@ fn check(problem: &TuningProblem) -> Result<(), TuningError> {
             "name at least one parameter to tune (key=lo:hi)".into(),
         ));
     }
-    for range in &problem.params {
+    let kind = problem.controller.kind();
+    if let Some(spec) = problem
+        .scenarios
+        .iter()
+        .find(|s| s.controller.kind() != kind)
+    {
+        return Err(TuningError::Setup(format!(
+            "{} runs {}, not the {} tuned",
+            spec.preset.name(),
+            spec.controller.kind().name(),
+            kind.name()
+        )));
+    }
+    for (i, range) in problem.params.iter().enumerate() {
+        if let Some(earlier) = problem.params[..i].iter().find(|r| r.key == range.key) {
+            return Err(TuningError::Setup(format!(
+                "{} is given twice ({}:{} and {}:{}); give each parameter once",
+                range.key, earlier.lo, earlier.hi, range.lo, range.hi
+            )));
+        }
         // Both ends must be values the controller accepts.
         let mut probe = problem.controller.clone();
         probe
@@ -674,9 +689,8 @@ fn start_teach_cut(
     Box<crate::closed_loop::runner::OnMachine<crate::closed_loop::runner::TeachCut>>,
     TuningError,
 > {
-    let mut spec = problem.scenarios[index].clone();
-    spec.controller = problem.controller.clone();
-    crate::closed_loop::lab::teach_cut_work(&spec)
+    let spec = &problem.scenarios[index];
+    crate::closed_loop::lab::teach_cut_work(spec)
         .map(Box::new)
         .map_err(|error| TuningError::Run {
             preset: spec.preset.name(),

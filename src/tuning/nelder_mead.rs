@@ -96,6 +96,7 @@ impl NelderMead {
             evaluations: 0,
             step: Step::Initial,
             pending: None,
+            best: None,
             converged: false,
         }
     }
@@ -130,6 +131,9 @@ pub struct Search {
     step: Step,
     /// The point asked for and not yet told, in unit-cube coordinates.
     pending: Option<Vec<f64>>,
+    /// The best point told so far and its cost: a search stopped by its budget between a
+    /// reflection and the expansion it asked for keeps the reflected point this way.
+    best: Option<(Vec<f64>, f64)>,
     converged: bool,
 }
 
@@ -155,6 +159,9 @@ impl Search {
         } else {
             f64::INFINITY
         };
+        if self.best.as_ref().is_none_or(|(_, best)| cost < *best) {
+            self.best = Some((point.clone(), cost));
+        }
         let n = self.bounds.len();
         match std::mem::replace(&mut self.step, Step::Done) {
             Step::Initial => {
@@ -217,13 +224,11 @@ impl Search {
         self.step == Step::Done
     }
 
-    /// The best point so far (the start point before any cost was told).
+    /// The best point told so far (the start point before any cost was told).
     pub fn minimum(&self) -> Minimum {
         let best = self
-            .simplex
-            .iter()
-            .min_by(|a, b| a.1.total_cmp(&b.1))
-            .cloned()
+            .best
+            .clone()
             .unwrap_or_else(|| (self.start.clone(), f64::INFINITY));
         Minimum {
             point: self.to_problem(&best.0),
@@ -242,8 +247,25 @@ impl Search {
 
     /// The unit-cube point the current step needs evaluated (ordering the simplex and testing
     /// the tolerances first when a new iteration starts); `None` when done.
+    ///
+    /// The budget is checked before every evaluation, not only when an iteration starts: an
+    /// expansion, a contraction or a shrink (n more points) would otherwise run past it.
     fn next_unit_point(&mut self) -> Option<Vec<f64>> {
         let n = self.bounds.len();
+        let iteration_starts = match &self.step {
+            Step::Initial => self.simplex.len() > n,
+            Step::Reflect => true,
+            _ => false,
+        };
+        // At an iteration's start the tolerances are tested first, so a search that has
+        // converged says so even when its budget is spent too.
+        if !iteration_starts
+            && !matches!(self.step, Step::Done)
+            && self.evaluations >= self.settings.max_evaluations
+        {
+            self.step = Step::Done;
+            return None;
+        }
         match &self.step {
             Step::Done => None,
             Step::Initial if self.simplex.len() <= n => {
@@ -379,7 +401,61 @@ mod tests {
         );
         assert!(m.cost.is_finite() && m.point[0] <= 0.5, "{m:?}");
         assert!((m.point[0] - 0.2).abs() < 0.01, "{m:?}");
-        assert!(calls <= 25 + 2, "{calls} evaluations");
+        assert!(calls <= 25, "{calls} evaluations");
         assert_eq!(m.evaluations, calls);
+    }
+
+    /// Counts the evaluations of a search of `cost` over `dimensions` parameters on [0, 1] with
+    /// budget `max`, returning (calls, the minimum).
+    fn budgeted(cost: fn(&[f64]) -> f64, dimensions: usize, max: usize) -> (usize, Minimum) {
+        let mut calls = 0;
+        let m = NelderMead {
+            max_evaluations: max,
+            // Never met: only the budget stops the search.
+            cost_tolerance: 0.0,
+            point_tolerance: 0.0,
+        }
+        .minimize(
+            |p| {
+                calls += 1;
+                cost(p)
+            },
+            &vec![(0.0, 1.0); dimensions],
+            &vec![0.9; dimensions],
+        );
+        (calls, m)
+    }
+
+    #[test]
+    fn the_budget_holds_exactly_through_expansions_contractions_and_shrinks() {
+        // The audit's cases (30 → 32, 3 → 4, 5 → 7, 1 → 3 before the fix) and every budget up
+        // to 40 on a bowl (expansions), a narrow valley (contractions) and a cost with a plateau
+        // that forces shrinks.
+        let bowl: fn(&[f64]) -> f64 = |p| p.iter().map(|x| (x - 0.2).powi(2)).sum();
+        let valley: fn(&[f64]) -> f64 = |p| {
+            let y = p.get(1).copied().unwrap_or(0.0);
+            (p[0] - 0.3).powi(2) + 50.0 * (y - p[0] * p[0]).powi(2)
+        };
+        let plateau: fn(&[f64]) -> f64 = |p| if p[0] > 0.6 { 1.0 } else { p[0] };
+        for cost in [bowl, valley, plateau] {
+            for dimensions in [1, 2, 3] {
+                for max in 1..=40 {
+                    let (calls, m) = budgeted(cost, dimensions, max);
+                    assert_eq!(calls, max, "{dimensions} parameters, budget {max}");
+                    assert_eq!(m.evaluations, max);
+                    assert!(!m.converged);
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn a_search_stopped_before_its_expansion_keeps_the_reflected_point() {
+        // One parameter from 0.9: vertices 0.9 and 0.65, the reflection 0.4 beats both, and the
+        // budget of 3 ends the search before the expansion is evaluated.
+        let (calls, m) = budgeted(|p| (p[0] - 0.1).abs(), 1, 3);
+        assert_eq!(calls, 3);
+        assert!((m.point[0] - 0.4).abs() < 1e-12, "{m:?}");
+        assert!((m.cost - 0.3).abs() < 1e-12, "{m:?}");
     }
 }

@@ -47,6 +47,8 @@ pub fn App() -> impl IntoView {
                 Page::Fuzzy => view! { <pages::fuzzy::FuzzyPage /> }.into_any(),
                 Page::Plant => view! { <pages::plant::PlantPage /> }.into_any(),
                 Page::Tune => view! { <pages::tune::TunePage /> }.into_any(),
+                Page::Hardware => view! { <pages::hardware::HardwarePage /> }.into_any(),
+                Page::Logs => view! { <pages::logs::LogsPage /> }.into_any(),
             }}
         </main>
         <footer class="site-footer">

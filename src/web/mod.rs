@@ -9,10 +9,12 @@
 //! | `app` | the shell: header, navigation, the current page |
 //! | `route` | the page registry and the URL hash that selects a page |
 //! | `components` | form fields and the canvas chart |
+//! | `hardware` | the Hardware page's ports (WebSerial, virtual device), station and IndexedDB store |
 //! | `pages` | one module per section of the lab |
 
 mod app;
 mod components;
+mod hardware;
 mod pages;
 mod route;
 

@@ -18,16 +18,22 @@ pub enum Page {
     Plant,
     /// Teach-in, sweeps and automatic tuning.
     Tune,
+    /// A real machine over WebSerial, or the virtual device.
+    Hardware,
+    /// Engineers' own machine logs: analysis, calibration, replay.
+    Logs,
     /// The guided path through the ideas.
     Learn,
 }
 
 impl Page {
     /// Every page, in navigation order.
-    pub const ALL: [Page; 7] = [
+    pub const ALL: [Page; 9] = [
         Page::Simulate,
         Page::Compare,
         Page::Tune,
+        Page::Hardware,
+        Page::Logs,
         Page::Fuzzy,
         Page::Plant,
         Page::SignalChain,
@@ -46,6 +52,8 @@ impl Page {
             Page::Fuzzy => "fuzzy",
             Page::Plant => "plant",
             Page::Tune => "tune",
+            Page::Hardware => "hardware",
+            Page::Logs => "logs",
             Page::Learn => "learn",
         }
     }
@@ -59,6 +67,8 @@ impl Page {
             Page::Fuzzy => "Fuzzy rules",
             Page::Plant => "Machine",
             Page::Tune => "Tune",
+            Page::Hardware => "Hardware",
+            Page::Logs => "Logs",
             Page::Learn => "Learn",
         }
     }

@@ -112,11 +112,22 @@ test("the fuzzy rule bases' comparison starts from the paper's own settings", as
     const output = page.getByRole('group', { name: variant }).getByLabel(/Output range/);
     assert.equal(await output.inputValue(), '100');
   }
-  await page.getByRole('status').filter({ hasText: 'not reproduced' }).waitFor();
-  // Its slowly sampled twin sets the period and says where the difference appears.
+  // The finding is measured from the runs on the page, and its figures are the table's.
+  const settlingOf = async () => {
+    const row = table.getByRole('row').filter({ has: page.getByRole('rowheader', { name: 'Max settling time (s)' }) });
+    return (await row.getByRole('cell').allTextContents()).map((t) => t.replace(/[*★]/g, '').trim());
+  };
+  const finding = page.getByRole('status').filter({ hasText: 'Measured:' });
+  await finding.filter({ hasText: 'Not reproduced.' }).waitFor({ timeout: RUN_TIMEOUT });
+  const [experience, dynamics] = await settlingOf();
+  assert.match(await finding.textContent(), new RegExp(`in ${dynamics} s against ${experience} s`));
+  // Its slowly sampled twin sets the period; there the dynamics table settles sooner.
   await page.getByRole('button', { name: 'Paper 002 at 0.5 s sampling' }).click();
-  await page.getByRole('status').filter({ hasText: "Fig. 7's difference" }).waitFor();
+  await finding.filter({ hasText: ' Reproduced.' }).waitFor({ timeout: RUN_TIMEOUT });
   assert.match(page.url(), /period=0\.5/);
+  const [slowExperience, slowDynamics] = await settlingOf();
+  assert.ok(Number(slowDynamics) < Number(slowExperience), `${slowDynamics} vs ${slowExperience}`);
+  assert.match(await finding.textContent(), new RegExp(`in ${slowDynamics} s against ${slowExperience} s`));
   assert.deepEqual(problems, []);
   await context.close();
 });

@@ -255,6 +255,25 @@ pub fn ScenarioFields(form: ScenarioForm) -> impl IntoView {
     }
 }
 
+/// Chosen settings of a scenario form, in a fieldset of their own (the Hardware page shows the
+/// run's target, safety envelope and signal chain, but no machine edits: the machine is real).
+#[component]
+pub fn SettingFields(
+    form: ScenarioForm,
+    /// The fieldset's legend.
+    legend: &'static str,
+    /// The settings, in order.
+    settings: Vec<RunSetting>,
+) -> impl IntoView {
+    let errors = Memo::new(move |_| form.parse().err().unwrap_or_default());
+    view! {
+        <fieldset>
+            <legend>{legend}</legend>
+            {settings.into_iter().map(|s| setting_field(form, s, errors)).collect_view()}
+        </fieldset>
+    }
+}
+
 /// The machine, cut and signal-chain fields of a scenario form (shown after the controller).
 #[component]
 pub fn MachineAndSignalFields(form: ScenarioForm) -> impl IntoView {

@@ -8,7 +8,7 @@ use leptos::prelude::*;
 use crate::charts::{Axis, LineChart, Series, PALETTE};
 use crate::closed_loop::lab::RunResult;
 use crate::closed_loop::metrics::Metrics;
-use crate::closed_loop::summary::{best, METRIC_ROWS};
+use crate::closed_loop::summary::{best, format_metric, METRIC_ROWS};
 use crate::web::components::chart::ChartCanvas;
 
 /// A run with the name it is shown under.
@@ -189,14 +189,6 @@ pub fn RunCharts(
     }
 }
 
-fn format_number(v: f64) -> String {
-    if v.fract() == 0.0 || v.abs() >= 100.0 {
-        format!("{v:.0}")
-    } else {
-        format!("{v:.2}")
-    }
-}
-
 /// The metrics of the runs as a table; with several runs the best value of each row is marked.
 #[component]
 pub fn MetricsTable(
@@ -224,7 +216,7 @@ pub fn MetricsTable(
                         .iter()
                         .map(|row| {
                             let values: Vec<Option<f64>> = runs.iter().map(|(_, r)| (row.value)(r)).collect();
-                            let marks = best(&values, row.better, format_number);
+                            let marks = best(&values, row.better, format_metric);
                             view! {
                                 <tr>
                                     <th scope="row">{row.heading()}</th>
@@ -234,7 +226,7 @@ pub fn MetricsTable(
                                         .map(|(v, is_best)| {
                                             view! {
                                                 <td class:best=is_best>
-                                                    {row.show(v, format_number)}
+                                                    {row.show(v, format_metric)}
                                                     {is_best.then(|| view! { <span class="best-mark" aria-label="best">" ★"</span> })}
                                                 </td>
                                             }

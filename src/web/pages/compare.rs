@@ -5,13 +5,12 @@ use std::time::Duration;
 
 use leptos::prelude::*;
 
-use crate::closed_loop::definition::RunSetting;
 use crate::closed_loop::lab::{LabRuns, RunResult, RunSpec, TeachKey};
 use crate::closed_loop::metrics::metrics_csv_columns;
+use crate::closed_loop::paper_comparisons::PAPER_COMPARISONS;
 use crate::closed_loop::runner::Calibration;
 use crate::closed_loop::trace::write_csv_runs;
 use crate::control::registry::ControllerKind;
-use crate::plant::Preset;
 use crate::web::components::download::{download_configuration, download_text, download_written};
 use crate::web::components::run_form::{
     ControllerFields, ControllerForm, MachineAndSignalFields, ScenarioFields, ScenarioForm,
@@ -33,99 +32,6 @@ fn runs_so_far(runs: &LabRuns) -> Option<Vec<Arc<RunResult>>> {
 }
 const VARIANT_PREFIXES: [&str; 4] = ["a.", "b.", "c.", "d."];
 const VARIANT_NAMES: [&str; 4] = ["A", "B", "C", "D"];
-
-/// A comparison the papers make, one click away, with what the paper claims and what the lab
-/// shows (docs/papers.md has the figures).
-struct PaperComparison {
-    label: &'static str,
-    preset: Preset,
-    controllers: &'static [ControllerKind],
-    /// Settings other than the preset's, as typed in the form.
-    settings: &'static [(RunSetting, &'static str)],
-    finding: &'static str,
-}
-
-const PAPER_COMPARISONS: [PaperComparison; 7] = [
-    PaperComparison {
-        label: "Paper 003: fixed feed vs threshold control over DOC steps",
-        preset: Preset::KimStepDoc,
-        controllers: &[ControllerKind::Fixed, ControllerKind::Threshold],
-        settings: &[],
-        finding: "Paper 003 (Fig. 10): the threshold law holds the force through the depth steps \
-                  that a fixed feed follows. Here too: about 6 % mean force error against 52 %.",
-    },
-    PaperComparison {
-        label: "Paper 003: across the material change",
-        preset: Preset::KimMaterialTaper,
-        controllers: &[ControllerKind::Fixed, ControllerKind::Threshold],
-        settings: &[],
-        finding:
-            "Paper 003 (Fig. 11): the controller speeds up in aluminium. Here it finishes \
-                  about 48 % sooner than the fastest fixed feed that keeps the steel at the target.",
-    },
-    PaperComparison {
-        label: "Paper 002: experience-based vs dynamics-based fuzzy rules",
-        preset: Preset::LiuCurrentStep,
-        controllers: &[
-            ControllerKind::FuzzyExperience,
-            ControllerKind::FuzzyDynamics,
-        ],
-        settings: &[],
-        finding: "Paper 002 (Fig. 7) says the dynamics-based rules settle sooner after the load \
-                  step and fluctuate less. At the paper's own 50 ms sampling and k_u the two \
-                  tables settle alike here (about 1.1 s to ±2 %): the claim is not reproduced. \
-                  The next comparison samples ten times more slowly, where it is.",
-    },
-    PaperComparison {
-        label: "Paper 002 at 0.5 s sampling",
-        preset: Preset::LiuCurrentStep,
-        controllers: &[
-            ControllerKind::FuzzyExperience,
-            ControllerKind::FuzzyDynamics,
-        ],
-        settings: &[(RunSetting::ControlPeriod, "0.5")],
-        finding: "Sampled every 0.5 s, each correction is a full step and the rules away from the \
-                  diagonal decide: the experience table overshoots and keeps oscillating, the \
-                  dynamics table settles in about 4.5 s against 16 s — Fig. 7's difference.",
-    },
-    PaperComparison {
-        label: "Paper 001: adaptive control at DOC 4 mm",
-        preset: Preset::ManeeratDoc4,
-        controllers: &[
-            ControllerKind::Fixed,
-            ControllerKind::Mrac,
-            ControllerKind::Pi,
-        ],
-        settings: &[],
-        finding: "Paper 001 (Fig. 9): the adaptive law converges to 320 N. Here it does within \
-                  5 %, after entering the cut fast from the air (about 1 s above the limit).",
-    },
-    PaperComparison {
-        label: "Paper 001's own model with a dynamometer",
-        preset: Preset::ManeeratSecondOrder,
-        controllers: &[
-            ControllerKind::Fixed,
-            ControllerKind::Mrac,
-            ControllerKind::Pi,
-        ],
-        settings: &[],
-        finding: "Paper 001's second-order process (eq 2.3) with the force read by a dynamometer, \
-                  as in its experiments: the adaptive law holds 200 N with about 6 % mean error.",
-    },
-    PaperComparison {
-        label: "Paper 000 vs 003: restriction vs threshold vs PI",
-        preset: Preset::KimCircularTaper,
-        controllers: &[
-            ControllerKind::Restriction,
-            ControllerKind::Threshold,
-            ControllerKind::Pi,
-        ],
-        settings: &[],
-        finding: "Paper 000's restriction steps the override one grade at a time and chatters; \
-                  paper 003 made the step proportional to the excess. Compare the override \
-                  changes row.",
-    },
-];
 
 /// The Compare page.
 #[component]
@@ -155,8 +61,8 @@ pub fn ComparePage() -> impl IntoView {
             }
         }
     });
-    // What the last chosen paper comparison claims and what the lab shows.
-    let finding = RwSignal::new(None::<&'static str>);
+    // The paper comparison last chosen: its claim, and what its runs measure once they are done.
+    let chosen_comparison = RwSignal::new(None::<usize>);
     let initial_count = query
         .iter()
         .find(|(k, _)| k == "variants")
@@ -257,6 +163,23 @@ pub fn ComparePage() -> impl IntoView {
         _ => runs.get(),
     });
 
+    // The claim at once; the measured finding when the runs shown are the comparison's (an edit
+    // that changes the controllers or the preset leaves the claim alone).
+    let finding = move || {
+        let comparison = &PAPER_COMPARISONS[chosen_comparison.get()?];
+        let measured = runs.with(|shown| {
+            let results: Vec<&RunResult> = shown.iter().map(|(_, r)| r.as_ref()).collect();
+            comparison.finding(&results)
+        });
+        Some(match measured {
+            Some(f) => format!("{} {}", comparison.claim, f.text()),
+            None => format!(
+                "{} (what the lab measures appears when this comparison's runs are shown)",
+                comparison.claim
+            ),
+        })
+    };
+
     let (export_error, set_export_error) = signal(None::<String>);
     let export_traces = move |_| {
         let shown = runs.get_untracked();
@@ -306,7 +229,8 @@ pub fn ComparePage() -> impl IntoView {
                         <div class="preset-row">
                             {PAPER_COMPARISONS
                                 .iter()
-                                .map(|c| {
+                                .enumerate()
+                                .map(|(index, c)| {
                                     view! {
                                         <button
                                             type="button"
@@ -321,7 +245,7 @@ pub fn ComparePage() -> impl IntoView {
                                                     form.follow_preset(c.preset);
                                                     form.reset_to(*kind);
                                                 }
-                                                finding.set(Some(c.finding));
+                                                chosen_comparison.set(Some(index));
                                             }
                                         >
                                             {c.label}
@@ -330,7 +254,7 @@ pub fn ComparePage() -> impl IntoView {
                                 })
                                 .collect_view()}
                         </div>
-                        <p class="finding" role="status">{move || finding.get()}</p>
+                        <p class="finding" role="status">{finding}</p>
                     </fieldset>
                     <ScenarioFields form=scenario />
                     {move || {

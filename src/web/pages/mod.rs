@@ -2,7 +2,9 @@
 
 pub mod compare;
 pub mod fuzzy;
+pub mod hardware;
 pub mod learn;
+pub mod logs;
 pub mod plant;
 pub mod signal_chain;
 pub mod simulate;

@@ -1,19 +1,24 @@
-//! Tune: teach-in, a grid sweep or a Nelder–Mead search over a controller's parameters across
-//! scenarios, sliced between frames (`tuning::TuningWork`); the table, the heat map of a
-//! two-parameter sweep and the Pareto front fill in when it is done.
+//! Tune: teach-in (the chosen scenarios' simulated teach cuts, or a saved calibration file), a
+//! grid sweep or a Nelder–Mead search over a controller's parameters across scenarios, sliced
+//! between frames (`tuning::TuningWork`); the table, the heat map of a two-parameter sweep and
+//! the chart of the Pareto front fill in when it is done.
 
 use leptos::prelude::*;
 
+use crate::charts::pareto::trade_off_chart;
 use crate::charts::{Axis, HeatMap, Scale};
+use crate::closed_loop::calibration_file::CalibrationFile;
 use crate::closed_loop::definition::preset_controller;
 use crate::closed_loop::lab::RunSpec;
 use crate::control::registry::ControllerKind;
 use crate::input::{parse_count, parse_number, readable};
 use crate::plant::Preset;
 use crate::tuning::nelder_mead::NelderMead;
+use crate::tuning::teach_in::{teach_in_calibration, TargetBasis};
 use crate::tuning::{
     Objective, ParamRange, TeachIn, TeachInWork, Tuned, TuningMode, TuningProblem, TuningWork,
 };
+use crate::web::components::chart::ChartCanvas;
 use crate::web::components::fields::{NumberField, SelectField};
 use crate::web::components::heat_map::HeatMapCanvas;
 use crate::web::components::runner::{RunProgress, Runner};
@@ -134,6 +139,47 @@ fn simulate_href(
         href.push_str(&format!("&{}={}", p.key, readable(*v)));
     }
     href
+}
+
+/// The chart of every evaluation's mean cycle time against its mean force error, the Pareto
+/// front joined and the best objective marked.
+fn pareto_chart(tuned: &Tuned) -> crate::charts::LineChart {
+    let points: Vec<(f64, f64)> = tuned
+        .evaluations
+        .iter()
+        .map(|e| (e.cycle_time_s, e.force_error_pct))
+        .collect();
+    let best = tuned
+        .evaluations
+        .iter()
+        .enumerate()
+        .min_by(|a, b| a.1.cost.total_cmp(&b.1.cost))
+        .map(|(i, _)| i);
+    trade_off_chart(
+        Axis::linear("mean cycle time (s)"),
+        Axis::linear("mean force error (%)"),
+        &points,
+        &tuned.pareto,
+        best,
+    )
+}
+
+/// A short reason for a proposed target, for the teach-in table.
+fn basis_text(basis: TargetBasis) -> &'static str {
+    match basis {
+        TargetBasis::Fraction => "80 % of the force at 100 %",
+        TargetBasis::RaisedToCalibratedRange => "raised to the calibrated range",
+        TargetBasis::LoweredToCalibratedRange => "lowered to the calibrated range",
+    }
+}
+
+/// A current for the table: three decimals, or a dash where a dynamometer reads the force.
+fn current_text(current_a: f64) -> String {
+    if current_a.is_finite() {
+        format!("{current_a:.3}")
+    } else {
+        "— (dynamometer)".to_string()
+    }
 }
 
 /// The Tune page.
@@ -300,6 +346,52 @@ pub fn TunePage() -> impl IntoView {
         ));
     };
 
+    // A teach-in from a saved calibration (what `cutlab host --save-calibration` writes after a
+    // teach cut on the machine): the first chosen scenario is the program it was taught on.
+    let from_file = RwSignal::new(None::<TeachIn>);
+    let (file_error, set_file_error) = signal(None::<String>);
+    let on_calibration_file = move |ev: leptos::ev::Event| {
+        use wasm_bindgen::JsCast;
+        let Some(input) = ev
+            .target()
+            .and_then(|t| t.dyn_into::<web_sys::HtmlInputElement>().ok())
+        else {
+            return;
+        };
+        let Some(file) = input.files().and_then(|f| f.get(0)) else {
+            return;
+        };
+        let name = file.name();
+        let program = scenarios()
+            .first()
+            .map(|&p| RunSpec::new(p, ControllerKind::Threshold));
+        let promise = file.text();
+        leptos::task::spawn_local(async move {
+            let text = match wasm_bindgen_futures::JsFuture::from(promise).await {
+                Ok(text) => text.as_string().unwrap_or_default(),
+                Err(_) => {
+                    set_file_error.set(Some(format!("{name} could not be read.")));
+                    return;
+                }
+            };
+            let taught = CalibrationFile::from_json(&text)
+                .map_err(|e| format!("{name}: {e}"))
+                .and_then(|file| {
+                    teach_in_calibration(&file, &name, program.as_ref()).map_err(|e| e.to_string())
+                });
+            match taught {
+                Ok(t) => {
+                    set_file_error.set(None);
+                    from_file.set(Some(t));
+                }
+                Err(e) => {
+                    from_file.set(None);
+                    set_file_error.set(Some(e));
+                }
+            }
+        });
+    };
+
     let tuned = runner.finished();
     let taught = teach_runner.finished();
     let param_options = Memo::new(move |_| {
@@ -344,7 +436,21 @@ pub fn TunePage() -> impl IntoView {
                     </fieldset>
                     <fieldset>
                         <legend>"Teach-in"</legend>
+                        <p class="hint">
+                            "A teach cut on each chosen scenario, or a calibration saved after a "
+                            "teach cut on the machine (the first chosen scenario is its program)."
+                        </p>
                         <button type="button" on:click=teach_in>"Teach-in"</button>
+                        <div class="field">
+                            <label for="tune-calibration-file">"Calibration file to teach in from"</label>
+                            <input
+                                id="tune-calibration-file"
+                                type="file"
+                                accept=".json,application/json"
+                                on:change=on_calibration_file
+                            />
+                            {move || file_error.get().map(|e| view! { <p class="field-error" role="alert">{e}</p> })}
+                        </div>
                     </fieldset>
                     <fieldset>
                         <legend>"Controller and parameters"</legend>
@@ -427,30 +533,57 @@ pub fn TunePage() -> impl IntoView {
                 </form>
                 <div class="results">
                     <RunProgress runner=teach_runner.clone() id="teach-progress" failure="The teach-in could not be made" />
-                    {move || taught.get().map(|list| view! {
+                    {move || {
+                        let list: Vec<TeachIn> = taught
+                            .get()
+                            .unwrap_or_default()
+                            .into_iter()
+                            .chain(from_file.get())
+                            .collect();
+                        (!list.is_empty()).then(|| view! {
                         <table aria-label="Teach-in">
+                            <caption>
+                                "Proposed from what each teach cut measured; the paper's own target "
+                                "beside it for comparison."
+                            </caption>
                             <thead><tr>
-                                <th scope="col">"Scenario"</th>
+                                <th scope="col">"Teach cut"</th>
                                 <th scope="col">"Force at 100 % (N)"</th>
-                                <th scope="col">"Target (N)"</th>
+                                <th scope="col">"Proposed target (N)"</th>
+                                <th scope="col">"Target from"</th>
                                 <th scope="col">"Reference current (A)"</th>
                                 <th scope="col">"Estimate noise, 1 σ (N)"</th>
                                 <th scope="col">"Threshold gap (%)"</th>
+                                <th scope="col">"Paper's target"</th>
                             </tr></thead>
                             <tbody>
-                                {list.into_iter().map(|t| view! {
-                                    <tr>
-                                        <th scope="row">{t.preset}</th>
-                                        <td>{format!("{:.0}", t.force_at_full_override_n)}</td>
-                                        <td>{format!("{:.0}", t.proposed_target_n)}</td>
-                                        <td>{if t.reference_current_a.is_finite() { format!("{:.3}", t.reference_current_a) } else { "— (dynamometer)".to_string() }}</td>
-                                        <td>{format!("{:.1}", t.estimate_noise_n)}</td>
-                                        <td>{format!("{:.1}", t.proposed_gap_pct)}</td>
-                                    </tr>
+                                {list.into_iter().map(|t| {
+                                    let p = t.proposal;
+                                    let paper = t.paper.as_ref().map_or("—".to_string(), |paper| {
+                                        let current = if paper.reference_current_a.is_finite() {
+                                            format!(" ({:.3} A)", paper.reference_current_a)
+                                        } else {
+                                            String::new()
+                                        };
+                                        format!("{:.0} N{current}", paper.target_n)
+                                    });
+                                    view! {
+                                        <tr>
+                                            <th scope="row">{t.source.clone()}</th>
+                                            <td>{format!("{:.0}", t.learned.force_at_full_override_n)}</td>
+                                            <td>{format!("{:.0}", p.target_n)}</td>
+                                            <td>{basis_text(p.basis)}</td>
+                                            <td>{current_text(p.reference_current_a)}</td>
+                                            <td>{format!("{:.1}", p.estimate_noise_n)}</td>
+                                            <td>{format!("{:.1}", p.gap_pct)}</td>
+                                            <td>{paper}</td>
+                                        </tr>
+                                    }
                                 }).collect_view()}
                             </tbody>
                         </table>
-                    })}
+                        })
+                    }}
                     <RunProgress runner=runner.clone() id="tune-progress" failure="The tuning could not be made" />
                     {move || {
                         let (tuned, (params, steps, preset, k)) = (tuned.get()?, asked.get()?);
@@ -462,13 +595,26 @@ pub fn TunePage() -> impl IntoView {
                         Some(view! {
                             <p role="status">
                                 {format!(
-                                    "Best of {} evaluations{}: objective {:.3}, cycle {:.1} s, force error {:.1} %. ",
+                                    "Best of {} evaluations{}: {}; objective {:.3}, cycle {:.1} s, force error {:.1} %. ",
                                     tuned.evaluations.len(),
                                     if tuned.converged { " (converged)" } else { "" },
+                                    params
+                                        .iter()
+                                        .zip(&best.values)
+                                        .map(|(p, v)| format!("{} = {}", p.key, readable(*v)))
+                                        .collect::<Vec<_>>()
+                                        .join(", "),
                                     best.cost, best.cycle_time_s, best.force_error_pct
                                 )}
                                 <a href=best_href>"Open the best in Simulate"</a>
                             </p>
+                            <ChartCanvas
+                                label="Cycle time against force error"
+                                chart=Signal::derive({
+                                    let chart = pareto_chart(&tuned);
+                                    move || chart.clone()
+                                })
+                            />
                             {map.map(|m| {
                                 // Picking a cell opens the evaluation nearest to it in Simulate.
                                 let points: Vec<Vec<f64>> = tuned.evaluations.iter().map(|e| e.values.clone()).collect();
@@ -485,11 +631,14 @@ pub fn TunePage() -> impl IntoView {
                                 }
                             })}
                             <table aria-label="Evaluations">
+                                <caption>"Means over the chosen scenarios."</caption>
                                 <thead><tr>
                                     {headers}
                                     <th scope="col">"Objective"</th>
                                     <th scope="col">"Cycle (s)"</th>
                                     <th scope="col">"Force error (%)"</th>
+                                    <th scope="col">"Above limit (s)"</th>
+                                    <th scope="col">"Override activity (%)"</th>
                                     <th scope="col">"Pareto front"</th>
                                     <th scope="col">"Simulate"</th>
                                 </tr></thead>
@@ -500,6 +649,8 @@ pub fn TunePage() -> impl IntoView {
                                             <td>{format!("{:.3}", e.cost)}</td>
                                             <td>{format!("{:.1}", e.cycle_time_s)}</td>
                                             <td>{format!("{:.1}", e.force_error_pct)}</td>
+                                            <td>{format!("{:.2}", e.time_above_limit_s)}</td>
+                                            <td>{format!("{:.0}", e.override_activity_pct)}</td>
                                             <td>{if front { "yes" } else { "" }}</td>
                                             <td><a href=simulate_href(preset, k, &params, &e.values)>{format!("Open {} in Simulate", i + 1)}</a></td>
                                         </tr>

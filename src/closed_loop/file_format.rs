@@ -1,0 +1,57 @@
+//! What every JSON file cutlab saves opens with — `"format"` and `"version"` — and how reading
+//! checks them before anything else, so that a file of another kind, or one a newer cutlab wrote,
+//! gets a message about that rather than about its first unexpected field.
+
+use std::fmt;
+
+use serde::Deserialize;
+
+/// Why a file is not one this build reads.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct FormatError(pub String);
+
+impl fmt::Display for FormatError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(&self.0)
+    }
+}
+
+/// Checks that `text` is JSON whose `"format"` is `format` and whose `"version"` is `version`;
+/// `what` names the kind of file in messages ("configuration", "calibration").
+///
+/// ```
+/// use cutlab::closed_loop::file_format::check_format;
+/// assert!(check_format(r#"{"format": "x", "version": 1}"#, "x", 1, "thing").is_ok());
+/// let e = check_format(r#"{"format": "x", "version": 3}"#, "x", 1, "thing").unwrap_err();
+/// assert!(e.to_string().contains("version 3, written by a newer cutlab"));
+/// ```
+pub fn check_format(text: &str, format: &str, version: u32, what: &str) -> Result<(), FormatError> {
+    #[derive(Deserialize)]
+    struct Opening {
+        format: Option<String>,
+        version: Option<serde_json::Value>,
+    }
+    let opening: Opening =
+        serde_json::from_str(text).map_err(|e| FormatError(format!("not a cutlab {what}: {e}")))?;
+    if opening.format.as_deref() != Some(format) {
+        return Err(FormatError(format!(
+            "not a cutlab {what}: \"format\" must be \"{format}\", found {}",
+            opening
+                .format
+                .map_or("nothing".to_string(), |f| format!("{f:?}"))
+        )));
+    }
+    match opening.version.as_ref().and_then(serde_json::Value::as_u64) {
+        Some(v) if v == u64::from(version) => Ok(()),
+        Some(v) if v > u64::from(version) => Err(FormatError(format!(
+            "this {what} is version {v}, written by a newer cutlab; this one reads version \
+             {version}"
+        ))),
+        _ => Err(FormatError(format!(
+            "\"version\" must be {version}, found {}",
+            opening
+                .version
+                .map_or("nothing".to_string(), |v| v.to_string())
+        ))),
+    }
+}

@@ -1,0 +1,20 @@
+//! A real machine (or the device emulator) driven from the lab as it runs: the browser's Hardware
+//! page's core, plain Rust without I/O or clock of its own.
+//!
+//! ```text
+//! port bytes ─► HardwareSession::receive ─► HostSession (protocol, samples, counts)
+//!   ─► each LinkSample pushed into the run's SampleLoop (TeachCut, then FeedbackLoop with its
+//!      safety envelope: the loop LabRun and `cutlab host` run)
+//!   ─► override command ─► KeepUp (SetOverride, Heartbeat, re-Arm) ─► bytes for the port
+//!   ─► one LiveRow per sample ─► the live charts and a Recorder (CSV chunks the page stores)
+//! HardwareSession::tick (the caller's clock): handshake, both ways of the host's watchdog
+//! the operator: teach cut, arm (after the page's confirmation), disarm / Escape, disconnect
+//! ```
+//!
+//! [`session`] holds the link state (closed, handshaking, streaming, armed, alarm) with the reason
+//! of its last change, and what the host does with the device; [`recording`] turns its rows into
+//! the CSV text the page writes to IndexedDB a chunk at a time, which the log reader
+//! ([`crate::log`]) reads back with each column's role guessed.
+
+pub mod recording;
+pub mod session;

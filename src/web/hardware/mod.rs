@@ -1,0 +1,13 @@
+//! The Hardware page's plumbing: the ports that move bytes (WebSerial, or the device emulator in
+//! the page), the recordings store in IndexedDB, and the station that joins them to the core's
+//! [`crate::hardware::session::HardwareSession`].
+//!
+//! ```text
+//! Port (serial reader / virtual device timer) ─► Station::on_bytes ─► HardwareSession
+//!   ─► bytes back to the Port; rows ─► live window (charts) and Recorder ─► Store (IndexedDB)
+//! page timer ─► Station::tick (watchdogs, heartbeats, flush); page ◄─ Station::snapshot
+//! ```
+
+pub mod port;
+pub mod station;
+pub mod store;

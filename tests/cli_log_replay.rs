@@ -1,0 +1,246 @@
+//! `cutlab log replay` and `cutlab calibrate --save-calibration` on the synthetic machine export
+//! in www/data: a calibration saved from a log, used to replay a controller on it, with the CSV
+//! and JSON the issue names.
+#![cfg(feature = "cli")]
+// Test code: unwrapping and panicking on a broken expectation is the point.
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
+
+mod common;
+
+use cutlab::closed_loop::calibration_file::CalibrationFile;
+use cutlab::closed_loop::runner::Feedback;
+
+const EXPORT: &str = concat!(
+    env!("CARGO_MANIFEST_DIR"),
+    "/www/data/synthetic-kim-step-doc-export.csv"
+);
+
+fn scratch(name: &str) -> String {
+    let dir = std::env::temp_dir().join(format!("cutlab-cli-log-replay-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir.join(name).to_string_lossy().into_owned()
+}
+
+#[test]
+fn a_calibration_saved_from_a_log_replays_a_controller_on_it() {
+    let saved = scratch("export-calibration.json");
+    let (result, out) = common::cutlab_text(
+        &[
+            "calibrate",
+            EXPORT,
+            "--map",
+            "time_s=Zeit [s]",
+            "--map",
+            "force_n=Kraft [N]",
+            "--map",
+            "spindle_current_rms_a=S_Strom [A]",
+            "--map",
+            "spindle_speed_rpm=S_Drehzahl (rpm)",
+            "--save-calibration",
+            &saved,
+        ],
+        "",
+    );
+    result.unwrap();
+    assert!(out.contains("0.004493 A/N"), "{out}");
+    let file = CalibrationFile::from_json(&std::fs::read_to_string(&saved).unwrap()).unwrap();
+    assert_eq!(file.feedback(), Feedback::SpindleCurrent);
+    assert!(file.source.contains("spindle model"), "{}", file.source);
+    // The median logged force in the cut, and a phase's peak from the largest RMS current.
+    let c = &file.calibration;
+    assert!(
+        (300.0..420.0).contains(&c.median_force_at_full_override_n),
+        "{c:?}"
+    );
+    assert!(
+        (c.max_phase_current_a / 48.9991 - 2f64.sqrt()).abs() < 1e-3,
+        "{c:?}"
+    );
+
+    let (csv, json) = (scratch("replay.csv"), scratch("replay.json"));
+    let (result, out) = common::cutlab_text(
+        &[
+            "log",
+            "replay",
+            EXPORT,
+            "--current",
+            "S_Strom [A]",
+            "--controller",
+            "pi",
+            "--set",
+            "kp=0.4",
+            "--calibration",
+            &saved,
+            "--target-n",
+            "372",
+            "--csv",
+            &csv,
+            "--json",
+            &json,
+        ],
+        "",
+    );
+    result.unwrap();
+    assert!(out.contains("pi replayed on 1149 rows"), "{out}");
+    assert!(out.contains("RMS value in the log"), "{out}");
+    let text = std::fs::read_to_string(&csv).unwrap();
+    let mut lines = text.lines();
+    assert_eq!(
+        lines.next().unwrap(),
+        "time_s,current_a,force_est_n,requested_override_pct,override_pct,envelope_state,\
+         logged_override_pct,force_n"
+    );
+    let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    assert_eq!(
+        rows.len() as u64,
+        report["summary"]["periods"].as_u64().unwrap()
+    );
+    assert_eq!(report["settings"]["controller"]["params"]["kp"], 0.4);
+    assert_eq!(report["settings"]["target_force_n"], 372.0);
+    assert_eq!(
+        report["settings"]["spindle_lowpass_hz"],
+        serde_json::Value::Null
+    );
+    assert_eq!(report["events"][0]["kind"], "armed");
+    let armed_at = report["summary"]["armed_at_s"].as_f64().unwrap();
+    assert!((3.0..3.2).contains(&armed_at), "{armed_at}");
+    // In the 4 mm step the estimate reads the log's force: the calibration was fitted to it.
+    let (mut estimate, mut measured, mut n) = (0.0, 0.0, 0.0);
+    for row in &rows {
+        let t: f64 = row[0].parse().unwrap();
+        if (40.0..50.0).contains(&t) {
+            estimate += row[2].parse::<f64>().unwrap();
+            measured += row[7].parse::<f64>().unwrap();
+            n += 1.0;
+        }
+    }
+    assert!(n > 100.0);
+    assert!(
+        (estimate / measured - 1.0).abs() < 0.05,
+        "{} vs {}",
+        estimate / n,
+        measured / n
+    );
+    // The envelope's states in the CSV: disarmed first, armed later.
+    assert_eq!(rows[0][5], "disarmed");
+    assert!(rows.iter().any(|r| r[5] == "armed" || r[5] == "limited"));
+}
+
+#[test]
+fn replay_refuses_what_it_cannot_do_and_says_what_to_give() {
+    for (args, message) in [
+        (
+            &["log", "replay", EXPORT, "--controller", "pi"][..],
+            "--current",
+        ),
+        (
+            &[
+                "log",
+                "replay",
+                EXPORT,
+                "--current",
+                "Strom",
+                "--controller",
+                "pi",
+            ][..],
+            "--current: no column \"Strom\"; columns: Zeit [s]",
+        ),
+        (
+            &["log", "replay", EXPORT, "--current", "S_Strom [A]"][..],
+            "--controller",
+        ),
+        (
+            &[
+                "log",
+                "replay",
+                EXPORT,
+                "--current",
+                "S_Strom [A]",
+                "--controller",
+                "pi",
+                "--target-n",
+                "300",
+            ][..],
+            "a force target needs a calibration",
+        ),
+        (
+            &[
+                "log",
+                "replay",
+                EXPORT,
+                "--current",
+                "S_Strom [A]",
+                "--controller",
+                "pi",
+            ][..],
+            "give a current target (--target-a)",
+        ),
+        (
+            &[
+                "log",
+                "replay",
+                EXPORT,
+                "--current",
+                "S_Strom [A]",
+                "--controller",
+                "pi",
+                "--target-a",
+                "10",
+                "--set",
+                "kq=1",
+            ][..],
+            "--set: controller \"pi\" has no parameter \"kq\"",
+        ),
+        (
+            &[
+                "log",
+                "replay",
+                EXPORT,
+                "--current",
+                "S_Strom [A]",
+                "--controller",
+                "pi",
+                "--target-a",
+                "10",
+                "--map",
+                "torque=S_Strom [A]",
+            ][..],
+            "--map: unknown channel \"torque\"",
+        ),
+        (
+            &[
+                "log",
+                "replay",
+                EXPORT,
+                "--current",
+                "X_Strom [A]",
+                "--controller",
+                "pi",
+                "--target-a",
+                "1",
+                "--map",
+                "feed=",
+            ][..],
+            "feed-current feedback needs the feed",
+        ),
+    ] {
+        let (result, _) = common::cutlab_text(args, "");
+        let e = result.unwrap_err();
+        assert!(e.contains(message), "{args:?}: {e}");
+        assert!(!e.contains('\n'), "{e}");
+    }
+    let (result, help) = common::cutlab_text(&["log", "replay", "--help"], "");
+    result.unwrap();
+    for option in [
+        "--current",
+        "--target-n",
+        "--calibration",
+        "--csv",
+        "--json",
+        "open-loop",
+    ] {
+        assert!(help.contains(option), "{option}");
+    }
+}

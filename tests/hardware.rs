@@ -1,0 +1,573 @@
+//! The Hardware page's core (`cutlab::hardware`) against the device emulator, byte for byte, on a
+//! clock the test keeps: handshake, teach cut and closed loop over the link, Disarm's safe
+//! override, both watchdogs, a lost port, and recordings the log reader reads back.
+//!
+//! Nothing here waits for real time: the "wall clock" advances in 5 ms steps and the device runs
+//! `SCALE` device seconds per wall second, so each test takes a fraction of a second of compute.
+// Test code: unwrapping and panicking on a broken expectation is the point.
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
+// The page runs this core in wasm: the same tests run there too.
+#[cfg(target_arch = "wasm32")]
+use wasm_bindgen_test::wasm_bindgen_test as test;
+
+use cutlab::closed_loop::calibration_file::CalibrationFile;
+use cutlab::closed_loop::lab::{simulate, RunSpec};
+use cutlab::closed_loop::runner::Feedback;
+use cutlab::control::registry::ControllerKind;
+use cutlab::hardware::recording::{LiveRow, Recorder, RecordingMeta};
+use cutlab::hardware::session::{
+    HardwareSession, LinkState, SessionOptions, Stage, TaughtCalibration,
+};
+use cutlab::log::{load, ColumnKind, Role};
+use cutlab::plant::Preset;
+use cutlab::protocol::codec::{encode_frame, Decoder, MAX_FRAME_LEN};
+use cutlab::protocol::device::{DeviceConfig, DeviceEmulator, FaultInjection};
+use cutlab::protocol::frame::{padded, Capabilities, Frame, OverrideModeCode};
+
+/// Device seconds per wall second.
+const SCALE: f64 = 4.0;
+/// Wall seconds per step of the test's clock.
+const STEP_S: f64 = 0.005;
+
+/// A device and the session joined by the test: bytes cross at every step of the clock.
+struct Bench {
+    device: DeviceEmulator,
+    session: HardwareSession,
+    now_s: f64,
+    to_host: Vec<u8>,
+    rows: Vec<LiveRow>,
+    /// The link is cut both ways (the test's unplug).
+    cut: bool,
+}
+
+impl Bench {
+    fn new(config: DeviceConfig, options: SessionOptions) -> Self {
+        let mut b = Self {
+            device: DeviceEmulator::new(config).unwrap(),
+            session: HardwareSession::new(options, 0.0),
+            now_s: 0.0,
+            to_host: Vec::new(),
+            rows: Vec::new(),
+            cut: false,
+        };
+        b.run_until(|b| b.session.state() != LinkState::Handshaking, 5.0);
+        assert_eq!(
+            b.session.state(),
+            LinkState::Streaming,
+            "{}",
+            b.session.reason()
+        );
+        b
+    }
+
+    /// One step of the clock: host → device, the device's due frames, device → host, tick.
+    fn step(&mut self) {
+        self.now_s += STEP_S;
+        let to_device = self.session.take_output();
+        if !self.cut {
+            self.device.receive(&to_device, &mut self.to_host);
+        }
+        while self.device.time_s() + self.device.frame_period_s() <= self.now_s * SCALE {
+            self.device.step_frame(&mut self.to_host);
+        }
+        let bytes = std::mem::take(&mut self.to_host);
+        if !self.cut {
+            self.session.receive(&bytes, self.now_s);
+        }
+        self.session.tick(self.now_s);
+        self.rows.extend(self.session.take_rows());
+    }
+
+    /// Steps until `done` or `limit_s` of wall time more.
+    fn run_until(&mut self, done: impl Fn(&Self) -> bool, limit_s: f64) {
+        let until = self.now_s + limit_s;
+        while !done(self) && self.now_s < until {
+            self.step();
+        }
+    }
+
+    fn events(&self) -> String {
+        self.session
+            .events()
+            .iter()
+            .map(|e| format!("{:8.3} {}\n", e.time_s, e.text))
+            .collect()
+    }
+
+    /// Teach, then arm the closed loop of `spec`.
+    fn teach_and_arm(&mut self, spec: &RunSpec) {
+        self.session.teach_limits(spec).unwrap();
+        self.session.start_teach_cut(spec, self.now_s).unwrap();
+        assert_eq!(self.session.state(), LinkState::Armed);
+        self.run_until(|b| b.session.stage() == Stage::Idle, 60.0);
+        assert!(self.session.calibration().is_some(), "{}", self.events());
+        assert_eq!(self.session.state(), LinkState::Streaming);
+        assert!(
+            !self.session.holding(),
+            "handed back at the teach cut's end"
+        );
+        let limits = self.session.arm_limits(spec).unwrap();
+        assert!(
+            limits.lines.iter().any(|l| l.contains("Overload")),
+            "{limits:?}"
+        );
+        self.session.arm(spec, self.now_s).unwrap();
+        assert_eq!(self.session.state(), LinkState::Armed);
+    }
+}
+
+fn maneerat(watchdog_s: f64) -> DeviceConfig {
+    let mut c = DeviceConfig::new(Preset::ManeeratDoc1);
+    c.watchdog_timeout_s = watchdog_s;
+    c
+}
+
+fn spec() -> RunSpec {
+    RunSpec::new(Preset::ManeeratDoc1, ControllerKind::Threshold)
+}
+
+fn within(a: f64, b: f64, rel: f64) -> bool {
+    (a - b).abs() <= rel * a.abs().max(b.abs())
+}
+
+#[test]
+fn a_teach_cut_and_a_closed_loop_over_the_link_run_like_the_simulation() {
+    let mut b = Bench::new(maneerat(0.5), SessionOptions::default());
+    let device = b.session.device().unwrap();
+    assert_eq!(
+        (device.device_id.as_str(), device.program.as_str()),
+        ("cutlab-emulator", "maneerat-doc-1")
+    );
+    b.teach_and_arm(&spec());
+    b.run_until(|b| b.session.stage() == Stage::Idle, 60.0);
+    let events = b.events();
+    let run = b.session.result().expect("a result").clone();
+    let sim = simulate(&spec()).unwrap();
+    let (s, l) = (&sim.metrics, &run.metrics);
+    assert!(l.completed, "{events}");
+    assert!(within(s.cycle_time_s, l.cycle_time_s, 0.05), "{s:?}\n{l:?}");
+    assert!(
+        within(s.removed_volume_mm3, l.removed_volume_mm3, 0.01),
+        "{s:?}\n{l:?}"
+    );
+    assert!(within(s.peak_force_n, l.peak_force_n, 0.1), "{s:?}\n{l:?}");
+    assert_eq!(sim.settings.target_force_n, run.settings.target_force_n);
+    // At the program's end the device was handed back, and said so.
+    assert_eq!(b.session.state(), LinkState::Streaming, "{events}");
+    assert!(!b.session.holding());
+    assert!(events.contains("run complete"), "{events}");
+    let st = b.session.stats();
+    assert_eq!(
+        (st.frames_lost, st.bytes_dropped, st.link_losses),
+        (0, 0, 0)
+    );
+    assert!(st.commands_sent > 10, "{st:?}");
+    // Every command (Arms, SetOverrides, Disarms) was acknowledged.
+    b.run_until(|_| false, 0.05);
+    assert_eq!(
+        b.session.stats().commands_acknowledged,
+        b.session.stats().commands_sent
+    );
+    assert_eq!(b.device.stats().watchdog_fallbacks, 0);
+    // One row per sample, in device time, with the loop's commands and estimates on them.
+    let samples = b.device.stats().frames_sent;
+    assert!(b.rows.len() > 20_000 && (b.rows.len() as u64) < samples);
+    assert!(b.rows.windows(2).all(|w| w[1].time_s > w[0].time_s));
+    let looped: Vec<&LiveRow> = b.rows.iter().filter(|r| r.phase == "closed loop").collect();
+    assert!(looped.iter().all(|r| r.commanded_override_pct.is_finite()));
+    assert!(looped.iter().any(|r| r.force_est_n > 0.5 * l.peak_force_n));
+}
+
+#[test]
+fn disarm_commands_the_safe_override_at_once_and_hands_back_when_the_part_ends() {
+    let options = SessionOptions::new(2.0, Some(35.0)).unwrap();
+    let mut b = Bench::new(maneerat(0.5), options);
+    b.teach_and_arm(&spec());
+    // Into the cut, under control.
+    b.run_until(
+        |b| b.rows.last().is_some_and(|r| r.force_est_n > 50.0),
+        10.0,
+    );
+    let acked = b.session.stats().commands_acknowledged;
+    b.session.disarm("Escape", b.now_s);
+    assert_eq!(b.session.state(), LinkState::Streaming);
+    assert_eq!(b.session.stage(), Stage::HoldingSafe);
+    assert!(
+        b.session.reason().contains("35 %"),
+        "{}",
+        b.session.reason()
+    );
+    // The SetOverride went out with the disarm itself.
+    let out = b.session.take_output();
+    let sent: Vec<Frame> = Decoder::new().frames(&out).filter_map(Result::ok).collect();
+    assert!(
+        sent.iter()
+            .any(|f| matches!(f, Frame::SetOverride(c) if c.override_cpct == 3500)),
+        "{sent:?}"
+    );
+    b.device.receive(&out, &mut b.to_host);
+    b.run_until(|b| b.session.stats().commands_acknowledged > acked, 1.0);
+    let ack = b.session.last_ack().unwrap();
+    assert_eq!(ack.applied_override_cpct, 3500);
+    // The run ended there, incomplete; the machine runs on at 35 % to the program's end, then
+    // the device is handed back.
+    assert!(!b.session.result().unwrap().trace.completed);
+    b.run_until(|b| b.session.stage() == Stage::Idle, 60.0);
+    assert!(!b.session.holding(), "{}", b.events());
+    let last_held = b
+        .rows
+        .iter()
+        .rev()
+        .find(|r| r.phase == "held at the safe override")
+        .unwrap();
+    assert_eq!(last_held.applied_override_pct, 35.0);
+}
+
+#[test]
+fn the_host_watchdog_alarms_when_samples_stop_and_the_device_falls_back() {
+    let mut config = maneerat(0.5);
+    // The cable is pulled 2 s (device time) into the closed loop's part, which starts at about
+    // 12 s: the teach cut's part is about 12 s long.
+    config.faults = FaultInjection {
+        unplug_at_s: Some(16.0),
+        ..FaultInjection::default()
+    };
+    let mut b = Bench::new(config, SessionOptions::new(0.5, None).unwrap());
+    b.teach_and_arm(&spec());
+    b.run_until(|b| b.session.state() == LinkState::Alarm, 30.0);
+    let events = b.events();
+    assert_eq!(b.session.state(), LinkState::Alarm, "{events}");
+    assert!(
+        b.session
+            .reason()
+            .starts_with("host watchdog: no sample for 0.5 s"),
+        "{}",
+        b.session.reason()
+    );
+    assert!(b.session.reason().contains("safe override (50 %)"));
+    assert_eq!(b.session.stats().link_losses, 1);
+    assert!(!b.session.result().unwrap().trace.completed);
+    // The device, hearing nothing, fell back on its own.
+    b.run_until(|b| b.device.stats().watchdog_fallbacks > 0, 2.0);
+    assert_eq!(b.device.stats().watchdog_fallbacks, 1);
+    // The alarm stays until acknowledged, and cannot be while the device is silent.
+    assert!(b.session.acknowledge_alarm(b.now_s).is_err());
+    assert_eq!(b.session.state(), LinkState::Alarm);
+}
+
+#[test]
+fn a_device_watchdog_fallback_is_counted_and_answered_by_re_arming() {
+    let mut config = maneerat(0.5);
+    // The device's receiver stalls for 1 s of device time inside the closed loop's part.
+    config.faults = FaultInjection {
+        stall_at_s: Some(18.0),
+        stall_s: 1.0,
+        ..FaultInjection::default()
+    };
+    let mut b = Bench::new(config, SessionOptions::default());
+    b.teach_and_arm(&spec());
+    b.run_until(|b| b.session.stage() == Stage::Idle, 60.0);
+    let events = b.events();
+    let st = b.session.stats();
+    assert_eq!(st.watchdog_fallbacks, 1, "{events}");
+    assert_eq!(b.device.stats().watchdog_fallbacks, 1);
+    assert!(events.contains("re-arming the device"), "{events}");
+    assert!(
+        events.contains("device back under the host's control"),
+        "{events}"
+    );
+    assert!(b.rows.iter().any(|r| r.phase == "device watchdog fallback"));
+    // The host stayed in control and the run completed.
+    assert!(b.session.result().unwrap().metrics.completed, "{events}");
+    assert_eq!(st.link_losses, 0);
+}
+
+#[test]
+fn a_lost_port_alarms_and_nothing_more_is_sent() {
+    let mut b = Bench::new(maneerat(0.5), SessionOptions::default());
+    b.teach_and_arm(&spec());
+    b.run_until(|b| b.rows.len() > 15_000, 10.0);
+    b.cut = true;
+    b.session.link_lost("the device was unplugged", b.now_s);
+    assert_eq!(b.session.state(), LinkState::Alarm);
+    let reason = b.session.reason().to_string();
+    assert!(
+        reason.starts_with("link lost: the device was unplugged")
+            && reason.contains("fallback override (50 %)"),
+        "{reason}"
+    );
+    assert!(!b.session.holding());
+    for _ in 0..100 {
+        b.step();
+        assert!(b.session.take_output().is_empty());
+    }
+    assert_eq!(b.session.stats().link_losses, 1);
+}
+
+#[test]
+fn a_silent_port_ends_the_handshake_with_the_reason() {
+    let mut s = HardwareSession::new(SessionOptions::new(1.0, None).unwrap(), 100.0);
+    let mut hellos = 0;
+    let mut t = 100.0;
+    while s.state() == LinkState::Handshaking && t < 120.0 {
+        t += 0.05;
+        s.tick(t);
+        hellos += Decoder::new()
+            .frames(&s.take_output())
+            .filter(|f| matches!(f, Ok(Frame::Hello(_))))
+            .count();
+    }
+    assert_eq!(s.state(), LinkState::Closed);
+    assert!(s.reason().starts_with("no answer to Hello within 5 s"));
+    assert!((15..=25).contains(&hellos), "{hellos}");
+}
+
+#[test]
+fn a_device_of_another_major_version_is_refused_and_arming_needs_a_calibration() {
+    let caps = |major| Capabilities {
+        version_major: major,
+        version_minor: 3,
+        device_id: padded("bridge"),
+        program: padded("maneerat-doc-1"),
+        channel_mask: 0x7F,
+        spindle_current_a_per_count: 0.01,
+        feed_current_a_per_count: 0.01,
+        fv_v_per_count: 0.001,
+        sample_rate_hz: 1000.0,
+        override_mode: OverrideModeCode::WholePercent,
+        min_override_cpct: 0,
+        max_override_cpct: 25500,
+        dial_cpct: [0; 16],
+        watchdog_timeout_ms: 500,
+        fallback_override_cpct: 5000,
+        over_current_a: 150.0,
+        features: 0,
+    };
+    let bytes = |c| {
+        let mut buf = [0u8; MAX_FRAME_LEN];
+        let n = encode_frame(&Frame::Capabilities(c), &mut buf).unwrap();
+        buf[..n].to_vec()
+    };
+    let mut s = HardwareSession::new(SessionOptions::default(), 0.0);
+    s.receive(&bytes(caps(2)), 0.1);
+    assert_eq!(s.state(), LinkState::Closed);
+    assert_eq!(
+        s.reason(),
+        "the device speaks protocol 2.3; this host speaks 1.x"
+    );
+    let mut s = HardwareSession::new(SessionOptions::default(), 0.0);
+    s.receive(&bytes(caps(1)), 0.1);
+    assert_eq!(s.state(), LinkState::Streaming);
+    assert!(s
+        .arm(&spec(), 0.2)
+        .unwrap_err()
+        .starts_with("no calibration yet"));
+    // A real bridge sends no truth: the teach cut takes the model of a cut of one depth, and
+    // says why it cannot run on a program whose depth steps.
+    let limits = s.teach_limits(&spec()).unwrap();
+    assert!(
+        limits
+            .lines
+            .iter()
+            .any(|l| l.contains("the model of the preset's cut (1 mm deep")),
+        "{limits:?}"
+    );
+    let steps = RunSpec::new(Preset::KimStepDoc, ControllerKind::Threshold);
+    assert!(s
+        .teach_limits(&steps)
+        .unwrap_err()
+        .contains("load a saved calibration instead"));
+    // A safe override the device cannot apply is refused before anything is armed.
+    let mut dial = caps(1);
+    dial.max_override_cpct = 15000;
+    dial.features = 1;
+    let mut s = HardwareSession::new(SessionOptions::new(2.0, Some(200.0)).unwrap(), 0.0);
+    s.receive(&bytes(dial), 0.1);
+    let why = s.start_teach_cut(&spec(), 0.2).unwrap_err();
+    assert_eq!(
+        why,
+        "the safe override 200 % is outside what the device applies (0–150 %)"
+    );
+    assert!(s.take_output().iter().all(|_| false) || s.state() == LinkState::Streaming);
+    assert!(SessionOptions::new(2.0, Some(300.0)).is_err());
+    assert!(SessionOptions::new(0.0, None).is_err());
+}
+
+#[test]
+fn a_recording_reads_back_through_the_log_reader_with_each_roles_guess() {
+    let mut b = Bench::new(maneerat(0.5), SessionOptions::default());
+    b.teach_and_arm(&spec());
+    b.rows.clear();
+    // Past the arming delay and into the cut.
+    b.run_until(|b| b.rows.len() >= 6000, 10.0);
+    let device = b.session.device().unwrap();
+    let mut recorder = Recorder::new(RecordingMeta {
+        id: 1,
+        name: "closed loop".into(),
+        started_ms: 0.0,
+        device: device.device_id.clone(),
+        sample_rate_hz: device.sample_rate_hz,
+        sim_truth: device.sim_truth,
+        rows: 0,
+        chunks: 0,
+        duration_s: 0.0,
+        finished: false,
+        end: String::new(),
+        summary: String::new(),
+    });
+    let mut csv = String::new();
+    for row in &b.rows {
+        recorder.push(row);
+        if recorder.pending_bytes() > 50_000 {
+            csv.push_str(&recorder.take_chunk().unwrap().1);
+        }
+    }
+    csv.push_str(&recorder.take_chunk().unwrap().1);
+    let log = load(csv.as_bytes(), None);
+    assert!(
+        log.problems.is_empty(),
+        "{:?}",
+        &log.problems[..3.min(log.problems.len())]
+    );
+    assert_eq!(log.rows, b.rows.len());
+    let role = |name: &str| {
+        log.columns
+            .iter()
+            .find(|c| c.name == name)
+            .unwrap_or_else(|| panic!("no column {name}"))
+            .role
+    };
+    assert_eq!(role("time [s]"), Some(Role::Time));
+    assert_eq!(role("S_I_U [A]"), Some(Role::PhaseCurrent));
+    assert_eq!(role("X_I_W [A]"), Some(Role::PhaseCurrent));
+    assert_eq!(role("S_speed [rpm]"), Some(Role::SpindleSpeed));
+    assert_eq!(role("feed [mm/min]"), Some(Role::Feed));
+    assert_eq!(role("S_current_rms [A]"), Some(Role::RmsCurrent));
+    assert_eq!(role("force estimate [N]"), Some(Role::Force));
+    assert_eq!(role("depth (simulated) [mm]"), Some(Role::Depth));
+    assert_eq!(role("phase"), Some(Role::Label));
+    let time = &log.columns[log.time_column.unwrap()];
+    assert_eq!(time.kind, ColumnKind::Time);
+    // 1 kHz, in device time.
+    assert!((log.sample_period_s.unwrap() - 0.001).abs() < 1e-9);
+}
+
+#[test]
+fn a_device_without_truth_is_taught_from_the_cut_model_and_a_saved_calibration_needs_no_teach_cut()
+{
+    let mut config = maneerat(0.5);
+    config.sim_truth = false;
+    let mut b = Bench::new(config, SessionOptions::default());
+    assert!(!b.session.device().unwrap().sim_truth);
+    b.teach_and_arm(&spec());
+    b.run_until(|b| b.session.stage() == Stage::Idle, 60.0);
+    let taught = b.session.calibration().unwrap().clone();
+    let run = b.session.result().unwrap();
+    assert!(run.metrics.completed, "{}", b.events());
+    // No truth on the rows either.
+    assert!(b.rows.iter().all(|r| r.force_n.is_nan()));
+
+    // The calibration saved as a file and loaded into a fresh session arms at once.
+    let file = CalibrationFile::new(taught.calibration.clone(), "teach cut over the link");
+    let read = CalibrationFile::from_json(&file.to_json()).unwrap();
+    let mut b = Bench::new(maneerat(0.5), SessionOptions::default());
+    b.session.set_calibration(TaughtCalibration {
+        calibration: read.calibration,
+        settings: None,
+        source: "a file".into(),
+    });
+    b.session.arm(&spec(), b.now_s).unwrap();
+    b.run_until(|b| b.session.stage() == Stage::Idle, 60.0);
+    assert!(b.session.result().unwrap().metrics.completed);
+    assert_eq!(b.device.stats().parts, 1, "no teach cut");
+    // A calibration of another feedback path is refused, saying so.
+    let mut feed = spec();
+    feed.settings.feedback = Some(Feedback::FeedCurrent);
+    let why = b.session.arm(&feed, b.now_s).unwrap_err();
+    assert!(
+        why.starts_with("the calibration is for spindle feedback but the run measures with feed"),
+        "{why}"
+    );
+}
+
+#[test]
+fn an_overload_feed_hold_alarms_and_stays_in_force_with_the_safe_override() {
+    let mut b = Bench::new(maneerat(0.5), SessionOptions::default());
+    // A target far below the cut's force: the envelope's overload limit (3 × target) is crossed
+    // as soon as the tool enters, and it holds the feed.
+    let mut low = spec();
+    low.settings.target_force_n = Some(10.0);
+    b.teach_and_arm(&low);
+    b.run_until(|b| b.session.state() == LinkState::Alarm, 30.0);
+    let events = b.events();
+    assert_eq!(b.session.state(), LinkState::Alarm, "{events}");
+    assert!(
+        b.session
+            .reason()
+            .starts_with("overload: the envelope held the feed"),
+        "{}",
+        b.session.reason()
+    );
+    assert_eq!(b.session.stage(), Stage::HoldingSafe);
+    // The feed stays held (the device acknowledges the hold) at the safe override.
+    b.rows.clear();
+    b.run_until(|b| b.rows.len() > 500, 5.0);
+    assert!(
+        b.rows.iter().all(|r| r.feed_mm_min.abs() < 1e-6),
+        "{events}"
+    );
+    assert!(b.rows.iter().all(|r| r.commanded_override_pct == 50.0));
+    assert_eq!(
+        b.session.last_ack().unwrap().flags & 1,
+        1,
+        "feed hold in force"
+    );
+}
+
+/// docs/protocol.md §5, as the page does it: an over-current the device reports stops the run and
+/// the safe override is held until the part ends; an E-stop stops the run and hands the device
+/// back at once (it refuses commands and its axes stopped).
+#[test]
+fn a_device_fault_alarms_an_over_current_holds_the_safe_override_an_e_stop_hands_back() {
+    // The teach cut's part ends about 15 s into device time: the faults come 5 s into the run.
+    let mut config = maneerat(5.0);
+    config.faults.over_current_at_s = Some(20.0);
+    config.faults.over_current_s = 0.2;
+    let mut b = Bench::new(config, SessionOptions::default());
+    b.teach_and_arm(&spec());
+    b.run_until(|b| b.session.state() == LinkState::Alarm, 30.0);
+    let events = b.events();
+    assert_eq!(b.session.state(), LinkState::Alarm, "{events}");
+    assert!(
+        b.session
+            .reason()
+            .contains("device fault over-current raised"),
+        "{}",
+        b.session.reason()
+    );
+    assert_eq!(b.session.stage(), Stage::HoldingSafe);
+    assert!(!b.session.result().unwrap().metrics.completed);
+    b.rows.clear();
+    b.run_until(|b| !b.session.holding(), 30.0);
+    assert!(b.rows.iter().any(|r| r.program_end), "{}", b.events());
+    assert!(b
+        .rows
+        .iter()
+        .all(|r| r.commanded_override_pct == 50.0 || r.commanded_override_pct.is_nan()));
+
+    let mut config = maneerat(5.0);
+    config.faults.estop_at_s = Some(20.0);
+    let mut b = Bench::new(config, SessionOptions::default());
+    b.teach_and_arm(&spec());
+    b.run_until(|b| b.session.state() == LinkState::Alarm, 30.0);
+    let events = b.events();
+    assert_eq!(b.session.state(), LinkState::Alarm, "{events}");
+    assert!(
+        b.session.reason().contains("device fault e-stop raised"),
+        "{}",
+        b.session.reason()
+    );
+    assert!(!b.session.holding(), "{events}");
+    assert!(!b.session.result().unwrap().metrics.completed);
+    assert!(events.contains("disarm: E-stop"), "{events}");
+}
