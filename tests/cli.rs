@@ -835,3 +835,43 @@ fn log_analyse_groups_by_label_and_says_when_a_stage_is_skipped() {
         assert!(e.contains(message), "{args:?}: {e}");
     }
 }
+
+/// `cutlab calibrate` reads a hostile log (a BOM, CRLF, numbers at the edge of f64) as the log
+/// reader does: no panic, one error naming the file, line and column.
+#[test]
+fn calibrate_names_the_line_and_column_of_an_impossible_value() {
+    let dir = std::env::temp_dir().join(format!("cutlab-calibrate-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("hostile.csv");
+    let mut text =
+        String::from("\u{feff}time_s,spindle_current_rms_a,spindle_speed_rpm,force_n\r\n");
+    for i in 0..40 {
+        text.push_str(&format!(
+            "{},{},1000,{}\r\n",
+            f64::from(i) * 0.1,
+            5 + i % 7,
+            200 + 3 * i
+        ));
+    }
+    text.push_str("4,1e308,1000,1e200\r\n");
+    std::fs::write(&path, &text).unwrap();
+    let file = path.to_str().unwrap();
+    let (result, out) = cutlab(&["calibrate", file], "");
+    let e = result.unwrap_err();
+    assert!(out.is_empty(), "{out}");
+    assert!(
+        e.starts_with(&format!(
+            "{file}: line 42, column \"force_n\": 1e200 is beyond"
+        )),
+        "{e}"
+    );
+    assert!(!e.contains('\n'), "{e}");
+    // Without the impossible row the same file (BOM and CRLF kept) calibrates.
+    let good: String = text.lines().take(41).map(|l| format!("{l}\r\n")).collect();
+    std::fs::write(&path, good).unwrap();
+    let (result, out) = cutlab(&["calibrate", file, "--json"], "");
+    result.unwrap();
+    let report: serde_json::Value = serde_json::from_str(&out).unwrap();
+    assert_eq!(report["rows_with_force"], 40, "{out}");
+    std::fs::remove_dir_all(&dir).ok();
+}
