@@ -104,6 +104,9 @@ pub fn parallel_map_reporting<T: Sync, R: Send>(
     f: impl Fn(&T) -> R + Sync,
     mut done: impl FnMut(usize, &R),
 ) -> Vec<R> {
+    // The browser's one thread runs the items in order.
+    #[cfg(target_arch = "wasm32")]
+    let _ = threads;
     #[cfg(not(target_arch = "wasm32"))]
     if threads > 1 && items.len() > 1 {
         use std::sync::atomic::{AtomicUsize, Ordering};

@@ -325,6 +325,15 @@ test('a real device behind a fake serial port: handshake, teach cut, arm, acknow
     assert.equal(role('S_current_rms [A]'), 'rms-current');
     assert.equal(role('force estimate [N]'), 'force');
     assert.equal(role('phase'), 'label');
+    // The Logs page opens the same file as a person would, with the same rows and roles.
+    await page.goto(`${page.url().split('#')[0]}#/logs`);
+    await page.getByLabel('Open log files').setInputFiles(file);
+    await page.getByRole('status')
+      .filter({ hasText: `Loaded hardware-recording.csv: ${rowsBefore} rows × ${log.columns.length} columns` })
+      .waitFor({ timeout: LONG });
+    await page.getByLabel('Analyse hardware-recording.csv').check();
+    assert.equal(await page.getByRole('combobox', { name: 'force estimate [N]' }).inputValue(), 'force');
+    assert.equal(await page.getByRole('combobox', { name: 'phase', exact: true }).inputValue(), 'label');
     assert.deepEqual(problems, []);
   } finally {
     bridge.kill();
@@ -416,6 +425,16 @@ test('without WebSerial the page says why and what works instead; the virtual de
   await mkdir(artifacts, { recursive: true });
   const saved = join(artifacts, 'hardware-calibration.json');
   execFileSync(cutlab, ['sim', '--scenario', 'maneerat-doc-1', '--controller', 'fixed', '--save-calibration', saved]);
+  // A calibration saved in this browser (as the Logs page saves it) is offered too.
+  const savedText = JSON.parse(await readFile(saved, 'utf8'));
+  await page.evaluate((file) => localStorage.setItem('cutlab-calibrations', JSON.stringify([
+    { ...file, source: 'log teach.csv, spindle feedback' },
+  ])), savedText);
+  const savedList = page.getByLabel('Or one saved in this browser (Logs page)');
+  await savedList.focus();
+  await savedList.selectOption({ label: 'log teach.csv, spindle feedback' });
+  await page.getByText('In use: saved in this browser: log teach.csv, spindle feedback').waitFor();
+
   const broken = join(artifacts, 'hardware-calibration-broken.json');
   await writeFile(broken, '{"format": "cutlab-calibration", "version": 1, "calibration": 3}');
   await page.getByLabel('Load a calibration file (cutlab-calibration JSON)').setInputFiles(broken);

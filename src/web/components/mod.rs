@@ -7,5 +7,6 @@ pub mod heat_map;
 pub mod run_form;
 pub mod run_view;
 pub mod runner;
+pub mod saved_calibrations;
 pub mod savings;
 pub mod work_job;

@@ -34,6 +34,7 @@ use crate::web::components::run_form::{
     ControllerFields, ControllerForm, ScenarioForm, SettingFields,
 };
 use crate::web::components::run_view::{MetricsTable, NamedRun};
+use crate::web::components::saved_calibrations::stored_calibrations;
 use crate::web::hardware::port::{
     describe, now_s, web_serial_unavailable, Port, PortEvent, SerialLink, SerialSettings, Sink,
     VirtualLink,
@@ -573,6 +574,17 @@ pub fn HardwarePage() -> impl IntoView {
     // Calibrations: loaded from a file (cutlab sim/host --save-calibration, cutlab calibrate),
     // saved after a teach cut over the link.
     let calibration_error = RwSignal::new(None::<String>);
+    let use_calibration = move |file: CalibrationFile, source: String| {
+        station.try_update_value(|s| {
+            s.set_calibration(TaughtCalibration {
+                calibration: file.calibration,
+                settings: None,
+                source,
+            })
+        });
+        calibration_error.set(None);
+        ui.publish(station, true);
+    };
     let load_calibration = move |ev: leptos::ev::Event| {
         let Some(input) = ev
             .target()
@@ -601,19 +613,30 @@ pub fn HardwarePage() -> impl IntoView {
                     } else {
                         format!("file {name} ({})", file.source)
                     };
-                    station.try_update_value(|s| {
-                        s.set_calibration(TaughtCalibration {
-                            calibration: file.calibration,
-                            settings: None,
-                            source,
-                        })
-                    });
-                    calibration_error.set(None);
-                    ui.publish(station, true);
+                    use_calibration(file, source);
                 }
                 Err(e) => calibration_error.set(Some(format!("{name}: {e}"))),
             }
         });
+    };
+    // The calibrations saved in this browser (the Logs page saves them), read again whenever
+    // the list is opened so one saved in another tab shows up.
+    let saved = RwSignal::new(stored_calibrations());
+    let refresh_saved = move |_| saved.set(stored_calibrations());
+    let use_saved = move |ev: leptos::ev::Event| {
+        let chosen = event_target_value(&ev);
+        let Ok(index) = chosen.parse::<usize>() else {
+            return;
+        };
+        match saved.with_untracked(|(files, _)| files.get(index).cloned()) {
+            Some(file) => {
+                let source = format!("saved in this browser: {}", file.source);
+                use_calibration(file, source);
+            }
+            None => calibration_error.set(Some(
+                "that saved calibration is gone (deleted in another tab?)".into(),
+            )),
+        }
     };
     let save_calibration = move |_| {
         let Some(file) = station.try_with_value(Station::calibration_file).flatten() else {
@@ -868,6 +891,29 @@ pub fn HardwarePage() -> impl IntoView {
                                     on:change=load_calibration
                                     aria-describedby="hw-calibration-error"
                                 />
+                            </div>
+                            <div class="field">
+                                <label for="hw-saved-calibration">"Or one saved in this browser (Logs page)"</label>
+                                <select
+                                    id="hw-saved-calibration"
+                                    on:focus=refresh_saved
+                                    on:change=use_saved
+                                    aria-describedby="hw-calibration-error hw-saved-problems"
+                                >
+                                    <option value="" selected=true>
+                                        {move || if saved.with(|(files, _)| files.is_empty()) {
+                                            "None saved yet"
+                                        } else {
+                                            "Choose a saved calibration…"
+                                        }}
+                                    </option>
+                                    {move || saved.with(|(files, _)| files.iter().enumerate().map(|(i, f)| {
+                                        view! { <option value=i.to_string()>{f.source.clone()}</option> }
+                                    }).collect_view())}
+                                </select>
+                                <p class="hint" id="hw-saved-problems">
+                                    {move || saved.with(|(_, problems)| problems.join("; "))}
+                                </p>
                                 <p class="field-error" id="hw-calibration-error" aria-live="polite">
                                     {move || calibration_error.get().unwrap_or_default()}
                                 </p>

@@ -21,7 +21,6 @@ use wasm_bindgen::JsCast;
 
 use crate::charts::{Axis, LineChart, Series, Stroke, PALETTE};
 use crate::closed_loop::calibration_file::CalibrationFile;
-use crate::closed_loop::calibration_store::{read_store, with_saved, STORAGE_KEY};
 use crate::closed_loop::runner::{Calibration, Feedback};
 use crate::control::registry::{ControllerConfig, ControllerKind};
 use crate::estimation::cut_forces::CutGeometry;
@@ -40,6 +39,7 @@ use crate::web::components::chart::ChartCanvas;
 use crate::web::components::download::{download_text, download_written};
 use crate::web::components::fields::{parse_count, parse_number, NumberField, SelectField};
 use crate::web::components::runner::{Debounce, RunProgress, Runner};
+use crate::web::components::saved_calibrations::{save_calibration, stored_calibrations};
 use crate::web::components::work_job::Shared;
 
 /// At most this many logs are open (and overlaid) at once.
@@ -454,28 +454,6 @@ fn replay_chart(
     }
     chart.fit();
     chart
-}
-
-/// The saved calibrations in this browser, and what could not be read.
-fn stored_calibrations() -> (Vec<CalibrationFile>, Vec<String>) {
-    let text = window()
-        .local_storage()
-        .ok()
-        .flatten()
-        .and_then(|s| s.get_item(STORAGE_KEY).ok().flatten());
-    read_store(text.as_deref())
-}
-
-fn save_calibration(file: &CalibrationFile) -> Result<(), String> {
-    let storage = window()
-        .local_storage()
-        .ok()
-        .flatten()
-        .ok_or("this browser keeps no local storage")?;
-    let text = storage.get_item(STORAGE_KEY).ok().flatten();
-    storage
-        .set_item(STORAGE_KEY, &with_saved(text.as_deref(), file))
-        .map_err(|_| "the browser refused to store the calibration (storage full?)".to_string())
 }
 
 /// A labelled select over dynamic options, keeping its value.
