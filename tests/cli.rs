@@ -875,3 +875,32 @@ fn calibrate_names_the_line_and_column_of_an_impossible_value() {
     assert_eq!(report["rows_with_force"], 40, "{out}");
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// A header of twenty thousand columns (a few MB) is read at once, and the error for a missing
+/// force column names a few of the file's columns and how many there are, not all of them.
+#[test]
+fn calibrate_on_a_very_wide_file_says_what_is_missing_in_one_short_line() {
+    let dir = std::env::temp_dir().join(format!("cutlab-wide-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("wide.csv");
+    let names: Vec<String> = (0..20_000).map(|i| format!("c{i}")).collect();
+    let values = vec!["1"; names.len()].join(",");
+    std::fs::write(&path, format!("{}\n{values}\n{values}\n", names.join(","))).unwrap();
+    let file = path.to_str().unwrap();
+    let (result, _) = cutlab(&["calibrate", file], "");
+    let e = result.unwrap_err();
+    assert!(
+        e.contains("no \"force_n\" column (the file's columns: c0, c1,")
+            && e.contains("c11, … (20000 in all)"),
+        "{e}"
+    );
+    assert!(e.len() < 400, "{e}");
+    let (result, _) = cutlab(&["calibrate", file, "--map", "force_n=F"], "");
+    let e = result.unwrap_err();
+    assert!(
+        e.contains("--map force_n=F: no such column; columns: c0,"),
+        "{e}"
+    );
+    assert!(e.len() < 400, "{e}");
+    std::fs::remove_dir_all(&dir).ok();
+}

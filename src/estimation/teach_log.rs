@@ -120,8 +120,8 @@ impl fmt::Display for LogError {
                 columns,
             } => write!(
                 f,
-                "no {name:?} column (columns: {}); {purpose}",
-                columns.join(", ")
+                "no {name:?} column (the file's columns: {}); {purpose}",
+                some_names(columns)
             ),
             LogError::NoModel { spindle, feed } => write!(
                 f,
@@ -132,6 +132,17 @@ impl fmt::Display for LogError {
 }
 
 impl std::error::Error for LogError {}
+
+/// The first few of `names` for a message, and how many there are in all: a file with ten
+/// thousand columns must not make a ten-thousand-name error.
+fn some_names(names: &[String]) -> String {
+    const SHOWN: usize = 12;
+    match names.len() {
+        0 => "none".to_string(),
+        n if n <= SHOWN => names.join(", "),
+        n => format!("{}, … ({n} in all)", names[..SHOWN].join(", ")),
+    }
+}
 
 /// The columns calibration reads, by their names in cutlab's own logs (`override_pct` only by
 /// a teach-in, to find the rows cut at 100 %).
@@ -151,6 +162,8 @@ pub const CALIBRATION_COLUMNS: [&str; 10] = [
 /// The numeric columns of a CSV log, by name.
 #[derive(Debug, Clone, PartialEq)]
 pub struct LogTable {
+    /// Every column of the file, by name (for messages).
+    file_columns: Vec<String>,
     header: Vec<String>,
     columns: Vec<Vec<f64>>,
     /// The file line (from 1) of each data row: blank lines are skipped.
@@ -215,6 +228,7 @@ impl LogTable {
             }
         }
         Ok(Self {
+            file_columns: header.clone(),
             header,
             columns,
             row_lines,
@@ -244,13 +258,10 @@ impl LogTable {
                 ));
             }
             if !log.columns.iter().any(|c| &c.name == column) {
+                let names: Vec<String> = log.columns.iter().map(|c| c.name.clone()).collect();
                 return Err(format!(
                     "--map {role}={column}: no such column; columns: {}",
-                    log.columns
-                        .iter()
-                        .map(|c| c.name.as_str())
-                        .collect::<Vec<_>>()
-                        .join(", ")
+                    some_names(&names)
                 ));
             }
         }
@@ -272,6 +283,7 @@ impl LogTable {
             }
         }
         Ok(Self {
+            file_columns: log.columns.iter().map(|c| c.name.clone()).collect(),
             header,
             columns,
             row_lines: log.row_lines.iter().map(|&l| l as usize).collect(),
@@ -317,7 +329,7 @@ impl LogTable {
             .ok_or_else(|| LogError::MissingColumn {
                 name,
                 purpose,
-                columns: self.header.clone(),
+                columns: self.file_columns.clone(),
             })
     }
 }
@@ -367,7 +379,7 @@ fn forces(table: &LogTable, geometry: Option<(&CutGeometry, &str)>) -> Result<Fo
             name: "force_n",
             purpose: "without a measured force, model it from the cut (--material, \
                       --diameter-mm, --teeth and --mode)",
-            columns: table.header.clone(),
+            columns: table.file_columns.clone(),
         })?;
         let (feed_n, feed_source) = match table.fit_column("feed_force_n")? {
             Some(feed) => (feed.to_vec(), "the feed_force_n column".to_string()),
