@@ -123,7 +123,8 @@ test("the fuzzy rule bases' comparison starts from the paper's own settings", as
   assert.match(await finding.textContent(), new RegExp(`in ${dynamics} s against ${experience} s`));
   // Its slowly sampled twin sets the period; there the dynamics table settles sooner.
   await page.getByRole('button', { name: 'Paper 002 at 0.5 s sampling' }).click();
-  await finding.filter({ hasText: ' Reproduced.' }).waitFor({ timeout: RUN_TIMEOUT });
+  // A regular expression, case-sensitive: the string ' Reproduced.' also matches "Not reproduced.".
+  await finding.filter({ hasText: /Reproduced\./ }).waitFor({ timeout: RUN_TIMEOUT });
   assert.match(page.url(), /period=0\.5/);
   const [slowExperience, slowDynamics] = await settlingOf();
   assert.ok(Number(slowDynamics) < Number(slowExperience), `${slowDynamics} vs ${slowExperience}`);
