@@ -364,3 +364,32 @@ fn the_synthetic_daq_capture_maps_itself_and_calibrates() {
     };
     assert!(model.rows[0].quality.r_squared > 0.95, "{}", fit.quality());
 }
+
+/// The browser's first run on the default scenario starts from the shipped calibration: the run
+/// it gives is the run its own teach cut gives, trace and metrics to the bit.
+#[test]
+fn a_run_from_the_shipped_calibration_is_the_run_with_its_own_teach_cut() {
+    use cutlab::closed_loop::lab::{simulate, LabRun, RunSpec, TeachKey};
+    use cutlab::closed_loop::precomputed::shipped_calibrations;
+    use cutlab::control::registry::ControllerKind;
+    use cutlab::plant::Preset;
+    use cutlab::work::Work;
+    let spec = RunSpec::new(Preset::KimStepDoc, ControllerKind::Threshold);
+    let key = TeachKey::of(&spec).unwrap();
+    let (_, shipped) = shipped_calibrations()
+        .into_iter()
+        .find(|(k, _)| *k == key)
+        .expect("the default scenario's teach cut is shipped");
+    let from_shipped = LabRun::calibrated(&spec, shipped)
+        .and_then(Work::run_to_end)
+        .unwrap();
+    let taught = simulate(&spec).unwrap();
+    assert_eq!(
+        format!("{:?}", from_shipped.trace),
+        format!("{:?}", taught.trace)
+    );
+    assert_eq!(
+        format!("{:?}", from_shipped.metrics),
+        format!("{:?}", taught.metrics)
+    );
+}

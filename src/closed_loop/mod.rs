@@ -10,6 +10,7 @@ pub mod file_format;
 pub mod lab;
 pub mod metrics;
 pub mod paper_comparisons;
+pub mod precomputed;
 pub mod runner;
 pub mod summary;
 pub mod trace;

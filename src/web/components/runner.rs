@@ -23,8 +23,11 @@ use crate::work::{Progress, Work};
 /// Target duration of one chunk of work.
 pub const CHUNK_BUDGET_MS: f64 = 30.0;
 
-/// How often a job's output so far is shown while it runs ([`Runner::start_previewing`]).
-pub const PREVIEW_EVERY_MS: f64 = 200.0;
+/// How often a job's output so far is shown while it runs ([`Runner::start_previewing`]). A
+/// preview redraws every chart of the page, tens of milliseconds in all: each one would add that
+/// much to a short run, so a run done within half a second is drawn once, finished, and a longer
+/// one fills in twice a second.
+pub const PREVIEW_EVERY_MS: f64 = 500.0;
 
 /// What a runner is doing.
 #[derive(Debug, Clone, PartialEq)]
@@ -145,7 +148,9 @@ impl<T: Clone + Send + Sync + 'static> Runner<T> {
             status: self.status,
             preview: self.preview,
         };
-        pump(state, signals, self.generation.clone(), generation);
+        // The first chunk in a task of its own: a page that starts a run as it mounts paints first.
+        let generations = self.generation.clone();
+        next_task(move || pump(state, signals, generations, generation));
     }
 }
 

@@ -8,7 +8,7 @@ use leptos::prelude::*;
 use crate::closed_loop::lab::{LabRuns, RunResult, RunSpec, TeachKey};
 use crate::closed_loop::metrics::metrics_csv_columns;
 use crate::closed_loop::paper_comparisons::PAPER_COMPARISONS;
-use crate::closed_loop::runner::Calibration;
+use crate::closed_loop::precomputed::shipped_calibrations;
 use crate::closed_loop::trace::write_csv_runs;
 use crate::control::registry::ControllerKind;
 use crate::web::components::download::{download_configuration, download_text, download_written};
@@ -89,7 +89,9 @@ pub fn ComparePage() -> impl IntoView {
             .collect::<Option<Vec<_>>>()
     });
 
-    let calibrations = StoredValue::new(Vec::<(TeachKey, Calibration)>::new());
+    // Seeded with the teach cuts shipped with the code (the default scenario's), so its first run
+    // starts with the closed loop.
+    let calibrations = StoredValue::new(shipped_calibrations());
     let debounce = Debounce::new(RERUN_DELAY);
     let first_run = StoredValue::new(true);
     let savings_for_edits = savings.clone();

@@ -7,7 +7,7 @@ use leptos::prelude::*;
 
 use crate::closed_loop::lab::{LabRuns, RunResult, RunSpec, TeachKey};
 use crate::closed_loop::metrics::metrics_csv;
-use crate::closed_loop::runner::Calibration;
+use crate::closed_loop::precomputed::shipped_calibrations;
 use crate::closed_loop::trace::write_csv;
 use crate::control::registry::ControllerKind;
 use crate::web::components::download::{download_configuration, download_text, download_written};
@@ -67,7 +67,9 @@ pub fn SimulatePage() -> impl IntoView {
     });
 
     // The calibrations of the last teach cuts, newest last.
-    let calibrations = StoredValue::new(Vec::<(TeachKey, Calibration)>::new());
+    // Seeded with the teach cuts shipped with the code (the default scenario's), so its first run
+    // starts with the closed loop.
+    let calibrations = StoredValue::new(shipped_calibrations());
     let start_run = {
         let runner = runner.clone();
         move |spec: RunSpec| {
