@@ -393,3 +393,35 @@ fn a_run_from_the_shipped_calibration_is_the_run_with_its_own_teach_cut() {
         format!("{:?}", taught.metrics)
     );
 }
+
+/// The shipped references are what the reference search finds for the default scenario, and the
+/// Simulate page's default run (threshold) has that scenario, however its settings are spelled.
+#[test]
+fn the_shipped_references_are_kim_step_docs_reference_search() {
+    use cutlab::closed_loop::lab::{fixed_feed_spec, references, RunSpec, ScenarioKey};
+    use cutlab::closed_loop::precomputed::shipped_references;
+    use cutlab::control::registry::ControllerKind;
+    use cutlab::plant::Preset;
+    let default_run = RunSpec::new(Preset::KimStepDoc, ControllerKind::Threshold);
+    let scenario = fixed_feed_spec(&default_run, 100.0).unwrap();
+    let key = ScenarioKey::of(&default_run).unwrap();
+    let (_, shipped) = shipped_references()
+        .into_iter()
+        .find(|(k, _)| *k == key)
+        .expect("the default scenario's references are shipped");
+    let fresh = references(&scenario).unwrap();
+    // Debug text compares every bit (and NaN equal to NaN).
+    assert_eq!(
+        format!("{shipped:?}"),
+        format!("{fresh:?}"),
+        "kim-step-doc-references.json is stale: run scripts/sample-data"
+    );
+    // The browser's form spells every setting out; the key is the same.
+    let mut spelled = default_run.clone();
+    spelled.settings.control_period_s = Some(
+        cutlab::closed_loop::lab::default_settings(&default_run)
+            .unwrap()
+            .control_period_s,
+    );
+    assert_eq!(ScenarioKey::of(&spelled).unwrap(), key);
+}

@@ -739,17 +739,21 @@ pub fn simulate(spec: &RunSpec) -> Result<RunResult, LoopError> {
 }
 
 /// The reference runs of the savings.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct References {
     /// Cycle time at the programmed feed (fixed 100 %).
+    #[serde(deserialize_with = "crate::estimation::null_as_nan")]
     pub programmed_cycle_time_s: f64,
     /// The highest fixed override whose peak regulated force stays at or below the target (NaN
     /// when not even the lowest does, and with it the cycle time and that saving): the
     /// feed a machinist would fix for the part's worst spot, judged against the same force the
     /// controllers are asked to hold (not the 1.2 × target limit, which would let the fixed feed
     /// run 20 % harder than any controller aims to).
+    #[serde(deserialize_with = "crate::estimation::null_as_nan")]
     pub safe_fixed_override_pct: f64,
     /// Cycle time at that override.
+    #[serde(deserialize_with = "crate::estimation::null_as_nan")]
     pub safe_fixed_cycle_time_s: f64,
 }
 
@@ -1075,6 +1079,31 @@ pub fn fixed_feed_spec(spec: &RunSpec, override_pct: f64) -> Result<RunSpec, Loo
     Ok(s)
 }
 
+/// What a scenario's fixed-feed references depend on: the preset, the seed, the machine edits and
+/// the settings of its run at the fixed 100 % feed, resolved to values. Two specs that spell the
+/// same settings differently (a default left unset, or typed in) have the same key, and their
+/// reference searches give the same result; the controller plays no part.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ScenarioKey {
+    preset: Preset,
+    seed: u64,
+    plant: PlantEdits,
+    settings: LoopSettings,
+}
+
+impl ScenarioKey {
+    /// The key of `spec`'s scenario.
+    pub fn of(spec: &RunSpec) -> Result<Self, LoopError> {
+        let fixed = fixed_feed_spec(spec, 100.0)?;
+        Ok(Self {
+            preset: spec.preset,
+            seed: spec.seed,
+            plant: spec.plant,
+            settings: default_settings(&fixed)?,
+        })
+    }
+}
+
 /// Fills a result's savings from the references.
 pub fn apply_references(result: &mut RunResult, references: &References) {
     result.metrics = with_savings(
@@ -1208,13 +1237,16 @@ impl Work for LabRuns {
     fn progress(&self) -> Progress {
         let total = self.specs.len().max(1);
         let index = self.results.len();
-        let (stage, part) = self
-            .current
-            .as_ref()
-            .map_or(("teach cut".to_string(), 0.0), |r| {
+        let (stage, part) = match &self.current {
+            Some(r) => {
                 let p = r.progress();
                 (p.stage, p.fraction)
-            });
+            }
+            // Between runs nothing has been done yet for the next one (which may need no teach
+            // cut); after the last, the output is being handed over.
+            None if index >= self.specs.len() => ("done".to_string(), 0.0),
+            None => ("starting".to_string(), 0.0),
+        };
         let label = if total > 1 {
             format!("Run {} of {total}: {stage}", (index + 1).min(total))
         } else {

@@ -9,8 +9,10 @@ use std::sync::Arc;
 use leptos::prelude::*;
 
 use crate::closed_loop::lab::{
-    apply_references, fixed_feed_spec, ReferenceSearch, References, RunResult, RunSpec, TeachKey,
+    apply_references, fixed_feed_spec, ReferenceSearch, References, RunResult, RunSpec,
+    ScenarioKey, TeachKey,
 };
+use crate::closed_loop::precomputed::shipped_references;
 use crate::closed_loop::runner::Calibration;
 use crate::web::components::run_view::NamedRun;
 use crate::web::components::runner::{RunProgress, RunStatus, Runner};
@@ -23,6 +25,11 @@ fn scenario_of(spec: &RunSpec) -> Option<RunSpec> {
     fixed_feed_spec(spec, 100.0).ok()
 }
 
+/// What the references of `spec`'s scenario depend on (the same for the scenario itself).
+fn key_of(spec: &RunSpec) -> Option<ScenarioKey> {
+    ScenarioKey::of(spec).ok()
+}
+
 /// Reference runs for the savings, made on request and remembered per scenario.
 #[derive(Clone)]
 pub struct Savings {
@@ -30,7 +37,7 @@ pub struct Savings {
     /// The scenario of the search under way or last started.
     started: StoredValue<Option<RunSpec>>,
     /// Known references, newest last.
-    known: RwSignal<Vec<(RunSpec, References)>>,
+    known: RwSignal<Vec<(ScenarioKey, References)>>,
 }
 
 impl Savings {
@@ -38,14 +45,15 @@ impl Savings {
     pub fn new() -> Self {
         let runner = Runner::<References>::new();
         let started = StoredValue::new(None::<RunSpec>);
-        let known = RwSignal::new(Vec::<(RunSpec, References)>::new());
+        // The default scenario's references ship with the code (closed_loop::precomputed).
+        let known = RwSignal::new(shipped_references());
         let status = runner.status;
         Effect::new(move |_| {
             if let RunStatus::Done(found) = status.get() {
-                if let Some(scenario) = started.get_value() {
+                if let Some(key) = started.get_value().as_ref().and_then(key_of) {
                     known.update(|k| {
-                        k.retain(|(s, _)| *s != scenario);
-                        k.push((scenario, found));
+                        k.retain(|(s, _)| *s != key);
+                        k.push((key, found));
                         let excess = k.len().saturating_sub(KEPT);
                         k.drain(..excess);
                     });
@@ -60,8 +68,9 @@ impl Savings {
     }
 
     fn lookup(&self, scenario: &RunSpec) -> Option<References> {
+        let key = key_of(scenario)?;
         self.known
-            .with(|k| k.iter().find(|(s, _)| s == scenario).map(|(_, r)| *r))
+            .with(|k| k.iter().find(|(s, _)| *s == key).map(|(_, r)| *r))
     }
 
     /// Starts the reference runs for the scenario of `spec`, unless they are known or under way;
@@ -73,7 +82,7 @@ impl Savings {
         };
         let known = self
             .known
-            .with_untracked(|k| k.iter().any(|(s, _)| *s == scenario));
+            .with_untracked(|k| k.iter().any(|(s, _)| Some(s) == key_of(&scenario).as_ref()));
         if known {
             return;
         }
@@ -81,7 +90,7 @@ impl Savings {
             self.runner.status.get_untracked(),
             RunStatus::Running { .. }
         );
-        if running && self.started.get_value().as_ref() == Some(&scenario) {
+        if running && self.started.get_value().as_ref().and_then(key_of) == key_of(&scenario) {
             return;
         }
         let same_teach_cut = match (TeachKey::of(spec), TeachKey::of(&scenario)) {
@@ -105,7 +114,8 @@ impl Savings {
     /// Stops a search for another scenario than `spec`'s, so it does not slow the new run.
     pub fn keep_only(&self, spec: &RunSpec) {
         let scenario = scenario_of(spec);
-        if self.started.get_value() != scenario {
+        let started = self.started.get_value().as_ref().and_then(key_of);
+        if started.is_none() || started != scenario.as_ref().and_then(key_of) {
             self.runner.cancel();
         }
     }

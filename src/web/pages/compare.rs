@@ -16,7 +16,7 @@ use crate::web::components::run_form::{
     ControllerFields, ControllerForm, MachineAndSignalFields, ScenarioFields, ScenarioForm,
 };
 use crate::web::components::run_view::{MetricsTable, NamedRun, RunCharts};
-use crate::web::components::runner::{Debounce, RunProgress, Runner};
+use crate::web::components::runner::{Debounce, RunProgress, RunStatus, Runner};
 use crate::web::components::savings::Savings;
 use crate::web::route::{query_params, replace_query, Page};
 
@@ -94,6 +94,10 @@ pub fn ComparePage() -> impl IntoView {
     let calibrations = StoredValue::new(shipped_calibrations());
     let debounce = Debounce::new(RERUN_DELAY);
     let first_run = StoredValue::new(true);
+    // The specs of the comparison under way or shown: the forms' signals settling after the page
+    // mounts wake this effect without changing the runs, and must not restart them.
+    let started = StoredValue::new(None::<Vec<RunSpec>>);
+    let status = runner.status;
     let savings_for_edits = savings.clone();
     let runner_for_effect = runner.clone();
     Effect::new(move |_| {
@@ -106,6 +110,14 @@ pub fn ComparePage() -> impl IntoView {
         let Some(specs) = specs.get() else {
             return;
         };
+        let live = matches!(
+            status.get_untracked(),
+            RunStatus::Running { .. } | RunStatus::Done(_)
+        );
+        if live && started.with_value(|s| s.as_ref() == Some(&specs)) {
+            return;
+        }
+        started.set_value(Some(specs.clone()));
         if let Some(first) = specs.first() {
             savings_for_edits.keep_only(first);
         }
@@ -154,12 +166,7 @@ pub fn ComparePage() -> impl IntoView {
     let preview = runner.preview;
     let status = runner.status;
     // Only the start and end of a run matter here, not every progress tick.
-    let running = Memo::new(move |_| {
-        matches!(
-            status.get(),
-            crate::web::components::runner::RunStatus::Running { .. }
-        )
-    });
+    let running = Memo::new(move |_| matches!(status.get(), RunStatus::Running { .. }));
     let drawn = Signal::derive(move || match preview.get() {
         Some(so_far) if running.get() => named(so_far),
         _ => runs.get(),

@@ -15,7 +15,7 @@ use crate::web::components::run_form::{
     ControllerFields, ControllerForm, MachineAndSignalFields, ScenarioFields, ScenarioForm,
 };
 use crate::web::components::run_view::{metrics_json, EventLog, MetricsTable, NamedRun, RunCharts};
-use crate::web::components::runner::{Debounce, RunProgress, Runner};
+use crate::web::components::runner::{Debounce, RunProgress, RunStatus, Runner};
 use crate::web::components::savings::Savings;
 use crate::web::route::{query_params, replace_query, Page};
 
@@ -82,6 +82,11 @@ pub fn SimulatePage() -> impl IntoView {
     // once, edits after a short debounce.
     let debounce = Debounce::new(RERUN_DELAY);
     let first_run = StoredValue::new(true);
+    // The spec of the run under way or shown: the form's signals settling after the page mounts
+    // (or a field set to what it held) wake this effect without changing the run, and must not
+    // restart it.
+    let started = StoredValue::new(None::<RunSpec>);
+    let status = runner.status;
     let savings_for_edits = savings.clone();
     let start_for_effect = start_run.clone();
     Effect::new(move |_| {
@@ -91,6 +96,14 @@ pub fn SimulatePage() -> impl IntoView {
         let Some(spec) = spec.get() else {
             return;
         };
+        let live = matches!(
+            status.get_untracked(),
+            RunStatus::Running { .. } | RunStatus::Done(_)
+        );
+        if live && started.with_value(|s| s.as_ref() == Some(&spec)) {
+            return;
+        }
+        started.set_value(Some(spec.clone()));
         savings_for_edits.keep_only(&spec);
         let start = start_for_effect.clone();
         if first_run.get_value() {
