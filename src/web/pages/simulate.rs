@@ -19,10 +19,10 @@ use crate::web::components::runner::{Debounce, RunProgress, RunStatus, Runner};
 use crate::web::components::savings::Savings;
 use crate::web::route::{query_params, replace_query, Page};
 
-/// Wait after the last edit before re-running: a burst of events (a key held down, a spinner)
-/// starts one run. Typing "150" may start "1" and "15" too, but each new run cancels the one
-/// before, so only the last one costs anything; the page answers within a frame of the edit.
-const RERUN_DELAY: Duration = Duration::from_millis(40);
+/// Wait after an edit before re-running: none beyond the task that made it, so the events of one
+/// edit start one run. A new run cancels the one before and its first chunk waits for a task of
+/// its own, so typing "150" costs only the last run, and the page answers within a frame.
+const RERUN_DELAY: Duration = Duration::ZERO;
 
 /// Teach cuts whose calibrations the page keeps: an edit that leaves the teach cut as it was (a
 /// controller parameter, the target, the envelope) re-runs only the loop.
