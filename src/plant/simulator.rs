@@ -30,7 +30,7 @@ use super::cnc::{samples_per, AppliedOverride, CncConfig, Control, Every};
 use super::feed_drive::{three_phase_rms_a, FeedDrive, FeedDriveConfig};
 use super::materials::{CuttingCoefficients, Material};
 use super::mechanics::{mean_forces, Immersion, MillingForceModel, MillingMode};
-use super::power_law::{PowerLawInputs, PowerLawMaterial, PowerLawModel};
+use super::power_law::{CachedPowerLaw, PowerLawInputs, PowerLawMaterial, PowerLawModel};
 use super::scenario::Scenario;
 use super::sensors::{CurrentSensor, CurrentSensorConfig};
 use super::signals::{AxisSignals, PlantSignals};
@@ -221,7 +221,7 @@ pub struct Simulator {
     force_model: MillingForceModel,
     region_coefficients: Vec<CuttingCoefficients>,
     /// Each material region's power law and the cut it was calibrated on.
-    region_power_law: Vec<(PowerLawModel, PowerLawInputs)>,
+    region_power_law: Vec<CachedPowerLaw>,
     spindle: SpindleDrive,
     axes: [FeedDrive; 2],
     feed_sensor: CurrentSensor,
@@ -261,7 +261,10 @@ impl Simulator {
         let region_power_law = scenario
             .material_regions()
             .iter()
-            .map(|r| calibrated_power_law(&scenario, r.material))
+            .map(|r| {
+                let (model, inputs) = calibrated_power_law(&scenario, r.material);
+                CachedPowerLaw::new(model, inputs)
+            })
             .collect();
         let axis = FeedDrive::new(config.feed_drive, dt_s).map_err(|e| e.within("feed_drive"))?;
         let mut sim = Self {
@@ -454,7 +457,6 @@ impl PlantModel for Simulator {
         if ipo_tick {
             (self.power_law_force_n, self.power_law_uncertainty) = match region {
                 Some(r) if cutting => {
-                    let (model, calibrated_on) = &self.region_power_law[r];
                     let now = PowerLawInputs {
                         radial_width_mm: width_mm,
                         feed_per_tooth_mm,
@@ -462,10 +464,7 @@ impl PlantModel for Simulator {
                         diameter_mm: cutter.diameter_mm,
                         teeth_engaged: self.immersion.teeth_engaged(cutter.teeth),
                     };
-                    (
-                        model.forces(&now).resultant_n(),
-                        model.relative_uncertainty(&now, calibrated_on),
-                    )
+                    self.region_power_law[r].evaluate(&now)
                 }
                 _ => (0.0, 0.0),
             };
