@@ -234,6 +234,8 @@ pub struct Simulator {
     spindle_started_at_s: Option<f64>,
     power_law_force_n: f64,
     power_law_uncertainty: f64,
+    /// The CNC's block at the latest sample (0 before the first).
+    cnc_block: usize,
 }
 
 /// Where the last sample found the tool in the scenario's profiles and material regions: the
@@ -301,6 +303,7 @@ impl Simulator {
             spindle_started_at_s: None,
             power_law_force_n: 0.0,
             power_law_uncertainty: 0.0,
+            cnc_block: 0,
         };
         sim.reset();
         Ok(sim)
@@ -340,10 +343,7 @@ impl Simulator {
 
     #[inline(always)]
     fn planner_block(&self) -> usize {
-        self.sampling
-            .latest()
-            .signals
-            .block
+        self.cnc_block
             .min(self.scenario.segments().len().saturating_sub(1))
     }
 
@@ -373,6 +373,7 @@ impl PlantModel for Simulator {
         let ready = self.spindle_ready(time_s, spindle_command_rpm);
         let control = self.control.step(command, ready);
         let (applied, cnc) = (control.applied, control.cnc);
+        self.cnc_block = cnc.block;
 
         // 3. Where the tool is and what it meets.
         let s = cnc.position_mm;
@@ -550,7 +551,7 @@ impl PlantModel for Simulator {
 
     fn power_law_force(&self) -> Option<SensorlessEstimate> {
         Some(SensorlessEstimate {
-            force_n: self.sampling.latest().signals.power_law_force_n,
+            force_n: self.power_law_force_n,
             relative_uncertainty: self.power_law_uncertainty,
         })
     }
@@ -572,6 +573,7 @@ impl PlantModel for Simulator {
         self.spindle_started_at_s = None;
         self.power_law_force_n = 0.0;
         self.power_law_uncertainty = 0.0;
+        self.cnc_block = 0;
         let start = self.scenario.point_at(0.0);
         PlantSignals {
             truth: PlantTruth {
