@@ -124,6 +124,15 @@ pub trait PlantModel {
     /// ([`Sampling::latest`]): [`Machine::step_block`] keeps only a block's last one.
     fn advance(&mut self, tick: Tick, command: OverrideCommand) -> PlantSample;
 
+    /// [`PlantModel::advance`] for a sample whose internal signals nobody will read unless it
+    /// ends the run (a sample inside a block, [`Machine::step_block`]): the sensors, the truth
+    /// and `finished` are the same; the other signals may be left out, which spares work a
+    /// plant does only to show them.
+    #[inline(always)]
+    fn advance_unkept(&mut self, tick: Tick, command: OverrideCommand) -> PlantSample {
+        self.advance(tick, command)
+    }
+
     /// Back to the state right after construction; returns the signals to show before the
     /// first sample.
     fn restart(&mut self) -> PlantSignals;
@@ -240,7 +249,11 @@ impl<P: PlantModel> Machine for P {
                 return i + 1;
             }
             let tick = self.sampling_mut().tick();
-            let sample = self.advance(tick, command);
+            let sample = if i + 1 == n {
+                self.advance(tick, command)
+            } else {
+                self.advance_unkept(tick, command)
+            };
             slot.step = MachineStep {
                 sensors: sample.sensors,
                 truth: Some(sample.signals.truth),

@@ -347,23 +347,11 @@ impl Simulator {
             .min(self.scenario.segments().len().saturating_sub(1))
     }
 
-    /// The override the machine applies now.
-    pub fn applied_override(&self) -> AppliedOverride {
-        self.control.applied()
-    }
-}
-
-impl PlantModel for Simulator {
-    fn sampling(&self) -> &Sampling {
-        &self.sampling
-    }
-
-    fn sampling_mut(&mut self) -> &mut Sampling {
-        &mut self.sampling
-    }
-
+    /// One sample ([`PlantModel::advance`]); with `keep` false ([`PlantModel::advance_unkept`]),
+    /// the unmeasured axis's phase currents, seen only in the signals, are left out (NaN) unless
+    /// the run ends here.
     #[inline(always)]
-    fn advance(&mut self, tick: Tick, command: OverrideCommand) -> PlantSample {
+    fn advance_with(&mut self, tick: Tick, command: OverrideCommand, keep: bool) -> PlantSample {
         let time_s = tick.time_s;
         let ipo_tick = self.ipo.tick();
 
@@ -437,8 +425,16 @@ impl PlantModel for Simulator {
         // 5. Drives: each axis resists its share of the force on the tool.
         let vx = feed_mm_min * cos_a;
         let vy = feed_mm_min * sin_a;
-        let ax = self.axes[0].step(vx, -force_x_n, 0.0);
-        let ay = self.axes[1].step(vy, -force_y_n, 0.0);
+        let finished = cnc.finished || time_s >= self.config.max_duration_s;
+        let mut ax = self.axes[0].step_without_currents(vx, -force_x_n, 0.0);
+        let mut ay = self.axes[1].step_without_currents(vy, -force_y_n, 0.0);
+        let all_signals = keep || finished;
+        if all_signals || self.config.measured_axis == FeedAxis::X {
+            ax.phase_currents_a = self.axes[0].phase_currents_a(ax.iq_a);
+        }
+        if all_signals || self.config.measured_axis == FeedAxis::Y {
+            ay.phase_currents_a = self.axes[1].phase_currents_a(ay.iq_a);
+        }
         let spindle = self.spindle.step(spindle_command_rpm, forces.torque_nm);
         if spindle.running && self.spindle_started_at_s.is_none() {
             self.spindle_started_at_s = Some(time_s);
@@ -545,8 +541,33 @@ impl PlantModel for Simulator {
         PlantSample {
             sensors,
             signals,
-            finished: cnc.finished || time_s >= self.config.max_duration_s,
+            finished,
         }
+    }
+
+    /// The override the machine applies now.
+    pub fn applied_override(&self) -> AppliedOverride {
+        self.control.applied()
+    }
+}
+
+impl PlantModel for Simulator {
+    fn sampling(&self) -> &Sampling {
+        &self.sampling
+    }
+
+    fn sampling_mut(&mut self) -> &mut Sampling {
+        &mut self.sampling
+    }
+
+    #[inline(always)]
+    fn advance(&mut self, tick: Tick, command: OverrideCommand) -> PlantSample {
+        self.advance_with(tick, command, true)
+    }
+
+    #[inline(always)]
+    fn advance_unkept(&mut self, tick: Tick, command: OverrideCommand) -> PlantSample {
+        self.advance_with(tick, command, false)
     }
 
     fn power_law_force(&self) -> Option<SensorlessEstimate> {
