@@ -400,6 +400,21 @@ impl FeedDrive {
         load_force_n: f64,
         shaft_torque_nm: f64,
     ) -> FeedDriveOutput {
+        let mut out = self.step_without_currents(velocity_mm_min, load_force_n, shaft_torque_nm);
+        out.phase_currents_a = self.phase_currents_a(out.iq_a);
+        out
+    }
+
+    /// [`FeedDrive::step`] without the phase currents (left NaN), for an axis whose currents
+    /// nobody reads at this sample; [`FeedDrive::phase_currents_a`] right after gives them, the
+    /// same bits as `step`'s.
+    #[inline(always)]
+    pub fn step_without_currents(
+        &mut self,
+        velocity_mm_min: f64,
+        load_force_n: f64,
+        shaft_torque_nm: f64,
+    ) -> FeedDriveOutput {
         let k = &self.k;
         let accel_mm_s2 = (velocity_mm_min - self.previous_velocity_mm_min) * k.mm_s2_per_mm_min;
         self.previous_velocity_mm_min = velocity_mm_min;
@@ -424,11 +439,18 @@ impl FeedDrive {
             torque_demand_nm,
             torque_nm,
             iq_a,
-            phase_currents_a: self
-                .waveform
-                .currents_from_trig(iq_a, theta.cos(), theta.sin()),
+            phase_currents_a: [f64::NAN; 3],
             electrical_angle_rad: theta.angle_rad(),
         }
+    }
+
+    /// The phase currents for q-current `iq_a` at the axis's present electrical angle (the one
+    /// its latest step left).
+    #[inline(always)]
+    pub fn phase_currents_a(&self, iq_a: f64) -> [f64; 3] {
+        let theta = &self.electrical;
+        self.waveform
+            .currents_from_trig(iq_a, theta.cos(), theta.sin())
     }
 }
 

@@ -87,7 +87,9 @@ pub mod spindle_drive;
 
 use std::fmt;
 
-use crate::machine::{Machine, MachineStep, OverrideCommand, SensorSample, SensorlessEstimate};
+use crate::machine::{
+    BlockStep, Machine, MachineStep, OverrideCommand, SensorSample, SensorlessEstimate,
+};
 
 pub use presets::{Preset, PresetMachine};
 pub use signals::PlantSignals;
@@ -118,8 +120,18 @@ pub trait PlantModel {
     fn sampling_mut(&mut self) -> &mut Sampling;
 
     /// Advances the physics over the sample period that ends at `tick` under `command`. Called
-    /// only until a sample says the run has finished.
+    /// only until a sample says the run has finished. It must not read the latest sample back
+    /// ([`Sampling::latest`]): [`Machine::step_block`] keeps only a block's last one.
     fn advance(&mut self, tick: Tick, command: OverrideCommand) -> PlantSample;
+
+    /// [`PlantModel::advance`] for a sample whose internal signals nobody will read unless it
+    /// ends the run (a sample inside a block, [`Machine::step_block`]): the sensors, the truth
+    /// and `finished` are the same; the other signals may be left out, which spares work a
+    /// plant does only to show them.
+    #[inline(always)]
+    fn advance_unkept(&mut self, tick: Tick, command: OverrideCommand) -> PlantSample {
+        self.advance(tick, command)
+    }
 
     /// Back to the state right after construction; returns the signals to show before the
     /// first sample.
@@ -221,6 +233,38 @@ impl<P: PlantModel> Machine for P {
 
     fn finished(&self) -> bool {
         self.sampling().latest.finished
+    }
+
+    /// [`Machine::step`] sample after sample, keeping only the block's last sample as the latest:
+    /// nothing can look at the latest sample while the block runs (plants do not read it back,
+    /// see [`PlantModel::advance`]), so the others are only written to `out`, which saves storing
+    /// every internal signal of every sample.
+    #[inline(always)]
+    fn step_block(&mut self, command: OverrideCommand, out: &mut [BlockStep]) -> usize {
+        let n = out.len();
+        for (i, slot) in out.iter_mut().enumerate() {
+            if self.sampling().latest.finished {
+                slot.step = self.sampling().machine_step();
+                slot.dynamometer = None;
+                return i + 1;
+            }
+            let tick = self.sampling_mut().tick();
+            let sample = if i + 1 == n {
+                self.advance(tick, command)
+            } else {
+                self.advance_unkept(tick, command)
+            };
+            slot.step = MachineStep {
+                sensors: sample.sensors,
+                truth: Some(sample.signals.truth),
+            };
+            slot.dynamometer = None;
+            if sample.finished || i + 1 == n {
+                self.sampling_mut().latest = sample;
+                return i + 1;
+            }
+        }
+        n
     }
 
     fn sensorless_force(&self) -> Option<SensorlessEstimate> {

@@ -30,7 +30,7 @@ use super::cnc::{samples_per, AppliedOverride, CncConfig, Control, Every};
 use super::feed_drive::{three_phase_rms_a, FeedDrive, FeedDriveConfig};
 use super::materials::{CuttingCoefficients, Material};
 use super::mechanics::{mean_forces, Immersion, MillingForceModel, MillingMode};
-use super::power_law::{PowerLawInputs, PowerLawMaterial, PowerLawModel};
+use super::power_law::{CachedPowerLaw, PowerLawInputs, PowerLawMaterial, PowerLawModel};
 use super::scenario::Scenario;
 use super::sensors::{CurrentSensor, CurrentSensorConfig};
 use super::signals::{AxisSignals, PlantSignals};
@@ -221,7 +221,7 @@ pub struct Simulator {
     force_model: MillingForceModel,
     region_coefficients: Vec<CuttingCoefficients>,
     /// Each material region's power law and the cut it was calibrated on.
-    region_power_law: Vec<(PowerLawModel, PowerLawInputs)>,
+    region_power_law: Vec<CachedPowerLaw>,
     spindle: SpindleDrive,
     axes: [FeedDrive; 2],
     feed_sensor: CurrentSensor,
@@ -234,6 +234,8 @@ pub struct Simulator {
     spindle_started_at_s: Option<f64>,
     power_law_force_n: f64,
     power_law_uncertainty: f64,
+    /// The CNC's block at the latest sample (0 before the first).
+    cnc_block: usize,
 }
 
 /// Where the last sample found the tool in the scenario's profiles and material regions: the
@@ -261,7 +263,10 @@ impl Simulator {
         let region_power_law = scenario
             .material_regions()
             .iter()
-            .map(|r| calibrated_power_law(&scenario, r.material))
+            .map(|r| {
+                let (model, inputs) = calibrated_power_law(&scenario, r.material);
+                CachedPowerLaw::new(model, inputs)
+            })
             .collect();
         let axis = FeedDrive::new(config.feed_drive, dt_s).map_err(|e| e.within("feed_drive"))?;
         let mut sim = Self {
@@ -298,6 +303,7 @@ impl Simulator {
             spindle_started_at_s: None,
             power_law_force_n: 0.0,
             power_law_uncertainty: 0.0,
+            cnc_block: 0,
         };
         sim.reset();
         Ok(sim)
@@ -337,30 +343,15 @@ impl Simulator {
 
     #[inline(always)]
     fn planner_block(&self) -> usize {
-        self.sampling
-            .latest()
-            .signals
-            .block
+        self.cnc_block
             .min(self.scenario.segments().len().saturating_sub(1))
     }
 
-    /// The override the machine applies now.
-    pub fn applied_override(&self) -> AppliedOverride {
-        self.control.applied()
-    }
-}
-
-impl PlantModel for Simulator {
-    fn sampling(&self) -> &Sampling {
-        &self.sampling
-    }
-
-    fn sampling_mut(&mut self) -> &mut Sampling {
-        &mut self.sampling
-    }
-
+    /// One sample ([`PlantModel::advance`]); with `keep` false ([`PlantModel::advance_unkept`]),
+    /// the unmeasured axis's phase currents, seen only in the signals, are left out (NaN) unless
+    /// the run ends here.
     #[inline(always)]
-    fn advance(&mut self, tick: Tick, command: OverrideCommand) -> PlantSample {
+    fn advance_with(&mut self, tick: Tick, command: OverrideCommand, keep: bool) -> PlantSample {
         let time_s = tick.time_s;
         let ipo_tick = self.ipo.tick();
 
@@ -370,6 +361,7 @@ impl PlantModel for Simulator {
         let ready = self.spindle_ready(time_s, spindle_command_rpm);
         let control = self.control.step(command, ready);
         let (applied, cnc) = (control.applied, control.cnc);
+        self.cnc_block = cnc.block;
 
         // 3. Where the tool is and what it meets.
         let s = cnc.position_mm;
@@ -433,8 +425,16 @@ impl PlantModel for Simulator {
         // 5. Drives: each axis resists its share of the force on the tool.
         let vx = feed_mm_min * cos_a;
         let vy = feed_mm_min * sin_a;
-        let ax = self.axes[0].step(vx, -force_x_n, 0.0);
-        let ay = self.axes[1].step(vy, -force_y_n, 0.0);
+        let finished = cnc.finished || time_s >= self.config.max_duration_s;
+        let mut ax = self.axes[0].step_without_currents(vx, -force_x_n, 0.0);
+        let mut ay = self.axes[1].step_without_currents(vy, -force_y_n, 0.0);
+        let all_signals = keep || finished;
+        if all_signals || self.config.measured_axis == FeedAxis::X {
+            ax.phase_currents_a = self.axes[0].phase_currents_a(ax.iq_a);
+        }
+        if all_signals || self.config.measured_axis == FeedAxis::Y {
+            ay.phase_currents_a = self.axes[1].phase_currents_a(ay.iq_a);
+        }
         let spindle = self.spindle.step(spindle_command_rpm, forces.torque_nm);
         if spindle.running && self.spindle_started_at_s.is_none() {
             self.spindle_started_at_s = Some(time_s);
@@ -454,7 +454,6 @@ impl PlantModel for Simulator {
         if ipo_tick {
             (self.power_law_force_n, self.power_law_uncertainty) = match region {
                 Some(r) if cutting => {
-                    let (model, calibrated_on) = &self.region_power_law[r];
                     let now = PowerLawInputs {
                         radial_width_mm: width_mm,
                         feed_per_tooth_mm,
@@ -462,10 +461,7 @@ impl PlantModel for Simulator {
                         diameter_mm: cutter.diameter_mm,
                         teeth_engaged: self.immersion.teeth_engaged(cutter.teeth),
                     };
-                    (
-                        model.forces(&now).resultant_n(),
-                        model.relative_uncertainty(&now, calibrated_on),
-                    )
+                    self.region_power_law[r].evaluate(&now)
                 }
                 _ => (0.0, 0.0),
             };
@@ -545,13 +541,38 @@ impl PlantModel for Simulator {
         PlantSample {
             sensors,
             signals,
-            finished: cnc.finished || time_s >= self.config.max_duration_s,
+            finished,
         }
+    }
+
+    /// The override the machine applies now.
+    pub fn applied_override(&self) -> AppliedOverride {
+        self.control.applied()
+    }
+}
+
+impl PlantModel for Simulator {
+    fn sampling(&self) -> &Sampling {
+        &self.sampling
+    }
+
+    fn sampling_mut(&mut self) -> &mut Sampling {
+        &mut self.sampling
+    }
+
+    #[inline(always)]
+    fn advance(&mut self, tick: Tick, command: OverrideCommand) -> PlantSample {
+        self.advance_with(tick, command, true)
+    }
+
+    #[inline(always)]
+    fn advance_unkept(&mut self, tick: Tick, command: OverrideCommand) -> PlantSample {
+        self.advance_with(tick, command, false)
     }
 
     fn power_law_force(&self) -> Option<SensorlessEstimate> {
         Some(SensorlessEstimate {
-            force_n: self.sampling.latest().signals.power_law_force_n,
+            force_n: self.power_law_force_n,
             relative_uncertainty: self.power_law_uncertainty,
         })
     }
@@ -573,6 +594,7 @@ impl PlantModel for Simulator {
         self.spindle_started_at_s = None;
         self.power_law_force_n = 0.0;
         self.power_law_uncertainty = 0.0;
+        self.cnc_block = 0;
         let start = self.scenario.point_at(0.0);
         PlantSignals {
             truth: PlantTruth {
