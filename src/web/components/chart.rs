@@ -14,6 +14,8 @@ use std::ops::Range;
 use leptos::prelude::*;
 use plotters::prelude::IntoDrawingArea;
 use plotters_canvas::CanvasBackend;
+use wasm_bindgen::closure::Closure;
+use wasm_bindgen::JsCast;
 
 use crate::charts::view::{nearest, pan, visible, zoom};
 use crate::charts::{draw_line_chart, ChartStyle, LineChart, PlotGeometry};
@@ -34,6 +36,45 @@ fn readout(value: f64) -> String {
     }
 }
 
+/// The canvas's CSS width in pixels, reported by a `ResizeObserver` once the browser has laid the
+/// page out and again whenever it changes (`None` until then). Reading `clientWidth` instead
+/// forces a layout whenever the page changed since the last one: about 30 ms on a page's first
+/// frame, inside the task that mounts it. Without `ResizeObserver`, `clientWidth` once.
+pub fn observed_width(canvas_ref: NodeRef<leptos::html::Canvas>) -> ReadSignal<Option<u32>> {
+    let (width, set_width) = signal(None::<u32>);
+    type Observing = (web_sys::ResizeObserver, Closure<dyn FnMut(js_sys::Array)>);
+    let observing = StoredValue::new_local(None::<Observing>);
+    Effect::new(move |_| {
+        let Some(canvas) = canvas_ref.get() else {
+            return;
+        };
+        let report = Closure::<dyn FnMut(js_sys::Array)>::new(move |entries: js_sys::Array| {
+            let Ok(entry) = entries.get(0).dyn_into::<web_sys::ResizeObserverEntry>() else {
+                return;
+            };
+            let px = entry.content_rect().width().round().clamp(0.0, 100_000.0) as u32;
+            if width.try_get_untracked() != Some(Some(px)) {
+                let _ = set_width.try_set(Some(px));
+            }
+        });
+        match web_sys::ResizeObserver::new(report.as_ref().unchecked_ref()) {
+            Ok(observer) => {
+                observer.observe(&canvas);
+                observing.set_value(Some((observer, report)));
+            }
+            Err(_) => set_width.set(Some(canvas.client_width().max(0) as u32)),
+        }
+    });
+    on_cleanup(move || {
+        observing.try_with_value(|o| {
+            if let Some((observer, _)) = o {
+                observer.disconnect();
+            }
+        });
+    });
+    width
+}
+
 /// An explorable line chart drawn with plotters on a canvas.
 #[component]
 pub fn ChartCanvas(
@@ -51,11 +92,7 @@ pub fn ChartCanvas(
 ) -> impl IntoView {
     let x_view = x_view.unwrap_or_else(|| RwSignal::new(None));
     let canvas_ref = NodeRef::<leptos::html::Canvas>::new();
-    let (resized, set_resized) = signal(0u32);
-    let handle = window_event_listener(leptos::ev::resize, move |_| {
-        set_resized.update(|n| *n = n.wrapping_add(1));
-    });
-    on_cleanup(move || handle.remove());
+    let width = observed_width(canvas_ref);
     let hidden = RwSignal::new(Vec::<bool>::new());
     let geometry = StoredValue::new(None::<PlotGeometry>);
     let ratio = StoredValue::new(1.0_f64);
@@ -65,10 +102,7 @@ pub fn ChartCanvas(
 
     // The chart as shown: zoomed, with hidden series removed and long series decimated.
     let shown = Memo::new(move |_| {
-        resized.track();
-        let width_px = canvas_ref
-            .get()
-            .map_or(800, |c| c.client_width().max(120) as usize);
+        let width_px = width.get().unwrap_or(800).max(120) as usize;
         chart.with(|c| hidden.with(|h| visible(c, x_view.get().as_ref(), h, 2 * width_px)))
     });
 
@@ -77,6 +111,10 @@ pub fn ChartCanvas(
     let draws = StoredValue::new(0u64);
     Effect::new(move |_| {
         let shown = shown.get();
+        // Nothing to draw on until the page is laid out and the width reported.
+        let Some(css_width) = width.get() else {
+            return;
+        };
         draws.update_value(|n| *n += 1);
         let mine = draws.get_value();
         next_task(move || {
@@ -88,7 +126,7 @@ pub fn ChartCanvas(
             };
             let pixel_ratio = window().device_pixel_ratio().clamp(1.0, 4.0);
             ratio.set_value(pixel_ratio);
-            let css_width = f64::from(canvas.client_width().max(120));
+            let css_width = f64::from(css_width.max(120));
             canvas.set_width((css_width * pixel_ratio).round() as u32);
             canvas.set_height((f64::from(height_px) * pixel_ratio).round() as u32);
             let Some(backend) = CanvasBackend::with_canvas_object(canvas) else {
