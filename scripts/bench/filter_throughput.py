@@ -37,6 +37,8 @@ import numpy as np
 import scipy
 from scipy import signal
 
+from machine import cpus, rustc_version
+
 try:  # private; present in scipy 1.x. Without it the kernel row has no scipy figure.
     from scipy.signal._sosfilt import _sosfilt
 except ImportError:  # pragma: no cover
@@ -69,19 +71,9 @@ def cutlab(binary, path, channels, mode, repeats, output=None):
 
 
 def machine():
-    model = platform.machine()
-    try:
-        with open("/proc/cpuinfo") as fh:
-            for line in fh:
-                if line.startswith("model name"):
-                    model = line.split(":", 1)[1].strip()
-                    break
-    except OSError:
-        pass
-    rustc = subprocess.run(["rustc", "--version"], capture_output=True, text=True).stdout.strip()
     return (
-        f"{model}, {os.cpu_count()} logical CPUs (shared); Python {platform.python_version()}, "
-        f"scipy {scipy.__version__}, numpy {np.__version__}; {rustc}, release profile "
+        f"{cpus()}; Python {platform.python_version()}, "
+        f"scipy {scipy.__version__}, numpy {np.__version__}; {rustc_version()}, release profile "
         f"(opt-level 3, default x86-64 target; three channels use AVX2 when the CPU has it)"
     )
 

@@ -55,6 +55,8 @@ import time
 
 import numpy as np
 
+from machine import cpus, load_average, rustc_version
+
 ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", ".."))
 FLL = os.path.join(ROOT, "www", "data", "paper-002-dynamics.fll")
 NAMES = ["NB", "NM", "NS", "ZO", "PS", "PM", "PB"]
@@ -224,20 +226,8 @@ def timed_rate(evaluate, points):
 
 
 def machine():
-    model = platform.machine()
-    try:
-        with open("/proc/cpuinfo") as fh:
-            for line in fh:
-                if line.startswith("model name"):
-                    model = line.split(":", 1)[1].strip()
-                    break
-    except OSError:
-        pass
-    with open("/proc/loadavg") as fh:
-        load = " ".join(fh.read().split()[:3])
-    rustc = subprocess.run(["rustc", "--version"], capture_output=True, text=True).stdout.strip()
-    return (f"{model}, {os.cpu_count()} logical CPUs (shared), load average {load}; "
-            f"Python {platform.python_version()}, numpy {np.__version__}; {rustc}, release profile")
+    return (f"{cpus()}, load average {load_average()}; "
+            f"Python {platform.python_version()}, numpy {np.__version__}; {rustc_version()}, release profile")
 
 
 def main():
