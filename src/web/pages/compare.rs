@@ -16,7 +16,9 @@ use crate::web::components::run_form::{
     ControllerFields, ControllerForm, MachineAndSignalFields, ScenarioFields, ScenarioForm,
 };
 use crate::web::components::run_view::{MetricsTable, NamedRun, RunCharts};
-use crate::web::components::runner::{Debounce, RunProgress, RunStatus, Runner};
+use crate::web::components::runner::{
+    runner_status_live, Debounce, RunProgress, RunStatus, Runner,
+};
 use crate::web::components::savings::Savings;
 use crate::web::route::{query_params, replace_query, Page};
 
@@ -112,11 +114,7 @@ pub fn ComparePage() -> impl IntoView {
         let Some(specs) = specs.get() else {
             return;
         };
-        let live = matches!(
-            status.get_untracked(),
-            RunStatus::Running { .. } | RunStatus::Done(_)
-        );
-        if live && started.with_value(|s| s.as_ref() == Some(&specs)) {
+        if runner_status_live(status) && started.with_value(|s| s.as_ref() == Some(&specs)) {
             return;
         }
         started.set_value(Some(specs.clone()));

@@ -15,7 +15,7 @@ use crate::web::components::run_form::{
     ControllerFields, ControllerForm, MachineAndSignalFields, ScenarioFields, ScenarioForm,
 };
 use crate::web::components::run_view::{metrics_json, EventLog, MetricsTable, NamedRun, RunCharts};
-use crate::web::components::runner::{Debounce, RunProgress, RunStatus, Runner};
+use crate::web::components::runner::{runner_status_live, Debounce, RunProgress, Runner};
 use crate::web::components::savings::Savings;
 use crate::web::route::{query_params, replace_query, Page};
 
@@ -96,11 +96,7 @@ pub fn SimulatePage() -> impl IntoView {
         let Some(spec) = spec.get() else {
             return;
         };
-        let live = matches!(
-            status.get_untracked(),
-            RunStatus::Running { .. } | RunStatus::Done(_)
-        );
-        if live && started.with_value(|s| s.as_ref() == Some(&spec)) {
+        if runner_status_live(status) && started.with_value(|s| s.as_ref() == Some(&spec)) {
             return;
         }
         started.set_value(Some(spec.clone()));
