@@ -11,10 +11,12 @@
 //! | `components` | form fields and the canvas chart |
 //! | `hardware` | the Hardware page's ports (WebSerial, virtual device), station and IndexedDB store |
 //! | `pages` | one module per section of the lab |
+//! | `js` | what a JavaScript error says, the text of a chosen file |
 
 mod app;
 mod components;
 mod hardware;
+mod js;
 mod pages;
 mod route;
 

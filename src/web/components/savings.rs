@@ -25,7 +25,8 @@ fn scenario_of(spec: &RunSpec) -> Option<RunSpec> {
     fixed_feed_spec(spec, 100.0).ok()
 }
 
-/// What the references of `spec`'s scenario depend on (the same for the scenario itself).
+/// What the references of `spec`'s scenario depend on (the same for the scenario itself: the key
+/// is taken at the fixed 100 % feed).
 fn key_of(spec: &RunSpec) -> Option<ScenarioKey> {
     ScenarioKey::of(spec).ok()
 }
@@ -35,7 +36,7 @@ fn key_of(spec: &RunSpec) -> Option<ScenarioKey> {
 pub struct Savings {
     runner: Runner<References>,
     /// The scenario of the search under way or last started.
-    started: StoredValue<Option<RunSpec>>,
+    started: StoredValue<Option<ScenarioKey>>,
     /// Known references, newest last.
     known: RwSignal<Vec<(ScenarioKey, References)>>,
 }
@@ -44,13 +45,13 @@ impl Savings {
     /// Nothing known yet; a search under way stops when the page is left.
     pub fn new() -> Self {
         let runner = Runner::<References>::new();
-        let started = StoredValue::new(None::<RunSpec>);
+        let started = StoredValue::new(None::<ScenarioKey>);
         // The default scenario's references ship with the code (closed_loop::precomputed).
         let known = RwSignal::new(shipped_references());
         let status = runner.status;
         Effect::new(move |_| {
             if let RunStatus::Done(found) = status.get() {
-                if let Some(key) = started.get_value().as_ref().and_then(key_of) {
+                if let Some(key) = started.get_value() {
                     known.update(|k| {
                         k.retain(|(s, _)| *s != key);
                         k.push((key, found));
@@ -67,8 +68,9 @@ impl Savings {
         }
     }
 
-    fn lookup(&self, scenario: &RunSpec) -> Option<References> {
-        let key = key_of(scenario)?;
+    /// The known references of `spec`'s scenario.
+    fn lookup(&self, spec: &RunSpec) -> Option<References> {
+        let key = key_of(spec)?;
         self.known
             .with(|k| k.iter().find(|(s, _)| *s == key).map(|(_, r)| *r))
     }
@@ -80,9 +82,12 @@ impl Savings {
         let Some(scenario) = scenario_of(spec) else {
             return;
         };
+        let Some(key) = key_of(&scenario) else {
+            return;
+        };
         let known = self
             .known
-            .with_untracked(|k| k.iter().any(|(s, _)| Some(s) == key_of(&scenario).as_ref()));
+            .with_untracked(|k| k.iter().any(|(s, _)| *s == key));
         if known {
             return;
         }
@@ -90,7 +95,7 @@ impl Savings {
             self.runner.status.get_untracked(),
             RunStatus::Running { .. }
         );
-        if running && self.started.get_value().as_ref().and_then(key_of) == key_of(&scenario) {
+        if running && self.started.get_value().as_ref() == Some(&key) {
             return;
         }
         let same_teach_cut = match (TeachKey::of(spec), TeachKey::of(&scenario)) {
@@ -103,7 +108,7 @@ impl Savings {
         };
         match search {
             Ok(search) => {
-                self.started.set_value(Some(scenario));
+                self.started.set_value(Some(key));
                 self.runner.start(search);
             }
             // The run itself reports what is wrong with the spec.
@@ -113,16 +118,15 @@ impl Savings {
 
     /// Stops a search for another scenario than `spec`'s, so it does not slow the new run.
     pub fn keep_only(&self, spec: &RunSpec) {
-        let scenario = scenario_of(spec);
-        let started = self.started.get_value().as_ref().and_then(key_of);
-        if started.is_none() || started != scenario.as_ref().and_then(key_of) {
+        let started = self.started.get_value();
+        if started.is_none() || started != key_of(spec) {
             self.runner.cancel();
         }
     }
 
     /// `run` with its savings filled if the references of its scenario are known.
     pub fn apply(&self, run: Arc<RunResult>) -> Arc<RunResult> {
-        let known = scenario_of(&run.spec).and_then(|s| self.lookup(&s));
+        let known = self.lookup(&run.spec);
         match known {
             Some(references) => {
                 let mut with: RunResult = (*run).clone();

@@ -16,6 +16,7 @@ use web_sys::{
 };
 
 use crate::protocol::device::DeviceEmulator;
+use crate::web::js::describe;
 
 /// What a port reports.
 pub enum PortEvent {
@@ -43,20 +44,6 @@ pub struct SerialSettings {
     pub flow_control: &'static str,
     /// The browser's read buffer, bytes.
     pub buffer_size: u32,
-}
-
-/// What a JavaScript error says.
-pub fn describe(value: &JsValue) -> String {
-    value
-        .dyn_ref::<web_sys::DomException>()
-        .map(|e| format!("{}: {}", e.name(), e.message()))
-        .or_else(|| {
-            value
-                .dyn_ref::<js_sys::Error>()
-                .map(|e| String::from(e.message()))
-        })
-        .or_else(|| value.as_string())
-        .unwrap_or_else(|| "an unknown error".to_string())
 }
 
 /// Whether this page can use WebSerial, and if not, why.

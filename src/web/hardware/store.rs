@@ -10,25 +10,12 @@ use web_sys::{
 };
 
 use crate::hardware::recording::RecordingMeta;
+use crate::web::js::describe;
 
 const DATABASE: &str = "cutlab-hardware";
 const VERSION: u32 = 1;
 const RECORDINGS: &str = "recordings";
 const CHUNKS: &str = "recording-chunks";
-
-/// What a DOM error says.
-fn describe(value: &JsValue) -> String {
-    value
-        .dyn_ref::<web_sys::DomException>()
-        .map(|e| format!("{}: {}", e.name(), e.message()))
-        .or_else(|| {
-            value
-                .dyn_ref::<js_sys::Error>()
-                .map(|e| String::from(e.message()))
-        })
-        .or_else(|| value.as_string())
-        .unwrap_or_else(|| "an unknown error".to_string())
-}
 
 /// Waits for `request` and gives its result.
 async fn done(request: &IdbRequest) -> Result<JsValue, String> {

@@ -21,6 +21,7 @@ use crate::web::components::fields::{parse_number, NumberField, SelectField};
 use crate::web::components::heat_map::HeatMapCanvas;
 use crate::web::components::run_form::{decode_rule_table, encode_rule_table};
 use crate::web::components::runner::{RunProgress, Runner};
+use crate::web::js::read_chosen_file;
 use crate::web::route::{query_params, replace_query, Page};
 
 /// Grid points per axis of the control surface.
@@ -334,22 +335,9 @@ pub fn FuzzyPage() -> impl IntoView {
         Err(e) => set_fll_error.set(Some(format!("The FLL could not be read: {e}"))),
     };
     let on_file = move |ev: leptos::ev::Event| {
-        use wasm_bindgen::JsCast;
-        let Some(input) = ev
-            .target()
-            .and_then(|t| t.dyn_into::<web_sys::HtmlInputElement>().ok())
-        else {
-            return;
-        };
-        let Some(file) = input.files().and_then(|f| f.get(0)) else {
-            return;
-        };
-        let promise = file.text();
-        leptos::task::spawn_local(async move {
-            match wasm_bindgen_futures::JsFuture::from(promise).await {
-                Ok(text) => fll_text.set(text.as_string().unwrap_or_default()),
-                Err(_) => set_fll_error.set(Some("The file could not be read.".into())),
-            }
+        read_chosen_file(&ev, move |_, text| match text {
+            Ok(text) => fll_text.set(text),
+            Err(e) => set_fll_error.set(Some(e)),
         });
     };
 

@@ -36,11 +36,11 @@ use crate::web::components::run_form::{
 use crate::web::components::run_view::{MetricsTable, NamedRun};
 use crate::web::components::saved_calibrations::stored_calibrations;
 use crate::web::hardware::port::{
-    describe, now_s, web_serial_unavailable, Port, PortEvent, SerialLink, SerialSettings, Sink,
-    VirtualLink,
+    now_s, web_serial_unavailable, Port, PortEvent, SerialLink, SerialSettings, Sink, VirtualLink,
 };
 use crate::web::hardware::station::{Effects, Snapshot, Station};
 use crate::web::hardware::store::Store;
+use crate::web::js::{describe, read_chosen_file};
 use crate::web::route::{query_params, replace_query, Page};
 
 /// How often the station's clock ticks (watchdogs, heartbeats, the store's flush).
@@ -586,27 +586,10 @@ pub fn HardwarePage() -> impl IntoView {
         ui.publish(station, true);
     };
     let load_calibration = move |ev: leptos::ev::Event| {
-        let Some(input) = ev
-            .target()
-            .and_then(|t| t.dyn_into::<web_sys::HtmlInputElement>().ok())
-        else {
-            return;
-        };
-        let Some(file) = input.files().and_then(|f| f.get(0)) else {
-            return;
-        };
-        let name = file.name();
-        let promise = file.text();
-        leptos::task::spawn_local(async move {
-            let text = match wasm_bindgen_futures::JsFuture::from(promise).await {
-                Ok(t) => t.as_string().unwrap_or_default(),
-                Err(e) => {
-                    calibration_error
-                        .set(Some(format!("{name} could not be read: {}", describe(&e))));
-                    return;
-                }
-            };
-            match CalibrationFile::from_json(&text) {
+        read_chosen_file(&ev, move |name, text| {
+            match text
+                .and_then(|t| CalibrationFile::from_json(&t).map_err(|e| format!("{name}: {e}")))
+            {
                 Ok(file) => {
                     let source = if file.source.is_empty() {
                         format!("file {name}")
@@ -615,7 +598,7 @@ pub fn HardwarePage() -> impl IntoView {
                     };
                     use_calibration(file, source);
                 }
-                Err(e) => calibration_error.set(Some(format!("{name}: {e}"))),
+                Err(e) => calibration_error.set(Some(e)),
             }
         });
     };

@@ -22,6 +22,7 @@ use crate::web::components::chart::ChartCanvas;
 use crate::web::components::fields::{NumberField, SelectField};
 use crate::web::components::heat_map::HeatMapCanvas;
 use crate::web::components::runner::{RunProgress, Runner};
+use crate::web::js::read_chosen_file;
 use crate::web::route::Page;
 
 /// The controllers worth tuning (a fixed feed has one value, found by the reference search).
@@ -351,34 +352,18 @@ pub fn TunePage() -> impl IntoView {
     let from_file = RwSignal::new(None::<TeachIn>);
     let (file_error, set_file_error) = signal(None::<String>);
     let on_calibration_file = move |ev: leptos::ev::Event| {
-        use wasm_bindgen::JsCast;
-        let Some(input) = ev
-            .target()
-            .and_then(|t| t.dyn_into::<web_sys::HtmlInputElement>().ok())
-        else {
-            return;
-        };
-        let Some(file) = input.files().and_then(|f| f.get(0)) else {
-            return;
-        };
-        let name = file.name();
         let program = scenarios()
             .first()
             .map(|&p| RunSpec::new(p, ControllerKind::Threshold));
-        let promise = file.text();
-        leptos::task::spawn_local(async move {
-            let text = match wasm_bindgen_futures::JsFuture::from(promise).await {
-                Ok(text) => text.as_string().unwrap_or_default(),
-                Err(_) => {
-                    set_file_error.set(Some(format!("{name} could not be read.")));
-                    return;
-                }
-            };
-            let taught = CalibrationFile::from_json(&text)
-                .map_err(|e| format!("{name}: {e}"))
-                .and_then(|file| {
-                    teach_in_calibration(&file, &name, program.as_ref()).map_err(|e| e.to_string())
-                });
+        read_chosen_file(&ev, move |name, text| {
+            let taught = text.and_then(|text| {
+                CalibrationFile::from_json(&text)
+                    .map_err(|e| format!("{name}: {e}"))
+                    .and_then(|file| {
+                        teach_in_calibration(&file, &name, program.as_ref())
+                            .map_err(|e| e.to_string())
+                    })
+            });
             match taught {
                 Ok(t) => {
                     set_file_error.set(None);
