@@ -332,17 +332,6 @@ thread_local! {
     };
 }
 
-/// Whether `status` is a job under way or done, not idle, failed or cancelled: an output shown or
-/// coming, which a page need not start again for the same input (read without tracking).
-pub fn runner_status_live<T: Clone + Send + Sync + 'static>(
-    status: RwSignal<RunStatus<T>>,
-) -> bool {
-    matches!(
-        status.try_get_untracked(),
-        Some(RunStatus::Running { .. } | RunStatus::Done(_))
-    )
-}
-
 /// Runs `task` as a task of its own once the browser has handled input and painting: a message
 /// the page posts to itself, which (unlike a zero-delay timeout, held back ≥ 4 ms once timeouts
 /// nest) starts as soon as the browser is free. Falls back to a timeout without a channel.

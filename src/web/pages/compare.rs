@@ -16,9 +16,7 @@ use crate::web::components::run_form::{
     ControllerFields, ControllerForm, MachineAndSignalFields, ScenarioFields, ScenarioForm,
 };
 use crate::web::components::run_view::{MetricsTable, NamedRun, RunCharts};
-use crate::web::components::runner::{
-    runner_status_live, Debounce, RunProgress, RunStatus, Runner,
-};
+use crate::web::components::runner::{Debounce, RunProgress, RunStatus, Runner};
 use crate::web::components::savings::Savings;
 use crate::web::route::{query_params, replace_query, Page};
 
@@ -98,12 +96,9 @@ pub fn ComparePage() -> impl IntoView {
     let calibrations = StoredValue::new(shipped_calibrations());
     let debounce = Debounce::new(RERUN_DELAY);
     let first_run = StoredValue::new(true);
-    // The specs of the comparison under way or shown: the forms' signals settling after the page
-    // mounts wake this effect without changing the runs, and must not restart them.
-    let started = StoredValue::new(None::<Vec<RunSpec>>);
-    let status = runner.status;
     let savings_for_edits = savings.clone();
     let runner_for_effect = runner.clone();
+    // Keep the URL in step with the forms.
     Effect::new(move |_| {
         let mut q = scenario.query();
         q.push(("variants".into(), count.get().to_string()));
@@ -111,13 +106,13 @@ pub fn ComparePage() -> impl IntoView {
             q.extend(form.query(prefix));
         }
         replace_query(Page::Compare, &q);
+    });
+    // Re-run when the valid specs change, and only then: `specs` is a memo, so the forms' signals
+    // settling after the page mounts, or a field set to what it held, start nothing.
+    Effect::new(move |_| {
         let Some(specs) = specs.get() else {
             return;
         };
-        if runner_status_live(status) && started.with_value(|s| s.as_ref() == Some(&specs)) {
-            return;
-        }
-        started.set_value(Some(specs.clone()));
         if let Some(first) = specs.first() {
             savings_for_edits.keep_only(first);
         }

@@ -15,7 +15,7 @@ use crate::web::components::run_form::{
     ControllerFields, ControllerForm, MachineAndSignalFields, ScenarioFields, ScenarioForm,
 };
 use crate::web::components::run_view::{metrics_json, EventLog, MetricsTable, NamedRun, RunCharts};
-use crate::web::components::runner::{runner_status_live, Debounce, RunProgress, Runner};
+use crate::web::components::runner::{Debounce, RunProgress, Runner};
 use crate::web::components::savings::Savings;
 use crate::web::route::{query_params, replace_query, Page};
 
@@ -79,27 +79,22 @@ pub fn SimulatePage() -> impl IntoView {
     };
 
     // Keep the URL in step with the form, and re-run when a valid spec changes: the first run at
-    // once, edits after a short debounce.
+    // once, edits in the next task.
     let debounce = Debounce::new(RERUN_DELAY);
     let first_run = StoredValue::new(true);
-    // The spec of the run under way or shown: the form's signals settling after the page mounts
-    // (or a field set to what it held) wake this effect without changing the run, and must not
-    // restart it.
-    let started = StoredValue::new(None::<RunSpec>);
-    let status = runner.status;
     let savings_for_edits = savings.clone();
     let start_for_effect = start_run.clone();
     Effect::new(move |_| {
         let mut q = scenario.query();
         q.extend(controller.query(""));
         replace_query(Page::Simulate, &q);
+    });
+    // Re-run when the valid spec changes, and only then: `spec` is a memo, so the form's signals
+    // settling after the page mounts, or a field set to what it held, start nothing.
+    Effect::new(move |_| {
         let Some(spec) = spec.get() else {
             return;
         };
-        if runner_status_live(status) && started.with_value(|s| s.as_ref() == Some(&spec)) {
-            return;
-        }
-        started.set_value(Some(spec.clone()));
         savings_for_edits.keep_only(&spec);
         let start = start_for_effect.clone();
         if first_run.get_value() {
