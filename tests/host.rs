@@ -31,12 +31,16 @@ use cutlab::protocol::link::{
     DEVICE_QUEUE_CHUNKS, READ_CHUNK,
 };
 
-/// One closed loop against the emulator at a time.
+/// One closed loop against the emulator at a time, and nothing else heavy beside it: a test that
+/// runs the link in real time holds this for its whole body (its own simulation included), so
+/// another test's simulation cannot take the cores the host and the device need and add latency
+/// the metrics then show (a clean CI-like run once saw 76 s instead of 72 s of cycle time).
 static ONE_AT_A_TIME: Mutex<()> = Mutex::new(());
 
 const TIME_SCALE: f64 = 20.0;
 
-/// The device on a thread and the host on this one, joined by two pipes.
+/// The device on a thread and the host on this one, joined by two pipes (the caller holds
+/// [`ONE_AT_A_TIME`]).
 fn host_against_emulator(
     config: DeviceConfig,
     spec: &RunSpec,
@@ -52,7 +56,6 @@ fn host_against_emulator_calibrated(
     options: HostOptions,
     calibration: Option<Calibration>,
 ) -> (LinkRun, DeviceStats, String) {
-    let _one = ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner());
     let (host_to_device_r, host_to_device_w) = std::io::pipe().unwrap();
     let (device_to_host_r, mut device_to_host_w) = std::io::pipe().unwrap();
     let device = std::thread::spawn(move || {
@@ -214,6 +217,7 @@ fn without_latency_a_threshold_loop_keeps_the_programs_metrics_within_two_percen
 
 #[test]
 fn the_closed_loop_over_the_protocol_matches_the_simulation() {
+    let _one = ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner());
     let spec = kim_threshold();
     let sim = simulate(&spec).unwrap();
     let (run, device, diagnostics) =
@@ -235,6 +239,7 @@ fn the_closed_loop_over_the_protocol_matches_the_simulation() {
 
 #[test]
 fn a_saved_calibration_replaces_the_teach_cut_over_the_link() {
+    let _one = ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner());
     let spec = kim_threshold();
     let sim = simulate(&spec).unwrap();
     // Through the file, as `cutlab host --calibration` reads it.
@@ -266,6 +271,7 @@ fn a_saved_calibration_replaces_the_teach_cut_over_the_link() {
 
 #[test]
 fn a_bridge_without_truth_is_taught_by_the_cut_model_or_needs_a_calibration() {
+    let _one = ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner());
     // maneerat-doc-1 cuts one depth in one material: the model of the cut gives the teach force.
     let spec = RunSpec::new(Preset::ManeeratDoc1, ControllerKind::Pi);
     let sim = simulate(&spec).unwrap();
@@ -305,6 +311,7 @@ fn a_bridge_without_truth_is_taught_by_the_cut_model_or_needs_a_calibration() {
 
 #[test]
 fn a_lossy_noisy_line_still_completes_and_the_losses_are_counted() {
+    let _one = ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner());
     let spec = kim_threshold();
     let sim = simulate(&spec).unwrap();
     let mut config = kim_device(5.0);
@@ -330,6 +337,7 @@ fn a_lossy_noisy_line_still_completes_and_the_losses_are_counted() {
 
 #[test]
 fn an_unplugged_cable_alarms_the_host_and_the_device_falls_back() {
+    let _one = ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner());
     // The device's watchdog (5 s of device time) fires while the host's (1 s of wall time, 20 s
     // of device time) is still waiting.
     let mut config = kim_device(5.0);
@@ -360,6 +368,7 @@ fn an_unplugged_cable_alarms_the_host_and_the_device_falls_back() {
 
 #[test]
 fn a_stalled_receiver_fires_the_device_watchdog_and_both_sides_report_it() {
+    let _one = ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner());
     // A 4 s stall against a 2 s watchdog: the stall fires it, a hiccup of the test machine
     // (under 0.1 s of wall time) does not.
     let mut config = kim_device(2.0);
