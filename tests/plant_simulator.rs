@@ -6,7 +6,7 @@
 #[cfg(target_arch = "wasm32")]
 use wasm_bindgen_test::wasm_bindgen_test as test;
 
-use cutlab::machine::{Machine, MachineStep, OverrideCommand};
+use cutlab::machine::{BlockStep, Machine, MachineStep, OverrideCommand};
 use cutlab::plant::materials::Material;
 use cutlab::plant::mechanics::{mean_forces, Cutter, Immersion, MillingMode};
 use cutlab::plant::scenario::{MaterialRegion, Move, Scenario, ScenarioSpec};
@@ -264,3 +264,123 @@ fn a_seeded_run_has_the_same_bits_natively_and_in_wasm() {
 }
 
 const RECORDED_CHECKSUM: u64 = 1_474_825_950_871_922_126;
+
+/// Builds a fresh machine.
+type MakePlant = Box<dyn Fn() -> Box<dyn Plant>>;
+
+/// Every step and the signals at the end of each block: stepped one sample at a time, or in
+/// blocks of the given sizes, under a command that changes from block to block.
+fn stepped(machine: &mut dyn Plant, sizes: &[usize], in_blocks: bool) -> Vec<String> {
+    let mut seen = Vec::new();
+    let mut block = vec![BlockStep::default(); 200];
+    for (b, &size) in sizes.iter().enumerate() {
+        let command = OverrideCommand {
+            override_pct: [100.0, 150.0, 37.5, 255.0][b % 4],
+            feed_hold: b % 7 == 6,
+        };
+        if in_blocks {
+            let n = machine.step_block(command, &mut block[..size]);
+            for b in &block[..n] {
+                seen.push(format!("{:?}", b.step));
+            }
+        } else {
+            for _ in 0..size {
+                seen.push(format!("{:?}", machine.step(command)));
+                if machine.finished() {
+                    break;
+                }
+            }
+        }
+        // What the plant shows after the block: its last sample's every signal.
+        seen.push(format!("{:?} {}", machine.signals(), machine.finished()));
+    }
+    seen
+}
+
+#[test]
+fn stepping_in_blocks_gives_the_bits_of_stepping_one_by_one() {
+    // Block sizes around the simulator's 64-sample chunk, about 5.6 s: past the cuts' starts.
+    let sizes: Vec<usize> = [1, 3, 64, 65, 130, 17, 200, 63]
+        .iter()
+        .cycle()
+        .take(700)
+        .copied()
+        .collect();
+    let y_measured = SimConfig {
+        measured_axis: cutlab::plant::simulator::FeedAxis::Y,
+        ..SimConfig::with_seed(4)
+    };
+    let machines: Vec<(&str, MakePlant)> = vec![
+        (
+            "maneerat-doc-4",
+            Box::new(|| Box::new(Preset::ManeeratDoc4.machine(3).unwrap())),
+        ),
+        (
+            "kim-step-doc",
+            Box::new(|| Box::new(Preset::KimStepDoc.machine(5).unwrap())),
+        ),
+        (
+            "a slot measured on Y",
+            Box::new(move || Box::new(Simulator::new(steady_slot(2.0), y_measured).unwrap())),
+        ),
+        (
+            "brake bench",
+            Box::new(|| Box::new(Preset::WangBrakeBench.machine(2).unwrap())),
+        ),
+    ];
+    for (name, make) in &machines {
+        let one_by_one = stepped(make().as_mut(), &sizes, false);
+        let in_blocks = stepped(make().as_mut(), &sizes, true);
+        assert_eq!(one_by_one.len(), in_blocks.len(), "{name}");
+        for (i, (a, b)) in one_by_one.iter().zip(&in_blocks).enumerate() {
+            assert_eq!(a, b, "{name}, entry {i}");
+        }
+    }
+}
+
+#[test]
+fn a_run_that_ends_inside_a_block_ends_there_and_repeats_its_last_sample() {
+    // A 12 mm slot at 600 mm/min ends after about 1.3 s: blocks of 100 samples meet its end
+    // inside one.
+    let short = || {
+        let spec = ScenarioSpec {
+            name: "short".into(),
+            start_mm: [0.0, 0.0],
+            moves: vec![Move::line([12.0, 0.0], 600.0, 1000.0)],
+            cutter: Cutter::new(10.0, 2, 30.0).unwrap(),
+            mode: MillingMode::Slot,
+            depth_mm: vec![(0.0, 2.0)],
+            width_mm: vec![(0.0, 10.0)],
+            materials: vec![MaterialRegion {
+                from_mm: 2.0,
+                to_mm: 12.0,
+                material: Material::Sm45c,
+            }],
+            spindle_start_dwell_s: 0.0,
+        };
+        Simulator::new(Scenario::new(spec).unwrap(), SimConfig::with_seed(6)).unwrap()
+    };
+    let mut one = short();
+    let mut steps = Vec::new();
+    while !one.finished() {
+        steps.push(format!("{:?}", one.step(OverrideCommand::default())));
+        assert!(steps.len() < 100_000, "the slot ends");
+    }
+    let mut blocks = short();
+    let mut block = vec![BlockStep::default(); 100];
+    let mut from_blocks = Vec::new();
+    let mut last_block = 0;
+    while !blocks.finished() {
+        last_block = blocks.step_block(OverrideCommand::default(), &mut block);
+        from_blocks.extend(block[..last_block].iter().map(|b| format!("{:?}", b.step)));
+    }
+    assert_eq!(steps, from_blocks);
+    assert!(last_block < 100, "the end fell inside a block");
+    assert_eq!(
+        format!("{:?}", one.signals()),
+        format!("{:?}", blocks.signals())
+    );
+    // Finished: a block gives one sample, the last, again.
+    assert_eq!(blocks.step_block(OverrideCommand::default(), &mut block), 1);
+    assert_eq!(format!("{:?}", block[0].step), steps[steps.len() - 1]);
+}

@@ -345,23 +345,37 @@ impl CurrentSensor {
     /// Samples the true phase currents; returns what the ADC reads, in amperes.
     #[inline(always)]
     pub fn read(&mut self, currents_a: [f64; 3]) -> [f64; 3] {
-        let mut out = [0.0; 3];
+        let mut samples = [currents_a];
+        self.read_block(&mut samples);
+        samples[0]
+    }
+
+    /// [`CurrentSensor::read`] of each sample of `currents_a` in turn, the reading replacing
+    /// the true currents: the same bits as reading them one by one, since each phase has its
+    /// own lag and noise stream, and a phase at a time runs as a tight loop.
+    #[inline(always)]
+    pub fn read_block(&mut self, currents_a: &mut [[f64; 3]]) {
         // Each phase draws from its own stream, so an unmeasured phase (W in two-phase wiring)
         // need not draw at all: the others' noise is the same either way.
         for k in 0..self.measured {
-            let noise_v = if self.noise_v == 0.0 {
-                0.0
-            } else {
-                self.noise_v * self.normal.sample(&mut self.rngs[k])
-            };
-            let seen_v = currents_a[k] * self.seen_v_per_a + self.offsets_v[k];
-            let volts = self.lags[k].step(seen_v) + noise_v;
-            out[k] = self.quantiser.code(volts) * self.amps_per_code;
+            let (lag, rng) = (&mut self.lags[k], &mut self.rngs[k]);
+            let offset_v = self.offsets_v[k];
+            for sample in currents_a.iter_mut() {
+                let noise_v = if self.noise_v == 0.0 {
+                    0.0
+                } else {
+                    self.noise_v * self.normal.sample(rng)
+                };
+                let seen_v = sample[k] * self.seen_v_per_a + offset_v;
+                let volts = lag.step(seen_v) + noise_v;
+                sample[k] = self.quantiser.code(volts) * self.amps_per_code;
+            }
         }
         if self.measured == 2 {
-            out[2] = -(out[0] + out[1]);
+            for sample in currents_a.iter_mut() {
+                sample[2] = -(sample[0] + sample[1]);
+            }
         }
-        out
     }
 
     /// Back to the start: lags at rest, noise streams restarted from `seed`.
