@@ -351,28 +351,24 @@ impl CurrentSensor {
     }
 
     /// [`CurrentSensor::read`] of each sample of `currents_a` in turn, the reading replacing
-    /// the true currents: the same bits as reading them one by one, since each phase has its
-    /// own lag and noise stream, and a phase at a time runs as a tight loop.
+    /// the true currents.
     #[inline(always)]
     pub fn read_block(&mut self, currents_a: &mut [[f64; 3]]) {
         // Each phase draws from its own stream, so an unmeasured phase (W in two-phase wiring)
-        // need not draw at all: the others' noise is the same either way.
-        for k in 0..self.measured {
-            let (lag, rng) = (&mut self.lags[k], &mut self.rngs[k]);
-            let offset_v = self.offsets_v[k];
-            for sample in currents_a.iter_mut() {
+        // need not draw at all: the others' noise is the same either way. The phases' lags are
+        // independent chains, stepped side by side.
+        for sample in currents_a.iter_mut() {
+            for k in 0..self.measured {
                 let noise_v = if self.noise_v == 0.0 {
                     0.0
                 } else {
-                    self.noise_v * self.normal.sample(rng)
+                    self.noise_v * self.normal.sample(&mut self.rngs[k])
                 };
-                let seen_v = sample[k] * self.seen_v_per_a + offset_v;
-                let volts = lag.step(seen_v) + noise_v;
+                let seen_v = sample[k] * self.seen_v_per_a + self.offsets_v[k];
+                let volts = self.lags[k].step(seen_v) + noise_v;
                 sample[k] = self.quantiser.code(volts) * self.amps_per_code;
             }
-        }
-        if self.measured == 2 {
-            for sample in currents_a.iter_mut() {
+            if self.measured == 2 {
                 sample[2] = -(sample[0] + sample[1]);
             }
         }
