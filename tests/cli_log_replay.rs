@@ -83,6 +83,18 @@ fn a_calibration_saved_from_a_log_replays_a_controller_on_it() {
     result.unwrap();
     assert!(out.contains("pi replayed on 1149 rows"), "{out}");
     assert!(out.contains("RMS value in the log"), "{out}");
+    // The summary's percents and forces to a tenth, as a person reads them.
+    let summary = out
+        .lines()
+        .find(|l| l.starts_with("override while armed: "))
+        .unwrap();
+    for number in summary
+        .split([' ', '(', ')', ';', ','])
+        .filter(|w| w.contains('.'))
+    {
+        let decimals = number.split('.').nth(1).unwrap();
+        assert_eq!(decimals.len(), 1, "{number} in {summary}");
+    }
     let text = std::fs::read_to_string(&csv).unwrap();
     let mut lines = text.lines();
     assert_eq!(

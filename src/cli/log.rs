@@ -692,6 +692,8 @@ fn replay(args: ReplayArgs, io: &mut Io<'_>) -> Result<(), CliError> {
     // The brief for a terminal.
     let readable = crate::input::readable;
     let number = |v: Option<f64>| v.map_or("—".to_string(), readable);
+    // Percent and newtons to a tenth: what a person compares at a glance.
+    let tenth = |v: Option<f64>| v.map_or("—".to_string(), |v| format!("{v:.1}"));
     let sum = &result.summary;
     let mut out = format!(
         "{path}: {} replayed on {} rows, {} control periods of {} s ({} feedback, {})\n",
@@ -729,18 +731,18 @@ fn replay(args: ReplayArgs, io: &mut Io<'_>) -> Result<(), CliError> {
     out.push_str(&format!(
         "override while armed: min {} %, mean {} %, max {} % (the log's own: mean {} %); \
          {} periods limited by the envelope; {} s under a sensor fault",
-        number(sum.override_min_pct),
-        number(sum.override_mean_pct),
-        number(sum.override_max_pct),
-        number(sum.logged_override_mean_pct),
+        tenth(sum.override_min_pct),
+        tenth(sum.override_mean_pct),
+        tenth(sum.override_max_pct),
+        tenth(sum.logged_override_mean_pct),
         sum.periods_limited,
         readable(sum.sensor_fault_s)
     ));
     if result.calibrated {
         out.push_str(&format!(
             "; force estimate mean {} N, max {} N",
-            number(sum.force_est_mean_n),
-            number(sum.force_est_max_n)
+            tenth(sum.force_est_mean_n),
+            tenth(sum.force_est_max_n)
         ));
     }
     out.push('\n');
