@@ -187,7 +187,9 @@ pub fn read_log(file: &str) -> Result<crate::log::Log, CliError> {
         std::fs::read(file).map_err(|e| CliError::new(format!("{file}: cannot read: {e}")))?;
     let log = crate::log::load(&bytes, None);
     if log.rows == 0 {
-        return Err(CliError::new(format!("{file}: {}", LogError::Empty)));
+        return Err(CliError::new(format!(
+            "{file}: no data rows (a header line and at least one line of values are needed)"
+        )));
     }
     Ok(log)
 }

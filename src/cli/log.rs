@@ -691,7 +691,6 @@ fn replay(args: ReplayArgs, io: &mut Io<'_>) -> Result<(), CliError> {
     }
     // The brief for a terminal.
     let readable = crate::input::readable;
-    let number = |v: Option<f64>| v.map_or("—".to_string(), readable);
     // Percent and newtons to a tenth: what a person compares at a glance.
     let tenth = |v: Option<f64>| v.map_or("—".to_string(), |v| format!("{v:.1}"));
     let sum = &result.summary;

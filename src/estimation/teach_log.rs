@@ -17,7 +17,6 @@
 //! messy machine logs are the log importer's. It works on text, so the command line and the
 //! browser share it; nothing here panics on any input.
 
-use std::collections::HashSet;
 use std::fmt;
 
 use serde::Serialize;
@@ -34,33 +33,6 @@ pub const MAX_FIT_MAGNITUDE: f64 = 1e12;
 /// Why a log could not be read or fitted; the message says where.
 #[derive(Debug, Clone, PartialEq)]
 pub enum LogError {
-    /// The text has no header line.
-    Empty,
-    /// A header names a column twice.
-    DuplicateColumn {
-        /// File line, from 1.
-        line: usize,
-        /// The name.
-        name: String,
-    },
-    /// A data line has another number of fields than the header.
-    FieldCount {
-        /// File line, from 1.
-        line: usize,
-        /// Fields found.
-        found: usize,
-        /// Fields in the header.
-        expected: usize,
-    },
-    /// A cell is not a number.
-    NotANumber {
-        /// File line, from 1.
-        line: usize,
-        /// Its column.
-        column: String,
-        /// What it holds.
-        text: String,
-    },
     /// A value the fit would use is beyond any physical magnitude.
     Absurd {
         /// File line, from 1.
@@ -91,20 +63,6 @@ pub enum LogError {
 impl fmt::Display for LogError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
-            LogError::Empty => f.write_str("the file is empty"),
-            LogError::DuplicateColumn { line, name } => write!(
-                f,
-                "line {line}: column {name:?} appears twice; which one to fit is ambiguous"
-            ),
-            LogError::FieldCount {
-                line,
-                found,
-                expected,
-            } => write!(f, "line {line}: {found} fields, the header has {expected}"),
-            LogError::NotANumber { line, column, text } => write!(
-                f,
-                "line {line}, column {column:?}: cannot parse {text:?} as a number"
-            ),
             LogError::Absurd {
                 line,
                 column,
@@ -171,70 +129,6 @@ pub struct LogTable {
 }
 
 impl LogTable {
-    /// Parses comma-separated text with a header line. A UTF-8 byte-order mark is ignored (a
-    /// spreadsheet's export starts with one, and it would otherwise rename the first column).
-    ///
-    /// ```
-    /// use cutlab::estimation::teach_log::LogTable;
-    /// let t = LogTable::parse("\u{feff}time_s,force_n\n0,1\n0.1,2.5\n").unwrap();
-    /// assert_eq!(t.column("time_s"), Some(&[0.0, 0.1][..]));
-    /// assert_eq!(t.column("force_n"), Some(&[1.0, 2.5][..]));
-    /// ```
-    pub fn parse(text: &str) -> Result<Self, LogError> {
-        let text = text.strip_prefix('\u{feff}').unwrap_or(text);
-        let mut lines = text
-            .lines()
-            .enumerate()
-            .filter(|(_, l)| !l.trim().is_empty());
-        let Some((header_index, header_line)) = lines.next() else {
-            return Err(LogError::Empty);
-        };
-        let header: Vec<String> = header_line
-            .split(',')
-            .map(|h| h.trim().trim_matches('"').to_string())
-            .collect();
-        // A set, not a scan of the names before each: a million columns stay a moment's work.
-        let mut seen = HashSet::with_capacity(header.len());
-        for name in &header {
-            if !seen.insert(name.as_str()) {
-                return Err(LogError::DuplicateColumn {
-                    line: header_index + 1,
-                    name: name.clone(),
-                });
-            }
-        }
-        let mut columns = vec![Vec::new(); header.len()];
-        let mut row_lines = Vec::new();
-        for (index, line) in lines {
-            row_lines.push(index + 1);
-            let cells: Vec<&str> = line.split(',').collect();
-            if cells.len() != header.len() {
-                return Err(LogError::FieldCount {
-                    line: index + 1,
-                    found: cells.len(),
-                    expected: header.len(),
-                });
-            }
-            for ((cell, column), name) in cells.iter().zip(&mut columns).zip(&header) {
-                let value = cell
-                    .trim()
-                    .parse::<f64>()
-                    .map_err(|_| LogError::NotANumber {
-                        line: index + 1,
-                        column: name.clone(),
-                        text: cell.trim().to_string(),
-                    })?;
-                column.push(value);
-            }
-        }
-        Ok(Self {
-            file_columns: header.clone(),
-            header,
-            columns,
-            row_lines,
-        })
-    }
-
     /// The columns calibration reads from `log` (a messy file read by [`crate::log`]): each
     /// of [`CALIBRATION_COLUMNS`] from the column `map` names for it (`ROLE=COLUMN`, as typed
     /// after `--map`), else from a column of that very name. Only numeric columns can be
@@ -508,7 +402,8 @@ fn median(values: impl Iterator<Item = f64>) -> f64 {
 /// use cutlab::estimation::teach_log::{full_override_rows, LogTable};
 /// let csv = "override_pct,force_n,spindle_speed_rpm\n100,0,1000\n100,300,990\n30,90,1000\n\
 ///            100,320,980\n100,310,985\n";
-/// let full = full_override_rows(&LogTable::parse(csv).unwrap(), None).unwrap();
+/// let log = cutlab::log::load(csv.as_bytes(), None);
+/// let full = full_override_rows(&LogTable::from_log(&log, &[]).unwrap(), None).unwrap();
 /// assert_eq!((full.rows, full.resultant_n, full.spindle_rpm), (3, 310.0, 985.0));
 /// ```
 pub fn full_override_rows(
@@ -556,7 +451,8 @@ pub fn full_override_rows(
 ///     let force = 10.0 * f64::from(i);
 ///     csv += &format!("{},1000,{force}\n", 5.0 + 0.01 * force);
 /// }
-/// let fitted = calibrate_log(&LogTable::parse(&csv).unwrap(), None, 900.0).unwrap();
+/// let table = LogTable::from_log(&cutlab::log::load(csv.as_bytes(), None), &[]).unwrap();
+/// let fitted = calibrate_log(&table, None, 900.0).unwrap();
 /// let row = fitted.spindle.unwrap().rows[0];
 /// assert!((row.sensitivity_a_per_n - 0.01).abs() < 1e-9);
 /// assert!(fitted.feed.is_none());
@@ -644,18 +540,25 @@ mod tests {
         csv + extra_row
     }
 
+    /// The calibration's columns of a CSV text, read as `cutlab calibrate` reads a file.
+    fn table(csv: &str) -> LogTable {
+        LogTable::from_log(&crate::log::load(csv.as_bytes(), None), &[]).unwrap()
+    }
+
     #[test]
     fn a_byte_order_mark_keeps_the_first_column() {
-        let text = format!("\u{feff}{}", spindle_log(""));
-        let t = LogTable::parse(&text).unwrap();
-        assert_eq!(t.header()[0], "spindle_current_rms_a");
+        let t = table(&format!("\u{feff}{}", spindle_log("")));
+        assert_eq!(
+            t.column("spindle_current_rms_a").map(<[f64]>::len),
+            Some(20)
+        );
         assert!(calibrate_log(&t, None, 900.0).unwrap().spindle.is_some());
     }
 
     #[test]
     fn an_absurd_value_is_refused_where_it_is_instead_of_a_nan_fit() {
         for value in ["1e308", "1e200"] {
-            let t = LogTable::parse(&spindle_log(&format!("6,1000,{value}\n"))).unwrap();
+            let t = table(&spindle_log(&format!("6,1000,{value}\n")));
             let e = calibrate_log(&t, None, 900.0).unwrap_err();
             assert!(
                 matches!(&e, LogError::Absurd { line: 22, column, .. } if column == "force_n"),
@@ -669,34 +572,8 @@ mod tests {
     }
 
     #[test]
-    fn a_header_of_many_columns_is_read_in_linear_time() {
-        // 200 000 distinct names: a scan per name would be 2·10¹⁰ comparisons.
-        let header: Vec<String> = (0..200_000).map(|i| format!("c{i}")).collect();
-        let text = format!("{}\n", header.join(","));
-        let t = LogTable::parse(&text).unwrap();
-        assert_eq!(t.header().len(), 200_000);
-        let twice = format!("{},c7\n", header.join(","));
-        assert!(matches!(
-            LogTable::parse(&twice),
-            Err(LogError::DuplicateColumn { line: 1, .. })
-        ));
-    }
-
-    #[test]
-    fn damaged_lines_are_named() {
-        let e = LogTable::parse("a,b\n1,2\n3\n").unwrap_err();
-        assert_eq!(e.to_string(), "line 3: 1 fields, the header has 2");
-        let e = LogTable::parse("a,b\n1,2\n3,x\n").unwrap_err();
-        assert_eq!(
-            e.to_string(),
-            "line 3, column \"b\": cannot parse \"x\" as a number"
-        );
-        assert_eq!(LogTable::parse(" \n").unwrap_err(), LogError::Empty);
-    }
-
-    #[test]
     fn without_force_or_cut_the_error_names_the_missing_column() {
-        let t = LogTable::parse("spindle_current_rms_a,spindle_speed_rpm\n1,1000\n").unwrap();
+        let t = table("spindle_current_rms_a,spindle_speed_rpm\n1,1000\n");
         let e = calibrate_log(&t, None, 900.0).unwrap_err();
         assert!(e.to_string().starts_with("no \"force_n\" column"), "{e}");
     }

@@ -358,15 +358,21 @@ impl CurrentSensor {
         // need not draw at all: the others' noise is the same either way. The phases' lags are
         // independent chains, stepped side by side.
         for sample in currents_a.iter_mut() {
-            for k in 0..self.measured {
+            let phases = sample
+                .iter_mut()
+                .zip(&mut self.lags)
+                .zip(&mut self.rngs)
+                .zip(&self.offsets_v)
+                .take(self.measured);
+            for (((current, lag), rng), offset_v) in phases {
                 let noise_v = if self.noise_v == 0.0 {
                     0.0
                 } else {
-                    self.noise_v * self.normal.sample(&mut self.rngs[k])
+                    self.noise_v * self.normal.sample(rng)
                 };
-                let seen_v = sample[k] * self.seen_v_per_a + self.offsets_v[k];
-                let volts = self.lags[k].step(seen_v) + noise_v;
-                sample[k] = self.quantiser.code(volts) * self.amps_per_code;
+                let seen_v = *current * self.seen_v_per_a + offset_v;
+                let volts = lag.step(seen_v) + noise_v;
+                *current = self.quantiser.code(volts) * self.amps_per_code;
             }
             if self.measured == 2 {
                 sample[2] = -(sample[0] + sample[1]);
