@@ -166,6 +166,13 @@ impl LogTable {
                 .iter()
                 .find(|(r, _)| r == role)
                 .map_or(role, |(_, c)| c.as_str());
+            let same_name = log.columns.iter().filter(|c| c.name == source).count();
+            if same_name > 1 {
+                return Err(format!(
+                    "{same_name} columns are named {source:?}: which one is {role} is ambiguous; \
+                     rename one in the file"
+                ));
+            }
             if let Some(column) = log.columns.iter().find(|c| c.name == source) {
                 if column.values.len() != log.rows {
                     return Err(format!(
@@ -569,6 +576,24 @@ mod tests {
                 "{e}"
             );
         }
+    }
+
+    #[test]
+    fn a_column_named_twice_is_refused_as_ambiguous() {
+        let csv = "spindle_current_rms_a,force_n,force_n\n1,2,3\n";
+        let log = crate::log::load(csv.as_bytes(), None);
+        let e = LogTable::from_log(&log, &[]).unwrap_err();
+        assert_eq!(
+            e,
+            "2 columns are named \"force_n\": which one is force_n is ambiguous; rename one in \
+             the file"
+        );
+        // A name no role reads may repeat.
+        let log = crate::log::load(b"note,note,force_n\na,b,3\n", None);
+        assert_eq!(
+            LogTable::from_log(&log, &[]).unwrap().column("force_n"),
+            Some(&[3.0][..])
+        );
     }
 
     #[test]
