@@ -14,6 +14,11 @@
 //!    and phase currents ([`super::spindle_drive`]);
 //! 6. Hall sensors and the ADC read one feed axis and the spindle ([`super::sensors`]).
 //!
+//! A block of samples ([`PlantModel::advance_block`], what the closed loop steps) runs steps 1–5
+//! sample by sample, then the measured phase currents and step 6 for the whole block: nothing in
+//! steps 1–5 depends on them, and each sensor phase keeps its own lag and noise stream, so the
+//! bits are those of stepping one sample at a time.
+//!
 //! Nothing in `step` allocates. Its only inputs are the override command and the seed, so two
 //! runs with the same seed and commands are bit-identical (natively and in wasm: all
 //! transcendental functions come from [`crate::math`]).
