@@ -165,7 +165,7 @@ const PHASOR_SMALL_STEP_RAD: f64 = 0.25;
 
 /// A [`Phasor`] recomputes its cosine and sine from its angle after this many rotations, so
 /// rounding cannot accumulate (the drift in between is ~10⁻¹³ rad).
-const PHASOR_RESYNC_STEPS: u32 = 1024;
+pub const PHASOR_RESYNC_STEPS: u32 = 1024;
 
 /// Below this step (radians) the short form of [`small_cos_sin`] is already exact.
 const PHASOR_TINY_STEP_RAD: f64 = 1.0 / 32.0;

@@ -14,7 +14,7 @@ pub(crate) const ABOUT: &str = "Evaluate a Mamdani engine given in fuzzylite's F
 evaluation per stdin\nline: the input values in the order the file declares them), or print \
 paper 002's engine as FLL.";
 
-/// The options of `cutlab fuzzy`: a subcommand ([`ABOUT`]).
+/// The options of `cutlab fuzzy`: a subcommand (its help says what each does).
 #[derive(Debug, clap::Args)]
 pub struct FuzzyArgs {
     #[command(subcommand)]

@@ -237,7 +237,7 @@ const AIR_MARGIN: f64 = 1.5;
 /// The air-cut threshold never rises above this fraction of the target: a model that reads a
 /// large force in air still leaves the controller the light cuts (paper 003's 1 mm entry cuts at
 /// 40 % of the target at 100 %).
-const MAX_AIR_CUT_FRACTION: f64 = 0.35;
+pub const MAX_AIR_CUT_FRACTION: f64 = 0.35;
 
 /// The estimated force below which the safety envelope takes the tool for in air: a fifth of
 /// the target, raised to half again the force the calibrated model read in the teach cut's air
@@ -768,7 +768,7 @@ pub fn references(spec: &RunSpec) -> Result<References, LoopError> {
 const REFERENCE_BRACKET_PCT: (f64, f64) = (1.0, 250.0);
 
 /// Probes the force model may place before the search falls back to halving the bracket.
-const GUIDED_PROBES: usize = 4;
+pub const GUIDED_PROBES: usize = 4;
 
 /// A probe that only needs a verdict is looked at after this many control periods.
 const VERDICT_CHECK_PERIODS: usize = 20;

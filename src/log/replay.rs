@@ -14,7 +14,7 @@
 //! overload) and the force estimate — not what would have happened after the first decision that
 //! differs from the machine's own. docs/logs.md says more.
 //!
-//! How the log's columns become a [`SensorSample`] (the [`Channel`]s of a [`Mapping`]):
+//! How the log's columns become a [`crate::machine::SensorSample`] (the [`Channel`]s of a [`Mapping`]):
 //!
 //! * **three phase currents** of a motor go in as they are; **two** are completed by Kirchhoff's
 //!   current law (`i_w = −i_u − i_v`, exact for a motor without neutral); **one** stands for the

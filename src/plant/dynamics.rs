@@ -4,7 +4,7 @@
 //! bandwidth are lags. Discretising them by the matrix exponential keeps their step responses
 //! exact at any sample rate, so a 1 kHz run and a 10 kHz run agree at the common instants.
 //!
-//! * first order:  y' = (u − y)·2π·f_c,           y[k+1] = y[k] + (1 − e^(−2π f_c Δt))·(u − y[k])
+//! * first order:  y' = (u − y)·2π·f_c,           y\[k+1\] = y\[k\] + (1 − e^(−2π f_c Δt))·(u − y\[k\])
 //! * second order: y'' + 2ζω·y' + ω²·y = ω²·u,    ω = 2π·f_n, exact ZOH via exp([[A, B], [0, 0]]·Δt)
 //!
 //! A cutoff of 0 or +∞ makes the lag a pass-through. A NaN input propagates to the output and
