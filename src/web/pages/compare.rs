@@ -5,19 +5,20 @@ use std::time::Duration;
 
 use leptos::prelude::*;
 
-use crate::closed_loop::lab::{LabRuns, RunResult, RunSpec, TeachKey};
+use crate::closed_loop::lab::{LabRuns, RunResult, RunSpec};
 use crate::closed_loop::metrics::metrics_csv_columns;
 use crate::closed_loop::paper_comparisons::PAPER_COMPARISONS;
-use crate::closed_loop::precomputed::shipped_calibrations;
 use crate::closed_loop::trace::write_csv_runs;
 use crate::control::registry::ControllerKind;
 use crate::web::components::download::{download_configuration, download_text, download_written};
+use crate::web::components::later::Later;
 use crate::web::components::run_form::{
     ControllerFields, ControllerForm, MachineAndSignalFields, ScenarioFields, ScenarioForm,
 };
 use crate::web::components::run_view::{MetricsTable, NamedRun, RunCharts};
-use crate::web::components::runner::{Debounce, RunProgress, RunStatus, Runner};
+use crate::web::components::runner::{next_task, Debounce, RunProgress, RunStatus, Runner};
 use crate::web::components::savings::Savings;
+use crate::web::components::teach_cuts::KeptCalibrations;
 use crate::web::route::{query_params, replace_query, Page};
 
 /// Wait after an edit before re-running: none beyond the task that made it, so the events of one
@@ -91,9 +92,7 @@ pub fn ComparePage() -> impl IntoView {
             .collect::<Option<Vec<_>>>()
     });
 
-    // Seeded with the teach cuts shipped with the code (the default scenario's), so its first run
-    // starts with the closed loop.
-    let calibrations = StoredValue::new(shipped_calibrations());
+    let calibrations = KeptCalibrations::new(KEPT_CALIBRATIONS);
     let debounce = Debounce::new(RERUN_DELAY);
     let first_run = StoredValue::new(true);
     let savings_for_edits = savings.clone();
@@ -118,12 +117,14 @@ pub fn ComparePage() -> impl IntoView {
         }
         let runner = runner_for_effect.clone();
         let start = move || {
-            let runs = LabRuns::with_calibrations(specs, calibrations.get_value());
+            let runs = LabRuns::with_calibrations(specs, calibrations.known());
             runner.start_previewing(runs, runs_so_far);
         };
         if first_run.get_value() {
+            // In a task of its own, after the results mount (`Later`): the page's first task
+            // stays short.
             first_run.set_value(false);
-            start();
+            next_task(start);
         } else {
             debounce.request(start);
         }
@@ -143,14 +144,7 @@ pub fn ComparePage() -> impl IntoView {
     Effect::new(move |_| {
         results.with(|runs| {
             if let Some((_, first)) = runs.first() {
-                if let Ok(key) = TeachKey::of(&first.spec) {
-                    calibrations.update_value(|known| {
-                        known.retain(|(k, _)| *k != key);
-                        known.push((key, first.calibration.clone()));
-                        let excess = known.len().saturating_sub(KEPT_CALIBRATIONS);
-                        known.drain(..excess);
-                    });
-                }
+                calibrations.remember(&first.spec, &first.calibration);
                 savings_for_effect.request(&first.spec, Some(&first.calibration));
             }
         });
@@ -296,9 +290,13 @@ pub fn ComparePage() -> impl IntoView {
                     </fieldset>
                 </form>
                 <div class="results">
+                    // The results mount in the next task: the form paints first, and the page's
+                    // first task stays short.
+                    <Later>
                     <RunCharts runs=drawn />
                     {savings.progress()}
                     <MetricsTable runs=runs />
+                    </Later>
                 </div>
             </div>
         </section>

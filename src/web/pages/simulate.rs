@@ -5,18 +5,19 @@ use std::time::Duration;
 
 use leptos::prelude::*;
 
-use crate::closed_loop::lab::{LabRuns, RunResult, RunSpec, TeachKey};
+use crate::closed_loop::lab::{LabRuns, RunResult, RunSpec};
 use crate::closed_loop::metrics::metrics_csv;
-use crate::closed_loop::precomputed::shipped_calibrations;
 use crate::closed_loop::trace::write_csv;
 use crate::control::registry::ControllerKind;
 use crate::web::components::download::{download_configuration, download_text, download_written};
+use crate::web::components::later::Later;
 use crate::web::components::run_form::{
     ControllerFields, ControllerForm, MachineAndSignalFields, ScenarioFields, ScenarioForm,
 };
 use crate::web::components::run_view::{metrics_json, EventLog, MetricsTable, NamedRun, RunCharts};
-use crate::web::components::runner::{Debounce, RunProgress, Runner};
+use crate::web::components::runner::{next_task, Debounce, RunProgress, Runner};
 use crate::web::components::savings::Savings;
+use crate::web::components::teach_cuts::KeptCalibrations;
 use crate::web::route::{query_params, replace_query, Page};
 
 /// Wait after an edit before re-running: none beyond the task that made it, so the events of one
@@ -66,20 +67,17 @@ pub fn SimulatePage() -> impl IntoView {
         })
     });
 
-    // The calibrations of the last teach cuts, newest last.
-    // Seeded with the teach cuts shipped with the code (the default scenario's), so its first run
-    // starts with the closed loop.
-    let calibrations = StoredValue::new(shipped_calibrations());
+    let calibrations = KeptCalibrations::new(KEPT_CALIBRATIONS);
     let start_run = {
         let runner = runner.clone();
         move |spec: RunSpec| {
-            let known = calibrations.get_value();
+            let known = calibrations.known();
             runner.start_previewing(LabRuns::with_calibrations(vec![spec], known), runs_so_far);
         }
     };
 
-    // Keep the URL in step with the form, and re-run when a valid spec changes: the first run at
-    // once, edits in the next task.
+    // Keep the URL in step with the form, and re-run when a valid spec changes: the first run and
+    // edits each in the next task.
     let debounce = Debounce::new(RERUN_DELAY);
     let first_run = StoredValue::new(true);
     let savings_for_edits = savings.clone();
@@ -98,8 +96,10 @@ pub fn SimulatePage() -> impl IntoView {
         savings_for_edits.keep_only(&spec);
         let start = start_for_effect.clone();
         if first_run.get_value() {
+            // In a task of its own, after the results mount (`Later`): the page's first task
+            // stays short.
             first_run.set_value(false);
-            start(spec);
+            next_task(move || start(spec));
         } else {
             debounce.request(move || start(spec));
         }
@@ -112,14 +112,7 @@ pub fn SimulatePage() -> impl IntoView {
     let savings_for_effect = savings.clone();
     Effect::new(move |_| {
         if let Some(r) = finished.get() {
-            if let Ok(key) = TeachKey::of(&r.spec) {
-                calibrations.update_value(|known| {
-                    known.retain(|(k, _)| *k != key);
-                    known.push((key, r.calibration.clone()));
-                    let excess = known.len().saturating_sub(KEPT_CALIBRATIONS);
-                    known.drain(..excess);
-                });
-            }
+            calibrations.remember(&r.spec, &r.calibration);
             savings_for_effect.request(&r.spec, Some(&r.calibration));
         }
     });
@@ -219,10 +212,14 @@ pub fn SimulatePage() -> impl IntoView {
                     </fieldset>
                 </form>
                 <div class="results">
+                    // The results mount in the next task: the form paints first, and the page's
+                    // first task stays short.
+                    <Later>
                     <RunCharts runs=drawn />
                     {savings.progress()}
                     <MetricsTable runs=runs />
                     <EventLog run=Signal::derive(move || result.get()) />
+                    </Later>
                 </div>
             </div>
         </section>
