@@ -255,6 +255,9 @@ pub fn ComparePage() -> impl IntoView {
                         <p class="finding" role="status">{finding}</p>
                     </fieldset>
                     <ScenarioFields form=scenario />
+                    // The variants, and then the rest of the form, each a task later: the page's
+                    // first task stays short.
+                    <Later>
                     {move || {
                         (0..count.get())
                             .map(|i| {
@@ -263,6 +266,8 @@ pub fn ComparePage() -> impl IntoView {
                             })
                             .collect_view()
                     }}
+                    </Later>
+                    <Later>
                     <MachineAndSignalFields form=scenario />
                     <div class="button-row">
                         <button type="button" on:click=move |_| count.update(|c| *c = (*c + 1).min(4)) disabled=move || { count.get() >= 4 }>
@@ -288,6 +293,7 @@ pub fn ComparePage() -> impl IntoView {
                         </div>
                         {move || export_error.get().map(|e| view! { <p class="run-error" role="alert">{e}</p> })}
                     </fieldset>
+                    </Later>
                 </form>
                 <div class="results">
                     // The results mount in the next task: the form paints first, and the page's

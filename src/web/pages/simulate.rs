@@ -187,9 +187,11 @@ pub fn SimulatePage() -> impl IntoView {
                 <form class="panel" aria-label="Run settings" on:submit=|ev| ev.prevent_default()>
                     <ScenarioFields form=scenario />
                     <ControllerFields form=controller />
+                    // The rest of the form a task later: the page's first task stays short.
+                    <Later>
                     <MachineAndSignalFields form=scenario />
                     <div class="button-row">
-                        <button type="button" class="primary" on:click=run_now>"Run"</button>
+                        <button type="button" class="primary" on:click=run_now.clone()>"Run"</button>
                     </div>
                     <RunProgress runner=runner.clone() />
                     <fieldset>
@@ -210,6 +212,7 @@ pub fn SimulatePage() -> impl IntoView {
                         </div>
                         {move || export_error.get().map(|e| view! { <p class="run-error" role="alert">{e}</p> })}
                     </fieldset>
+                    </Later>
                 </form>
                 <div class="results">
                     // The results mount in the next task: the form paints first, and the page's
