@@ -8,13 +8,20 @@ use leptos::prelude::*;
 
 use crate::web::components::runner::next_task;
 
+/// `false` until the task after the one that calls it, then `true`. An effect that returns early
+/// while it reads `false` does its work in that task instead of the one that mounts the page.
+pub fn from_next_task() -> ReadSignal<bool> {
+    let (ready, set_ready) = signal(false);
+    next_task(move || {
+        let _ = set_ready.try_set(true);
+    });
+    ready
+}
+
 /// Shows `children` from the task after the one that mounts it: the browser paints what was
 /// mounted before and handles input in between. Nothing shows if the page is left meanwhile.
 #[component]
 pub fn Later(children: ChildrenFn) -> impl IntoView {
-    let ready = RwSignal::new(false);
-    next_task(move || {
-        let _ = ready.try_set(true);
-    });
+    let ready = from_next_task();
     move || ready.get().then(|| children())
 }

@@ -9,7 +9,7 @@ use crate::closed_loop::runner::Calibration;
 
 /// Known calibrations by teach cut, newest last; the teach cuts shipped with the code (the
 /// default scenario's) are among them, so its first run starts with the closed loop. Those are
-/// parsed when the first run asks for them (a task of its own), not while the page mounts.
+/// parsed when the first run asks for them, in the task that starts it, not while the page mounts.
 #[derive(Clone, Copy)]
 pub struct KeptCalibrations {
     known: StoredValue<Option<Vec<(TeachKey, Calibration)>>>,

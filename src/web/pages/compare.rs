@@ -11,12 +11,12 @@ use crate::closed_loop::paper_comparisons::PAPER_COMPARISONS;
 use crate::closed_loop::trace::write_csv_runs;
 use crate::control::registry::ControllerKind;
 use crate::web::components::download::{download_configuration, download_text, download_written};
-use crate::web::components::later::Later;
+use crate::web::components::later::{from_next_task, Later};
 use crate::web::components::run_form::{
     ControllerFields, ControllerForm, MachineAndSignalFields, ScenarioFields, ScenarioForm,
 };
 use crate::web::components::run_view::{MetricsTable, NamedRun, RunCharts};
-use crate::web::components::runner::{next_task, Debounce, RunProgress, RunStatus, Runner};
+use crate::web::components::runner::{Debounce, RunProgress, RunStatus, Runner};
 use crate::web::components::savings::Savings;
 use crate::web::components::teach_cuts::KeptCalibrations;
 use crate::web::route::{query_params, replace_query, Page};
@@ -95,10 +95,16 @@ pub fn ComparePage() -> impl IntoView {
     let calibrations = KeptCalibrations::new(KEPT_CALIBRATIONS);
     let debounce = Debounce::new(RERUN_DELAY);
     let first_run = StoredValue::new(true);
+    // Both effects wait for the task after the page's: parsing the forms and writing the URL are
+    // the page's own work, not its mount's.
+    let mounted = from_next_task();
     let savings_for_edits = savings.clone();
     let runner_for_effect = runner.clone();
     // Keep the URL in step with the forms.
     Effect::new(move |_| {
+        if !mounted.get() {
+            return;
+        }
         let mut q = scenario.query();
         q.push(("variants".into(), count.get().to_string()));
         for (form, prefix) in forms.iter().zip(VARIANT_PREFIXES).take(count.get()) {
@@ -109,6 +115,9 @@ pub fn ComparePage() -> impl IntoView {
     // Re-run when the valid specs change, and only then: `specs` is a memo, so the forms' signals
     // settling after the page mounts, or a field set to what it held, start nothing.
     Effect::new(move |_| {
+        if !mounted.get() {
+            return;
+        }
         let Some(specs) = specs.get() else {
             return;
         };
@@ -121,10 +130,8 @@ pub fn ComparePage() -> impl IntoView {
             runner.start_previewing(runs, runs_so_far);
         };
         if first_run.get_value() {
-            // In a task of its own, after the results mount (`Later`): the page's first task
-            // stays short.
             first_run.set_value(false);
-            next_task(start);
+            start();
         } else {
             debounce.request(start);
         }
@@ -222,6 +229,10 @@ pub fn ComparePage() -> impl IntoView {
             </p>
             <div class="layout-two">
                 <form class="panel" aria-label="Comparison settings" on:submit=|ev| ev.prevent_default()>
+                    // The page mounts in pieces, a task each (the page itself with its state, the
+                    // papers' comparisons and the scenario, the variants, the rest of the form, the
+                    // results), so that no task of a first load takes more than 50 ms.
+                    <Later>
                     <fieldset>
                         <legend>"The papers' comparisons"</legend>
                         <div class="preset-row">
@@ -255,8 +266,7 @@ pub fn ComparePage() -> impl IntoView {
                         <p class="finding" role="status">{finding}</p>
                     </fieldset>
                     <ScenarioFields form=scenario />
-                    // The variants, and then the rest of the form, each a task later: the page's
-                    // first task stays short.
+                    </Later>
                     <Later>
                     {move || {
                         (0..count.get())
@@ -296,8 +306,6 @@ pub fn ComparePage() -> impl IntoView {
                     </Later>
                 </form>
                 <div class="results">
-                    // The results mount in the next task: the form paints first, and the page's
-                    // first task stays short.
                     <Later>
                     <RunCharts runs=drawn />
                     {savings.progress()}

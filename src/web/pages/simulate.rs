@@ -10,12 +10,12 @@ use crate::closed_loop::metrics::metrics_csv;
 use crate::closed_loop::trace::write_csv;
 use crate::control::registry::ControllerKind;
 use crate::web::components::download::{download_configuration, download_text, download_written};
-use crate::web::components::later::Later;
+use crate::web::components::later::{from_next_task, Later};
 use crate::web::components::run_form::{
     ControllerFields, ControllerForm, MachineAndSignalFields, ScenarioFields, ScenarioForm,
 };
 use crate::web::components::run_view::{metrics_json, EventLog, MetricsTable, NamedRun, RunCharts};
-use crate::web::components::runner::{next_task, Debounce, RunProgress, Runner};
+use crate::web::components::runner::{Debounce, RunProgress, Runner};
 use crate::web::components::savings::Savings;
 use crate::web::components::teach_cuts::KeptCalibrations;
 use crate::web::route::{query_params, replace_query, Page};
@@ -76,13 +76,19 @@ pub fn SimulatePage() -> impl IntoView {
         }
     };
 
-    // Keep the URL in step with the form, and re-run when a valid spec changes: the first run and
-    // edits each in the next task.
+    // Keep the URL in step with the form, and re-run when a valid spec changes: the first run at
+    // once (in the task after the page's, see `mounted`), edits in the next task.
     let debounce = Debounce::new(RERUN_DELAY);
     let first_run = StoredValue::new(true);
+    // Both effects wait for the task after the page's: parsing the form and writing the URL are
+    // the page's own work, not its mount's.
+    let mounted = from_next_task();
     let savings_for_edits = savings.clone();
     let start_for_effect = start_run.clone();
     Effect::new(move |_| {
+        if !mounted.get() {
+            return;
+        }
         let mut q = scenario.query();
         q.extend(controller.query(""));
         replace_query(Page::Simulate, &q);
@@ -90,16 +96,17 @@ pub fn SimulatePage() -> impl IntoView {
     // Re-run when the valid spec changes, and only then: `spec` is a memo, so the form's signals
     // settling after the page mounts, or a field set to what it held, start nothing.
     Effect::new(move |_| {
+        if !mounted.get() {
+            return;
+        }
         let Some(spec) = spec.get() else {
             return;
         };
         savings_for_edits.keep_only(&spec);
         let start = start_for_effect.clone();
         if first_run.get_value() {
-            // In a task of its own, after the results mount (`Later`): the page's first task
-            // stays short.
             first_run.set_value(false);
-            next_task(move || start(spec));
+            start(spec);
         } else {
             debounce.request(move || start(spec));
         }
@@ -185,9 +192,13 @@ pub fn SimulatePage() -> impl IntoView {
             </p>
             <div class="layout-two">
                 <form class="panel" aria-label="Run settings" on:submit=|ev| ev.prevent_default()>
+                    // The page mounts in pieces, a task each (the page itself with its state, the
+                    // scenario and controller, the rest of the form, the results), so that no
+                    // task of a first load takes more than 50 ms.
+                    <Later>
                     <ScenarioFields form=scenario />
                     <ControllerFields form=controller />
-                    // The rest of the form a task later: the page's first task stays short.
+                    </Later>
                     <Later>
                     <MachineAndSignalFields form=scenario />
                     <div class="button-row">
@@ -215,8 +226,6 @@ pub fn SimulatePage() -> impl IntoView {
                     </Later>
                 </form>
                 <div class="results">
-                    // The results mount in the next task: the form paints first, and the page's
-                    // first task stays short.
                     <Later>
                     <RunCharts runs=drawn />
                     {savings.progress()}
