@@ -3,9 +3,16 @@
 // samples inside it (self time per function, and the time under each of the app's own frames).
 //
 //   trunk build --release --offline
-//   # names kept: the same module, wasm-opt with -g (see docs/benchmarks.md, "Longest task")
-//   node scripts/bench/browser_profile.mjs [--dist DIR] [--hash '#/compare?variants=4'] \
+//   # The same module with its function names kept (Trunk's wasm-opt strips them):
+//   rm -rf /tmp/named && cp -r dist /tmp/named && sed -i 's/ integrity="[^"]*"//g' /tmp/named/index.html
+//   wasm-bindgen --target web --no-typescript --out-name cutlab-web --out-dir /tmp/wb \
+//     target/wasm32-unknown-unknown/web-release/cutlab-web.wasm
+//   wasm-opt --output=$(ls /tmp/named/*_bg.wasm) -Oz -g /tmp/wb/cutlab-web_bg.wasm
+//   node scripts/bench/browser_profile.mjs --dist /tmp/named [--hash '#/compare?variants=4'] \
 //        [--min-ms 30] [--top 25] [--trace out.json] [--no-samples]
+//
+// The sampling profiler slows V8's compiles (it logs each compiled function), so its tasks run
+// longer than without it; --no-samples times the tasks as they run unprofiled (trace events only).
 //
 // The page is loaded once, and the trace stops once the default run's metrics table shows its
 // savings (every column of it on Compare), so the first tasks, the runs and the first draws are in.

@@ -31,6 +31,12 @@ pub const CHUNK_BUDGET_MS: f64 = 35.0;
 /// one fills in twice a second.
 pub const PREVIEW_EVERY_MS: f64 = 500.0;
 
+/// How often a running job's progress (stage and fraction) is published. Each change of the
+/// status has the browser draw a frame after the chunk (a few ms of layout and paint), so a
+/// progress bar updated after every chunk would slow the run it shows; ten times a second is
+/// smooth to read.
+pub const PROGRESS_EVERY_MS: f64 = 100.0;
+
 /// What a runner is doing.
 #[derive(Debug, Clone, PartialEq)]
 pub enum RunStatus<T> {
@@ -144,6 +150,7 @@ impl<T: Clone + Send + Sync + 'static> Runner<T> {
             budget: 1,
             preview,
             previewed_at_ms: now_ms(),
+            progress_at_ms: now_ms(),
             phase: Phase::Working,
         }));
         let signals = Published {
@@ -170,6 +177,8 @@ struct Pumped<J: Work> {
     budget: usize,
     preview: Option<PreviewOf<J>>,
     previewed_at_ms: f64,
+    /// When the progress was last published.
+    progress_at_ms: f64,
     phase: Phase,
 }
 
@@ -259,8 +268,22 @@ fn pump<J: Work + 'static>(
             let _ = published.preview.try_set(None);
         }
     }
+    // Progress at most every PROGRESS_EVERY_MS; an end (done, failed) at once.
+    let publish = !running || {
+        let mut s = state.borrow_mut();
+        let due = now_ms() - s.progress_at_ms >= PROGRESS_EVERY_MS;
+        if due {
+            s.progress_at_ms = now_ms();
+        }
+        due
+    };
     // The page may have been left meanwhile: a disposed status ends the job quietly.
-    if status.try_set(next).is_none() && running {
+    let alive = if publish {
+        status.try_set(next).is_none()
+    } else {
+        status.try_with_untracked(|_| ()).is_some()
+    };
+    if alive && running {
         next_task(move || pump(state, published, generation, mine));
     }
 }
