@@ -3,6 +3,7 @@
 use leptos::prelude::*;
 
 use super::components::chart::ChartHelp;
+use super::components::later::Later;
 use super::pages;
 use super::route::{use_current_page, Page};
 
@@ -39,6 +40,8 @@ pub fn App() -> impl IntoView {
         </header>
         <ChartHelp />
         <main id="main">
+            // The page mounts in the task after the shell's, so the two never add up in one task.
+            <Later>
             {move || match page.get() {
                 Page::SignalChain => view! { <pages::signal_chain::SignalChainPage /> }.into_any(),
                 Page::Learn => view! { <pages::learn::LearnPage /> }.into_any(),
@@ -50,6 +53,7 @@ pub fn App() -> impl IntoView {
                 Page::Hardware => view! { <pages::hardware::HardwarePage /> }.into_any(),
                 Page::Logs => view! { <pages::logs::LogsPage /> }.into_any(),
             }}
+            </Later>
         </main>
         <footer class="site-footer">
             <p>

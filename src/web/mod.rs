@@ -21,7 +21,11 @@ mod pages;
 mod route;
 
 /// Mounts the lab on the page's `<body>`; called once by the `cutlab-web` binary.
+///
+/// The mount waits for a task of its own: the binary's `main` runs in the task that finishes
+/// instantiating the module (V8 ends its streaming compilation there), and the two together took
+/// longer than the 50 ms a task should.
 pub fn start() {
     console_error_panic_hook::set_once();
-    leptos::mount::mount_to_body(app::App);
+    components::runner::next_task(|| leptos::mount::mount_to_body(app::App));
 }

@@ -27,7 +27,13 @@ pub struct ScenarioForm {
     pub preset: RwSignal<String>,
     /// The typed text of each setting, in the order of [`RunSetting::ALL`].
     settings: [RwSignal<String>; RunSetting::ALL.len()],
+    /// The fields parsed, once per change for every reader (the page's run and each fieldset's
+    /// messages), instead of once per reader.
+    parsed: Memo<ParsedScenario>,
 }
+
+/// A parsed scenario form: the choice, or the message of each field that did not parse.
+type ParsedScenario = Result<ScenarioChoice, BTreeMap<&'static str, String>>;
 
 /// The preset a fresh form shows.
 const DEFAULT_PRESET: &str = "kim-step-doc";
@@ -66,14 +72,17 @@ impl ScenarioForm {
     /// A form with the defaults, then whatever `query` says.
     pub fn new(query: &[(String, String)]) -> Self {
         let typed = |key: &str| query.iter().find(|(k, _)| k == key).map(|(_, v)| v.clone());
+        let preset = RwSignal::new(typed("preset").unwrap_or_else(|| DEFAULT_PRESET.to_string()));
+        let settings = RunSetting::ALL.map(|setting| {
+            RwSignal::new(
+                typed(setting.spec().query_key)
+                    .unwrap_or_else(|| shown_default(setting).to_string()),
+            )
+        });
         Self {
-            preset: RwSignal::new(typed("preset").unwrap_or_else(|| DEFAULT_PRESET.to_string())),
-            settings: RunSetting::ALL.map(|setting| {
-                RwSignal::new(
-                    typed(setting.spec().query_key)
-                        .unwrap_or_else(|| shown_default(setting).to_string()),
-                )
-            }),
+            preset,
+            settings,
+            parsed: Memo::new(move |_| parse_scenario(preset, settings)),
         }
     }
 
@@ -110,38 +119,47 @@ impl ScenarioForm {
             .collect()
     }
 
-    /// Parses the fields through the run definition ([`parse_texts`], as the command line
-    /// does); errors are keyed by the setting's query key.
-    pub fn parse(&self) -> Result<ScenarioChoice, BTreeMap<&'static str, String>> {
-        let Some(preset) = Preset::from_name(&self.preset.get()) else {
-            return Err(BTreeMap::from([("preset", "choose a preset".to_string())]));
-        };
-        // The machine fields are hidden for presets without a mill; what they hold then must
-        // neither block the run nor change it.
-        let has_mill = preset.scenario().is_some();
-        let texts: Vec<(RunSetting, String)> = self
-            .fields()
-            .filter(|(setting, _)| has_mill || setting.spec().group != SettingGroup::Machine)
-            .map(|(setting, text)| (setting, text.get()))
-            .collect();
-        match parse_texts(preset, ControllerConfig::new(ControllerKind::Fixed), &texts) {
-            Ok(spec) => Ok(ScenarioChoice {
-                preset,
-                seed: spec.seed,
-                settings: spec.settings,
-                plant: spec.plant,
-            }),
-            Err(errors) => Err(errors
-                .into_iter()
-                .map(|e| {
-                    let message = match e.choices() {
-                        Some(choices) => format!("{}; choices: {choices}", e.problem),
-                        None => e.problem.to_string(),
-                    };
-                    (e.setting.spec().query_key, message)
-                })
-                .collect()),
-        }
+    /// The fields parsed through the run definition ([`parse_texts`], as the command line
+    /// does); errors are keyed by the setting's query key. Tracked.
+    pub fn parse(&self) -> ParsedScenario {
+        self.parsed.get()
+    }
+}
+
+/// Parses a scenario form's fields (see [`ScenarioForm::parse`]).
+fn parse_scenario(
+    preset: RwSignal<String>,
+    settings: [RwSignal<String>; RunSetting::ALL.len()],
+) -> ParsedScenario {
+    let Some(preset) = Preset::from_name(&preset.get()) else {
+        return Err(BTreeMap::from([("preset", "choose a preset".to_string())]));
+    };
+    // The machine fields are hidden for presets without a mill; what they hold then must
+    // neither block the run nor change it.
+    let has_mill = preset.scenario().is_some();
+    let texts: Vec<(RunSetting, String)> = RunSetting::ALL
+        .into_iter()
+        .zip(settings)
+        .filter(|(setting, _)| has_mill || setting.spec().group != SettingGroup::Machine)
+        .map(|(setting, text)| (setting, text.get()))
+        .collect();
+    match parse_texts(preset, ControllerConfig::new(ControllerKind::Fixed), &texts) {
+        Ok(spec) => Ok(ScenarioChoice {
+            preset,
+            seed: spec.seed,
+            settings: spec.settings,
+            plant: spec.plant,
+        }),
+        Err(errors) => Err(errors
+            .into_iter()
+            .map(|e| {
+                let message = match e.choices() {
+                    Some(choices) => format!("{}; choices: {choices}", e.problem),
+                    None => e.problem.to_string(),
+                };
+                (e.setting.spec().query_key, message)
+            })
+            .collect()),
     }
 }
 
@@ -541,11 +559,18 @@ pub fn ControllerFields(
                         form.values.with_untracked(|v| v.get(&key).cloned().unwrap_or_default()),
                     );
                     let key_for_effect = key.clone();
+                    // Only a changed text is written: the first run of the effect, as the field
+                    // mounts, writes nothing, so the page's run and URL are not worked out twice.
                     Effect::new(move |_| {
                         let t = text.get();
-                        form.values.update(|v| {
-                            v.insert(key_for_effect.clone(), t);
-                        });
+                        let changed = form
+                            .values
+                            .with_untracked(|v| v.get(&key_for_effect) != Some(&t));
+                        if changed {
+                            form.values.update(|v| {
+                                v.insert(key_for_effect.clone(), t);
+                            });
+                        }
                     });
                     let param_key = p.key.to_string();
                     let error = Signal::derive(move || errors.with(|e| e.get(&param_key).cloned()));

@@ -20,14 +20,22 @@ use wasm_bindgen::prelude::{Closure, JsCast, JsValue};
 
 use crate::work::{Progress, Work};
 
-/// Target duration of one chunk of work.
-pub const CHUNK_BUDGET_MS: f64 = 30.0;
+/// Longest duration of one chunk of work: a chunk ends before a step that would take it past
+/// this, so with the page's own work around it a chunk stays under the 50 ms a task should take;
+/// between chunks the browser draws a frame (a few ms), so shorter chunks would cost the run time.
+pub const CHUNK_BUDGET_MS: f64 = 35.0;
 
 /// How often a job's output so far is shown while it runs ([`Runner::start_previewing`]). A
 /// preview redraws every chart of the page, tens of milliseconds in all: each one would add that
 /// much to a short run, so a run done within half a second is drawn once, finished, and a longer
 /// one fills in twice a second.
 pub const PREVIEW_EVERY_MS: f64 = 500.0;
+
+/// How often a running job's progress (stage and fraction) is published. Each change of the
+/// status has the browser draw a frame after the chunk (a few ms of layout and paint), so a
+/// progress bar updated after every chunk would slow the run it shows; ten times a second is
+/// smooth to read.
+pub const PROGRESS_EVERY_MS: f64 = 100.0;
 
 /// What a runner is doing.
 #[derive(Debug, Clone, PartialEq)]
@@ -142,6 +150,7 @@ impl<T: Clone + Send + Sync + 'static> Runner<T> {
             budget: 1,
             preview,
             previewed_at_ms: now_ms(),
+            progress_at_ms: now_ms(),
             phase: Phase::Working,
         }));
         let signals = Published {
@@ -168,6 +177,8 @@ struct Pumped<J: Work> {
     budget: usize,
     preview: Option<PreviewOf<J>>,
     previewed_at_ms: f64,
+    /// When the progress was last published.
+    progress_at_ms: f64,
     phase: Phase,
 }
 
@@ -257,8 +268,22 @@ fn pump<J: Work + 'static>(
             let _ = published.preview.try_set(None);
         }
     }
+    // Progress at most every PROGRESS_EVERY_MS; an end (done, failed) at once.
+    let publish = !running || {
+        let mut s = state.borrow_mut();
+        let due = now_ms() - s.progress_at_ms >= PROGRESS_EVERY_MS;
+        if due {
+            s.progress_at_ms = now_ms();
+        }
+        due
+    };
     // The page may have been left meanwhile: a disposed status ends the job quietly.
-    if status.try_set(next).is_none() && running {
+    let alive = if publish {
+        status.try_set(next).is_none()
+    } else {
+        status.try_with_untracked(|_| ()).is_some()
+    };
+    if alive && running {
         next_task(move || pump(state, published, generation, mine));
     }
 }
@@ -288,7 +313,11 @@ fn work_chunk<J: Work>(s: &mut Pumped<J>) -> RunStatus<J::Output> {
             .clamp(b / 4.0, b * 2.0)
             .round()
             .clamp(1.0, 1e9) as usize;
-        if now_ms() - started >= CHUNK_BUDGET_MS {
+        // End the chunk before a step that would take it past its budget, at the last step's
+        // pace: a job's first step, which sets it up (and has V8 compile its code), can take
+        // most of a chunk by itself.
+        let next_step_ms = elapsed * s.budget as f64 / b;
+        if now_ms() - started + next_step_ms >= CHUNK_BUDGET_MS {
             break;
         }
     }
@@ -400,29 +429,60 @@ pub fn RunProgress<T: Clone + Send + Sync + 'static>(
     failure: &'static str,
 ) -> impl IntoView {
     let status = runner.status;
+    // What is shown changes only when a run starts or ends; while it runs, each chunk's progress
+    // updates the label and the bar in place instead of building them again (and having the
+    // browser lay out the form again) after every chunk.
+    let shown = Memo::new(move |_| {
+        status.with(|s| match s {
+            RunStatus::Running { .. } => Shown::Running,
+            RunStatus::Failed(message) => Shown::Failed(message.clone()),
+            RunStatus::Cancelled if !quiet_cancel => Shown::Cancelled,
+            _ => Shown::Nothing,
+        })
+    });
+    let stage = Memo::new(move |_| {
+        status.with(|s| match s {
+            RunStatus::Running { stage, .. } => stage.clone(),
+            _ => String::new(),
+        })
+    });
+    let fraction = move || {
+        status.with(|s| match s {
+            RunStatus::Running { fraction, .. } => fraction.to_string(),
+            _ => "0".to_string(),
+        })
+    };
     move || {
-        match status.get() {
-        RunStatus::Running { stage, fraction } => {
+        match shown.get() {
+        Shown::Running => {
             let runner = runner.clone();
             view! {
                 <div class="run-progress" role="status">
-                    <label for=id>{stage}</label>
-                    <progress id=id max="1" value=fraction.to_string()></progress>
+                    <label for=id>{move || stage.get()}</label>
+                    <progress id=id max="1" value=fraction></progress>
                     <button type="button" on:click=move |_| runner.cancel()>"Cancel"</button>
                 </div>
             }
             .into_any()
         }
-        RunStatus::Failed(message) => view! {
+        Shown::Failed(message) => view! {
             <p class="run-error" role="alert">{format!("{failure}: {message}")}</p>
         }
         .into_any(),
-        RunStatus::Cancelled if quiet_cancel => ().into_any(),
-        RunStatus::Cancelled => view! {
+        Shown::Cancelled => view! {
             <p class="hint" role="status">"Cancelled. Change a setting or press Run to start again."</p>
         }
         .into_any(),
-        _ => ().into_any(),
+        Shown::Nothing => ().into_any(),
     }
     }
+}
+
+/// Which of its forms a [`RunProgress`] shows.
+#[derive(Clone, PartialEq)]
+enum Shown {
+    Running,
+    Failed(String),
+    Cancelled,
+    Nothing,
 }

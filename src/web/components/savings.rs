@@ -4,7 +4,7 @@
 //! controller, so they run in the background after a result is shown, once per scenario, and
 //! the answers of the last few scenarios are kept: retuning a controller never waits for them.
 
-use std::sync::Arc;
+use std::sync::{Arc, OnceLock};
 
 use leptos::prelude::*;
 
@@ -31,6 +31,14 @@ fn key_of(spec: &RunSpec) -> Option<ScenarioKey> {
     ScenarioKey::of(spec).ok()
 }
 
+/// The default scenario's references, shipped with the code ([`shipped_references`]); read on
+/// first use, when a run asks for its savings, not while a page mounts (whose first task should
+/// stay short).
+fn shipped() -> &'static [(ScenarioKey, References)] {
+    static SHIPPED: OnceLock<Vec<(ScenarioKey, References)>> = OnceLock::new();
+    SHIPPED.get_or_init(shipped_references)
+}
+
 /// Reference runs for the savings, made on request and remembered per scenario.
 #[derive(Clone)]
 pub struct Savings {
@@ -42,12 +50,11 @@ pub struct Savings {
 }
 
 impl Savings {
-    /// Nothing known yet; a search under way stops when the page is left.
+    /// Only the shipped references known; a search under way stops when the page is left.
     pub fn new() -> Self {
         let runner = Runner::<References>::new();
         let started = StoredValue::new(None::<ScenarioKey>);
-        // The default scenario's references ship with the code (closed_loop::precomputed).
-        let known = RwSignal::new(shipped_references());
+        let known = RwSignal::new(Vec::new());
         let status = runner.status;
         Effect::new(move |_| {
             if let RunStatus::Done(found) = status.get() {
@@ -68,11 +75,12 @@ impl Savings {
         }
     }
 
-    /// The known references of `spec`'s scenario.
+    /// The known references of `spec`'s scenario: found by a search, or shipped.
     fn lookup(&self, spec: &RunSpec) -> Option<References> {
         let key = key_of(spec)?;
         self.known
             .with(|k| k.iter().find(|(s, _)| *s == key).map(|(_, r)| *r))
+            .or_else(|| shipped().iter().find(|(s, _)| *s == key).map(|(_, r)| *r))
     }
 
     /// Starts the reference runs for the scenario of `spec`, unless they are known or under way;
@@ -87,7 +95,8 @@ impl Savings {
         };
         let known = self
             .known
-            .with_untracked(|k| k.iter().any(|(s, _)| *s == key));
+            .with_untracked(|k| k.iter().any(|(s, _)| *s == key))
+            || shipped().iter().any(|(s, _)| *s == key);
         if known {
             return;
         }

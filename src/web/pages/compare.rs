@@ -5,19 +5,20 @@ use std::time::Duration;
 
 use leptos::prelude::*;
 
-use crate::closed_loop::lab::{LabRuns, RunResult, RunSpec, TeachKey};
+use crate::closed_loop::lab::{LabRuns, RunResult, RunSpec};
 use crate::closed_loop::metrics::metrics_csv_columns;
 use crate::closed_loop::paper_comparisons::PAPER_COMPARISONS;
-use crate::closed_loop::precomputed::shipped_calibrations;
 use crate::closed_loop::trace::write_csv_runs;
 use crate::control::registry::ControllerKind;
 use crate::web::components::download::{download_configuration, download_text, download_written};
+use crate::web::components::later::{from_next_task, Later};
 use crate::web::components::run_form::{
     ControllerFields, ControllerForm, MachineAndSignalFields, ScenarioFields, ScenarioForm,
 };
 use crate::web::components::run_view::{MetricsTable, NamedRun, RunCharts};
 use crate::web::components::runner::{Debounce, RunProgress, RunStatus, Runner};
 use crate::web::components::savings::Savings;
+use crate::web::components::teach_cuts::KeptCalibrations;
 use crate::web::route::{query_params, replace_query, Page};
 
 /// Wait after an edit before re-running: none beyond the task that made it, so the events of one
@@ -91,15 +92,19 @@ pub fn ComparePage() -> impl IntoView {
             .collect::<Option<Vec<_>>>()
     });
 
-    // Seeded with the teach cuts shipped with the code (the default scenario's), so its first run
-    // starts with the closed loop.
-    let calibrations = StoredValue::new(shipped_calibrations());
+    let calibrations = KeptCalibrations::new(KEPT_CALIBRATIONS);
     let debounce = Debounce::new(RERUN_DELAY);
     let first_run = StoredValue::new(true);
+    // Both effects wait for the task after the page's: parsing the forms and writing the URL are
+    // the page's own work, not its mount's.
+    let mounted = from_next_task();
     let savings_for_edits = savings.clone();
     let runner_for_effect = runner.clone();
     // Keep the URL in step with the forms.
     Effect::new(move |_| {
+        if !mounted.get() {
+            return;
+        }
         let mut q = scenario.query();
         q.push(("variants".into(), count.get().to_string()));
         for (form, prefix) in forms.iter().zip(VARIANT_PREFIXES).take(count.get()) {
@@ -110,6 +115,9 @@ pub fn ComparePage() -> impl IntoView {
     // Re-run when the valid specs change, and only then: `specs` is a memo, so the forms' signals
     // settling after the page mounts, or a field set to what it held, start nothing.
     Effect::new(move |_| {
+        if !mounted.get() {
+            return;
+        }
         let Some(specs) = specs.get() else {
             return;
         };
@@ -118,7 +126,7 @@ pub fn ComparePage() -> impl IntoView {
         }
         let runner = runner_for_effect.clone();
         let start = move || {
-            let runs = LabRuns::with_calibrations(specs, calibrations.get_value());
+            let runs = LabRuns::with_calibrations(specs, calibrations.known());
             runner.start_previewing(runs, runs_so_far);
         };
         if first_run.get_value() {
@@ -143,14 +151,7 @@ pub fn ComparePage() -> impl IntoView {
     Effect::new(move |_| {
         results.with(|runs| {
             if let Some((_, first)) = runs.first() {
-                if let Ok(key) = TeachKey::of(&first.spec) {
-                    calibrations.update_value(|known| {
-                        known.retain(|(k, _)| *k != key);
-                        known.push((key, first.calibration.clone()));
-                        let excess = known.len().saturating_sub(KEPT_CALIBRATIONS);
-                        known.drain(..excess);
-                    });
-                }
+                calibrations.remember(&first.spec, &first.calibration);
                 savings_for_effect.request(&first.spec, Some(&first.calibration));
             }
         });
@@ -228,6 +229,10 @@ pub fn ComparePage() -> impl IntoView {
             </p>
             <div class="layout-two">
                 <form class="panel" aria-label="Comparison settings" on:submit=|ev| ev.prevent_default()>
+                    // The page mounts in pieces, a task each (the page itself with its state, the
+                    // papers' comparisons and the scenario, the variants, the rest of the form, the
+                    // results), so that no task of a first load takes more than 50 ms.
+                    <Later>
                     <fieldset>
                         <legend>"The papers' comparisons"</legend>
                         <div class="preset-row">
@@ -261,6 +266,8 @@ pub fn ComparePage() -> impl IntoView {
                         <p class="finding" role="status">{finding}</p>
                     </fieldset>
                     <ScenarioFields form=scenario />
+                    </Later>
+                    <Later>
                     {move || {
                         (0..count.get())
                             .map(|i| {
@@ -269,6 +276,8 @@ pub fn ComparePage() -> impl IntoView {
                             })
                             .collect_view()
                     }}
+                    </Later>
+                    <Later>
                     <MachineAndSignalFields form=scenario />
                     <div class="button-row">
                         <button type="button" on:click=move |_| count.update(|c| *c = (*c + 1).min(4)) disabled=move || { count.get() >= 4 }>
@@ -294,11 +303,14 @@ pub fn ComparePage() -> impl IntoView {
                         </div>
                         {move || export_error.get().map(|e| view! { <p class="run-error" role="alert">{e}</p> })}
                     </fieldset>
+                    </Later>
                 </form>
                 <div class="results">
+                    <Later>
                     <RunCharts runs=drawn />
                     {savings.progress()}
                     <MetricsTable runs=runs />
+                    </Later>
                 </div>
             </div>
         </section>

@@ -5,18 +5,19 @@ use std::time::Duration;
 
 use leptos::prelude::*;
 
-use crate::closed_loop::lab::{LabRuns, RunResult, RunSpec, TeachKey};
+use crate::closed_loop::lab::{LabRuns, RunResult, RunSpec};
 use crate::closed_loop::metrics::metrics_csv;
-use crate::closed_loop::precomputed::shipped_calibrations;
 use crate::closed_loop::trace::write_csv;
 use crate::control::registry::ControllerKind;
 use crate::web::components::download::{download_configuration, download_text, download_written};
+use crate::web::components::later::{from_next_task, Later};
 use crate::web::components::run_form::{
     ControllerFields, ControllerForm, MachineAndSignalFields, ScenarioFields, ScenarioForm,
 };
 use crate::web::components::run_view::{metrics_json, EventLog, MetricsTable, NamedRun, RunCharts};
 use crate::web::components::runner::{Debounce, RunProgress, Runner};
 use crate::web::components::savings::Savings;
+use crate::web::components::teach_cuts::KeptCalibrations;
 use crate::web::route::{query_params, replace_query, Page};
 
 /// Wait after an edit before re-running: none beyond the task that made it, so the events of one
@@ -66,25 +67,28 @@ pub fn SimulatePage() -> impl IntoView {
         })
     });
 
-    // The calibrations of the last teach cuts, newest last.
-    // Seeded with the teach cuts shipped with the code (the default scenario's), so its first run
-    // starts with the closed loop.
-    let calibrations = StoredValue::new(shipped_calibrations());
+    let calibrations = KeptCalibrations::new(KEPT_CALIBRATIONS);
     let start_run = {
         let runner = runner.clone();
         move |spec: RunSpec| {
-            let known = calibrations.get_value();
+            let known = calibrations.known();
             runner.start_previewing(LabRuns::with_calibrations(vec![spec], known), runs_so_far);
         }
     };
 
     // Keep the URL in step with the form, and re-run when a valid spec changes: the first run at
-    // once, edits in the next task.
+    // once (in the task after the page's, see `mounted`), edits in the next task.
     let debounce = Debounce::new(RERUN_DELAY);
     let first_run = StoredValue::new(true);
+    // Both effects wait for the task after the page's: parsing the form and writing the URL are
+    // the page's own work, not its mount's.
+    let mounted = from_next_task();
     let savings_for_edits = savings.clone();
     let start_for_effect = start_run.clone();
     Effect::new(move |_| {
+        if !mounted.get() {
+            return;
+        }
         let mut q = scenario.query();
         q.extend(controller.query(""));
         replace_query(Page::Simulate, &q);
@@ -92,6 +96,9 @@ pub fn SimulatePage() -> impl IntoView {
     // Re-run when the valid spec changes, and only then: `spec` is a memo, so the form's signals
     // settling after the page mounts, or a field set to what it held, start nothing.
     Effect::new(move |_| {
+        if !mounted.get() {
+            return;
+        }
         let Some(spec) = spec.get() else {
             return;
         };
@@ -112,14 +119,7 @@ pub fn SimulatePage() -> impl IntoView {
     let savings_for_effect = savings.clone();
     Effect::new(move |_| {
         if let Some(r) = finished.get() {
-            if let Ok(key) = TeachKey::of(&r.spec) {
-                calibrations.update_value(|known| {
-                    known.retain(|(k, _)| *k != key);
-                    known.push((key, r.calibration.clone()));
-                    let excess = known.len().saturating_sub(KEPT_CALIBRATIONS);
-                    known.drain(..excess);
-                });
-            }
+            calibrations.remember(&r.spec, &r.calibration);
             savings_for_effect.request(&r.spec, Some(&r.calibration));
         }
     });
@@ -192,11 +192,17 @@ pub fn SimulatePage() -> impl IntoView {
             </p>
             <div class="layout-two">
                 <form class="panel" aria-label="Run settings" on:submit=|ev| ev.prevent_default()>
+                    // The page mounts in pieces, a task each (the page itself with its state, the
+                    // scenario and controller, the rest of the form, the results), so that no
+                    // task of a first load takes more than 50 ms.
+                    <Later>
                     <ScenarioFields form=scenario />
                     <ControllerFields form=controller />
+                    </Later>
+                    <Later>
                     <MachineAndSignalFields form=scenario />
                     <div class="button-row">
-                        <button type="button" class="primary" on:click=run_now>"Run"</button>
+                        <button type="button" class="primary" on:click=run_now.clone()>"Run"</button>
                     </div>
                     <RunProgress runner=runner.clone() />
                     <fieldset>
@@ -217,12 +223,15 @@ pub fn SimulatePage() -> impl IntoView {
                         </div>
                         {move || export_error.get().map(|e| view! { <p class="run-error" role="alert">{e}</p> })}
                     </fieldset>
+                    </Later>
                 </form>
                 <div class="results">
+                    <Later>
                     <RunCharts runs=drawn />
                     {savings.progress()}
                     <MetricsTable runs=runs />
                     <EventLog run=Signal::derive(move || result.get()) />
+                    </Later>
                 </div>
             </div>
         </section>
