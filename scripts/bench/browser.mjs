@@ -9,7 +9,8 @@
 //                                                                                ≤ 100 ms
 //   compare         the Compare page with four controllers until every column's savings are
 //                   shown, from navigation start                                 ≤ 2000 ms
-//   longest task    main-thread work over 50 ms, as Chromium reports it (longtask) ≤ 50 ms
+//   longest task    main-thread work over 50 ms, as Chromium reports it (longtask) ≤ 50 ms,
+//                   in the cases above and in the first load of every other page
 //
 //   node scripts/bench/browser.mjs [--rounds 3]
 //
@@ -107,9 +108,31 @@ async function compareRound(browser, base) {
   return { compare: done, longest, problems };
 }
 
+/** The pages besides Simulate and Compare: the longest task of each one's first load, watched
+ * until the network is idle and then for a further two seconds (their drawing and any work they
+ * start on their own). */
+const OTHER_PAGES = ['signal', 'fuzzy', 'plant', 'tune', 'hardware', 'logs', 'learn'];
+const SETTLE_MS = 2000;
+
+async function otherPagesRound(browser, base) {
+  const longest = {};
+  const problems = [];
+  for (const slug of OTHER_PAGES) {
+    const opened = await open(browser, base + '#/' + slug);
+    await opened.page.getByRole('main').waitFor({ timeout: TIMEOUT });
+    await opened.page.waitForLoadState('networkidle', { timeout: TIMEOUT });
+    await opened.page.waitForTimeout(SETTLE_MS);
+    longest[slug] = Math.max(0, ...(await opened.page.evaluate(() => window.cutlabLongTasks)));
+    problems.push(...opened.problems);
+    await opened.context.close();
+  }
+  return { longest, problems };
+}
+
 const server = await serveDist();
 const browser = await launchBrowser();
 const best = { first: Infinity, edit: Infinity, compare: Infinity, longest: 0 };
+const pagesLongest = Object.fromEntries(OTHER_PAGES.map((slug) => [slug, 0]));
 const problems = [];
 try {
   for (let i = 0; i < rounds; i++) {
@@ -120,6 +143,9 @@ try {
     best.compare = Math.min(best.compare, c.compare);
     best.longest = Math.max(best.longest, s.longest, c.longest);
     problems.push(...s.problems, ...c.problems);
+    const o = await otherPagesRound(browser, server.url);
+    for (const slug of OTHER_PAGES) pagesLongest[slug] = Math.max(pagesLongest[slug], o.longest[slug]);
+    problems.push(...o.problems);
   }
 } finally {
   await browser.close();
@@ -131,8 +157,11 @@ console.log('|---|---:|---|');
 console.log(`| Simulate: first result after load | ${ms(best.first)} | ≤ 500 ms |`);
 console.log(`| Simulate: edit → re-simulated and redrawn | ${ms(best.edit)} | ≤ 100 ms |`);
 console.log(`| Compare: four controllers with savings | ${ms(best.compare)} | ≤ 2000 ms |`);
-console.log(`| longest main-thread task | ${ms(best.longest)} | ≤ 50 ms |`);
-console.log(JSON.stringify({ rounds, first_result_ms: best.first, edit_ms: best.edit, compare_ms: best.compare, longest_task_ms: best.longest, console_errors: problems.length }));
+console.log(`| longest main-thread task (Simulate with an edit, Compare) | ${ms(best.longest)} | ≤ 50 ms |`);
+const worstPage = OTHER_PAGES.reduce((a, b) => (pagesLongest[b] > pagesLongest[a] ? b : a));
+console.log(`| longest main-thread task, the other pages' first loads (worst: ${worstPage}) | ${ms(pagesLongest[worstPage])} | ≤ 50 ms |`);
+console.log(`pages: ${OTHER_PAGES.map((slug) => `${slug} ${ms(pagesLongest[slug])}`).join(', ')}`);
+console.log(JSON.stringify({ rounds, first_result_ms: best.first, edit_ms: best.edit, compare_ms: best.compare, longest_task_ms: best.longest, pages_longest_task_ms: pagesLongest, console_errors: problems.length }));
 if (problems.length) {
   console.error(`browser bench: ${problems.length} console errors, first: ${problems[0]}`);
   process.exitCode = 1;

@@ -9,7 +9,7 @@
 //     target/wasm32-unknown-unknown/web-release/cutlab-web.wasm
 //   wasm-opt --output=$(ls /tmp/named/*_bg.wasm) -Oz -g /tmp/wb/cutlab-web_bg.wasm
 //   node scripts/bench/browser_profile.mjs --dist /tmp/named [--hash '#/compare?variants=4'] \
-//        [--min-ms 30] [--top 25] [--trace out.json] [--no-samples]
+//        [--min-ms 30] [--top 25] [--trace out.json] [--no-samples] [--settle-ms 2000]
 //
 // The sampling profiler slows V8's compiles (it logs each compiled function), so its tasks run
 // longer than without it; --no-samples times the tasks as they run unprofiled (trace events only).
@@ -30,6 +30,9 @@ const hash = arg('--hash', '#/simulate');
 const minMs = Number(arg('--min-ms', 30));
 const top = Number(arg('--top', 25));
 const tracePath = arg('--trace', null);
+// Pages without a metrics table (Signal chain, Fuzzy rules, Hardware, …): trace until the network
+// is idle and this many milliseconds more, instead of until the run's savings show.
+const settleMs = process.argv.includes('--settle-ms') ? Number(arg('--settle-ms', 2000)) : null;
 // Without the sampling profiler (whose code logging slows V8's compiles), the trace events alone
 // time the tasks as they run without a profiler.
 const sampling = !process.argv.includes('--no-samples');
@@ -67,7 +70,11 @@ try {
   await browser.startTracing(page, { categories });
   await page.goto(url);
   const columns = hash.includes('compare') ? Number(/variants=(\d)/.exec(hash)?.[1] ?? 2) : 1;
-  await page.waitForFunction((n) => {
+  if (settleMs !== null) {
+    // A page without a metrics table: its load, then a fixed window for what it starts itself.
+    await page.waitForLoadState('networkidle', { timeout: 120_000 });
+    await page.waitForTimeout(settleMs);
+  } else await page.waitForFunction((n) => {
     const rows = [...document.querySelectorAll('table.metrics tbody tr')].filter((r) => /Saving vs/.test(r.textContent));
     return rows.length === 2 && rows.every((r) => {
       const cells = [...r.querySelectorAll('td')];
