@@ -345,39 +345,23 @@ impl CurrentSensor {
     /// Samples the true phase currents; returns what the ADC reads, in amperes.
     #[inline(always)]
     pub fn read(&mut self, currents_a: [f64; 3]) -> [f64; 3] {
-        let mut samples = [currents_a];
-        self.read_block(&mut samples);
-        samples[0]
-    }
-
-    /// [`CurrentSensor::read`] of each sample of `currents_a` in turn, the reading replacing
-    /// the true currents.
-    #[inline(always)]
-    pub fn read_block(&mut self, currents_a: &mut [[f64; 3]]) {
+        let mut out = [0.0; 3];
         // Each phase draws from its own stream, so an unmeasured phase (W in two-phase wiring)
-        // need not draw at all: the others' noise is the same either way. The phases' lags are
-        // independent chains, stepped side by side.
-        for sample in currents_a.iter_mut() {
-            let phases = sample
-                .iter_mut()
-                .zip(&mut self.lags)
-                .zip(&mut self.rngs)
-                .zip(&self.offsets_v)
-                .take(self.measured);
-            for (((current, lag), rng), offset_v) in phases {
-                let noise_v = if self.noise_v == 0.0 {
-                    0.0
-                } else {
-                    self.noise_v * self.normal.sample(rng)
-                };
-                let seen_v = *current * self.seen_v_per_a + offset_v;
-                let volts = lag.step(seen_v) + noise_v;
-                *current = self.quantiser.code(volts) * self.amps_per_code;
-            }
-            if self.measured == 2 {
-                sample[2] = -(sample[0] + sample[1]);
-            }
+        // need not draw at all: the others' noise is the same either way.
+        for k in 0..self.measured {
+            let noise_v = if self.noise_v == 0.0 {
+                0.0
+            } else {
+                self.noise_v * self.normal.sample(&mut self.rngs[k])
+            };
+            let seen_v = currents_a[k] * self.seen_v_per_a + self.offsets_v[k];
+            let volts = self.lags[k].step(seen_v) + noise_v;
+            out[k] = self.quantiser.code(volts) * self.amps_per_code;
         }
+        if self.measured == 2 {
+            out[2] = -(out[0] + out[1]);
+        }
+        out
     }
 
     /// Back to the start: lags at rest, noise streams restarted from `seed`.
