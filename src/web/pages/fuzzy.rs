@@ -418,6 +418,8 @@ pub fn FuzzyPage() -> impl IntoView {
                                 })
                                 .collect_view()}
                         </div>
+                        // The 49 cells of seven choices each a task after the page's own.
+                        <Later>
                         {move || match source.get() {
                             Source::Imported(e, why) => view! {
                                 <p class="hint">
@@ -452,6 +454,7 @@ pub fn FuzzyPage() -> impl IntoView {
                             }
                             .into_any(),
                         }}
+                        </Later>
                         <SelectField
                             id="defuzzifier"
                             label="Defuzzifier"
