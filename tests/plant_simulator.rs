@@ -99,17 +99,22 @@ fn every_preset_runs_with_finite_sensor_readings() {
 }
 
 fn steady_slot(depth_mm: f64) -> Scenario {
+    slot(100.0, depth_mm)
+}
+
+/// A slot of `length_mm` along +x at 300 mm/min and 1000 rpm, in steel from 0.5 mm on.
+fn slot(length_mm: f64, depth_mm: f64) -> Scenario {
     Scenario::new(ScenarioSpec {
         name: "steady".into(),
         start_mm: [0.0, 0.0],
-        moves: vec![Move::line([100.0, 0.0], 300.0, 1000.0)],
+        moves: vec![Move::line([length_mm, 0.0], 300.0, 1000.0)],
         cutter: Cutter::new(20.0, 2, 30.0).unwrap(),
         mode: MillingMode::Slot,
         depth_mm: vec![(0.0, depth_mm)],
         width_mm: vec![(0.0, 20.0)],
         materials: vec![MaterialRegion {
             from_mm: 0.5,
-            to_mm: 100.0,
+            to_mm: length_mm,
             material: Material::Sm45c,
         }],
         spindle_start_dwell_s: 0.0,
@@ -340,26 +345,9 @@ fn stepping_in_blocks_gives_the_bits_of_stepping_one_by_one() {
 
 #[test]
 fn a_run_that_ends_inside_a_block_ends_there_and_repeats_its_last_sample() {
-    // A 12 mm slot at 600 mm/min ends after about 1.3 s: blocks of 100 samples meet its end
+    // A 6 mm slot at 300 mm/min ends after about 1.5 s: blocks of 100 samples meet its end
     // inside one.
-    let short = || {
-        let spec = ScenarioSpec {
-            name: "short".into(),
-            start_mm: [0.0, 0.0],
-            moves: vec![Move::line([12.0, 0.0], 600.0, 1000.0)],
-            cutter: Cutter::new(10.0, 2, 30.0).unwrap(),
-            mode: MillingMode::Slot,
-            depth_mm: vec![(0.0, 2.0)],
-            width_mm: vec![(0.0, 10.0)],
-            materials: vec![MaterialRegion {
-                from_mm: 2.0,
-                to_mm: 12.0,
-                material: Material::Sm45c,
-            }],
-            spindle_start_dwell_s: 0.0,
-        };
-        Simulator::new(Scenario::new(spec).unwrap(), SimConfig::with_seed(6)).unwrap()
-    };
+    let short = || Simulator::new(slot(6.0, 2.0), SimConfig::with_seed(6)).unwrap();
     let mut one = short();
     let mut steps = Vec::new();
     while !one.finished() {

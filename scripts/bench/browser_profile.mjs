@@ -16,10 +16,9 @@
 //
 // The page is loaded once, and the trace stops once the default run's metrics table shows its
 // savings (every column of it on Compare), so the first tasks, the runs and the first draws are in.
-import { createServer } from 'node:http';
-import { readFile, writeFile } from 'node:fs/promises';
-import { extname, join, normalize, resolve } from 'node:path';
-import { root, launchBrowser } from '../../tests/browser/harness.mjs';
+import { writeFile } from 'node:fs/promises';
+import { join, resolve } from 'node:path';
+import { root, launchBrowser, serveDist } from '../../tests/browser/harness.mjs';
 
 const arg = (name, fallback) => {
   const i = process.argv.indexOf(name);
@@ -37,22 +36,8 @@ const settleMs = process.argv.includes('--settle-ms') ? Number(arg('--settle-ms'
 // time the tasks as they run without a profiler.
 const sampling = !process.argv.includes('--no-samples');
 
-const types = { '.html': 'text/html', '.js': 'text/javascript', '.wasm': 'application/wasm', '.css': 'text/css', '.svg': 'image/svg+xml', '.json': 'application/json', '.csv': 'text/csv' };
-const server = createServer(async (req, res) => {
-  try {
-    const path = decodeURIComponent(new URL(req.url, 'http://x').pathname);
-    const file = normalize(join(dist, path.endsWith('/') ? path + 'index.html' : path));
-    if (!file.startsWith(dist)) throw new Error('outside dist');
-    const body = await readFile(file);
-    res.writeHead(200, { 'content-type': types[extname(file)] ?? 'application/octet-stream' });
-    res.end(body);
-  } catch {
-    res.writeHead(404);
-    res.end();
-  }
-});
-await new Promise((r) => server.listen(0, '127.0.0.1', r));
-const url = `http://127.0.0.1:${server.address().port}/${hash}`;
+const server = await serveDist(dist);
+const url = `${server.url}${hash}`;
 
 const categories = [
   'toplevel', 'devtools.timeline', 'disabled-by-default-devtools.timeline', 'v8', 'v8.execute',
@@ -85,7 +70,7 @@ try {
   if (problems.length) console.error('console errors:', problems);
 } finally {
   await browser.close();
-  server.close();
+  await server.close();
 }
 if (tracePath) await writeFile(tracePath, JSON.stringify(trace));
 

@@ -27,13 +27,14 @@ const types = {
   '.fll': 'text/plain; charset=utf-8',
 };
 
-/** Serves dist/ on 127.0.0.1 at a free port; resolves to { url, close }. */
-export async function serveDist() {
+/** Serves dist/ (or another build's `directory`) on 127.0.0.1 at a free port; resolves to
+ * { url, close }. */
+export async function serveDist(directory = dist) {
   const server = createServer(async (req, res) => {
     try {
       const path = decodeURIComponent(new URL(req.url, 'http://x').pathname);
-      const file = normalize(join(dist, path.endsWith('/') ? path + 'index.html' : path));
-      if (!file.startsWith(dist)) throw new Error('outside dist');
+      const file = normalize(join(directory, path.endsWith('/') ? path + 'index.html' : path));
+      if (!file.startsWith(directory)) throw new Error('outside dist');
       const body = await readFile(file);
       res.writeHead(200, { 'content-type': types[extname(file)] ?? 'application/octet-stream' });
       res.end(body);
