@@ -5,6 +5,7 @@ pub mod download;
 pub mod fields;
 pub mod heat_map;
 pub mod later;
+pub mod recent;
 pub mod run_form;
 pub mod run_view;
 pub mod runner;

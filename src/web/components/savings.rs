@@ -14,6 +14,7 @@ use crate::closed_loop::lab::{
 };
 use crate::closed_loop::precomputed::shipped_references;
 use crate::closed_loop::runner::Calibration;
+use crate::web::components::recent;
 use crate::web::components::run_view::NamedRun;
 use crate::web::components::runner::{RunProgress, RunStatus, Runner};
 
@@ -39,6 +40,13 @@ fn shipped() -> &'static [(ScenarioKey, References)] {
     SHIPPED.get_or_init(shipped_references)
 }
 
+/// The references under `key` among those `known`, else among the shipped ones.
+fn known_or_shipped(known: &[(ScenarioKey, References)], key: &ScenarioKey) -> Option<References> {
+    recent::find(known, key)
+        .or_else(|| recent::find(shipped(), key))
+        .copied()
+}
+
 /// Reference runs for the savings, made on request and remembered per scenario.
 #[derive(Clone)]
 pub struct Savings {
@@ -59,12 +67,7 @@ impl Savings {
         Effect::new(move |_| {
             if let RunStatus::Done(found) = status.get() {
                 if let Some(key) = started.get_value() {
-                    known.update(|k| {
-                        k.retain(|(s, _)| *s != key);
-                        k.push((key, found));
-                        let excess = k.len().saturating_sub(KEPT);
-                        k.drain(..excess);
-                    });
+                    known.update(|k| recent::remember(k, key, found, KEPT));
                 }
             }
         });
@@ -78,9 +81,7 @@ impl Savings {
     /// The known references of `spec`'s scenario: found by a search, or shipped.
     fn lookup(&self, spec: &RunSpec) -> Option<References> {
         let key = key_of(spec)?;
-        self.known
-            .with(|k| k.iter().find(|(s, _)| *s == key).map(|(_, r)| *r))
-            .or_else(|| shipped().iter().find(|(s, _)| *s == key).map(|(_, r)| *r))
+        self.known.with(|k| known_or_shipped(k, &key))
     }
 
     /// Starts the reference runs for the scenario of `spec`, unless they are known or under way;
@@ -95,8 +96,7 @@ impl Savings {
         };
         let known = self
             .known
-            .with_untracked(|k| k.iter().any(|(s, _)| *s == key))
-            || shipped().iter().any(|(s, _)| *s == key);
+            .with_untracked(|k| known_or_shipped(k, &key).is_some());
         if known {
             return;
         }

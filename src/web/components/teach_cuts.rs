@@ -6,6 +6,7 @@ use leptos::prelude::*;
 use crate::closed_loop::lab::{RunSpec, TeachKey};
 use crate::closed_loop::precomputed::shipped_calibrations;
 use crate::closed_loop::runner::Calibration;
+use crate::web::components::recent;
 
 /// Known calibrations by teach cut, newest last; the teach cuts shipped with the code (the
 /// default scenario's) are among them, so its first run starts with the closed loop. Those are
@@ -40,10 +41,7 @@ impl KeptCalibrations {
         let keep = self.keep;
         self.known.update_value(|known| {
             let known = known.get_or_insert_with(shipped_calibrations);
-            known.retain(|(k, _)| *k != key);
-            known.push((key, calibration.clone()));
-            let excess = known.len().saturating_sub(keep);
-            known.drain(..excess);
+            recent::remember(known, key, calibration.clone(), keep);
         });
     }
 }
