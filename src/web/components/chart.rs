@@ -75,6 +75,20 @@ pub fn observed_width(canvas_ref: NodeRef<leptos::html::Canvas>) -> ReadSignal<O
     width
 }
 
+/// Narrowest a chart is drawn, CSS pixels.
+const MIN_CHART_WIDTH_PX: u32 = 120;
+
+/// Sizes `canvas`'s bitmap for `css_width_px` × `height_px` CSS pixels (at least
+/// [`MIN_CHART_WIDTH_PX`] wide) at the screen's pixel ratio, which it returns: a chart drawn at
+/// that ratio stays sharp on a high-density screen.
+pub fn size_bitmap(canvas: &web_sys::HtmlCanvasElement, css_width_px: u32, height_px: u32) -> f64 {
+    let pixel_ratio = window().device_pixel_ratio().clamp(1.0, 4.0);
+    let css_width = f64::from(css_width_px.max(MIN_CHART_WIDTH_PX));
+    canvas.set_width((css_width * pixel_ratio).round() as u32);
+    canvas.set_height((f64::from(height_px) * pixel_ratio).round() as u32);
+    pixel_ratio
+}
+
 /// An explorable line chart drawn with plotters on a canvas.
 #[component]
 pub fn ChartCanvas(
@@ -102,7 +116,7 @@ pub fn ChartCanvas(
 
     // The chart as shown: zoomed, with hidden series removed and long series decimated.
     let shown = Memo::new(move |_| {
-        let width_px = width.get().unwrap_or(800).max(120) as usize;
+        let width_px = width.get().unwrap_or(800).max(MIN_CHART_WIDTH_PX) as usize;
         chart.with(|c| hidden.with(|h| visible(c, x_view.get().as_ref(), h, 2 * width_px)))
     });
 
@@ -124,11 +138,8 @@ pub fn ChartCanvas(
             let Some(canvas) = canvas_ref.get_untracked() else {
                 return;
             };
-            let pixel_ratio = window().device_pixel_ratio().clamp(1.0, 4.0);
+            let pixel_ratio = size_bitmap(&canvas, css_width, height_px);
             ratio.set_value(pixel_ratio);
-            let css_width = f64::from(css_width.max(120));
-            canvas.set_width((css_width * pixel_ratio).round() as u32);
-            canvas.set_height((f64::from(height_px) * pixel_ratio).round() as u32);
             let Some(backend) = CanvasBackend::with_canvas_object(canvas) else {
                 let _ = set_draw_error
                     .try_set(Some("This browser gave no 2-D canvas to draw on.".into()));

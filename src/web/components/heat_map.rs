@@ -6,7 +6,7 @@ use plotters::prelude::IntoDrawingArea;
 use plotters_canvas::CanvasBackend;
 
 use crate::charts::{draw_heat_map, ChartStyle, HeatMap, PlotGeometry};
-use crate::web::components::chart::observed_width;
+use crate::web::components::chart::{observed_width, size_bitmap};
 
 /// A heat map drawn with plotters; `on_pick` receives the (x, y) of a click, or of the keyboard
 /// cursor when Enter or Space is pressed on the focused map (the arrow keys move the cursor one
@@ -71,11 +71,8 @@ pub fn HeatMapCanvas(
         let (Some(canvas), Some(css_width)) = (canvas_ref.get(), width.get()) else {
             return;
         };
-        let pixel_ratio = window().device_pixel_ratio().clamp(1.0, 4.0);
+        let pixel_ratio = size_bitmap(&canvas, css_width, height_px);
         ratio.set_value(pixel_ratio);
-        let css_width = f64::from(css_width.max(120));
-        canvas.set_width((css_width * pixel_ratio).round() as u32);
-        canvas.set_height((f64::from(height_px) * pixel_ratio).round() as u32);
         let Some(backend) = CanvasBackend::with_canvas_object(canvas) else {
             set_draw_error.set(Some("This browser gave no 2-D canvas to draw on.".into()));
             return;
