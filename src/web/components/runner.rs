@@ -387,6 +387,8 @@ pub fn next_task(task: impl FnOnce() + 'static) {
 pub struct Debounce {
     latest: StoredValue<u64>,
     delay: Duration,
+    /// The next request runs at once (a page's first run, which nothing can supersede yet).
+    next_at_once: StoredValue<bool>,
 }
 
 impl Debounce {
@@ -395,11 +397,26 @@ impl Debounce {
         Self {
             latest: StoredValue::new(0),
             delay,
+            next_at_once: StoredValue::new(false),
+        }
+    }
+
+    /// The same, except that the first request runs at once: a page's first run should not
+    /// wait for edits that have not happened.
+    pub fn first_at_once(delay: Duration) -> Self {
+        Self {
+            next_at_once: StoredValue::new(true),
+            ..Self::new(delay)
         }
     }
 
     /// Requests `action`; it runs unless another request comes within the delay.
     pub fn request(&self, action: impl FnOnce() + 'static) {
+        if self.next_at_once.get_value() {
+            self.next_at_once.set_value(false);
+            action();
+            return;
+        }
         self.latest.update_value(|n| *n += 1);
         let mine = self.latest.get_value();
         let latest = self.latest;

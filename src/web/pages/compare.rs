@@ -93,8 +93,7 @@ pub fn ComparePage() -> impl IntoView {
     });
 
     let calibrations = KeptCalibrations::new(KEPT_CALIBRATIONS);
-    let debounce = Debounce::new(RERUN_DELAY);
-    let first_run = StoredValue::new(true);
+    let debounce = Debounce::first_at_once(RERUN_DELAY);
     // Both effects wait for the task after the page's: parsing the forms and writing the URL are
     // the page's own work, not its mount's.
     let mounted = from_next_task();
@@ -129,12 +128,7 @@ pub fn ComparePage() -> impl IntoView {
             let runs = LabRuns::with_calibrations(specs, calibrations.known());
             runner.start_previewing(runs, runs_so_far);
         };
-        if first_run.get_value() {
-            first_run.set_value(false);
-            start();
-        } else {
-            debounce.request(start);
-        }
+        debounce.request(start);
     });
 
     let named = |runs: Vec<Arc<RunResult>>| {

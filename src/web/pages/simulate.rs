@@ -78,8 +78,7 @@ pub fn SimulatePage() -> impl IntoView {
 
     // Keep the URL in step with the form, and re-run when a valid spec changes: the first run at
     // once (in the task after the page's, see `mounted`), edits in the next task.
-    let debounce = Debounce::new(RERUN_DELAY);
-    let first_run = StoredValue::new(true);
+    let debounce = Debounce::first_at_once(RERUN_DELAY);
     // Both effects wait for the task after the page's: parsing the form and writing the URL are
     // the page's own work, not its mount's.
     let mounted = from_next_task();
@@ -104,12 +103,7 @@ pub fn SimulatePage() -> impl IntoView {
         };
         savings_for_edits.keep_only(&spec);
         let start = start_for_effect.clone();
-        if first_run.get_value() {
-            first_run.set_value(false);
-            start(spec);
-        } else {
-            debounce.request(move || start(spec));
-        }
+        debounce.request(move || start(spec));
     });
 
     // The last finished run stays on screen while the next one computes (its charts fill in as
