@@ -20,7 +20,7 @@ use wasm_bindgen::JsCast;
 use crate::charts::view::{nearest, pan, visible, zoom};
 use crate::charts::{draw_line_chart, ChartStyle, LineChart, PlotGeometry};
 use crate::web::components::download::{download_canvas_png, png_name};
-use crate::web::components::runner::next_task;
+use crate::web::components::runner::Debounce;
 
 /// Formats a readout value with a sensible number of digits.
 fn readout(value: f64) -> String {
@@ -122,19 +122,14 @@ pub fn ChartCanvas(
 
     // Each chart draws in a task of its own (a page redraws five at once when a run ends, and
     // together they took longer than a task should); a draw superseded before it ran is skipped.
-    let draws = StoredValue::new(0u64);
+    let draws = Debounce::to_next_task();
     Effect::new(move |_| {
         let shown = shown.get();
         // Nothing to draw on until the page is laid out and the width reported.
         let Some(css_width) = width.get() else {
             return;
         };
-        draws.update_value(|n| *n += 1);
-        let mine = draws.get_value();
-        next_task(move || {
-            if draws.try_get_value() != Some(mine) {
-                return;
-            }
+        draws.request(move || {
             let Some(canvas) = canvas_ref.get_untracked() else {
                 return;
             };

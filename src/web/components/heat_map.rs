@@ -7,6 +7,7 @@ use plotters_canvas::CanvasBackend;
 
 use crate::charts::{draw_heat_map, ChartStyle, HeatMap, PlotGeometry};
 use crate::web::components::chart::{observed_width, size_bitmap};
+use crate::web::components::runner::Debounce;
 
 /// A heat map drawn with plotters; `on_pick` receives the (x, y) of a click, or of the keyboard
 /// cursor when Enter or Space is pressed on the focused map (the arrow keys move the cursor one
@@ -65,28 +66,34 @@ pub fn HeatMapCanvas(
         }
     };
     let width = observed_width(canvas_ref);
+    // Drawn in a task of its own, as the line charts are: the width arrives with the page's
+    // first layout, in the same rendering step as the other charts' widths.
+    let draws = Debounce::to_next_task();
     Effect::new(move |_| {
         let map = map.get();
         // Nothing to draw on until the page is laid out and the width reported.
         let (Some(canvas), Some(css_width)) = (canvas_ref.get(), width.get()) else {
             return;
         };
-        let pixel_ratio = size_bitmap(&canvas, css_width, height_px);
-        ratio.set_value(pixel_ratio);
-        let Some(backend) = CanvasBackend::with_canvas_object(canvas) else {
-            set_draw_error.set(Some("This browser gave no 2-D canvas to draw on.".into()));
-            return;
-        };
-        let area = backend.into_drawing_area();
-        let result = draw_heat_map(&area, &map, ChartStyle { pixel_ratio }).and_then(|g| {
-            geometry.set_value(Some(g));
-            area.present()
+        draws.request(move || {
+            let pixel_ratio = size_bitmap(&canvas, css_width, height_px);
+            ratio.set_value(pixel_ratio);
+            let Some(backend) = CanvasBackend::with_canvas_object(canvas) else {
+                let _ = set_draw_error
+                    .try_set(Some("This browser gave no 2-D canvas to draw on.".into()));
+                return;
+            };
+            let area = backend.into_drawing_area();
+            let result = draw_heat_map(&area, &map, ChartStyle { pixel_ratio }).and_then(|g| {
+                geometry.set_value(Some(g));
+                area.present()
+            });
+            let _ = set_draw_error.try_set(
+                result
+                    .err()
+                    .map(|e| format!("The map could not be drawn: {e}")),
+            );
         });
-        set_draw_error.set(
-            result
-                .err()
-                .map(|e| format!("The map could not be drawn: {e}")),
-        );
     });
     let pick = move |ev: leptos::ev::MouseEvent| {
         let r = ratio.get_value();

@@ -410,7 +410,14 @@ impl Debounce {
         }
     }
 
-    /// Requests `action`; it runs unless another request comes within the delay.
+    /// No wait beyond the next task: of the requests made before it, only the last runs (a
+    /// chart redrawn twice in one task draws once), and it runs in a task of its own.
+    pub fn to_next_task() -> Self {
+        Self::new(Duration::ZERO)
+    }
+
+    /// Requests `action`; it runs unless another request comes within the delay (before the
+    /// next task, for a delay of zero).
     pub fn request(&self, action: impl FnOnce() + 'static) {
         if self.next_at_once.get_value() {
             self.next_at_once.set_value(false);
@@ -420,14 +427,17 @@ impl Debounce {
         self.latest.update_value(|n| *n += 1);
         let mine = self.latest.get_value();
         let latest = self.latest;
-        set_timeout(
-            move || {
-                if latest.try_get_value() == Some(mine) {
-                    action();
-                }
-            },
-            self.delay,
-        );
+        let if_latest = move || {
+            if latest.try_get_value() == Some(mine) {
+                action();
+            }
+        };
+        // A zero timeout waits at least 4 ms once timeouts nest; a posted message does not.
+        if self.delay.is_zero() {
+            next_task(if_latest);
+        } else {
+            set_timeout(if_latest, self.delay);
+        }
     }
 }
 

@@ -19,7 +19,7 @@ use crate::web::components::chart::ChartCanvas;
 use crate::web::components::download::download_text;
 use crate::web::components::fields::{parse_number, NumberField, SelectField};
 use crate::web::components::heat_map::HeatMapCanvas;
-use crate::web::components::later::Later;
+use crate::web::components::later::{from_next_task, Later};
 use crate::web::components::run_form::{decode_rule_table, encode_rule_table};
 use crate::web::components::runner::{RunProgress, Runner};
 use crate::web::js::read_chosen_file;
@@ -119,7 +119,12 @@ pub fn FuzzyPage() -> impl IntoView {
     let (fll_error, set_fll_error) = signal(None::<String>);
     let fll_text = RwSignal::new(String::new());
 
+    // The URL is the page's own work, not its mount's: written from the task after the page's.
+    let mounted = from_next_task();
     Effect::new(move |_| {
+        if !mounted.get() {
+            return;
+        }
         replace_query(
             Page::Fuzzy,
             &[("rules".to_string(), encode_rule_table(&table.get()))],
@@ -368,6 +373,10 @@ pub fn FuzzyPage() -> impl IntoView {
             }
             c
         };
+        // The options are marked once, as the cell mounts (`prop:value` cannot choose an option
+        // before the options exist); later changes of the table go through `prop:value` alone,
+        // which saves a reactive `selected` per option: 343 of them in the table.
+        let chosen_at_mount = value.get_untracked();
         view! {
             <td class=class>
                 <select
@@ -382,7 +391,7 @@ pub fn FuzzyPage() -> impl IntoView {
                 >
                     {LEVEL_NAMES
                         .iter()
-                        .map(|n| view! { <option value=*n selected=move || value.get() == *n>{*n}</option> })
+                        .map(|n| view! { <option value=*n selected=*n == chosen_at_mount>{*n}</option> })
                         .collect_view()}
                 </select>
             </td>
@@ -468,120 +477,129 @@ pub fn FuzzyPage() -> impl IntoView {
                             )>"Simulate with this table"</a>
                         </p>
                     </fieldset>
-                    <fieldset>
-                        <legend>"Rule viewer"</legend>
-                        <NumberField
-                            id="viewer-e"
-                            label="E (scaled)"
-                            value=e_text
-                            error=Signal::derive(move || parse_number(&e_text.get()).err())
-                        />
-                        <NumberField
-                            id="viewer-ec"
-                            label="EC (scaled)"
-                            value=ec_text
-                            error=Signal::derive(move || parse_number(&ec_text.get()).err())
-                        />
-                        <p class="hint">"Or click a point of the control surface."</p>
-                        {move || {
-                            viewer
-                                .get()
-                                .map(|(u, firing)| {
-                                    let mut firing = firing;
-                                    firing.sort_by(|a, b| b.1.total_cmp(&a.1));
-                                    view! {
-                                        <p role="status">
-                                            <strong>{format!("U = {u:.3}")}</strong>
-                                            {format!(" — {} rule(s) fire", firing.len())}
-                                        </p>
-                                        <ol class="firing-list" aria-label="Firing rules">
-                                            {firing
-                                                .into_iter()
-                                                .map(|(r, a)| {
-                                                    view! {
-                                                        <li>
-                                                            <span class="bar" style=format!("width: {:.1}rem", 4.0 * a)></span>
-                                                            {format!("{:.2}: {}", a, rule_text(r))}
-                                                        </li>
+                    // The viewer (which builds the engine and evaluates it), the run and the FLL
+                    // each mount in a task of their own: in the page's, V8's first compile of all
+                    // they call took its task past 50 ms.
+                    <Later>
+                        <fieldset>
+                            <legend>"Rule viewer"</legend>
+                            <NumberField
+                                id="viewer-e"
+                                label="E (scaled)"
+                                value=e_text
+                                error=Signal::derive(move || parse_number(&e_text.get()).err())
+                            />
+                            <NumberField
+                                id="viewer-ec"
+                                label="EC (scaled)"
+                                value=ec_text
+                                error=Signal::derive(move || parse_number(&ec_text.get()).err())
+                            />
+                            <p class="hint">"Or click a point of the control surface."</p>
+                            {move || {
+                                viewer
+                                    .get()
+                                    .map(|(u, firing)| {
+                                        let mut firing = firing;
+                                        firing.sort_by(|a, b| b.1.total_cmp(&a.1));
+                                        view! {
+                                            <p role="status">
+                                                <strong>{format!("U = {u:.3}")}</strong>
+                                                {format!(" — {} rule(s) fire", firing.len())}
+                                            </p>
+                                            <ol class="firing-list" aria-label="Firing rules">
+                                                {firing
+                                                    .into_iter()
+                                                    .map(|(r, a)| {
+                                                        view! {
+                                                            <li>
+                                                                <span class="bar" style=format!("width: {:.1}rem", 4.0 * a)></span>
+                                                                {format!("{:.2}: {}", a, rule_text(r))}
+                                                            </li>
+                                                        }
+                                                    })
+                                                    .collect_view()}
+                                            </ol>
+                                        }
+                                    })
+                            }}
+                        </fieldset>
+                    </Later>
+                    <Later>
+                        <fieldset>
+                            <legend>"A moment of a simulated run"</legend>
+                            <SelectField
+                                id="fuzzy-run-preset"
+                                label="Preset"
+                                options=Preset::ALL.iter().map(|p| (p.name(), p.label())).collect()
+                                value=run_preset
+                            />
+                            <p class="hint">
+                                "The run uses the fuzzy controller with this table and paper 002's "
+                                "weighted-average defuzzification, whatever the viewer's choice."
+                            </p>
+                            <div class="button-row">
+                                <button type="button" on:click=start_run.clone()>"Run with this table"</button>
+                            </div>
+                            <RunProgress runner=runner.clone() />
+                            {move || {
+                                run_result
+                                    .get()
+                                    .map(|r| {
+                                        let last = r.trace.rows.len().saturating_sub(1);
+                                        view! {
+                                            <div class="field">
+                                                <label for="moment">
+                                                    {move || {
+                                                        let t = run_result
+                                                            .with(|r| r.as_ref().and_then(|r| r.trace.rows.get(moment.get()).map(|row| row.time_s)))
+                                                            .unwrap_or(0.0);
+                                                        format!("Moment: {t:.2} s")
+                                                    }}
+                                                </label>
+                                                <input
+                                                    id="moment"
+                                                    type="range"
+                                                    min="0"
+                                                    max=last.to_string()
+                                                    prop:value=move || moment.get().to_string()
+                                                    on:input=move |ev| {
+                                                        if let Ok(i) = event_target_value(&ev).parse::<usize>() {
+                                                            moment.set(i.min(last));
+                                                        }
                                                     }
-                                                })
-                                                .collect_view()}
-                                        </ol>
-                                    }
-                                })
-                        }}
-                    </fieldset>
-                    <fieldset>
-                        <legend>"A moment of a simulated run"</legend>
-                        <SelectField
-                            id="fuzzy-run-preset"
-                            label="Preset"
-                            options=Preset::ALL.iter().map(|p| (p.name(), p.label())).collect()
-                            value=run_preset
-                        />
-                        <p class="hint">
-                            "The run uses the fuzzy controller with this table and paper 002's "
-                            "weighted-average defuzzification, whatever the viewer's choice."
-                        </p>
-                        <div class="button-row">
-                            <button type="button" on:click=start_run>"Run with this table"</button>
-                        </div>
-                        <RunProgress runner=runner.clone() />
-                        {move || {
-                            run_result
-                                .get()
-                                .map(|r| {
-                                    let last = r.trace.rows.len().saturating_sub(1);
-                                    view! {
-                                        <div class="field">
-                                            <label for="moment">
-                                                {move || {
-                                                    let t = run_result
-                                                        .with(|r| r.as_ref().and_then(|r| r.trace.rows.get(moment.get()).map(|row| row.time_s)))
-                                                        .unwrap_or(0.0);
-                                                    format!("Moment: {t:.2} s")
-                                                }}
-                                            </label>
-                                            <input
-                                                id="moment"
-                                                type="range"
-                                                min="0"
-                                                max=last.to_string()
-                                                prop:value=move || moment.get().to_string()
-                                                on:input=move |ev| {
-                                                    if let Ok(i) = event_target_value(&ev).parse::<usize>() {
-                                                        moment.set(i.min(last));
-                                                    }
-                                                }
-                                            />
-                                        </div>
-                                    }
-                                })
-                        }}
-                    </fieldset>
-                    <fieldset>
-                        <legend>"FLL (fuzzylite)"</legend>
-                        <div class="button-row">
-                            <button type="button" on:click=export>"Export FLL"</button>
-                        </div>
-                        <div class="field">
-                            <label for="fll-file">"FLL file to import"</label>
-                            <input id="fll-file" type="file" accept=".fll,text/plain" on:change=on_file />
-                        </div>
-                        <div class="field">
-                            <label for="fll-text">"FLL text"</label>
-                            <textarea
-                                id="fll-text"
-                                class="fll"
-                                prop:value=move || fll_text.get()
-                                on:input=move |ev| fll_text.set(event_target_value(&ev))
-                            ></textarea>
-                        </div>
-                        <div class="button-row">
-                            <button type="button" on:click=import>"Import FLL"</button>
-                        </div>
-                        {move || fll_error.get().map(|e| view! { <p class="run-error" role="alert">{e}</p> })}
-                    </fieldset>
+                                                />
+                                            </div>
+                                        }
+                                    })
+                            }}
+                        </fieldset>
+                    </Later>
+                    <Later>
+                        <fieldset>
+                            <legend>"FLL (fuzzylite)"</legend>
+                            <div class="button-row">
+                                <button type="button" on:click=export>"Export FLL"</button>
+                            </div>
+                            <div class="field">
+                                <label for="fll-file">"FLL file to import"</label>
+                                <input id="fll-file" type="file" accept=".fll,text/plain" on:change=on_file />
+                            </div>
+                            <div class="field">
+                                <label for="fll-text">"FLL text"</label>
+                                <textarea
+                                    id="fll-text"
+                                    class="fll"
+                                    prop:value=move || fll_text.get()
+                                    on:input=move |ev| fll_text.set(event_target_value(&ev))
+                                ></textarea>
+                            </div>
+                            <div class="button-row">
+                                <button type="button" on:click=import>"Import FLL"</button>
+                            </div>
+                            {move || fll_error.get().map(|e| view! { <p class="run-error" role="alert">{e}</p> })}
+                        </fieldset>
+                    </Later>
                 </div>
                 // The surface (the engine over a grid) and the charts in the task after the
                 // form's: together they took the page's first task past 50 ms.
