@@ -767,152 +767,158 @@ pub fn HardwarePage() -> impl IntoView {
                                 </button>
                             </div>
                         </fieldset>
-                        <fieldset>
-                            <legend>"Virtual device"</legend>
-                            <SelectField
-                                id="hw-virtual-preset"
-                                label="Program (preset)"
-                                options=Preset::ALL.iter().map(|p| (p.name(), p.label())).collect()
-                                value=virtual_form.preset
-                            />
-                            {[
-                                ("seed", "hw-virtual-seed", "Seed", "", virtual_form.seed),
-                                ("time_scale", "hw-time-scale", "Time scale", "× real time", virtual_form.time_scale),
-                                ("drop_rate", "hw-drop-rate", "Drop rate", "0–1 per frame", virtual_form.drop_rate),
-                                ("noise_rate", "hw-noise-rate", "Noise rate", "0–1 per frame", virtual_form.noise_rate),
-                                ("stall_at", "hw-stall-at", "Receiver stall at", "s, blank: none", virtual_form.stall_at),
-                                ("stall_for", "hw-stall-for", "Receiver stall for", "s", virtual_form.stall_for),
-                                ("unplug_at", "hw-unplug-at", "Cable pulled at", "s, blank: never", virtual_form.unplug_at),
-                                ("watchdog", "hw-device-watchdog", "Device watchdog", "s", virtual_form.watchdog),
-                                ("fallback", "hw-fallback", "Device fallback override", "%", virtual_form.fallback),
-                            ]
-                                .into_iter()
-                                .map(|(key, id, label, unit, value)| {
-                                    view! {
-                                        <NumberField
-                                            id=id
-                                            label=label.to_string()
-                                            unit=unit
-                                            value=value
-                                            error=Signal::derive(move || virtual_form.error(key))
-                                        />
-                                    }
-                                })
-                                .collect_view()}
-                            <label class="check">
-                                <input
-                                    type="checkbox"
-                                    prop:checked=move || virtual_form.truth.get()
-                                    on:change=move |ev| virtual_form.truth.set(event_target_checked(&ev))
+                        <Later>
+                            <fieldset>
+                                <legend>"Virtual device"</legend>
+                                <SelectField
+                                    id="hw-virtual-preset"
+                                    label="Program (preset)"
+                                    options=Preset::ALL.iter().map(|p| (p.name(), p.label())).collect()
+                                    value=virtual_form.preset
                                 />
-                                "Send the simulation's truth (off: a real bridge's twin)"
-                            </label>
-                            <div class="button-row">
-                                <button type="button" on:click=start_virtual disabled=move || connected.get()>
-                                    "Start the virtual device"
-                                </button>
-                                <button type="button" on:click=unplug hidden=move || !is_virtual.get()>
-                                    "Pull the virtual cable"
-                                </button>
-                            </div>
-                            <p class="hint">
-                                "Times are device seconds from power-on. Each frame either way is lost "
-                                "(drop) or corrupted (noise) with its rate; a stall makes the device deaf."
-                            </p>
-                        </fieldset>
+                                {[
+                                    ("seed", "hw-virtual-seed", "Seed", "", virtual_form.seed),
+                                    ("time_scale", "hw-time-scale", "Time scale", "× real time", virtual_form.time_scale),
+                                    ("drop_rate", "hw-drop-rate", "Drop rate", "0–1 per frame", virtual_form.drop_rate),
+                                    ("noise_rate", "hw-noise-rate", "Noise rate", "0–1 per frame", virtual_form.noise_rate),
+                                    ("stall_at", "hw-stall-at", "Receiver stall at", "s, blank: none", virtual_form.stall_at),
+                                    ("stall_for", "hw-stall-for", "Receiver stall for", "s", virtual_form.stall_for),
+                                    ("unplug_at", "hw-unplug-at", "Cable pulled at", "s, blank: never", virtual_form.unplug_at),
+                                    ("watchdog", "hw-device-watchdog", "Device watchdog", "s", virtual_form.watchdog),
+                                    ("fallback", "hw-fallback", "Device fallback override", "%", virtual_form.fallback),
+                                ]
+                                    .into_iter()
+                                    .map(|(key, id, label, unit, value)| {
+                                        view! {
+                                            <NumberField
+                                                id=id
+                                                label=label.to_string()
+                                                unit=unit
+                                                value=value
+                                                error=Signal::derive(move || virtual_form.error(key))
+                                            />
+                                        }
+                                    })
+                                    .collect_view()}
+                                <label class="check">
+                                    <input
+                                        type="checkbox"
+                                        prop:checked=move || virtual_form.truth.get()
+                                        on:change=move |ev| virtual_form.truth.set(event_target_checked(&ev))
+                                    />
+                                    "Send the simulation's truth (off: a real bridge's twin)"
+                                </label>
+                                <div class="button-row">
+                                    <button type="button" on:click=start_virtual disabled=move || connected.get()>
+                                        "Start the virtual device"
+                                    </button>
+                                    <button type="button" on:click=unplug hidden=move || !is_virtual.get()>
+                                        "Pull the virtual cable"
+                                    </button>
+                                </div>
+                                <p class="hint">
+                                    "Times are device seconds from power-on. Each frame either way is lost "
+                                    "(drop) or corrupted (noise) with its rate; a stall makes the device deaf."
+                                </p>
+                            </fieldset>
+                        </Later>
                         <div class="button-row">
                             <button type="button" on:click=disconnect disabled=move || !connected.get()>
                                 "Disconnect"
                             </button>
                         </div>
                     </form>
-                    <form class="panel" aria-label="Control" on:submit=|ev| ev.prevent_default()>
-                        <fieldset>
-                            <legend>"Run settings"</legend>
-                            <SelectField
-                                id="preset"
-                                label="Preset (the run's settings)"
-                                options=Preset::ALL.iter().map(|p| (p.name(), p.label())).collect()
-                                value=scenario.preset
-                            />
-                            <p class="hint">"Follows the program the device names, as cutlab host does."</p>
-                        </fieldset>
-                        <ControllerFields form=controller />
-                        <SettingFields form=scenario legend="Target and safety envelope" settings=RUN_SETTINGS.to_vec() />
-                        <fieldset>
-                            <legend>"Host safety"</legend>
-                            <NumberField
-                                id="hw-safe-override"
-                                label="Safe override (blank: the device's fallback)".to_string()
-                                unit="%"
-                                value=safe_text
-                                error=safe_error
-                            />
-                            <NumberField
-                                id="hw-host-watchdog"
-                                label="Host watchdog".to_string()
-                                unit="s"
-                                value=watchdog_text
-                                error=watchdog_error
-                            />
-                            {move || options_error.get().map(|e| view! { <p class="field-error" role="alert">{e}</p> })}
-                        </fieldset>
-                        <SettingFields form=scenario legend="Signal chain" settings=SIGNAL_SETTINGS.to_vec() />
-                        <fieldset>
-                            <legend>"Calibration"</legend>
-                            <p class="calibration">
-                                {move || ui.snapshot.with(|s| s.calibration.clone()).map_or_else(
-                                    || "None yet: make a teach cut over the link, or load a saved calibration.".to_string(),
-                                    |c| format!("In use: {c}"),
-                                )}
-                            </p>
-                            <div class="field">
-                                <label for="hw-calibration-file">"Load a calibration file (cutlab-calibration JSON)"</label>
-                                <input
-                                    id="hw-calibration-file"
-                                    type="file"
-                                    accept=".json,application/json"
-                                    on:change=load_calibration
-                                    aria-describedby="hw-calibration-error"
+                    // The run's form, and the virtual device's fields above, each mount in a task of
+                    // their own: with the serial port's they took the page's first task past 50 ms.
+                    <Later>
+                        <form class="panel" aria-label="Control" on:submit=|ev| ev.prevent_default()>
+                            <fieldset>
+                                <legend>"Run settings"</legend>
+                                <SelectField
+                                    id="preset"
+                                    label="Preset (the run's settings)"
+                                    options=Preset::ALL.iter().map(|p| (p.name(), p.label())).collect()
+                                    value=scenario.preset
                                 />
-                            </div>
-                            <div class="field">
-                                <label for="hw-saved-calibration">"Or one saved in this browser (Logs page)"</label>
-                                <select
-                                    id="hw-saved-calibration"
-                                    on:focus=refresh_saved
-                                    on:change=use_saved
-                                    aria-describedby="hw-calibration-error hw-saved-problems"
-                                >
-                                    <option value="" selected=true>
-                                        {move || if saved.with(|(files, _)| files.is_empty()) {
-                                            "None saved yet"
-                                        } else {
-                                            "Choose a saved calibration…"
-                                        }}
-                                    </option>
-                                    {move || saved.with(|(files, _)| files.iter().enumerate().map(|(i, f)| {
-                                        view! { <option value=i.to_string()>{f.source.clone()}</option> }
-                                    }).collect_view())}
-                                </select>
-                                <p class="hint" id="hw-saved-problems">
-                                    {move || saved.with(|(_, problems)| problems.join("; "))}
+                                <p class="hint">"Follows the program the device names, as cutlab host does."</p>
+                            </fieldset>
+                            <ControllerFields form=controller />
+                            <SettingFields form=scenario legend="Target and safety envelope" settings=RUN_SETTINGS.to_vec() />
+                            <fieldset>
+                                <legend>"Host safety"</legend>
+                                <NumberField
+                                    id="hw-safe-override"
+                                    label="Safe override (blank: the device's fallback)".to_string()
+                                    unit="%"
+                                    value=safe_text
+                                    error=safe_error
+                                />
+                                <NumberField
+                                    id="hw-host-watchdog"
+                                    label="Host watchdog".to_string()
+                                    unit="s"
+                                    value=watchdog_text
+                                    error=watchdog_error
+                                />
+                                {move || options_error.get().map(|e| view! { <p class="field-error" role="alert">{e}</p> })}
+                            </fieldset>
+                            <SettingFields form=scenario legend="Signal chain" settings=SIGNAL_SETTINGS.to_vec() />
+                            <fieldset>
+                                <legend>"Calibration"</legend>
+                                <p class="calibration">
+                                    {move || ui.snapshot.with(|s| s.calibration.clone()).map_or_else(
+                                        || "None yet: make a teach cut over the link, or load a saved calibration.".to_string(),
+                                        |c| format!("In use: {c}"),
+                                    )}
                                 </p>
-                                <p class="field-error" id="hw-calibration-error" aria-live="polite">
-                                    {move || calibration_error.get().unwrap_or_default()}
-                                </p>
-                            </div>
-                            <div class="button-row">
-                                <button
-                                    type="button"
-                                    on:click=save_calibration
-                                    disabled=move || ui.snapshot.with(|s| s.calibration.is_none())
-                                >
-                                    "Save the calibration (JSON)"
-                                </button>
-                            </div>
-                        </fieldset>
-                    </form>
+                                <div class="field">
+                                    <label for="hw-calibration-file">"Load a calibration file (cutlab-calibration JSON)"</label>
+                                    <input
+                                        id="hw-calibration-file"
+                                        type="file"
+                                        accept=".json,application/json"
+                                        on:change=load_calibration
+                                        aria-describedby="hw-calibration-error"
+                                    />
+                                </div>
+                                <div class="field">
+                                    <label for="hw-saved-calibration">"Or one saved in this browser (Logs page)"</label>
+                                    <select
+                                        id="hw-saved-calibration"
+                                        on:focus=refresh_saved
+                                        on:change=use_saved
+                                        aria-describedby="hw-calibration-error hw-saved-problems"
+                                    >
+                                        <option value="" selected=true>
+                                            {move || if saved.with(|(files, _)| files.is_empty()) {
+                                                "None saved yet"
+                                            } else {
+                                                "Choose a saved calibration…"
+                                            }}
+                                        </option>
+                                        {move || saved.with(|(files, _)| files.iter().enumerate().map(|(i, f)| {
+                                            view! { <option value=i.to_string()>{f.source.clone()}</option> }
+                                        }).collect_view())}
+                                    </select>
+                                    <p class="hint" id="hw-saved-problems">
+                                        {move || saved.with(|(_, problems)| problems.join("; "))}
+                                    </p>
+                                    <p class="field-error" id="hw-calibration-error" aria-live="polite">
+                                        {move || calibration_error.get().unwrap_or_default()}
+                                    </p>
+                                </div>
+                                <div class="button-row">
+                                    <button
+                                        type="button"
+                                        on:click=save_calibration
+                                        disabled=move || ui.snapshot.with(|s| s.calibration.is_none())
+                                    >
+                                        "Save the calibration (JSON)"
+                                    </button>
+                                </div>
+                            </fieldset>
+                        </form>
+                    </Later>
                 </div>
                 <div class="results">
                     <LinkPanel ui=ui>

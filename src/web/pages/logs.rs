@@ -38,6 +38,7 @@ use crate::signal::decimate::min_max_indices;
 use crate::web::components::chart::ChartCanvas;
 use crate::web::components::download::{download_text, download_written};
 use crate::web::components::fields::{parse_count, parse_number, NumberField, SelectField};
+use crate::web::components::later::Later;
 use crate::web::components::runner::{Debounce, RunProgress, Runner};
 use crate::web::components::saved_calibrations::{save_calibration, stored_calibrations};
 use crate::web::components::work_job::Shared;
@@ -1108,106 +1109,120 @@ pub fn LogsPage() -> impl IntoView {
                             .into_any()
                         }}
                     </fieldset>
-                    <fieldset>
-                        <legend>"Signal chain"</legend>
-                        <ChoiceField id="chain-column" label="Column" options=column_options value=chain_column error=Signal::derive(move || chain_error.get()) />
-                        <NumberField id="chain-lowpass" label="Zero-phase low-pass cut-off (empty: none)" unit="Hz" value=lowpass_text
-                            error=Signal::derive(move || lowpass.get().err()) />
-                        <NumberField id="chain-order" label="Low-pass order" value=order_text step="1"
-                            error=Signal::derive(move || order.get().err()) />
-                        <NumberField id="chain-rms" label="RMS window" unit="s" value=rms_text
-                            error=Signal::derive(move || rms_window.get().err()) />
-                        <NumberField id="chain-teeth" label="Cutter teeth (tooth-passing marker)" value=teeth_text step="1"
-                            error=Signal::derive(move || teeth.get().err()) />
-                        <ChoiceField id="chain-by" label="Statistics per label of" options=label_options value=by_label />
-                        <RunProgress runner=chain_runner.clone() id="chain-progress" failure="The signal chain failed" />
-                    </fieldset>
-                    <fieldset>
-                        <legend>"Calibration"</legend>
-                        <SelectField id="log-feedback" label="Force measured from the current of the"
-                            options=vec![("spindle", "Spindle"), ("feed", "Feed drive")] value=feedback_text />
-                        <SelectField id="fit-force" label="Force for the fit"
-                            options=vec![("measured", "The log's measured force"), ("model", "Modelled from the cut")] value=force_from />
-                        <div hidden=move || force_from.get() != "model">
-                            <SelectField id="fit-material" label="Material"
-                                options=Material::ALL.iter().map(|m| (m.name(), m.label())).collect() value=material />
-                            <NumberField id="fit-diameter" label="Cutter diameter" unit="mm" value=diameter_text error=Signal::derive(|| None::<String>) />
-                            <NumberField id="fit-teeth" label="Cutter teeth" value=cutter_teeth_text step="1" error=Signal::derive(|| None::<String>) />
-                            <SelectField id="fit-mode" label="Milling mode"
-                                options=MillingMode::ALL.iter().map(|m| (m.name(), m.label())).collect() value=mode />
-                            <NumberField id="fit-depth" label="Depth of cut (empty: the depth column)" unit="mm" value=depth_text error=Signal::derive(|| None::<String>) />
-                            <NumberField id="fit-width" label="Width of cut" unit="mm" value=width_text error=Signal::derive(|| None::<String>) />
-                        </div>
-                        <div class="button-row">
-                            <button type="button" on:click=calibrate>"Calibrate"</button>
-                            <button type="button" on:click=save_in_browser disabled=move || fit_done.with(Option::is_none)>"Save calibration in this browser"</button>
-                            <button type="button" on:click=download_calibration disabled=move || fit_done.with(Option::is_none)>"Calibration (JSON)"</button>
-                        </div>
-                        {move || fit_error.get().map(|e| view! { <p class="run-error" role="alert">{e}</p> })}
-                        {move || saved_message.get().map(|m| match m {
-                            Ok(m) => view! { <p class="hint" role="status">{m}</p> }.into_any(),
-                            Err(e) => view! { <p class="run-error" role="alert">{e}</p> }.into_any(),
-                        })}
-                        <RunProgress runner=fit_runner.clone() id="fit-progress" failure="The calibration failed" />
-                    </fieldset>
-                    <fieldset>
-                        <legend>"Replay controllers"</legend>
-                        {ControllerKind::ALL
-                            .iter()
-                            .zip(chosen)
-                            .map(|(kind, on)| {
-                                let id = format!("replay-{}", kind.name());
-                                view! {
-                                    <div class="check">
-                                        <input type="checkbox" id=id.clone() prop:checked=move || on.get()
-                                            on:change=move |ev| on.set(event_target_checked(&ev)) />
-                                        <label for=id>{format!("Replay {}", kind.label())}</label>
-                                    </div>
-                                }
-                            })
-                            .collect_view()}
-                        <SelectField id="replay-target-kind" label="Target is a"
-                            options=vec![("current", "Current (A)"), ("force", "Force (N)")] value=target_kind />
-                        <NumberField id="replay-target" label="Target value (empty: 80 % of the calibrated force at full override)" value=target_text
-                            error=Signal::derive(move || target_error.get()) />
-                        <ChoiceField id="replay-calibration" label="Calibration for the replay" options=calibration_options value=use_calibration />
-                        {move || stored.with(|s| s.1.clone()).into_iter().map(|p| view! { <p class="field-error">{p}</p> }).collect_view()}
-                        <div class="button-row">
-                            <button type="button" on:click=replay>"Replay"</button>
-                        </div>
-                        {move || replay_error.get().map(|e| view! { <p class="run-error" role="alert">{e}</p> })}
-                        <RunProgress runner=replay_runner.clone() id="replay-progress" failure="The replay failed" />
-                    </fieldset>
-                    <fieldset>
-                        <legend>"Export"</legend>
-                        <div class="button-row">
-                            <button type="button" on:click=export_channels disabled=move || active_log.with(Option::is_none)>"Analysed channels (CSV)"</button>
-                            <button type="button" on:click=export_replays disabled=move || replay_done.with(Option::is_none)>"Replayed overrides (CSV)"</button>
-                        </div>
-                        {move || export_error.get().map(|e| view! { <p class="run-error" role="alert">{e}</p> })}
-                    </fieldset>
+                    // Each part of the form past the first mounts in a task of its own (`Later`): the
+                    // first compile of all they call made the page's first task long.
+                    <Later>
+                        <fieldset>
+                            <legend>"Signal chain"</legend>
+                            <ChoiceField id="chain-column" label="Column" options=column_options value=chain_column error=Signal::derive(move || chain_error.get()) />
+                            <NumberField id="chain-lowpass" label="Zero-phase low-pass cut-off (empty: none)" unit="Hz" value=lowpass_text
+                                error=Signal::derive(move || lowpass.get().err()) />
+                            <NumberField id="chain-order" label="Low-pass order" value=order_text step="1"
+                                error=Signal::derive(move || order.get().err()) />
+                            <NumberField id="chain-rms" label="RMS window" unit="s" value=rms_text
+                                error=Signal::derive(move || rms_window.get().err()) />
+                            <NumberField id="chain-teeth" label="Cutter teeth (tooth-passing marker)" value=teeth_text step="1"
+                                error=Signal::derive(move || teeth.get().err()) />
+                            <ChoiceField id="chain-by" label="Statistics per label of" options=label_options value=by_label />
+                            <RunProgress runner=chain_runner.clone() id="chain-progress" failure="The signal chain failed" />
+                        </fieldset>
+                    </Later>
+                    <Later>
+                        <fieldset>
+                            <legend>"Calibration"</legend>
+                            <SelectField id="log-feedback" label="Force measured from the current of the"
+                                options=vec![("spindle", "Spindle"), ("feed", "Feed drive")] value=feedback_text />
+                            <SelectField id="fit-force" label="Force for the fit"
+                                options=vec![("measured", "The log's measured force"), ("model", "Modelled from the cut")] value=force_from />
+                            <div hidden=move || force_from.get() != "model">
+                                <SelectField id="fit-material" label="Material"
+                                    options=Material::ALL.iter().map(|m| (m.name(), m.label())).collect() value=material />
+                                <NumberField id="fit-diameter" label="Cutter diameter" unit="mm" value=diameter_text error=Signal::derive(|| None::<String>) />
+                                <NumberField id="fit-teeth" label="Cutter teeth" value=cutter_teeth_text step="1" error=Signal::derive(|| None::<String>) />
+                                <SelectField id="fit-mode" label="Milling mode"
+                                    options=MillingMode::ALL.iter().map(|m| (m.name(), m.label())).collect() value=mode />
+                                <NumberField id="fit-depth" label="Depth of cut (empty: the depth column)" unit="mm" value=depth_text error=Signal::derive(|| None::<String>) />
+                                <NumberField id="fit-width" label="Width of cut" unit="mm" value=width_text error=Signal::derive(|| None::<String>) />
+                            </div>
+                            <div class="button-row">
+                                <button type="button" on:click=calibrate.clone()>"Calibrate"</button>
+                                <button type="button" on:click=save_in_browser disabled=move || fit_done.with(Option::is_none)>"Save calibration in this browser"</button>
+                                <button type="button" on:click=download_calibration disabled=move || fit_done.with(Option::is_none)>"Calibration (JSON)"</button>
+                            </div>
+                            {move || fit_error.get().map(|e| view! { <p class="run-error" role="alert">{e}</p> })}
+                            {move || saved_message.get().map(|m| match m {
+                                Ok(m) => view! { <p class="hint" role="status">{m}</p> }.into_any(),
+                                Err(e) => view! { <p class="run-error" role="alert">{e}</p> }.into_any(),
+                            })}
+                            <RunProgress runner=fit_runner.clone() id="fit-progress" failure="The calibration failed" />
+                        </fieldset>
+                    </Later>
+                    <Later>
+                        <fieldset>
+                            <legend>"Replay controllers"</legend>
+                            {ControllerKind::ALL
+                                .iter()
+                                .zip(chosen)
+                                .map(|(kind, on)| {
+                                    let id = format!("replay-{}", kind.name());
+                                    view! {
+                                        <div class="check">
+                                            <input type="checkbox" id=id.clone() prop:checked=move || on.get()
+                                                on:change=move |ev| on.set(event_target_checked(&ev)) />
+                                            <label for=id>{format!("Replay {}", kind.label())}</label>
+                                        </div>
+                                    }
+                                })
+                                .collect_view()}
+                            <SelectField id="replay-target-kind" label="Target is a"
+                                options=vec![("current", "Current (A)"), ("force", "Force (N)")] value=target_kind />
+                            <NumberField id="replay-target" label="Target value (empty: 80 % of the calibrated force at full override)" value=target_text
+                                error=Signal::derive(move || target_error.get()) />
+                            <ChoiceField id="replay-calibration" label="Calibration for the replay" options=calibration_options value=use_calibration />
+                            {move || stored.with(|s| s.1.clone()).into_iter().map(|p| view! { <p class="field-error">{p}</p> }).collect_view()}
+                            <div class="button-row">
+                                <button type="button" on:click=replay.clone()>"Replay"</button>
+                            </div>
+                            {move || replay_error.get().map(|e| view! { <p class="run-error" role="alert">{e}</p> })}
+                            <RunProgress runner=replay_runner.clone() id="replay-progress" failure="The replay failed" />
+                        </fieldset>
+                    </Later>
+                    <Later>
+                        <fieldset>
+                            <legend>"Export"</legend>
+                            <div class="button-row">
+                                <button type="button" on:click=export_channels disabled=move || active_log.with(Option::is_none)>"Analysed channels (CSV)"</button>
+                                <button type="button" on:click=export_replays disabled=move || replay_done.with(Option::is_none)>"Replayed overrides (CSV)"</button>
+                            </div>
+                            {move || export_error.get().map(|e| view! { <p class="run-error" role="alert">{e}</p> })}
+                        </fieldset>
+                    </Later>
                 </form>
                 <div class="results">
-                    {move || active_log.get().map(|l| view! { <LogSummary l=l period_text=period_text period_error=Signal::derive(move || period.get().err()) mapping_error=Signal::derive(move || mapping_error.get()) logs=logs /> })}
-                    <div class="charts">
-                        <ChartCanvas label="Current of each open log" chart=overlay_current x_view=time_view />
-                        <ChartCanvas label="Measured force of each open log" chart=overlay_force x_view=time_view height_px=200 />
-                        <ChartCanvas label="Signal chain on the chosen column" chart=chain_chart x_view=time_view />
-                        <ChartCanvas label="Spectrum of the chosen column" chart=spectrum />
-                    </div>
-                    {move || chain_done.get().map(|out| view! { <ChainReport out=out column=chain_column.get_untracked() /> })}
-                    <h2>"Calibration"</h2>
-                    {move || fit_done.get().map(|f| view! {
-                        <p role="status" class="finding">{format!("Fit: {}", f.quality())}</p>
-                        <ul class="hint">{f.notes.iter().map(|n| view! { <li>{n.clone()}</li> }).collect_view()}</ul>
-                    })}
-                    <ChartCanvas label="Calibration fit: current against force" chart=calibration_chart />
-                    <h2>"Replay"</h2>
-                    <div class="charts">
-                        <ChartCanvas label="Replayed override" chart=replay_override x_view=time_view />
-                        <ChartCanvas label="Replayed force estimate" chart=replay_force x_view=time_view />
-                    </div>
-                    {move || replay_done.get().map(|results| view! { <ReplayReport results=results /> })}
+                    // The results and their charts a task after the form: together with the form they
+                    // took the page's first task past 50 ms.
+                    <Later>
+                        {move || active_log.get().map(|l| view! { <LogSummary l=l period_text=period_text period_error=Signal::derive(move || period.get().err()) mapping_error=Signal::derive(move || mapping_error.get()) logs=logs /> })}
+                        <div class="charts">
+                            <ChartCanvas label="Current of each open log" chart=overlay_current x_view=time_view />
+                            <ChartCanvas label="Measured force of each open log" chart=overlay_force x_view=time_view height_px=200 />
+                            <ChartCanvas label="Signal chain on the chosen column" chart=chain_chart x_view=time_view />
+                            <ChartCanvas label="Spectrum of the chosen column" chart=spectrum />
+                        </div>
+                        {move || chain_done.get().map(|out| view! { <ChainReport out=out column=chain_column.get_untracked() /> })}
+                        <h2>"Calibration"</h2>
+                        {move || fit_done.get().map(|f| view! {
+                            <p role="status" class="finding">{format!("Fit: {}", f.quality())}</p>
+                            <ul class="hint">{f.notes.iter().map(|n| view! { <li>{n.clone()}</li> }).collect_view()}</ul>
+                        })}
+                        <ChartCanvas label="Calibration fit: current against force" chart=calibration_chart />
+                        <h2>"Replay"</h2>
+                        <div class="charts">
+                            <ChartCanvas label="Replayed override" chart=replay_override x_view=time_view />
+                            <ChartCanvas label="Replayed force estimate" chart=replay_force x_view=time_view />
+                        </div>
+                        {move || replay_done.get().map(|results| view! { <ReplayReport results=results /> })}
+                    </Later>
                 </div>
             </div>
         </section>
