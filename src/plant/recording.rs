@@ -569,10 +569,12 @@ impl Work for BenchRecording {
     }
 
     fn progress(&self) -> Progress {
-        Progress::new(
-            "Simulating the brake bench",
-            self.done as f64 / self.total.max(1) as f64,
-        )
+        let stage = if self.done >= self.total {
+            "Computing the spectrum"
+        } else {
+            "Simulating the brake bench"
+        };
+        Progress::new(stage, self.done as f64 / self.total.max(1) as f64)
     }
 
     fn finish(&mut self) -> Result<PhaseRecording, RecordingError> {
@@ -768,6 +770,22 @@ mod tests {
         while !bench.advance(7).unwrap() {}
         assert!(bench.finish().is_ok());
         assert_eq!(bench.finish(), Err(RecordingError::AlreadyTaken));
+    }
+
+    #[test]
+    fn the_spectrum_is_a_stage_of_its_own() {
+        // The browser's runner starts a new stage in a chunk of its own: the spectrum must not
+        // be reported as more of the simulation.
+        let mut bench = BenchRecording::new(1, 0.0, 0.01).unwrap();
+        assert_eq!(bench.progress().stage, "Simulating the brake bench");
+        assert!(!bench.advance(99).unwrap());
+        assert_eq!(bench.progress().stage, "Simulating the brake bench");
+        assert!(
+            !bench.advance(1).unwrap(),
+            "the last sample, not yet the spectrum"
+        );
+        assert_eq!(bench.progress().stage, "Computing the spectrum");
+        assert!(bench.advance(1).unwrap());
     }
 
     #[test]

@@ -292,6 +292,7 @@ fn pump<J: Work + 'static>(
 /// when the work is done: the output is published by the next task).
 fn work_chunk<J: Work>(s: &mut Pumped<J>) -> RunStatus<J::Output> {
     let started = now_ms();
+    let stage_at_start = s.job.progress().stage;
     // Work in small steps until the chunk's time is used up: the cost of a step can jump (a run
     // enters the cut and the force model wakes up), and checking the clock between steps keeps
     // the chunk near its budget whatever the step costs.
@@ -319,6 +320,16 @@ fn work_chunk<J: Work>(s: &mut Pumped<J>) -> RunStatus<J::Output> {
         let next_step_ms = elapsed * s.budget as f64 / b;
         if now_ms() - started + next_step_ms >= CHUNK_BUDGET_MS {
             break;
+        }
+        // A new stage (the spectrum after the samples, the closed loop after the teach cut, the
+        // next reference run) costs what the last step cannot tell: it starts a chunk of its
+        // own rather than finishing this one past its budget.
+        let progress = s.job.progress();
+        if progress.stage != stage_at_start {
+            return RunStatus::Running {
+                stage: progress.stage,
+                fraction: progress.fraction,
+            };
         }
     }
     let Progress { stage, fraction } = s.job.progress();

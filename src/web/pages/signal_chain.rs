@@ -18,8 +18,8 @@ use crate::signal::sos::Sos;
 use crate::signal::spectrum::{amplitude_spectrum, find_peaks, Window};
 use crate::web::components::chart::ChartCanvas;
 use crate::web::components::fields::{parse_count, parse_number, NumberField, SelectField};
-use crate::web::components::later::Later;
-use crate::web::components::runner::{RunProgress, RunStatus, Runner};
+use crate::web::components::later::{from_next_task, Later};
+use crate::web::components::runner::{next_task, RunProgress, RunStatus, Runner};
 use crate::web::components::work_job::Shared;
 use crate::web::route::{query_params, replace_query, Page};
 
@@ -383,7 +383,13 @@ pub fn SignalChainPage() -> impl IntoView {
         rate: rate.get(),
     });
     // Keep the URL in step with the form, so a link reproduces the design.
-    Effect::new(move |_| replace_query(Page::SignalChain, &text.with(FormText::query)));
+    // Written from the task after the page's: the page's own work, not its mount's.
+    let mounted = from_next_task();
+    Effect::new(move |_| {
+        if mounted.get() {
+            replace_query(Page::SignalChain, &text.with(FormText::query));
+        }
+    });
     let chosen_preset = Memo::new(move |_| text.with(|t| t.preset().map(|p| p.name)));
 
     let form = Memo::new(move |_| text.with(parse_form));
@@ -415,11 +421,18 @@ pub fn SignalChainPage() -> impl IntoView {
     });
     // The bench recording is made once, in pieces; the filter is re-applied whenever the design
     // changes.
+    // The bench is built in the task after the page's (its machine and first compiles are not
+    // the mount's work).
     let bench = Runner::<Arc<PhaseRecording>>::new();
-    match BenchRecording::loaded_step(1) {
-        Ok(recording) => bench.start(Shared(recording)),
-        Err(e) => bench.status.set(RunStatus::Failed(e.to_string())),
-    }
+    let bench_to_start = bench.clone();
+    next_task(move || match BenchRecording::loaded_step(1) {
+        Ok(recording) => bench_to_start.start(Shared(recording)),
+        Err(e) => {
+            let _ = bench_to_start
+                .status
+                .try_set(RunStatus::Failed(e.to_string()));
+        }
+    });
     let recording = bench.finished();
     let currents = Memo::new(
         move |previous: Option<&Option<(LineChart, LineChart, LineChart, String)>>| {
@@ -492,48 +505,52 @@ pub fn SignalChainPage() -> impl IntoView {
                                 .collect_view()}
                         </div>
                     </fieldset>
-                    <SelectField
-                        id="filter-kind"
-                        label="Filter type"
-                        options=FilterKind::ALL.iter().map(|k| (k.name(), k.label())).collect()
-                        value=kind
-                    />
-                    <NumberField
-                        id="filter-order"
-                        label="Order"
-                        value=order
-                        step="1"
-                        error=Signal::derive(move || form.with(|f| f.order_error.clone()))
-                    />
-                    <NumberField
-                        id="filter-cutoff"
-                        label=Signal::derive(move || if is_band.get() { "Lower cut-off" } else { "Cut-off" }.to_string())
-                        unit="Hz"
-                        value=cutoff
-                        error=Signal::derive(move || form.with(|f| f.cutoff_error.clone()))
-                    />
-                    <NumberField
-                        id="filter-upper"
-                        label="Upper cut-off"
-                        unit="Hz"
-                        value=upper
-                        hidden=Signal::derive(move || !is_band.get())
-                        error=Signal::derive(move || form.with(|f| f.upper_error.clone()))
-                    />
-                    <NumberField
-                        id="filter-rate"
-                        label="Sample rate"
-                        unit="Hz"
-                        value=rate
-                        error=Signal::derive(move || form.with(|f| f.rate_error.clone()))
-                    />
-                    <p class="hint" aria-live="polite">
-                        {move || match sections() {
-                            0 => "No valid design yet: the charts show the last valid one.".to_string(),
-                            1 => "1 second-order section".to_string(),
-                            n => format!("{n} second-order sections"),
-                        }}
-                    </p>
+                    // The fields and the design they give a task after the presets: with the
+                    // page's other work they took its first task past 50 ms.
+                    <Later>
+                        <SelectField
+                            id="filter-kind"
+                            label="Filter type"
+                            options=FilterKind::ALL.iter().map(|k| (k.name(), k.label())).collect()
+                            value=kind
+                        />
+                        <NumberField
+                            id="filter-order"
+                            label="Order"
+                            value=order
+                            step="1"
+                            error=Signal::derive(move || form.with(|f| f.order_error.clone()))
+                        />
+                        <NumberField
+                            id="filter-cutoff"
+                            label=Signal::derive(move || if is_band.get() { "Lower cut-off" } else { "Cut-off" }.to_string())
+                            unit="Hz"
+                            value=cutoff
+                            error=Signal::derive(move || form.with(|f| f.cutoff_error.clone()))
+                        />
+                        <NumberField
+                            id="filter-upper"
+                            label="Upper cut-off"
+                            unit="Hz"
+                            value=upper
+                            hidden=Signal::derive(move || !is_band.get())
+                            error=Signal::derive(move || form.with(|f| f.upper_error.clone()))
+                        />
+                        <NumberField
+                            id="filter-rate"
+                            label="Sample rate"
+                            unit="Hz"
+                            value=rate
+                            error=Signal::derive(move || form.with(|f| f.rate_error.clone()))
+                        />
+                        <p class="hint" aria-live="polite">
+                            {move || match sections() {
+                                0 => "No valid design yet: the charts show the last valid one.".to_string(),
+                                1 => "1 second-order section".to_string(),
+                                n => format!("{n} second-order sections"),
+                            }}
+                        </p>
+                    </Later>
                 </form>
                 // The charts in the task after the form's: together they took the page's first
                 // task past 50 ms.
