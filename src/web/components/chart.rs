@@ -12,13 +12,14 @@
 use std::ops::Range;
 
 use leptos::prelude::*;
-use plotters::prelude::IntoDrawingArea;
+use plotters::coord::Shift;
+use plotters::prelude::{DrawingArea, IntoDrawingArea};
 use plotters_canvas::CanvasBackend;
 use wasm_bindgen::closure::Closure;
 use wasm_bindgen::JsCast;
 
 use crate::charts::view::{nearest, pan, visible, zoom};
-use crate::charts::{draw_line_chart, ChartStyle, LineChart, PlotGeometry};
+use crate::charts::{draw_line_chart, ChartStyle, DrawResult, LineChart, PlotGeometry};
 use crate::web::components::download::{download_canvas_png, png_name};
 use crate::web::components::runner::Debounce;
 
@@ -89,6 +90,47 @@ pub fn size_bitmap(canvas: &web_sys::HtmlCanvasElement, css_width_px: u32, heigh
     pixel_ratio
 }
 
+/// What a canvas chart keeps of its last drawing: the pixel ratio and the plot's geometry, to map
+/// the pointer to data, and why it could not be drawn, to show instead.
+#[derive(Clone, Copy)]
+pub struct CanvasDrawing {
+    pub ratio: StoredValue<f64>,
+    pub geometry: StoredValue<Option<PlotGeometry>>,
+    pub error: WriteSignal<Option<String>>,
+}
+
+impl CanvasDrawing {
+    /// Draws with `draw` on `canvas`, its bitmap sized for `css_width_px` × `height_px` at the
+    /// screen's pixel ratio; a failure reads "The `what` could not be drawn: …".
+    pub fn draw(
+        self,
+        canvas: web_sys::HtmlCanvasElement,
+        css_width_px: u32,
+        height_px: u32,
+        what: &str,
+        draw: impl FnOnce(&DrawingArea<CanvasBackend, Shift>, ChartStyle) -> DrawResult<CanvasBackend>,
+    ) {
+        let pixel_ratio = size_bitmap(&canvas, css_width_px, height_px);
+        self.ratio.set_value(pixel_ratio);
+        let Some(backend) = CanvasBackend::with_canvas_object(canvas) else {
+            let _ = self
+                .error
+                .try_set(Some("This browser gave no 2-D canvas to draw on.".into()));
+            return;
+        };
+        let area = backend.into_drawing_area();
+        let result = draw(&area, ChartStyle { pixel_ratio }).and_then(|g| {
+            self.geometry.set_value(Some(g));
+            area.present()
+        });
+        let _ = self.error.try_set(
+            result
+                .err()
+                .map(|e| format!("The {what} could not be drawn: {e}")),
+        );
+    }
+}
+
 /// An explorable line chart drawn with plotters on a canvas.
 #[component]
 pub fn ChartCanvas(
@@ -113,6 +155,11 @@ pub fn ChartCanvas(
     let hover_x = RwSignal::new(None::<f64>);
     let drag_from = StoredValue::new(None::<(f64, Range<f64>)>);
     let (draw_error, set_draw_error) = signal(None::<String>);
+    let drawing = CanvasDrawing {
+        ratio,
+        geometry,
+        error: set_draw_error,
+    };
 
     // The chart as shown: zoomed, with hidden series removed and long series decimated.
     let shown = Memo::new(move |_| {
@@ -133,27 +180,9 @@ pub fn ChartCanvas(
             let Some(canvas) = canvas_ref.get_untracked() else {
                 return;
             };
-            let pixel_ratio = size_bitmap(&canvas, css_width, height_px);
-            ratio.set_value(pixel_ratio);
-            let Some(backend) = CanvasBackend::with_canvas_object(canvas) else {
-                let _ = set_draw_error
-                    .try_set(Some("This browser gave no 2-D canvas to draw on.".into()));
-                return;
-            };
-            let area = backend.into_drawing_area();
-            let result = draw_line_chart(&area, &shown, ChartStyle { pixel_ratio });
-            let result = match result {
-                Ok(g) => {
-                    geometry.set_value(Some(g));
-                    area.present()
-                }
-                Err(e) => Err(e),
-            };
-            let _ = set_draw_error.try_set(
-                result
-                    .err()
-                    .map(|e| format!("The chart could not be drawn: {e}")),
-            );
+            drawing.draw(canvas, css_width, height_px, "chart", |area, style| {
+                draw_line_chart(area, &shown, style)
+            });
         });
     });
 

@@ -2,11 +2,9 @@
 //! pressing Enter, reports its data coordinates.
 
 use leptos::prelude::*;
-use plotters::prelude::IntoDrawingArea;
-use plotters_canvas::CanvasBackend;
 
-use crate::charts::{draw_heat_map, ChartStyle, HeatMap, PlotGeometry};
-use crate::web::components::chart::{observed_width, size_bitmap};
+use crate::charts::{draw_heat_map, HeatMap, PlotGeometry};
+use crate::web::components::chart::{observed_width, CanvasDrawing};
 use crate::web::components::runner::Debounce;
 
 /// A heat map drawn with plotters; `on_pick` receives the (x, y) of a click, or of the keyboard
@@ -29,6 +27,11 @@ pub fn HeatMapCanvas(
     let geometry = StoredValue::new(None::<PlotGeometry>);
     let ratio = StoredValue::new(1.0_f64);
     let (draw_error, set_draw_error) = signal(None::<String>);
+    let drawing = CanvasDrawing {
+        ratio,
+        geometry,
+        error: set_draw_error,
+    };
     // The keyboard cursor as a fraction of each axis's range, at the centre of a cell.
     let cursor = RwSignal::new((0.5_f64, 0.5_f64));
     let cursor_point = move || {
@@ -76,23 +79,9 @@ pub fn HeatMapCanvas(
             return;
         };
         draws.request(move || {
-            let pixel_ratio = size_bitmap(&canvas, css_width, height_px);
-            ratio.set_value(pixel_ratio);
-            let Some(backend) = CanvasBackend::with_canvas_object(canvas) else {
-                let _ = set_draw_error
-                    .try_set(Some("This browser gave no 2-D canvas to draw on.".into()));
-                return;
-            };
-            let area = backend.into_drawing_area();
-            let result = draw_heat_map(&area, &map, ChartStyle { pixel_ratio }).and_then(|g| {
-                geometry.set_value(Some(g));
-                area.present()
+            drawing.draw(canvas, css_width, height_px, "map", |area, style| {
+                draw_heat_map(area, &map, style)
             });
-            let _ = set_draw_error.try_set(
-                result
-                    .err()
-                    .map(|e| format!("The map could not be drawn: {e}")),
-            );
         });
     });
     let pick = move |ev: leptos::ev::MouseEvent| {
