@@ -14,6 +14,8 @@ use std::fmt;
 #[derive(Debug, Clone, PartialEq)]
 pub struct Progress {
     /// What it is doing now, for a person ("Teach cut", "Closed loop", "Reference run 2 of 9 …").
+    /// It changes only where the work changes kind: the browser's runner starts a new stage in
+    /// a chunk of its own, since the pace of the last stage says nothing of the next one's.
     pub stage: String,
     /// Rough fraction of the whole done, 0–1.
     pub fraction: f64,
