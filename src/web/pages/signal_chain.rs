@@ -419,10 +419,9 @@ pub fn SignalChainPage() -> impl IntoView {
                 LineChart::new(Axis::log("frequency (Hz)"), Axis::linear("phase (°)"))
             })
     });
-    // The bench recording is made once, in pieces; the filter is re-applied whenever the design
-    // changes.
-    // The bench is built in the task after the page's (its machine and first compiles are not
-    // the mount's work).
+    // The bench recording is made once, in pieces, starting in the task after the page's (its
+    // machine and first compiles are not the mount's work); the filter is re-applied whenever
+    // the design changes.
     let bench = Runner::<Arc<PhaseRecording>>::new();
     let bench_to_start = bench.clone();
     next_task(move || match BenchRecording::loaded_step(1) {
