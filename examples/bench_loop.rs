@@ -15,7 +15,8 @@
 
 use std::time::Instant;
 
-use cutlab::closed_loop::lab::{simulate, RunSpec};
+use cutlab::closed_loop::definition::RunSpec;
+use cutlab::closed_loop::lab::simulate;
 use cutlab::control::registry::ControllerKind;
 use cutlab::plant::Preset;
 

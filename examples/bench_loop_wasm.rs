@@ -15,7 +15,8 @@
 mod wasm {
     use wasm_bindgen::prelude::wasm_bindgen;
 
-    use cutlab::closed_loop::lab::{simulate, RunSpec};
+    use cutlab::closed_loop::definition::RunSpec;
+    use cutlab::closed_loop::lab::simulate;
     use cutlab::control::registry::ControllerKind;
     use cutlab::plant::Preset;
 

@@ -19,7 +19,8 @@ use std::cell::RefCell;
 use std::error::Error;
 use std::rc::Rc;
 
-use cutlab::closed_loop::lab::{simulate, RunResult, RunSpec};
+use cutlab::closed_loop::definition::RunSpec;
+use cutlab::closed_loop::lab::{simulate, RunResult};
 use cutlab::control::registry::ControllerKind;
 use cutlab::plant::Preset;
 use cutlab::protocol::device::{DeviceConfig, DeviceEmulator};

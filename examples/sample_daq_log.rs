@@ -17,8 +17,10 @@ use std::error::Error;
 use std::io::Write;
 use std::rc::Rc;
 
-use cutlab::closed_loop::lab::{default_settings, RunSpec};
-use cutlab::closed_loop::runner::{OnMachine, TeachForce};
+use cutlab::closed_loop::definition::RunSpec;
+use cutlab::closed_loop::lab::preset_plan;
+use cutlab::closed_loop::sample_loop::OnMachine;
+use cutlab::closed_loop::teach_cut::TeachForce;
 use cutlab::control::registry::ControllerKind;
 use cutlab::machine::{Machine, MachineStep, OverrideCommand};
 use cutlab::plant::Preset;
@@ -50,16 +52,15 @@ const BLOCK: usize = 10;
 fn main() -> Result<(), Box<dyn Error>> {
     let mut spec = RunSpec::new(Preset::ManeeratDoc2, ControllerKind::Fixed);
     spec.seed = 5;
-    let mut settings = default_settings(&spec)?;
+    let mut plan = preset_plan(&spec)?;
     // A 12 s capture: the approach in air, the entry, the cut at four overrides.
-    settings.max_duration_s = 12.0;
+    plan.max_duration_s = 12.0;
     let steps = Rc::new(RefCell::new(Vec::new()));
     let machine = Recorder {
         inner: Box::new(spec.preset.machine_with(spec.seed, &spec.plant)?),
         steps: steps.clone(),
     };
-    OnMachine::teach_cut(Box::new(machine), &settings, TeachForce::SimulationTruth)?
-        .run_to_end()?;
+    OnMachine::teach_cut(Box::new(machine), &plan, TeachForce::SimulationTruth)?.run_to_end()?;
     let out = std::io::stdout();
     let mut out = std::io::BufWriter::new(out.lock());
     writeln!(

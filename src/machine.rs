@@ -163,7 +163,7 @@ pub trait Machine {
 
     /// A force sensor's reading at the latest sample, if the machine has one (a dynamometer under
     /// the part, or a log's force columns). A teach cut can calibrate against it
-    /// ([`crate::closed_loop::runner::TeachForce::Dynamometer`]).
+    /// ([`crate::closed_loop::teach_cut::TeachForce::Dynamometer`]).
     fn dynamometer_force_n(&self) -> Option<DynamometerReading> {
         None
     }

@@ -144,10 +144,11 @@ pub enum ArmingTrigger {
 pub const AIR_CUT_FRACTION: f64 = 0.2;
 
 impl EnvelopeConfig {
-    /// Defaults for a force target: override 10–150 % at up to 100 %/s on FANUC's 16-position
-    /// dial (0, 10, …, 150 %), arming 3 s after spindle start (paper 003), overload at 1.5 × target
-    /// for 0.2 s.
-    pub fn for_target(target_force_n: f64) -> Self {
+    /// The defaults on FANUC's 16-position dial (0, 10, …, 150 %): override 10–150 % at up to
+    /// 100 %/s, arming 3 s after spindle start (paper 003), overload held 0.2 s before feed hold;
+    /// the force limits, which follow a target, off (0) until one is set
+    /// ([`EnvelopeConfig::for_target`], or a run's resolved settings).
+    pub fn default_for_dial() -> Self {
         Self {
             min_override_pct: 10.0,
             max_override_pct: 150.0,
@@ -161,10 +162,20 @@ impl EnvelopeConfig {
             max_gap_periods: 3.0,
             recover_after_s: 0.1,
             fault_action: FaultAction::Hold,
-            air_cut_force_n: AIR_CUT_FRACTION * target_force_n,
+            air_cut_force_n: 0.0,
             entry_override_pct: 100.0,
-            overload_limit_n: 1.5 * target_force_n,
+            overload_limit_n: 0.0,
             overload_time_s: 0.2,
+        }
+    }
+
+    /// [`EnvelopeConfig::default_for_dial`] for a force target: the tool taken for in air below
+    /// [`AIR_CUT_FRACTION`] of it, overload at 1.5 × target.
+    pub fn for_target(target_force_n: f64) -> Self {
+        Self {
+            air_cut_force_n: AIR_CUT_FRACTION * target_force_n,
+            overload_limit_n: 1.5 * target_force_n,
+            ..Self::default_for_dial()
         }
     }
 }

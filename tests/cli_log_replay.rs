@@ -8,7 +8,7 @@
 mod common;
 
 use cutlab::closed_loop::calibration_file::CalibrationFile;
-use cutlab::closed_loop::runner::Feedback;
+use cutlab::estimation::estimator::Feedback;
 
 const EXPORT: &str = concat!(
     env!("CARGO_MANIFEST_DIR"),
@@ -82,7 +82,7 @@ fn a_calibration_saved_from_a_log_replays_a_controller_on_it() {
     );
     result.unwrap();
     assert!(out.contains("pi replayed on 1149 rows"), "{out}");
-    assert!(out.contains("RMS value in the log"), "{out}");
+    assert!(out.contains("current is an RMS value"), "{out}");
     // The summary's percents and forces to a tenth, as a person reads them.
     let summary = out
         .lines()
@@ -187,7 +187,7 @@ fn replay_refuses_what_it_cannot_do_and_says_what_to_give() {
                 "--controller",
                 "pi",
             ][..],
-            "give a current target (--target-a)",
+            "--target-a: no calibration, so the controllers regulate the current: give a current target",
         ),
         (
             &[

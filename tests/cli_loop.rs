@@ -260,7 +260,7 @@ fn bad_input_gives_one_line_that_names_it() {
 #[test]
 fn a_saved_configuration_reproduces_the_runs_it_describes() {
     use cutlab::closed_loop::config::RunConfiguration;
-    use cutlab::closed_loop::lab::RunSpec;
+    use cutlab::closed_loop::definition::RunSpec;
     use cutlab::control::registry::{ControllerConfig, ControllerKind};
     use cutlab::plant::Preset;
 

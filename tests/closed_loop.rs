@@ -7,7 +7,8 @@
 #[cfg(target_arch = "wasm32")]
 use wasm_bindgen_test::wasm_bindgen_test as test;
 
-use cutlab::closed_loop::lab::{simulate, LabRun, RunResult, RunSpec};
+use cutlab::closed_loop::definition::RunSpec;
+use cutlab::closed_loop::lab::{simulate, LabRun, RunResult};
 use cutlab::closed_loop::trace::write_csv;
 use cutlab::control::registry::ControllerKind;
 use cutlab::plant::Preset;
@@ -276,7 +277,7 @@ fn a_run_given_the_teach_cuts_calibration_equals_one_that_teaches_itself() {
 #[cfg(not(target_arch = "wasm32"))]
 #[test]
 fn the_reference_search_finds_the_highest_safe_fixed_override_in_pieces_or_at_once() {
-    use cutlab::closed_loop::lab::{fixed_feed_spec, references, ReferenceSearch};
+    use cutlab::closed_loop::references::{fixed_feed_spec, references, ReferenceSearch};
     let spec = RunSpec::new(Preset::ManeeratDoc1, ControllerKind::Threshold);
     let whole = references(&spec).unwrap();
 
@@ -390,7 +391,7 @@ fn a_run_stopped_by_the_overload_alarm_has_no_cycle_time_to_win_with() {
 #[cfg(not(target_arch = "wasm32"))]
 #[test]
 fn feed_current_feedback_converts_the_target_and_refuses_down_milling() {
-    use cutlab::closed_loop::runner::Feedback;
+    use cutlab::estimation::estimator::Feedback;
     let mut spec = RunSpec::new(Preset::KimStepDoc, ControllerKind::Threshold);
     spec.settings.feedback = Some(Feedback::FeedCurrent);
     let r = simulate(&spec).unwrap();
@@ -489,7 +490,7 @@ fn paper_002_rule_tables_differ_only_when_the_loop_samples_slowly() {
 /// its noise and lag.
 #[test]
 fn paper_001_process_with_dynamometer_feedback_holds_the_target() {
-    use cutlab::closed_loop::runner::{Estimator, Feedback};
+    use cutlab::estimation::estimator::{Estimator, Feedback};
     let r = run(Preset::ManeeratSecondOrder, ControllerKind::Mrac);
     assert_eq!(r.settings.feedback, Feedback::Dynamometer);
     assert_eq!(r.calibration.estimator, Estimator::Dynamometer);
@@ -669,13 +670,13 @@ fn the_comparison_table_in_the_docs_is_what_the_tool_computes() {
 /// Dynamometer feedback is a choice on every preset, not only on paper 001's own process.
 #[test]
 fn dynamometer_feedback_on_a_mill_holds_the_target() {
-    use cutlab::closed_loop::runner::Feedback;
+    use cutlab::estimation::estimator::Feedback;
     let mut spec = RunSpec::new(Preset::ManeeratDoc2, ControllerKind::Mrac);
     spec.settings.feedback = Some(Feedback::Dynamometer);
     let r = simulate(&spec).unwrap();
     assert!(matches!(
         r.calibration.estimator,
-        cutlab::closed_loop::runner::Estimator::Dynamometer
+        cutlab::estimation::estimator::Estimator::Dynamometer
     ));
     assert!(r.metrics.completed);
     assert!(

@@ -11,9 +11,10 @@
 use wasm_bindgen_test::wasm_bindgen_test as test;
 
 use cutlab::closed_loop::calibration_file::CalibrationFile;
-use cutlab::closed_loop::lab::{simulate, RunSpec};
-use cutlab::closed_loop::runner::Feedback;
+use cutlab::closed_loop::definition::RunSpec;
+use cutlab::closed_loop::lab::simulate;
 use cutlab::control::registry::ControllerKind;
+use cutlab::estimation::estimator::Feedback;
 use cutlab::hardware::recording::{LiveRow, Recorder, RecordingMeta};
 use cutlab::hardware::session::{
     HardwareSession, LinkState, SessionOptions, Stage, TaughtCalibration,

@@ -19,9 +19,10 @@ use std::sync::mpsc::RecvTimeoutError;
 use std::sync::Mutex;
 
 use cutlab::closed_loop::calibration_file::CalibrationFile;
-use cutlab::closed_loop::lab::{simulate, RunResult, RunSpec};
-use cutlab::closed_loop::runner::Calibration;
+use cutlab::closed_loop::definition::RunSpec;
+use cutlab::closed_loop::lab::{simulate, RunResult};
 use cutlab::control::registry::ControllerKind;
+use cutlab::estimation::estimator::Calibration;
 use cutlab::plant::Preset;
 use cutlab::protocol::codec::{encode_frame, MAX_FRAME_LEN};
 use cutlab::protocol::device::{DeviceConfig, DeviceEmulator, DeviceStats, FaultInjection};

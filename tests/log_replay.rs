@@ -11,20 +11,31 @@ use std::fmt::Write as _;
 use std::rc::Rc;
 use std::sync::Arc;
 
-use cutlab::closed_loop::lab::{settled_settings, teach_cut_only, RunSpec};
-use cutlab::closed_loop::runner::{ClosedLoop, Feedback};
+use cutlab::closed_loop::definition::RunSpec;
+use cutlab::closed_loop::definition::SettingsOverrides;
+use cutlab::closed_loop::feedback_loop::ClosedLoop;
+use cutlab::closed_loop::lab::{settled_settings, teach_cut_only};
 use cutlab::closed_loop::trace::Trace;
 use cutlab::control::registry::{ControllerConfig, ControllerKind, RunContext};
+use cutlab::estimation::estimator::Feedback;
+use cutlab::log::calibration::{fit_calibration, ForceSource};
 use cutlab::log::load;
 use cutlab::log::mapping::{Channel, Mapping};
-use cutlab::log::replay::{
-    fit_calibration, write_replay_csv, EnvelopeState, ForceSource, ReplayRun, ReplaySettings,
-    Target,
-};
+use cutlab::log::replay::{write_replay_csv, EnvelopeState, ReplayRun, ReplaySettings};
 use cutlab::machine::{Machine, MachineStep, OverrideCommand, SensorSample};
 use cutlab::plant::Preset;
 use cutlab::safety::{SafetyEvent, SensorFault};
 use cutlab::work::Work;
+
+/// Settings with the time limit left out: a replay ends where its log does.
+fn without_time_limit(
+    settings: &cutlab::closed_loop::settings::LoopSettings,
+) -> cutlab::closed_loop::settings::LoopSettings {
+    cutlab::closed_loop::settings::LoopSettings {
+        max_duration_s: 0.0,
+        ..settings.clone()
+    }
+}
 
 /// A machine that records every sample it returns.
 struct Recorder {
@@ -127,18 +138,26 @@ fn replaying_a_recorded_run_through_its_controller_gives_the_loops_decisions() {
     }
     assert_eq!(mapping.count(Channel::SpindlePhase), 3);
     assert_eq!(mapping.columns_of(Channel::Override), ["Override [%]"]);
+    // The replay is asked what the run was asked: its target, its control period, and the
+    // machine's override input; the rest it derives as the lab did.
     let replay_settings = ReplaySettings {
-        feedback: Feedback::SpindleCurrent,
-        control_period_s: Some(settings.control_period_s),
-        spindle_lowpass_hz: settings.spindle_lowpass_hz,
-        feed_lowpass_hz: settings.feed_lowpass_hz,
-        lowpass_order: settings.lowpass_order,
-        target: Some(Target::ForceN(settings.target_force_n)),
-        envelope: settings.envelope.clone(),
+        override_mode: spec.preset.override_mode(),
+        run: SettingsOverrides {
+            feedback: Some(Feedback::SpindleCurrent),
+            target_force_n: Some(settings.target_force_n),
+            control_period_s: Some(settings.control_period_s),
+            ..SettingsOverrides::default()
+        },
         calibration: Some(calibration.clone()),
         ..ReplaySettings::default()
     };
     let replayed = replay(&log, &mapping, &replay_settings, &spec.controller);
+    // The same settings resolved from the same target, calibration and sample period: the
+    // air-cut force, the limits, the control period; only the time limit is the log's end.
+    assert_eq!(
+        without_time_limit(&replayed.settings),
+        without_time_limit(&settings)
+    );
 
     // The same samples through the same loop: every decision, bit for bit.
     assert_eq!(replayed.trace.rows.len(), live.rows.len());
@@ -260,7 +279,10 @@ fn a_slow_rms_log_skips_the_phase_stages_and_the_envelope_sees_its_gaps() {
     let mapping = Mapping::guess(&log);
     assert_eq!(mapping.columns_of(Channel::SpindleCurrent), ["S_Strom [A]"]);
     let settings = ReplaySettings {
-        target: Some(Target::CurrentA(10.0)),
+        run: SettingsOverrides {
+            target_current_a: Some(10.0),
+            ..SettingsOverrides::default()
+        },
         ..ReplaySettings::default()
     };
     let result = replay(
@@ -341,13 +363,19 @@ fn an_uncalibrated_replay_asks_for_a_current_target_and_names_a_missing_current(
     let e = error(&ReplaySettings::default(), &mapping);
     assert!(e.contains("give a current target"), "{e}");
     let force_target = ReplaySettings {
-        target: Some(Target::ForceN(300.0)),
+        run: SettingsOverrides {
+            target_force_n: Some(300.0),
+            ..SettingsOverrides::default()
+        },
         ..ReplaySettings::default()
     };
     assert!(error(&force_target, &mapping).contains("needs a calibration"));
     let feed = ReplaySettings {
-        feedback: Feedback::FeedCurrent,
-        target: Some(Target::CurrentA(1.0)),
+        run: SettingsOverrides {
+            feedback: Some(Feedback::FeedCurrent),
+            target_current_a: Some(1.0),
+            ..SettingsOverrides::default()
+        },
         ..ReplaySettings::default()
     };
     let e = error(&feed, &mapping);
@@ -393,7 +421,7 @@ fn a_log_with_a_force_calibrates_the_line_its_currents_follow_from_one_two_or_th
             &ForceSource::Measured,
         )
         .unwrap();
-        let cutlab::closed_loop::runner::Estimator::Spindle { model, .. } =
+        let cutlab::estimation::estimator::Estimator::Spindle { model, .. } =
             &fit.calibration.estimator
         else {
             panic!("a spindle model");
@@ -417,7 +445,10 @@ fn a_log_with_a_force_calibrates_the_line_its_currents_follow_from_one_two_or_th
         // The calibration replays: the estimate reads the log's force back.
         let settings = ReplaySettings {
             calibration: Some(fit.calibration.clone()),
-            target: Some(Target::ForceN(200.0)),
+            run: SettingsOverrides {
+                target_force_n: Some(200.0),
+                ..SettingsOverrides::default()
+            },
             ..ReplaySettings::default()
         };
         let result = replay(

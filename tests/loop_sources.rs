@@ -5,10 +5,11 @@
 #[cfg(target_arch = "wasm32")]
 use wasm_bindgen_test::wasm_bindgen_test as test;
 
-use cutlab::closed_loop::lab::{simulate, LabRun, RunMachines, RunSpec};
-use cutlab::closed_loop::runner::{
-    FeedbackLoop, LoopSample, OnMachine, SampleLoop, TeachCut, TeachForce,
-};
+use cutlab::closed_loop::definition::RunSpec;
+use cutlab::closed_loop::feedback_loop::FeedbackLoop;
+use cutlab::closed_loop::lab::{simulate, LabRun, RunMachines};
+use cutlab::closed_loop::sample_loop::{LoopSample, OnMachine, SampleLoop};
+use cutlab::closed_loop::teach_cut::{TeachCut, TeachForce};
 use cutlab::control::registry::{ControllerKind, RunContext};
 use cutlab::estimation::cut_forces::CutGeometry;
 use cutlab::machine::{DynamometerReading, Machine, MachineStep, OverrideCommand};
@@ -89,8 +90,8 @@ impl Machine for WithDynamometer {
 
 fn teach(machine: Box<dyn Machine>, force: TeachForce) -> OnMachine<TeachCut> {
     let spec = RunSpec::new(Preset::ManeeratDoc1, ControllerKind::Pi);
-    let settings = cutlab::closed_loop::lab::default_settings(&spec).unwrap();
-    let mut teach = OnMachine::teach_cut(machine, &settings, force).unwrap();
+    let plan = cutlab::closed_loop::lab::plan_on(&spec, machine.sample_rate_hz()).unwrap();
+    let mut teach = OnMachine::teach_cut(machine, &plan, force).unwrap();
     while !teach.advance(1000).unwrap() {}
     teach
 }
@@ -149,7 +150,7 @@ fn a_teach_cut_on_the_model_of_the_cut_holds_the_target_on_a_machine_without_tru
         RunMachines::Shared(truthless(1)),
         TeachForce::CutModel {
             geometry,
-            depth_mm,
+            depth_mm: Some(depth_mm),
             width_mm,
         },
     )
@@ -209,7 +210,7 @@ fn a_run_stopped_at_its_time_limit_is_not_reported_as_finished() {
             amps_per_newton: f64::NAN,
         })
         .unwrap();
-    let trace = cutlab::closed_loop::runner::ClosedLoop::new(
+    let trace = cutlab::closed_loop::feedback_loop::ClosedLoop::new(
         Box::new(Endless(Box::new(spec.preset.machine(1).unwrap()))),
         controller,
         taught.calibration.estimator.clone(),
@@ -249,8 +250,8 @@ fn a_spindle_that_droops_under_load_is_one_calibration_speed() {
         spec.settings.control_period_s = Some(period_s);
         cutlab::closed_loop::lab::teach_cut_only(&spec).unwrap()
     };
-    let rows = |c: &cutlab::closed_loop::runner::Calibration| match &c.estimator {
-        cutlab::closed_loop::runner::Estimator::Spindle { model, .. } => model.rows.len(),
+    let rows = |c: &cutlab::estimation::estimator::Calibration| match &c.estimator {
+        cutlab::estimation::estimator::Estimator::Spindle { model, .. } => model.rows.len(),
         _ => 0,
     };
     let (reference, reference_calibration) = teach(0.04);
@@ -281,7 +282,7 @@ fn a_spindle_that_droops_under_load_is_one_calibration_speed() {
 fn the_brake_benchs_references_stay_on_its_dial() {
     // The bench's 16-grade dial stops at 150 %; the reference search used to ask for 255 %.
     let spec = RunSpec::new(Preset::WangBrakeBench, ControllerKind::Restriction);
-    let found = cutlab::closed_loop::lab::references(&spec).unwrap();
+    let found = cutlab::closed_loop::references::references(&spec).unwrap();
     // The brake's torque does not depend on the feed, so no fixed override brings the load to
     // the target: the answer is "none" (NaN), never an override beyond the dial.
     assert!(
@@ -317,7 +318,7 @@ fn a_cut_before_the_loop_arms_is_warned_about_once() {
             amps_per_newton: f64::NAN,
         })
         .unwrap();
-    let late = cutlab::closed_loop::runner::ClosedLoop::new(
+    let late = cutlab::closed_loop::feedback_loop::ClosedLoop::new(
         Box::new(WithDynamometer {
             machine: Box::new(spec.preset.machine(1).unwrap()),
             last: MachineStep::default(),

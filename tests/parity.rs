@@ -111,7 +111,8 @@ fn math_functions() -> Computed {
 /// A whole closed loop: teach cut, estimator, PI controller, safety envelope, on the simulated
 /// mill with sensor noise.
 fn closed_loop_run() -> Computed {
-    use cutlab::closed_loop::lab::{simulate, RunSpec};
+    use cutlab::closed_loop::definition::RunSpec;
+    use cutlab::closed_loop::lab::simulate;
     use cutlab::control::registry::ControllerKind;
     use cutlab::plant::Preset;
     let result =

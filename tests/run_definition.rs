@@ -87,7 +87,7 @@ fn every_setting_has_its_option_in_the_help() {
 #[test]
 fn the_override_before_arming_is_refused_outside_the_band_and_the_default_follows_it() {
     use cutlab::closed_loop::config::RunConfiguration;
-    use cutlab::closed_loop::lab::default_settings;
+    use cutlab::closed_loop::lab::preset_plan;
     let texts = |preset: Preset, pairs: &[(RunSetting, &str)]| {
         parse_texts(preset, ControllerConfig::new(ControllerKind::Pi), pairs)
     };
@@ -135,12 +135,12 @@ fn the_override_before_arming_is_refused_outside_the_band_and_the_default_follow
     let mut spec = texts(Preset::ManeeratDoc1, &[(RunSetting::MaxOverride, "120")]).unwrap();
     spec.settings.arming_override_pct = Some(130.0);
     let text = RunConfiguration::new(vec![spec.clone()], None).to_json();
-    let run = RunConfiguration::from_json(&text).unwrap().runs.remove(0);
-    let e = default_settings(&run).unwrap_err().to_string();
+    // Refused as the file is read, before anything runs.
+    let e = RunConfiguration::from_json(&text).unwrap_err().to_string();
     assert!(e.contains("arming_override_pct: 130 % is outside"), "{e}");
     // Left at its default, the override before arming follows a band below 100 %.
     spec.settings.arming_override_pct = None;
     spec.settings.max_override_pct = Some(80.0);
-    let settings = default_settings(&spec).unwrap();
-    assert_eq!(settings.envelope.arming_override_pct, 80.0);
+    let plan = preset_plan(&spec).unwrap();
+    assert_eq!(plan.limits.arming_override_pct, 80.0);
 }

@@ -53,7 +53,8 @@ fn the_saved_comparison_and_the_teach_cut_log_load() {
 #[test]
 fn the_saved_calibration_is_kim_step_docs_teach_cut() {
     use cutlab::closed_loop::calibration_file::CalibrationFile;
-    use cutlab::closed_loop::lab::{teach_cut_only, RunSpec};
+    use cutlab::closed_loop::definition::RunSpec;
+    use cutlab::closed_loop::lab::teach_cut_only;
     use cutlab::control::registry::ControllerKind;
     use cutlab::plant::Preset;
     let saved = CalibrationFile::from_json(&read("kim-step-doc-calibration.json")).unwrap();
@@ -332,8 +333,9 @@ fn the_synthetic_machine_export_reads_and_analyses_by_phase() {
 /// columns map themselves, and its force calibrates the spindle current it was recorded with.
 #[test]
 fn the_synthetic_daq_capture_maps_itself_and_calibrates() {
+    use cutlab::log::calibration::{fit_calibration, ForceSource};
     use cutlab::log::mapping::{Channel, Mapping};
-    use cutlab::log::replay::{fit_calibration, ForceSource, ReplaySettings};
+    use cutlab::log::replay::ReplaySettings;
     let bytes = std::fs::read(format!("{DATA}synthetic-maneerat-doc-2-daq.csv")).unwrap();
     let log = std::sync::Arc::new(cutlab::log::load(&bytes, None));
     assert_eq!(log.rows, 12_000);
@@ -358,7 +360,8 @@ fn the_synthetic_daq_capture_maps_itself_and_calibrates() {
         &ForceSource::Measured,
     )
     .unwrap();
-    let cutlab::closed_loop::runner::Estimator::Spindle { model, .. } = &fit.calibration.estimator
+    let cutlab::estimation::estimator::Estimator::Spindle { model, .. } =
+        &fit.calibration.estimator
     else {
         panic!("a spindle model");
     };
@@ -369,7 +372,8 @@ fn the_synthetic_daq_capture_maps_itself_and_calibrates() {
 /// it gives is the run its own teach cut gives, trace and metrics to the bit.
 #[test]
 fn a_run_from_the_shipped_calibration_is_the_run_with_its_own_teach_cut() {
-    use cutlab::closed_loop::lab::{simulate, LabRun, RunSpec, TeachKey};
+    use cutlab::closed_loop::definition::RunSpec;
+    use cutlab::closed_loop::lab::{simulate, LabRun, TeachKey};
     use cutlab::closed_loop::precomputed::shipped_calibrations;
     use cutlab::control::registry::ControllerKind;
     use cutlab::plant::Preset;
@@ -398,8 +402,9 @@ fn a_run_from_the_shipped_calibration_is_the_run_with_its_own_teach_cut() {
 /// Simulate page's default run (threshold) has that scenario, however its settings are spelled.
 #[test]
 fn the_shipped_references_are_kim_step_docs_reference_search() {
-    use cutlab::closed_loop::lab::{fixed_feed_spec, references, RunSpec, ScenarioKey};
+    use cutlab::closed_loop::definition::RunSpec;
     use cutlab::closed_loop::precomputed::shipped_references;
+    use cutlab::closed_loop::references::{fixed_feed_spec, references, ScenarioKey};
     use cutlab::control::registry::ControllerKind;
     use cutlab::plant::Preset;
     let default_run = RunSpec::new(Preset::KimStepDoc, ControllerKind::Threshold);
@@ -419,8 +424,9 @@ fn the_shipped_references_are_kim_step_docs_reference_search() {
     // The browser's form spells every setting out; the key is the same.
     let mut spelled = default_run.clone();
     spelled.settings.control_period_s = Some(
-        cutlab::closed_loop::lab::default_settings(&default_run)
+        cutlab::closed_loop::lab::preset_plan(&default_run)
             .unwrap()
+            .chain
             .control_period_s,
     );
     assert_eq!(ScenarioKey::of(&spelled).unwrap(), key);

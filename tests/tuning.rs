@@ -9,13 +9,13 @@
 #[cfg(target_arch = "wasm32")]
 use wasm_bindgen_test::wasm_bindgen_test as test;
 
-use cutlab::closed_loop::lab::{simulate, RunSpec};
+use cutlab::closed_loop::definition::RunSpec;
+use cutlab::closed_loop::lab::simulate;
+use cutlab::closed_loop::settings::DEFAULT_TARGET_FRACTION;
 use cutlab::control::registry::{ControllerConfig, ControllerKind};
 use cutlab::plant::Preset;
 use cutlab::tuning::nelder_mead::NelderMead;
-use cutlab::tuning::teach_in::{
-    teach_in_calibration, teach_in_log, LogTeachIn, TargetBasis, TARGET_FRACTION,
-};
+use cutlab::tuning::teach_in::{teach_in_calibration, teach_in_log, LogTeachIn, TargetBasis};
 use cutlab::tuning::{Objective, ParamRange, Report, Tuner, TuningError, TuningProblem};
 
 fn problem(kind: ControllerKind, ranges: &[&str], presets: &[Preset]) -> TuningProblem {
@@ -286,7 +286,7 @@ fn a_simulated_teach_in_proposes_from_the_force_it_measured() {
         close(p.target_n, &expected["target_n"], 0.01, preset.name());
         assert_eq!(
             p.target_n,
-            TARGET_FRACTION * learned.force_at_full_override_n
+            DEFAULT_TARGET_FRACTION * learned.force_at_full_override_n
         );
         assert_eq!(p.basis, TargetBasis::Fraction);
         // The paper's own target is shown beside it, and differs from it.
@@ -314,7 +314,7 @@ fn a_simulated_teach_in_proposes_from_the_force_it_measured() {
     );
     assert_eq!(
         liu.proposal.target_n,
-        TARGET_FRACTION * liu.learned.force_at_full_override_n
+        DEFAULT_TARGET_FRACTION * liu.learned.force_at_full_override_n
     );
 }
 

@@ -69,11 +69,22 @@ def log_reference():
                      encoding="utf-8-sig")
     force = df["Kraft [N]"].to_numpy()
     current = df["S_Strom [A]"].to_numpy()
-    cutting = force > 0
-    full = cutting & (np.abs(df["Override [%]"].to_numpy() - 100.0) <= 0.5)
+    time = df["Zeit [s]"].to_numpy()
+    override = df["Override [%]"].to_numpy()
+    speed = df["S_Drehzahl (rpm)"].to_numpy()
+    feed = df["X_Vorschub [mm/min]"].to_numpy()
+    # The teach cut's selection (docs/tuning.md, "What a teach cut keeps"): half a second past an
+    # override change, the spindle's speed within 1 % of the row before, the axes feeding, and a
+    # positive force.
+    changed = np.r_[False, override[1:] != override[:-1]]
+    change_time = pd.Series(np.where(changed, time, np.nan)).ffill().fillna(-np.inf).to_numpy()
+    settled_override = time - change_time >= 0.5
+    steady = np.r_[True, np.abs(np.diff(speed)) <= 0.01 * np.abs(speed[1:])]
+    cutting = settled_override & steady & (np.abs(feed) >= 1e-6) & (force > 0)
+    full = cutting & (np.abs(override - 100.0) <= 0.5)
     force_full = float(np.median(force[full]))
     speed_full = float(np.median(df["S_Drehzahl (rpm)"].to_numpy()[full]))
-    # Least squares I = idle + s F over every cutting row (one speed: the droop is < 2 %).
+    # Least squares I = idle + s F over every row kept (one speed: the droop is < 2 %).
     (slope, idle), ss_res, _, _, _ = np.polyfit(force[cutting], current[cutting], 1, full=True)
     n = int(cutting.sum())
     residual_a = math.sqrt(float(ss_res[0]) / (n - 2))

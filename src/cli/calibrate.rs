@@ -1,6 +1,6 @@
 //! `cutlab calibrate FILE.csv`: fit the current-to-force models from a logged teach cut.
 //!
-//! Reads the file, hands the text to [`crate::estimation::teach_log`] (which says what the log
+//! Reads the file, hands the text to [`crate::log::period_log`] (which says what the log
 //! must hold and fits both models), and prints the report or its JSON.
 
 use std::fmt::Write as _;
@@ -9,10 +9,10 @@ use serde::Serialize;
 
 use super::args::{required, value_or};
 use super::{write_json, CliError, Io};
-use crate::closed_loop::runner::{Calibration, Estimator, GEAR_CHANGE_RPM};
 use crate::estimation::cut_forces::{cutting_material, CutGeometry};
-use crate::estimation::speed::FvSpeedModel;
-use crate::estimation::teach_log::{calibrate_log, LogCalibration, LogError, LogTable};
+use crate::estimation::estimator::{Calibration, Feedback};
+use crate::estimation::speed::GEAR_CHANGE_RPM;
+use crate::log::period_log::{calibrate_log, LogCalibration, LogError, LogTable};
 use crate::plant::mechanics::{Cutter, MillingMode};
 
 pub(crate) const ABOUT: &str =
@@ -247,7 +247,7 @@ pub fn run(args: CalibrateArgs, io: &mut Io<'_>) -> Result<(), CliError> {
     .map_err(in_file)?;
     let rows_with_force = report.rows_with_force;
     if let Some(path) = args.save_calibration.as_deref() {
-        let (calibration, which) = saved_calibration(&report, &table, args.feedback.as_deref())?;
+        let (calibration, which) = saved_calibration(&report, args.feedback.as_deref())?;
         super::save_calibration(
             path,
             &calibration,
@@ -327,88 +327,25 @@ pub fn run(args: CalibrateArgs, io: &mut Io<'_>) -> Result<(), CliError> {
     Ok(())
 }
 
-/// The calibration a fitted log makes: one model (the spindle's unless `feedback` says feed), no
-/// F/V slope (the estimator then reads the programmed speed; a log of a speed column has no
-/// converter voltage), the median force it was fitted to as the force at full override, and
-/// √2 × the largest RMS current as the largest phase current (the peak of a sine).
+/// The calibration a fitted log makes: the spindle model's unless `feedback` says feed (or only
+/// the feed model was fitted), as the teach-cut fit made it (a log of a speed column has no
+/// converter voltage: the estimator reads the speed itself).
 fn saved_calibration(
     report: &LogCalibration,
-    table: &LogTable,
     feedback: Option<&str>,
 ) -> Result<(Calibration, &'static str), CliError> {
-    let largest = |name: &str| {
-        table.column(name).map_or(0.0, |values| {
-            values
-                .iter()
-                .copied()
-                .filter(|v| v.is_finite())
-                .fold(0.0, f64::max)
-        })
-    };
-    let duration_s = table.column("time_s").map_or(0.0, |t| {
-        let finite: Vec<f64> = t.iter().copied().filter(|v| v.is_finite()).collect();
-        match (finite.first(), finite.last()) {
-            (Some(a), Some(b)) => (b - a).max(0.0),
-            _ => 0.0,
-        }
-    });
-    let want_feed = match feedback.map(str::trim) {
-        None => report.spindle.is_none(),
-        Some("spindle") => false,
-        Some("feed") => true,
+    let feedback = match feedback.map(str::trim) {
+        None if report.spindle.is_none() => Feedback::FeedCurrent,
+        None | Some("spindle") => Feedback::SpindleCurrent,
+        Some("feed") => Feedback::FeedCurrent,
         Some(other) => {
             return Err(CliError::new(format!(
                 "--feedback: expected spindle or feed, got {other:?}"
             )))
         }
     };
-    if want_feed {
-        let model = report.feed.ok_or_else(|| {
-            CliError::new(format!(
-                "--save-calibration: no feed model was fitted ({})",
-                report.feed_error.as_deref().unwrap_or("no reason given")
-            ))
-        })?;
-        Ok((
-            Calibration {
-                estimator: Estimator::Feed { model },
-                // A log's rows carry no air periods this fit saw; the envelope falls back to
-                // its fixed fraction of the target.
-                air_force_estimate_n: f64::NAN,
-                median_force_at_full_override_n: report.median_feed_force_n,
-                regulated_per_resultant: 1.0,
-                periods: model.quality.samples,
-                max_phase_current_a: std::f64::consts::SQRT_2 * largest("feed_current_rms_a"),
-                duration_s,
-            },
-            "feed",
-        ))
-    } else {
-        let model = report.spindle.clone().ok_or_else(|| {
-            CliError::new(format!(
-                "--save-calibration: no spindle model was fitted ({})",
-                report.spindle_error.as_deref().unwrap_or("no reason given")
-            ))
-        })?;
-        let periods = model.rows.iter().map(|r| r.quality.samples).sum();
-        Ok((
-            Calibration {
-                estimator: Estimator::Spindle {
-                    speed: FvSpeedModel {
-                        gear_change_rpm: model.gear_change_rpm,
-                        low_range_v_per_rpm: f64::NAN,
-                        high_range_v_per_rpm: f64::NAN,
-                    },
-                    model,
-                },
-                air_force_estimate_n: f64::NAN,
-                median_force_at_full_override_n: report.median_force_n,
-                regulated_per_resultant: 1.0,
-                periods,
-                max_phase_current_a: std::f64::consts::SQRT_2 * largest("spindle_current_rms_a"),
-                duration_s,
-            },
-            "spindle",
-        ))
-    }
+    let fit = report
+        .fit_of(feedback)
+        .map_err(|e| CliError::new(format!("--save-calibration: {e}")))?;
+    Ok((fit.calibration.clone(), feedback.name()))
 }

@@ -7,11 +7,13 @@ use serde::Serialize;
 
 use super::args::required;
 use super::{write_json, CliError, Io};
-use crate::closed_loop::runner::Feedback;
+use crate::closed_loop::definition::{max_override_pct_of, parse_settings, RunSetting};
 use crate::control::registry::{ControllerConfig, ControllerKind};
+use crate::estimation::estimator::Feedback;
 use crate::log::mapping::{Channel, Mapping};
 use crate::log::replay::{write_replay_csv, ReplayRun, ReplaySettings, Target};
 use crate::log::{ColumnKind, LogBuilder, Role};
+use crate::plant::cnc::OverrideMode;
 use crate::work::Work;
 
 /// The long help of `cutlab log`.
@@ -36,7 +38,7 @@ enum LogCommand {
     /// Replay a controller on the log: the override it would have commanded, what the safety
     /// envelope would have done, the force estimate (open-loop: the log cannot react)
     #[command(long_about = REPLAY_ABOUT)]
-    Replay(ReplayArgs),
+    Replay(Box<ReplayArgs>),
 }
 
 /// The long help of `cutlab log replay`.
@@ -113,15 +115,20 @@ pub struct ReplayArgs {
     #[arg(long = "set", value_name = "K=V")]
     set: Vec<String>,
     /// The force to hold, N (needs --calibration)
-    #[arg(long, value_name = "N", conflicts_with = "target_a")]
-    target_n: Option<f64>,
+    #[arg(
+        long,
+        value_name = "N",
+        conflicts_with = "target_a",
+        allow_hyphen_values = true
+    )]
+    target_n: Option<String>,
     /// The current to hold, A (through the calibration a force; without one the current itself)
-    #[arg(long, value_name = "A")]
-    target_a: Option<f64>,
-    /// The control period, s (default: a whole number of log samples and spindle revolutions,
-    /// at least 40 ms)
-    #[arg(long, value_name = "S")]
-    period_s: Option<f64>,
+    #[arg(long, value_name = "A", allow_hyphen_values = true)]
+    target_a: Option<String>,
+    /// The control period, s (default: whole spindle revolutions, at least 40 ms; rounded to
+    /// whole log samples)
+    #[arg(long, value_name = "S", allow_hyphen_values = true)]
+    period_s: Option<String>,
     /// A saved calibration file (cutlab sim/calibrate --save-calibration) turning current into
     /// force
     #[arg(long, value_name = "FILE")]
@@ -153,7 +160,7 @@ pub fn run(args: LogArgs, io: &mut Io<'_>) -> Result<(), CliError> {
     match args.command {
         Some(LogCommand::Inspect(a)) => inspect(a, io),
         Some(LogCommand::Analyse(a)) => analyse(a, io),
-        Some(LogCommand::Replay(a)) => replay(a, io),
+        Some(LogCommand::Replay(a)) => replay(*a, io),
         None => super::print_help(io, &["log"]),
     }
 }
@@ -608,19 +615,17 @@ fn replay(args: ReplayArgs, io: &mut Io<'_>) -> Result<(), CliError> {
             .set_text(assignment)
             .map_err(|e| CliError::new(format!("--set: {e}")))?;
     }
-    for (option, value) in [
-        ("target-n", args.target_n),
-        ("target-a", args.target_a),
-        ("period-s", args.period_s),
-    ] {
-        if let Some(v) = value {
-            if !(v.is_finite() && v > 0.0) {
-                return Err(CliError::new(format!(
-                    "--{option}: must be a positive number, got {v}"
-                )));
-            }
-        }
-    }
+    // The run's settings, through the run definition's rows as `cutlab sim`'s.
+    let texts: Vec<(RunSetting, &str)> = [
+        (RunSetting::TargetForce, &args.target_n),
+        (RunSetting::TargetCurrent, &args.target_a),
+        (RunSetting::ControlPeriod, &args.period_s),
+    ]
+    .into_iter()
+    .filter_map(|(setting, text)| text.as_deref().map(|t| (setting, t)))
+    .collect();
+    let mut run_settings = parse_settings(&texts, max_override_pct_of(&OverrideMode::default()))
+        .map_err(|errors| CliError::new(errors[0].for_cli()))?;
     let calibration = args
         .calibration
         .as_deref()
@@ -632,22 +637,16 @@ fn replay(args: ReplayArgs, io: &mut Io<'_>) -> Result<(), CliError> {
     }
     let (mapping, feedback) =
         replay_mapping(&args, &log, calibration.as_ref().map(|c| c.feedback()))?;
-    let target = match (args.target_n, args.target_a) {
-        (Some(n), _) => Some(Target::ForceN(n)),
-        (None, Some(a)) => Some(Target::CurrentA(a)),
-        (None, None) => None,
-    };
+    run_settings.feedback = Some(feedback);
     let settings = ReplaySettings {
-        feedback,
-        control_period_s: args.period_s,
+        run: run_settings,
         sample_period_s: args.sample_period_s,
-        target,
         calibration: calibration.as_ref().map(|c| c.calibration.clone()),
         ..ReplaySettings::default()
     };
     let result = ReplayRun::new(&log, &mapping, &settings, &controller)
         .and_then(|run| run.run_to_end())
-        .map_err(|e| CliError::new(format!("{path}: {e}")))?;
+        .map_err(|e| CliError::new(format!("{path}: {}", e.for_cli())))?;
     if let Some(out) = args.csv.as_deref() {
         let mut file = std::fs::File::create(out)
             .map_err(|e| CliError::new(format!("--csv: cannot create {out:?}: {e}")))?;

@@ -24,7 +24,7 @@ use std::io::{BufRead, Write};
 use clap::{CommandFactory, Parser, Subcommand};
 
 use crate::closed_loop::calibration_file::CalibrationFile;
-use crate::closed_loop::runner::Calibration;
+use crate::estimation::estimator::Calibration;
 
 pub use args::CliError;
 

@@ -7,16 +7,15 @@ use serde::Serialize;
 use super::args::required;
 use super::{write_json, CliError, Io};
 use crate::closed_loop::config::RunConfiguration;
+use crate::closed_loop::definition::RunSpec;
 use crate::closed_loop::definition::{parse_texts, preset_controller, RunSetting, SettingKind};
-use crate::closed_loop::lab::{
-    apply_references, teach_cut_only, LabRun, ReferenceSearch, References, RunResult, RunSpec,
-    TeachKey,
-};
+use crate::closed_loop::lab::{teach_cut_only, LabRun, RunResult, TeachKey};
 use crate::closed_loop::metrics::Metrics;
-use crate::closed_loop::runner::{Calibration, Feedback};
+use crate::closed_loop::references::{apply_references, ReferenceSearch, References};
 use crate::closed_loop::summary::{best, METRIC_ROWS};
 use crate::closed_loop::trace::write_csv;
 use crate::control::registry::{ControllerConfig, ControllerKind};
+use crate::estimation::estimator::{Calibration, Feedback};
 use crate::plant::Preset;
 use crate::safety::SafetyEvent;
 use crate::work::Work;

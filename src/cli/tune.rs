@@ -12,10 +12,10 @@ use super::args::required;
 use super::calibrate::{problem_notes, read_log, LogCalibrationArgs};
 use super::sim::controller_with_settings;
 use super::{write_json, CliError, Io};
+use crate::closed_loop::definition::RunSpec;
 use crate::closed_loop::definition::DEFAULT_SEED;
-use crate::closed_loop::lab::RunSpec;
-use crate::closed_loop::runner::Feedback;
 use crate::control::registry::ControllerKind;
+use crate::estimation::estimator::Feedback;
 use crate::plant::Preset;
 use crate::tuning::nelder_mead::NelderMead;
 use crate::tuning::teach_in::{

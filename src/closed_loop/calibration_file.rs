@@ -31,8 +31,8 @@ use std::fmt;
 use serde::{Deserialize, Serialize};
 
 use super::file_format::{check_format, FormatError};
-use super::runner::{Calibration, Estimator, Feedback};
 use crate::estimation::current_force::{FitQuality, Range};
+use crate::estimation::estimator::{Calibration, Estimator, Feedback};
 
 /// The `format` every calibration file carries.
 pub const FORMAT: &str = "cutlab-calibration";
@@ -100,7 +100,8 @@ impl CalibrationFile {
     ///
     /// ```
     /// use cutlab::closed_loop::calibration_file::CalibrationFile;
-    /// use cutlab::closed_loop::lab::{teach_cut_only, RunSpec};
+    /// use cutlab::closed_loop::lab::teach_cut_only;
+    /// use cutlab::closed_loop::definition::RunSpec;
     /// use cutlab::control::registry::ControllerKind;
     /// use cutlab::plant::Preset;
     /// let spec = RunSpec::new(Preset::ManeeratDoc1, ControllerKind::Fixed);
@@ -117,17 +118,6 @@ impl CalibrationFile {
             serde_json::from_str(text).map_err(|e| CalibrationFileError(e.to_string()))?;
         check_calibration(&file.calibration).map_err(CalibrationFileError)?;
         Ok(file)
-    }
-}
-
-impl Estimator {
-    /// The feedback path this estimator reads.
-    pub fn feedback(&self) -> Feedback {
-        match self {
-            Estimator::Spindle { .. } => Feedback::SpindleCurrent,
-            Estimator::Feed { .. } => Feedback::FeedCurrent,
-            Estimator::Dynamometer => Feedback::Dynamometer,
-        }
     }
 }
 
@@ -279,7 +269,8 @@ fn shown(v: f64) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::closed_loop::lab::{teach_cut_only, RunSpec};
+    use crate::closed_loop::definition::RunSpec;
+    use crate::closed_loop::lab::teach_cut_only;
     use crate::control::registry::ControllerKind;
     use crate::plant::Preset;
 

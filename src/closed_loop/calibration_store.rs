@@ -52,7 +52,8 @@ pub fn read_store(text: Option<&str>) -> (Vec<CalibrationFile>, Vec<String>) {
 /// ```
 /// use cutlab::closed_loop::calibration_store::{read_store, with_saved};
 /// use cutlab::closed_loop::calibration_file::CalibrationFile;
-/// use cutlab::closed_loop::lab::{teach_cut_only, RunSpec};
+/// use cutlab::closed_loop::lab::teach_cut_only;
+/// use cutlab::closed_loop::definition::RunSpec;
 /// use cutlab::control::registry::ControllerKind;
 /// use cutlab::plant::Preset;
 /// let (_, c) = teach_cut_only(&RunSpec::new(Preset::ManeeratDoc1, ControllerKind::Fixed)).unwrap();

@@ -23,8 +23,8 @@ use std::fmt;
 
 use serde::{Deserialize, Serialize};
 
+use super::definition::RunSpec;
 use super::file_format::check_format;
-use super::lab::RunSpec;
 
 /// The `format` every saved configuration carries.
 pub const FORMAT: &str = "cutlab-runs";
@@ -80,7 +80,7 @@ impl RunConfiguration {
     ///
     /// ```
     /// use cutlab::closed_loop::config::RunConfiguration;
-    /// use cutlab::closed_loop::lab::RunSpec;
+    /// use cutlab::closed_loop::definition::RunSpec;
     /// use cutlab::control::registry::ControllerKind;
     /// use cutlab::plant::Preset;
     /// let saved = RunConfiguration::new(vec![RunSpec::new(Preset::ManeeratDoc1, ControllerKind::Pi)], None);

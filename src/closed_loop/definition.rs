@@ -15,16 +15,127 @@
 
 use std::fmt;
 
-use super::lab::RunSpec;
-use super::runner::Feedback;
+use serde::{Deserialize, Serialize};
+
 use crate::control::registry::{ControllerConfig, ControllerKind};
+use crate::estimation::estimator::Feedback;
 use crate::input::{parse_count, parse_number, parse_seed, readable};
 use crate::plant::cnc::{OverrideMode, MAX_OVERRIDE_PCT};
 use crate::plant::materials::Material;
 use crate::plant::mechanics::MAX_TEETH;
-use crate::plant::presets::PlantKind;
+use crate::plant::presets::{PlantEdits, PlantKind};
 use crate::plant::Preset;
 use crate::safety::EnvelopeConfig;
+
+/// Everything that defines a run; the same spec and seed give the same trace. Its JSON form is
+/// what a saved configuration holds ([`super::config`]). Read from JSON, a controller's missing
+/// parameters take the preset's values ([`preset_controller`], as a run made by a form or the
+/// command line does), and every setting is checked against the table below: a spec that exists
+/// is one the form and the command line would accept.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(try_from = "RunSpecText")]
+pub struct RunSpec {
+    /// The experiment.
+    pub preset: Preset,
+    /// The controller and its parameters.
+    pub controller: ControllerConfig,
+    /// Seed of every noise source.
+    pub seed: u64,
+    /// Overrides of the preset's default settings.
+    #[serde(default)]
+    pub settings: SettingsOverrides,
+    /// Changes to the preset's machine and cut (mill presets).
+    #[serde(default)]
+    pub plant: PlantEdits,
+}
+
+/// Settings a user may change; `None` keeps the preset's default (and is left out of the
+/// serialised form).
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct SettingsOverrides {
+    /// Which current measures the force.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub feedback: Option<Feedback>,
+    /// Target force.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub target_force_n: Option<f64>,
+    /// Target current (through the calibrated model), when no force is given.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub target_current_a: Option<f64>,
+    /// Control period.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub control_period_s: Option<f64>,
+    /// Spindle current low-pass cut-off.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub spindle_lowpass_hz: Option<f64>,
+    /// Feed current low-pass cut-off.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub feed_lowpass_hz: Option<f64>,
+    /// Order of the low-passes.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub lowpass_order: Option<usize>,
+    /// Lowest override.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub min_override_pct: Option<f64>,
+    /// Highest override.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub max_override_pct: Option<f64>,
+    /// Override rate limit.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub max_rate_pct_per_s: Option<f64>,
+    /// Override held until the envelope arms.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub arming_override_pct: Option<f64>,
+}
+
+/// A run spec as a saved configuration writes it, before its controller takes the preset's
+/// defaults and its settings are checked.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RunSpecText {
+    preset: Preset,
+    controller: crate::control::registry::ControllerText,
+    seed: u64,
+    #[serde(default)]
+    settings: SettingsOverrides,
+    #[serde(default)]
+    plant: PlantEdits,
+}
+
+impl TryFrom<RunSpecText> for RunSpec {
+    type Error = String;
+
+    fn try_from(text: RunSpecText) -> Result<Self, String> {
+        let preset = text.preset;
+        let controller = text
+            .controller
+            .resolve(|kind| preset_controller(preset, kind))
+            .map_err(|e| format!("controller: {e}"))?;
+        let spec = RunSpec {
+            preset,
+            controller,
+            seed: text.seed,
+            settings: text.settings,
+            plant: text.plant,
+        };
+        check_spec(&spec).map_err(|e| e.to_string())?;
+        Ok(spec)
+    }
+}
+
+impl RunSpec {
+    /// A run of `preset` with `controller` at its defaults and seed 1.
+    pub fn new(preset: Preset, controller: ControllerKind) -> Self {
+        Self {
+            preset,
+            controller: preset_controller(preset, controller),
+            seed: 1,
+            settings: SettingsOverrides::default(),
+            plant: PlantEdits::default(),
+        }
+    }
+}
 
 /// Which group of the form a setting belongs to.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -77,6 +188,24 @@ pub enum SettingValue {
     Material(Material),
 }
 
+impl SettingValue {
+    /// The number, if this is one.
+    pub fn number(self) -> Option<f64> {
+        match self {
+            SettingValue::Number(v) => Some(v),
+            _ => None,
+        }
+    }
+
+    /// The whole number, if this is one.
+    pub fn count(self) -> Option<usize> {
+        match self {
+            SettingValue::Count(n) => Some(n),
+            _ => None,
+        }
+    }
+}
+
 /// Every setting of a run.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum RunSetting {
@@ -86,6 +215,8 @@ pub enum RunSetting {
     Feedback,
     /// The force to hold.
     TargetForce,
+    /// The force to hold, stated as a current.
+    TargetCurrent,
     /// The lowest override the envelope allows.
     MinOverride,
     /// The highest override the envelope allows.
@@ -145,9 +276,10 @@ const fn number(min: f64, max: f64) -> SettingKind {
 
 impl RunSetting {
     /// Every setting, in the order the form shows them.
-    pub const ALL: [RunSetting; 18] = [
+    pub const ALL: [RunSetting; 19] = [
         RunSetting::Seed,
         RunSetting::TargetForce,
+        RunSetting::TargetCurrent,
         RunSetting::Feedback,
         RunSetting::MaxOverride,
         RunSetting::MinOverride,
@@ -189,6 +321,18 @@ impl RunSetting {
                 number(1.0, 100_000.0),
                 Scenario,
                 "the force to hold (default: the preset's)",
+            ),
+            RunSetting::TargetCurrent => (
+                "target_current_a",
+                "target_a",
+                "target-a",
+                "Target current (blank: none)",
+                "A",
+                number(0.001, 10_000.0),
+                Scenario,
+                "the force to hold, stated as the current the calibrated model gives at the \
+                 program's speed and feed (as papers 000, 002 and 003 state their targets); a \
+                 target force, if given, wins",
             ),
             RunSetting::Feedback => (
                 "feedback",
@@ -386,11 +530,17 @@ impl RunSetting {
     /// The accepted numeric range for `preset`: the static range, narrowed where the preset's
     /// machine cannot follow (the highest override a dial or override input applies).
     pub fn range(self, preset: Preset) -> Option<(f64, f64)> {
+        self.range_on(machine_max_override_pct(preset))
+    }
+
+    /// The accepted numeric range on a machine whose highest override is
+    /// `machine_max_override_pct` (a log's, or a preset's: [`RunSetting::range`]).
+    pub fn range_on(self, machine_max_override_pct: f64) -> Option<(f64, f64)> {
         match self.spec().kind {
             SettingKind::Number { min, max }
                 if matches!(self, RunSetting::MaxOverride | RunSetting::ArmingOverride) =>
             {
-                Some((min, max.min(machine_max_override_pct(preset))))
+                Some((min, max.min(machine_max_override_pct)))
             }
             SettingKind::Number { min, max } => Some((min, max)),
             SettingKind::Count { min, max } => Some((min as f64, max as f64)),
@@ -412,6 +562,15 @@ impl RunSetting {
     /// assert_eq!(e.problem.to_string(), "5 s is outside 0.001–2 s");
     /// ```
     pub fn parse(self, text: &str, preset: Preset) -> Result<Option<SettingValue>, SettingError> {
+        self.parse_on(text, machine_max_override_pct(preset))
+    }
+
+    /// [`RunSetting::parse`] on a machine whose highest override is `machine_max_override_pct`.
+    pub fn parse_on(
+        self,
+        text: &str,
+        machine_max_override_pct: f64,
+    ) -> Result<Option<SettingValue>, SettingError> {
         let text = text.trim();
         if text.is_empty() {
             return Ok(None);
@@ -450,13 +609,22 @@ impl RunSetting {
                 })?)
             }
         };
-        self.check(value, preset)?;
+        self.check_on(value, machine_max_override_pct)?;
         Ok(Some(value))
     }
 
     /// Checks a value against the range for `preset`.
     pub fn check(self, value: SettingValue, preset: Preset) -> Result<(), SettingError> {
-        let Some((min, max)) = self.range(preset) else {
+        self.check_on(value, machine_max_override_pct(preset))
+    }
+
+    /// [`RunSetting::check`] on a machine whose highest override is `machine_max_override_pct`.
+    pub fn check_on(
+        self,
+        value: SettingValue,
+        machine_max_override_pct: f64,
+    ) -> Result<(), SettingError> {
+        let Some((min, max)) = self.range_on(machine_max_override_pct) else {
             return Ok(());
         };
         let v = match value {
@@ -507,6 +675,7 @@ impl RunSetting {
             RunSetting::Seed => Some(SettingValue::Seed(spec.seed)),
             RunSetting::Feedback => s.feedback.map(SettingValue::Feedback),
             RunSetting::TargetForce => number(s.target_force_n),
+            RunSetting::TargetCurrent => number(s.target_current_a),
             RunSetting::MinOverride => number(s.min_override_pct),
             RunSetting::MaxOverride => number(s.max_override_pct),
             RunSetting::MaxRate => number(s.max_rate_pct_per_s),
@@ -531,15 +700,11 @@ impl RunSetting {
     /// Never for values made by [`RunSetting::parse`] for this setting; a value of another kind
     /// is ignored (a bug, caught by the tests that cover every setting).
     pub fn apply(self, spec: &mut RunSpec, value: Option<SettingValue>) {
-        let number = match value {
-            Some(SettingValue::Number(v)) => Some(v),
-            _ => None,
-        };
-        let count = match value {
-            Some(SettingValue::Count(n)) => Some(n),
-            _ => None,
-        };
-        let s = &mut spec.settings;
+        let number = value.and_then(SettingValue::number);
+        let count = value.and_then(SettingValue::count);
+        if self.apply_to_settings(&mut spec.settings, value) {
+            return;
+        }
         let p = &mut spec.plant;
         match self {
             RunSetting::Seed => {
@@ -548,21 +713,6 @@ impl RunSetting {
                     _ => DEFAULT_SEED,
                 }
             }
-            RunSetting::Feedback => {
-                s.feedback = match value {
-                    Some(SettingValue::Feedback(f)) => Some(f),
-                    _ => None,
-                }
-            }
-            RunSetting::TargetForce => s.target_force_n = number,
-            RunSetting::MinOverride => s.min_override_pct = number,
-            RunSetting::MaxOverride => s.max_override_pct = number,
-            RunSetting::MaxRate => s.max_rate_pct_per_s = number,
-            RunSetting::ArmingOverride => s.arming_override_pct = number,
-            RunSetting::ControlPeriod => s.control_period_s = number,
-            RunSetting::FilterOrder => s.lowpass_order = count,
-            RunSetting::SpindleCutoff => s.spindle_lowpass_hz = number,
-            RunSetting::FeedCutoff => s.feed_lowpass_hz = number,
             RunSetting::Material => {
                 p.material = match value {
                     Some(SettingValue::Material(m)) => Some(m),
@@ -576,7 +726,84 @@ impl RunSetting {
             RunSetting::ToolDiameter => p.tool_diameter_mm = number,
             RunSetting::Teeth => p.teeth = count.map(|n| n as u32),
             RunSetting::SensorNoise => p.sensor_noise_a = number,
+            // Settings rows: applied above.
+            _ => {}
         }
+    }
+
+    /// Puts a checked value into `settings` (`None` restores the default) if this is one of the
+    /// run's settings rather than the seed or a machine edit; says whether it was.
+    pub fn apply_to_settings(
+        self,
+        settings: &mut SettingsOverrides,
+        value: Option<SettingValue>,
+    ) -> bool {
+        let number = value.and_then(SettingValue::number);
+        let count = value.and_then(SettingValue::count);
+        let s = settings;
+        match self {
+            RunSetting::Feedback => {
+                s.feedback = match value {
+                    Some(SettingValue::Feedback(f)) => Some(f),
+                    _ => None,
+                }
+            }
+            RunSetting::TargetForce => s.target_force_n = number,
+            RunSetting::TargetCurrent => s.target_current_a = number,
+            RunSetting::MinOverride => s.min_override_pct = number,
+            RunSetting::MaxOverride => s.max_override_pct = number,
+            RunSetting::MaxRate => s.max_rate_pct_per_s = number,
+            RunSetting::ArmingOverride => s.arming_override_pct = number,
+            RunSetting::ControlPeriod => s.control_period_s = number,
+            RunSetting::FilterOrder => s.lowpass_order = count,
+            RunSetting::SpindleCutoff => s.spindle_lowpass_hz = number,
+            RunSetting::FeedCutoff => s.feed_lowpass_hz = number,
+            RunSetting::Seed
+            | RunSetting::Material
+            | RunSetting::SpindleSpeed
+            | RunSetting::ProgrammedFeed
+            | RunSetting::DepthScale
+            | RunSetting::ToolDiameter
+            | RunSetting::Teeth
+            | RunSetting::SensorNoise => return false,
+        }
+        true
+    }
+}
+
+/// Parses the typed text of run settings (no seed, no machine edits) for a machine whose highest
+/// override is `machine_max_override_pct`: what a replay of a log takes, through the same rows as a
+/// lab run. Every setting that does not parse, is out of range or is not a run setting is
+/// reported.
+///
+/// ```
+/// use cutlab::closed_loop::definition::{parse_settings, RunSetting};
+/// let texts = [(RunSetting::TargetCurrent, "12,5"), (RunSetting::ControlPeriod, "0.1")];
+/// let s = parse_settings(&texts, 150.0).unwrap();
+/// assert_eq!((s.target_current_a, s.control_period_s), (Some(12.5), Some(0.1)));
+/// let e = parse_settings(&[(RunSetting::ControlPeriod, "1000")], 150.0).unwrap_err();
+/// assert_eq!(e[0].problem.to_string(), "1000 s is outside 0.001–2 s");
+/// ```
+pub fn parse_settings<T: AsRef<str>>(
+    texts: &[(RunSetting, T)],
+    machine_max_override_pct: f64,
+) -> Result<SettingsOverrides, Vec<SettingError>> {
+    let mut settings = SettingsOverrides::default();
+    let mut errors = Vec::new();
+    for (setting, text) in texts {
+        match setting.parse_on(text.as_ref(), machine_max_override_pct) {
+            Ok(value) if setting.apply_to_settings(&mut settings, value) => {}
+            Ok(_) => errors.push(SettingError {
+                setting: *setting,
+                problem: Problem::Requires("not a setting of a replay: it changes the machine"),
+            }),
+            Err(e) => errors.push(e),
+        }
+    }
+    if errors.is_empty() {
+        Ok(settings)
+    } else {
+        Err(errors)
     }
 }
 
@@ -614,7 +841,7 @@ pub fn parse_texts<T: AsRef<str>>(
         }
     }
     if errors.is_empty() {
-        check_arming_in_band(&spec).map_err(|e| vec![e])?;
+        check_band(&spec.settings, default_override_band_pct(preset)).map_err(|e| vec![e])?;
         Ok(spec)
     } else {
         Err(errors)
@@ -675,7 +902,12 @@ pub const DEFAULT_SEED: u64 = 1;
 /// The highest override `preset`'s machine applies: the top of its dial, or the 255 % of an
 /// override input.
 pub fn machine_max_override_pct(preset: Preset) -> f64 {
-    match preset.override_mode() {
+    max_override_pct_of(&preset.override_mode())
+}
+
+/// The highest override a machine whose override input is `mode` applies.
+pub fn max_override_pct_of(mode: &OverrideMode) -> f64 {
+    match mode {
         OverrideMode::Dial(table) => table.positions().into_iter().fold(0.0, f64::max),
         OverrideMode::WholePercent | OverrideMode::Continuous => MAX_OVERRIDE_PCT,
     }
@@ -686,8 +918,14 @@ pub fn machine_max_override_pct(preset: Preset) -> f64 {
 /// experiments — the 1 mm entry, the aluminium section, the taper's light corner — need the room
 /// above 150 %).
 pub fn default_override_band_pct(preset: Preset) -> (f64, f64) {
-    let defaults = EnvelopeConfig::for_target(1.0);
-    let max = match preset.override_mode() {
+    default_band_pct_of(&preset.override_mode())
+}
+
+/// The default override band on a machine whose override input is `mode`
+/// ([`default_override_band_pct`]).
+pub fn default_band_pct_of(mode: &OverrideMode) -> (f64, f64) {
+    let defaults = EnvelopeConfig::default_for_dial();
+    let max = match mode {
         OverrideMode::WholePercent => MAX_OVERRIDE_PCT,
         _ => defaults.max_override_pct,
     };
@@ -702,28 +940,48 @@ pub fn check_spec(spec: &RunSpec) -> Result<(), SettingError> {
             setting.check(value, spec.preset)?;
         }
     }
-    check_arming_in_band(spec)
+    check_band(&spec.settings, default_override_band_pct(spec.preset)).map(|_| ())
 }
 
-/// The override held before arming is one the run allows: refused, not clamped, when outside the
-/// lowest–highest band (the run's own, or the preset's where it leaves them).
-fn check_arming_in_band(spec: &RunSpec) -> Result<(), SettingError> {
-    let s = &spec.settings;
-    let Some(value) = s.arming_override_pct else {
-        return Ok(());
-    };
-    let (default_min, default_max) = default_override_band_pct(spec.preset);
-    let (min, max) = (
-        s.min_override_pct.unwrap_or(default_min),
-        s.max_override_pct.unwrap_or(default_max),
-    );
-    if value >= min && value <= max {
-        return Ok(());
+/// The override band `settings` ask for, each end the machine's default (`default_band_pct`)
+/// where they leave it out: refused when its lowest end lies above its highest, or when the
+/// override held before arming lies outside it (refused, not clamped or swapped: either would
+/// run something other than what was asked).
+///
+/// ```
+/// use cutlab::closed_loop::definition::{check_band, SettingsOverrides};
+/// let mut s = SettingsOverrides::default();
+/// assert_eq!(check_band(&s, (10.0, 150.0)), Ok((10.0, 150.0)));
+/// s.min_override_pct = Some(200.0);
+/// let e = check_band(&s, (10.0, 150.0)).unwrap_err();
+/// assert_eq!(e.to_string(), "min_override_pct: the lowest override 200 % is above the highest, 150 %");
+/// ```
+pub fn check_band(
+    settings: &SettingsOverrides,
+    default_band_pct: (f64, f64),
+) -> Result<(f64, f64), SettingError> {
+    let (default_min, default_max) = default_band_pct;
+    let min = settings.min_override_pct.unwrap_or(default_min);
+    let max = settings.max_override_pct.unwrap_or(default_max);
+    if min > max {
+        // Name the setting that was given: the other end is the machine's default.
+        let setting = if settings.min_override_pct.is_some() {
+            RunSetting::MinOverride
+        } else {
+            RunSetting::MaxOverride
+        };
+        return Err(SettingError {
+            setting,
+            problem: Problem::BandInverted { min, max },
+        });
     }
-    Err(SettingError {
-        setting: RunSetting::ArmingOverride,
-        problem: Problem::OutsideBand { value, min, max },
-    })
+    match settings.arming_override_pct {
+        Some(value) if !(value >= min && value <= max) => Err(SettingError {
+            setting: RunSetting::ArmingOverride,
+            problem: Problem::OutsideBand { value, min, max },
+        }),
+        _ => Ok((min, max)),
+    }
 }
 
 /// What is wrong with a value.
@@ -763,6 +1021,22 @@ pub enum Problem {
         max: f64,
         /// Which override ("highest override").
         what: &'static str,
+    },
+    /// Needed and not given, or given where it cannot be used; the text says why.
+    Requires(&'static str),
+    /// The lowest override above the highest.
+    BandInverted {
+        /// The run's lowest override.
+        min: f64,
+        /// The run's highest override.
+        max: f64,
+    },
+    /// A control period that is not between one sample and 10⁷ samples of the machine.
+    PeriodInSamples {
+        /// The period asked for.
+        period_s: f64,
+        /// The machine's sample period.
+        sample_period_s: f64,
     },
     /// An override outside the run's own lowest–highest band.
     OutsideBand {
@@ -810,6 +1084,22 @@ impl fmt::Display for Problem {
             Problem::AboveMachine { value, max, what } => write!(
                 f,
                 "{what} {value} % is more than this machine applies ({max} %)"
+            ),
+            Problem::Requires(why) => f.write_str(why),
+            Problem::BandInverted { min, max } => write!(
+                f,
+                "the lowest override {} % is above the highest, {} %",
+                readable(*min),
+                readable(*max)
+            ),
+            Problem::PeriodInSamples {
+                period_s,
+                sample_period_s,
+            } => write!(
+                f,
+                "{} s is shorter than one sample of the machine ({} s) or longer than 10⁷ samples",
+                readable(*period_s),
+                readable(*sample_period_s)
             ),
             Problem::OutsideBand { value, min, max } => write!(
                 f,

@@ -3,8 +3,9 @@
 //! an edit, a new seed or a changed model could silently contradict. The Compare page offers each
 //! one click away; `tests/closed_loop.rs` holds the verdicts docs/papers.md reports.
 
+use super::definition::RunSpec;
 use super::definition::{parse_texts, preset_controller, RunSetting, SettingError};
-use super::lab::{RunResult, RunSpec};
+use super::lab::RunResult;
 use super::summary::format_metric;
 use crate::control::registry::ControllerKind;
 use crate::plant::Preset;

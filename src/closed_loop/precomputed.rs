@@ -11,9 +11,11 @@
 //! key and computes as usual.
 
 use super::calibration_file::CalibrationFile;
-use super::lab::{References, RunSpec, ScenarioKey, TeachKey};
-use super::runner::Calibration;
+use super::definition::RunSpec;
+use super::lab::TeachKey;
+use super::references::{References, ScenarioKey};
 use crate::control::registry::ControllerKind;
+use crate::estimation::estimator::Calibration;
 use crate::plant::Preset;
 
 /// kim-step-doc's teach cut with its default settings, as `cutlab sim --scenario kim-step-doc
@@ -28,7 +30,8 @@ const KIM_STEP_DOC_REFERENCES: &str = include_str!("../../www/data/kim-step-doc-
 /// read (it cannot, short of a broken build) is left out: those runs teach as usual.
 ///
 /// ```
-/// use cutlab::closed_loop::lab::{RunSpec, TeachKey};
+/// use cutlab::closed_loop::definition::RunSpec;
+/// use cutlab::closed_loop::lab::TeachKey;
 /// use cutlab::closed_loop::precomputed::shipped_calibrations;
 /// use cutlab::control::registry::ControllerKind;
 /// use cutlab::plant::Preset;
@@ -50,7 +53,8 @@ pub fn shipped_calibrations() -> Vec<(TeachKey, Calibration)> {
 /// The shipped fixed-feed references with the key of the scenario each one is of.
 ///
 /// ```
-/// use cutlab::closed_loop::lab::{RunSpec, ScenarioKey};
+/// use cutlab::closed_loop::definition::RunSpec;
+/// use cutlab::closed_loop::references::ScenarioKey;
 /// use cutlab::closed_loop::precomputed::shipped_references;
 /// use cutlab::control::registry::ControllerKind;
 /// use cutlab::plant::Preset;

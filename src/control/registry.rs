@@ -285,7 +285,7 @@ impl std::error::Error for ParamError {}
 
 /// A controller choice with its parameter values, each inside its range.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(try_from = "ControllerConfigText", into = "ControllerConfigText")]
+#[serde(try_from = "ControllerText", into = "ControllerText")]
 pub struct ControllerConfig {
     kind: ControllerKind,
     values: Vec<f64>,
@@ -294,34 +294,51 @@ pub struct ControllerConfig {
 }
 
 /// The serialised form: `{"kind": "pi", "params": {"kp": 0.3, ...}}`; missing parameters take
-/// their defaults, unknown or out-of-range ones are errors.
+/// their defaults, unknown or out-of-range ones are errors. Whose defaults depends on the reader:
+/// a controller on its own takes its kind's ([`ControllerConfig::new`]), a run in a saved
+/// configuration its preset's (`closed_loop::definition::preset_controller`), through
+/// [`ControllerText::resolve`].
 #[derive(Debug, Clone, Serialize, Deserialize)]
-struct ControllerConfigText {
-    kind: ControllerKind,
+pub struct ControllerText {
+    /// The controller.
+    pub kind: ControllerKind,
+    /// Parameters by key.
     #[serde(default)]
-    params: std::collections::BTreeMap<String, f64>,
+    pub params: std::collections::BTreeMap<String, f64>,
+    /// A user's rule table (fuzzy controllers).
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    rule_table: Option<RuleTable>,
+    pub rule_table: Option<RuleTable>,
 }
 
-impl TryFrom<ControllerConfigText> for ControllerConfig {
-    type Error = ParamError;
-
-    fn try_from(text: ControllerConfigText) -> Result<Self, ParamError> {
-        let mut config = ControllerConfig::new(text.kind);
-        for (key, value) in text.params {
+impl ControllerText {
+    /// The controller this text describes: `defaults` for its kind, with the parameters and the
+    /// rule table it gives.
+    pub fn resolve(
+        self,
+        defaults: impl FnOnce(ControllerKind) -> ControllerConfig,
+    ) -> Result<ControllerConfig, ParamError> {
+        let mut config = defaults(self.kind);
+        for (key, value) in self.params {
             config.set(&key, value)?;
         }
-        if let Some(table) = text.rule_table {
+        if let Some(table) = self.rule_table {
             config.set_rule_table(table)?;
         }
         Ok(config)
     }
 }
 
-impl From<ControllerConfig> for ControllerConfigText {
+impl TryFrom<ControllerText> for ControllerConfig {
+    type Error = ParamError;
+
+    fn try_from(text: ControllerText) -> Result<Self, ParamError> {
+        text.resolve(ControllerConfig::new)
+    }
+}
+
+impl From<ControllerConfig> for ControllerText {
     fn from(config: ControllerConfig) -> Self {
-        ControllerConfigText {
+        ControllerText {
             kind: config.kind,
             params: config
                 .kind

@@ -22,8 +22,8 @@ use serde::{Deserialize, Serialize};
 
 use super::null_as_nan;
 
-use super::least_squares::{fit, Fit, FitError};
 use super::speed::in_high_speed_range;
+use crate::math::least_squares::{fit, Fit, FitError};
 
 /// A force estimate and whether its inputs lie inside the calibrated range.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]

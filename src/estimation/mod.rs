@@ -3,16 +3,16 @@
 //! | module | what it holds |
 //! |---|---|
 //! | [`current_force`] | paper 000's feed-current model and paper 003's spindle-current model, their calibration from a teach cut, and range checks |
+//! | [`estimator`] | [`Feedback`](estimator::Feedback) (which current measures the force), the calibrated [`Estimator`](estimator::Estimator) a loop calls every period, and the [`Calibration`](estimator::Calibration) a teach cut makes |
 //! | [`cut_forces`] | a logged cut's force from its feed, speed, depth and width (mechanistic model), for calibration without a dynamometer |
-//! | [`teach_log`] | calibration from a logged teach cut (CSV text → both models and their fit quality), shared by `cutlab calibrate` and the browser |
+//! | [`teach_fit`] | the one teach-cut fit: control periods at known loads → a calibration, with the periods it used and why it left the others out |
 //! | [`speed`] | spindle speed from the F/V converter voltage, per gear range |
-//! | [`least_squares`] | the QR least-squares fit behind every calibration |
 
 pub mod current_force;
 pub mod cut_forces;
-pub mod least_squares;
+pub mod estimator;
 pub mod speed;
-pub mod teach_log;
+pub mod teach_fit;
 
 /// Reads a number that JSON wrote as `null` because it was not finite (serde_json writes NaN and
 /// ±∞ as null) back as NaN, so a saved model round-trips; the reader of a saved calibration then

@@ -10,6 +10,9 @@ use serde::{Deserialize, Serialize};
 
 use super::null_as_nan;
 
+/// The spindle gear change of paper 003's machining centre.
+pub const GEAR_CHANGE_RPM: f64 = 900.0;
+
 /// Speed identification from the F/V voltage, one slope per gear range.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]

@@ -44,14 +44,19 @@
 use std::fmt::Write as _;
 
 use super::recording::LiveRow;
+use crate::closed_loop::definition::RunSpec;
+use crate::closed_loop::error::LoopError;
+use crate::closed_loop::feedback_loop::FeedbackLoop;
 use crate::closed_loop::lab::{
-    cut_model_teach_force, default_settings, feedback_loop, metrics_config, RunResult, RunSpec,
+    closed_loop_of, cut_model_teach_force, metrics_config, plan_on, RunResult,
 };
 use crate::closed_loop::metrics::compute;
-use crate::closed_loop::runner::{
-    Calibration, Feedback, FeedbackLoop, LoopError, LoopSample, LoopSettings, SampleLoop, TeachCut,
-    TeachForce, TEACH_OVERRIDES_PCT, TEACH_STEP_S,
+use crate::closed_loop::sample_loop::{LoopSample, SampleLoop};
+use crate::closed_loop::settings::ChainSettings;
+use crate::closed_loop::teach_cut::{
+    TeachCut, TeachForce, TeachSchedule, TEACH_OVERRIDES_PCT, TEACH_STEP_S,
 };
+use crate::estimation::estimator::{Calibration, Feedback};
 use crate::machine::OverrideCommand;
 use crate::protocol::frame::{sample_flag, Ack, Capabilities, FaultKind, FrameType, VERSION_MAJOR};
 use crate::protocol::host::{DeviceSummary, HostSession, KeepUp, LinkSample, LinkStats};
@@ -186,16 +191,16 @@ pub struct TaughtCalibration {
     pub calibration: Calibration,
     /// The settings of the teach cut when it was made over this link: a run must measure the
     /// force the same way. `None` for a saved calibration, whose file keeps only the model.
-    pub settings: Option<LoopSettings>,
+    pub settings: Option<ChainSettings>,
     /// Where it came from.
     pub source: String,
 }
 
 impl TaughtCalibration {
-    /// Why a run with `settings` cannot use this calibration, if it cannot: the feedback path
-    /// must be the calibration's, and after a teach cut over this link the signal chain too (the
-    /// fitted line holds for those only).
-    pub fn mismatch(&self, settings: &LoopSettings) -> Option<String> {
+    /// Why a run with the signal chain `settings` cannot use this calibration, if it cannot: the
+    /// feedback path must be the calibration's, and after a teach cut over this link the signal
+    /// chain too (the fitted line holds for those only).
+    pub fn mismatch(&self, settings: &ChainSettings) -> Option<String> {
         let feedback = self.calibration.estimator.feedback();
         if feedback != settings.feedback {
             return Some(
@@ -254,7 +259,7 @@ pub struct ArmLimits {
 
 struct Teaching {
     teach: TeachCut,
-    settings: LoopSettings,
+    settings: ChainSettings,
 }
 
 struct Running {
@@ -614,7 +619,9 @@ impl HardwareSession {
     pub fn teach_limits(&self, spec: &RunSpec) -> Result<ArmLimits, String> {
         let caps = self.ready_to_arm()?;
         let force = teach_force(&caps, spec)?;
-        let settings = default_settings(spec).map_err(|e| e.to_string())?;
+        let settings = plan_on(spec, f64::from(caps.sample_rate_hz))
+            .map_err(|e| e.to_string())?
+            .chain;
         let schedule = TEACH_OVERRIDES_PCT
             .iter()
             .map(|p| format!("{p:.0} %"))
@@ -636,8 +643,9 @@ impl HardwareSession {
                     depth_mm, width_mm, ..
                 } => format!(
                     "The force the current is fitted against: the model of the preset's cut \
-                     ({depth_mm} mm deep, {width_mm} mm wide, from each period's feed and \
-                     speed): the machine must cut exactly that."
+                     ({} deep, {width_mm} mm wide, from each period's feed and speed): the \
+                     machine must cut exactly that.",
+                    depth_mm.map_or("the machine's depth".to_string(), |d| format!("{d} mm"))
                 ),
                 TeachForce::Dynamometer => {
                     "The force the current is fitted against: the dynamometer's.".to_string()
@@ -739,18 +747,14 @@ impl HardwareSession {
         let Some(taught) = &self.calibration else {
             return Err("no calibration yet: make a teach cut, or load a saved calibration".into());
         };
-        let settings = default_settings(spec).map_err(|e| e.to_string())?;
-        if let Some(why) = taught.mismatch(&settings) {
+        let sample_rate_hz = f64::from(caps.sample_rate_hz);
+        let plan = plan_on(spec, sample_rate_hz).map_err(|e| e.to_string())?;
+        if let Some(why) = taught.mismatch(&plan.chain) {
             return Err(why);
         }
         self.check_safe_override(caps)?;
-        let run = feedback_loop(
-            spec,
-            &settings,
-            &taught.calibration,
-            f64::from(caps.sample_rate_hz),
-        )
-        .map_err(|e| e.to_string())?;
+        let run = closed_loop_of(spec, &plan, &taught.calibration, sample_rate_hz)
+            .map_err(|e| e.to_string())?;
         Ok((run, taught.calibration.clone()))
     }
 
@@ -759,13 +763,15 @@ impl HardwareSession {
         self.teach_limits(spec)?;
         let caps = self.ready_to_arm()?;
         self.check_safe_override(&caps)?;
-        let settings = default_settings(spec).map_err(|e| e.to_string())?;
+        let plan = plan_on(spec, f64::from(caps.sample_rate_hz)).map_err(|e| e.to_string())?;
         let teach = TeachCut::new(
             f64::from(caps.sample_rate_hz),
-            &settings,
+            &plan,
             teach_force(&caps, spec)?,
+            TeachSchedule::Overrides,
         )
         .map_err(|e| e.to_string())?;
+        let settings = plan.chain;
         self.activity = Activity::Teach(Box::new(Teaching { teach, settings }));
         self.arm_device(
             "teach cut armed: the host runs the teach-cut overrides",

@@ -12,8 +12,11 @@
 //! and kept as a gap (NaN); the rest of the file loads. docs/logs.md describes the rules.
 
 pub mod analysis;
+pub mod calibration;
 pub mod csv;
+pub mod machine;
 pub mod mapping;
+pub mod period_log;
 pub mod replay;
 
 use serde::Serialize;
@@ -563,20 +566,12 @@ impl Sink {
             }
             column.unit = Some(if scale == 1e-3 { "ms" } else { "µs" }.into());
         }
-        // The median step, found in linear time (a million-row log would spend a tenth of its
-        // load sorting otherwise).
-        let mut steps: Vec<f64> = column
-            .values
-            .windows(2)
-            .map(|w| w[1] - w[0])
-            .filter(|d| d.is_finite())
-            .collect();
-        if steps.is_empty() {
+        // The median step (in linear time: a million-row log would spend a tenth of its load
+        // sorting otherwise).
+        let median = crate::signal::stats::median(column.values.windows(2).map(|w| w[1] - w[0]));
+        if median.is_nan() {
             return None;
         }
-        let middle = steps.len() / 2;
-        let median = *steps.select_nth_unstable_by(middle, f64::total_cmp).1;
-        drop(steps);
         // Nothing says the unit and the usual step is a second or more: no machine log samples
         // that slowly (the slowest ones log at 10 Hz), but a DAQ's counter of milliseconds does.
         let mut median = median;

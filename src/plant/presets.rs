@@ -739,6 +739,24 @@ impl Preset {
         })
     }
 
+    /// The rate the preset's machine samples at, Hz.
+    ///
+    /// ```
+    /// use cutlab::machine::Machine;
+    /// use cutlab::plant::Preset;
+    /// for preset in Preset::ALL {
+    ///     assert_eq!(preset.sample_rate_hz(), preset.machine(1).unwrap().sample_rate_hz());
+    /// }
+    /// ```
+    pub fn sample_rate_hz(self) -> f64 {
+        match (self.bench_config(0), self.bond_graph_run(0)) {
+            (Some(bench), _) => bench.sample_rate_hz,
+            (None, Some(run)) => run.sample_rate_hz,
+            // The mills, and paper 001's second-order process on a mill's configuration.
+            (None, None) => self.sim_config(0).sample_rate_hz,
+        }
+    }
+
     /// The bond graph's run (liu-current-step only).
     pub fn bond_graph_run(self, seed: u64) -> Option<BondGraphRun> {
         matches!(self.definition().plant, PlantDefinition::BondGraph { .. }).then(|| BondGraphRun {

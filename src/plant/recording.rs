@@ -20,8 +20,8 @@ use std::fmt;
 
 use super::signals::PlantSignals;
 use super::{Plant, PlantError, Preset, PresetMachine};
-use crate::estimation::least_squares::{fit, FitError};
 use crate::machine::{Machine, OverrideCommand};
+use crate::math::least_squares::{fit, FitError};
 use crate::signal::spectrum::{amplitude_spectrum, AmplitudeSpectrum, SpectrumError, Window};
 use crate::signal::stats::MinMeanMax;
 use crate::work::{Progress, Work};

@@ -53,7 +53,8 @@ use super::frame::{
     FaultKind, Frame, FrameType, Heartbeat, OverrideModeCode, Sample, SimTruth, NO_DIAL_CODE,
     VERSION_MAJOR, VERSION_MINOR,
 };
-use crate::closed_loop::lab::{RunMachines, RunSpec};
+use crate::closed_loop::definition::RunSpec;
+use crate::closed_loop::lab::RunMachines;
 use crate::control::registry::ControllerKind;
 use crate::machine::{Machine, OverrideCommand, PlantTruth, SensorSample};
 use crate::plant::cnc::{AppliedOverride, OverrideMode};

@@ -21,11 +21,14 @@ use std::time::{Duration, Instant};
 use super::device::DeviceEmulator;
 use super::frame::{Capabilities, FaultKind, VERSION_MAJOR, VERSION_MINOR};
 use super::host::{DeviceSummary, HostSession, KeepUp, LinkEvent, LinkSample, LinkStats};
+use crate::closed_loop::definition::RunSpec;
+use crate::closed_loop::error::LoopError;
 use crate::closed_loop::lab::{
-    cut_model_teach_force, metrics_config, LabRun, RunMachines, RunResult, RunSpec,
+    cut_model_teach_force, metrics_config, LabRun, RunMachines, RunResult,
 };
 use crate::closed_loop::metrics::compute;
-use crate::closed_loop::runner::{Calibration, LoopError, TeachForce};
+use crate::closed_loop::teach_cut::TeachForce;
+use crate::estimation::estimator::Calibration;
 use crate::machine::{Machine, MachineStep, OverrideCommand};
 use crate::work::Work;
 

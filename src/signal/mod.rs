@@ -17,6 +17,7 @@
 //! | [`rms`] | block, sliding-window, three-phase (paper 003 eq 7) and per-revolution peak RMS; an RMS detector (√ of the low-passed square) | — |
 //! | [`dq`] | Clarke and Park transforms (amplitude- and power-invariant) and the PMSM torque of paper 000 eq 7–8 | — |
 //! | [`spectrum`] | windowed single-sided amplitude spectrum, Welch PSD, peaks, spindle/tooth-passing markers, a check that time stamps are evenly spaced | `welch` |
+//! | [`chain`] | the closed loop's signal chain: every sensor sample's phase currents low-passed and three-phase RMS'd, summed into one [`PeriodSummary`](chain::PeriodSummary) per control period | — |
 //! | [`decimate`] | min/max decimation of long series for plotting | — |
 //! | [`stats`] | [`MinMeanMax`](stats::MinMeanMax): running minimum, mean and maximum of a stream | — |
 //!
@@ -37,6 +38,7 @@
 //! is NaN; [`decimate::min_max`] skips non-finite values so a plot still shows the rest.
 
 pub mod butterworth;
+pub mod chain;
 pub mod decimate;
 pub mod dq;
 pub mod filter;

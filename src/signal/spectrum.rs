@@ -469,9 +469,7 @@ pub fn uniform_sample_rate_hz(
             });
         }
     }
-    let mut steps: Vec<f64> = times_s.windows(2).map(|w| w[1] - w[0]).collect();
-    steps.sort_by(f64::total_cmp);
-    let median_step_s = steps[steps.len() / 2];
+    let median_step_s = super::stats::median(times_s.windows(2).map(|w| w[1] - w[0]));
     let tolerance = relative_tolerance.abs();
     for (i, w) in times_s.windows(2).enumerate() {
         let step_s = w[1] - w[0];

@@ -1,5 +1,6 @@
-//! Running summaries of a stream of samples: the smallest, the mean and the largest, for the
-//! min/max bands and block means that plots show and the closed loop's period summaries.
+//! Summaries of samples: the running smallest, mean and largest of a stream, for the min/max
+//! bands and block means that plots show and the closed loop's period summaries, and the one
+//! [`median`] every caller takes.
 //!
 //! ## NaN and ±∞
 //!
@@ -86,6 +87,34 @@ impl MinMeanMax {
             self.sum / self.count as f64
         }
     }
+}
+
+/// The median of the finite values, as numpy and pandas take it: the middle value of an odd
+/// count, the mean of the two middle values of an even one; NaN when no value is finite.
+/// Non-finite values are left out rather than sorted in (a NaN has no place in an order, and
+/// one ±∞ would pull the median by a whole position).
+///
+/// ```
+/// use cutlab::signal::stats::median;
+/// assert_eq!(median([3.0, 1.0, 2.0]), 2.0);
+/// assert_eq!(median([4.0, 1.0, 3.0, 2.0]), 2.5);
+/// assert_eq!(median([f64::NAN, 5.0, f64::INFINITY]), 5.0);
+/// assert!(median([]).is_nan());
+/// ```
+pub fn median(values: impl IntoIterator<Item = f64>) -> f64 {
+    let mut finite: Vec<f64> = values.into_iter().filter(|v| v.is_finite()).collect();
+    let n = finite.len();
+    if n == 0 {
+        return f64::NAN;
+    }
+    let (below, upper, _) = finite.select_nth_unstable_by(n / 2, f64::total_cmp);
+    let upper = *upper;
+    if n % 2 == 1 {
+        return upper;
+    }
+    // The lower middle value is the largest of those before the upper one.
+    let lower = below.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    0.5 * (lower + upper)
 }
 
 #[cfg(test)]

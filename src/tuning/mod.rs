@@ -23,10 +23,12 @@ pub mod teach_in;
 
 use serde::Serialize;
 
-use crate::closed_loop::lab::{LabRun, RunSpec};
+use crate::closed_loop::definition::RunSpec;
+use crate::closed_loop::error::LoopError;
+use crate::closed_loop::lab::LabRun;
 use crate::closed_loop::metrics::Metrics;
-use crate::closed_loop::runner::{Calibration, LoopError};
 use crate::control::registry::{ControllerConfig, ParamError};
+use crate::estimation::estimator::Calibration;
 use crate::work::{parallel_map_reporting as parallel_map, Work};
 use nelder_mead::NelderMead;
 pub use objective::Objective;
@@ -555,7 +557,9 @@ enum Points {
 }
 
 enum WorkStage {
-    Teaching(Box<crate::closed_loop::runner::OnMachine<crate::closed_loop::runner::TeachCut>>),
+    Teaching(
+        Box<crate::closed_loop::sample_loop::OnMachine<crate::closed_loop::teach_cut::TeachCut>>,
+    ),
     Evaluating {
         values: Vec<f64>,
         run: Box<LabRun>,
@@ -686,7 +690,7 @@ fn start_teach_cut(
     problem: &TuningProblem,
     index: usize,
 ) -> Result<
-    Box<crate::closed_loop::runner::OnMachine<crate::closed_loop::runner::TeachCut>>,
+    Box<crate::closed_loop::sample_loop::OnMachine<crate::closed_loop::teach_cut::TeachCut>>,
     TuningError,
 > {
     let spec = &problem.scenarios[index];

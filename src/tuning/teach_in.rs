@@ -13,7 +13,7 @@
 //! the fit saw, the spread of one estimate) and that operating point. [`propose`] is the one
 //! function that turns it into a target, its reference current and a threshold gap:
 //!
-//! * **target** = [`TARGET_FRACTION`] (80 %) of the force at 100 % override. The metrics and
+//! * **target** = [`DEFAULT_TARGET_FRACTION`] (80 %) of the force at 100 % override. The metrics and
 //!   the threshold controller put the force limit 20 % above the target, so this target puts
 //!   that limit (96 %) just under the load the programmer accepted at 100 %; where the cut is
 //!   lighter the control raises the feed, where it is heavier it slows below the program.
@@ -32,29 +32,21 @@ use serde::Serialize;
 
 use super::TuningError;
 use crate::closed_loop::calibration_file::CalibrationFile;
-use crate::closed_loop::lab::{settled_settings, RunSpec};
-use crate::closed_loop::runner::{Calibration, Estimator, Feedback, OnMachine, TeachCut};
+use crate::closed_loop::definition::RunSpec;
+use crate::closed_loop::lab::settled_settings;
+use crate::closed_loop::sample_loop::OnMachine;
+use crate::closed_loop::settings::{OperatingPoint, DEFAULT_TARGET_FRACTION};
+use crate::closed_loop::teach_cut::TeachCut;
 use crate::estimation::current_force::{FeedCurrentModel, Range, SpindleCurrentModel};
 use crate::estimation::cut_forces::CutGeometry;
-use crate::estimation::teach_log::{calibrate_log, full_override_rows, LogTable};
+use crate::estimation::estimator::{Calibration, Estimator, Feedback};
+use crate::log::period_log::{calibrate_log, LogTable};
 use crate::work::{Progress, Work};
 
-/// The proposed target as a fraction of the force measured at 100 % override.
-pub const TARGET_FRACTION: f64 = 0.8;
 /// The narrowest threshold gap a teach-in proposes, % of target.
 pub const MIN_PROPOSED_GAP_PCT: f64 = 5.0;
 /// The proposed gap spans ± this many standard deviations of one period's estimate.
 pub const NOISE_SIGMAS: f64 = 3.0;
-
-/// Where the program runs: the spindle speed and feed at 100 % override (NaN where the
-/// feedback path does not need it).
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
-pub struct OperatingPoint {
-    /// Spindle speed, rpm.
-    pub spindle_rpm: f64,
-    /// Programmed feed, mm/min.
-    pub feed_mm_min: f64,
-}
 
 /// The calibrated current-to-force line at the operating point.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
@@ -127,7 +119,7 @@ pub struct Learned {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum TargetBasis {
-    /// [`TARGET_FRACTION`] of the force at 100 % override.
+    /// [`DEFAULT_TARGET_FRACTION`] of the force at 100 % override.
     Fraction,
     /// That fraction lay below the currents the fit saw: raised to the lowest force they cover.
     RaisedToCalibratedRange,
@@ -174,9 +166,10 @@ pub struct Proposal {
 /// (see the module's documentation for the reasoning).
 ///
 /// ```
-/// use cutlab::closed_loop::runner::Feedback;
+/// use cutlab::estimation::estimator::Feedback;
 /// use cutlab::estimation::current_force::Range;
-/// use cutlab::tuning::teach_in::{propose, CalibratedLine, Learned, OperatingPoint, TargetBasis};
+/// use cutlab::closed_loop::settings::OperatingPoint;
+/// use cutlab::tuning::teach_in::{propose, CalibratedLine, Learned, TargetBasis};
 /// // 5 A idle, 0.01 A/N, currents 6–9 A seen (100–400 N), estimates ±4 N (1 σ).
 /// let line = CalibratedLine { idle_current_a: 5.0, sensitivity_a_per_n: 0.01,
 ///     current_range_a: Range { min: 6.0, max: 9.0 }, residual_std_n: 4.0 };
@@ -197,7 +190,7 @@ pub fn propose(learned: &Learned) -> Result<Proposal, TuningError> {
                 .into(),
         ));
     }
-    let wanted = TARGET_FRACTION * full;
+    let wanted = DEFAULT_TARGET_FRACTION * full;
     let (calibrated, noise) = match &learned.line {
         Some(line) => (
             Range {
@@ -266,19 +259,7 @@ pub struct TeachIn {
 
 /// The operating point of `spec`'s program (its plant edits included).
 pub fn operating_point(spec: &RunSpec) -> OperatingPoint {
-    let summary = spec.preset.summary();
-    OperatingPoint {
-        spindle_rpm: spec
-            .plant
-            .spindle_rpm
-            .or(summary.spindle_rpm)
-            .unwrap_or(f64::NAN),
-        feed_mm_min: spec
-            .plant
-            .programmed_feed_mm_min
-            .or(summary.programmed_feed_mm_min)
-            .unwrap_or(f64::NAN),
-    }
+    OperatingPoint::of_preset(spec)
 }
 
 /// What `calibration` learned, at `at`.
@@ -346,7 +327,7 @@ fn teach_in_of(
 /// Runs `spec`'s teach cut on the simulated machine and proposes from it.
 ///
 /// ```
-/// use cutlab::closed_loop::lab::RunSpec;
+/// use cutlab::closed_loop::definition::RunSpec;
 /// use cutlab::control::registry::ControllerKind;
 /// use cutlab::plant::Preset;
 /// let t = cutlab::tuning::teach_in(&RunSpec::new(Preset::ManeeratDoc1, ControllerKind::Threshold))
@@ -461,8 +442,8 @@ pub struct LoggedTeachIn {
 
 /// Proposes from a logged teach cut read by the messy-log reader ([`crate::log`]): the
 /// calibration `cutlab calibrate` fits ([`calibrate_log`]: the spindle model where the log
-/// has the spindle's columns, else the feed model), the force at 100 % override as the median
-/// over the cutting rows whose `override_pct` is 100 % (every cutting row when the log has no
+/// has the spindle's columns, else the feed model), the force at 100 % override as the fit's
+/// median over the rows it used whose `override_pct` is 100 % (every row when the log has no
 /// override column: a teach cut runs the program as written), and the operating point as the
 /// median speed and feed of those rows. `name` names the log in messages.
 pub fn teach_in_log(
@@ -477,54 +458,38 @@ pub fn teach_in_log(
     let table = LogTable::from_log(log, how.map).map_err(in_log)?;
     let fitted = calibrate_log(&table, how.geometry, how.gear_change_rpm)
         .map_err(|e| in_log(e.to_string()))?;
-    let full = full_override_rows(&table, how.geometry).map_err(|e| in_log(e.to_string()))?;
     let mut notes = Vec::new();
-    if !full.override_column {
+    if table.column("override_pct").is_none() {
         notes.push(
             "the log has no override_pct column (map one with --map override_pct=COLUMN): every \
              cutting row is taken as cut at 100 % override"
                 .to_string(),
         );
     }
-    let (feedback, line, force, periods) = match (&fitted.spindle, &fitted.feed) {
-        (Some(model), _) => {
+    let fit = match (&fitted.spindle_fit, &fitted.feed_fit) {
+        (Some(fit), _) => {
             if let Some(e) = &fitted.feed_error {
                 notes.push(format!("feed model not fitted: {e}"));
             }
             notes.push(format!("force from {}", fitted.force_source));
-            let at = full.spindle_rpm;
-            (
-                Feedback::SpindleCurrent,
-                CalibratedLine::of_spindle(model, at),
-                full.resultant_n,
-                model.rows.iter().map(|r| r.quality.samples).sum(),
-            )
+            fit
         }
-        (None, Some(model)) => {
+        (None, Some(fit)) => {
             if let Some(e) = &fitted.spindle_error {
                 notes.push(format!("spindle model not fitted: {e}"));
             }
             notes.push(format!("feed force from {}", fitted.feed_force_source));
-            (
-                Feedback::FeedCurrent,
-                Some(CalibratedLine::of_feed(model, full.feed_mm_min)),
-                full.feed_n,
-                model.quality.samples,
-            )
+            fit
         }
         // calibrate_log refuses a log where neither model could be fitted.
         (None, None) => return Err(in_log("no current model could be fitted".into())),
     };
-    let learned = Learned {
-        feedback,
-        at: OperatingPoint {
-            spindle_rpm: full.spindle_rpm,
-            feed_mm_min: full.feed_mm_min,
-        },
-        force_at_full_override_n: force,
-        line,
-        periods,
+    notes.push(fit.selection_note());
+    let at = OperatingPoint {
+        spindle_rpm: fit.full_override.spindle_rpm,
+        feed_mm_min: fit.full_override.feed_mm_min,
     };
+    let learned = learned_from_calibration(&fit.calibration, at);
     let source = format!("log {name}");
     let proposal = propose(&learned).map_err(|e| e.within(&source))?;
     Ok(LoggedTeachIn {

@@ -3,7 +3,7 @@
 use wasm_bindgen::JsCast;
 
 use crate::closed_loop::config::RunConfiguration;
-use crate::closed_loop::lab::RunSpec;
+use crate::closed_loop::definition::RunSpec;
 
 /// Offers `text` as a download named `file_name`. Returns a message if the browser refused.
 pub fn download_text(file_name: &str, mime: &str, text: &str) -> Result<(), String> {

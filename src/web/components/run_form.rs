@@ -6,13 +6,13 @@ use std::collections::BTreeMap;
 
 use leptos::prelude::*;
 
+use crate::closed_loop::definition::SettingsOverrides;
 use crate::closed_loop::definition::{
     parse_texts, preset_controller, RunSetting, SettingGroup, SettingKind,
 };
-use crate::closed_loop::lab::SettingsOverrides;
-use crate::closed_loop::runner::Feedback;
 use crate::control::fuzzy::rules::RuleTable;
 use crate::control::registry::{ControllerConfig, ControllerKind};
+use crate::estimation::estimator::Feedback;
 use crate::plant::materials::Material;
 use crate::plant::presets::PlantEdits;
 use crate::plant::Preset;

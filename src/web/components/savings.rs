@@ -8,12 +8,13 @@ use std::sync::{Arc, OnceLock};
 
 use leptos::prelude::*;
 
-use crate::closed_loop::lab::{
-    apply_references, fixed_feed_spec, ReferenceSearch, References, RunResult, RunSpec,
-    ScenarioKey, TeachKey,
-};
+use crate::closed_loop::definition::RunSpec;
+use crate::closed_loop::lab::{RunResult, TeachKey};
 use crate::closed_loop::precomputed::shipped_references;
-use crate::closed_loop::runner::Calibration;
+use crate::closed_loop::references::{
+    apply_references, fixed_feed_spec, ReferenceSearch, References, ScenarioKey,
+};
+use crate::estimation::estimator::Calibration;
 use crate::web::components::recent;
 use crate::web::components::run_view::NamedRun;
 use crate::web::components::runner::{RunProgress, RunStatus, Runner};

@@ -3,9 +3,10 @@
 
 use leptos::prelude::*;
 
-use crate::closed_loop::lab::{RunSpec, TeachKey};
+use crate::closed_loop::definition::RunSpec;
+use crate::closed_loop::lab::TeachKey;
 use crate::closed_loop::precomputed::shipped_calibrations;
-use crate::closed_loop::runner::Calibration;
+use crate::estimation::estimator::Calibration;
 use crate::web::components::recent;
 
 /// Known calibrations by teach cut, newest last; the teach cuts shipped with the code (the

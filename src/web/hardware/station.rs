@@ -7,7 +7,8 @@ use std::sync::Arc;
 
 use crate::charts::{Axis, LineChart, Series, PALETTE};
 use crate::closed_loop::calibration_file::CalibrationFile;
-use crate::closed_loop::lab::{RunResult, RunSpec};
+use crate::closed_loop::definition::RunSpec;
+use crate::closed_loop::lab::RunResult;
 use crate::hardware::recording::{LiveRow, Recorder, RecordingMeta};
 use crate::hardware::session::{
     describe_ack, ArmLimits, HardwareSession, LinkState, SessionOptions, Stage, TaughtCalibration,

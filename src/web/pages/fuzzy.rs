@@ -8,8 +8,9 @@ use leptos::prelude::*;
 
 use crate::charts::{Axis, HeatMap, LineChart, Series, PALETTE};
 use crate::closed_loop::definition::preset_controller;
+use crate::closed_loop::definition::RunSpec;
 use crate::closed_loop::lab::LabRuns;
-use crate::closed_loop::lab::{RunResult, RunSpec};
+use crate::closed_loop::lab::RunResult;
 use crate::control::fuzzy::engine::{Defuzzifier, Engine};
 use crate::control::fuzzy::fll;
 use crate::control::fuzzy::rules::{paper_002_engine, paper_002_table, RuleBase, LEVEL_NAMES};

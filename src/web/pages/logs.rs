@@ -21,16 +21,17 @@ use wasm_bindgen::JsCast;
 
 use crate::charts::{Axis, LineChart, Series, Stroke, PALETTE};
 use crate::closed_loop::calibration_file::CalibrationFile;
-use crate::closed_loop::runner::{Calibration, Feedback};
+use crate::closed_loop::definition::{max_override_pct_of, RunSetting, SettingsOverrides};
+use crate::closed_loop::error::LoopError;
 use crate::control::registry::{ControllerConfig, ControllerKind};
 use crate::estimation::cut_forces::CutGeometry;
+use crate::estimation::estimator::{Calibration, Feedback};
 use crate::input::readable;
 use crate::log::analysis::{row_times, write_channels_csv, ChainOutput, ChainRequest, ChainWork};
+use crate::log::calibration::{ForceSource, LogFit, LogFitWork};
+use crate::log::machine::ReplayError;
 use crate::log::mapping::{Channel, Mapping};
-use crate::log::replay::{
-    events, write_replay_csv, ForceSource, LogFit, LogFitWork, ReplayResult, ReplayRuns,
-    ReplaySettings, Target,
-};
+use crate::log::replay::{events, write_replay_csv, ReplayResult, ReplayRuns, ReplaySettings};
 use crate::log::{ColumnKind, Log, LogBuilder};
 use crate::plant::materials::Material;
 use crate::plant::mechanics::{Cutter, MillingMode};
@@ -293,16 +294,6 @@ fn points(times: &[f64], values: &[f64], view: Option<&Range<f64>>) -> Vec<(f64,
         .into_iter()
         .map(|i| (times[start + i], values[start + i]))
         .collect()
-}
-
-/// The median of the finite values (NaN if none): the speed a cut ran at, whatever its run-up.
-fn median(values: &[f64]) -> f64 {
-    let mut finite: Vec<f64> = values.iter().copied().filter(|v| v.is_finite()).collect();
-    if finite.is_empty() {
-        return f64::NAN;
-    }
-    let middle = finite.len() / 2;
-    *finite.select_nth_unstable_by(middle, f64::total_cmp).1
 }
 
 /// The column of a log carrying the first of `channels` in its mapping.
@@ -715,7 +706,10 @@ pub fn LogsPage() -> impl IntoView {
             }
         };
         let settings = ReplaySettings {
-            feedback: feedback.get_untracked(),
+            run: SettingsOverrides {
+                feedback: Some(feedback.get_untracked()),
+                ..SettingsOverrides::default()
+            },
             sample_period_s: period_value.get_untracked(),
             ..ReplaySettings::default()
         };
@@ -813,43 +807,48 @@ pub fn LogsPage() -> impl IntoView {
             replay_error.set(Some("choose at least one controller".into()));
             return;
         }
-        let text = target_text.get_untracked();
-        let target = if text.trim().is_empty() {
-            None
+        // The target through the run definition's row, as `cutlab log replay --target-n/-a`.
+        let target_setting = if target_kind.get_untracked() == "force" {
+            RunSetting::TargetForce
         } else {
-            match parse_number(&text) {
-                Ok(v) if v > 0.0 => Some(if target_kind.get_untracked() == "force" {
-                    Target::ForceN(v)
-                } else {
-                    Target::CurrentA(v)
-                }),
-                Ok(_) => {
-                    target_error.set(Some("the target must be positive".into()));
-                    return;
-                }
-                Err(e) => {
-                    target_error.set(Some(e));
-                    return;
-                }
-            }
+            RunSetting::TargetCurrent
         };
-        let calibration = chosen_calibration();
+        let mut run = SettingsOverrides {
+            feedback: Some(feedback.get_untracked()),
+            ..SettingsOverrides::default()
+        };
+        let text = target_text.get_untracked();
+        let max_override_pct = max_override_pct_of(&ReplaySettings::default().override_mode);
+        match target_setting.parse_on(&text, max_override_pct) {
+            Ok(value) => {
+                target_setting.apply_to_settings(&mut run, value);
+            }
+            Err(e) => {
+                target_error.set(Some(e.problem.to_string()));
+                return;
+            }
+        }
         let settings = ReplaySettings {
-            feedback: feedback.get_untracked(),
+            run,
             sample_period_s: period_value.get_untracked(),
-            target,
-            calibration,
+            calibration: chosen_calibration(),
             ..ReplaySettings::default()
         };
-        // Check what the first replay needs before starting, so the message lands here.
+        // Check what the first replay needs before starting, so the message lands beside the
+        // control it is about.
         if let Err(e) =
             crate::log::replay::ReplayRun::new(&l.log, &l.mapping, &settings, &controllers[0])
         {
-            let message = e.to_string();
-            if message.contains("target") {
-                target_error.set(Some(message));
-            } else {
-                replay_error.set(Some(message));
+            match e {
+                ReplayError::Loop(LoopError::Setting(e))
+                    if matches!(
+                        e.setting,
+                        RunSetting::TargetForce | RunSetting::TargetCurrent
+                    ) =>
+                {
+                    target_error.set(Some(e.problem.to_string()))
+                }
+                e => replay_error.set(Some(e.to_string())),
             }
             return;
         }
@@ -947,7 +946,7 @@ pub fn LogsPage() -> impl IntoView {
         let speed = active_log.with(|l| {
             l.as_ref()
                 .and_then(|l| channel_column(l, &[Channel::SpindleSpeed, Channel::SpindleCommand]))
-                .map(|c| median(&c.values))
+                .map(|c| crate::signal::stats::median(c.values.iter().copied()))
         });
         spectrum_chart(&out, speed, teeth.get().ok())
     });

@@ -5,7 +5,8 @@ use std::time::Duration;
 
 use leptos::prelude::*;
 
-use crate::closed_loop::lab::{LabRuns, RunResult, RunSpec};
+use crate::closed_loop::definition::RunSpec;
+use crate::closed_loop::lab::{LabRuns, RunResult};
 use crate::closed_loop::metrics::metrics_csv;
 use crate::closed_loop::trace::write_csv;
 use crate::control::registry::ControllerKind;

@@ -9,7 +9,7 @@ use crate::charts::pareto::trade_off_chart;
 use crate::charts::{Axis, HeatMap, Scale};
 use crate::closed_loop::calibration_file::CalibrationFile;
 use crate::closed_loop::definition::preset_controller;
-use crate::closed_loop::lab::RunSpec;
+use crate::closed_loop::definition::RunSpec;
 use crate::control::registry::ControllerKind;
 use crate::input::{parse_count, parse_number, readable};
 use crate::plant::Preset;

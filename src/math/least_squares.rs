@@ -57,7 +57,7 @@ pub struct Fit {
 /// Fits `y ≈ Σ_j β_j · columns[j]`. Rows where any value is non-finite are skipped.
 ///
 /// ```
-/// use cutlab::estimation::least_squares::fit;
+/// use cutlab::math::least_squares::fit;
 /// let x: Vec<f64> = (0..10).map(f64::from).collect();
 /// let y: Vec<f64> = x.iter().map(|x| 2.0 + 0.5 * x).collect();
 /// let ones = vec![1.0; 10];

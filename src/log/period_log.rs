@@ -1,6 +1,7 @@
-//! Calibration from a logged teach cut: a CSV of per-period rows (the CSV `cutlab sim --csv`
-//! writes, or any log with the same column names) → paper 003's spindle-current model and paper
-//! 000's feed-current model, with the quality of each fit.
+//! Calibration from a log whose rows are control periods: the CSV `cutlab sim --csv` writes (a
+//! teach cut's or a run's trace), or any log with the same column names (or mapped to them) →
+//! paper 003's spindle-current model and paper 000's feed-current model, each through the one
+//! teach-cut fit ([`crate::estimation::teach_fit`]), with the quality of each.
 //!
 //! The spindle model needs `spindle_current_rms_a` and `spindle_speed_rpm`, the feed model
 //! `feed_current_rms_a` and `feed_mm_min`, and both a force:
@@ -12,19 +13,23 @@
 //!   the spindle model and the feed force for the feed model. If the log has `force_n` too, the
 //!   report says how far the two differ.
 //!
-//! Rows without force (air cuts, force ≤ 0) are left out, as in the teach cut. This reader is
-//! strict (comma-separated, a header line, numbers only) and says exactly where a file is wrong;
-//! messy machine logs are the log importer's. It works on text, so the command line and the
-//! browser share it; nothing here panics on any input.
+//! The rows are selected as a teach cut's periods are: the spindle's speed steady, half a second
+//! past an override change (from `override_pct` and `time_s`, where the log has them), the axes
+//! feeding, a positive force, and with a modelled force not in air. Messy machine logs are read by
+//! the log reader ([`crate::log`]) first; nothing here panics on any input.
 
 use std::fmt;
 
 use serde::Serialize;
 
-use super::current_force::{FeedCurrentModel, SpindleCurrentModel};
-use super::cut_forces::CutGeometry;
+use crate::estimation::current_force::{FeedCurrentModel, SpindleCurrentModel};
+use crate::estimation::cut_forces::CutGeometry;
+use crate::estimation::estimator::Feedback;
+use crate::estimation::teach_fit::{fit, ForceOrigin, TeachFit, TeachPeriod};
 use crate::plant::mechanics::ToolForces;
+use crate::signal::chain::PeriodSummary;
 use crate::signal::spectrum::{uniform_sample_rate_hz, SpectrumError, TIME_STEP_TOLERANCE};
+use crate::signal::stats::median;
 
 /// Magnitudes beyond this in a column the fit uses are no physical current, speed or force; a
 /// least-squares fit over them would overflow (1e200 squared) and report nonsense.
@@ -135,7 +140,7 @@ impl LogTable {
     /// mapped.
     ///
     /// ```
-    /// use cutlab::estimation::teach_log::LogTable;
+    /// use cutlab::log::period_log::LogTable;
     /// let log = cutlab::log::load(b"t;F [N];I [A]\n0;1,5;2\n0,1;2,5;3\n", None);
     /// let map = [("force_n".to_string(), "F [N]".to_string())];
     /// let t = LogTable::from_log(&log, &map).unwrap();
@@ -143,7 +148,7 @@ impl LogTable {
     /// assert!(LogTable::from_log(&log, &[("torque".into(), "F [N]".into())]).unwrap_err()
     ///     .contains("force_n"));
     /// ```
-    pub fn from_log(log: &crate::log::Log, map: &[(String, String)]) -> Result<Self, String> {
+    pub fn from_log(log: &super::Log, map: &[(String, String)]) -> Result<Self, String> {
         for (role, column) in map {
             if !CALIBRATION_COLUMNS.contains(&role.as_str()) {
                 return Err(format!(
@@ -173,7 +178,13 @@ impl LogTable {
                      rename one in the file"
                 ));
             }
-            if let Some(column) = log.columns.iter().find(|c| c.name == source) {
+            let column = log.columns.iter().find(|c| c.name == source).or_else(|| {
+                // The time axis is the reader's time column (in seconds) unless one is mapped.
+                (role == "time_s" && source == role)
+                    .then(|| log.time_column.and_then(|t| log.columns.get(t)))
+                    .flatten()
+            });
+            if let Some(column) = column {
                 if column.values.len() != log.rows {
                     return Err(format!(
                         "column {source:?} holds no numbers, so it cannot be {role}"
@@ -233,34 +244,6 @@ impl LogTable {
                 columns: self.file_columns.clone(),
             })
     }
-}
-
-/// What a calibration from a log found.
-#[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct LogCalibration {
-    /// Rows with a positive force.
-    pub rows_with_force: usize,
-    /// Median of the positive forces the spindle model was fitted to (NaN without any).
-    pub median_force_n: f64,
-    /// Median of the positive feed forces the feed model was fitted to (NaN without any).
-    pub median_feed_force_n: f64,
-    /// Where the spindle model's force came from.
-    pub force_source: String,
-    /// Where the feed model's force came from.
-    pub feed_force_source: String,
-    /// With modelled forces and a `force_n` column: RMS difference, % of the mean measured force.
-    pub model_vs_measured_pct: Option<f64>,
-    /// The log's sampling, from its `time_s` column: even steps and their rate, or where the
-    /// steps are uneven (the fit itself does not need even steps, but a reader of the log does).
-    pub time_steps: Option<String>,
-    /// Paper 003's spindle model, if it could be fitted.
-    pub spindle: Option<SpindleCurrentModel>,
-    /// Why not.
-    pub spindle_error: Option<String>,
-    /// Paper 000's feed model, if it could be fitted.
-    pub feed: Option<FeedCurrentModel>,
-    /// Why not.
-    pub feed_error: Option<String>,
 }
 
 struct Forces {
@@ -336,15 +319,53 @@ fn forces(table: &LogTable, geometry: Option<(&CutGeometry, &str)>) -> Result<Fo
     })
 }
 
-/// Keeps the rows of `columns` where `force` is finite and positive.
-fn cutting_rows(force: &[f64], columns: &[&[f64]]) -> Vec<Vec<f64>> {
-    let keep: Vec<usize> = (0..force.len())
-        .filter(|&i| force[i].is_finite() && force[i] > 0.0)
-        .collect();
-    std::iter::once(force)
-        .chain(columns.iter().copied())
-        .map(|c| keep.iter().filter_map(|&i| c.get(i).copied()).collect())
-        .collect()
+/// The rows of `table` as the control periods of a teach cut, each with its force from `force`
+/// (the resultant for the spindle model, the feed force for the feed model).
+fn periods(table: &LogTable, force: &[f64], forces: &Forces) -> Result<Vec<TeachPeriod>, LogError> {
+    let column = |name: &str| table.fit_column(name);
+    let (time, override_pct) = (column("time_s")?, column("override_pct")?);
+    let (speed, feed) = (column("spindle_speed_rpm")?, column("feed_mm_min")?);
+    let spindle_current = column("spindle_current_rms_a")?;
+    let feed_current = column("feed_current_rms_a")?;
+    let (depth, width) = (column("depth_mm")?, column("width_mm")?);
+    let at = |c: Option<&[f64]>, i: usize| c.and_then(|c| c.get(i).copied()).unwrap_or(f64::NAN);
+    let mut periods = Vec::with_capacity(force.len());
+    let mut changed_s = f64::NEG_INFINITY;
+    let mut previous_pct = f64::NAN;
+    for (i, &force_n) in force.iter().enumerate() {
+        let time_s = time.map_or(i as f64, |t| t.get(i).copied().unwrap_or(f64::NAN));
+        // A log without an override column ran the program as written.
+        let pct = override_pct.map_or(100.0, |o| o.get(i).copied().unwrap_or(f64::NAN));
+        if previous_pct.is_finite() && pct != previous_pct {
+            changed_s = time_s;
+        }
+        previous_pct = pct;
+        let rpm = at(speed, i);
+        periods.push(TeachPeriod {
+            summary: PeriodSummary {
+                samples: 1,
+                end_time_s: time_s,
+                spindle_current_rms_a: at(spindle_current, i),
+                feed_current_rms_a: at(feed_current, i),
+                // No F/V converter in a log of a speed column: the estimator reads the speed.
+                spindle_fv_voltage_v: f64::NAN,
+                spindle_speed_rpm: rpm,
+                spindle_command_rpm: rpm,
+                feed_mm_min: at(feed, i),
+                force_mean_resultant_n: forces.resultant_n.get(i).copied().unwrap_or(f64::NAN),
+                feed_force_n: forces.feed_n.get(i).copied().unwrap_or(f64::NAN),
+                depth_mm: at(depth, i),
+                width_mm: at(width, i),
+                ..PeriodSummary::default()
+            },
+            force_n,
+            override_pct: pct,
+            since_override_change_s: time_s - changed_s,
+            // Nothing says when the spindle started: a period log starts in the cut.
+            since_spindle_start_s: f64::INFINITY,
+        });
+    }
+    Ok(periods)
 }
 
 /// How the log was sampled, from its `time_s` column, naming the file line where steps are
@@ -369,90 +390,62 @@ fn describe_time_steps(table: &LogTable) -> Option<String> {
     })
 }
 
-/// A row is at 100 % override when its `override_pct` is within this of 100.
-pub const FULL_OVERRIDE_TOLERANCE_PCT: f64 = 0.5;
-
-/// The load a logged teach cut shows at 100 % override: medians over the cutting rows there.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
-pub struct FullOverride {
-    /// Whether the log has an `override_pct` column; without one every cutting row counts.
-    pub override_column: bool,
-    /// Cutting rows (resultant force > 0) at 100 % override.
-    pub rows: usize,
-    /// Median resultant force over those rows (measured or modelled, as the calibration's).
-    pub resultant_n: f64,
-    /// Median feed force over those with a positive one.
-    pub feed_n: f64,
-    /// Median spindle speed over those rows (NaN without the column).
-    pub spindle_rpm: f64,
-    /// Median feed over those rows (NaN without the column).
-    pub feed_mm_min: f64,
+/// What a calibration from a log of control periods found.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct LogCalibration {
+    /// Rows with a positive force.
+    pub rows_with_force: usize,
+    /// Median of the forces the spindle model was fitted to (NaN without any).
+    pub median_force_n: f64,
+    /// Median of the feed forces the feed model was fitted to (NaN without any).
+    pub median_feed_force_n: f64,
+    /// Where the spindle model's force came from.
+    pub force_source: String,
+    /// Where the feed model's force came from.
+    pub feed_force_source: String,
+    /// With modelled forces and a `force_n` column: RMS difference, % of the mean measured force.
+    pub model_vs_measured_pct: Option<f64>,
+    /// The log's sampling, from its `time_s` column: even steps and their rate, or where the
+    /// steps are uneven (the fit itself does not need even steps, but a reader of the log does).
+    pub time_steps: Option<String>,
+    /// Paper 003's spindle model, if it could be fitted.
+    pub spindle: Option<SpindleCurrentModel>,
+    /// Why not.
+    pub spindle_error: Option<String>,
+    /// Paper 000's feed model, if it could be fitted.
+    pub feed: Option<FeedCurrentModel>,
+    /// Why not.
+    pub feed_error: Option<String>,
+    /// The spindle model's fit, with its calibration and the rows it used.
+    #[serde(skip)]
+    pub spindle_fit: Option<TeachFit>,
+    /// The feed model's fit.
+    #[serde(skip)]
+    pub feed_fit: Option<TeachFit>,
 }
 
-/// The median of the finite values (the mean of the two middle ones for an even count; NaN for
-/// none), as numpy and pandas take it.
-fn median(values: impl Iterator<Item = f64>) -> f64 {
-    let mut sorted: Vec<f64> = values.filter(|v| v.is_finite()).collect();
-    sorted.sort_by(f64::total_cmp);
-    let n = sorted.len();
-    match n {
-        0 => f64::NAN,
-        _ if n % 2 == 1 => sorted[n / 2],
-        _ => 0.5 * (sorted[n / 2 - 1] + sorted[n / 2]),
+impl LogCalibration {
+    /// The fit of `feedback`'s model, or why there is none.
+    pub fn fit_of(&self, feedback: Feedback) -> Result<&TeachFit, String> {
+        let (fit, error, name) = match feedback {
+            Feedback::FeedCurrent => (&self.feed_fit, &self.feed_error, "feed"),
+            _ => (&self.spindle_fit, &self.spindle_error, "spindle"),
+        };
+        fit.as_ref().ok_or_else(|| {
+            format!(
+                "no {name} model was fitted ({})",
+                error.as_deref().unwrap_or("no reason given")
+            )
+        })
     }
 }
 
-/// The rows of a logged teach cut at 100 % override and the load they show, with the forces
-/// [`calibrate_log`] fits against (`geometry` as there).
+/// Fits both current-to-force models from a log of control periods. `geometry` models the force
+/// from the cut instead of the `force_n` column (with a description of the cut for the report);
+/// `gear_change_rpm` splits the spindle's speeds into gear ranges.
 ///
 /// ```
-/// use cutlab::estimation::teach_log::{full_override_rows, LogTable};
-/// let csv = "override_pct,force_n,spindle_speed_rpm\n100,0,1000\n100,300,990\n30,90,1000\n\
-///            100,320,980\n100,310,985\n";
-/// let log = cutlab::log::load(csv.as_bytes(), None);
-/// let full = full_override_rows(&LogTable::from_log(&log, &[]).unwrap(), None).unwrap();
-/// assert_eq!((full.rows, full.resultant_n, full.spindle_rpm), (3, 310.0, 985.0));
-/// ```
-pub fn full_override_rows(
-    table: &LogTable,
-    geometry: Option<(&CutGeometry, &str)>,
-) -> Result<FullOverride, LogError> {
-    let forces = forces(table, geometry)?;
-    let override_pct = table.fit_column("override_pct")?;
-    let rows: Vec<usize> = (0..forces.resultant_n.len())
-        .filter(|&i| {
-            let force = forces.resultant_n[i];
-            let at_full = override_pct.is_none_or(|o| {
-                o.get(i)
-                    .is_some_and(|o| (o - 100.0).abs() <= FULL_OVERRIDE_TOLERANCE_PCT)
-            });
-            at_full && force.is_finite() && force > 0.0
-        })
-        .collect();
-    let over = |column: Option<&[f64]>| {
-        column.map_or(f64::NAN, |c| {
-            median(rows.iter().filter_map(|&i| c.get(i).copied()))
-        })
-    };
-    Ok(FullOverride {
-        override_column: override_pct.is_some(),
-        rows: rows.len(),
-        resultant_n: over(Some(&forces.resultant_n)),
-        feed_n: median(
-            rows.iter()
-                .map(|&i| forces.feed_n.get(i).copied().unwrap_or(f64::NAN))
-                .filter(|f| *f > 0.0),
-        ),
-        spindle_rpm: over(table.fit_column("spindle_speed_rpm")?),
-        feed_mm_min: over(table.fit_column("feed_mm_min")?),
-    })
-}
-
-/// Fits both current-to-force models from a logged teach cut. `geometry` models the force from
-/// the cut instead of the `force_n` column (with a description of the cut for the report).
-///
-/// ```
-/// use cutlab::estimation::teach_log::{calibrate_log, LogTable};
+/// use cutlab::log::period_log::{calibrate_log, LogTable};
 /// let mut csv = String::from("spindle_current_rms_a,spindle_speed_rpm,force_n\n");
 /// for i in 1..=20 {
 ///     let force = 10.0 * f64::from(i);
@@ -470,23 +463,30 @@ pub fn calibrate_log(
     gear_change_rpm: f64,
 ) -> Result<LogCalibration, LogError> {
     let forces = forces(table, geometry)?;
-    let force = forces.resultant_n.as_slice();
-    let median_positive = |values: &[f64]| {
-        let mut positive: Vec<f64> = values
-            .iter()
-            .copied()
-            .filter(|f| f.is_finite() && *f > 0.0)
-            .collect();
-        positive.sort_by(f64::total_cmp);
-        positive
-            .get(positive.len() / 2)
-            .copied()
-            .unwrap_or(f64::NAN)
+    let origin = if geometry.is_some() {
+        ForceOrigin::Modelled
+    } else {
+        ForceOrigin::Measured
+    };
+    // An RMS value stands for three phases of its own value; a phase's peak is √2 of it.
+    let largest_phase = |name: &str| -> Result<f64, LogError> {
+        Ok(std::f64::consts::SQRT_2
+            * table.fit_column(name)?.map_or(0.0, |values| {
+                values
+                    .iter()
+                    .copied()
+                    .filter(|v| v.is_finite())
+                    .fold(0.0, f64::max)
+            }))
     };
     let mut report = LogCalibration {
-        rows_with_force: force.iter().filter(|f| f.is_finite() && **f > 0.0).count(),
-        median_force_n: median_positive(force),
-        median_feed_force_n: median_positive(&forces.feed_n),
+        rows_with_force: forces
+            .resultant_n
+            .iter()
+            .filter(|f| f.is_finite() && **f > 0.0)
+            .count(),
+        median_force_n: f64::NAN,
+        median_feed_force_n: f64::NAN,
         force_source: forces.source.clone(),
         feed_force_source: forces.feed_source.clone(),
         model_vs_measured_pct: forces.model_vs_measured_pct,
@@ -495,35 +495,51 @@ pub fn calibrate_log(
         spindle_error: None,
         feed: None,
         feed_error: None,
+        spindle_fit: None,
+        feed_fit: None,
     };
-    match (
-        table.fit_column("spindle_current_rms_a")?,
-        table.fit_column("spindle_speed_rpm")?,
-    ) {
-        (Some(current), Some(speed)) => {
-            let rows = cutting_rows(force, &[current, speed]);
-            match SpindleCurrentModel::calibrate(&rows[1], &rows[2], &rows[0], gear_change_rpm) {
-                Ok(m) => report.spindle = Some(m),
-                Err(e) => report.spindle_error = Some(e.to_string()),
+    let fitted = |feedback: Feedback, force: &[f64], largest_a: f64| {
+        let periods = periods(table, force, &forces)?;
+        Ok::<_, LogError>(
+            fit(&periods, feedback, origin, largest_a, gear_change_rpm).map_err(|e| e.to_string()),
+        )
+    };
+    if table.column("spindle_current_rms_a").is_some()
+        && table.column("spindle_speed_rpm").is_some()
+    {
+        let largest_a = largest_phase("spindle_current_rms_a")?;
+        match fitted(Feedback::SpindleCurrent, &forces.resultant_n, largest_a)? {
+            Ok(f) => {
+                report.median_force_n = median(f.points.iter().map(|p| p.force_n));
+                if let crate::estimation::estimator::Estimator::Spindle { model, .. } =
+                    &f.calibration.estimator
+                {
+                    report.spindle = Some(model.clone());
+                }
+                report.spindle_fit = Some(f);
             }
+            Err(e) => report.spindle_error = Some(e),
         }
-        _ => {
-            report.spindle_error =
-                Some("needs columns spindle_current_rms_a and spindle_speed_rpm".into())
-        }
+    } else {
+        report.spindle_error =
+            Some("needs columns spindle_current_rms_a and spindle_speed_rpm".into());
     }
-    match (
-        table.fit_column("feed_current_rms_a")?,
-        table.fit_column("feed_mm_min")?,
-    ) {
-        (Some(current), Some(feed)) => {
-            let rows = cutting_rows(&forces.feed_n, &[current, feed]);
-            match FeedCurrentModel::calibrate(&rows[1], &rows[2], &rows[0]) {
-                Ok(m) => report.feed = Some(m),
-                Err(e) => report.feed_error = Some(e.to_string()),
+    if table.column("feed_current_rms_a").is_some() && table.column("feed_mm_min").is_some() {
+        let largest_a = largest_phase("feed_current_rms_a")?;
+        match fitted(Feedback::FeedCurrent, &forces.feed_n, largest_a)? {
+            Ok(f) => {
+                report.median_feed_force_n = median(f.points.iter().map(|p| p.force_n));
+                if let crate::estimation::estimator::Estimator::Feed { model } =
+                    &f.calibration.estimator
+                {
+                    report.feed = Some(*model);
+                }
+                report.feed_fit = Some(f);
             }
+            Err(e) => report.feed_error = Some(e),
         }
-        _ => report.feed_error = Some("needs columns feed_current_rms_a and feed_mm_min".into()),
+    } else {
+        report.feed_error = Some("needs columns feed_current_rms_a and feed_mm_min".into());
     }
     if report.spindle.is_none() && report.feed.is_none() {
         return Err(LogError::NoModel {

@@ -1,4 +1,7 @@
-//! Transcendental functions with the same bits on every target.
+//! Numerics: transcendental functions with the same bits on every target, and the least-squares
+//! fit behind every calibration ([`least_squares`]).
+//!
+//! ## Transcendental functions
 //!
 //! `f64::sin` and friends call the platform's C library natively (glibc on Linux) but a Rust port
 //! of musl's libm in wasm; the two can differ in the last bit, and a closed loop that quantises its
@@ -11,6 +14,8 @@
 //! the same bits too: [`Phasor`] keeps an advancing angle's cosine and sine by rotation,
 //! [`wrap_turn`] replaces `rem_euclid(2π)` for an angle that moved by less than a turn, and
 //! [`round_ties_even`] rounds without a call.
+
+pub mod least_squares;
 
 use std::f64::consts::TAU;
 

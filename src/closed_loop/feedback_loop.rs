@@ -1,0 +1,386 @@
+//! The closed loop: one code path for every machine.
+//!
+//! ```text
+//! Machine::step ─► SafetyEnvelope::observe ─► SignalChain::push        (every sensor sample)
+//!   every control period:
+//!   SignalChain::finish_period ─► Estimator ─► Controller::step ─► SafetyEnvelope::command
+//!   ─► OverrideCommand for the next period, and one TraceRow
+//! ```
+//!
+//! [`ClosedLoop`] owns a `Box<dyn Machine>`, so the simulated mill, a replayed log and a machine on
+//! the serial line run through exactly this code. It advances in chunks
+//! ([`crate::work::Work::advance`]) so a browser can run it across animation frames with a
+//! progress bar and a cancel button. Its settings come resolved ([`super::settings`]); its
+//! estimator from a teach cut ([`super::teach_cut`]) or a saved calibration.
+
+use super::error::LoopError;
+use super::sample_loop::{signal_chain, LoopSample, OnMachine, PeriodClock, SampleLoop};
+use super::settings::{LoopSettings, OperatingPoint};
+use super::trace::{Trace, TraceRow};
+use crate::control::law::{ControlInput, Controller};
+use crate::control::registry::{ControllerConfig, RunContext};
+use crate::estimation::current_force::ForceEstimate;
+use crate::estimation::estimator::{Calibration, Estimator};
+use crate::machine::{Machine, OverrideCommand, SensorSample, SensorlessEstimate};
+use crate::safety::{SafetyEnvelope, SafetyEvent};
+use crate::signal::chain::{PeriodSummary, SignalChain};
+use crate::work::Work;
+
+/// The closed loop on a machine.
+pub type ClosedLoop = OnMachine<FeedbackLoop>;
+
+/// The closed loop without a machine: sensor samples in, override commands out.
+///
+/// Every sample passes the safety envelope's observation (stuck or implausible currents, the
+/// arming clock) and the signal chain; at each control period's end the estimator turns the
+/// period's current into a force, the controller asks for an override, the envelope limits it,
+/// and one [`TraceRow`] is recorded. Nothing allocates per sample beyond the trace's reserve.
+pub struct FeedbackLoop {
+    controller: Box<dyn Controller>,
+    estimator: Estimator,
+    settings: LoopSettings,
+    chain: SignalChain,
+    envelope: SafetyEnvelope,
+    clock: PeriodClock,
+    last: SensorSample,
+    /// The power-law estimate at the latest sample that carried one.
+    last_sensorless: SensorlessEstimate,
+    command: OverrideCommand,
+    last_request_pct: f64,
+    trace: Trace,
+    /// Whether the cut-before-arming warning was given (once a run).
+    warned_cut_before_arming: bool,
+    /// The force estimate of the period before.
+    previous_estimate_n: f64,
+    done: bool,
+}
+
+/// A force estimate above this fraction of the target, with the spindle at speed, before the
+/// loop has armed, is a cut the controller cannot shape.
+const CUT_BEFORE_ARMING_FRACTION: f64 = 0.5;
+/// The spindle is at speed within this fraction of its command (its run-up current would read as
+/// a force).
+const AT_SPEED_FRACTION: f64 = 0.02;
+
+impl FeedbackLoop {
+    /// The closed loop of `controller` with `settings` and `calibration`'s estimator, for samples
+    /// at `sample_rate_hz`: the controller built for the target and the period, with the current
+    /// sensitivity of the calibrated line where the program runs (`at`).
+    pub fn wire(
+        controller: &ControllerConfig,
+        settings: LoopSettings,
+        calibration: &Calibration,
+        at: OperatingPoint,
+        sample_rate_hz: f64,
+    ) -> Result<Self, LoopError> {
+        // A program without a spindle speed reads the line at rest.
+        let rpm = if at.spindle_rpm.is_finite() {
+            at.spindle_rpm
+        } else {
+            0.0
+        };
+        let built = controller
+            .build(&RunContext {
+                target_force_n: settings.target_force_n,
+                control_period_s: settings.control_period_s,
+                amps_per_newton: calibration.estimator.sensitivity_a_per_n(rpm),
+            })
+            .map_err(LoopError::Controller)?;
+        Self::new(
+            sample_rate_hz,
+            built,
+            calibration.estimator.clone(),
+            settings,
+        )
+    }
+
+    /// Wires `controller` and `estimator` with `settings` for samples at `sample_rate_hz`.
+    pub fn new(
+        sample_rate_hz: f64,
+        controller: Box<dyn Controller>,
+        estimator: Estimator,
+        settings: LoopSettings,
+    ) -> Result<Self, LoopError> {
+        if !(settings.max_duration_s.is_finite() && settings.max_duration_s > 0.0) {
+            return Err(LoopError::TimeLimit(settings.max_duration_s));
+        }
+        let chain = signal_chain(&settings.chain(), sample_rate_hz)?;
+        let clock = PeriodClock::new(&settings.chain(), sample_rate_hz)?;
+        let envelope = SafetyEnvelope::new(settings.envelope.clone(), sample_rate_hz)
+            .map_err(LoopError::Envelope)?;
+        let command = OverrideCommand {
+            override_pct: envelope.output_pct(),
+            feed_hold: false,
+        };
+        let capacity = (settings.max_duration_s / settings.control_period_s).min(1e6) as usize + 1;
+        let term_names = controller
+            .terms()
+            .iter()
+            .map(|t| (t.name, t.unit))
+            .collect();
+        Ok(Self {
+            controller,
+            estimator,
+            chain,
+            envelope,
+            clock,
+            last: SensorSample::default(),
+            last_sensorless: NO_SENSORLESS_ESTIMATE,
+            command,
+            last_request_pct: command.override_pct,
+            trace: Trace {
+                rows: Vec::with_capacity(capacity),
+                term_names,
+                ..Trace::default()
+            },
+            settings,
+            warned_cut_before_arming: false,
+            previous_estimate_n: f64::NAN,
+            done: false,
+        })
+    }
+
+    /// The settings.
+    pub fn settings(&self) -> &LoopSettings {
+        &self.settings
+    }
+
+    /// The trace so far.
+    pub fn trace(&self) -> &Trace {
+        &self.trace
+    }
+
+    /// Warns once when the estimate shows a cut before the loop has armed.
+    fn watch_cut_before_arming(
+        &mut self,
+        period: &PeriodSummary,
+        estimate: &ForceEstimate,
+        armed: bool,
+    ) {
+        let force_n = estimate.force_n;
+        let at_speed = period.spindle_command_rpm > 0.0
+            && (period.spindle_speed_rpm - period.spindle_command_rpm).abs()
+                <= AT_SPEED_FRACTION * period.spindle_command_rpm;
+        // After its run-up the spindle's current decays for a few periods and reads as a falling
+        // force; a cut's force rises or holds. (A run-up also reads far outside the calibrated
+        // range, which `in_range` rejects.)
+        let falling = force_n < 0.9 * self.previous_estimate_n;
+        self.previous_estimate_n = force_n;
+        if !armed
+            && !self.warned_cut_before_arming
+            && at_speed
+            && !falling
+            && estimate.in_range
+            && force_n > CUT_BEFORE_ARMING_FRACTION * self.settings.target_force_n
+        {
+            self.warned_cut_before_arming = true;
+            self.trace.events.push(SafetyEvent::CutBeforeArming {
+                time_s: period.end_time_s,
+                force_n,
+            });
+        }
+    }
+
+    /// Ends a control period: estimate, control, limit, record.
+    fn end_period(&mut self, sensorless: SensorlessEstimate) {
+        let sensorless_n = sensorless.force_n;
+        let last = self.last;
+        let period = self.chain.finish_period();
+        let estimate = self.estimator.estimate(&period);
+        let dt_s = self.settings.control_period_s;
+        let input = ControlInput {
+            time_s: period.end_time_s,
+            dt_s,
+            force_n: estimate.force_n,
+            target_force_n: self.settings.target_force_n,
+            programmed_feed_mm_min: last.programmed_feed_mm_min,
+            applied_override_pct: last.applied_override_pct,
+            time_since_start_s: self.envelope.time_since_start_s(&last),
+        };
+        let armed = self.envelope.armed();
+        self.watch_cut_before_arming(&period, &estimate, armed);
+        // The controller runs only while armed: before that its output would be ignored, and an
+        // integrating law must not accumulate the spindle's starting transient.
+        if armed {
+            self.last_request_pct = self.controller.step(&input);
+        }
+        self.command = self.envelope.command(
+            self.last_request_pct,
+            estimate.force_n,
+            period.end_time_s,
+            dt_s,
+            &last,
+        );
+        if !self.envelope.armed() {
+            self.last_request_pct = self.command.override_pct;
+        }
+        self.envelope.drain_events(&mut self.trace.events);
+        for t in self.controller.terms() {
+            self.trace.terms.push(t.value);
+        }
+        self.trace.rows.push(TraceRow {
+            time_s: period.end_time_s,
+            depth_mm: period.depth_mm,
+            width_mm: period.width_mm,
+            path_position_mm: period.path_position_mm,
+            programmed_feed_mm_min: last.programmed_feed_mm_min,
+            feed_mm_min: period.feed_mm_min,
+            requested_override_pct: self.last_request_pct,
+            override_pct: self.command.override_pct,
+            applied_override_pct: last.applied_override_pct,
+            force_n: self.settings.feedback.regulated_truth_n(&period),
+            force_est_n: estimate.force_n,
+            force_power_law_n: sensorless_n,
+            target_force_n: self.settings.target_force_n,
+            force_min_n: period.force_min_max_n.0,
+            force_max_n: period.force_min_max_n.1,
+            spindle_current_rms_a: period.spindle_current_rms_a,
+            feed_current_rms_a: period.feed_current_rms_a,
+            feed_current_u_min_a: period.feed_current_u_min_max_a.0,
+            feed_current_u_max_a: period.feed_current_u_min_max_a.1,
+            spindle_speed_rpm: period.spindle_speed_rpm,
+            material_removal_mm3_s: period.material_removal_mm3_s,
+            armed,
+            sensor_fault: self.envelope.fault().is_some(),
+            feed_hold: self.command.feed_hold,
+            estimate_in_range: estimate.in_range,
+            cross_check_disagrees: disagrees(
+                estimate.force_n,
+                sensorless_n,
+                self.settings.cross_check_tolerance + sensorless.relative_uncertainty,
+                self.settings.target_force_n,
+            ),
+        });
+        let held_at_rest = self.command.feed_hold && period.feed_mm_min.abs() < 1e-9;
+        if held_at_rest || period.end_time_s >= self.settings.max_duration_s {
+            self.done = true;
+        }
+    }
+}
+
+impl SampleLoop for FeedbackLoop {
+    type Output = Trace;
+
+    #[inline(always)]
+    fn push(&mut self, sample: &LoopSample<'_>) -> Option<OverrideCommand> {
+        if self.done {
+            return None;
+        }
+        self.envelope.observe(&sample.step.sensors);
+        self.chain.push(sample.step);
+        if let Some(d) = &sample.dynamometer {
+            self.chain.push_dynamometer(d);
+        }
+        self.last = sample.step.sensors;
+        self.last_sensorless = sample.sensorless.unwrap_or(NO_SENSORLESS_ESTIMATE);
+        if !self.clock.tick() {
+            return None;
+        }
+        self.end_period(self.last_sensorless);
+        Some(self.command)
+    }
+
+    fn command(&self) -> OverrideCommand {
+        self.command
+    }
+
+    fn clock(&self) -> &PeriodClock {
+        &self.clock
+    }
+
+    fn end_of_program(&mut self) {
+        if self.clock.cut_short() > 0 && !self.done {
+            self.end_period(self.last_sensorless);
+        }
+        self.trace.completed = true;
+        self.done = true;
+    }
+
+    fn finished(&self) -> bool {
+        self.done
+    }
+
+    fn elapsed_s(&self) -> f64 {
+        self.trace.rows.last().map_or(0.0, |r| r.time_s)
+    }
+
+    fn stage(&self) -> &'static str {
+        "closed loop"
+    }
+
+    fn finish(&mut self) -> Result<Trace, LoopError> {
+        Ok(std::mem::take(&mut self.trace))
+    }
+}
+
+impl OnMachine<FeedbackLoop> {
+    /// Wires `machine`, `controller` and `estimator` with `settings`.
+    pub fn new(
+        machine: Box<dyn Machine>,
+        controller: Box<dyn Controller>,
+        estimator: Estimator,
+        settings: LoopSettings,
+    ) -> Result<Self, LoopError> {
+        let feedback_loop =
+            FeedbackLoop::new(machine.sample_rate_hz(), controller, estimator, settings)?;
+        Ok(Self::new_with(machine, feedback_loop))
+    }
+
+    /// The settings.
+    pub fn settings(&self) -> &LoopSettings {
+        self.sample_loop.settings()
+    }
+
+    /// The trace so far.
+    pub fn trace(&self) -> &Trace {
+        self.sample_loop.trace()
+    }
+
+    /// The trace, ending the loop.
+    pub fn into_trace(mut self) -> Trace {
+        std::mem::take(&mut self.sample_loop.trace)
+    }
+
+    /// Runs to the end.
+    pub fn run(self) -> Trace {
+        self.run_to_end().unwrap_or_default()
+    }
+}
+
+/// Whether two estimates differ by more than `tolerance` of the larger of them and the target
+/// (so two near-zero estimates in air never disagree).
+/// What a period without a sensorless estimate records.
+const NO_SENSORLESS_ESTIMATE: SensorlessEstimate = SensorlessEstimate {
+    force_n: f64::NAN,
+    relative_uncertainty: 0.0,
+};
+
+fn disagrees(current_based_n: f64, sensorless_n: f64, tolerance: f64, target_n: f64) -> bool {
+    if !(current_based_n.is_finite() && sensorless_n.is_finite()) {
+        return false;
+    }
+    let scale = current_based_n
+        .abs()
+        .max(sensorless_n.abs())
+        .max(target_n * 0.25);
+    (current_based_n - sensorless_n).abs() > tolerance * scale
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_cross_check_widens_with_the_power_laws_uncertainty_but_still_sees_a_real_gap() {
+        // ±30 % at the calibration cut.
+        assert!(!disagrees(100.0, 130.0, 0.3, 100.0));
+        assert!(disagrees(100.0, 150.0, 0.3, 100.0));
+        // Half the calibrated feed per tooth adds 0.25·ln 2 ≈ 0.17: 50 % apart is then within it.
+        let tolerance = 0.3 + 0.25 * 2f64.ln();
+        assert!(!disagrees(100.0, 150.0, tolerance, 100.0));
+        // A force two and a half times the estimate is still a disagreement.
+        assert!(disagrees(100.0, 250.0, tolerance, 100.0));
+        // No power-law estimate, no verdict.
+        assert!(!disagrees(100.0, f64::NAN, tolerance, 100.0));
+    }
+}

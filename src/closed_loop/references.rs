@@ -1,0 +1,391 @@
+//! The fixed-feed reference runs the savings are measured against: the programmed feed at 100 %,
+//! and the highest fixed override that keeps the peak force at the target — the feed a machinist
+//! would fix for the part's worst spot.
+
+use serde::Serialize;
+
+use super::definition::{machine_max_override_pct, RunSpec};
+use super::error::LoopError;
+use super::lab::{preset_plan, LabRun, RunResult};
+use super::metrics::with_savings;
+use super::settings::Plan;
+use crate::control::registry::{ControllerConfig, ControllerKind};
+use crate::estimation::estimator::Calibration;
+use crate::plant::presets::PlantEdits;
+use crate::plant::Preset;
+use crate::work::{Progress, Work};
+
+/// The reference runs of the savings.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct References {
+    /// Cycle time at the programmed feed (fixed 100 %).
+    #[serde(deserialize_with = "crate::estimation::null_as_nan")]
+    pub programmed_cycle_time_s: f64,
+    /// The highest fixed override whose peak regulated force stays at or below the target (NaN
+    /// when not even the lowest does, and with it the cycle time and that saving): the
+    /// feed a machinist would fix for the part's worst spot, judged against the same force the
+    /// controllers are asked to hold (not the 1.2 × target limit, which would let the fixed feed
+    /// run 20 % harder than any controller aims to).
+    #[serde(deserialize_with = "crate::estimation::null_as_nan")]
+    pub safe_fixed_override_pct: f64,
+    /// Cycle time at that override.
+    #[serde(deserialize_with = "crate::estimation::null_as_nan")]
+    pub safe_fixed_cycle_time_s: f64,
+}
+
+/// Runs the fixed-feed references for `spec`'s preset and settings: 100 %, and a search for the
+/// highest fixed override that keeps the peak force at or below the target (to 1 %).
+pub fn references(spec: &RunSpec) -> Result<References, LoopError> {
+    ReferenceSearch::new(spec)?.run_to_end()
+}
+
+/// The search's bracket of fixed overrides, percent: the answer lies in [low, high), and neither
+/// end is run unless the search comes down to it.
+const REFERENCE_BRACKET_PCT: (f64, f64) = (1.0, 250.0);
+
+/// Probes the force model may place before the search falls back to halving the bracket.
+pub const GUIDED_PROBES: usize = 4;
+
+/// A probe that only needs a verdict is looked at after this many control periods.
+const VERDICT_CHECK_PERIODS: usize = 20;
+
+/// The reference runs of [`references`], done a piece at a time so a browser can show progress
+/// and stay responsive: the programmed feed at 100 %, then probes of fixed overrides.
+///
+/// The peak force of a fixed-feed run grows with the override, nearly in a straight line (the
+/// chip's force with the feed per tooth, plus the edge forces), so the probes are placed where
+/// the line through the runs so far meets the target (through the origin while only one run is
+/// known), inside the bracket of the highest override that passed and the lowest that failed;
+/// after [`GUIDED_PROBES`] such probes, or when the line gives nothing, the bracket is halved.
+/// For a peak that rises with the override this finds the same answer as a bisection, in three
+/// to five runs instead of nine. Once two whole runs have fixed the line, a probe that breaks the
+/// target is stopped there (the rest of its cut cannot lower its peak). The teach cut is made
+/// once, by the first run (or given: [`ReferenceSearch::calibrated`]); the others reuse its
+/// calibration (they differ from it only in controller and override band, which the teach cut
+/// does not depend on).
+pub struct ReferenceSearch {
+    spec: RunSpec,
+    run: LabRun,
+    /// The fixed override of `run`, percent, and what it is for.
+    running: (f64, RunKind),
+    calibration: Option<Calibration>,
+    programmed_cycle_time_s: f64,
+    /// The force no reference run may exceed: the target the controllers hold.
+    reference_force_n: f64,
+    /// The highest override known to keep the force (the bracket's floor until one is run).
+    low_pct: f64,
+    /// The lowest override known to break it (the bracket's top until one is run).
+    high_pct: f64,
+    best_cycle_time_s: Option<f64>,
+    /// (override, peak force) of every whole run so far: the line's points.
+    peaks: Vec<(f64, f64)>,
+    /// Rows of `run`'s trace already compared with the reference force.
+    rows_checked: usize,
+    guided_probes: usize,
+    runs_done: usize,
+    /// The largest fraction shown so far (the number of runs is not known in advance).
+    shown_fraction: std::cell::Cell<f64>,
+    found: Option<References>,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum RunKind {
+    Programmed,
+    Probe,
+    /// No probe stayed under the target: the lowest override, checked like the others.
+    Lowest,
+}
+
+impl ReferenceSearch {
+    /// Starts with the programmed-feed run (and its teach cut).
+    pub fn new(spec: &RunSpec) -> Result<Self, LoopError> {
+        Self::starting(spec, LabRun::new(&fixed_feed_spec(spec, 100.0)?)?, None)
+    }
+
+    /// Starts with the programmed-feed run, calibrated by `calibration` (from a teach cut of a
+    /// run on the same scenario: [`TeachKey`]) instead of a teach cut of its own.
+    pub fn calibrated(spec: &RunSpec, calibration: Calibration) -> Result<Self, LoopError> {
+        let run = LabRun::calibrated(&fixed_feed_spec(spec, 100.0)?, calibration.clone())?;
+        Self::starting(spec, run, Some(calibration))
+    }
+
+    fn starting(
+        spec: &RunSpec,
+        run: LabRun,
+        calibration: Option<Calibration>,
+    ) -> Result<Self, LoopError> {
+        let (low_pct, bracket_high_pct) = REFERENCE_BRACKET_PCT;
+        // A dial that stops at 150 % cannot run a fixed 250 %.
+        let high_pct = bracket_high_pct.min(machine_max_override_pct(spec.preset));
+        Ok(Self {
+            run,
+            running: (100.0, RunKind::Programmed),
+            spec: spec.clone(),
+            calibration,
+            programmed_cycle_time_s: f64::NAN,
+            reference_force_n: f64::NAN,
+            low_pct,
+            high_pct,
+            best_cycle_time_s: None,
+            peaks: Vec::new(),
+            rows_checked: 0,
+            guided_probes: 0,
+            runs_done: 0,
+            shown_fraction: std::cell::Cell::new(0.0),
+            found: None,
+        })
+    }
+
+    /// The references, once found.
+    pub fn found(&self) -> Option<References> {
+        self.found
+    }
+
+    /// The calibration of the scenario's teach cut, once made (or given).
+    pub fn calibration(&self) -> Option<&Calibration> {
+        self.calibration.as_ref()
+    }
+
+    /// Whether the run under way has already broken the reference force, checking the rows added
+    /// since the last look.
+    fn run_broke_target(&mut self) -> bool {
+        let Some(trace) = self.run.trace() else {
+            return false;
+        };
+        let rows = &trace.rows[self.rows_checked.min(trace.rows.len())..];
+        self.rows_checked = trace.rows.len();
+        rows.iter()
+            .any(|r| r.force_n.is_finite() && r.force_n > self.reference_force_n)
+    }
+
+    /// Where the straight line through the whole runs so far (the last two; through the origin
+    /// while there is one) reaches the reference force, if it rises.
+    fn line_reaches_target_pct(&self) -> Option<f64> {
+        let target = self.reference_force_n;
+        let pct = match self.peaks.as_slice() {
+            [] => return None,
+            [(p, f)] => p * target / f,
+            [.., (p0, f0), (p1, f1)] => {
+                let slope = (f1 - f0) / (p1 - p0);
+                // A line that does not rise (or a NaN) says nothing: halve the bracket instead.
+                if slope.is_nan() || slope <= 0.0 {
+                    return None;
+                }
+                p1 + (target - f1) / slope
+            }
+        };
+        pct.is_finite().then_some(pct)
+    }
+
+    /// The next override to run, or `None` when the bracket is down to 1 %.
+    fn next_probe_pct(&mut self) -> Option<f64> {
+        if self.high_pct - self.low_pct <= 1.0 {
+            return None;
+        }
+        let (inside_low, inside_high) = (self.low_pct + 1.0, self.high_pct - 1.0);
+        let guided = (self.guided_probes < GUIDED_PROBES)
+            .then(|| self.line_reaches_target_pct())
+            .flatten();
+        let pct = match guided {
+            Some(pct) => {
+                self.guided_probes += 1;
+                pct.floor()
+            }
+            None => ((self.low_pct + self.high_pct) / 2.0).round(),
+        };
+        Some(pct.clamp(inside_low, inside_high))
+    }
+
+    /// The run after a `kind` run ended: the next probe, the lowest override's check, or the
+    /// answer.
+    fn next(&mut self, kind: RunKind) -> Result<bool, LoopError> {
+        let next = match self.next_probe_pct() {
+            Some(pct) => Some((pct, RunKind::Probe)),
+            None if self.best_cycle_time_s.is_none() && kind != RunKind::Lowest => {
+                Some((self.low_pct, RunKind::Lowest))
+            }
+            None => None,
+        };
+        match (
+            next,
+            self.best_cycle_time_s
+                .or_else(|| self.no_safe_fixed_feed(kind)),
+        ) {
+            (Some((pct, kind)), _) => {
+                let spec = fixed_feed_spec(&self.spec, pct)?;
+                self.run = match &self.calibration {
+                    Some(c) => LabRun::calibrated(&spec, c.clone())?,
+                    None => LabRun::new(&spec)?,
+                };
+                self.running = (pct, kind);
+                self.rows_checked = 0;
+                Ok(false)
+            }
+            (None, Some(best)) => {
+                self.found = Some(References {
+                    programmed_cycle_time_s: self.programmed_cycle_time_s,
+                    safe_fixed_override_pct: self.low_pct,
+                    safe_fixed_cycle_time_s: best,
+                });
+                Ok(true)
+            }
+            (None, None) => Err(LoopError::NoReference),
+        }
+    }
+
+    /// After the lowest override also broke the target, the answer is that no fixed feed keeps
+    /// the force at the target (the cut's floor, its edge forces at the deepest point, lies
+    /// above it): NaN, which leaves the saving against a safe fixed feed undefined rather than
+    /// measured against a 1 % crawl that is not safe either.
+    fn no_safe_fixed_feed(&mut self, kind: RunKind) -> Option<f64> {
+        (kind == RunKind::Lowest).then(|| {
+            self.low_pct = f64::NAN;
+            f64::NAN
+        })
+    }
+}
+
+impl Work for ReferenceSearch {
+    type Output = References;
+    type Error = LoopError;
+
+    /// Does at most `periods` control periods of work.
+    fn advance(&mut self, periods: usize) -> Result<bool, LoopError> {
+        if self.found.is_some() {
+            return Ok(true);
+        }
+        let (pct, kind) = self.running;
+        // Once the line is fixed by two whole runs, a probe needs no more than a verdict: it is
+        // looked at every few periods and stopped when it breaks the target. (The answer does not
+        // depend on where it stops, nor on the budget: such a probe adds no point to the line.)
+        let verdict_only = kind == RunKind::Probe && self.peaks.len() >= 2;
+        let mut left = periods.max(1);
+        let finished = loop {
+            let piece = if verdict_only {
+                left.min(VERDICT_CHECK_PERIODS)
+            } else {
+                left
+            };
+            left -= piece;
+            if self.run.advance(piece)? {
+                break true;
+            }
+            if verdict_only && self.run_broke_target() {
+                self.runs_done += 1;
+                self.high_pct = self.high_pct.min(pct);
+                return self.next(kind);
+            }
+            if left == 0 {
+                break false;
+            }
+        };
+        if !finished {
+            return Ok(false);
+        }
+        let result = self.run.finish()?;
+        self.runs_done += 1;
+        if kind == RunKind::Programmed {
+            self.programmed_cycle_time_s = result.metrics.cycle_time_s;
+            self.reference_force_n = result.settings.target_force_n;
+            self.calibration.get_or_insert(result.calibration);
+        }
+        let peak_n = result.metrics.peak_force_n;
+        let kept = peak_n <= self.reference_force_n && result.trace.completed;
+        if result.trace.completed && (kept || !verdict_only) {
+            self.peaks.push((pct, peak_n));
+        }
+        match kind {
+            // The programmed feed is a probe at 100 % too.
+            RunKind::Programmed | RunKind::Probe => {
+                if kept && pct > self.low_pct {
+                    self.low_pct = pct;
+                    self.best_cycle_time_s = Some(result.metrics.cycle_time_s);
+                } else if !kept {
+                    self.high_pct = self.high_pct.min(pct);
+                }
+            }
+            RunKind::Lowest => {
+                if kept {
+                    self.best_cycle_time_s = Some(result.metrics.cycle_time_s);
+                }
+            }
+        }
+        self.next(kind)
+    }
+
+    /// The fixed override of the current run and the rough fraction done.
+    fn progress(&self) -> Progress {
+        // The runs still to come: about one per halving of the bracket, at most three once the
+        // line guides the probes, and the run under way.
+        let width = (self.high_pct - self.low_pct).max(1.0);
+        let remaining = if self.found.is_some() {
+            0
+        } else {
+            1 + (width.log2().ceil() as usize).min(3)
+        };
+        let expected = (self.runs_done + remaining).max(1);
+        let label = format!(
+            "Savings: reference run {} of about {expected}, fixed feed at {:.0} %",
+            self.runs_done + 1,
+            self.running.0
+        );
+        let fraction = ((self.runs_done as f64 + self.run.progress().fraction) / expected as f64)
+            .clamp(0.0, 1.0)
+            .max(self.shown_fraction.get());
+        self.shown_fraction.set(fraction);
+        Progress::new(label, fraction)
+    }
+
+    fn finish(&mut self) -> Result<References, LoopError> {
+        self.found.ok_or(LoopError::NotFinished)
+    }
+}
+
+/// `spec` at a fixed override from start to end, not bounded by the envelope's override band:
+/// the program as a machinist would run it without adaptive control.
+pub fn fixed_feed_spec(spec: &RunSpec, override_pct: f64) -> Result<RunSpec, LoopError> {
+    let mut s = spec.clone();
+    s.controller = ControllerConfig::new(ControllerKind::Fixed);
+    s.controller
+        .set("override_pct", override_pct)
+        .map_err(LoopError::Controller)?;
+    s.settings.min_override_pct = Some(0.0);
+    s.settings.max_override_pct = Some(machine_max_override_pct(spec.preset));
+    s.settings.arming_override_pct = Some(override_pct);
+    Ok(s)
+}
+
+/// What a scenario's fixed-feed references depend on: the preset, the seed, the machine edits and
+/// the settings of its run at the fixed 100 % feed, resolved to values. Two specs that spell the
+/// same settings differently (a default left unset, or typed in) have the same key, and their
+/// reference searches give the same result; the controller plays no part.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ScenarioKey {
+    preset: Preset,
+    seed: u64,
+    plant: PlantEdits,
+    plan: Plan,
+}
+
+impl ScenarioKey {
+    /// The key of `spec`'s scenario.
+    pub fn of(spec: &RunSpec) -> Result<Self, LoopError> {
+        let fixed = fixed_feed_spec(spec, 100.0)?;
+        Ok(Self {
+            preset: spec.preset,
+            seed: spec.seed,
+            plant: spec.plant,
+            plan: preset_plan(&fixed)?,
+        })
+    }
+}
+
+/// Fills a result's savings from the references.
+pub fn apply_references(result: &mut RunResult, references: &References) {
+    result.metrics = with_savings(
+        result.metrics.clone(),
+        Some(references.programmed_cycle_time_s),
+        Some(references.safe_fixed_cycle_time_s),
+    );
+}
