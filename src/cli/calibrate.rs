@@ -185,7 +185,7 @@ impl LogCalibrationArgs {
 pub fn read_log(file: &str) -> Result<crate::log::Log, CliError> {
     let bytes =
         std::fs::read(file).map_err(|e| CliError::new(format!("{file}: cannot read: {e}")))?;
-    let log = crate::log::load(&bytes, None);
+    let log = crate::log::load(&bytes, None).map_err(|e| CliError::new(format!("{file}: {e}")))?;
     if log.rows == 0 {
         return Err(CliError::new(format!(
             "{file}: no data rows (a header line and at least one line of values are needed)"

@@ -136,7 +136,7 @@ impl LogTable {
     ///
     /// ```
     /// use cutlab::estimation::teach_log::LogTable;
-    /// let log = cutlab::log::load(b"t;F [N];I [A]\n0;1,5;2\n0,1;2,5;3\n", None);
+    /// let log = cutlab::log::load(b"t;F [N];I [A]\n0;1,5;2\n0,1;2,5;3\n", None).unwrap();
     /// let map = [("force_n".to_string(), "F [N]".to_string())];
     /// let t = LogTable::from_log(&log, &map).unwrap();
     /// assert_eq!(t.column("force_n"), Some(&[1.5, 2.5][..]));
@@ -409,7 +409,7 @@ fn median(values: impl Iterator<Item = f64>) -> f64 {
 /// use cutlab::estimation::teach_log::{full_override_rows, LogTable};
 /// let csv = "override_pct,force_n,spindle_speed_rpm\n100,0,1000\n100,300,990\n30,90,1000\n\
 ///            100,320,980\n100,310,985\n";
-/// let log = cutlab::log::load(csv.as_bytes(), None);
+/// let log = cutlab::log::load(csv.as_bytes(), None).unwrap();
 /// let full = full_override_rows(&LogTable::from_log(&log, &[]).unwrap(), None).unwrap();
 /// assert_eq!((full.rows, full.resultant_n, full.spindle_rpm), (3, 310.0, 985.0));
 /// ```
@@ -458,7 +458,7 @@ pub fn full_override_rows(
 ///     let force = 10.0 * f64::from(i);
 ///     csv += &format!("{},1000,{force}\n", 5.0 + 0.01 * force);
 /// }
-/// let table = LogTable::from_log(&cutlab::log::load(csv.as_bytes(), None), &[]).unwrap();
+/// let table = LogTable::from_log(&cutlab::log::load(csv.as_bytes(), None).unwrap(), &[]).unwrap();
 /// let fitted = calibrate_log(&table, None, 900.0).unwrap();
 /// let row = fitted.spindle.unwrap().rows[0];
 /// assert!((row.sensitivity_a_per_n - 0.01).abs() < 1e-9);
@@ -549,7 +549,7 @@ mod tests {
 
     /// The calibration's columns of a CSV text, read as `cutlab calibrate` reads a file.
     fn table(csv: &str) -> LogTable {
-        LogTable::from_log(&crate::log::load(csv.as_bytes(), None), &[]).unwrap()
+        LogTable::from_log(&crate::log::load(csv.as_bytes(), None).unwrap(), &[]).unwrap()
     }
 
     #[test]
@@ -581,7 +581,7 @@ mod tests {
     #[test]
     fn a_column_named_twice_is_refused_as_ambiguous() {
         let csv = "spindle_current_rms_a,force_n,force_n\n1,2,3\n";
-        let log = crate::log::load(csv.as_bytes(), None);
+        let log = crate::log::load(csv.as_bytes(), None).unwrap();
         let e = LogTable::from_log(&log, &[]).unwrap_err();
         assert_eq!(
             e,
@@ -589,7 +589,7 @@ mod tests {
              the file"
         );
         // A name no role reads may repeat.
-        let log = crate::log::load(b"note,note,force_n\na,b,3\n", None);
+        let log = crate::log::load(b"note,note,force_n\na,b,3\n", None).unwrap();
         assert_eq!(
             LogTable::from_log(&log, &[]).unwrap().column("force_n"),
             Some(&[3.0][..])

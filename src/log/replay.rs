@@ -193,9 +193,13 @@ impl LogMachine {
 
     fn sample(&mut self, row: usize) -> MachineStep {
         let s = &self.source;
-        let time_s = self
-            .value(Channel::Time, row)
-            .unwrap_or(row as f64 * s.sample_period_s);
+        let time_s = match self.value(Channel::Time, row) {
+            Some(t) if t.is_finite() => t,
+            // A damaged time cell (a gap, NaN, ±∞): a period after the row before, so no event
+            // or period of the replay is timed "NaN s".
+            Some(_) if row > 0 => self.last.sensors.time_s + s.sample_period_s,
+            _ => row as f64 * s.sample_period_s,
+        };
         let speed_rpm = self
             .value(Channel::SpindleSpeed, row)
             .unwrap_or(s.spindle_rpm);
