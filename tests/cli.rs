@@ -904,3 +904,115 @@ fn calibrate_on_a_very_wide_file_says_what_is_missing_in_one_short_line() {
     assert!(e.len() < 400, "{e}");
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// Only a closed standard output is quiet: an error that merely says "Broken pipe" (a file of
+/// that name, a device that went away) is printed and fails.
+#[cfg(unix)]
+#[test]
+fn an_error_is_never_taken_for_a_closed_pipe_by_its_words() {
+    use std::process::{Command, Stdio};
+    let exe = env!("CARGO_BIN_EXE_cutlab");
+    let out = Command::new(exe)
+        .args(["log", "inspect", "Broken pipe.csv"])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(1), "{out:?}");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        stderr.starts_with("cutlab: error: Broken pipe.csv: cannot open"),
+        "{stderr}"
+    );
+    // The reader of stdout gone before the output: quiet, and a success.
+    let mut child = Command::new(exe)
+        .args(["fuzzy", "export", "--rules", "dynamics"])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    drop(child.stdout.take());
+    let out = child.wait_with_output().unwrap();
+    assert!(out.status.success(), "{out:?}");
+    assert!(out.stderr.is_empty(), "{out:?}");
+}
+
+#[test]
+fn negative_values_get_the_options_own_message() {
+    for (args, expected) in [
+        (
+            &[
+                "log",
+                "replay",
+                "x.csv",
+                "--current",
+                "I",
+                "--controller",
+                "pi",
+                "--target-a",
+                "-1",
+            ][..],
+            "--target-a: must be a positive number, got -1",
+        ),
+        (
+            &[
+                "tune",
+                "--controller",
+                "pi",
+                "--scenarios",
+                "maneerat-doc-1",
+                "--sweep",
+                "-1",
+            ][..],
+            "--sweep: cannot be negative, got -1",
+        ),
+        (
+            &[
+                "tune",
+                "--controller",
+                "pi",
+                "--scenarios",
+                "maneerat-doc-1",
+                "--max-evals",
+                "-5",
+            ][..],
+            "--max-evals: cannot be negative, got -5",
+        ),
+        (
+            &[
+                "host",
+                "--port",
+                "/dev/null",
+                "--baud",
+                "-1",
+                "--controller",
+                "pi",
+            ][..],
+            "--baud: cannot parse \"-1\" as a non-negative integer",
+        ),
+    ] {
+        let (result, _) = cutlab(args, "");
+        assert_eq!(result.unwrap_err(), expected, "{args:?}");
+    }
+}
+
+#[test]
+fn a_range_error_in_a_config_file_names_the_file_the_run_and_the_field() {
+    let path =
+        std::env::temp_dir().join(format!("cutlab-config-range-{}.json", std::process::id()));
+    std::fs::write(
+        &path,
+        r#"{"format": "cutlab-runs", "version": 1, "runs": [{"preset": "maneerat-doc-1",
+            "controller": {"kind": "pi"}, "seed": 1, "settings": {"max_override_pct": 1e300}}]}"#,
+    )
+    .unwrap();
+    let path = path.to_string_lossy().into_owned();
+    for command in ["sim", "compare"] {
+        let (result, _) = cutlab(&[command, "--config", &path, "--no-references"], "");
+        assert_eq!(
+            result.unwrap_err(),
+            format!(
+                "--config {path}: run 1: highest override 1e300 % is more than this machine \
+                 applies (255 %)"
+            )
+        );
+    }
+}

@@ -17,12 +17,15 @@
 //! Each run is a [`RunSpec`]: settings and machine edits left out keep the preset's values, and
 //! every controller parameter is written out, so a later change of a default does not change what
 //! a saved file means. Unknown fields are errors, not silently ignored: a misspelt
-//! `"target_force"` would otherwise run at the preset's target.
+//! `"target_force"` would otherwise run at the preset's target, a misspelt `"parms"` in a
+//! controller object at the controller's defaults. Every setting is checked against its range
+//! when the file is read, so an error names the run and the field before anything runs.
 
 use std::fmt;
 
 use serde::{Deserialize, Serialize};
 
+use super::definition::check_spec;
 use super::file_format::check_format;
 use super::lab::RunSpec;
 
@@ -95,6 +98,10 @@ impl RunConfiguration {
         let config: Self = serde_json::from_str(text).map_err(|e| ConfigError(e.to_string()))?;
         if config.runs.is_empty() {
             return Err(ConfigError("\"runs\" is empty: nothing to run".into()));
+        }
+        // Every setting in range before anything runs, each error naming its run and field.
+        for (i, run) in config.runs.iter().enumerate() {
+            check_spec(run).map_err(|e| ConfigError(format!("run {}: {e}", i + 1)))?;
         }
         Ok(config)
     }
@@ -175,6 +182,22 @@ mod tests {
                 r#"{"format": "cutlab-runs", "version": 1, "runs": [{"preset": "kim-step-doc",
                  "controller": {"kind": "pi"}, "seed": -1}]}"#,
                 "line 2",
+            ),
+            (
+                r#"{"format": "cutlab-runs", "version": 1, "runs": [{"preset": "kim-step-doc",
+                 "controller": {"kind": "pi", "parms": {"kp": 5}}, "seed": 1}]}"#,
+                "unknown field `parms`",
+            ),
+            (
+                r#"{"format": "cutlab-runs", "version": 1, "runs": [{"preset": "kim-step-doc",
+                 "controller": {"kind": "pi"}, "seed": 1}, {"preset": "kim-step-doc",
+                 "controller": {"kind": "pi"}, "seed": 1, "settings": {"max_override_pct": 1e300}}]}"#,
+                "run 2: highest override 1e300 % is more than this machine applies",
+            ),
+            (
+                r#"{"format": "cutlab-runs", "version": 1, "runs": [{"preset": "kim-step-doc",
+                 "controller": {"kind": "pi"}, "seed": 1, "settings": {"control_period_s": 1e-300}}]}"#,
+                "run 1: control_period_s: 1e-300 s is outside",
             ),
         ];
         for (text, expected) in cases {

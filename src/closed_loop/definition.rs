@@ -809,7 +809,9 @@ impl fmt::Display for Problem {
             }
             Problem::AboveMachine { value, max, what } => write!(
                 f,
-                "{what} {value} % is more than this machine applies ({max} %)"
+                "{what} {} % is more than this machine applies ({} %)",
+                readable(*value),
+                readable(*max)
             ),
             Problem::OutsideBand { value, min, max } => write!(
                 f,

@@ -294,8 +294,10 @@ pub struct ControllerConfig {
 }
 
 /// The serialised form: `{"kind": "pi", "params": {"kp": 0.3, ...}}`; missing parameters take
-/// their defaults, unknown or out-of-range ones are errors.
+/// their defaults, unknown or out-of-range ones are errors, and so is a field other than these
+/// three (a misspelt `"parms"` would otherwise run on the defaults).
 #[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 struct ControllerConfigText {
     kind: ControllerKind,
     #[serde(default)]
@@ -658,5 +660,10 @@ mod tests {
             serde_json::from_str::<ControllerConfig>(r#"{"kind":"pi","params":{"kp":-3}}"#)
                 .is_err()
         );
+        // A misspelt field is an error, not a run on the defaults.
+        let e = serde_json::from_str::<ControllerConfig>(r#"{"kind":"pi","parms":{"kp":5}}"#)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("unknown field `parms`"), "{e}");
     }
 }
