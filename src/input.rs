@@ -93,6 +93,22 @@ pub fn readable(v: f64) -> String {
     }
 }
 
+/// Text from the user's input in a message: quoted, and cut after 40 characters with its length
+/// said, so a 10 MB field makes a one-line message, not a 10 MB one.
+///
+/// ```
+/// use cutlab::input::excerpt;
+/// assert_eq!(excerpt("abc"), "\"abc\"");
+/// assert_eq!(excerpt(&"x".repeat(1000)), format!("\"{}\"… (1000 characters)", "x".repeat(40)));
+/// ```
+pub fn excerpt(text: &str) -> String {
+    const SHOWN: usize = 40;
+    match text.char_indices().nth(SHOWN) {
+        None => format!("{text:?}"),
+        Some((at, _)) => format!("{:?}… ({} characters)", &text[..at], text.chars().count()),
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

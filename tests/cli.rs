@@ -1016,3 +1016,24 @@ fn a_range_error_in_a_config_file_names_the_file_the_run_and_the_field() {
         );
     }
 }
+
+#[test]
+fn an_objective_of_all_zero_weights_is_refused_before_any_run() {
+    let (result, out) = cutlab(
+        &[
+            "tune",
+            "--controller",
+            "pi",
+            "--scenarios",
+            "maneerat-doc-1",
+            "--param",
+            "kp=0.1:1",
+            "--objective",
+            "cycle=0,error=0,above=0,activity=0",
+        ],
+        "",
+    );
+    let e = result.unwrap_err();
+    assert!(e.starts_with("--objective: every weight is 0"), "{e}");
+    assert!(out.is_empty(), "{out}");
+}

@@ -161,11 +161,19 @@ impl LogTable {
         }
         let mut header = Vec::new();
         let mut columns = Vec::new();
+        let mut read: Vec<(&str, &str)> = Vec::new();
         for role in CALIBRATION_COLUMNS {
             let source = map
                 .iter()
                 .find(|(r, _)| r == role)
                 .map_or(role, |(_, c)| c.as_str());
+            // One column read as two quantities fits a line of itself (I = 0 + 1·F, R² 1).
+            if let Some((other, _)) = read.iter().find(|(_, c)| *c == source) {
+                return Err(format!(
+                    "{other} and {role} would both be read from column {source:?}; a column can \
+                     be only one of them: map the other to a column of its own"
+                ));
+            }
             let same_name = log.columns.iter().filter(|c| c.name == source).count();
             if same_name > 1 {
                 return Err(format!(
@@ -181,6 +189,7 @@ impl LogTable {
                 }
                 header.push(role.to_string());
                 columns.push(column.values.clone());
+                read.push((role, source));
             }
         }
         Ok(Self {
@@ -576,6 +585,19 @@ mod tests {
                 "{e}"
             );
         }
+    }
+
+    #[test]
+    fn one_column_read_as_two_quantities_is_refused() {
+        let csv =
+            "time_s,force_n,spindle_current_rms_a,spindle_speed_rpm\n0,1,2,900\n0.1,2,3,900\n";
+        let log = crate::log::load(csv.as_bytes(), None).unwrap();
+        let map = [("force_n".to_string(), "spindle_current_rms_a".to_string())];
+        let e = LogTable::from_log(&log, &map).unwrap_err();
+        assert!(
+            e.contains("force_n and spindle_current_rms_a would both be read from column \"spindle_current_rms_a\""),
+            "{e}"
+        );
     }
 
     #[test]

@@ -27,7 +27,7 @@ pub mod replay;
 
 use serde::Serialize;
 
-use crate::input::readable;
+use crate::input::{excerpt, readable};
 use csv::{parse_number, Cell, CsvReader, Dialect, RecordView};
 
 /// A column with at least this share of numbers (among its non-empty cells) is numeric; its
@@ -801,7 +801,7 @@ impl Sink {
                 self.problem(
                     line,
                     Some(name.clone()),
-                    format!("{} is not a number; kept as a gap", short_text(&text)),
+                    format!("{} is not a number; kept as a gap", excerpt(&text)),
                 );
             }
             if b.not_finite > 0 {
@@ -997,16 +997,6 @@ impl Sink {
         }
         // Time stamps are written to a few digits: 0.0009999999999998899 is the log's 1 ms.
         Some(format!("{median:.11e}").parse().unwrap_or(median))
-    }
-}
-
-/// A cell's text for a message: quoted, and cut after 40 characters (a 10 MB cell must not make
-/// a 10 MB message).
-fn short_text(text: &str) -> String {
-    const SHOWN: usize = 40;
-    match text.char_indices().nth(SHOWN) {
-        None => format!("{text:?}"),
-        Some((at, _)) => format!("{:?}… ({} characters)", &text[..at], text.chars().count()),
     }
 }
 
