@@ -71,15 +71,21 @@ fn parse_whole<T: std::str::FromStr>(text: &str, range: &str) -> Result<T, Strin
 }
 
 /// `v` as a person reads it in a message: plain digits with at most four decimals, or an exponent
-/// when very large or small (1e308 has 309 digits).
+/// with at most five significant digits when very large or small — 1e300, not a 301-digit
+/// integer; 1e-300, not "0.0000"; 3.4028e38, not 3.4028234663852886e38. Every number a message
+/// shows goes through here.
 ///
 /// ```
 /// use cutlab::input::readable;
 /// assert_eq!(readable(1e308), "1e308");
+/// assert_eq!(readable(1e300), "1e300");
+/// assert_eq!(readable(-1e-300), "-1e-300");
+/// assert_eq!(readable(f64::from(f32::MAX)), "3.4028e38");
 /// assert_eq!(readable(20000.0), "20000");
 /// assert_eq!(readable(0.125), "0.125");
 /// assert_eq!(readable(2e-9), "2e-9");
 /// assert_eq!(readable(f64::NAN), "NaN");
+/// assert_eq!(readable(f64::NEG_INFINITY), "-inf");
 /// ```
 pub fn readable(v: f64) -> String {
     if v == 0.0 || (1e-3..1e7).contains(&v.abs()) {
@@ -88,8 +94,17 @@ pub fn readable(v: f64) -> String {
             .trim_end_matches('0')
             .trim_end_matches('.')
             .to_string()
+    } else if v.is_finite() {
+        let rounded = format!("{v:.4e}");
+        match rounded.split_once('e') {
+            Some((mantissa, exponent)) => format!(
+                "{}e{exponent}",
+                mantissa.trim_end_matches('0').trim_end_matches('.')
+            ),
+            None => rounded,
+        }
     } else {
-        format!("{v:e}")
+        format!("{v}")
     }
 }
 

@@ -846,7 +846,8 @@ impl Sink {
                         self.label_names.get(id as usize).cloned()
                     }
                     _ if value.is_nan() => None,
-                    _ => Some(readable(*value)),
+                    // Every digit: two numbers must never become one label.
+                    _ => Some(number_label(*value)),
                 };
                 if let Some(label) = label {
                     let next = local.len() as u32;
@@ -997,6 +998,17 @@ impl Sink {
         }
         // Time stamps are written to a few digits: 0.0009999999999998899 is the log's 1 ms.
         Some(format!("{median:.11e}").parse().unwrap_or(median))
+    }
+}
+
+/// A number in a text column as its label: every digit (the shortest text that reads back as
+/// the same number), with an exponent where plain digits would run long.
+fn number_label(v: f64) -> String {
+    let plain = format!("{v}");
+    if plain.len() <= 24 {
+        plain
+    } else {
+        format!("{v:e}")
     }
 }
 
