@@ -124,6 +124,29 @@ pub fn excerpt(text: &str) -> String {
     }
 }
 
+/// A message that may quote the user's input at length (a parser's `unknown field \`…\``) cut to
+/// one short line: at most 300 characters, its start and its end kept (where a parser says the
+/// line and column), the cut said.
+///
+/// ```
+/// use cutlab::input::one_short_line;
+/// assert_eq!(one_short_line("line 3: bad"), "line 3: bad");
+/// let long = format!("unknown field `{}` at line 1 column 9", "x".repeat(10_000));
+/// let short = one_short_line(&long);
+/// assert!(short.len() < 320 && short.ends_with("at line 1 column 9"), "{short}");
+/// ```
+pub fn one_short_line(message: &str) -> String {
+    const KEPT: usize = 140;
+    let message = message.replace(['\n', '\r'], " ");
+    let count = message.chars().count();
+    if count <= 2 * KEPT + 20 {
+        return message;
+    }
+    let head: String = message.chars().take(KEPT).collect();
+    let tail: String = message.chars().skip(count - KEPT).collect();
+    format!("{head}… ({} characters cut) …{tail}", count - 2 * KEPT)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -119,8 +119,8 @@ impl CalibrationFile {
     /// ```
     pub fn from_json(text: &str) -> Result<Self, CalibrationFileError> {
         check_format(text, FORMAT, VERSION, "calibration")?;
-        let file: Self =
-            serde_json::from_str(text).map_err(|e| CalibrationFileError(e.to_string()))?;
+        let file: Self = serde_json::from_str(text)
+            .map_err(|e| CalibrationFileError(crate::input::one_short_line(&e.to_string())))?;
         check_calibration(&file.calibration).map_err(CalibrationFileError)?;
         Ok(file)
     }

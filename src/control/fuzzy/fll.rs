@@ -20,7 +20,7 @@ use super::membership::Shape;
 use super::FuzzyError;
 
 fn error(line: usize, message: impl AsRef<str>) -> FuzzyError {
-    FuzzyError(format!("line {line}: {}", message.as_ref()))
+    FuzzyError::new(format!("line {line}: {}", message.as_ref()))
 }
 
 fn number(line: usize, text: &str, what: &str) -> Result<f64, FuzzyError> {
@@ -230,7 +230,7 @@ pub fn parse(text: &str) -> Result<Engine, FuzzyError> {
     }
     for v in &inputs {
         if !(v.min.is_finite() && v.max.is_finite()) {
-            return Err(FuzzyError(format!(
+            return Err(FuzzyError::new(format!(
                 "input variable {} has no range",
                 v.name
             )));
@@ -238,7 +238,7 @@ pub fn parse(text: &str) -> Result<Engine, FuzzyError> {
     }
     for v in &outputs {
         if !(v.min.is_finite() && v.max.is_finite()) {
-            return Err(FuzzyError(format!(
+            return Err(FuzzyError::new(format!(
                 "output variable {} has no range",
                 v.name
             )));
