@@ -18,6 +18,7 @@ const QUOTED: &[u8] = include_bytes!("data/logs/quoted_units.csv");
 const FIFTY: &[u8] = include_bytes!("data/logs/fifty_columns.csv");
 const SLOW: &[u8] = include_bytes!("data/logs/slow_10hz_rms.csv");
 const FAST: &[u8] = include_bytes!("data/logs/fast_10khz_phases.tsv");
+const DAMAGED: &[u8] = include_bytes!("data/logs/damaged.csv");
 
 /// Values compared bit for bit, NaN equal to NaN.
 fn same(a: &[f64], b: &[f64]) -> bool {
@@ -134,6 +135,7 @@ fn any_chunking_gives_the_same_log() {
         QUOTED,
         FIFTY,
         SLOW,
+        DAMAGED,
     ] {
         let whole = load(bytes, None).unwrap();
         for chunk in [1, 2, 3, 5, 7, 64] {
@@ -1036,4 +1038,44 @@ fn statistics_by_label_take_one_pass_whatever_the_number_of_labels() {
         "{:?}",
         started.elapsed()
     );
+}
+
+#[test]
+fn the_damaged_sample_accounts_for_each_of_its_fifteen_lines() {
+    let log = load(DAMAGED, None).unwrap();
+    let a = &log.account;
+    assert_eq!(
+        (
+            a.lines,
+            a.preamble_lines,
+            a.header_lines,
+            a.blank_lines,
+            a.row_lines
+        ),
+        (15, 2, 1, 1, 11)
+    );
+    assert_eq!(log.rows, 11);
+    assert_eq!(
+        (
+            a.empty_rows,
+            a.short_cells,
+            a.extra_cells,
+            a.text_cells,
+            a.not_finite_cells
+        ),
+        (1, 1, 1, 1, 2)
+    );
+    // Minutes, read as seconds; the current feedback is a current, the feed a feed.
+    assert_eq!(log.sample_period_s, Some(0.06));
+    let roles: Vec<Option<Role>> = log.columns.iter().map(|c| c.role).collect();
+    assert_eq!(
+        roles,
+        [
+            Some(Role::Time),
+            Some(Role::RmsCurrent),
+            Some(Role::Feed),
+            Some(Role::Label)
+        ]
+    );
+    assert_eq!(log.account.unread().len(), 8);
 }

@@ -120,7 +120,8 @@ impl LogCalibrationArgs {
         let rpm: f64 = value_or("gear-change-rpm", &self.gear_change_rpm, GEAR_CHANGE_RPM)?;
         if !(rpm.is_finite() && rpm > 0.0) {
             return Err(CliError::new(format!(
-                "--gear-change-rpm: must be a positive speed, got {rpm}"
+                "--gear-change-rpm: must be a positive speed, got {}",
+                crate::input::readable(rpm)
             )));
         }
         Ok(rpm)

@@ -193,8 +193,7 @@ pub fn analyse(log: &Log, name: &str, request: &AnalysisRequest) -> Result<Colum
     if let Some((cutoff_hz, order)) = request.lowpass {
         match period {
             None => notes.push(
-                "the low-pass needs the sample period (a time column or --sample-period-s): \
-                 skipped"
+                "the low-pass needs the sample period (a time column, or give it): skipped"
                     .to_string(),
             ),
             Some(p) if cutoff_hz >= 0.5 / p => notes.push(format!(
@@ -231,9 +230,9 @@ pub fn analyse(log: &Log, name: &str, request: &AnalysisRequest) -> Result<Colum
                 .columns
                 .iter()
                 .find(|c| &c.name == by)
-                .ok_or_else(|| format!("--by: no column {by:?}; columns: {}", names()))?;
+                .ok_or_else(|| format!("no column {by:?} to group by; columns: {}", names()))?;
             if labels.kind != ColumnKind::Text {
-                return Err(format!("--by: column {by:?} holds no labels"));
+                return Err(format!("column {by:?} holds no labels to group by"));
             }
             by_label(labels, &values, period)
         }

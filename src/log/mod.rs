@@ -1273,7 +1273,11 @@ pub fn guess_role_from(name: &str, unit: Option<&str>, kind: ColumnKind) -> Opti
     if PHASE_NAMES.contains(&joined.as_str())
         || stem.first().is_some_and(|w| w.starts_with("phase"))
     {
-        return Some((Role::PhaseCurrent, format!("the phase name {joined:?}")));
+        let written = name.split(['[', '(', '{']).next().unwrap_or(name).trim();
+        return Some((
+            Role::PhaseCurrent,
+            format!("{written:?}, a phase current's name"),
+        ));
     }
     let speed = |why: String| {
         Some(if feed_axis {
