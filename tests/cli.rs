@@ -1037,3 +1037,49 @@ fn an_objective_of_all_zero_weights_is_refused_before_any_run() {
     assert!(e.starts_with("--objective: every weight is 0"), "{e}");
     assert!(out.is_empty(), "{out}");
 }
+
+#[test]
+fn log_inspect_gives_the_mean_of_huge_values_and_counts_what_statistics_leave_out() {
+    let path = std::env::temp_dir().join(format!("cutlab-huge-{}.csv", std::process::id()));
+    let mut text = String::from("t [s],F [N],I [A]\n");
+    for i in 0..50 {
+        // 30 of 50 currents are NaN, inf or beyond a double's range.
+        let current = match i % 5 {
+            0 => "NaN",
+            1 => "inf",
+            2 => "1e309",
+            _ => "2",
+        };
+        text.push_str(&format!("{i},1e308,{current}\n"));
+    }
+    std::fs::write(&path, text).unwrap();
+    let path = path.to_string_lossy().into_owned();
+    let (result, out) = cutlab(&["log", "inspect", &path], "");
+    result.unwrap();
+    let force = out
+        .lines()
+        .find(|l| l.trim_start().starts_with("F [N]"))
+        .unwrap();
+    assert!(force.contains("1e308 … 1e308, mean 1e308"), "{force}");
+    let current = out
+        .lines()
+        .find(|l| l.trim_start().starts_with("I [A]"))
+        .unwrap();
+    assert!(
+        current.contains("not finite 30") && current.contains("(20 of 50 rows)"),
+        "{current}"
+    );
+    let (result, json) = cutlab(&["log", "inspect", &path, "--json"], "");
+    result.unwrap();
+    let report: serde_json::Value = serde_json::from_str(&json).unwrap();
+    assert_eq!(report["columns"][1]["mean"], 1e308);
+    assert_eq!(report["columns"][2]["not_finite"], 30);
+    assert_eq!(report["columns"][2]["count"], 20);
+    assert_eq!(report["account"]["not_finite_cells"], 30);
+    let (result, out) = cutlab(&["log", "analyse", &path, "--column", "I [A]"], "");
+    result.unwrap();
+    assert!(
+        out.contains("(30 of 50 rows left out: gaps or not finite)"),
+        "{out}"
+    );
+}

@@ -657,6 +657,9 @@ fn every_damage_leaves_every_data_line_a_row_and_every_other_line_counted() {
         Box::new(|l: &Log| {
             assert_eq!(l.account.empty_rows, 2);
             assert_eq!(l.columns[1].missing, 2);
+            // The duration keeps them: 50 rows of 10 ms.
+            let stats = cutlab::log::analysis::Stats::of(&l.columns[1].values, l.sample_period_s);
+            assert!((stats.duration_s.unwrap() - 0.5).abs() < 1e-12, "{stats:?}");
             assert!(l
                 .problems
                 .iter()
