@@ -135,8 +135,12 @@ fn the_override_before_arming_is_refused_outside_the_band_and_the_default_follow
     let mut spec = texts(Preset::ManeeratDoc1, &[(RunSetting::MaxOverride, "120")]).unwrap();
     spec.settings.arming_override_pct = Some(130.0);
     let text = RunConfiguration::new(vec![spec.clone()], None).to_json();
-    let run = RunConfiguration::from_json(&text).unwrap().runs.remove(0);
-    let e = default_settings(&run).unwrap_err().to_string();
+    let e = RunConfiguration::from_json(&text).unwrap_err().to_string();
+    assert!(
+        e.contains("run 1: arming_override_pct: 130 % is outside"),
+        "{e}"
+    );
+    let e = default_settings(&spec).unwrap_err().to_string();
     assert!(e.contains("arming_override_pct: 130 % is outside"), "{e}");
     // Left at its default, the override before arming follows a band below 100 %.
     spec.settings.arming_override_pct = None;
