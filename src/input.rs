@@ -71,15 +71,21 @@ fn parse_whole<T: std::str::FromStr>(text: &str, range: &str) -> Result<T, Strin
 }
 
 /// `v` as a person reads it in a message: plain digits with at most four decimals, or an exponent
-/// when very large or small (1e308 has 309 digits).
+/// with at most five significant digits when very large or small — 1e300, not a 301-digit
+/// integer; 1e-300, not "0.0000"; 3.4028e38, not 3.4028234663852886e38. Every number a message
+/// shows goes through here.
 ///
 /// ```
 /// use cutlab::input::readable;
 /// assert_eq!(readable(1e308), "1e308");
+/// assert_eq!(readable(1e300), "1e300");
+/// assert_eq!(readable(-1e-300), "-1e-300");
+/// assert_eq!(readable(f64::from(f32::MAX)), "3.4028e38");
 /// assert_eq!(readable(20000.0), "20000");
 /// assert_eq!(readable(0.125), "0.125");
 /// assert_eq!(readable(2e-9), "2e-9");
 /// assert_eq!(readable(f64::NAN), "NaN");
+/// assert_eq!(readable(f64::NEG_INFINITY), "-inf");
 /// ```
 pub fn readable(v: f64) -> String {
     if v == 0.0 || (1e-3..1e7).contains(&v.abs()) {
@@ -88,9 +94,57 @@ pub fn readable(v: f64) -> String {
             .trim_end_matches('0')
             .trim_end_matches('.')
             .to_string()
+    } else if v.is_finite() {
+        let rounded = format!("{v:.4e}");
+        match rounded.split_once('e') {
+            Some((mantissa, exponent)) => format!(
+                "{}e{exponent}",
+                mantissa.trim_end_matches('0').trim_end_matches('.')
+            ),
+            None => rounded,
+        }
     } else {
-        format!("{v:e}")
+        format!("{v}")
     }
+}
+
+/// Text from the user's input in a message: quoted, and cut after 40 characters with its length
+/// said, so a 10 MB field makes a one-line message, not a 10 MB one.
+///
+/// ```
+/// use cutlab::input::excerpt;
+/// assert_eq!(excerpt("abc"), "\"abc\"");
+/// assert_eq!(excerpt(&"x".repeat(1000)), format!("\"{}\"… (1000 characters)", "x".repeat(40)));
+/// ```
+pub fn excerpt(text: &str) -> String {
+    const SHOWN: usize = 40;
+    match text.char_indices().nth(SHOWN) {
+        None => format!("{text:?}"),
+        Some((at, _)) => format!("{:?}… ({} characters)", &text[..at], text.chars().count()),
+    }
+}
+
+/// A message that may quote the user's input at length (a parser's `unknown field \`…\``) cut to
+/// one short line: at most 300 characters, its start and its end kept (where a parser says the
+/// line and column), the cut said.
+///
+/// ```
+/// use cutlab::input::one_short_line;
+/// assert_eq!(one_short_line("line 3: bad"), "line 3: bad");
+/// let long = format!("unknown field `{}` at line 1 column 9", "x".repeat(10_000));
+/// let short = one_short_line(&long);
+/// assert!(short.len() < 320 && short.ends_with("at line 1 column 9"), "{short}");
+/// ```
+pub fn one_short_line(message: &str) -> String {
+    const KEPT: usize = 140;
+    let message = message.replace(['\n', '\r'], " ");
+    let count = message.chars().count();
+    if count <= 2 * KEPT + 20 {
+        return message;
+    }
+    let head: String = message.chars().take(KEPT).collect();
+    let tail: String = message.chars().skip(count - KEPT).collect();
+    format!("{head}… ({} characters cut) …{tail}", count - 2 * KEPT)
 }
 
 #[cfg(test)]

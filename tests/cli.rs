@@ -908,3 +908,182 @@ fn calibrate_on_a_very_wide_file_says_what_is_missing_in_one_short_line() {
     assert!(e.len() < 400, "{e}");
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// Only a closed standard output is quiet: an error that merely says "Broken pipe" (a file of
+/// that name, a device that went away) is printed and fails.
+#[cfg(unix)]
+#[test]
+fn an_error_is_never_taken_for_a_closed_pipe_by_its_words() {
+    use std::process::{Command, Stdio};
+    let exe = env!("CARGO_BIN_EXE_cutlab");
+    let out = Command::new(exe)
+        .args(["log", "inspect", "Broken pipe.csv"])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(1), "{out:?}");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        stderr.starts_with("cutlab: error: Broken pipe.csv: cannot open"),
+        "{stderr}"
+    );
+    // The reader of stdout gone before the output: quiet, and a success.
+    let mut child = Command::new(exe)
+        .args(["fuzzy", "export", "--rules", "dynamics"])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    drop(child.stdout.take());
+    let out = child.wait_with_output().unwrap();
+    assert!(out.status.success(), "{out:?}");
+    assert!(out.stderr.is_empty(), "{out:?}");
+}
+
+#[test]
+fn negative_values_get_the_options_own_message() {
+    for (args, expected) in [
+        (
+            &[
+                "log",
+                "replay",
+                "x.csv",
+                "--current",
+                "I",
+                "--controller",
+                "pi",
+                "--target-a",
+                "-1",
+            ][..],
+            "--target-a: must be positive, got -1",
+        ),
+        (
+            &[
+                "tune",
+                "--controller",
+                "pi",
+                "--scenarios",
+                "maneerat-doc-1",
+                "--sweep",
+                "-1",
+            ][..],
+            "--sweep: cannot be negative, got -1",
+        ),
+        (
+            &[
+                "tune",
+                "--controller",
+                "pi",
+                "--scenarios",
+                "maneerat-doc-1",
+                "--max-evals",
+                "-5",
+            ][..],
+            "--max-evals: cannot be negative, got -5",
+        ),
+        (
+            &[
+                "host",
+                "--port",
+                "/dev/null",
+                "--baud",
+                "-1",
+                "--controller",
+                "pi",
+            ][..],
+            "--baud: cannot parse \"-1\" as a non-negative integer",
+        ),
+    ] {
+        let (result, _) = cutlab(args, "");
+        assert_eq!(result.unwrap_err(), expected, "{args:?}");
+    }
+}
+
+#[test]
+fn a_range_error_in_a_config_file_names_the_file_the_run_and_the_field() {
+    let path =
+        std::env::temp_dir().join(format!("cutlab-config-range-{}.json", std::process::id()));
+    std::fs::write(
+        &path,
+        r#"{"format": "cutlab-runs", "version": 1, "runs": [{"preset": "maneerat-doc-1",
+            "controller": {"kind": "pi"}, "seed": 1, "settings": {"max_override_pct": 1e300}}]}"#,
+    )
+    .unwrap();
+    let path = path.to_string_lossy().into_owned();
+    for command in ["sim", "compare"] {
+        let (result, _) = cutlab(&[command, "--config", &path, "--no-references"], "");
+        assert_eq!(
+            result.unwrap_err(),
+            format!(
+                "--config {path}: run 1: highest override 1e300 % is more than this machine \
+                 applies (255 %)"
+            )
+        );
+    }
+}
+
+#[test]
+fn an_objective_of_all_zero_weights_is_refused_before_any_run() {
+    let (result, out) = cutlab(
+        &[
+            "tune",
+            "--controller",
+            "pi",
+            "--scenarios",
+            "maneerat-doc-1",
+            "--param",
+            "kp=0.1:1",
+            "--objective",
+            "cycle=0,error=0,above=0,activity=0",
+        ],
+        "",
+    );
+    let e = result.unwrap_err();
+    assert!(e.starts_with("--objective: every weight is 0"), "{e}");
+    assert!(out.is_empty(), "{out}");
+}
+
+#[test]
+fn log_inspect_gives_the_mean_of_huge_values_and_counts_what_statistics_leave_out() {
+    let path = std::env::temp_dir().join(format!("cutlab-huge-{}.csv", std::process::id()));
+    let mut text = String::from("t [s],F [N],I [A]\n");
+    for i in 0..50 {
+        // 30 of 50 currents are NaN, inf or beyond a double's range.
+        let current = match i % 5 {
+            0 => "NaN",
+            1 => "inf",
+            2 => "1e309",
+            _ => "2",
+        };
+        text.push_str(&format!("{i},1e308,{current}\n"));
+    }
+    std::fs::write(&path, text).unwrap();
+    let path = path.to_string_lossy().into_owned();
+    let (result, out) = cutlab(&["log", "inspect", &path], "");
+    result.unwrap();
+    let force = out
+        .lines()
+        .find(|l| l.trim_start().starts_with("F [N]"))
+        .unwrap();
+    assert!(force.contains("1e308 … 1e308, mean 1e308"), "{force}");
+    let current = out
+        .lines()
+        .find(|l| l.trim_start().starts_with("I [A]"))
+        .unwrap();
+    assert!(
+        current.contains("not finite 30") && current.contains("(20 of 50 rows)"),
+        "{current}"
+    );
+    let (result, json) = cutlab(&["log", "inspect", &path, "--json"], "");
+    result.unwrap();
+    let report: serde_json::Value = serde_json::from_str(&json).unwrap();
+    assert_eq!(report["columns"][1]["mean"], 1e308);
+    assert_eq!(report["columns"][2]["not_finite"], 30);
+    assert_eq!(report["columns"][2]["count"], 20);
+    assert_eq!(report["account"]["not_finite_cells"], 30);
+    let (result, out) = cutlab(&["log", "analyse", &path, "--column", "I [A]"], "");
+    result.unwrap();
+    assert!(
+        out.contains("(30 of 50 rows left out: gaps or not finite)"),
+        "{out}"
+    );
+}

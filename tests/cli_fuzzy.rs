@@ -74,3 +74,33 @@ fn stray_arguments_after_fuzzy_subcommands_are_refused() {
     assert_eq!(result.unwrap_err(), "unexpected argument \"extra\"");
     assert!(cutlab(&["fuzzy", "eval", "--fll", fll], "0 0\n").0.is_ok());
 }
+
+#[test]
+fn an_input_that_is_not_finite_is_refused_not_answered_with_the_default() {
+    let dir = std::env::temp_dir().join(format!("cutlab-fuzzy-nan-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("experience.fll");
+    let (result, fll) = cutlab(&["fuzzy", "export", "--rules", "experience"], "");
+    result.unwrap();
+    std::fs::write(&path, &fll).unwrap();
+    for (input, word) in [
+        ("NaN 0\n", "NaN"),
+        ("0 inf\n", "inf"),
+        ("-infinity 1\n", "-infinity"),
+    ] {
+        let (result, out) = cutlab(&["fuzzy", "eval", "--fll", path.to_str().unwrap()], input);
+        assert_eq!(
+            result.unwrap_err(),
+            format!("stdin line 1: \"{word}\" is not a finite input"),
+            "{out}"
+        );
+    }
+    // A 10 000-character word is cut in the message.
+    let long = "x".repeat(10_000);
+    let (result, _) = cutlab(
+        &["fuzzy", "eval", "--fll", path.to_str().unwrap()],
+        &format!("{long} 0\n"),
+    );
+    let e = result.unwrap_err();
+    assert!(e.len() < 120 && e.contains("(10000 characters)"), "{e}");
+}

@@ -256,3 +256,97 @@ fn replay_refuses_what_it_cannot_do_and_says_what_to_give() {
         assert!(help.contains(option), "{option}");
     }
 }
+
+/// The export with `damage` applied to the time cell (the first field) of each of `lines`.
+fn damaged_export(name: &str, lines: &[usize], damage: &str) -> String {
+    let text = std::fs::read_to_string(EXPORT).unwrap();
+    let damaged: Vec<String> = text
+        .split('\n')
+        .enumerate()
+        .map(
+            |(i, line)| match (lines.contains(&(i + 1)), line.split_once(';')) {
+                (true, Some((_, rest))) => format!("{damage};{rest}"),
+                _ => line.to_string(),
+            },
+        )
+        .collect();
+    let path = scratch(name);
+    std::fs::write(&path, damaged.join("\n")).unwrap();
+    path
+}
+
+#[test]
+fn replayed_events_are_timed_even_where_a_time_cell_is_damaged() {
+    // The arming (3.06 s) and the air cut after it are events: damage the times around them.
+    for damage in ["NaN", "inf", "kaputt", ""] {
+        let path = damaged_export(
+            &format!("damaged-time-{damage}.csv"),
+            &[50, 51, 52, 53, 54, 1100],
+            damage,
+        );
+        let json = scratch(&format!("damaged-time-{damage}.json"));
+        let (result, out) = common::cutlab_text(
+            &[
+                "log",
+                "replay",
+                &path,
+                "--current",
+                "S_Strom [A]",
+                "--controller",
+                "pi",
+                "--target-a",
+                "10.3",
+                "--json",
+                &json,
+            ],
+            "",
+        );
+        result.unwrap();
+        assert!(
+            !out.contains("NaN s") && !out.contains("inf s"),
+            "{damage:?}: {out}"
+        );
+        let report: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+        let events = report["events"].as_array().unwrap();
+        assert!(!events.is_empty());
+        for e in events {
+            assert!(
+                e["time_s"].as_f64().is_some_and(f64::is_finite),
+                "{damage:?}: {e}"
+            );
+        }
+    }
+}
+
+#[test]
+fn a_time_column_that_does_not_increase_is_named_as_such() {
+    let path = scratch("standing-time.csv");
+    std::fs::write(&path, "time_s,I [A]\n0,10\n0,11\n0,12\n0,11\n").unwrap();
+    let (result, _) = common::cutlab_text(
+        &[
+            "log",
+            "replay",
+            &path,
+            "--current",
+            "I [A]",
+            "--controller",
+            "pi",
+            "--target-a",
+            "10",
+        ],
+        "",
+    );
+    let e = result.unwrap_err();
+    assert!(
+        e.contains("its time column \"time_s\" does not increase; give it with --sample-period-s"),
+        "{e}"
+    );
+    let (result, out) = common::cutlab_text(&["log", "inspect", &path], "");
+    result.unwrap();
+    assert!(
+        out.contains("line 3, time_s: the time column does not increase"),
+        "{out}"
+    );
+    assert!(!out.contains("line 0"), "{out}");
+}

@@ -677,3 +677,107 @@ fn universes_and_terms_wider_than_an_f64_are_refused_saying_so() {
     engine.evaluate(&[1.0, 1.0], &mut out);
     assert!(out[0].is_finite());
 }
+
+/// A word to put in place of one in an FLL line: a hostile number, a keyword from elsewhere,
+/// or junk.
+fn hostile_word(rng: &mut Rng) -> &'static str {
+    const WORDS: [&str; 18] = [
+        "NaN", "inf", "-inf", "1e309", "-0", "1e-320", "", "x", "if", "then", "and", "or", "is",
+        "with", "Triangle", "Centroid", "0", "é∂",
+    ];
+    WORDS[(rng.next_u64() % WORDS.len() as u64) as usize]
+}
+
+#[test]
+fn random_and_mutated_fll_loads_every_rule_and_term_or_is_refused_at_its_line() {
+    let base =
+        write(&paper_002_engine(&RuleBase::Dynamics.table(), Defuzzifier::Centroid).unwrap());
+    let original: Vec<String> = base.lines().map(String::from).collect();
+    let mut rng = Rng::seed_from(2716);
+    let (mut loaded, mut refused) = (0, 0);
+    for round in 0..2000 {
+        let mut doc = original.clone();
+        for _ in 0..1 + rng.next_u64() % 3 {
+            let at = (rng.next_u64() % doc.len().max(1) as u64) as usize;
+            if doc.is_empty() {
+                break;
+            }
+            match rng.next_u64() % 6 {
+                0 => {
+                    doc.remove(at);
+                }
+                1 => {
+                    let line = doc[at].clone();
+                    doc.insert(at, line);
+                }
+                2 | 3 => {
+                    let mut words: Vec<String> = doc[at].split(' ').map(String::from).collect();
+                    let w = (rng.next_u64() % words.len() as u64) as usize;
+                    words[w] = hostile_word(&mut rng).to_string();
+                    doc[at] = words.join(" ");
+                }
+                4 if rng.next_u64().is_multiple_of(4) => doc[at].push_str(&"x".repeat(100_000)),
+                4 => {
+                    let cut = (rng.next_u64() % (doc[at].len() as u64 + 1)) as usize;
+                    let cut = (0..=cut)
+                        .rev()
+                        .find(|&c| doc[at].is_char_boundary(c))
+                        .unwrap();
+                    doc[at].truncate(cut);
+                }
+                _ => {
+                    let other = original[(rng.next_u64() % original.len() as u64) as usize].clone();
+                    doc.insert(at, other);
+                }
+            }
+        }
+        let text = doc.join("\n");
+        match parse(&text) {
+            Ok(mut engine) => {
+                loaded += 1;
+                // Every rule and term line of the file is in the engine: none dropped.
+                let count = |key: &str| {
+                    text.lines()
+                        .filter(|l| l.trim_start().starts_with(key))
+                        .count()
+                };
+                assert_eq!(
+                    engine.rules().len(),
+                    count("rule:"),
+                    "round {round}\n{text}"
+                );
+                let terms: usize = engine.inputs().iter().map(|v| v.terms.len()).sum::<usize>()
+                    + engine
+                        .outputs()
+                        .iter()
+                        .map(|v| v.terms.len())
+                        .sum::<usize>();
+                assert_eq!(terms, count("term:"), "round {round}\n{text}");
+                // It writes back as itself, and evaluates anything in its ranges.
+                let again = parse(&write(&engine)).unwrap();
+                assert_eq!(again.inputs(), engine.inputs(), "round {round}");
+                assert_eq!(again.rules(), engine.rules(), "round {round}");
+                let inputs: Vec<f64> = engine
+                    .inputs()
+                    .iter()
+                    .map(|v| v.min + (v.max - v.min) * rng.uniform())
+                    .collect();
+                let mut outputs = vec![0.0; engine.outputs().len()];
+                engine.evaluate(&inputs, &mut outputs);
+            }
+            Err(e) => {
+                refused += 1;
+                let e = e.to_string();
+                assert!(!e.contains('\n') && e.len() < 400, "round {round}: {e}");
+                if let Some(line) = e.strip_prefix("line ").and_then(|r| r.split(':').next()) {
+                    let line: usize = line.parse().unwrap();
+                    assert!((1..=doc.len()).contains(&line), "round {round}: {e}");
+                }
+            }
+        }
+    }
+    assert!(
+        loaded > 200 && refused > 500,
+        "{loaded} loaded, {refused} refused"
+    );
+}

@@ -424,7 +424,7 @@ fn a_recording_reads_back_through_the_log_reader_with_each_roles_guess() {
         }
     }
     csv.push_str(&recorder.take_chunk().unwrap().1);
-    let log = load(csv.as_bytes(), None);
+    let log = load(csv.as_bytes(), None).unwrap();
     assert!(
         log.problems.is_empty(),
         "{:?}",

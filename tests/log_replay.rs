@@ -124,7 +124,7 @@ fn replaying_a_recorded_run_through_its_controller_gives_the_loops_decisions() {
     .unwrap()
     .run();
     let text = export(&samples.borrow());
-    let log = Arc::new(load(text.as_bytes(), None));
+    let log = Arc::new(load(text.as_bytes(), None).unwrap());
     assert_eq!(log.rows, samples.borrow().len());
     assert!(log.problems.is_empty(), "{:?}", log.problems);
 
@@ -274,7 +274,7 @@ fn slow_log() -> String {
 
 #[test]
 fn a_slow_rms_log_skips_the_phase_stages_and_the_envelope_sees_its_gaps() {
-    let log = Arc::new(load(slow_log().as_bytes(), None));
+    let log = Arc::new(load(slow_log().as_bytes(), None).unwrap());
     assert_eq!(log.sample_period_s, Some(0.1));
     let mapping = Mapping::guess(&log);
     assert_eq!(mapping.columns_of(Channel::SpindleCurrent), ["S_Strom [A]"]);
@@ -351,7 +351,7 @@ fn a_slow_rms_log_skips_the_phase_stages_and_the_envelope_sees_its_gaps() {
 
 #[test]
 fn an_uncalibrated_replay_asks_for_a_current_target_and_names_a_missing_current() {
-    let log = Arc::new(load(slow_log().as_bytes(), None));
+    let log = Arc::new(load(slow_log().as_bytes(), None).unwrap());
     let mapping = Mapping::guess(&log);
     let pi = ControllerConfig::new(ControllerKind::Pi);
     let error = |settings: &ReplaySettings, mapping: &Mapping| {
@@ -410,7 +410,7 @@ fn phase_log(columns: usize) -> String {
 #[test]
 fn a_log_with_a_force_calibrates_the_line_its_currents_follow_from_one_two_or_three_phases() {
     for columns in [3, 2, 1] {
-        let log = Arc::new(load(phase_log(columns).as_bytes(), None));
+        let log = Arc::new(load(phase_log(columns).as_bytes(), None).unwrap());
         let mapping = Mapping::guess(&log);
         assert_eq!(mapping.count(Channel::SpindlePhase), columns);
         assert_eq!(mapping.columns_of(Channel::Force), ["Fx [N]"]);

@@ -135,8 +135,14 @@ fn the_override_before_arming_is_refused_outside_the_band_and_the_default_follow
     let mut spec = texts(Preset::ManeeratDoc1, &[(RunSetting::MaxOverride, "120")]).unwrap();
     spec.settings.arming_override_pct = Some(130.0);
     let text = RunConfiguration::new(vec![spec.clone()], None).to_json();
-    // Refused as the file is read, before anything runs.
+    // Refused as the file is read, before anything runs, naming the run.
     let e = RunConfiguration::from_json(&text).unwrap_err().to_string();
+    assert!(
+        e.contains("run 1: arming_override_pct: 130 % is outside"),
+        "{e}"
+    );
+    // And when a run is planned from the spec itself.
+    let e = preset_plan(&spec).unwrap_err().to_string();
     assert!(e.contains("arming_override_pct: 130 % is outside"), "{e}");
     // Left at its default, the override before arming follows a band below 100 %.
     spec.settings.arming_override_pct = None;

@@ -290,7 +290,7 @@ fn the_synthetic_machine_export_reads_and_analyses_by_phase() {
     use cutlab::log::analysis::{analyse, AnalysisRequest};
     use cutlab::log::Role;
     let bytes = std::fs::read(format!("{DATA}synthetic-kim-step-doc-export.csv")).unwrap();
-    let log = cutlab::log::load(&bytes, None);
+    let log = cutlab::log::load(&bytes, None).unwrap();
     assert_eq!(log.dialect.delimiter, b';');
     assert!(log.dialect.decimal_comma);
     assert_eq!(log.sample_period_s, Some(0.06));
@@ -337,7 +337,7 @@ fn the_synthetic_daq_capture_maps_itself_and_calibrates() {
     use cutlab::log::mapping::{Channel, Mapping};
     use cutlab::log::replay::ReplaySettings;
     let bytes = std::fs::read(format!("{DATA}synthetic-maneerat-doc-2-daq.csv")).unwrap();
-    let log = std::sync::Arc::new(cutlab::log::load(&bytes, None));
+    let log = std::sync::Arc::new(cutlab::log::load(&bytes, None).unwrap());
     assert_eq!(log.rows, 12_000);
     assert_eq!(log.sample_period_s, Some(0.001));
     assert!(log.problems.is_empty(), "{:?}", log.problems);

@@ -321,7 +321,7 @@ fn a_simulated_teach_in_proposes_from_the_force_it_measured() {
 #[test]
 fn a_logged_teach_cut_proposes_what_pandas_and_numpy_compute() {
     let expected = &reference()["log"];
-    let log = cutlab::log::load(TEACH_LOG, None);
+    let log = cutlab::log::load(TEACH_LOG, None).unwrap();
     let map: Vec<(String, String)> = [
         ("spindle_current_rms_a", "S_Strom [A]"),
         ("spindle_speed_rpm", "S_Drehzahl (rpm)"),

@@ -172,6 +172,20 @@ pub fn one_line(e: &clap::Error, args: &[String], root: &clap::Command) -> CliEr
             Some(value) => format!("{} needs a value ({value})", option_name(&arg)),
             None => format!("{} needs a value", option_name(&arg)),
         },
+        (ErrorKind::ValueValidation, Some(arg)) => {
+            let value = context(e, ContextKind::InvalidValue).unwrap_or_default();
+            match value.trim().parse::<f64>() {
+                Ok(v) if v < 0.0 => format!(
+                    "{}: cannot be negative, got {}",
+                    option_name(&arg),
+                    crate::input::readable(v)
+                ),
+                _ => match std::error::Error::source(e) {
+                    Some(why) => format!("{}: cannot read {value:?}: {why}", option_name(&arg)),
+                    None => format!("{}: cannot read {value:?}", option_name(&arg)),
+                },
+            }
+        }
         (ErrorKind::TooManyValues, Some(arg)) if placeholder(&arg).is_none() => {
             format!("{} takes no value", option_name(&arg))
         }

@@ -120,7 +120,8 @@ impl LogCalibrationArgs {
         let rpm: f64 = value_or("gear-change-rpm", &self.gear_change_rpm, GEAR_CHANGE_RPM)?;
         if !(rpm.is_finite() && rpm > 0.0) {
             return Err(CliError::new(format!(
-                "--gear-change-rpm: must be a positive speed, got {rpm}"
+                "--gear-change-rpm: must be a positive speed, got {}",
+                crate::input::readable(rpm)
             )));
         }
         Ok(rpm)
@@ -185,7 +186,7 @@ impl LogCalibrationArgs {
 pub fn read_log(file: &str) -> Result<crate::log::Log, CliError> {
     let bytes =
         std::fs::read(file).map_err(|e| CliError::new(format!("{file}: cannot read: {e}")))?;
-    let log = crate::log::load(&bytes, None);
+    let log = crate::log::load(&bytes, None).map_err(|e| CliError::new(format!("{file}: {e}")))?;
     if log.rows == 0 {
         return Err(CliError::new(format!(
             "{file}: no data rows (a header line and at least one line of values are needed)"

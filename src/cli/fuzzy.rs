@@ -97,10 +97,19 @@ fn eval(args: EvalArgs, io: &mut Io<'_>) -> Result<(), CliError> {
         for word in trimmed.split_whitespace() {
             let value: f64 = word.parse().map_err(|_| {
                 CliError::new(format!(
-                    "stdin line {}: cannot parse {word:?} as a number",
-                    index + 1
+                    "stdin line {}: cannot parse {} as a number",
+                    index + 1,
+                    crate::input::excerpt(word)
                 ))
             })?;
+            // NaN or ±∞ fires no rule: the engine would print its default as if it were an
+            // answer.
+            if !value.is_finite() {
+                return Err(CliError::new(format!(
+                    "stdin line {}: {word:?} is not a finite input",
+                    index + 1
+                )));
+            }
             inputs.push(value);
         }
         if inputs.len() != n_inputs {

@@ -18,9 +18,11 @@ use crate::work::Work;
 
 /// The long help of `cutlab log`.
 pub const ABOUT: &str = "Read a machine's CSV log as it is: comma, semicolon or tab delimited \
-(detected), a decimal comma, quoted fields, a byte-order mark, CRLF, a header with units or none, \
-text columns kept as labels. Damaged lines are reported by line and column and kept as gaps. \
-Inspect it, analyse its columns, or replay a controller on it (docs/logs.md).";
+(detected), a decimal comma, quoted fields, a byte-order mark, CRLF or CR line ends, a preamble \
+or comment lines before a header with units, or no header, text columns kept as labels. Damaged \
+lines are reported by line and column and kept as gaps, and every line and cell not read as data \
+is counted; a file in UTF-16 or UTF-32, or with a quote that swallows the lines after it, is \
+refused. Inspect it, analyse its columns, or replay a controller on it (docs/logs.md).";
 
 /// The options of `cutlab log`: a subcommand.
 #[derive(Debug, clap::Args)]
@@ -171,8 +173,13 @@ struct ColumnReport<'a> {
     kind: ColumnKind,
     unit: Option<&'a str>,
     role: Option<Role>,
+    /// What the role guess rests on (or why there is none).
+    role_reason: Option<&'a str>,
     numeric_share: f64,
     missing: usize,
+    not_finite: usize,
+    /// Values the statistics cover (finite ones).
+    count: usize,
     min: Option<f64>,
     max: Option<f64>,
     mean: Option<f64>,
@@ -196,6 +203,10 @@ struct InspectReport<'a> {
     columns: Vec<ColumnReport<'a>>,
     problems: Vec<ProblemReport<'a>>,
     problems_not_listed: usize,
+    /// Where every line went and what was not read as data.
+    account: crate::log::ReadAccount,
+    /// The same, as sentences.
+    not_read: Vec<String>,
 }
 
 /// Reads `path` (or standard input for "-") in chunks into a log.
@@ -207,7 +218,8 @@ fn read_log(
     if let Some(p) = sample_period_s {
         if !(p.is_finite() && p > 0.0) {
             return Err(CliError::new(format!(
-                "--sample-period-s: must be a positive number of seconds, got {p}"
+                "--sample-period-s: must be a positive number of seconds, got {}",
+                crate::input::readable(p)
             )));
         }
     }
@@ -233,12 +245,13 @@ fn read_log(
             break;
         }
         builder.push(&buffer[..n]);
+        if let Some(e) = builder.refused() {
+            return Err(CliError::new(format!("{path}: {e}")));
+        }
     }
-    Ok(builder.finish(sample_period_s))
-}
-
-fn finite(v: f64) -> Option<f64> {
-    v.is_finite().then_some(v)
+    builder
+        .finish(sample_period_s)
+        .map_err(|e| CliError::new(format!("{path}: {e}")))
 }
 
 fn inspect(args: InspectArgs, io: &mut Io<'_>) -> Result<(), CliError> {
@@ -255,18 +268,21 @@ fn inspect(args: InspectArgs, io: &mut Io<'_>) -> Result<(), CliError> {
             .columns
             .iter()
             .map(|c| {
-                let (min, max, mean) = c.min_max_mean();
                 let numeric = matches!(c.kind, ColumnKind::Number | ColumnKind::Time);
+                let stats = crate::log::analysis::Stats::of(&c.values, None);
                 ColumnReport {
                     name: &c.name,
                     kind: c.kind,
                     unit: c.unit.as_deref(),
                     role: c.role,
+                    role_reason: c.role_reason.as_deref(),
                     numeric_share: c.numeric_share,
                     missing: c.missing,
-                    min: finite(min).filter(|_| numeric),
-                    max: finite(max).filter(|_| numeric),
-                    mean: finite(mean).filter(|_| numeric),
+                    not_finite: c.not_finite,
+                    count: stats.count,
+                    min: stats.min.filter(|_| numeric),
+                    max: stats.max.filter(|_| numeric),
+                    mean: stats.mean.filter(|_| numeric),
                 }
             })
             .collect(),
@@ -280,6 +296,8 @@ fn inspect(args: InspectArgs, io: &mut Io<'_>) -> Result<(), CliError> {
             })
             .collect(),
         problems_not_listed: log.problems_not_listed,
+        account: log.account,
+        not_read: log.account.unread(),
     };
     if args.json {
         return write_json(io.stdout, &report);
@@ -301,6 +319,18 @@ fn inspect(args: InspectArgs, io: &mut Io<'_>) -> Result<(), CliError> {
                 |p| format!("{} s", crate::input::readable(p))
             )
         );
+    let a = &report.account;
+    out.push_str(&format!(
+        "  {} lines: {} rows on {}, a header on {}, {} skipped\n",
+        a.lines,
+        report.rows,
+        a.row_lines,
+        a.header_lines,
+        a.preamble_lines + a.blank_lines
+    ));
+    for sentence in &report.not_read {
+        out.push_str(&format!("  not read as data: {sentence}\n"));
+    }
     for c in &report.columns {
         out.push_str(&format!(
             "  {:<28} {:<7} {:<8} {:<14} missing {:>6}",
@@ -316,6 +346,9 @@ fn inspect(args: InspectArgs, io: &mut Io<'_>) -> Result<(), CliError> {
                 .unwrap_or_else(|| "—".into()),
             c.missing
         ));
+        if c.not_finite > 0 {
+            out.push_str(&format!(", not finite {}", c.not_finite));
+        }
         if let (Some(lo), Some(hi), Some(mean)) = (c.min, c.max, c.mean) {
             out.push_str(&format!(
                 "  {} … {}, mean {}",
@@ -323,6 +356,12 @@ fn inspect(args: InspectArgs, io: &mut Io<'_>) -> Result<(), CliError> {
                 crate::input::readable(hi),
                 crate::input::readable(mean)
             ));
+            if c.count < report.rows {
+                out.push_str(&format!(" ({} of {} rows)", c.count, report.rows));
+            }
+        }
+        if let Some(why) = c.role_reason {
+            out.push_str(&format!("  [{why}]"));
         }
         out.push('\n');
     }
@@ -364,7 +403,8 @@ fn analyse(args: AnalyseArgs, io: &mut Io<'_>) -> Result<(), CliError> {
     let lowpass = match args.lowpass_hz {
         Some(f) if !(f.is_finite() && f > 0.0) => {
             return Err(CliError::new(format!(
-                "--lowpass-hz: must be a positive frequency, got {f}"
+                "--lowpass-hz: must be a positive frequency, got {}",
+                crate::input::readable(f)
             )))
         }
         Some(f) => {
@@ -419,13 +459,18 @@ fn analyse(args: AnalyseArgs, io: &mut Io<'_>) -> Result<(), CliError> {
         }
         let line = |name: &str, s: &crate::log::analysis::Stats| {
             format!(
-                "  {name:<24} n {:>8}  mean {:>10}  rms {:>10}  min {:>10}  max {:>10}  duration {} s\n",
+                "  {name:<24} n {:>8}  mean {:>10}  rms {:>10}  min {:>10}  max {:>10}  duration {} s{}\n",
                 s.count,
                 number(s.mean),
                 number(s.rms),
                 number(s.min),
                 number(s.max),
-                number(s.duration_s)
+                number(s.duration_s),
+                if s.left_out > 0 {
+                    format!(" ({} of {} rows left out: gaps or not finite)", s.left_out, s.count + s.left_out)
+                } else {
+                    String::new()
+                }
             )
         };
         out.push_str(&line("all rows", &c.whole));
@@ -634,6 +679,14 @@ fn replay(args: ReplayArgs, io: &mut Io<'_>) -> Result<(), CliError> {
     let log = Arc::new(read_log(&path, args.sample_period_s, io)?);
     if log.rows == 0 {
         return Err(CliError::new(format!("{path}: no rows to replay")));
+    }
+    if args.sample_period_s.is_none() {
+        if let Some(why) = log.period_unknown() {
+            return Err(CliError::new(format!(
+                "{path}: the log's sample period is unknown: {why}; give it with \
+                 --sample-period-s"
+            )));
+        }
     }
     let (mapping, feedback) =
         replay_mapping(&args, &log, calibration.as_ref().map(|c| c.feedback()))?;

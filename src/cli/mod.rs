@@ -141,6 +141,23 @@ pub fn version_line() -> String {
     format!("cutlab {}", env!("CARGO_PKG_VERSION"))
 }
 
+/// The parser: every option that takes a value takes a negative one too (`--target-a -1` is a
+/// value the command refuses with its range, not an unknown option `-1`).
+fn command() -> clap::Command {
+    fn negative_values(command: clap::Command) -> clap::Command {
+        command
+            .mut_args(|arg| {
+                if arg.get_action().takes_values() {
+                    arg.allow_negative_numbers(true)
+                } else {
+                    arg
+                }
+            })
+            .mut_subcommands(negative_values)
+    }
+    negative_values(Cli::command())
+}
+
 /// Runs the command line on `args` (without the program name).
 pub fn run(args: &[String], io: &mut Io<'_>) -> Result<(), CliError> {
     // clap prints the version at --version whatever follows; a stray word is a mistake to say.
@@ -151,26 +168,26 @@ pub fn run(args: &[String], io: &mut Io<'_>) -> Result<(), CliError> {
             )));
         }
     }
-    let parsed =
-        match Cli::try_parse_from(std::iter::once("cutlab").chain(args.iter().map(String::as_str)))
-        {
-            Ok(parsed) => parsed,
-            Err(e) => {
-                use clap::error::ErrorKind;
-                return match e.kind() {
-                    ErrorKind::DisplayHelp
-                    | ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand => {
-                        write!(io.stdout, "{}", e.render())?;
-                        Ok(())
-                    }
-                    ErrorKind::DisplayVersion => {
-                        writeln!(io.stdout, "{}", version_line())?;
-                        Ok(())
-                    }
-                    _ => Err(args::one_line(&e, args, &Cli::command())),
-                };
-            }
-        };
+    let parsed = match command()
+        .try_get_matches_from(std::iter::once("cutlab").chain(args.iter().map(String::as_str)))
+        .and_then(|matches| <Cli as clap::FromArgMatches>::from_arg_matches(&matches))
+    {
+        Ok(parsed) => parsed,
+        Err(e) => {
+            use clap::error::ErrorKind;
+            return match e.kind() {
+                ErrorKind::DisplayHelp | ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand => {
+                    write!(io.stdout, "{}", e.render())?;
+                    Ok(())
+                }
+                ErrorKind::DisplayVersion => {
+                    writeln!(io.stdout, "{}", version_line())?;
+                    Ok(())
+                }
+                _ => Err(args::one_line(&e, args, &command())),
+            };
+        }
+    };
     match parsed.command {
         None => {
             write!(io.stdout, "{}", Cli::command().render_help())?;

@@ -6,15 +6,16 @@ use serde_json::json;
 
 use super::{CliError, Io};
 use crate::protocol::codec::{encode_frame, Decoder, MAX_FRAME_LEN};
-use crate::protocol::json::{frame_from_json, frame_to_json};
+use crate::protocol::json::{frame_from_json, frame_to_json, parse_line};
 
 /// Help of `cutlab protocol`.
 pub const ABOUT: &str = "The feed-override protocol's frames (docs/protocol.md) between bytes \
 and JSON lines. `decode` reads bytes on stdin as they come and prints one JSON object per frame, \
 then a summary of what the decoder dropped; `encode` reads one JSON object per line (the form \
 decode prints) and writes the frames' bytes. Encode is strict: every field of the frame type is \
-required (but a `flags` byte, 0 when left out) and a field the type does not have is an error; \
-the error names the line, the frame type and the field.";
+required (but a `flags` byte, 0 when left out), and a field the type does not have, a field \
+given twice, a number beyond a 32-bit field's range or a NUL in a text field is an error; the \
+error names the line, the frame type and the field.";
 
 /// `cutlab protocol`: decode or encode.
 #[derive(Debug, clap::Args)]
@@ -97,20 +98,25 @@ fn decode(args: &DecodeArgs, io: &mut Io<'_>) -> Result<(), CliError> {
 }
 
 fn encode(io: &mut Io<'_>) -> Result<(), CliError> {
-    let mut line = String::new();
+    let mut line = Vec::new();
     let mut number = 0usize;
     loop {
         line.clear();
-        if io.stdin.read_line(&mut line)? == 0 {
+        if io.stdin.read_until(b'\n', &mut line)? == 0 {
             break;
         }
         number += 1;
-        let text = line.trim();
+        let text = std::str::from_utf8(&line).map_err(|e| {
+            CliError::new(format!(
+                "line {number}: not UTF-8 text (byte {} is not)",
+                e.valid_up_to() + 1
+            ))
+        })?;
+        let text = text.trim();
         if text.is_empty() || text.starts_with('#') {
             continue;
         }
-        let value: serde_json::Value = serde_json::from_str(text)
-            .map_err(|e| CliError::new(format!("line {number}: not JSON: {e}")))?;
+        let value = parse_line(text).map_err(|e| CliError::new(format!("line {number}: {e}")))?;
         // decode's summary line and its --rejects lines are not frames: skipped, so
         // decode | encode round-trips.
         if value.get("summary").is_some() || value.get("type") == Some(&json!("rejected")) {

@@ -34,6 +34,12 @@ use super::file_format::{check_format, FormatError};
 use crate::estimation::current_force::{FitQuality, Range};
 use crate::estimation::estimator::{Calibration, Estimator, Feedback};
 
+/// The largest current sensitivity a calibration may have, A per N. A newton of cutting force
+/// moving a drive's current by more than this is no milling drive (fitted spindle and feed
+/// sensitivities are thousandths of an ampere per newton); a larger one makes every estimate
+/// read near 0 N, and a controller would then feed as fast as it may.
+pub const MAX_SENSITIVITY_A_PER_N: f64 = 10.0;
+
 /// The `format` every calibration file carries.
 pub const FORMAT: &str = "cutlab-calibration";
 /// The version this build writes and reads.
@@ -114,8 +120,8 @@ impl CalibrationFile {
     /// ```
     pub fn from_json(text: &str) -> Result<Self, CalibrationFileError> {
         check_format(text, FORMAT, VERSION, "calibration")?;
-        let file: Self =
-            serde_json::from_str(text).map_err(|e| CalibrationFileError(e.to_string()))?;
+        let file: Self = serde_json::from_str(text)
+            .map_err(|e| CalibrationFileError(crate::input::one_short_line(&e.to_string())))?;
         check_calibration(&file.calibration).map_err(CalibrationFileError)?;
         Ok(file)
     }
@@ -145,7 +151,7 @@ fn check_calibration(c: &Calibration) -> Result<(), String> {
                 }
                 previous_rpm = row.speed_rpm;
                 finite(&format!("{at}.idle_current_a"), row.idle_current_a)?;
-                positive(
+                sensitivity(
                     &format!("{at}.sensitivity_a_per_n"),
                     row.sensitivity_a_per_n,
                 )?;
@@ -174,7 +180,7 @@ fn check_calibration(c: &Calibration) -> Result<(), String> {
                 &format!("{at}.idle_current_a_per_mm_min"),
                 model.idle_current_a_per_mm_min,
             )?;
-            positive(
+            sensitivity(
                 &format!("{at}.sensitivity_a_per_n"),
                 model.sensitivity_a_per_n,
             )?;
@@ -200,13 +206,13 @@ fn check_calibration(c: &Calibration) -> Result<(), String> {
     if !(c.max_phase_current_a.is_finite() && c.max_phase_current_a >= 0.0) {
         return Err(format!(
             "calibration.max_phase_current_a: must be a finite current ≥ 0 A, not {}",
-            c.max_phase_current_a
+            shown(c.max_phase_current_a)
         ));
     }
     if !(c.duration_s.is_finite() && c.duration_s >= 0.0) {
         return Err(format!(
             "calibration.duration_s: must be a finite time ≥ 0 s, not {}",
-            c.duration_s
+            shown(c.duration_s)
         ));
     }
     Ok(())
@@ -231,11 +237,28 @@ fn positive(at: &str, v: f64) -> Result<(), String> {
     }
 }
 
+fn sensitivity(at: &str, v: f64) -> Result<(), String> {
+    positive(at, v)?;
+    if v > MAX_SENSITIVITY_A_PER_N {
+        return Err(format!(
+            "{at}: {} A/N is beyond any drive's sensitivity (at most {} A/N): every force \
+             estimate would read near 0 N",
+            crate::input::readable(v),
+            crate::input::readable(MAX_SENSITIVITY_A_PER_N)
+        ));
+    }
+    Ok(())
+}
+
 fn check_range(at: &str, r: &Range) -> Result<(), String> {
     finite(&format!("{at}.min"), r.min)?;
     finite(&format!("{at}.max"), r.max)?;
     if r.min > r.max {
-        return Err(format!("{at}: min {} is above max {}", r.min, r.max));
+        return Err(format!(
+            "{at}: min {} is above max {}",
+            shown(r.min),
+            shown(r.max)
+        ));
     }
     Ok(())
 }
@@ -257,12 +280,12 @@ fn check_quality(at: &str, q: &FitQuality) -> Result<(), String> {
     Ok(())
 }
 
-/// A number as the file wrote it (NaN was `null`).
+/// A number as the file wrote it (NaN was `null`), compact (1e300, not 301 digits).
 fn shown(v: f64) -> String {
     if v.is_nan() {
         "null".to_string()
     } else {
-        v.to_string()
+        crate::input::readable(v)
     }
 }
 
@@ -326,6 +349,15 @@ mod tests {
         assert!(
             e.contains("calibration.estimator.model.rows[0].sensitivity_a_per_n")
                 && e.contains("-0.01"),
+            "{e}"
+        );
+        // An absurd sensitivity would read every current as 0 N.
+        let e = edit(
+            &[&rows[..], &["0", "sensitivity_a_per_n"]].concat(),
+            1e308.into(),
+        );
+        assert!(
+            e.contains("rows[0].sensitivity_a_per_n: 1e308 A/N is beyond any drive's sensitivity"),
             "{e}"
         );
         let e = edit(&rows, serde_json::json!([]));

@@ -17,13 +17,15 @@
 //! Each run is a [`RunSpec`]: settings and machine edits left out keep the preset's values, and
 //! every controller parameter is written out, so a later change of a default does not change what
 //! a saved file means. Unknown fields are errors, not silently ignored: a misspelt
-//! `"target_force"` would otherwise run at the preset's target.
+//! `"target_force"` would otherwise run at the preset's target, a misspelt `"parms"` in a
+//! controller object at the controller's defaults. Every setting is checked against its range
+//! when the file is read, so an error names the run and the field before anything runs.
 
 use std::fmt;
 
 use serde::{Deserialize, Serialize};
 
-use super::definition::RunSpec;
+use super::definition::{check_spec, RunSpec};
 use super::file_format::check_format;
 
 /// The `format` every saved configuration carries.
@@ -92,9 +94,14 @@ impl RunConfiguration {
     /// ```
     pub fn from_json(text: &str) -> Result<Self, ConfigError> {
         check_format(text, FORMAT, VERSION, "configuration").map_err(|e| ConfigError(e.0))?;
-        let config: Self = serde_json::from_str(text).map_err(|e| ConfigError(e.to_string()))?;
+        let config: Self = serde_json::from_str(text)
+            .map_err(|e| ConfigError(crate::input::one_short_line(&e.to_string())))?;
         if config.runs.is_empty() {
             return Err(ConfigError("\"runs\" is empty: nothing to run".into()));
+        }
+        // Every setting in range before anything runs, each error naming its run and field.
+        for (i, run) in config.runs.iter().enumerate() {
+            check_spec(run).map_err(|e| ConfigError(format!("run {}: {e}", i + 1)))?;
         }
         Ok(config)
     }
@@ -141,6 +148,125 @@ mod tests {
         assert!(!text.contains("control_period_s"), "{text}");
     }
 
+    /// A value to put in place of one in a saved configuration: out of range, of the wrong kind,
+    /// or hostile.
+    fn hostile(rng: &mut crate::rng::Rng) -> serde_json::Value {
+        use serde_json::json;
+        match rng.next_u64() % 14 {
+            0 => json!(1e300),
+            1 => json!(-1e-300),
+            2 => json!(-1),
+            3 => serde_json::Value::Null,
+            4 => json!("x".repeat(1 + (rng.next_u64() % 100_000) as usize)),
+            5 => json!([1, 2]),
+            6 => json!({"nested": {"deeper": 1}}),
+            7 => json!(true),
+            8 => json!(u64::MAX),
+            9 => json!(0),
+            10 => json!(0.5),
+            11 => json!("kim-step-doc"),
+            12 => json!(250.0),
+            _ => json!((rng.next_u64() % 100_000) as f64 / 7.0),
+        }
+    }
+
+    /// Every place in a JSON value (a path of keys and indices), for mutating one.
+    fn places(value: &serde_json::Value, at: Vec<String>, out: &mut Vec<Vec<String>>) {
+        match value {
+            serde_json::Value::Object(m) => {
+                for (k, v) in m {
+                    let mut next = at.clone();
+                    next.push(k.clone());
+                    out.push(next.clone());
+                    places(v, next, out);
+                }
+            }
+            serde_json::Value::Array(a) => {
+                for (i, v) in a.iter().enumerate() {
+                    let mut next = at.clone();
+                    next.push(i.to_string());
+                    out.push(next.clone());
+                    places(v, next, out);
+                }
+            }
+            _ => {}
+        }
+    }
+
+    #[test]
+    fn random_and_hostile_configurations_load_whole_or_are_refused_in_one_short_line() {
+        use crate::rng::Rng;
+        let mut rng = Rng::seed_from(2727);
+        let saved = RunConfiguration::new(
+            vec![
+                edited_spec(),
+                RunSpec::new(Preset::ManeeratDoc1, ControllerKind::FuzzyDynamics),
+                RunSpec::new(Preset::WangBrakeBench, ControllerKind::Fixed),
+            ],
+            Some("http://127.0.0.1:8080/#/compare".into()),
+        );
+        let original: serde_json::Value = serde_json::from_str(&saved.to_json()).unwrap();
+        let (mut loaded, mut refused) = (0, 0);
+        for round in 0..1500 {
+            let mut value = original.clone();
+            for _ in 0..1 + rng.next_u64() % 3 {
+                let mut all = Vec::new();
+                places(&value, Vec::new(), &mut all);
+                let path = &all[(rng.next_u64() % all.len() as u64) as usize];
+                let (last, parents) = path.split_last().unwrap();
+                let mut at = &mut value;
+                for key in parents {
+                    at = match key.parse::<usize>() {
+                        Ok(i) if at.is_array() => &mut at[i],
+                        _ => &mut at[key.as_str()],
+                    };
+                }
+                match (rng.next_u64() % 4, at) {
+                    (0, serde_json::Value::Object(m)) => {
+                        m.remove(last);
+                    }
+                    (1, serde_json::Value::Object(m)) => {
+                        m.insert(format!("{last}_typo"), hostile(&mut rng));
+                    }
+                    (_, serde_json::Value::Object(m)) => {
+                        m.insert(last.clone(), hostile(&mut rng));
+                    }
+                    (_, serde_json::Value::Array(a)) => {
+                        if let Ok(i) = last.parse::<usize>() {
+                            a[i] = hostile(&mut rng);
+                        }
+                    }
+                    _ => {}
+                }
+            }
+            let mut text = serde_json::to_string_pretty(&value).unwrap();
+            if rng.next_u64().is_multiple_of(20) {
+                text.truncate((rng.next_u64() % text.len() as u64) as usize);
+            }
+            match RunConfiguration::from_json(&text) {
+                Ok(config) => {
+                    loaded += 1;
+                    // Every run of the file is there, each in range, and it saves as it reads.
+                    let runs = value["runs"].as_array().map_or(0, Vec::len);
+                    assert_eq!(config.runs.len(), runs, "round {round}");
+                    for run in &config.runs {
+                        check_spec(run).unwrap();
+                    }
+                    assert_eq!(RunConfiguration::from_json(&config.to_json()), Ok(config));
+                }
+                Err(e) => {
+                    refused += 1;
+                    let e = e.to_string();
+                    assert!(!e.contains('\n') && e.len() < 400, "round {round}: {e}");
+                }
+            }
+        }
+        assert!(
+            loaded > 100 && refused > 300,
+            "{loaded} loaded, {refused} refused"
+        );
+    }
+
     #[test]
     fn mistakes_are_errors_that_say_what_and_where() {
         let cases = [
@@ -175,6 +301,22 @@ mod tests {
                 r#"{"format": "cutlab-runs", "version": 1, "runs": [{"preset": "kim-step-doc",
                  "controller": {"kind": "pi"}, "seed": -1}]}"#,
                 "line 2",
+            ),
+            (
+                r#"{"format": "cutlab-runs", "version": 1, "runs": [{"preset": "kim-step-doc",
+                 "controller": {"kind": "pi", "parms": {"kp": 5}}, "seed": 1}]}"#,
+                "unknown field `parms`",
+            ),
+            (
+                r#"{"format": "cutlab-runs", "version": 1, "runs": [{"preset": "kim-step-doc",
+                 "controller": {"kind": "pi"}, "seed": 1}, {"preset": "kim-step-doc",
+                 "controller": {"kind": "pi"}, "seed": 1, "settings": {"max_override_pct": 1e300}}]}"#,
+                "run 2: highest override 1e300 % is more than this machine applies",
+            ),
+            (
+                r#"{"format": "cutlab-runs", "version": 1, "runs": [{"preset": "kim-step-doc",
+                 "controller": {"kind": "pi"}, "seed": 1, "settings": {"control_period_s": 1e-300}}]}"#,
+                "run 1: control_period_s: 1e-300 s is outside",
             ),
         ];
         for (text, expected) in cases {

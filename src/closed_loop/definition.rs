@@ -30,8 +30,7 @@ use crate::safety::EnvelopeConfig;
 /// Everything that defines a run; the same spec and seed give the same trace. Its JSON form is
 /// what a saved configuration holds ([`super::config`]). Read from JSON, a controller's missing
 /// parameters take the preset's values ([`preset_controller`], as a run made by a form or the
-/// command line does), and every setting is checked against the table below: a spec that exists
-/// is one the form and the command line would accept.
+/// command line does).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(try_from = "RunSpecText")]
 pub struct RunSpec {
@@ -112,15 +111,15 @@ impl TryFrom<RunSpecText> for RunSpec {
             .controller
             .resolve(|kind| preset_controller(preset, kind))
             .map_err(|e| format!("controller: {e}"))?;
-        let spec = RunSpec {
+        // The settings are checked by the reader of the whole configuration
+        // ([`super::config::RunConfiguration::from_json`]), which names the run.
+        Ok(RunSpec {
             preset,
             controller,
             seed: text.seed,
             settings: text.settings,
             plant: text.plant,
-        };
-        check_spec(&spec).map_err(|e| e.to_string())?;
-        Ok(spec)
+        })
     }
 }
 
@@ -1083,7 +1082,9 @@ impl fmt::Display for Problem {
             }
             Problem::AboveMachine { value, max, what } => write!(
                 f,
-                "{what} {value} % is more than this machine applies ({max} %)"
+                "{what} {} % is more than this machine applies ({} %)",
+                readable(*value),
+                readable(*max)
             ),
             Problem::Requires(why) => f.write_str(why),
             Problem::BandInverted { min, max } => write!(

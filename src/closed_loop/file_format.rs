@@ -31,14 +31,17 @@ pub fn check_format(text: &str, format: &str, version: u32, what: &str) -> Resul
         format: Option<String>,
         version: Option<serde_json::Value>,
     }
-    let opening: Opening =
-        serde_json::from_str(text).map_err(|e| FormatError(format!("not a cutlab {what}: {e}")))?;
+    let opening: Opening = serde_json::from_str(text).map_err(|e| {
+        FormatError(crate::input::one_short_line(&format!(
+            "not a cutlab {what}: {e}"
+        )))
+    })?;
     if opening.format.as_deref() != Some(format) {
         return Err(FormatError(format!(
             "not a cutlab {what}: \"format\" must be \"{format}\", found {}",
             opening
                 .format
-                .map_or("nothing".to_string(), |f| format!("{f:?}"))
+                .map_or("nothing".to_string(), |f| crate::input::excerpt(&f))
         )));
     }
     match opening.version.as_ref().and_then(serde_json::Value::as_u64) {
@@ -51,7 +54,9 @@ pub fn check_format(text: &str, format: &str, version: u32, what: &str) -> Resul
             "\"version\" must be {version}, found {}",
             opening
                 .version
-                .map_or("nothing".to_string(), |v| v.to_string())
+                .map_or("nothing".to_string(), |v| crate::input::excerpt(
+                    &v.to_string()
+                ))
         ))),
     }
 }

@@ -294,11 +294,13 @@ pub struct ControllerConfig {
 }
 
 /// The serialised form: `{"kind": "pi", "params": {"kp": 0.3, ...}}`; missing parameters take
-/// their defaults, unknown or out-of-range ones are errors. Whose defaults depends on the reader:
-/// a controller on its own takes its kind's ([`ControllerConfig::new`]), a run in a saved
-/// configuration its preset's (`closed_loop::definition::preset_controller`), through
+/// their defaults, unknown or out-of-range ones are errors, and so is a field other than these
+/// three (a misspelt `"parms"` would otherwise run on the defaults). Whose defaults depends on
+/// the reader: a controller on its own takes its kind's ([`ControllerConfig::new`]), a run in a
+/// saved configuration its preset's (`closed_loop::definition::preset_controller`), through
 /// [`ControllerText::resolve`].
 #[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct ControllerText {
     /// The controller.
     pub kind: ControllerKind,
@@ -675,5 +677,10 @@ mod tests {
             serde_json::from_str::<ControllerConfig>(r#"{"kind":"pi","params":{"kp":-3}}"#)
                 .is_err()
         );
+        // A misspelt field is an error, not a run on the defaults.
+        let e = serde_json::from_str::<ControllerConfig>(r#"{"kind":"pi","parms":{"kp":5}}"#)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("unknown field `parms`"), "{e}");
     }
 }

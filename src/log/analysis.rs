@@ -11,11 +11,13 @@ use crate::signal::butterworth::{butter, ButterworthSpec, Cutoff, FilterKind};
 use crate::signal::filtfilt::filtfilt;
 use crate::signal::spectrum::{find_peaks, welch};
 
-/// Statistics of some values (NaN gaps left out).
+/// Statistics of some values; NaN and ±∞ (gaps, damaged cells) are left out and counted.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct Stats {
-    /// Values counted.
+    /// Values counted: the finite ones.
     pub count: usize,
+    /// Values left out: gaps and numbers that are not finite.
+    pub left_out: usize,
     /// Their mean.
     pub mean: Option<f64>,
     /// Their root mean square.
@@ -29,26 +31,87 @@ pub struct Stats {
 }
 
 impl Stats {
-    fn of<'a>(values: impl Iterator<Item = &'a f64>, rows: usize, period_s: Option<f64>) -> Self {
-        let (mut n, mut sum, mut squares) = (0usize, 0.0, 0.0);
-        let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
-        for &v in values.filter(|v| v.is_finite()) {
+    /// The statistics of `values` (the rows of one column, or of one label's rows); the
+    /// duration is their number × `period_s`.
+    ///
+    /// The sums are taken over the values divided by a power of two near the largest magnitude
+    /// (an exact scaling), with compensation: no partial sum overflows, so a column of finite
+    /// 1e308 has the mean 1e308, not ∞, and the RMS of 1e200 is 1e200.
+    ///
+    /// ```
+    /// use cutlab::log::analysis::Stats;
+    /// let s = Stats::of(&[1e308, 1e308, f64::NAN, f64::INFINITY], Some(0.5));
+    /// assert_eq!((s.count, s.left_out, s.mean, s.rms), (2, 2, Some(1e308), Some(1e308)));
+    /// assert_eq!(s.duration_s, Some(2.0));
+    /// ```
+    pub fn of(values: &[f64], period_s: Option<f64>) -> Self {
+        let (mut n, mut lo, mut hi) = (0usize, f64::INFINITY, f64::NEG_INFINITY);
+        for &v in values.iter().filter(|v| v.is_finite()) {
             n += 1;
-            sum += v;
-            squares += v * v;
             lo = lo.min(v);
             hi = hi.max(v);
         }
-        let some = |v: f64| (n > 0).then_some(v);
+        let (mean, rms) = if n == 0 {
+            (None, None)
+        } else {
+            // The largest power of two not above the largest magnitude: every scaled value lies
+            // in (−2, 2), so n of them sum to at most 2n.
+            let largest = lo.abs().max(hi.abs());
+            let biased_exponent = (largest.to_bits() >> 52) & 0x7ff;
+            let scale = if biased_exponent == 0 {
+                1.0
+            } else {
+                f64::from_bits(biased_exponent << 52)
+            };
+            // Neumaier's compensated sum, and the squares (each below 4).
+            let (mut sum, mut compensation, mut squares) = (0.0f64, 0.0f64, 0.0f64);
+            for &v in values.iter().filter(|v| v.is_finite()) {
+                let x = v / scale;
+                let t = sum + x;
+                compensation += if sum.abs() >= x.abs() {
+                    (sum - t) + x
+                } else {
+                    (x - t) + sum
+                };
+                sum = t;
+                squares += x * x;
+            }
+            let count = n as f64;
+            (
+                Some((sum + compensation) / count * scale),
+                Some((squares / count).sqrt() * scale),
+            )
+        };
         Self {
             count: n,
-            mean: some(sum / n.max(1) as f64),
-            rms: some((squares / n.max(1) as f64).sqrt()),
-            min: some(lo),
-            max: some(hi),
-            duration_s: period_s.map(|p| rows as f64 * p),
+            left_out: values.len() - n,
+            mean,
+            rms,
+            min: (n > 0).then_some(lo),
+            max: (n > 0).then_some(hi),
+            duration_s: period_s.map(|p| values.len() as f64 * p),
         }
     }
+}
+
+/// The statistics of `values` per label of the text column `labels`, in the order of the
+/// labels' first appearance: one pass over the rows, whatever the number of labels.
+fn by_label(labels: &super::Column, values: &[f64], period_s: Option<f64>) -> Vec<LabelStats> {
+    let mut per_label: Vec<Vec<f64>> = vec![Vec::new(); labels.label_names.len()];
+    for (l, v) in labels.labels.iter().zip(values) {
+        if let Some(list) = per_label.get_mut(*l as usize) {
+            list.push(*v);
+        }
+    }
+    labels
+        .label_names
+        .iter()
+        .zip(&per_label)
+        .map(|(label, rows)| LabelStats {
+            label: label.clone(),
+            stats: Stats::of(rows, period_s),
+        })
+        .collect()
 }
 
 /// One label's rows of a column.
@@ -130,8 +193,7 @@ pub fn analyse(log: &Log, name: &str, request: &AnalysisRequest) -> Result<Colum
     if let Some((cutoff_hz, order)) = request.lowpass {
         match period {
             None => notes.push(
-                "the low-pass needs the sample period (a time column or --sample-period-s): \
-                 skipped"
+                "the low-pass needs the sample period (a time column, or give it): skipped"
                     .to_string(),
             ),
             Some(p) if cutoff_hz >= 0.5 / p => notes.push(format!(
@@ -160,7 +222,7 @@ pub fn analyse(log: &Log, name: &str, request: &AnalysisRequest) -> Result<Colum
             }
         }
     }
-    let whole = Stats::of(values.iter(), log.rows, period);
+    let whole = Stats::of(&values, period);
     let by_label = match &request.by {
         None => Vec::new(),
         Some(by) => {
@@ -168,28 +230,11 @@ pub fn analyse(log: &Log, name: &str, request: &AnalysisRequest) -> Result<Colum
                 .columns
                 .iter()
                 .find(|c| &c.name == by)
-                .ok_or_else(|| format!("--by: no column {by:?}; columns: {}", names()))?;
+                .ok_or_else(|| format!("no column {by:?} to group by; columns: {}", names()))?;
             if labels.kind != ColumnKind::Text {
-                return Err(format!("--by: column {by:?} holds no labels"));
+                return Err(format!("column {by:?} holds no labels to group by"));
             }
-            labels
-                .label_names
-                .iter()
-                .enumerate()
-                .map(|(id, label)| {
-                    let rows: Vec<f64> = labels
-                        .labels
-                        .iter()
-                        .zip(&values)
-                        .filter(|(l, _)| **l == id as u32)
-                        .map(|(_, v)| *v)
-                        .collect();
-                    LabelStats {
-                        label: label.clone(),
-                        stats: Stats::of(rows.iter(), rows.len(), period),
-                    }
-                })
-                .collect()
+            by_label(labels, &values, period)
         }
     };
     let mut peaks = Vec::new();
@@ -321,7 +366,7 @@ impl ChainWork {
             spectrum: (Vec::new(), Vec::new()),
             spectrum_cursor: 0,
             spectrum_weight: 0.0,
-            whole: Stats::of([].iter(), 0, None),
+            whole: Stats::of(&[], None),
             output: None,
         })
     }
@@ -446,7 +491,7 @@ impl ChainWork {
             }
             3 => {
                 // The statistics of what the chain made (filtered); per label in the next stage.
-                self.whole = Stats::of(self.filtered.iter(), self.log.rows, period);
+                self.whole = Stats::of(&self.filtered, period);
             }
             _ => {
                 let values = &self.filtered;
@@ -461,22 +506,7 @@ impl ChainWork {
                     if labels.kind != ColumnKind::Text {
                         return Err(format!("column {by:?} holds no labels"));
                     }
-                    // One pass: each row's value into its label's list.
-                    let mut per_label: Vec<Vec<f64>> = vec![Vec::new(); labels.label_names.len()];
-                    for (l, v) in labels.labels.iter().zip(values) {
-                        if let Some(list) = per_label.get_mut(*l as usize) {
-                            list.push(*v);
-                        }
-                    }
-                    by_label = labels
-                        .label_names
-                        .iter()
-                        .zip(&per_label)
-                        .map(|(label, rows)| LabelStats {
-                            label: label.clone(),
-                            stats: Stats::of(rows.iter(), rows.len(), period),
-                        })
-                        .collect();
+                    by_label = self::by_label(labels, values, period);
                 }
                 let (freq, psd) = &self.spectrum;
                 let lowest = freq.get(1).copied().unwrap_or(0.0);
@@ -568,7 +598,7 @@ pub fn row_times(log: &Log, sample_period_s: Option<f64>) -> Vec<f64> {
 ///
 /// ```
 /// use cutlab::log::{load, mapping::Mapping, analysis::write_channels_csv};
-/// let log = load(b"t [s],I [A]\n0,1\n0.1,2\n", None);
+/// let log = load(b"t [s],I [A]\n0,1\n0.1,2\n", None).unwrap();
 /// let mut out = Vec::new();
 /// write_channels_csv(&log, &Mapping::guess(&log), None, None, &mut out).unwrap();
 /// assert_eq!(String::from_utf8(out).unwrap(), "time_s,I [A]\n0,1\n0.1,2\n");

@@ -3,9 +3,14 @@
 //!
 //! What it takes: comma, semicolon or tab delimiters (detected), a decimal comma beside semicolons
 //! or tabs, quoted fields (doubled quotes inside, delimiters and line breaks inside quotes), a
-//! UTF-8 byte-order mark, LF or CRLF, a last line with or without its newline. It never panics on
-//! any input and keeps no copy of the text: only the unfinished last record of a chunk waits for
-//! the next one.
+//! UTF-8 byte-order mark, LF, CRLF or CR-only line ends, a last line with or without its newline.
+//! It never panics on any input and keeps no copy of the text: only the unfinished last record of
+//! a chunk waits for the next one.
+//!
+//! What it refuses rather than guesses at ([`CsvReader::refused`]): text in UTF-16 or UTF-32
+//! (with or without a byte-order mark) and other bytes with zeros among them, and a quote that
+//! swallows the lines after it — one never closed, or one whose field holds lines that look like
+//! whole records. Blank lines are skipped and counted ([`CsvReader::blank_lines`]).
 //!
 //! It is built for speed as much as for mess (a 100 MB log loads in well under a second, see
 //! docs/benchmarks.md): one pass over the bytes splits a record into fields that are slices of
@@ -37,6 +42,8 @@ impl Dialect {
 const SNIFF_BYTES: usize = 64 * 1024;
 /// How many records the dialect is inferred from.
 const SNIFF_RECORDS: usize = 50;
+/// How much of the start is looked at for zero bytes (UTF-16, UTF-32, binary files).
+const ENCODING_BYTES: usize = 4096;
 /// A record longer than this is cut (a file with no line breaks must not grow one record
 /// without bound); the cut is reported.
 pub const MAX_RECORD_BYTES: usize = 1 << 20;
@@ -65,6 +72,8 @@ pub enum Cell<'a> {
 pub struct RecordView<'a> {
     /// The line the record starts on (1-based).
     pub line: usize,
+    /// The lines it spans (more than one when a quoted field holds a line break).
+    pub lines: usize,
     dialect: Dialect,
     input: &'a [u8],
     scratch: &'a [u8],
@@ -85,6 +94,11 @@ impl<'a> RecordView<'a> {
     /// True for a record without fields (never handed out: blank lines are skipped).
     pub fn is_empty(&self) -> bool {
         self.spans.is_empty()
+    }
+
+    /// Whether every field is empty or blank (a line of only delimiters).
+    pub fn all_empty(&self) -> bool {
+        self.fields().all(|f| f.trim_ascii().is_empty())
     }
 
     /// Field `i`'s bytes, quotes removed (empty past the last field).
@@ -131,6 +145,8 @@ pub struct ReadProblem {
 #[derive(Debug, Default)]
 pub struct CsvReader {
     dialect: Option<Dialect>,
+    /// The most common number of fields in the first records (from the sniff).
+    usual_fields: usize,
     /// Bytes not yet split into records.
     pending: Vec<u8>,
     /// Line number of the first byte of `pending`.
@@ -142,14 +158,25 @@ pub struct CsvReader {
     /// The fields of the record being split.
     spans: Vec<Span>,
     problems: Vec<ReadProblem>,
+    /// Why the file is not read, once it is known; nothing more is read after it.
+    refused: Option<ReadProblem>,
+    /// The file ends its lines with a lone CR (old Mac exports): each CR is read as a line feed.
+    cr_line_ends: bool,
+    /// Blank lines skipped, and the first of them.
+    blank_lines: usize,
+    first_blank_line: usize,
+    /// The line within the record being split where its last quoted field opened.
+    quote_opened: usize,
 }
 
 /// How a scan of one record ended.
 enum Scan {
     /// A complete record: the offset after its line break, and the lines it spans.
     Complete { next: usize, lines: usize },
-    /// The bytes ran out inside the record.
-    Incomplete,
+    /// The bytes ran out inside the record (`in_quote`: inside a quoted field).
+    Incomplete { in_quote: bool },
+    /// The input ended inside a quoted field: the quote is never closed.
+    Unclosed,
 }
 
 impl CsvReader {
@@ -176,10 +203,38 @@ impl CsvReader {
         std::mem::take(&mut self.problems)
     }
 
+    /// Why the file is not read (UTF-16 or UTF-32, zero bytes, a quote swallowing lines), once
+    /// that is known; the reader hands out no records after it.
+    pub fn refused(&self) -> Option<&ReadProblem> {
+        self.refused.as_ref()
+    }
+
+    /// Lines split so far (every line once the input is finished).
+    pub fn lines_read(&self) -> usize {
+        self.pending_line.saturating_sub(1)
+    }
+
+    /// Blank lines skipped so far, and the first of them (0 if none).
+    pub fn blank_lines(&self) -> (usize, usize) {
+        (self.blank_lines, self.first_blank_line)
+    }
+
+    /// Whether the file ends its lines with a lone CR (read as line feeds).
+    pub fn cr_line_ends(&self) -> bool {
+        self.cr_line_ends
+    }
+
     /// Takes `chunk` and hands every record it completes to `out`.
     pub fn push(&mut self, chunk: &[u8], out: &mut impl FnMut(RecordView<'_>)) {
+        if self.refused.is_some() {
+            return;
+        }
         self.bytes_read += chunk.len() as u64;
+        let from = self.pending.len();
         self.pending.extend_from_slice(chunk);
+        if self.cr_line_ends {
+            cr_to_lf(&mut self.pending[from..]);
+        }
         if !self.bom_checked {
             // The mark may arrive split over chunks: wait for three bytes.
             let head = &self.pending[..self.pending.len().min(3)];
@@ -195,13 +250,16 @@ impl CsvReader {
             if self.pending.len() < SNIFF_BYTES {
                 return;
             }
-            self.dialect = Some(sniff(&self.pending));
+            self.decide();
         }
         self.drain(false, out);
     }
 
     /// Ends the input: hands over the last record (with or without its newline).
     pub fn finish(&mut self, out: &mut impl FnMut(RecordView<'_>)) {
+        if self.refused.is_some() {
+            return;
+        }
         if !self.bom_checked {
             self.bom_checked = true;
             if self.pending.starts_with(BOM) {
@@ -209,9 +267,32 @@ impl CsvReader {
             }
         }
         if self.dialect.is_none() {
-            self.dialect = Some(sniff(&self.pending));
+            self.decide();
         }
         self.drain(true, out);
+    }
+
+    /// From the start of the file: whether it is text at all, its line ends and its dialect.
+    fn decide(&mut self) {
+        if let Some(message) = encoding_problem(&self.pending) {
+            self.refuse(1, message);
+            return;
+        }
+        // No line feed anywhere in the start, but carriage returns: the lines end with a lone CR.
+        let start = &self.pending[..self.pending.len().min(SNIFF_BYTES)];
+        if !start.contains(&b'\n') && start.contains(&b'\r') {
+            self.cr_line_ends = true;
+            cr_to_lf(&mut self.pending);
+        }
+        let (dialect, fields) = sniff_fields(&self.pending);
+        self.dialect = Some(dialect);
+        self.usual_fields = fields;
+    }
+
+    /// Stops reading: the file is not read, for `message` at `line`.
+    fn refuse(&mut self, line: usize, message: String) {
+        self.refused = Some(ReadProblem { line, message });
+        self.pending = Vec::new();
     }
 
     /// Splits every complete record out of `pending` (all of it at the end).
@@ -223,13 +304,25 @@ impl CsvReader {
         while start < pending.len() {
             let rest = &pending[start..];
             let (scan, cut) = match self.split(rest, dialect, at_end) {
-                Scan::Incomplete if rest.len() > MAX_RECORD_BYTES => {
-                    // An unclosed quote (or no line break at all): cut the record, say so.
+                Scan::Incomplete { in_quote: true } if rest.len() > MAX_RECORD_BYTES => {
+                    let lines = rest.iter().filter(|&&b| b == b'\n').count();
+                    self.refuse(
+                        line + self.quote_opened - 1,
+                        format!(
+                            "a quote opens a field here and runs on for more than {} MiB ({lines} \
+                             lines) without closing: an unclosed quote would swallow the lines \
+                             after it; the file is not read (close or remove the quote)",
+                            MAX_RECORD_BYTES >> 20
+                        ),
+                    );
+                    return;
+                }
+                Scan::Incomplete { .. } if rest.len() > MAX_RECORD_BYTES => {
+                    // No line break at all: cut the record, say so (the rest is read on).
                     self.problems.push(ReadProblem {
                         line,
                         message: format!(
-                            "a record longer than {} MiB without a line break (an unclosed \
-                             quote?); cut there",
+                            "a record longer than {} MiB without a line break; cut there",
                             MAX_RECORD_BYTES >> 20
                         ),
                     });
@@ -239,13 +332,51 @@ impl CsvReader {
                 }
                 scan => (scan, false),
             };
-            let Scan::Complete { next, lines } = scan else {
-                break;
+            let (next, lines) = match scan {
+                Scan::Complete { next, lines } => (next, lines),
+                Scan::Incomplete { .. } => break,
+                Scan::Unclosed => {
+                    let opened = line + self.quote_opened - 1;
+                    // Line breaks after the quote, but a last one that ends the file.
+                    let breaks = rest.iter().filter(|&&b| b == b'\n').count();
+                    let after = breaks
+                        .saturating_sub(self.quote_opened - 1)
+                        .saturating_sub(usize::from(rest.ends_with(b"\n")));
+                    self.refuse(
+                        opened,
+                        format!(
+                            "a quote opens a field here and is never closed: it would swallow \
+                             the {after} lines after it into one field; the file is not read \
+                             (close or remove the quote)"
+                        ),
+                    );
+                    return;
+                }
             };
             let record_input = if cut { &rest[..MAX_RECORD_BYTES] } else { rest };
-            if !self.blank(record_input) {
+            if lines > 1 {
+                let swallowed = self.swallowed_records(dialect.delimiter);
+                if swallowed > 0 {
+                    self.refuse(
+                        line,
+                        format!(
+                            "a quoted field here runs over {lines} lines, {swallowed} of them \
+                             with the delimiters of a whole record: an unclosed quote? The file \
+                             is not read (close or remove the quote)"
+                        ),
+                    );
+                    return;
+                }
+            }
+            if self.blank(record_input) {
+                self.blank_lines += lines;
+                if self.first_blank_line == 0 {
+                    self.first_blank_line = line;
+                }
+            } else {
                 out(RecordView {
                     line,
+                    lines,
                     dialect,
                     input: record_input,
                     scratch: &self.scratch,
@@ -261,15 +392,32 @@ impl CsvReader {
         self.pending_line = line;
     }
 
-    /// Whether the record just split is blank (whitespace only): such lines are skipped.
+    /// The lines inside the quoted fields of the record just split (after a line break in one)
+    /// that hold as many delimiters as a whole record of the file's usual width: lines a quote
+    /// swallowed. A line break inside a quoted label ("two\nlines") is no record.
+    fn swallowed_records(&self, delimiter: u8) -> usize {
+        let needed = self.usual_fields.saturating_sub(1).max(1);
+        self.spans
+            .iter()
+            .filter_map(|s| match *s {
+                Span::Scratch(a, b) => self.scratch.get(a..b),
+                _ => None,
+            })
+            .flat_map(|field| field.split(|&b| b == b'\n').skip(1))
+            .filter(|l| l.iter().filter(|&&b| b == delimiter).count() >= needed)
+            .count()
+    }
+
+    /// Whether the record just split is blank (one field of white space): such lines are
+    /// skipped and counted. A line of delimiters only is a record of empty cells, not blank.
     fn blank(&self, input: &[u8]) -> bool {
-        self.spans.iter().all(|s| match *s {
-            Span::Input(a, b) => input
-                .get(a..b)
+        match self.spans.as_slice() {
+            [Span::Input(a, b)] => input
+                .get(*a..*b)
                 .is_none_or(|f| f.iter().all(u8::is_ascii_whitespace)),
             // A quoted field is a value, even if empty (""), and so is a number.
-            Span::Scratch(..) | Span::Number(..) => false,
-        })
+            _ => false,
+        }
     }
 
     /// Splits the first record of `bytes` into `self.spans` in one pass. A quote opens a quoted
@@ -286,7 +434,8 @@ impl CsvReader {
             match self.field(bytes, i, dialect, at_end, &mut lines) {
                 FieldEnd::Delimiter(next) => i = next,
                 FieldEnd::Record(next) => return Scan::Complete { next, lines },
-                FieldEnd::Incomplete => return Scan::Incomplete,
+                FieldEnd::Incomplete { in_quote } => return Scan::Incomplete { in_quote },
+                FieldEnd::Unclosed => return Scan::Unclosed,
             }
         }
     }
@@ -322,7 +471,7 @@ impl CsvReader {
                     self.spans.push(Span::Number(start, end, value));
                     return FieldEnd::Record(n);
                 }
-                None => return FieldEnd::Incomplete,
+                None => return FieldEnd::Incomplete { in_quote: false },
                 // Something else follows (a unit, a space): read the field the long way.
                 Some(_) => {}
             }
@@ -333,7 +482,7 @@ impl CsvReader {
             i = find_special(bytes, i, delimiter);
             let Some(&b) = bytes.get(i) else {
                 if !at_end {
-                    return FieldEnd::Incomplete;
+                    return FieldEnd::Incomplete { in_quote: false };
                 }
                 // The last record without its line break.
                 let end = if n > start && bytes[n - 1] == b'\r' {
@@ -378,6 +527,7 @@ impl CsvReader {
     ) -> FieldEnd {
         let n = bytes.len();
         let from = self.scratch.len();
+        self.quote_opened = *lines;
         let mut i = start;
         let mut closed = false;
         while let Some(&b) = bytes.get(i) {
@@ -389,7 +539,7 @@ impl CsvReader {
                         continue;
                     }
                     // The next chunk may start with the second quote of a pair.
-                    None if !at_end => return FieldEnd::Incomplete,
+                    None if !at_end => return FieldEnd::Incomplete { in_quote: true },
                     _ => {
                         closed = true;
                         i += 1;
@@ -405,11 +555,10 @@ impl CsvReader {
         }
         if !closed {
             if !at_end {
-                return FieldEnd::Incomplete;
+                return FieldEnd::Incomplete { in_quote: true };
             }
-            // An unclosed quote runs to the end of the input.
-            self.spans.push(Span::Scratch(from, self.scratch.len()));
-            return FieldEnd::Record(n);
+            // A quote open at the end of the input swallowed everything after it.
+            return FieldEnd::Unclosed;
         }
         // After the closing quote, up to the delimiter or line break.
         while let Some(&b) = bytes.get(i) {
@@ -429,7 +578,7 @@ impl CsvReader {
             Some(b) if b == delimiter => FieldEnd::Delimiter(i + 1),
             Some(_) => FieldEnd::Record(i + 1),
             None if at_end => FieldEnd::Record(n),
-            None => FieldEnd::Incomplete,
+            None => FieldEnd::Incomplete { in_quote: false },
         }
     }
 }
@@ -440,8 +589,82 @@ enum FieldEnd {
     Delimiter(usize),
     /// At the record's end; the next record starts here.
     Record(usize),
-    /// The bytes ran out.
-    Incomplete,
+    /// The bytes ran out (inside a quoted field, or not).
+    Incomplete { in_quote: bool },
+    /// The input ended inside a quoted field.
+    Unclosed,
+}
+
+/// Reads every carriage return as a line feed (a file whose lines end with a lone CR).
+fn cr_to_lf(bytes: &mut [u8]) {
+    for b in bytes.iter_mut().filter(|b| **b == b'\r') {
+        *b = b'\n';
+    }
+}
+
+/// Why the start of a file is no text this reader reads, or `None` for UTF-8, ASCII or
+/// Latin-1 text: UTF-32 or UTF-16 by its byte-order mark, or without one by the zero bytes
+/// beside each ASCII character (three in UTF-32, one in UTF-16), or zero bytes in any other
+/// pattern (a spreadsheet, an archive). Reading such bytes as text would give garbage columns.
+///
+/// ```
+/// use cutlab::log::csv::encoding_problem;
+/// assert!(encoding_problem(b"t,I\n0,1\n").is_none());
+/// assert!(encoding_problem(b"\xFF\xFEt\0,\0").unwrap().contains("UTF-16"));
+/// assert!(encoding_problem(b"t\0\0\0,\0\0\0I\0\0\0").unwrap().contains("UTF-32"));
+/// ```
+pub fn encoding_problem(start: &[u8]) -> Option<String> {
+    let marks: [(&[u8], &str); 4] = [
+        (&[0xFF, 0xFE, 0, 0], "UTF-32 (little-endian)"),
+        (&[0, 0, 0xFE, 0xFF], "UTF-32 (big-endian)"),
+        (&[0xFF, 0xFE], "UTF-16 (little-endian)"),
+        (&[0xFE, 0xFF], "UTF-16 (big-endian)"),
+    ];
+    let save_as = "save it as UTF-8 (or plain ASCII) and open it again";
+    for (mark, name) in marks {
+        if start.starts_with(mark) {
+            return Some(format!(
+                "the file is {name} text (its byte-order mark says so), which this reader does \
+                 not decode; {save_as}"
+            ));
+        }
+    }
+    let head = &start[..start.len().min(ENCODING_BYTES)];
+    let zeros = head.iter().filter(|&&b| b == 0).count();
+    // A stray zero byte in text is damage, read as text; many of them are an encoding.
+    if zeros == 0 || zeros * 8 < head.len() {
+        return None;
+    }
+    // The share of zero bytes at each position modulo 4.
+    let share = |k: usize| {
+        let at: Vec<u8> = head.iter().skip(k).step_by(4).copied().collect();
+        at.iter().filter(|&&b| b == 0).count() as f64 / at.len().max(1) as f64
+    };
+    let z = [share(0), share(1), share(2), share(3)];
+    let (high, low) = (|v: f64| v > 0.8, |v: f64| v < 0.5);
+    let name = if low(z[0]) && high(z[1]) && high(z[2]) && high(z[3]) {
+        Some("UTF-32 (little-endian)")
+    } else if high(z[0]) && high(z[1]) && high(z[2]) && low(z[3]) {
+        Some("UTF-32 (big-endian)")
+    } else if low(z[0]) && high(z[1]) && low(z[2]) && high(z[3]) {
+        Some("UTF-16 (little-endian)")
+    } else if high(z[0]) && low(z[1]) && high(z[2]) && low(z[3]) {
+        Some("UTF-16 (big-endian)")
+    } else {
+        None
+    };
+    Some(match name {
+        Some(name) => format!(
+            "the file looks like {name} text without a byte-order mark ({zeros} zero bytes in \
+             its first {} bytes), which this reader does not decode; {save_as}",
+            head.len()
+        ),
+        None => format!(
+            "the file is not text: {zeros} of its first {} bytes are zero (a spreadsheet or a \
+             compressed file?); export it as CSV",
+            head.len()
+        ),
+    })
 }
 
 const BOM: &[u8] = &[0xEF, 0xBB, 0xBF];
@@ -495,6 +718,7 @@ pub fn split_fields(text: &str, delimiter: u8) -> Vec<String> {
     if let Scan::Complete { .. } = reader.split(text.as_bytes(), dialect, true) {
         let view = RecordView {
             line: 1,
+            lines: 1,
             dialect,
             input: text.as_bytes(),
             scratch: &reader.scratch,
@@ -517,14 +741,22 @@ pub fn split_fields(text: &str, delimiter: u8) -> Vec<String> {
 /// assert_eq!(sniff(b"a\tb\n1.5\t2\n").delimiter, b'\t');
 /// ```
 pub fn sniff(start: &[u8]) -> Dialect {
+    sniff_fields(start).0
+}
+
+/// [`sniff`], and the number of fields most of the first records have (0 when none has more
+/// than one).
+fn sniff_fields(start: &[u8]) -> (Dialect, usize) {
     let text = String::from_utf8_lossy(&start[..start.len().min(SNIFF_BYTES)]);
+    // Comment lines (`# exported by …`) say nothing of the dialect.
     let records: Vec<&str> = text
         .lines()
-        .filter(|l| !l.trim().is_empty())
+        .filter(|l| !l.trim().is_empty() && !l.trim_start().starts_with('#'))
         .take(SNIFF_RECORDS)
         .collect();
     let mut best = (b',', 0usize, 0usize); // delimiter, lines agreeing, fields
-    for delimiter in [b',', b';', b'\t'] {
+                                           // On a tie a semicolon or tab wins: a comma that splits as well is a decimal comma.
+    for delimiter in [b';', b'\t', b','] {
         let counts: Vec<usize> = records
             .iter()
             .map(|l| split_fields(l, delimiter).len())
@@ -554,10 +786,13 @@ pub fn sniff(start: &[u8]) -> Dialect {
         let dot = fields.iter().filter(|f| looks_decimal(f, '.')).count();
         comma > dot
     };
-    Dialect {
-        delimiter,
-        decimal_comma,
-    }
+    (
+        Dialect {
+            delimiter,
+            decimal_comma,
+        },
+        best.2,
+    )
 }
 
 /// `1,5` / `-0.25e3`: digits, one `sep`, digits.

@@ -134,9 +134,13 @@ impl LogMachine {
 
     fn sample(&mut self, row: usize) -> MachineStep {
         let s = &self.source;
-        let time_s = self
-            .value(Channel::Time, row)
-            .unwrap_or(row as f64 * s.sample_period_s);
+        let time_s = match self.value(Channel::Time, row) {
+            Some(t) if t.is_finite() => t,
+            // A damaged time cell (a gap, NaN, ±∞): a period after the row before, so no event
+            // or period of the replay is timed "NaN s".
+            Some(_) if row > 0 => self.last.sensors.time_s + s.sample_period_s,
+            _ => row as f64 * s.sample_period_s,
+        };
         let speed_rpm = self
             .value(Channel::SpindleSpeed, row)
             .unwrap_or(s.spindle_rpm);
@@ -400,9 +404,12 @@ pub fn log_setup(
         .or(log.sample_period_s)
         .filter(|p| p.is_finite() && *p > 0.0)
         .ok_or_else(|| {
-            setting(
-                "the log's sample period is unknown: it has no time column; give the sample period",
-            )
+            let why = log
+                .period_unknown()
+                .unwrap_or_else(|| "its time steps are not positive".to_string());
+            setting(format!(
+                "the log's sample period is unknown: {why}; give the sample period"
+            ))
         })?;
     let feedback = options.feedback;
     let (phases, rms) = match feedback {

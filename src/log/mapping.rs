@@ -181,22 +181,32 @@ fn lower_first(label: &str) -> String {
         .map_or(String::new(), |c| c.to_lowercase().chain(chars).collect())
 }
 
-/// Whether a column name starts with a feed axis (`X_`, `Y_`, `Z_`, also `X.`, `X-`, `X `).
-fn feed_axis(name: &str) -> bool {
-    let lower = name.trim().to_ascii_lowercase();
-    let mut chars = lower.chars();
-    matches!(
-        (chars.next(), chars.next()),
-        (Some('x' | 'y' | 'z'), Some('_' | '.' | '-' | ' '))
-    )
+/// Whether a column name is a feed drive's: it starts with a feed axis (`X_`, `Y_`, `Z_`, also
+/// `X.`, `X-`, `X `) or has the word "feed" (`feed_current_rms_a`).
+fn feed_drive(name: &str) -> bool {
+    let words = super::name_words(name);
+    matches!(words.first().map(String::as_str), Some("x" | "y" | "z")) && words.len() > 1
+        || words.iter().any(|w| w == "feed" || w == "vorschub")
 }
 
-/// Whether a name says it is a set value (a command, programmed).
+/// Whether a name says it is a set value (a command, programmed): one of its words says so
+/// (`offset` and `reset` are no set values).
 fn commanded(name: &str) -> bool {
-    let lower = name.to_ascii_lowercase();
-    ["command", "cmd", "prog", "soll", "set", "target"]
-        .iter()
-        .any(|w| lower.contains(w))
+    super::name_words(name).iter().any(|w| {
+        [
+            "command",
+            "commanded",
+            "cmd",
+            "prog",
+            "programmed",
+            "soll",
+            "sollwert",
+            "set",
+            "setpoint",
+            "target",
+        ]
+        .contains(&w.as_str())
+    })
 }
 
 impl Mapping {
@@ -205,7 +215,7 @@ impl Mapping {
     ///
     /// ```
     /// use cutlab::log::{load, mapping::{Channel, Mapping}};
-    /// let log = load(b"t [s];S_I_U;S_I_V;S_speed (rpm);X_Strom [A];Override [%]\n0;1;2;3;4;100\n0,1;1;2;3;4;100\n", None);
+    /// let log = load(b"t [s];S_I_U;S_I_V;S_speed (rpm);X_Strom [A];Override [%]\n0;1;2;3;4;100\n0,1;1;2;3;4;100\n", None).unwrap();
     /// let m = Mapping::guess(&log);
     /// assert_eq!(m.channel_of("S_I_V"), Some(Channel::SpindlePhase));
     /// assert_eq!(m.channel_of("X_Strom [A]"), Some(Channel::FeedCurrent));
@@ -228,9 +238,9 @@ impl Mapping {
                 Some(Channel::FvVoltage)
             } else {
                 match column.role {
-                    Some(Role::PhaseCurrent) if feed_axis(name) => Some(Channel::FeedPhase),
+                    Some(Role::PhaseCurrent) if feed_drive(name) => Some(Channel::FeedPhase),
                     Some(Role::PhaseCurrent) => Some(Channel::SpindlePhase),
-                    Some(Role::RmsCurrent) if feed_axis(name) => Some(Channel::FeedCurrent),
+                    Some(Role::RmsCurrent) if feed_drive(name) => Some(Channel::FeedCurrent),
                     Some(Role::RmsCurrent) => Some(Channel::SpindleCurrent),
                     Some(Role::SpindleSpeed) if commanded(name) => Some(Channel::SpindleCommand),
                     Some(Role::SpindleSpeed) => Some(Channel::SpindleSpeed),
@@ -389,7 +399,7 @@ mod tests {
 
     #[test]
     fn resolving_names_the_column_at_fault() {
-        let log = load(b"t,I [A],Phase\n0,1,Prep\n0.1,2,Cut\n", None);
+        let log = load(b"t,I [A],Phase\n0,1,Prep\n0.1,2,Cut\n", None).unwrap();
         let mut m = Mapping::guess(&log);
         assert_eq!(m.channel_of("I [A]"), Some(Channel::SpindleCurrent));
         assert_eq!(m.channel_of("Phase"), Some(Channel::Label));

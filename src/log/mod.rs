@@ -1,15 +1,24 @@
 //! Engineers' logs as they are: a messy CSV file in, columns out.
 //!
 //! ```text
-//! bytes (chunks) ─► csv::CsvReader (dialect, quotes, BOM, CRLF) ─► records
-//!   ─► LogBuilder (header, numbers or labels per column, problems by line and column)
-//!   ─► Log (columns, units, time column and sample period, role guesses)
+//! bytes (chunks) ─► csv::CsvReader (encoding, dialect, quotes, BOM, CRLF or CR) ─► records
+//!   ─► LogBuilder (preamble and header, numbers or labels per column, problems by line and column)
+//!   ─► Log (columns, units, time column in seconds and sample period, role guesses and why,
+//!           an account of every line and cell not read as data)
 //! ```
 //!
 //! Numbers are stored as one `Vec<f64>` per column and text as interned labels; nothing of the
 //! text is kept after a record is read, so memory follows the numbers, not the file. A damaged
-//! line (too few or too many fields, text in a numeric column) is reported by line and column
-//! and kept as a gap (NaN); the rest of the file loads. docs/logs.md describes the rules.
+//! line (too few or too many fields, text in a numeric column, a line of delimiters only) is
+//! reported by line and column and kept as gaps (NaN); the rest of the file loads. Nothing is
+//! dropped without a count: [`ReadAccount`] says where every line of the file went (rows, the
+//! header, a preamble, blank lines) and how many cells were not read as numbers. What cannot be
+//! read without guessing — UTF-16 or UTF-32 text, a quote that swallows the lines after it — is
+//! refused with a [`ReadError`]. docs/logs.md describes the rules.
+//!
+//! NaN and ±∞ in a numeric column (written as such, or a number beyond a double's range) are
+//! kept as values, counted per column ([`Column::not_finite`]) and left out of statistics, which
+//! say how many values they left out.
 
 pub mod analysis;
 pub mod calibration;
@@ -21,6 +30,7 @@ pub mod replay;
 
 use serde::Serialize;
 
+use crate::input::{excerpt, readable};
 use csv::{parse_number, Cell, CsvReader, Dialect, RecordView};
 
 /// A column with at least this share of numbers (among its non-empty cells) is numeric; its
@@ -28,6 +38,9 @@ use csv::{parse_number, Cell, CsvReader, Dialect, RecordView};
 pub const NUMERIC_SHARE: f64 = 0.75;
 /// At most this many problems are listed one by one; the rest are counted.
 pub const MAX_LISTED_PROBLEMS: usize = 200;
+/// How many records are read before deciding which of them is the header (a preamble, comment
+/// lines or a damaged line must not turn the header into data).
+const HEADER_LOOKAHEAD: usize = 20;
 
 /// What a column holds.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
@@ -76,6 +89,135 @@ pub struct Problem {
     pub message: String,
 }
 
+/// Why a file is not read at all: bytes that are no text this reader decodes (UTF-16, UTF-32,
+/// zero bytes) or a quote that swallows the lines after it.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct ReadError {
+    /// The line where it shows (1-based).
+    pub line: usize,
+    /// What is wrong, and what to do.
+    pub message: String,
+}
+
+impl std::fmt::Display for ReadError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "line {}: {}", self.line, self.message)
+    }
+}
+
+impl std::error::Error for ReadError {}
+
+/// Where every line of a file went, and what was not read as data, counted. The lines add up:
+/// `lines == header_lines + preamble_lines + blank_lines + row_lines`.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize)]
+pub struct ReadAccount {
+    /// Bytes in the file.
+    pub bytes: u64,
+    /// Lines in the file.
+    pub lines: usize,
+    /// Lines of the header (more than one when a quoted name holds a line break; 0 without one).
+    pub header_lines: usize,
+    /// Lines before the header skipped as a preamble or comments (`# …`, `Machine: DMU 50`).
+    pub preamble_lines: usize,
+    /// The first of them (0 if none).
+    pub first_preamble_line: usize,
+    /// Blank lines, skipped.
+    pub blank_lines: usize,
+    /// The first of them (0 if none).
+    pub first_blank_line: usize,
+    /// Lines of the rows (more than the rows when a quoted cell holds a line break).
+    pub row_lines: usize,
+    /// Cells of the rows: rows × columns.
+    pub cells: usize,
+    /// Empty cells (gaps), the ones short rows lack included.
+    pub empty_cells: usize,
+    /// Cells short rows lack (gaps, among the empty ones).
+    pub short_cells: usize,
+    /// Fields beyond the header's width, not read.
+    pub extra_cells: usize,
+    /// Text in a numeric column (gaps).
+    pub text_cells: usize,
+    /// Numbers that are not finite: NaN, ±∞, beyond a double's range (kept, left out of
+    /// statistics).
+    pub not_finite_cells: usize,
+    /// Rows of only delimiters (every cell a gap).
+    pub empty_rows: usize,
+    /// Bytes of names and labels that are not UTF-8, replaced.
+    pub bytes_not_utf8: usize,
+    /// Whether the lines end with a lone CR (read as line feeds).
+    pub cr_line_ends: bool,
+}
+
+impl ReadAccount {
+    /// What was not read as data, as sentences for people (none when everything was).
+    ///
+    /// ```
+    /// let text = b"# exported\nt [s],I [A]\n0,1\n\n0.1,x\n0.2,3,4\n0.3,4\n0.4,5\n";
+    /// let log = cutlab::log::load(text, None).unwrap();
+    /// assert_eq!(log.account.unread(), [
+    ///     "1 line before the header skipped as a preamble or comments (from line 1)",
+    ///     "1 blank line skipped (first: line 4)",
+    ///     "1 cell of text in a numeric column, kept as gaps",
+    ///     "1 field beyond the header's columns, not read",
+    /// ]);
+    /// ```
+    pub fn unread(&self) -> Vec<String> {
+        let gaps = self.empty_cells - self.short_cells.min(self.empty_cells);
+        let preamble = format!(
+            "before the header skipped as a preamble or comments (from line {})",
+            self.first_preamble_line
+        );
+        let blank = format!("skipped (first: line {})", self.first_blank_line);
+        // (count, the thing and its plural, what became of them)
+        let counts: [(usize, &str, &str, &str); 9] = [
+            (self.preamble_lines, "line", "lines", &preamble),
+            (self.blank_lines, "blank line", "blank lines", &blank),
+            (
+                self.empty_rows,
+                "row",
+                "rows",
+                "of only delimiters, kept as gaps",
+            ),
+            (gaps, "empty cell", "empty cells", "(gaps)"),
+            (
+                self.short_cells,
+                "cell",
+                "cells",
+                "missing from short rows (gaps)",
+            ),
+            (
+                self.text_cells,
+                "cell",
+                "cells",
+                "of text in a numeric column, kept as gaps",
+            ),
+            (
+                self.not_finite_cells,
+                "number",
+                "numbers",
+                "not finite (NaN, ±inf or beyond ±1.8e308), left out of statistics",
+            ),
+            (
+                self.extra_cells,
+                "field",
+                "fields",
+                "beyond the header's columns, not read",
+            ),
+            (
+                self.bytes_not_utf8,
+                "byte",
+                "bytes",
+                "of names or labels not UTF-8, replaced",
+            ),
+        ];
+        counts
+            .iter()
+            .filter(|(n, ..)| *n > 0)
+            .map(|&(n, one, many, what)| format!("{n} {} {what}", if n == 1 { one } else { many }))
+            .collect()
+    }
+}
+
 /// One column of a log.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Column {
@@ -87,7 +229,10 @@ pub struct Column {
     pub kind: ColumnKind,
     /// What it measures, guessed.
     pub role: Option<Role>,
-    /// One value per row (NaN for a gap); empty for a text column.
+    /// What the guess rests on (`the unit "A"`, `the word "current"`), or why there is none
+    /// where a guess was refused.
+    pub role_reason: Option<String>,
+    /// One value per row (NaN for a gap); empty for a text column. A time column is in seconds.
     pub values: Vec<f64>,
     /// One label id per row for a text column (`u32::MAX` for an empty cell).
     pub labels: Vec<u32>,
@@ -97,42 +242,26 @@ pub struct Column {
     pub numeric_share: f64,
     /// Empty or unreadable cells.
     pub missing: usize,
+    /// Numbers that are not finite (NaN, ±∞, beyond a double's range): kept as values, left out
+    /// of statistics.
+    pub not_finite: usize,
 }
 
 impl Column {
-    /// Smallest, largest and mean of the finite values (NaN when there are none).
+    /// Smallest, largest and mean of the finite values (NaN when there are none). The mean
+    /// cannot overflow: a column of 1e308 has the mean 1e308.
+    ///
+    /// ```
+    /// let log = cutlab::log::load(b"a\n1e308\n1e308\nNaN\n", None).unwrap();
+    /// assert_eq!(log.columns[0].min_max_mean(), (1e308, 1e308, 1e308));
+    /// ```
     pub fn min_max_mean(&self) -> (f64, f64, f64) {
-        // Four independent lanes: the additions of one do not wait for another's.
-        let (mut lo, mut hi) = ([f64::INFINITY; 4], [f64::NEG_INFINITY; 4]);
-        let (mut sum, mut n) = ([0.0; 4], [0usize; 4]);
-        let mut lanes = self.values.chunks_exact(4);
-        for four in &mut lanes {
-            for k in 0..4 {
-                let v = four[k];
-                if v.is_finite() {
-                    lo[k] = if v < lo[k] { v } else { lo[k] };
-                    hi[k] = if v > hi[k] { v } else { hi[k] };
-                    sum[k] += v;
-                    n[k] += 1;
-                }
-            }
-        }
-        for &v in lanes.remainder() {
-            if v.is_finite() {
-                lo[0] = lo[0].min(v);
-                hi[0] = hi[0].max(v);
-                sum[0] += v;
-                n[0] += 1;
-            }
-        }
-        let count: usize = n.iter().sum();
-        if count == 0 {
-            (f64::NAN, f64::NAN, f64::NAN)
-        } else {
-            let lo = lo.iter().copied().fold(f64::INFINITY, f64::min);
-            let hi = hi.iter().copied().fold(f64::NEG_INFINITY, f64::max);
-            (lo, hi, (sum[0] + sum[1] + (sum[2] + sum[3])) / count as f64)
-        }
+        let s = analysis::Stats::of(&self.values, None);
+        (
+            s.min.unwrap_or(f64::NAN),
+            s.max.unwrap_or(f64::NAN),
+            s.mean.unwrap_or(f64::NAN),
+        )
     }
 }
 
@@ -141,7 +270,7 @@ impl Column {
 pub struct Log {
     /// How it was written.
     pub dialect: Dialect,
-    /// Whether its first record named the columns.
+    /// Whether a record named the columns.
     pub header: bool,
     /// Its columns, in file order.
     pub columns: Vec<Column>,
@@ -158,6 +287,30 @@ pub struct Log {
     pub problems_not_listed: usize,
     /// The file line (from 1) each row starts on.
     pub row_lines: Vec<u32>,
+    /// Where every line went, and what was not read as data.
+    pub account: ReadAccount,
+}
+
+impl Log {
+    /// Why the log has no sample period, for a message that asks for one ("it has no time
+    /// column", "its time column \"t\" does not increase"); `None` when it has one.
+    ///
+    /// ```
+    /// let log = cutlab::log::load(b"t [s],I\n1,5\n1,6\n", None).unwrap();
+    /// assert_eq!(log.period_unknown().as_deref(), Some("its time column \"t [s]\" does not increase"));
+    /// ```
+    pub fn period_unknown(&self) -> Option<String> {
+        if self.sample_period_s.is_some() {
+            return None;
+        }
+        Some(match self.time_column.and_then(|t| self.columns.get(t)) {
+            None => "it has no time column".to_string(),
+            Some(t) if t.values.iter().filter(|v| v.is_finite()).count() < 2 => {
+                format!("its time column {:?} has fewer than two times", t.name)
+            }
+            Some(t) => format!("its time column {:?} does not increase", t.name),
+        })
+    }
 }
 
 /// Per column while reading: numbers as they come, text cells interned.
@@ -168,6 +321,9 @@ struct ColumnBuilder {
     text: Vec<(u32, u32)>,
     numbers: usize,
     empty: usize,
+    /// Numbers that are not finite, and the row of the first.
+    not_finite: usize,
+    first_not_finite_row: u32,
 }
 
 /// Reads a log from chunks of bytes.
@@ -177,7 +333,7 @@ struct ColumnBuilder {
 /// let mut builder = LogBuilder::new();
 /// builder.push(b"time [s];I [A]\n0;1,5\n0,0");
 /// builder.push(b"1;2,5\n");
-/// let log = builder.finish(None);
+/// let log = builder.finish(None).unwrap();
 /// assert_eq!(log.columns[1].values, [1.5, 2.5]);
 /// assert_eq!(log.sample_period_s, Some(0.01));
 /// ```
@@ -187,13 +343,41 @@ pub struct LogBuilder {
     sink: Sink,
 }
 
+/// One of the first records, held until the header is found.
+#[derive(Debug)]
+struct Held {
+    line: usize,
+    lines: usize,
+    fields: Vec<Vec<u8>>,
+}
+
+impl Held {
+    fn of(record: &RecordView<'_>) -> Self {
+        Self {
+            line: record.line,
+            lines: record.lines,
+            fields: record.fields().map(<[u8]>::to_vec).collect(),
+        }
+    }
+
+    /// A comment line: its first field starts with `#` or `//`.
+    fn comment(&self) -> bool {
+        self.fields.first().is_some_and(|f| {
+            let t = f.trim_ascii();
+            t.starts_with(b"#") || t.starts_with(b"//")
+        })
+    }
+}
+
 /// Everything but the reader, so the reader's callback can borrow it.
 #[derive(Debug, Default)]
 struct Sink {
-    /// The first record, waiting for the second to say whether it is a header.
-    first: Option<(usize, Vec<Vec<u8>>)>,
+    /// The first records, held until [`HEADER_LOOKAHEAD`] of them say which is the header.
+    held: Vec<Held>,
     names: Vec<String>,
     header: Option<bool>,
+    /// The header's line (the first row's when there is none).
+    header_line: usize,
     columns: Vec<ColumnBuilder>,
     interned: std::collections::HashMap<String, u32>,
     label_names: Vec<String>,
@@ -202,7 +386,7 @@ struct Sink {
     row_lines: Vec<u32>,
     problems: Vec<Problem>,
     problems_not_listed: usize,
-    reported_utf8: bool,
+    account: ReadAccount,
     /// The file's size, when the caller knows it: the columns reserve their room once.
     expected_bytes: Option<u64>,
     reserved: bool,
@@ -238,6 +422,15 @@ impl LogBuilder {
         self.sink.rows
     }
 
+    /// Why the file will not be read, once that is known (its first bytes, a runaway quote): a
+    /// caller streaming a big file can stop there.
+    pub fn refused(&self) -> Option<ReadError> {
+        self.reader.refused().map(|p| ReadError {
+            line: p.line,
+            message: p.message.clone(),
+        })
+    }
+
     /// Takes the next chunk of the file.
     pub fn push(&mut self, chunk: &[u8]) {
         let sink = &mut self.sink;
@@ -248,30 +441,34 @@ impl LogBuilder {
     }
 
     /// Ends the file. `sample_period_s`, when given, is the period of a log without a time
-    /// column (and overrides the time column's).
-    pub fn finish(mut self, sample_period_s: Option<f64>) -> Log {
+    /// column (and overrides the time column's). A file this reader cannot read without
+    /// guessing is an error that says where and why.
+    pub fn finish(mut self, sample_period_s: Option<f64>) -> Result<Log, ReadError> {
+        {
+            let sink = &mut self.sink;
+            self.reader.finish(&mut |r| sink.record(&r));
+        }
+        if let Some(refused) = self.refused() {
+            return Err(refused);
+        }
         let sink = &mut self.sink;
-        self.reader.finish(&mut |r| sink.record(&r));
         let dialect = self.reader.dialect().unwrap_or(Dialect {
             delimiter: b',',
             decimal_comma: false,
         });
-        // A file of one record: it is data if it is all numbers, else a header alone.
-        if let Some((line, first)) = sink.first.take() {
-            let numeric = first.iter().all(|f| {
-                parse_number(f, dialect.decimal_comma).is_some() || f.trim_ascii().is_empty()
-            });
-            sink.start_columns(line, &first, !numeric);
-            if numeric {
-                sink.data(line, first.len(), dialect.decimal_comma, |i| {
-                    Cell::Bytes(first.get(i).map_or(&[][..], Vec::as_slice))
-                });
-            }
+        if sink.header.is_none() {
+            sink.start(dialect);
         }
         for p in self.reader.take_problems() {
             sink.problem(p.line, None, p.message);
         }
-        sink.finish(dialect, sample_period_s)
+        let (blank, first_blank) = self.reader.blank_lines();
+        sink.account.blank_lines = blank;
+        sink.account.first_blank_line = first_blank;
+        sink.account.lines = self.reader.lines_read();
+        sink.account.bytes = self.reader.bytes_read();
+        sink.account.cr_line_ends = self.reader.cr_line_ends();
+        Ok(sink.finish(dialect, sample_period_s))
     }
 }
 
@@ -307,75 +504,167 @@ impl Sink {
         }
     }
 
-    /// Text from the file's bytes; bytes that are not UTF-8 are replaced, and the first time
-    /// that happens it is reported.
+    /// Text from the file's bytes; bytes that are not UTF-8 are replaced and counted, and the
+    /// first time that happens it is reported.
     fn text(&mut self, bytes: &[u8], line: usize) -> String {
         match std::str::from_utf8(bytes) {
             Ok(t) => t.to_string(),
             Err(_) => {
-                if !self.reported_utf8 {
-                    self.reported_utf8 = true;
+                let bad: usize = bytes.utf8_chunks().map(|c| c.invalid().len()).sum();
+                if self.account.bytes_not_utf8 == 0 {
                     self.problem(
                         line,
                         None,
                         "bytes that are not UTF-8 were replaced (is the file Latin-1?)".into(),
                     );
                 }
+                self.account.bytes_not_utf8 += bad;
                 String::from_utf8_lossy(bytes).into_owned()
             }
         }
     }
 
     fn record(&mut self, record: &RecordView<'_>) {
-        let decimal_comma = record.dialect().decimal_comma;
         if self.header.is_none() {
-            // The first record waits for the second: together they say whether it is a header.
-            let Some((line, first)) = self.first.take() else {
-                self.first = Some((record.line, record.fields().map(<[u8]>::to_vec).collect()));
-                return;
-            };
-            let second: Vec<&[u8]> = record.fields().collect();
-            let header = is_header(&first, &second, decimal_comma);
-            self.start_columns(line, &first, header);
-            if !header {
-                self.data(line, first.len(), decimal_comma, |i| {
-                    Cell::Bytes(first.get(i).map_or(&[][..], Vec::as_slice))
-                });
+            // The first records wait: together they say which of them is the header.
+            self.held.push(Held::of(record));
+            if self.held.len() >= HEADER_LOOKAHEAD {
+                self.start(record.dialect());
             }
+            return;
         }
-        self.data(record.line, record.len(), decimal_comma, |i| record.cell(i));
+        let decimal_comma = record.dialect().decimal_comma;
+        self.data(
+            record.line,
+            record.lines,
+            record.len(),
+            decimal_comma,
+            |i| record.cell(i),
+        );
     }
 
-    /// Names the columns from the first record (a header) or by number.
-    fn start_columns(&mut self, line: usize, first: &[Vec<u8>], header: bool) {
-        self.header = Some(header);
-        self.names = first
+    /// Finds the header among the held records, names the columns and reads the held rows.
+    ///
+    /// Comment lines (`#`, `//`) at the start are skipped. The columns are as many as most
+    /// records have fields; the first record of that width is the header when it has text
+    /// where most records after it have numbers (or is all text above records with numbers).
+    /// With a header, every record before it is a preamble, skipped and counted; a record just
+    /// before the data that is all text when split at another delimiter is a header written
+    /// with that delimiter. Without a header, the records are all rows.
+    fn start(&mut self, dialect: Dialect) {
+        let held = std::mem::take(&mut self.held);
+        let decimal_comma = dialect.decimal_comma;
+        let leading_comments = held.iter().take_while(|h| h.comment()).count();
+        let rest = &held[leading_comments..];
+        // The usual width: the most common field count (the larger on a tie).
+        let mut counts: Vec<(usize, usize)> = Vec::new();
+        for h in rest {
+            match counts.iter_mut().find(|(n, _)| *n == h.fields.len()) {
+                Some((_, k)) => *k += 1,
+                None => counts.push((h.fields.len(), 1)),
+            }
+        }
+        let width = counts
             .iter()
-            .enumerate()
-            .map(|(i, n)| {
-                let name = self.text(n.trim_ascii(), line);
-                if header && !name.is_empty() {
-                    name
+            .max_by_key(|(n, k)| (*k, *n))
+            .map_or(0, |(n, _)| *n);
+        let first = rest.iter().position(|h| h.fields.len() == width);
+        let (header_at, names) = match first {
+            Some(c) => {
+                let following: Vec<&[Vec<u8>]> = rest[c + 1..]
+                    .iter()
+                    .filter(|h| h.fields.len() == width)
+                    .map(|h| h.fields.as_slice())
+                    .collect();
+                if is_header(&rest[c].fields, &following, decimal_comma) {
+                    (Some(c), Some(rest[c].fields.clone()))
                 } else {
+                    match c.checked_sub(1).and_then(|b| {
+                        other_delimiter_header(&rest[b].fields, dialect.delimiter, width)
+                            .map(|(names, d)| (b, names, d))
+                    }) {
+                        Some((b, names, delimiter)) => {
+                            self.problem(
+                                rest[b].line,
+                                None,
+                                format!(
+                                    "the header is delimited by {} where the data uses {}: its \
+                                     names are split at {}",
+                                    delimiter_name(delimiter),
+                                    dialect.delimiter_name(),
+                                    delimiter_name(delimiter)
+                                ),
+                            );
+                            (Some(b), Some(names))
+                        }
+                        None => (None, None),
+                    }
+                }
+            }
+            None => (None, None),
+        };
+        // Skipped: the leading comments always, and with a header everything before it.
+        let skipped = leading_comments + header_at.unwrap_or(0);
+        for h in &held[..skipped] {
+            self.account.preamble_lines += h.lines;
+        }
+        if let Some(first) = held.first().filter(|_| skipped > 0) {
+            self.account.first_preamble_line = first.line;
+        }
+        let data_from = match header_at {
+            Some(c) => leading_comments + c + 1,
+            None => leading_comments,
+        };
+        let header_record = header_at.map(|c| &held[leading_comments + c]);
+        self.header = Some(header_record.is_some());
+        self.header_line = header_record
+            .map(|h| h.line)
+            .or(held.get(data_from).map(|h| h.line))
+            .unwrap_or(1);
+        if let Some(h) = header_record {
+            self.account.header_lines = h.lines;
+        }
+        let names = names.unwrap_or_default();
+        let line = self.header_line;
+        self.names = (0..width)
+            .map(|i| {
+                let name = names
+                    .get(i)
+                    .map(|n| self.text(n.trim_ascii(), line))
+                    .unwrap_or_default();
+                if name.is_empty() {
                     format!("column {}", i + 1)
+                } else {
+                    name
                 }
             })
             .collect();
-        self.columns = (0..self.names.len())
-            .map(|_| ColumnBuilder::default())
-            .collect();
+        self.columns = (0..width).map(|_| ColumnBuilder::default()).collect();
+        for h in &held[data_from..] {
+            self.data(h.line, h.lines, h.fields.len(), decimal_comma, |i| {
+                Cell::Bytes(h.fields.get(i).map_or(&[][..], Vec::as_slice))
+            });
+        }
     }
 
-    /// One data row of `fields` fields, field `i` given by `cell(i)`.
+    /// One data row of `fields` fields, field `i` given by `cell(i)`, starting on `line` and
+    /// spanning `lines`.
     fn data<'a>(
         &mut self,
         line: usize,
+        lines: usize,
         fields: usize,
         decimal_comma: bool,
         cell: impl Fn(usize) -> Cell<'a>,
     ) {
         let width = self.columns.len();
+        self.account.row_lines += lines;
         if fields != width {
+            if fields < width {
+                self.account.short_cells += width - fields;
+            } else {
+                self.account.extra_cells += fields - width;
+            }
             self.problem(
                 line,
                 None,
@@ -390,6 +679,7 @@ impl Sink {
             );
         }
         let row = self.rows as u32;
+        let mut empty = 0;
         for c in 0..width {
             let cell = match if c < fields {
                 cell(c)
@@ -406,6 +696,12 @@ impl Sink {
             };
             if let Some(v) = parse_number(cell, decimal_comma) {
                 let builder = &mut self.columns[c];
+                if !v.is_finite() {
+                    if builder.not_finite == 0 {
+                        builder.first_not_finite_row = row;
+                    }
+                    builder.not_finite += 1;
+                }
                 builder.values.push(v);
                 builder.numbers += 1;
                 continue;
@@ -415,6 +711,7 @@ impl Sink {
                 let builder = &mut self.columns[c];
                 builder.values.push(f64::NAN);
                 builder.empty += 1;
+                empty += 1;
                 continue;
             }
             // Text: interned, so a label repeated a million times is stored once.
@@ -437,6 +734,14 @@ impl Sink {
             builder.values.push(f64::NAN);
             builder.text.push((row, id));
         }
+        if width > 0 && empty == width {
+            self.account.empty_rows += 1;
+            self.problem(
+                line,
+                None,
+                "every cell is empty (a line of delimiters only); kept as a row of gaps".into(),
+            );
+        }
         self.rows += 1;
         self.row_lines.push(line.min(u32::MAX as usize) as u32);
     }
@@ -449,6 +754,7 @@ impl Sink {
             columns.push(self.column(name, b));
         }
         let time_column = columns.iter().position(|c| c.role == Some(Role::Time));
+        self.account.cells = self.rows * columns.len();
         let mut log = Log {
             dialect,
             header: self.header.unwrap_or(false),
@@ -459,6 +765,7 @@ impl Sink {
             problems: Vec::new(),
             problems_not_listed: 0,
             row_lines: Vec::new(),
+            account: ReadAccount::default(),
         };
         let period = time_column.and_then(|t| self.time_steps(&mut log.columns[t]));
         log.sample_period_s = sample_period_s
@@ -467,6 +774,7 @@ impl Sink {
         log.problems = std::mem::take(&mut self.problems);
         log.problems_not_listed = self.problems_not_listed;
         log.row_lines = std::mem::take(&mut self.row_lines);
+        log.account = self.account;
         log
     }
 
@@ -480,9 +788,12 @@ impl Sink {
             0.0
         };
         let unit = unit_of(&name);
+        self.account.empty_cells += b.empty;
+        let mut not_finite = 0;
         let (kind, values, labels, label_names, missing) = if filled == 0 {
             (ColumnKind::Empty, b.values, Vec::new(), Vec::new(), b.empty)
         } else if numeric_share >= NUMERIC_SHARE {
+            self.account.text_cells += b.text.len();
             for &(row, id) in &b.text {
                 let line = self.row_lines.get(row as usize).copied().unwrap_or(0) as usize;
                 let text = self
@@ -493,7 +804,29 @@ impl Sink {
                 self.problem(
                     line,
                     Some(name.clone()),
-                    format!("{text:?} is not a number; kept as a gap"),
+                    format!("{} is not a number; kept as a gap", excerpt(&text)),
+                );
+            }
+            if b.not_finite > 0 {
+                not_finite = b.not_finite;
+                self.account.not_finite_cells += b.not_finite;
+                let line = self
+                    .row_lines
+                    .get(b.first_not_finite_row as usize)
+                    .copied()
+                    .unwrap_or(0) as usize;
+                self.problem(
+                    line,
+                    Some(name.clone()),
+                    format!(
+                        "{} not finite (NaN, ±inf or beyond ±1.8e308), the first here: kept, \
+                         and left out of statistics",
+                        if b.not_finite == 1 {
+                            "1 number is".to_string()
+                        } else {
+                            format!("{} numbers are", b.not_finite)
+                        }
+                    ),
                 );
             }
             (
@@ -516,7 +849,8 @@ impl Sink {
                         self.label_names.get(id as usize).cloned()
                     }
                     _ if value.is_nan() => None,
-                    _ => Some(crate::input::readable(*value)),
+                    // Every digit: two numbers must never become one label.
+                    _ => Some(number_label(*value)),
                 };
                 if let Some(label) = label {
                     let next = local.len() as u32;
@@ -529,7 +863,19 @@ impl Sink {
             }
             (ColumnKind::Text, Vec::new(), labels, local, b.empty)
         };
-        let role = guess_role(&name, unit.as_deref(), kind);
+        let mut guess = guess_role_from(&name, unit.as_deref(), kind)
+            .map(|(role, why)| (Some(role), Some(why)));
+        if let Some((Some(Role::Time), _)) = guess {
+            if let Err(other) = time_scale(unit.as_deref(), &name) {
+                let why = format!(
+                    "a time name, but {other:?} is no time unit this reader converts (s, ms, \
+                     µs, ns, min, h): not used as the time axis"
+                );
+                self.problem(self.header_line, Some(name.clone()), why.clone());
+                guess = Some((None, Some(why)));
+            }
+        }
+        let (role, role_reason) = guess.unwrap_or((None, None));
         Column {
             kind: if role == Some(Role::Time) && kind == ColumnKind::Number {
                 ColumnKind::Time
@@ -539,32 +885,30 @@ impl Sink {
             name,
             unit,
             role,
+            role_reason,
             values,
             labels,
             label_names,
             numeric_share,
             missing,
+            not_finite,
         }
     }
 
-    /// Converts a time column to seconds (a unit or name in ms says milliseconds), and returns
-    /// the median step; uneven steps and gaps are reported by line.
+    /// Converts a time column to seconds (its unit, or a unit word ending its name, says which:
+    /// s, ms, µs, ns, min, h), and returns the median step; uneven steps and gaps are reported
+    /// by line.
     fn time_steps(&mut self, column: &mut Column) -> Option<f64> {
-        let unit = column.unit.as_deref().map(str::to_ascii_lowercase);
-        let name = column.name.to_ascii_lowercase();
-        let scale = match unit.as_deref() {
-            Some("ms") => 1e-3,
-            Some("us" | "µs" | "μs") => 1e-6,
-            Some(_) => 1.0,
-            None if name.contains("ms") => 1e-3,
-            None if name.contains("us") && !name.contains("s_") => 1e-6,
-            None => 1.0,
-        };
-        if scale != 1.0 {
-            for v in &mut column.values {
-                *v *= scale;
+        let scale = time_scale(column.unit.as_deref(), &column.name)
+            .ok()
+            .flatten();
+        if let Some((seconds, symbol)) = scale {
+            if seconds != 1.0 {
+                for v in &mut column.values {
+                    *v *= seconds;
+                }
+                column.unit = Some(symbol.into());
             }
-            column.unit = Some(if scale == 1e-3 { "ms" } else { "µs" }.into());
         }
         // The median step (in linear time: a million-row log would spend a tenth of its load
         // sorting otherwise).
@@ -575,27 +919,39 @@ impl Sink {
         // Nothing says the unit and the usual step is a second or more: no machine log samples
         // that slowly (the slowest ones log at 10 Hz), but a DAQ's counter of milliseconds does.
         let mut median = median;
-        if scale == 1.0 && unit.is_none() && median >= 1.0 && !name.contains("sec") {
+        if scale.is_none() && median >= 1.0 {
             for v in &mut column.values {
                 *v *= 1e-3;
             }
             median *= 1e-3;
             column.unit = Some("ms".into());
             self.problem(
-                1,
+                self.header_line,
                 Some(column.name.clone()),
                 format!(
                     "the time column gives no unit and steps by {}: read as milliseconds \
                      (write \"[s]\" in its name if they are seconds)",
-                    crate::input::readable(median * 1e3)
+                    readable(median * 1e3)
                 ),
             );
         }
         if median <= 0.0 {
+            // Said at the first step that does not go forward.
+            let row = column
+                .values
+                .windows(2)
+                .position(|w| w[1] - w[0] <= 0.0)
+                .map_or(0, |i| i + 1);
+            let line = self
+                .row_lines
+                .get(row)
+                .map_or(self.header_line, |&l| l as usize);
             self.problem(
-                0,
+                line,
                 Some(column.name.clone()),
-                "the time column does not increase; no sample period from it".into(),
+                "the time column does not increase (its usual step is not positive); no \
+                 sample period from it"
+                    .into(),
             );
             return None;
         }
@@ -616,8 +972,8 @@ impl Sink {
                     Some(column.name.clone()),
                     format!(
                         "a gap of {} s in time (the usual step is {} s)",
-                        crate::input::readable(d),
-                        crate::input::readable(median)
+                        readable(d),
+                        readable(median)
                     ),
                 );
             } else if (d - median).abs() > 0.1 * median {
@@ -628,8 +984,8 @@ impl Sink {
                         Some(column.name.clone()),
                         format!(
                             "an uneven time step of {} s (the usual step is {} s)",
-                            crate::input::readable(d),
-                            crate::input::readable(median)
+                            readable(d),
+                            readable(median)
                         ),
                     );
                 }
@@ -640,13 +996,159 @@ impl Sink {
     }
 }
 
-/// Whether `first` names the columns: it has a non-empty cell that is not a number where the
-/// second record has a number, or every cell is text while the second record has a number.
-fn is_header(first: &[Vec<u8>], second: &[&[u8]], decimal_comma: bool) -> bool {
+/// A number in a text column as its label: every digit (the shortest text that reads back as
+/// the same number), with an exponent where plain digits would run long.
+fn number_label(v: f64) -> String {
+    let plain = format!("{v}");
+    if plain.len() <= 24 {
+        plain
+    } else {
+        format!("{v:e}")
+    }
+}
+
+fn delimiter_name(delimiter: u8) -> &'static str {
+    Dialect {
+        delimiter,
+        decimal_comma: false,
+    }
+    .delimiter_name()
+}
+
+/// The names of a record when it is split at another delimiter than the file's (a header written
+/// with `;` above data written with `,`): `Some` when that gives `width` fields of text, none a
+/// number.
+fn other_delimiter_header(
+    fields: &[Vec<u8>],
+    delimiter: u8,
+    width: usize,
+) -> Option<(Vec<Vec<u8>>, u8)> {
+    if width < 2 || fields.len() == width {
+        return None;
+    }
+    let joined = fields.join(&delimiter);
+    let text = String::from_utf8_lossy(&joined);
+    [b',', b';', b'\t']
+        .into_iter()
+        .filter(|&d| d != delimiter)
+        .find_map(|d| {
+            let names = csv::split_fields(&text, d);
+            let all_text = names
+                .iter()
+                .all(|n| !n.trim().is_empty() && parse_number(n.as_bytes(), false).is_none());
+            (names.len() == width && all_text)
+                .then(|| (names.into_iter().map(String::into_bytes).collect(), d))
+        })
+}
+
+/// Seconds per unit of a time column, and the unit's symbol: from its unit (`Time [min]`), else
+/// from a unit word ending its name (`time_ms`); `Ok(None)` when neither says, `Err(unit)` for a
+/// unit that is no time unit.
+///
+/// ```
+/// use cutlab::log::time_scale;
+/// assert_eq!(time_scale(Some("min"), "Time [min]"), Ok(Some((60.0, "min"))));
+/// assert_eq!(time_scale(None, "t_ns"), Ok(Some((1e-9, "ns"))));
+/// assert_eq!(time_scale(None, "Time"), Ok(None));
+/// assert_eq!(time_scale(Some("days"), "Zeit [days]"), Err("days".to_string()));
+/// ```
+pub fn time_scale(unit: Option<&str>, name: &str) -> Result<Option<(f64, &'static str)>, String> {
+    const UNITS: [(&[&str], f64, &str); 6] = [
+        (&["s", "sec", "secs", "second", "seconds", "sek"], 1.0, "s"),
+        (&["ms", "msec", "millisecond", "milliseconds"], 1e-3, "ms"),
+        (
+            &["us", "µs", "μs", "usec", "microsecond", "microseconds"],
+            1e-6,
+            "µs",
+        ),
+        (&["ns", "nsec", "nanosecond", "nanoseconds"], 1e-9, "ns"),
+        (&["min", "mins", "minute", "minutes"], 60.0, "min"),
+        (&["h", "hr", "hrs", "hour", "hours", "std"], 3600.0, "h"),
+    ];
+    let find = |word: &str| {
+        let word = word.trim().to_lowercase();
+        UNITS
+            .iter()
+            .find(|(names, _, _)| names.contains(&word.as_str()))
+            .map(|&(_, seconds, symbol)| (seconds, symbol))
+    };
+    if let Some(unit) = unit {
+        return find(unit).map(Some).ok_or_else(|| unit.trim().to_string());
+    }
+    let words = name_words(name);
+    Ok(match words.as_slice() {
+        [_, .., last] => find(last),
+        _ => None,
+    })
+}
+
+/// Whether `first` names the columns, given the records of its width that follow: it has text
+/// (a non-empty cell that is not a number) in a column where most of them have numbers, or it is
+/// all text while one of them has a number. A file of one record: it names the columns when none
+/// of its cells is a number.
+fn is_header(first: &[Vec<u8>], following: &[&[Vec<u8>]], decimal_comma: bool) -> bool {
     let number = |f: &[u8]| parse_number(f, decimal_comma).is_some();
     let text = |f: &[u8]| !f.trim_ascii().is_empty() && !number(f);
-    first.iter().zip(second).any(|(a, b)| text(a) && number(b))
-        || (first.iter().all(|f| text(f)) && second.iter().any(|f| number(f)))
+    let all_text = first.iter().any(|f| text(f)) && !first.iter().any(|f| number(f));
+    if following.is_empty() {
+        return all_text;
+    }
+    let numbers_below = |c: usize| {
+        following
+            .iter()
+            .filter(|r| r.get(c).is_some_and(|f| number(f)))
+            .count()
+    };
+    first
+        .iter()
+        .enumerate()
+        .any(|(c, a)| text(a) && 2 * numbers_below(c) > following.len())
+        || (all_text && following.iter().any(|r| r.iter().any(|f| number(f))))
+}
+
+/// The words of a column name before its unit, lower case: split at anything but letters and
+/// digits and where a lower-case letter meets an upper-case one (`X_CurrentFeedback [A]` →
+/// `x`, `current`, `feedback`).
+///
+/// ```
+/// use cutlab::log::name_words;
+/// assert_eq!(name_words("X_CurrentFeedback [A]"), ["x", "current", "feedback"]);
+/// assert_eq!(name_words("S_I_U"), ["s", "i", "u"]);
+/// assert_eq!(name_words("RMSCurrent"), ["rms", "current"]);
+/// ```
+pub fn name_words(name: &str) -> Vec<String> {
+    let base = name.split(['[', '(', '{']).next().unwrap_or_default();
+    let base = match base.rsplit_once(" / ") {
+        Some((before, _)) if unit_of(name).is_some() => before,
+        _ => base,
+    };
+    let chars: Vec<char> = base.chars().collect();
+    let mut words = Vec::new();
+    let mut word = String::new();
+    for (i, &c) in chars.iter().enumerate() {
+        if !c.is_alphanumeric() {
+            if !word.is_empty() {
+                words.push(std::mem::take(&mut word));
+            }
+            continue;
+        }
+        let previous = i.checked_sub(1).and_then(|p| chars.get(p)).copied();
+        let next = chars.get(i + 1).copied();
+        let boundary = c.is_uppercase()
+            && previous.is_some_and(|p| {
+                p.is_lowercase()
+                    || p.is_ascii_digit()
+                    || (p.is_uppercase() && next.is_some_and(char::is_lowercase))
+            });
+        if boundary && !word.is_empty() {
+            words.push(std::mem::take(&mut word));
+        }
+        word.extend(c.to_lowercase());
+    }
+    if !word.is_empty() {
+        words.push(word);
+    }
+    words
 }
 
 /// The unit in a column name: `Current [A]`, `speed(rpm)`, `F / N`.
@@ -682,84 +1184,137 @@ pub fn unit_of(name: &str) -> Option<String> {
 /// assert_eq!(guess_role("S_speed(rpm)", Some("rpm"), ColumnKind::Number), Some(Role::SpindleSpeed));
 /// assert_eq!(guess_role("X_I_U", None, ColumnKind::Number), Some(Role::PhaseCurrent));
 /// assert_eq!(guess_role("Z_Current [A]", Some("A"), ColumnKind::Number), Some(Role::RmsCurrent));
+/// assert_eq!(guess_role("X_CurrentFeedback", None, ColumnKind::Number), Some(Role::RmsCurrent));
 /// assert_eq!(guess_role("Fx [N]", Some("N"), ColumnKind::Number), Some(Role::Force));
 /// assert_eq!(guess_role("Phase", None, ColumnKind::Text), Some(Role::Label));
 /// ```
 pub fn guess_role(name: &str, unit: Option<&str>, kind: ColumnKind) -> Option<Role> {
+    guess_role_from(name, unit, kind).map(|(role, _)| role)
+}
+
+/// Words that name a quantity, by the role they suggest. A name's word is one of them, or a
+/// compound ending in one of five letters or more (`Spindelstrom`, `spindlespeed`); a word that
+/// merely contains one names something else (`feedback` is no feed).
+const QUANTITY_WORDS: [(Role, &[&str]); 5] = [
+    (Role::SpindleSpeed, &["speed", "rpm", "drehzahl"]),
+    (Role::Feed, &["feed", "feedrate", "vorschub"]),
+    (
+        Role::RmsCurrent,
+        &[
+            "current", "curr", "strom", "i", "irms", "load", "amps", "ampere",
+        ],
+    ),
+    (Role::Force, &["force", "kraft", "fx", "fy", "fz"]),
+    (Role::Depth, &["depth", "doc", "ap", "tiefe"]),
+];
+/// Words that name the time axis.
+const TIME_WORDS: [&str; 6] = ["time", "t", "timestamp", "zeit", "zeitstempel", "sec"];
+/// Names of one phase current (after an axis prefix).
+const PHASE_NAMES: [&str; 12] = [
+    "i_u", "i_v", "i_w", "iu", "iv", "iw", "i_a", "i_b", "i_c", "ia", "ib", "ic",
+];
+
+/// Whether a name's `word` is the quantity word `q` or a compound ending in it.
+fn names_quantity(word: &str, q: &str) -> bool {
+    word == q || (q.chars().count() >= 5 && word.ends_with(q))
+}
+
+/// [`guess_role`] and what the guess rests on, for people: the unit (`the unit "A"`), a word
+/// of the name (`the word "current"`; the last word that names a quantity wins, so
+/// `feed_current_rms_a` is a current), a phase name, or text. `None` when nothing fits.
+///
+/// ```
+/// use cutlab::log::{guess_role_from, ColumnKind, Role};
+/// assert_eq!(guess_role_from("X_CurrentFeedback", None, ColumnKind::Number),
+///     Some((Role::RmsCurrent, "the word \"current\" in its name".to_string())));
+/// assert_eq!(guess_role_from("X_Vorschub [mm/min]", Some("mm/min"), ColumnKind::Number),
+///     Some((Role::Feed, "its unit \"mm/min\"".to_string())));
+/// ```
+pub fn guess_role_from(name: &str, unit: Option<&str>, kind: ColumnKind) -> Option<(Role, String)> {
     if kind == ColumnKind::Text {
-        return Some(Role::Label);
+        return Some((Role::Label, "its cells are text: labels".into()));
     }
     if kind == ColumnKind::Empty {
         return None;
     }
-    let base = name
-        .split(['[', '(', '{'])
-        .next()
-        .unwrap_or_default()
-        .trim()
-        .to_ascii_lowercase();
+    let words = name_words(name);
     // Axis prefixes: X_, Y_, Z_, S_ (spindle).
-    let (axis, stem) = match base.split_once('_') {
-        Some((a, rest)) if matches!(a, "x" | "y" | "z" | "s" | "sp") => {
-            (Some(a.to_string()), rest.to_string())
+    let (axis, stem) = match words.split_first() {
+        Some((a, rest))
+            if !rest.is_empty() && matches!(a.as_str(), "x" | "y" | "z" | "s" | "sp") =>
+        {
+            (Some(a.as_str()), rest)
         }
-        _ => (None, base.clone()),
+        _ => (None, words.as_slice()),
     };
-    let unit = unit.map(str::to_ascii_lowercase);
-    let words = |list: &[&str]| {
-        list.iter().any(|w| {
-            stem == *w || stem.starts_with(&format!("{w}_")) || stem.starts_with(&format!("{w} "))
+    let feed_axis = axis.is_some_and(|a| matches!(a, "x" | "y" | "z"));
+    let unit_lower = unit.map(|u| u.trim().to_lowercase());
+    let unit_lower = unit_lower.as_deref();
+    let time_unit = unit.is_some_and(|u| matches!(time_scale(Some(u), name), Ok(Some(_))));
+    if let Some(first) = stem.first().filter(|w| TIME_WORDS.contains(&w.as_str())) {
+        return Some((Role::Time, format!("the word {first:?} in its name")));
+    }
+    if let Some(w) = stem
+        .iter()
+        .find(|w| names_quantity(w, "time") || names_quantity(w, "zeit"))
+        .filter(|_| time_unit)
+    {
+        return Some((
+            Role::Time,
+            format!("the word {w:?} in its name and its time unit"),
+        ));
+    }
+    let joined = stem.join("_");
+    if PHASE_NAMES.contains(&joined.as_str())
+        || stem.first().is_some_and(|w| w.starts_with("phase"))
+    {
+        let written = name.split(['[', '(', '{']).next().unwrap_or(name).trim();
+        return Some((
+            Role::PhaseCurrent,
+            format!("{written:?}, a phase current's name"),
+        ));
+    }
+    let speed = |why: String| {
+        Some(if feed_axis {
+            (Role::Feed, format!("{why} on a feed axis (a feed)"))
+        } else {
+            (Role::SpindleSpeed, why)
         })
     };
-    if words(&["time", "t", "timestamp", "zeit", "time_s", "time_ms"])
-        || matches!(unit.as_deref(), Some("s" | "ms" | "sec"))
-            && (stem.contains("time") || stem == "t")
-    {
-        return Some(Role::Time);
+    if let Some(u) = unit {
+        let why = format!("its unit {:?}", u.trim());
+        match unit_lower {
+            Some("a") => return Some((Role::RmsCurrent, why)),
+            Some("rpm" | "1/min" | "u/min" | "min-1" | "min^-1") => return speed(why),
+            Some("mm/min" | "m/min" | "mm/s") => return Some((Role::Feed, why)),
+            Some("n") => return Some((Role::Force, why)),
+            _ => {}
+        }
     }
-    let phase = [
-        "i_u", "i_v", "i_w", "iu", "iv", "iw", "i_a", "i_b", "i_c", "ia", "ib", "ic",
-    ];
-    if phase.contains(&stem.as_str()) || stem.starts_with("phase") {
-        return Some(Role::PhaseCurrent);
+    if axis.is_some_and(|a| a == "s" || a == "sp") && stem.first().is_some_and(|w| w == "n") {
+        return Some((
+            Role::SpindleSpeed,
+            "the spindle's \"n\" (a speed) in its name".into(),
+        ));
     }
-    if stem.contains("speed")
-        || stem.contains("rpm")
-        || unit.as_deref() == Some("rpm")
-        || (axis.as_deref() == Some("s") && stem.starts_with('n'))
-    {
-        return Some(if axis.as_deref().is_some_and(|a| a != "s" && a != "sp") {
-            Role::Feed
-        } else {
-            Role::SpindleSpeed
-        });
+    // The last word that names a quantity: "feed current" is a current, "spindle speed" a speed.
+    let found = stem.iter().rev().find_map(|w| {
+        QUANTITY_WORDS.iter().find_map(|(role, list)| {
+            list.iter()
+                .find(|q| names_quantity(w, q))
+                .map(|q| (*role, (*q).to_string()))
+        })
+    });
+    let (role, word) = found?;
+    let why = format!("the word {word:?} in its name");
+    match role {
+        Role::SpindleSpeed => speed(why),
+        role => Some((role, why)),
     }
-    if stem.contains("feed") || matches!(unit.as_deref(), Some("mm/min" | "m/min" | "mm/s")) {
-        return Some(Role::Feed);
-    }
-    if stem.contains("current")
-        || stem.contains("curr")
-        || stem == "i"
-        || stem.starts_with("i_rms")
-        || stem.contains("load")
-        || unit.as_deref() == Some("a")
-    {
-        return Some(Role::RmsCurrent);
-    }
-    if stem.contains("force")
-        || stem.starts_with('f') && unit.as_deref() == Some("n")
-        || unit.as_deref() == Some("n")
-    {
-        return Some(Role::Force);
-    }
-    if stem.contains("depth") || stem == "doc" || stem == "ap" {
-        return Some(Role::Depth);
-    }
-    None
 }
 
 /// Loads a whole file in memory at once (the command line; the browser pushes chunks).
-pub fn load(bytes: &[u8], sample_period_s: Option<f64>) -> Log {
+pub fn load(bytes: &[u8], sample_period_s: Option<f64>) -> Result<Log, ReadError> {
     let mut builder = LogBuilder::new();
     for chunk in bytes.chunks(1 << 16) {
         builder.push(chunk);

@@ -141,7 +141,7 @@ impl LogTable {
     ///
     /// ```
     /// use cutlab::log::period_log::LogTable;
-    /// let log = cutlab::log::load(b"t;F [N];I [A]\n0;1,5;2\n0,1;2,5;3\n", None);
+    /// let log = cutlab::log::load(b"t;F [N];I [A]\n0;1,5;2\n0,1;2,5;3\n", None).unwrap();
     /// let map = [("force_n".to_string(), "F [N]".to_string())];
     /// let t = LogTable::from_log(&log, &map).unwrap();
     /// assert_eq!(t.column("force_n"), Some(&[1.5, 2.5][..]));
@@ -166,11 +166,19 @@ impl LogTable {
         }
         let mut header = Vec::new();
         let mut columns = Vec::new();
+        let mut read: Vec<(&str, &str)> = Vec::new();
         for role in CALIBRATION_COLUMNS {
             let source = map
                 .iter()
                 .find(|(r, _)| r == role)
                 .map_or(role, |(_, c)| c.as_str());
+            // One column read as two quantities fits a line of itself (I = 0 + 1·F, R² 1).
+            if let Some((other, _)) = read.iter().find(|(_, c)| *c == source) {
+                return Err(format!(
+                    "{other} and {role} would both be read from column {source:?}; a column can \
+                     be only one of them: map the other to a column of its own"
+                ));
+            }
             let same_name = log.columns.iter().filter(|c| c.name == source).count();
             if same_name > 1 {
                 return Err(format!(
@@ -192,6 +200,7 @@ impl LogTable {
                 }
                 header.push(role.to_string());
                 columns.push(column.values.clone());
+                read.push((role, source));
             }
         }
         Ok(Self {
@@ -451,7 +460,7 @@ impl LogCalibration {
 ///     let force = 10.0 * f64::from(i);
 ///     csv += &format!("{},1000,{force}\n", 5.0 + 0.01 * force);
 /// }
-/// let table = LogTable::from_log(&cutlab::log::load(csv.as_bytes(), None), &[]).unwrap();
+/// let table = LogTable::from_log(&cutlab::log::load(csv.as_bytes(), None).unwrap(), &[]).unwrap();
 /// let fitted = calibrate_log(&table, None, 900.0).unwrap();
 /// let row = fitted.spindle.unwrap().rows[0];
 /// assert!((row.sensitivity_a_per_n - 0.01).abs() < 1e-9);
@@ -565,7 +574,7 @@ mod tests {
 
     /// The calibration's columns of a CSV text, read as `cutlab calibrate` reads a file.
     fn table(csv: &str) -> LogTable {
-        LogTable::from_log(&crate::log::load(csv.as_bytes(), None), &[]).unwrap()
+        LogTable::from_log(&crate::log::load(csv.as_bytes(), None).unwrap(), &[]).unwrap()
     }
 
     #[test]
@@ -595,9 +604,22 @@ mod tests {
     }
 
     #[test]
+    fn one_column_read_as_two_quantities_is_refused() {
+        let csv =
+            "time_s,force_n,spindle_current_rms_a,spindle_speed_rpm\n0,1,2,900\n0.1,2,3,900\n";
+        let log = crate::log::load(csv.as_bytes(), None).unwrap();
+        let map = [("force_n".to_string(), "spindle_current_rms_a".to_string())];
+        let e = LogTable::from_log(&log, &map).unwrap_err();
+        assert!(
+            e.contains("force_n and spindle_current_rms_a would both be read from column \"spindle_current_rms_a\""),
+            "{e}"
+        );
+    }
+
+    #[test]
     fn a_column_named_twice_is_refused_as_ambiguous() {
         let csv = "spindle_current_rms_a,force_n,force_n\n1,2,3\n";
-        let log = crate::log::load(csv.as_bytes(), None);
+        let log = crate::log::load(csv.as_bytes(), None).unwrap();
         let e = LogTable::from_log(&log, &[]).unwrap_err();
         assert_eq!(
             e,
@@ -605,7 +627,7 @@ mod tests {
              the file"
         );
         // A name no role reads may repeat.
-        let log = crate::log::load(b"note,note,force_n\na,b,3\n", None);
+        let log = crate::log::load(b"note,note,force_n\na,b,3\n", None).unwrap();
         assert_eq!(
             LogTable::from_log(&log, &[]).unwrap().column("force_n"),
             Some(&[3.0][..])

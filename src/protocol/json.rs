@@ -8,7 +8,9 @@
 //! (NaN and ±∞ are `null`, which encodes as NaN). Encoding takes the same objects, strictly: a
 //! field the frame type does not have is an error listing the fields it has ([`field_names`]),
 //! and so is a field left out, except a `flags` byte, which then has no bit set
-//! ([`DEFAULT_ZERO_FIELD`]).
+//! ([`DEFAULT_ZERO_FIELD`]); so are a field given twice ([`parse_line`]), a number beyond an
+//! `f32` field's range (it would become ±∞ on the wire) and a NUL in a text field (it would end
+//! the text there). An error quotes at most 40 characters of a bad value.
 //!
 //! ```
 //! use cutlab::protocol::frame::{Frame, Arm};
@@ -18,7 +20,10 @@
 //! assert_eq!(frame_from_json(&v), Ok(Frame::Arm(Arm { seq: 7 })));
 //! ```
 
+use serde::de::{self, Deserialize, Deserializer, MapAccess, SeqAccess, Visitor};
 use serde_json::{json, Map, Value};
+
+use crate::input::excerpt;
 
 use super::frame::{
     padded, text_field, Ack, AckResult, Arm, Capabilities, Disarm, Fault, FaultKind, Frame,
@@ -233,10 +238,12 @@ impl Fields<'_> {
     fn int<T: TryFrom<i64>>(&self, name: &str) -> Result<T, String> {
         match self.get(name)? {
             None => T::try_from(0).map_err(|_| self.bad(name, "out of range")),
-            Some(v) => v
-                .as_i64()
-                .and_then(|i| T::try_from(i).ok())
-                .ok_or_else(|| self.bad(name, format!("{v} is not an integer in range"))),
+            Some(v) => v.as_i64().and_then(|i| T::try_from(i).ok()).ok_or_else(|| {
+                self.bad(
+                    name,
+                    format!("{} is not an integer in range", excerpt(&v.to_string())),
+                )
+            }),
         }
     }
 
@@ -244,10 +251,23 @@ impl Fields<'_> {
         match self.get(name)? {
             None => Ok(0.0),
             Some(Value::Null) => Ok(f32::NAN),
-            Some(v) => v
-                .as_f64()
-                .map(|x| x as f32)
-                .ok_or_else(|| self.bad(name, format!("{v} is not a number"))),
+            Some(v) => {
+                let x = v.as_f64().ok_or_else(|| {
+                    self.bad(name, format!("{} is not a number", excerpt(&v.to_string())))
+                })?;
+                // `as` would make it ±∞ on the wire.
+                if x.abs() > f64::from(f32::MAX) {
+                    return Err(self.bad(
+                        name,
+                        format!(
+                            "{} is beyond the range of this 32-bit field (±{})",
+                            crate::input::readable(x),
+                            crate::input::readable(f64::from(f32::MAX))
+                        ),
+                    ));
+                }
+                Ok(x as f32)
+            }
         }
     }
 
@@ -259,15 +279,25 @@ impl Fields<'_> {
         let Some(v) = self.get(name)? else {
             return Ok(out);
         };
-        let items = v
-            .as_array()
-            .filter(|a| a.len() == N)
-            .ok_or_else(|| self.bad(name, format!("expected an array of {N} integers, got {v}")))?;
+        let items = v.as_array().filter(|a| a.len() == N).ok_or_else(|| {
+            self.bad(
+                name,
+                format!(
+                    "expected an array of {N} integers, got {}",
+                    excerpt(&v.to_string())
+                ),
+            )
+        })?;
         for (slot, item) in out.iter_mut().zip(items) {
             *slot = item
                 .as_i64()
                 .and_then(|i| T::try_from(i).ok())
-                .ok_or_else(|| self.bad(name, format!("{item} is not an integer in range")))?;
+                .ok_or_else(|| {
+                    self.bad(
+                        name,
+                        format!("{} is not an integer in range", excerpt(&item.to_string())),
+                    )
+                })?;
         }
         Ok(out)
     }
@@ -275,9 +305,17 @@ impl Fields<'_> {
     fn text<const N: usize>(&self, name: &str) -> Result<[u8; N], String> {
         match self.get(name)? {
             None => Ok([0; N]),
+            // The wire pads text with zero bytes: a NUL inside would end it there.
+            Some(Value::String(s)) if s.contains('\0') => Err(self.bad(
+                name,
+                format!(
+                    "{} holds a NUL character, which would end the text on the wire",
+                    excerpt(s)
+                ),
+            )),
             Some(Value::String(s)) if s.len() <= N => Ok(padded(s)),
             Some(Value::String(s)) => {
-                Err(self.bad(name, format!("{s:?} is longer than {N} bytes")))
+                Err(self.bad(name, format!("{} is longer than {N} bytes", excerpt(s))))
             }
             Some(_) => self.ints(name),
         }
@@ -293,38 +331,150 @@ impl Fields<'_> {
                 .map(|(c, _)| *c)
                 .ok_or_else(|| {
                     let known: Vec<&str> = names.iter().map(|(_, n)| *n).collect();
-                    self.bad(name, format!("unknown {s:?}; known: {}", known.join(", ")))
+                    self.bad(
+                        name,
+                        format!("unknown {}; known: {}", excerpt(s), known.join(", ")),
+                    )
                 }),
             Some(_) => self.int(name),
         }
     }
 }
 
+/// One line of JSON as a value, strictly: a key given twice in any object is an error (a
+/// plain reading keeps the last, so a frame could go out with a value nobody meant).
+///
+/// ```
+/// use cutlab::protocol::json::parse_line;
+/// assert!(parse_line(r#"{"type": "arm", "seq": 1}"#).is_ok());
+/// let e = parse_line(r#"{"type": "arm", "seq": 1, "seq": 2}"#).unwrap_err();
+/// assert!(e.contains("\"seq\" is given twice"), "{e}");
+/// ```
+pub fn parse_line(text: &str) -> Result<Value, String> {
+    serde_json::from_str::<Strict>(text)
+        .map(|s| s.0)
+        .map_err(|e| match e.classify() {
+            serde_json::error::Category::Data => e.to_string(),
+            _ => format!("not JSON: {e}"),
+        })
+}
+
+/// A JSON value read with every object's keys checked for repeats.
+struct Strict(Value);
+
+impl<'de> Deserialize<'de> for Strict {
+    fn deserialize<D: Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
+        deserializer.deserialize_any(StrictVisitor)
+    }
+}
+
+struct StrictVisitor;
+
+impl<'de> Visitor<'de> for StrictVisitor {
+    type Value = Strict;
+
+    fn expecting(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str("a JSON value")
+    }
+
+    fn visit_bool<E>(self, v: bool) -> Result<Strict, E> {
+        Ok(Strict(Value::Bool(v)))
+    }
+
+    fn visit_i64<E>(self, v: i64) -> Result<Strict, E> {
+        Ok(Strict(Value::from(v)))
+    }
+
+    fn visit_u64<E>(self, v: u64) -> Result<Strict, E> {
+        Ok(Strict(Value::from(v)))
+    }
+
+    fn visit_f64<E>(self, v: f64) -> Result<Strict, E> {
+        Ok(Strict(Value::from(v)))
+    }
+
+    fn visit_str<E>(self, v: &str) -> Result<Strict, E> {
+        Ok(Strict(Value::String(v.to_string())))
+    }
+
+    fn visit_string<E>(self, v: String) -> Result<Strict, E> {
+        Ok(Strict(Value::String(v)))
+    }
+
+    fn visit_unit<E>(self) -> Result<Strict, E> {
+        Ok(Strict(Value::Null))
+    }
+
+    fn visit_seq<A: SeqAccess<'de>>(self, mut seq: A) -> Result<Strict, A::Error> {
+        let mut items = Vec::new();
+        while let Some(Strict(item)) = seq.next_element()? {
+            items.push(item);
+        }
+        Ok(Strict(Value::Array(items)))
+    }
+
+    fn visit_map<A: MapAccess<'de>>(self, mut access: A) -> Result<Strict, A::Error> {
+        let mut map = Map::new();
+        while let Some(key) = access.next_key::<String>()? {
+            if map.contains_key(&key) {
+                return Err(de::Error::custom(format!(
+                    "field {} is given twice",
+                    excerpt(&key)
+                )));
+            }
+            let Strict(value) = access.next_value()?;
+            map.insert(key, value);
+        }
+        Ok(Strict(Value::Object(map)))
+    }
+}
+
 /// The frame a JSON object describes.
 pub fn frame_from_json(value: &Value) -> Result<Frame, String> {
-    let map = value
-        .as_object()
-        .ok_or_else(|| format!("expected a JSON object, got {value}"))?;
-    let type_name = map
-        .get("type")
-        .and_then(Value::as_str)
-        .ok_or("missing \"type\"")?;
+    let map = value.as_object().ok_or_else(|| {
+        format!(
+            "expected a JSON object, got {}",
+            excerpt(&value.to_string())
+        )
+    })?;
+    let type_name = match map.get("type") {
+        None => return Err("missing \"type\"".into()),
+        Some(Value::String(name)) => name,
+        Some(other) => {
+            return Err(format!(
+                "\"type\" must be a frame type's name, got {}",
+                excerpt(&other.to_string())
+            ))
+        }
+    };
     let frame_type = FrameType::from_name(type_name).ok_or_else(|| {
         let names: Vec<&str> = FrameType::ALL.iter().map(|t| t.name()).collect();
-        format!("unknown type {type_name:?}; types: {}", names.join(", "))
+        format!(
+            "unknown type {}; types: {}",
+            excerpt(type_name),
+            names.join(", ")
+        )
     })?;
     let type_name = frame_type.name();
     let known = field_names(frame_type);
     let unknown: Vec<String> = map
         .keys()
         .filter(|k| k.as_str() != "type" && !known.contains(&k.as_str()))
-        .map(|k| format!("{k:?}"))
+        .map(|k| excerpt(k))
         .collect();
     if !unknown.is_empty() {
+        // A few of them: an object of a million stray keys makes a short message.
+        const SHOWN: usize = 5;
+        let more = unknown.len().saturating_sub(SHOWN);
         return Err(format!(
-            "{type_name}: unknown field{} {}; a {type_name} frame has {}",
+            "{type_name}: unknown field{} {}{}; a {type_name} frame has {}",
             if unknown.len() > 1 { "s" } else { "" },
-            unknown.join(", "),
+            unknown[..unknown.len().min(SHOWN)].join(", "),
+            if more > 0 {
+                format!(" and {more} more")
+            } else {
+                String::new()
+            },
             known.join(", ")
         ));
     }
@@ -476,6 +626,61 @@ mod tests {
         );
         let e = frame_from_json(&json!({"type": "arm", "seq": 1, "a": 1, "b": 2})).unwrap_err();
         assert!(e.starts_with("arm: unknown fields \"a\", \"b\";"), "{e}");
+    }
+
+    #[test]
+    fn what_the_wire_would_change_is_refused_and_a_bad_value_is_quoted_short() {
+        // A 32-bit field beyond its range would go out as ±∞.
+        let mut sample = frame_to_json(&zero_frame(FrameType::Sample));
+        sample["feed_mm_min"] = json!(1e39);
+        let e = frame_from_json(&sample).unwrap_err();
+        assert_eq!(
+            e,
+            "sample: feed_mm_min: 1e39 is beyond the range of this 32-bit field (±3.4028e38)"
+        );
+        sample["feed_mm_min"] = json!(-3.0e38);
+        assert!(frame_from_json(&sample).is_ok());
+        // A NUL would end the device's name on the wire: "a\u0000b" came back as "a".
+        let mut caps = frame_to_json(&zero_frame(FrameType::Capabilities));
+        caps["device_id"] = json!("a\u{0}b");
+        let e = frame_from_json(&caps).unwrap_err();
+        assert!(
+            e.contains("device_id: \"a\\0b\" holds a NUL character"),
+            "{e}"
+        );
+        // A key given twice: a plain reading keeps the last.
+        let e =
+            parse_line(r#"{"type":"set-override","seq":1,"override_cpct":8000,"override_cpct":0}"#)
+                .unwrap_err();
+        assert!(
+            e.starts_with("field \"override_cpct\" is given twice"),
+            "{e}"
+        );
+        assert!(parse_line("{\"a\": [1, {\"b\": 2, \"b\": 3}]}").is_err());
+        assert!(parse_line("nope").unwrap_err().starts_with("not JSON: "));
+        // "type" that is not a string is said as such.
+        assert_eq!(
+            frame_from_json(&json!({"type": 1})).unwrap_err(),
+            "\"type\" must be a frame type's name, got \"1\""
+        );
+        // A 10 MB value makes a short message.
+        let huge = "x".repeat(10_000_000);
+        let mut long_id = frame_to_json(&zero_frame(FrameType::Capabilities));
+        long_id["device_id"] = json!(huge.clone());
+        for v in [
+            json!({"type": huge.clone()}),
+            json!({"type": "arm", "seq": huge.clone()}),
+            long_id,
+            json!({"type": "arm", "seq": 1, huge.clone(): 1}),
+            json!([huge.clone()]),
+        ] {
+            let e = frame_from_json(&v).unwrap_err();
+            assert!(
+                e.len() < 400 && e.contains("characters)"),
+                "{}",
+                &e[..e.len().min(400)]
+            );
+        }
     }
 
     #[test]

@@ -53,6 +53,7 @@ impl Objective {
     /// assert_eq!((o.cycle_time, o.force_error, o.override_activity), (1.0, 2.0, 0.0));
     /// assert!(Objective::parse("speed=1").unwrap_err().contains("cycle, error, above, activity"));
     /// assert!(Objective::parse("error=-1").is_err());
+    /// assert!(Objective::parse("cycle=0,error=0,above=0,activity=0").unwrap_err().contains("every weight is 0"));
     /// ```
     pub fn parse(text: &str) -> Result<Self, String> {
         let mut objective = Self::default();
@@ -78,6 +79,20 @@ impl Objective {
                 }
             };
             *slot = weight;
+        }
+        let weights = [
+            objective.cycle_time,
+            objective.force_error,
+            objective.time_above_limit,
+            objective.override_activity,
+        ];
+        // Every run would cost 0 and the "best" would be whichever came first.
+        if weights.iter().all(|w| *w == 0.0) {
+            return Err(format!(
+                "every weight is 0: nothing is minimised, so no run could be better than \
+                 another; give one of {} a positive weight",
+                Self::TERMS.join(", ")
+            ));
         }
         Ok(objective)
     }

@@ -281,7 +281,7 @@ impl Engine {
                 return Err(FuzzyError::new(format!(
                     "rule {}: weight {} must lie in [0, 1]",
                     i + 1,
-                    r.weight
+                    crate::input::readable(r.weight)
                 )));
             }
         }

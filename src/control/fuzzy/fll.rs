@@ -3,8 +3,8 @@
 //! The subset is what fuzzylite 6 writes for a Mamdani engine: `Engine:`, `InputVariable:` and
 //! `OutputVariable:` with `enabled`, `range`, `lock-range` and `term:` lines (`Triangle`,
 //! `Trapezoid`, `Ramp`), the output's `aggregation: Maximum`, `defuzzifier:` (`Centroid`,
-//! `WeightedAverage`, `MeanOfMaximum`; a resolution is accepted and ignored, since cutlab
-//! defuzzifies exactly), `default:` and `lock-previous:`, and one `RuleBlock:` with `conjunction`
+//! `WeightedAverage [Automatic]`, `MeanOfMaximum`; a resolution, a whole number ≥ 1, is accepted
+//! and ignored, since cutlab defuzzifies exactly), `default:` and `lock-previous:`, and one `RuleBlock:` with `conjunction`
 //! (`Minimum` or `AlgebraicProduct`), `disjunction`, `implication`, `activation: General` and
 //! `rule: if … and … then … [with w]` lines. `description:` lines and `#` comments are skipped.
 //!
@@ -20,7 +20,7 @@ use super::membership::Shape;
 use super::FuzzyError;
 
 fn error(line: usize, message: impl AsRef<str>) -> FuzzyError {
-    FuzzyError(format!("line {line}: {}", message.as_ref()))
+    FuzzyError::new(format!("line {line}: {}", message.as_ref()))
 }
 
 fn number(line: usize, text: &str, what: &str) -> Result<f64, FuzzyError> {
@@ -230,7 +230,7 @@ pub fn parse(text: &str) -> Result<Engine, FuzzyError> {
     }
     for v in &inputs {
         if !(v.min.is_finite() && v.max.is_finite()) {
-            return Err(FuzzyError(format!(
+            return Err(FuzzyError::new(format!(
                 "input variable {} has no range",
                 v.name
             )));
@@ -238,7 +238,7 @@ pub fn parse(text: &str) -> Result<Engine, FuzzyError> {
     }
     for v in &outputs {
         if !(v.min.is_finite() && v.max.is_finite()) {
-            return Err(FuzzyError(format!(
+            return Err(FuzzyError::new(format!(
                 "output variable {} has no range",
                 v.name
             )));
@@ -363,15 +363,45 @@ fn norm(line: usize, value: &str, key: &str) -> Result<Norm, FuzzyError> {
 }
 
 fn defuzzifier(line: usize, value: &str) -> Result<Defuzzifier, FuzzyError> {
-    let kind = value.split_whitespace().next().unwrap_or_default();
-    Defuzzifier::from_name(kind).ok_or_else(|| {
+    let mut words = value.split_whitespace();
+    let kind = words.next().unwrap_or_default();
+    let defuzzifier = Defuzzifier::from_name(kind).ok_or_else(|| {
         error(
             line,
             format!(
                 "defuzzifier {kind:?} is not supported (Centroid, WeightedAverage, MeanOfMaximum)"
             ),
         )
-    })
+    })?;
+    let parameter = words.next();
+    if let Some(extra) = words.next() {
+        return Err(error(
+            line,
+            format!("defuzzifier {kind}: unexpected {extra:?} after {parameter:?}"),
+        ));
+    }
+    match (defuzzifier, parameter) {
+        (_, None) | (Defuzzifier::WeightedAverage, Some("Automatic")) => Ok(defuzzifier),
+        (Defuzzifier::WeightedAverage, Some(other)) => Err(error(
+            line,
+            format!(
+                "WeightedAverage {other:?}: only the Automatic type of a Mamdani engine is \
+                 supported"
+            ),
+        )),
+        // A resolution: cutlab integrates exactly and ignores it, but a value fuzzylite would
+        // refuse (0, negative, NaN, not whole) is a mistake to say.
+        (_, Some(resolution)) => match resolution.parse::<u64>() {
+            Ok(r) if r >= 1 => Ok(defuzzifier),
+            _ => Err(error(
+                line,
+                format!(
+                    "{kind}: the resolution must be a whole number of at least 1 (fuzzylite's \
+                     default is 100), got {resolution:?}"
+                ),
+            )),
+        },
+    }
 }
 
 /// Each variable's index and its terms' indices by name, built once so that every proposition
@@ -617,6 +647,31 @@ mod tests {
                 "term: NB Triangle -6 -6 -4",
                 "term: NB Bell -6 1 2",
                 "shape Bell",
+            ),
+            (
+                "defuzzifier: Centroid 100",
+                "defuzzifier: Centroid 0",
+                "the resolution must be a whole number of at least 1",
+            ),
+            (
+                "defuzzifier: Centroid 100",
+                "defuzzifier: Centroid -5",
+                "got \"-5\"",
+            ),
+            (
+                "defuzzifier: Centroid 100",
+                "defuzzifier: Centroid NaN",
+                "got \"NaN\"",
+            ),
+            (
+                "defuzzifier: Centroid 100",
+                "defuzzifier: Centroid 100 200",
+                "unexpected \"200\"",
+            ),
+            (
+                "defuzzifier: Centroid 100",
+                "defuzzifier: WeightedAverage TakagiSugeno",
+                "only the Automatic type",
             ),
         ];
         for (from, to, expected) in cases {

@@ -48,6 +48,15 @@ fn finite(values: &[f64]) -> bool {
 }
 
 /// An error if `right − left` overflows: the slopes of a shape that wide are not f64 numbers.
+/// A shape's numbers for a message, compact (1e-320, not 320 zeros).
+fn shown(values: &[f64]) -> String {
+    values
+        .iter()
+        .map(|v| crate::input::readable(*v))
+        .collect::<Vec<_>>()
+        .join(" ")
+}
+
 fn span_fits(left: f64, right: f64) -> Result<(), FuzzyError> {
     if (right - left).is_finite() {
         Ok(())
@@ -71,7 +80,8 @@ impl Shape {
     pub fn triangle(a: f64, b: f64, c: f64) -> Result<Self, FuzzyError> {
         if !(finite(&[a, b, c]) && a <= b && b <= c && a < c) {
             return Err(FuzzyError::new(format!(
-                "a triangle needs a ≤ b ≤ c with a < c, got {a} {b} {c}"
+                "a triangle needs a ≤ b ≤ c with a < c, got {}",
+                shown(&[a, b, c])
             )));
         }
         span_fits(a, c)?;
@@ -82,7 +92,8 @@ impl Shape {
     pub fn trapezoid(a: f64, b: f64, c: f64, d: f64) -> Result<Self, FuzzyError> {
         if !(finite(&[a, b, c, d]) && a <= b && b <= c && c <= d && a < d) {
             return Err(FuzzyError::new(format!(
-                "a trapezoid needs a ≤ b ≤ c ≤ d with a < d, got {a} {b} {c} {d}"
+                "a trapezoid needs a ≤ b ≤ c ≤ d with a < d, got {}",
+                shown(&[a, b, c, d])
             )));
         }
         span_fits(a, d)?;
@@ -93,7 +104,8 @@ impl Shape {
     pub fn ramp(start: f64, end: f64) -> Result<Self, FuzzyError> {
         if !(finite(&[start, end]) && start != end) {
             return Err(FuzzyError::new(format!(
-                "a ramp needs two different finite ends, got {start} {end}"
+                "a ramp needs two different finite ends, got {}",
+                shown(&[start, end])
             )));
         }
         span_fits(start.min(end), start.max(end))?;

@@ -22,9 +22,9 @@ use std::fmt;
 pub struct FuzzyError(pub String);
 
 impl FuzzyError {
-    /// An error with this message.
+    /// An error with this message, kept to one short line (an FLL line it quotes may be long).
     pub fn new(message: impl Into<String>) -> Self {
-        Self(message.into())
+        Self(crate::input::one_short_line(&message.into()))
     }
 }
 

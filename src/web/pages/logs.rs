@@ -121,6 +121,9 @@ async fn read_blob(
         buffer.resize(array.length() as usize, 0);
         array.copy_to(&mut buffer);
         builder.push(&buffer);
+        if let Some(e) = builder.refused() {
+            return Err(format!("{name}: {e}"));
+        }
         offset = end;
         let _ = status.try_set(LoadStatus::Loading {
             name: name.clone(),
@@ -133,7 +136,7 @@ async fn read_blob(
     // The last chunk's task has ended; finishing (the time column's steps over every row) gets
     // a task of its own, and so does what the page makes of the log.
     next_task().await;
-    let log = builder.finish(None);
+    let log = builder.finish(None).map_err(|e| format!("{name}: {e}"))?;
     next_task().await;
     Ok(Some(log))
 }
@@ -1281,6 +1284,7 @@ fn LogSummary(
         })
         .collect();
     let more = log.problems.len().saturating_sub(10) + log.problems_not_listed;
+    let not_read = log.account.unread();
     let needs_period = log.time_column.is_none();
     let options: Vec<(String, String)> = std::iter::once((String::new(), "—".to_string()))
         .chain(
@@ -1293,6 +1297,9 @@ fn LogSummary(
         <section aria-labelledby="log-summary-title">
             <h2 id="log-summary-title">"The log"</h2>
             <p role="status">{dialect}</p>
+            {(!not_read.is_empty()).then(|| view! {
+                <p class="hint">{format!("Not read as data: {}.", not_read.join("; "))}</p>
+            })}
             {(!problems.is_empty()).then(|| view! {
                 <details>
                     <summary>{format!("{} problems, by line and column", problems.len() + more)}</summary>
@@ -1311,6 +1318,8 @@ fn LogSummary(
                         <th scope="col">"Kind"</th>
                         <th scope="col">"Unit"</th>
                         <th scope="col">"Missing"</th>
+                        <th scope="col">"Not finite"</th>
+                        <th scope="col">"Guessed from"</th>
                         <th scope="col">"Channel"</th>
                     </tr>
                 </thead>
@@ -1329,6 +1338,8 @@ fn LogSummary(
                                     <td>{format!("{:?}", c.kind).to_lowercase()}</td>
                                     <td>{c.unit.clone().unwrap_or_else(|| "—".into())}</td>
                                     <td>{c.missing}</td>
+                                    <td>{c.not_finite}</td>
+                                    <td>{c.role_reason.clone().unwrap_or_else(|| "—".into())}</td>
                                     <td>
                                         <select
                                             id=id
