@@ -828,14 +828,15 @@ fn a_link_lost_in_the_closed_loop_fails_the_command_with_the_results_written() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
-/// `cutlab device` survives any bytes on stdin: random bytes in, only frames out (heartbeats,
-/// nothing armed it), and it ends when stdin closes.
+/// `cutlab device --stdio --scenario kim-step-doc --time-scale 10 EXTRA…` as a process, its stdin
+/// piped.
 #[cfg(feature = "cli")]
-#[test]
-fn the_device_binary_survives_garbage_on_stdin_and_writes_only_frames() {
-    use std::io::Write;
-    use std::process::{Command, Stdio};
-    let mut child = Command::new(env!("CARGO_BIN_EXE_cutlab"))
+fn kim_device_process(
+    extra: &[&str],
+    stdout: std::process::Stdio,
+    stderr: std::process::Stdio,
+) -> std::process::Child {
+    std::process::Command::new(env!("CARGO_BIN_EXE_cutlab"))
         .args([
             "device",
             "--stdio",
@@ -844,11 +845,22 @@ fn the_device_binary_survives_garbage_on_stdin_and_writes_only_frames() {
             "--time-scale",
             "10",
         ])
-        .stdin(Stdio::piped())
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
+        .args(extra)
+        .stdin(std::process::Stdio::piped())
+        .stdout(stdout)
+        .stderr(stderr)
         .spawn()
-        .unwrap();
+        .unwrap()
+}
+
+/// `cutlab device` survives any bytes on stdin: random bytes in, only frames out (heartbeats,
+/// nothing armed it), and it ends when stdin closes.
+#[cfg(feature = "cli")]
+#[test]
+fn the_device_binary_survives_garbage_on_stdin_and_writes_only_frames() {
+    use std::io::Write;
+    use std::process::Stdio;
+    let mut child = kim_device_process(&[], Stdio::piped(), Stdio::piped());
     let mut stdin = child.stdin.take().unwrap();
     let mut rng = cutlab::rng::Rng::seed_from(8);
     for _ in 0..20 {
@@ -1070,29 +1082,19 @@ fn a_link_loss_after_the_loop_cut_to_30_percent_keeps_30_and_its_time_limit_ends
 #[test]
 fn the_device_trace_shows_the_fallback_at_30_percent_and_then_the_hold() {
     use std::io::Write;
-    use std::process::{Command, Stdio};
+    use std::process::Stdio;
     let dir = scratch("trace");
     let trace = dir.join("trace.csv");
-    let mut child = Command::new(env!("CARGO_BIN_EXE_cutlab"))
-        .args([
-            "device",
-            "--stdio",
-            "--scenario",
-            "kim-step-doc",
-            "--time-scale",
-            "10",
-        ])
-        .args([
+    let mut child = kim_device_process(
+        &[
             "--fallback-limit-s",
             "2",
             "--trace",
             trace.to_str().unwrap(),
-        ])
-        .stdin(Stdio::piped())
-        .stdout(Stdio::null())
-        .stderr(Stdio::null())
-        .spawn()
-        .unwrap();
+        ],
+        Stdio::null(),
+        Stdio::null(),
+    );
     let mut stdin = child.stdin.take().unwrap();
     stdin
         .write_all(&wire(Frame::Arm(cutlab::protocol::frame::Arm { seq: 1 })))

@@ -2,6 +2,40 @@
 //! before the first Arm on a device it has not seen commissioned: one definition, which the
 //! page lists and a test finds, check by check, in the document.
 
+/// The highest override of reduce-only limits: the loop can only slow the programmed feed. The
+/// Hardware page starts from it on a real port, and the first cuts run at it (docs/hardware.md
+/// §7, §10).
+pub const REDUCE_ONLY_MAX_OVERRIDE_PCT: f64 = 100.0;
+
+/// Where a browser remembers the devices whose commissioning the engineer confirmed (their
+/// identities, one a line): the first Arm on any other names every check first.
+pub const COMMISSIONED_DEVICES_KEY: &str = "cutlab-commissioned-devices";
+
+/// Whether `device_id` is among the `stored` identities (one a line).
+///
+/// ```
+/// use cutlab::hardware::commissioning::{commissioned, with_commissioned};
+/// let stored = with_commissioned(None, "bridge-7");
+/// assert!(commissioned(Some(&stored), "bridge-7") && !commissioned(Some(&stored), "bridge-8"));
+/// assert_eq!(with_commissioned(Some(&stored), "bridge-7"), stored);
+/// ```
+pub fn commissioned(stored: Option<&str>, device_id: &str) -> bool {
+    stored.is_some_and(|text| text.lines().any(|l| l == device_id))
+}
+
+/// The `stored` identities with `device_id` added.
+pub fn with_commissioned(stored: Option<&str>, device_id: &str) -> String {
+    if commissioned(stored, device_id) {
+        return stored.unwrap_or_default().to_string();
+    }
+    let mut text = stored.unwrap_or_default().trim_end().to_string();
+    if !text.is_empty() {
+        text.push('\n');
+    }
+    text.push_str(device_id);
+    text
+}
+
 /// One check of the commissioning procedure.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Check {

@@ -597,8 +597,8 @@ impl HardwareSession {
         self.host.link_lost(format!("link lost: {why}"));
         let fallback = match self.capabilities {
             Some(c) if was_holding => format!(
-                "; the device applies its fallback override ({} %) on its own after its \
-                 watchdog ({} s)",
+                "; the device applies its fallback override (at most {} %, never above the \
+                 applied) on its own after its watchdog ({} s), then holds the feed",
                 f64::from(c.fallback_override_cpct) / 100.0,
                 f64::from(c.watchdog_timeout_ms) / 1000.0
             ),
@@ -889,9 +889,9 @@ impl HardwareSession {
             configured
         };
         Some(format!(
-            "if the link is lost now: after {} s the device applies {fallback} % (the lower of \
+            "If the link is lost now: after {} s the device applies {fallback} % (the lower of \
              {applied} % applied and its {configured} % fallback) for at most {} s, then holds \
-             the feed until the operator resets it",
+             the feed until the operator resets it.",
             f64::from(caps.watchdog_timeout_ms) / 1000.0,
             f64::from(caps.fallback_limit_ms) / 1000.0
         ))

@@ -363,7 +363,8 @@ impl PhaseWindow {
     /// to tell.
     fn verdict(&self, n: f64) -> Result<Option<usize>, ()> {
         let phase_rms = (self.phase_sq.iter().sum::<f64>() / (3.0 * n)).sqrt();
-        if !(phase_rms > PHASE_CHECK_MIN_A) {
+        // NaN (no finite sample in the window) says nothing either.
+        if phase_rms.is_nan() || phase_rms <= PHASE_CHECK_MIN_A {
             return Err(());
         }
         let sum_rms = (self.sum_sq / n).sqrt();

@@ -685,7 +685,8 @@ impl HostSession {
         let moving = feed > OVERRIDE_CHECK_MOVING_FRACTION * programmed;
         let steady =
             (feed - self.feed_mean_mm_min).abs() <= OVERRIDE_CHECK_STEADY_FRACTION * programmed;
-        if !(programmed >= OVERRIDE_CHECK_MIN_FEED_MM_MIN)
+        if programmed.is_nan()
+            || programmed < OVERRIDE_CHECK_MIN_FEED_MM_MIN
             || s.flags & sample_flag::SPINDLE_RUNNING == 0
             || !moving
             || !steady
