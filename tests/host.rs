@@ -1401,3 +1401,49 @@ fn the_device_command_and_what_it_started_end_with_the_host() {
     );
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// The operator's reset (`cutlab host --reset-hold`, `HostLink::reset_hold`): refused while the
+/// hold's cause lasts, granted once it is gone; the device then moves again.
+#[test]
+fn the_operators_reset_releases_a_latched_hold_once_its_cause_is_gone() {
+    use cutlab::protocol::frame::Arm;
+    let mut config = DeviceConfig::new(Preset::KimStepDoc);
+    config.watchdog_timeout_s = 30.0;
+    config.faults.over_current_at_s = Some(0.5);
+    config.faults.over_current_s = 1.0;
+    let device = Rc::new(RefCell::new(DeviceEmulator::new(config).unwrap()));
+    let mut out = Vec::new();
+    {
+        let mut d = device.borrow_mut();
+        d.receive(&wire(Frame::Arm(Arm { seq: 1 })), &mut out);
+        while d.hold_latched().is_none() {
+            d.step_frame(&mut out);
+        }
+    }
+    let line = Box::new(LockstepLine::new(Rc::clone(&device)));
+    let mut link = HostLink::connect_line(line, HostOptions::default()).unwrap();
+    let answer = link.reset_hold().unwrap();
+    assert!(answer.contains("keeps the feed hold"), "{answer}");
+    assert_eq!(device.borrow().hold_latched(), Some(HoldCause::OverCurrent));
+    {
+        let mut d = device.borrow_mut();
+        for _ in 0..1500 {
+            d.step_frame(&mut out);
+        }
+    }
+    let answer = link.reset_hold().unwrap();
+    assert!(answer.contains("released"), "{answer}");
+    assert_eq!(device.borrow().hold_latched(), None);
+    assert!(!device.borrow().feed_hold());
+}
+
+/// `cutlab host --reset-hold` against a device with nothing latched: it says so and succeeds.
+#[cfg(feature = "cli")]
+#[test]
+fn the_reset_hold_option_sends_the_reset_and_says_what_the_device_answered() {
+    let exe = env!("CARGO_BIN_EXE_cutlab");
+    let device = format!("{exe} device --stdio --scenario kim-step-doc --time-scale 10");
+    let (result, out) = common::cutlab_text(&["host", "--device-cmd", &device, "--reset-hold"], "");
+    result.unwrap();
+    assert!(out.starts_with("reset: the feed hold is released"), "{out}");
+}
