@@ -1447,3 +1447,68 @@ fn the_reset_hold_option_sends_the_reset_and_says_what_the_device_answered() {
     result.unwrap();
     assert!(out.starts_with("reset: the feed hold is released"), "{out}");
 }
+
+/// The stuck-override and phase-sum checks raise nothing on a healthy machine: every preset's
+/// first part, through the teach cut's steps (100, 30, 140, 60 %, 1.5 s each), with every
+/// command applied (docs/protocol.md §4 and §5 quote what this finds).
+#[test]
+fn no_preset_raises_a_stuck_override_or_a_sensor_fault_when_healthy() {
+    use cutlab::protocol::frame::{fault_flag, Arm, Hello, SetOverride};
+    use cutlab::protocol::host::HostSession;
+    let _one = ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner());
+    for preset in Preset::ALL {
+        let mut d = DeviceEmulator::new(DeviceConfig::new(preset)).unwrap();
+        let mut host = HostSession::new();
+        let mut out = Vec::new();
+        d.receive(
+            &wire(Frame::Hello(Hello {
+                version_major: 2,
+                version_minor: 0,
+            })),
+            &mut out,
+        );
+        d.receive(&wire(Frame::Arm(Arm { seq: 1 })), &mut out);
+        host.start_part();
+        host.receive(&out);
+        let mut seq = 1;
+        let mut faults = 0u8;
+        let mut frame = 0u64;
+        while d.in_cycle() && frame < 200_000 {
+            if frame % 1500 == 0 {
+                seq += 1;
+                let pct = [100, 30, 140, 60][(frame / 1500 % 4) as usize];
+                let mut command = Vec::new();
+                host.set_override(
+                    cutlab::machine::OverrideCommand {
+                        override_pct: f64::from(pct),
+                        feed_hold: false,
+                    },
+                    &mut command,
+                );
+                let Ok(Frame::SetOverride(c)) = cutlab::protocol::codec::Decoder::new()
+                    .frames(&command)
+                    .next()
+                    .unwrap()
+                else {
+                    panic!("not a set-override")
+                };
+                d.receive(
+                    &wire(Frame::SetOverride(SetOverride { seq, ..c })),
+                    &mut out,
+                );
+            }
+            if frame % 100 == 0 {
+                d.receive(&wire(Frame::Heartbeat(Default::default())), &mut out);
+            }
+            out.clear();
+            d.step_frame(&mut out);
+            host.receive(&out);
+            while host.next_sample().is_some() {}
+            faults |= d.fault_flags();
+            frame += 1;
+        }
+        assert!(!d.in_cycle(), "{} did not end", preset.name());
+        assert_eq!(faults & fault_flag::SENSOR, 0, "{}", preset.name());
+        assert_eq!(host.take_stuck_override(), None, "{}", preset.name());
+    }
+}

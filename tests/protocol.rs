@@ -692,3 +692,82 @@ fn the_specifications_worked_examples_are_what_the_codec_writes() {
 fn frame_to_json_line(f: &Frame) -> String {
     cutlab::protocol::json::frame_to_json(f).to_string()
 }
+
+/// docs/protocol.md §1's table of what a stream asks of its line is `LineBudget`'s arithmetic.
+#[test]
+fn the_line_budget_table_in_the_specification_is_what_the_host_computes() {
+    use cutlab::protocol::frame::{feature, measured};
+    use cutlab::protocol::host::LineBudget;
+    let doc = include_str!("../docs/protocol.md");
+    let caps = |rate: f32, truth: bool, baud: u32| Capabilities {
+        version_major: 2,
+        version_minor: 0,
+        device_id: padded("bridge"),
+        program: padded("p"),
+        channel_mask: 0x7F,
+        spindle_current_a_per_count: 0.005,
+        feed_current_a_per_count: 0.005,
+        fv_v_per_count: 0.0005,
+        sample_rate_hz: rate,
+        override_mode: OverrideModeCode::WholePercent,
+        min_override_cpct: 0,
+        max_override_cpct: 10000,
+        dial_cpct: [0; 16],
+        watchdog_timeout_ms: 500,
+        fallback_override_cpct: 5000,
+        over_current_a: 150.0,
+        features: if truth { feature::SIM_TRUTH } else { 0 },
+        measured: measured::ALL,
+        fallback_limit_ms: 5000,
+        line_baud: baud,
+    };
+    let spaced = |n: f64| {
+        let digits = format!("{n:.0}");
+        let mut out = String::new();
+        for (i, c) in digits.chars().enumerate() {
+            if i > 0 && (digits.len() - i) % 3 == 0 {
+                out.push(' ');
+            }
+            out.push(c);
+        }
+        out
+    };
+    for (rate, truth) in [
+        (100.0, false),
+        (200.0, false),
+        (1000.0, false),
+        (1000.0, true),
+    ] {
+        let slow = LineBudget::of(&caps(rate, truth, 115_200));
+        let fast = LineBudget::of(&caps(rate, truth, 921_600));
+        let pct = |b: &LineBudget| format!("{:.0} %", 100.0 * b.bits_per_s / f64::from(b.baud));
+        let row_start = format!(
+            "| {rate:.0} | {} | {} |",
+            if truth { "yes" } else { "no" },
+            spaced(slow.bits_per_s)
+        );
+        let row = doc
+            .lines()
+            .find(|l| l.starts_with(&row_start))
+            .unwrap_or_else(|| panic!("docs/protocol.md §1 lacks the row {row_start}"));
+        for b in [&slow, &fast] {
+            let verdict = if b.fits() { "fits" } else { "refused" };
+            assert!(
+                row.contains(&format!("{} — {verdict}", pct(b)))
+                    || (!b.fits() && row.contains("| refused |")),
+                "{row}: {} baud should read {} — {verdict}",
+                b.baud,
+                pct(b)
+            );
+        }
+    }
+    // The most samples 115 200 baud carries, as §1 says.
+    let most = (1..2000)
+        .rev()
+        .find(|r| LineBudget::of(&caps(*r as f32, false, 115_200)).fits())
+        .unwrap();
+    assert!(
+        doc.contains(&format!("at 115 200 baud, at most {most} samples/s")),
+        "{most}"
+    );
+}

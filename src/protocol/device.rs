@@ -81,7 +81,8 @@ pub const PHASE_CHECK_WINDOW_S: f64 = 0.1;
 /// its sensors are not judged.
 pub const PHASE_CHECK_MIN_A: f64 = 1.0;
 /// A drive whose three phases' sum has an RMS above this fraction of the phases' RMS has an open
-/// or stuck sensor (a healthy drive's sum is its sensors' noise and offsets: under 1 %).
+/// or stuck sensor (a healthy drive's sum is its sensors' noise and offsets: no preset raises
+/// the fault, tests/host.rs).
 pub const PHASE_SUM_TOLERANCE: f64 = 0.25;
 
 /// Faults the emulator injects.
