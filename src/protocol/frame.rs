@@ -381,7 +381,7 @@ pub struct SimTruth {
 pub mod command_flag {
     /// Feed hold.
     pub const FEED_HOLD: u8 = 1 << 0;
-    /// [`Ack::flags`] only: the feed hold is latched until the operator resets it.
+    /// [`super::Ack::flags`] only: the feed hold is latched until the operator resets it.
     pub const HOLD_LATCHED: u8 = 1 << 1;
 }
 

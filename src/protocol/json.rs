@@ -7,8 +7,8 @@
 //! `kind`) are names, or numbers for codes this version does not know; `f32` fields are numbers
 //! (NaN and ±∞ are `null`, which encodes as NaN). Encoding takes the same objects, strictly: a
 //! field the frame type does not have is an error listing the fields it has ([`field_names`]),
-//! and so is a field left out, except a `flags` byte, which then has no bit set
-//! ([`DEFAULT_ZERO_FIELD`]).
+//! and so is a field left out, except a `flags` or `faults` byte, which then has no bit set
+//! ([`DEFAULT_ZERO_FIELDS`]).
 //!
 //! ```
 //! use cutlab::protocol::frame::{Frame, Arm};
