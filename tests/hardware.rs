@@ -734,3 +734,30 @@ fn the_hardware_document_has_every_section_of_the_fail_safe_design() {
         );
     }
 }
+
+/// A bridge that does not measure what a run needs is refused before it is armed, naming the
+/// field: the programmed feed (without it a stuck override cannot be seen) for the closed loop;
+/// the program end for any run (the teach cut and the hand-back wait for it).
+#[test]
+fn a_device_that_lacks_a_measurement_the_run_needs_is_not_armed() {
+    use cutlab::protocol::frame::measured;
+    let mut config = maneerat(5.0);
+    config.measured = measured::ALL & !measured::PROGRAMMED_FEED;
+    let mut b = Bench::new(config, SessionOptions::default());
+    b.session.teach_limits(&spec()).unwrap();
+    b.session.start_teach_cut(&spec(), b.now_s).unwrap();
+    b.run_until(|b| b.session.stage() == Stage::Idle, 60.0);
+    assert!(b.session.calibration().is_some(), "{}", b.events());
+    let why = b.session.arm(&spec(), b.now_s).unwrap_err();
+    assert!(
+        why.contains("does not measure the programmed feed a closed loop needs"),
+        "{why}"
+    );
+    assert_eq!(b.session.state(), LinkState::Streaming);
+
+    let mut config = maneerat(5.0);
+    config.measured = measured::ALL & !measured::PROGRAM_END;
+    let mut b = Bench::new(config, SessionOptions::default());
+    let why = b.session.start_teach_cut(&spec(), b.now_s).unwrap_err();
+    assert!(why.contains("program end"), "{why}");
+}

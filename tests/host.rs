@@ -1512,3 +1512,19 @@ fn no_preset_raises_a_stuck_override_or_a_sensor_fault_when_healthy() {
         assert_eq!(host.take_stuck_override(), None, "{}", preset.name());
     }
 }
+
+/// `cutlab host` refuses, before it arms anything, a bridge that does not measure what the run
+/// needs (docs/protocol.md §4), as the Hardware page does.
+#[test]
+fn the_host_refuses_a_bridge_that_lacks_a_measurement_before_arming_it() {
+    use cutlab::protocol::frame::measured;
+    let mut config = kim_device(5.0);
+    config.measured = measured::ALL & !measured::ACTUAL_FEED;
+    let (run, device) = lockstep_for(config, &kim_threshold(), None, None);
+    let error = run.result.err().unwrap().0;
+    assert!(
+        error.contains("does not measure the actual feed"),
+        "{error}"
+    );
+    assert_eq!(device.stats().parts, 0);
+}
