@@ -38,11 +38,11 @@ Prints the metrics as cutlab sim does and what crossed the link, and the link's 
 as they happen; --json writes both, whatever happens (a run that never came about gets the \
 counts, the events and the error). The savings are measured against cutlab sim's simulated \
 fixed-feed references of the preset the device runs (--no-references skips them). A device fault \
-(over-current, sensor, E-stop) stops the loop: the host holds the device's fallback override \
-until the part ends (after an E-stop it disarms at once). The command fails after a link loss or \
-a device fault's alarm, with the results up to there printed and written. A feed hold the device \
-latched (an overload, an over-current, a fallback that lasted its limit) stays until the operator \
-resets it: --reset-hold.";
+(sensor, over-current, E-stop) or a stuck override stops the loop: the host holds the device's \
+fallback override until the part ends, or disarms at once after an E-stop or when the device \
+holds the feed latched (an overload, an over-current, a fallback that lasted its limit), which \
+stays until the operator resets it: --reset-hold. The command fails after a link loss or an \
+alarm, with the results up to there printed and written.";
 
 /// Options of `cutlab host`.
 #[derive(Debug, clap::Args)]
