@@ -293,7 +293,7 @@ fn a_lost_port_alarms_and_nothing_more_is_sent() {
     let reason = b.session.reason().to_string();
     assert!(
         reason.starts_with("link lost: the device was unplugged")
-            && reason.contains("fallback override (50 %)"),
+            && reason.contains("fallback override (at most 50 %, never above the applied)"),
         "{reason}"
     );
     assert!(!b.session.holding());
