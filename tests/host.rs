@@ -1474,7 +1474,7 @@ fn no_preset_raises_a_stuck_override_or_a_sensor_fault_when_healthy() {
         let mut faults = 0u8;
         let mut frame = 0u64;
         while d.in_cycle() && frame < 200_000 {
-            if frame % 1500 == 0 {
+            if frame.is_multiple_of(1500) {
                 seq += 1;
                 let pct = [100, 30, 140, 60][(frame / 1500 % 4) as usize];
                 let mut command = Vec::new();
@@ -1497,7 +1497,7 @@ fn no_preset_raises_a_stuck_override_or_a_sensor_fault_when_healthy() {
                     &mut out,
                 );
             }
-            if frame % 100 == 0 {
+            if frame.is_multiple_of(100) {
                 d.receive(&wire(Frame::Heartbeat(Default::default())), &mut out);
             }
             out.clear();
