@@ -415,6 +415,14 @@ fn maneerat_calibrated() -> (RunSpec, RunResult, DeviceConfig) {
     (spec, sim, config)
 }
 
+/// [`maneerat_calibrated`]'s run over a [`LockstepLine`] with the faults `inject` sets; the run
+/// and the device afterwards.
+fn maneerat_faulted(inject: impl FnOnce(&mut FaultInjection)) -> (LinkRun, DeviceEmulator) {
+    let (spec, sim, mut config) = maneerat_calibrated();
+    inject(&mut config.faults);
+    lockstep_for(config, &spec, None, Some(sim.calibration))
+}
+
 fn texts(run: &LinkRun) -> Vec<&str> {
     run.events.iter().map(|e| e.text.as_str()).collect()
 }
@@ -426,10 +434,10 @@ fn texts(run: &LinkRun) -> Vec<&str> {
 fn an_over_current_stops_the_loop_and_the_device_holds_the_feed_until_reset() {
     // Not timed, but heavy: the tests in real time must not be starved by it.
     let _one = ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner());
-    let (spec, sim, mut config) = maneerat_calibrated();
-    config.faults.over_current_at_s = Some(6.0);
-    config.faults.over_current_s = 0.2;
-    let (run, mut device) = lockstep_for(config, &spec, None, Some(sim.calibration.clone()));
+    let (run, mut device) = maneerat_faulted(|f| {
+        f.over_current_at_s = Some(6.0);
+        f.over_current_s = 0.2;
+    });
     let alarm = run.alarm.clone().unwrap();
     assert_eq!((alarm.kind, alarm.part), (Some(FaultKind::OverCurrent), 1));
     let result = run.result.as_ref().unwrap();
@@ -459,9 +467,7 @@ fn an_over_current_stops_the_loop_and_the_device_holds_the_feed_until_reset() {
 fn an_e_stop_stops_the_loop_and_the_host_disarms_at_once() {
     // Not timed, but heavy: the tests in real time must not be starved by it.
     let _one = ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner());
-    let (spec, sim, mut config) = maneerat_calibrated();
-    config.faults.estop_at_s = Some(6.0);
-    let (run, device) = lockstep_for(config, &spec, None, Some(sim.calibration.clone()));
+    let (run, device) = maneerat_faulted(|f| f.estop_at_s = Some(6.0));
     let alarm = run.alarm.clone().unwrap();
     assert_eq!(alarm.kind, Some(FaultKind::EStop));
     assert!(alarm.text.contains("disarms"), "{}", alarm.text);
@@ -1207,9 +1213,7 @@ fn a_handshake_whose_line_budget_does_not_fit_is_refused() {
 #[test]
 fn an_open_sensor_raises_its_alarm_within_a_second() {
     let _one = ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner());
-    let (spec, sim, mut config) = maneerat_calibrated();
-    config.faults.sensor_open_at_s = Some(6.0);
-    let (run, _) = lockstep_for(config, &spec, None, Some(sim.calibration.clone()));
+    let (run, _) = maneerat_faulted(|f| f.sensor_open_at_s = Some(6.0));
     let alarm = run.alarm.clone().unwrap();
     assert_eq!(alarm.kind, Some(FaultKind::Sensor), "{}", alarm.text);
     let result = run.result.as_ref().unwrap();
