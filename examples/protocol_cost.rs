@@ -22,11 +22,10 @@ use std::rc::Rc;
 use cutlab::closed_loop::definition::RunSpec;
 use cutlab::closed_loop::lab::{simulate, RunResult};
 use cutlab::control::registry::ControllerKind;
+use cutlab::hardware::link_run::{run_on_link, LinkRun};
 use cutlab::plant::Preset;
 use cutlab::protocol::device::{DeviceConfig, DeviceEmulator};
-use cutlab::protocol::link::{
-    run_device, run_on_link, HostLink, HostOptions, LinkRun, LockstepLine,
-};
+use cutlab::protocol::link::{run_device, HostLink, HostOptions, LockstepLine};
 
 struct Options {
     preset: Preset,
@@ -99,6 +98,7 @@ fn real_time(spec: &RunSpec, time_scale: f64) -> Result<LinkRun, Box<dyn Error>>
             host_to_device_r,
             &mut device_to_host_w,
             &mut diagnostics,
+            None,
             time_scale,
         );
     });

@@ -101,6 +101,8 @@ fn random_lines_encode_to_the_frame_they_describe_or_are_refused_in_one_short_li
         let (result, out) = common::cutlab_bytes(&["protocol", "encode"], &line);
         let text = String::from_utf8_lossy(&line);
         match result {
+            // A blank line (a line truncated to nothing) is skipped, as in a file of frames.
+            Ok(()) if text.trim().is_empty() => assert!(out.is_empty(), "round {round}"),
             Ok(()) => {
                 encoded += 1;
                 let mut decoder = Decoder::new();

@@ -23,13 +23,16 @@ use cutlab::closed_loop::definition::RunSpec;
 use cutlab::closed_loop::lab::{simulate, RunResult};
 use cutlab::control::registry::ControllerKind;
 use cutlab::estimation::estimator::Calibration;
+use cutlab::hardware::link_run::{run_on_link, LinkRun};
 use cutlab::plant::Preset;
 use cutlab::protocol::codec::{encode_frame, MAX_FRAME_LEN};
-use cutlab::protocol::device::{DeviceConfig, DeviceEmulator, DeviceStats, FaultInjection};
+use cutlab::protocol::device::{
+    DeviceConfig, DeviceEmulator, DeviceStats, FaultInjection, HoldCause,
+};
 use cutlab::protocol::frame::{Capabilities, FaultKind, Frame};
 use cutlab::protocol::link::{
-    run_device, run_on_link, DeviceExit, HostLink, HostOptions, Line, LinkRun, LockstepLine,
-    DEVICE_QUEUE_CHUNKS, READ_CHUNK,
+    run_device, DeviceExit, HostLink, HostOptions, Line, LockstepLine, DEVICE_QUEUE_CHUNKS,
+    READ_CHUNK,
 };
 
 /// One closed loop against the emulator at a time, and nothing else heavy beside it: a test that
@@ -67,6 +70,7 @@ fn host_against_emulator_calibrated(
             host_to_device_r,
             &mut device_to_host_w,
             &mut diagnostics,
+            None,
             TIME_SCALE,
         );
         (
@@ -235,7 +239,7 @@ fn the_closed_loop_over_the_protocol_matches_the_simulation() {
     // Every command but the last Disarm (sent as the host left) was acknowledged.
     assert!(s.commands_acknowledged + 1 >= s.commands_sent, "{s:?}");
     assert!(s.command_latency_mean_s < 0.06, "{s:?}");
-    assert_eq!(run.device.protocol_version, "1.0");
+    assert_eq!(run.device.protocol_version, "2.0");
 }
 
 #[test]
@@ -412,45 +416,50 @@ fn maneerat_calibrated() -> (RunSpec, RunResult, DeviceConfig) {
     (spec, sim, config)
 }
 
+/// [`maneerat_calibrated`]'s run over a [`LockstepLine`] with the faults `inject` sets; the run
+/// and the device afterwards.
+fn maneerat_faulted(inject: impl FnOnce(&mut FaultInjection)) -> (LinkRun, DeviceEmulator) {
+    let (spec, sim, mut config) = maneerat_calibrated();
+    inject(&mut config.faults);
+    lockstep_for(config, &spec, None, Some(sim.calibration))
+}
+
 fn texts(run: &LinkRun) -> Vec<&str> {
     run.events.iter().map(|e| e.text.as_str()).collect()
 }
 
-/// docs/protocol.md §5: an over-current (or a sensor fault) the device reports while the host
-/// holds it stops the loop there; the host commands the device's fallback override (its safe
-/// override), holds it until the part ends, and only then disarms.
+/// docs/protocol.md §5: an over-current the device reports while the host holds it stops the
+/// loop there, and the device latches the feed hold (a crash, a broken tool) until the
+/// operator's reset: the host has nothing to hold and disarms at once; the hold stays.
 #[test]
-fn an_over_current_stops_the_loop_and_the_safe_override_is_held_until_the_part_ends() {
+fn an_over_current_stops_the_loop_and_the_device_holds_the_feed_until_reset() {
     // Not timed, but heavy: the tests in real time must not be starved by it.
     let _one = ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner());
-    let (spec, sim, mut config) = maneerat_calibrated();
-    config.faults.over_current_at_s = Some(6.0);
-    config.faults.over_current_s = 0.2;
-    let (run, device) = lockstep_for(config, &spec, None, Some(sim.calibration.clone()));
+    let (run, mut device) = maneerat_faulted(|f| {
+        f.over_current_at_s = Some(6.0);
+        f.over_current_s = 0.2;
+    });
     let alarm = run.alarm.clone().unwrap();
-    assert_eq!((alarm.kind, alarm.part), (FaultKind::OverCurrent, 1));
+    assert_eq!((alarm.kind, alarm.part), (Some(FaultKind::OverCurrent), 1));
     let result = run.result.as_ref().unwrap();
     assert!(!result.metrics.completed);
     let end_s = result.trace.rows.last().unwrap().time_s;
     assert!((5.9..6.1).contains(&end_s), "the loop ran to {end_s} s");
     let texts = texts(&run);
-    let at = |needle: &str| {
+    assert!(
         texts
             .iter()
-            .position(|t| t.contains(needle))
-            .unwrap_or_else(|| panic!("no {needle:?} in {texts:?}"))
-    };
-    assert!(at("alarm: device fault over-current raised") < at("holding the safe override (50 %)"));
-    assert!(at("holding the safe override") < at("program end"));
-    // The rest of the program at 50 %: it ended well after the loop's whole run would have.
-    let end = run.events.iter().find(|e| e.text == "program end").unwrap();
-    assert!(
-        end.time_s > sim.metrics.cycle_time_s + 3.0,
-        "{}",
-        end.time_s
+            .any(|t| t.contains("holds the feed, latched: the host disarms")),
+        "{texts:?}"
     );
-    assert!(!device.in_cycle() && !device.armed());
-    assert_eq!(device.stats().parts, 1);
+    // The device, disarmed, keeps the feed held, whatever time passes.
+    let mut out = Vec::new();
+    for _ in 0..3000 {
+        device.step_frame(&mut out);
+    }
+    assert!(device.in_cycle() && !device.armed());
+    assert_eq!(device.hold_latched(), Some(HoldCause::OverCurrent));
+    assert!(device.feed_hold());
 }
 
 /// docs/protocol.md §5: under an E-stop the device refuses commands and the machine's axes stop,
@@ -459,11 +468,9 @@ fn an_over_current_stops_the_loop_and_the_safe_override_is_held_until_the_part_e
 fn an_e_stop_stops_the_loop_and_the_host_disarms_at_once() {
     // Not timed, but heavy: the tests in real time must not be starved by it.
     let _one = ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner());
-    let (spec, sim, mut config) = maneerat_calibrated();
-    config.faults.estop_at_s = Some(6.0);
-    let (run, device) = lockstep_for(config, &spec, None, Some(sim.calibration.clone()));
+    let (run, device) = maneerat_faulted(|f| f.estop_at_s = Some(6.0));
     let alarm = run.alarm.clone().unwrap();
-    assert_eq!(alarm.kind, FaultKind::EStop);
+    assert_eq!(alarm.kind, Some(FaultKind::EStop));
     assert!(alarm.text.contains("disarms"), "{}", alarm.text);
     let result = run.result.as_ref().unwrap();
     assert!(!result.metrics.completed);
@@ -530,14 +537,14 @@ fn a_device_of_another_major_version_is_refused_naming_both_versions() {
         handshake_timeout_s: 1.0,
         ..HostOptions::default()
     };
-    let e = HostLink::connect_line(Box::new(Canned(capabilities_bytes(2, 3))), options)
+    let e = HostLink::connect_line(Box::new(Canned(capabilities_bytes(1, 3))), options)
         .err()
         .unwrap();
     assert!(
-        e.0.contains("the device speaks protocol 2.3; this host speaks 1.0"),
+        e.0.contains("the device speaks protocol 1.3; this host speaks 2.0"),
         "{e}"
     );
-    let link = HostLink::connect_line(Box::new(Canned(capabilities_bytes(1, 7))), options).unwrap();
+    let link = HostLink::connect_line(Box::new(Canned(capabilities_bytes(2, 7))), options).unwrap();
     assert_eq!(link.capabilities().version_minor, 7);
 }
 
@@ -570,7 +577,14 @@ fn a_flood_on_the_device_input_is_held_back_and_the_device_keeps_its_clock() {
     let mut device = DeviceEmulator::new(kim_device(5.0)).unwrap();
     let (mut out, mut diagnostics) = (Vec::new(), Vec::new());
     let start = Instant::now();
-    let run = run_device(&mut device, reader, &mut out, &mut diagnostics, TIME_SCALE);
+    let run = run_device(
+        &mut device,
+        reader,
+        &mut out,
+        &mut diagnostics,
+        None,
+        TIME_SCALE,
+    );
     let wall_s = start.elapsed().as_secs_f64();
     let written = flooder.join().unwrap();
     let diagnostics = String::from_utf8_lossy(&diagnostics);
@@ -650,7 +664,7 @@ fn the_binary_runs_the_host_against_the_binary_device() {
     let stdout = String::from_utf8_lossy(&out.stdout);
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(out.status.success(), "{stdout}\n{stderr}");
-    assert!(stdout.contains("link: protocol 1.0"), "{stdout}");
+    assert!(stdout.contains("link: protocol 2.0"), "{stdout}");
     assert!(stdout.contains("references: simulated"), "{stdout}");
     // The device's diagnostics, and the host's events as they happened.
     assert!(stderr.contains("part 2: cycle start"), "{stderr}");
@@ -671,7 +685,7 @@ fn the_binary_runs_the_host_against_the_binary_device() {
     ] {
         assert!(report.get(key).is_some(), "{key} missing from {report}");
     }
-    assert_eq!(report["protocol_version"], "1.0");
+    assert_eq!(report["protocol_version"], "2.0");
     assert_eq!(report["link_losses"], 0);
     assert_eq!(report["error"], serde_json::Value::Null);
     assert_eq!(report["metrics"]["completed"], true);
@@ -733,7 +747,7 @@ fn the_report_is_written_when_the_link_is_lost_in_the_teach_cut_or_the_device_is
         "{stderr}"
     );
     let report = report.unwrap();
-    assert_eq!(report["protocol_version"], "1.0");
+    assert_eq!(report["protocol_version"], "2.0");
     assert_eq!(report["frames_received"], 1);
     assert_eq!(report["link_losses"], 1);
     assert_eq!(report["link_lost"], true);
@@ -751,7 +765,7 @@ fn the_report_is_written_when_the_link_is_lost_in_the_teach_cut_or_the_device_is
     );
 
     let newer = Capabilities {
-        version_major: 2,
+        version_major: 3,
         version_minor: 0,
         ..caps
     };
@@ -760,13 +774,13 @@ fn the_report_is_written_when_the_link_is_lost_in_the_teach_cut_or_the_device_is
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(!out.status.success());
     assert!(
-        stderr.contains("the device speaks protocol 2.0; this host speaks 1.0"),
+        stderr.contains("the device speaks protocol 3.0; this host speaks 2.0"),
         "{stderr}"
     );
     let report = report.unwrap();
     assert_eq!(report["device"], serde_json::Value::Null);
     assert_eq!(report["frames_received"], serde_json::Value::Null);
-    assert!(report["error"].as_str().unwrap().contains("protocol 2.0"));
+    assert!(report["error"].as_str().unwrap().contains("protocol 3.0"));
     let _ = std::fs::remove_dir_all(&dir);
 }
 
@@ -821,14 +835,15 @@ fn a_link_lost_in_the_closed_loop_fails_the_command_with_the_results_written() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
-/// `cutlab device` survives any bytes on stdin: random bytes in, only frames out (heartbeats,
-/// nothing armed it), and it ends when stdin closes.
+/// `cutlab device --stdio --scenario kim-step-doc --time-scale 10 EXTRA…` as a process, its stdin
+/// piped.
 #[cfg(feature = "cli")]
-#[test]
-fn the_device_binary_survives_garbage_on_stdin_and_writes_only_frames() {
-    use std::io::Write;
-    use std::process::{Command, Stdio};
-    let mut child = Command::new(env!("CARGO_BIN_EXE_cutlab"))
+fn kim_device_process(
+    extra: &[&str],
+    stdout: std::process::Stdio,
+    stderr: std::process::Stdio,
+) -> std::process::Child {
+    std::process::Command::new(env!("CARGO_BIN_EXE_cutlab"))
         .args([
             "device",
             "--stdio",
@@ -837,11 +852,22 @@ fn the_device_binary_survives_garbage_on_stdin_and_writes_only_frames() {
             "--time-scale",
             "10",
         ])
-        .stdin(Stdio::piped())
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
+        .args(extra)
+        .stdin(std::process::Stdio::piped())
+        .stdout(stdout)
+        .stderr(stderr)
         .spawn()
-        .unwrap();
+        .unwrap()
+}
+
+/// `cutlab device` survives any bytes on stdin: random bytes in, only frames out (heartbeats,
+/// nothing armed it), and it ends when stdin closes.
+#[cfg(feature = "cli")]
+#[test]
+fn the_device_binary_survives_garbage_on_stdin_and_writes_only_frames() {
+    use std::io::Write;
+    use std::process::Stdio;
+    let mut child = kim_device_process(&[], Stdio::piped(), Stdio::piped());
     let mut stdin = child.stdin.take().unwrap();
     let mut rng = cutlab::rng::Rng::seed_from(8);
     for _ in 0..20 {
@@ -932,6 +958,7 @@ fn parts_are_machines_and_a_part_left_early_is_run_out_before_the_next() {
             host_to_device_r,
             &mut device_to_host_w,
             &mut sink,
+            None,
             TIME_SCALE,
         );
         d.stats()
@@ -982,4 +1009,527 @@ fn parts_are_machines_and_a_part_left_early_is_run_out_before_the_next() {
     drop(link);
     let stats = device.join().unwrap();
     assert_eq!((stats.parts, stats.watchdog_fallbacks), (2, 0));
+}
+
+// ── Issue 31: every fault path of the fail-safe design, one test each ──────────────────────────
+
+/// The frame bytes of `frame`.
+fn wire(frame: Frame) -> Vec<u8> {
+    let mut buf = [0u8; MAX_FRAME_LEN];
+    let n = encode_frame(&frame, &mut buf).unwrap();
+    buf[..n].to_vec()
+}
+
+/// The Acks among the bytes a device sent.
+fn acks(bytes: &[u8]) -> Vec<cutlab::protocol::frame::Ack> {
+    cutlab::protocol::codec::Decoder::new()
+        .frames(bytes)
+        .filter_map(|f| match f {
+            Ok(Frame::Ack(a)) => Some(a),
+            _ => None,
+        })
+        .collect()
+}
+
+fn set_override(seq: u32, pct: u16, sample_time_us: u32) -> Frame {
+    Frame::SetOverride(cutlab::protocol::frame::SetOverride {
+        seq,
+        override_cpct: pct * 100,
+        flags: 0,
+        sample_time_us,
+    })
+}
+
+/// A link lost after the loop cut the feed to 30 % keeps at most 30 %: the fallback is the lower
+/// of the applied and the configured 50 % (before, the fixed 50 % raised the feed by 67 % into
+/// the section that had needed 30 %); and the fallback's time limit ends in a latched feed hold.
+#[test]
+fn a_link_loss_after_the_loop_cut_to_30_percent_keeps_30_and_its_time_limit_ends_in_a_hold() {
+    use cutlab::protocol::frame::{fault_flag, Arm};
+    let mut config = DeviceConfig::new(Preset::KimStepDoc);
+    config.fallback_limit_s = 2.0;
+    config.trace = true;
+    let mut d = DeviceEmulator::new(config).unwrap();
+    let mut out = Vec::new();
+    d.receive(&wire(Frame::Arm(Arm { seq: 1 })), &mut out);
+    d.receive(&wire(set_override(2, 30, 0)), &mut out);
+    assert_eq!(d.applied_override_pct(), 30.0);
+    // The host goes quiet: 0.5 s of watchdog, then 2 s of fallback, then the hold.
+    for _ in 0..3000 {
+        d.step_frame(&mut out);
+    }
+    let trace = d.take_trace();
+    let fallback: Vec<_> = trace.iter().filter(|r| r.fallback).collect();
+    assert!(!fallback.is_empty());
+    assert!(
+        fallback.iter().all(|r| r.bridge_override_pct <= 30.0),
+        "the fallback raised the feed: {:?}",
+        fallback[0]
+    );
+    let first_fallback_s = fallback[0].time_s;
+    assert!(
+        (0.5..0.52).contains(&first_fallback_s),
+        "{first_fallback_s}"
+    );
+    let held = trace.iter().find(|r| r.hold_latched.is_some()).unwrap();
+    assert!(
+        (held.time_s - first_fallback_s - 2.0).abs() < 0.01,
+        "held at {} s",
+        held.time_s
+    );
+    assert_eq!(held.hold_latched, Some(HoldCause::FallbackLimit));
+    assert_ne!(held.faults & fault_flag::FALLBACK_LIMIT, 0);
+    let last = trace.last().unwrap();
+    assert!(last.feed_hold && last.feed_mm_min.abs() < 0.01, "{last:?}");
+}
+
+/// The same from outside, as a person checks it: `cutlab device --trace` writes what the bridge
+/// applied at each sample while a host that set 30 % went quiet.
+#[cfg(feature = "cli")]
+#[test]
+fn the_device_trace_shows_the_fallback_at_30_percent_and_then_the_hold() {
+    use std::io::Write;
+    use std::process::Stdio;
+    let dir = scratch("trace");
+    let trace = dir.join("trace.csv");
+    let mut child = kim_device_process(
+        &[
+            "--fallback-limit-s",
+            "2",
+            "--trace",
+            trace.to_str().unwrap(),
+        ],
+        Stdio::null(),
+        Stdio::null(),
+    );
+    let mut stdin = child.stdin.take().unwrap();
+    stdin
+        .write_all(&wire(Frame::Arm(cutlab::protocol::frame::Arm { seq: 1 })))
+        .unwrap();
+    stdin.write_all(&wire(set_override(2, 30, 0))).unwrap();
+    stdin.flush().unwrap();
+    // 4 device seconds: 0.5 s of watchdog, 2 s of fallback, then the hold.
+    std::thread::sleep(std::time::Duration::from_millis(400));
+    drop(stdin);
+    assert!(child.wait().unwrap().success());
+    let text = std::fs::read_to_string(&trace).unwrap();
+    let mut lines = text.lines();
+    assert!(lines
+        .next()
+        .unwrap()
+        .starts_with("time_s,part,seq,armed,fallback,feed_hold"));
+    let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
+    let fallback: Vec<_> = rows.iter().filter(|r| r[4] == "1").collect();
+    assert!(!fallback.is_empty(), "{text}");
+    assert!(fallback
+        .iter()
+        .all(|r| r[7].parse::<f64>().unwrap() <= 30.0));
+    assert!(
+        rows.iter()
+            .any(|r| r[6] == "fallback time limit" && r[5] == "1"),
+        "no latched hold in the trace"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// A replayed command (its sequence number not newer) and one decided on a sample older than the
+/// device's watchdog timeout are ignored, acknowledged as stale; a Hello starts a new session.
+#[test]
+fn a_stale_or_replayed_command_is_ignored() {
+    use cutlab::protocol::frame::{AckResult, Arm, Hello};
+    let mut d = DeviceEmulator::new(DeviceConfig::new(Preset::KimStepDoc)).unwrap();
+    let mut out = Vec::new();
+    d.receive(&wire(Frame::Arm(Arm { seq: 1 })), &mut out);
+    for i in 0..1000 {
+        if i % 100 == 0 {
+            d.receive(&wire(Frame::Heartbeat(Default::default())), &mut out);
+        }
+        d.step_frame(&mut out);
+    }
+    let now_us = (d.time_s() * 1e6) as u32;
+    out.clear();
+    d.receive(&wire(set_override(5, 80, now_us)), &mut out);
+    d.receive(&wire(set_override(5, 120, now_us)), &mut out); // replayed seq
+    d.receive(&wire(set_override(4, 120, now_us)), &mut out); // older seq
+    d.receive(&wire(set_override(6, 120, now_us - 600_000)), &mut out); // a stale sample
+    let results: Vec<_> = acks(&out).iter().map(|a| a.result).collect();
+    assert_eq!(
+        results,
+        [
+            AckResult::Applied,
+            AckResult::Stale,
+            AckResult::Stale,
+            AckResult::Stale
+        ]
+    );
+    assert_eq!(d.applied_override_pct(), 80.0);
+    out.clear();
+    d.receive(
+        &wire(Frame::Hello(Hello {
+            version_major: 2,
+            version_minor: 0,
+        })),
+        &mut out,
+    );
+    d.receive(&wire(set_override(1, 90, now_us)), &mut out);
+    assert_eq!(acks(&out)[0].result, AckResult::Applied);
+    assert_eq!(d.applied_override_pct(), 90.0);
+}
+
+/// A device whose stream does not fit its line with the headroom is refused at the handshake,
+/// by the native host and by the Hardware page's session alike.
+#[test]
+fn a_handshake_whose_line_budget_does_not_fit_is_refused() {
+    use cutlab::hardware::session::{HardwareSession, LinkState, SessionOptions};
+    let device = |baud: u32, truth: bool| {
+        let mut config = DeviceConfig::new(Preset::KimStepDoc);
+        config.line_baud = baud;
+        config.sim_truth = truth;
+        Rc::new(RefCell::new(DeviceEmulator::new(config).unwrap()))
+    };
+    for (baud, truth, fits) in [
+        (921_600, false, true),
+        (921_600, true, false),
+        (115_200, false, false),
+        (0, true, true),
+    ] {
+        let line = Box::new(LockstepLine::new(device(baud, truth)));
+        let got = HostLink::connect_line(line, HostOptions::default());
+        assert_eq!(got.is_ok(), fits, "{baud} baud, truth {truth}");
+        if let Err(e) = got {
+            assert!(e.0.contains("cannot carry its stream"), "{e}");
+        }
+        let d = device(baud, truth);
+        let mut session = HardwareSession::new(SessionOptions::default(), 0.0);
+        let mut answer = Vec::new();
+        d.borrow_mut().receive(&session.take_output(), &mut answer);
+        session.receive(&answer, 0.01);
+        let state = session.state();
+        assert_eq!(state == LinkState::Streaming, fits, "{}", session.reason());
+    }
+}
+
+/// An open transducer (it reads 0 A) breaks its drive's three-phase sum: the device raises a
+/// sensor fault naming the channel and the host's alarm stops the loop within a second.
+#[test]
+fn an_open_sensor_raises_its_alarm_within_a_second() {
+    let _one = ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner());
+    let (run, _) = maneerat_faulted(|f| f.sensor_open_at_s = Some(6.0));
+    let alarm = run.alarm.clone().unwrap();
+    assert_eq!(alarm.kind, Some(FaultKind::Sensor), "{}", alarm.text);
+    let result = run.result.as_ref().unwrap();
+    let end_s = result.trace.rows.last().unwrap().time_s;
+    assert!((6.0..7.0).contains(&end_s), "the loop ran to {end_s} s");
+    assert!(
+        texts(&run)
+            .iter()
+            .any(|t| t.contains("device fault sensor raised, channel 0")),
+        "{:?}",
+        texts(&run)
+    );
+}
+
+/// A CNC that ignores the bridge's outputs (the selector on the dial, a dead output, a ladder
+/// that does not take the code) moves at another feed than the override the bridge applies:
+/// the host alarms within a second of the first step the CNC did not follow. Here the teach
+/// cut's 30 % step, 1.5 s in, which the machine, stuck at 100 %, never takes.
+#[test]
+fn a_stuck_override_raises_its_alarm_within_a_second() {
+    let _one = ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner());
+    let spec = RunSpec::new(Preset::ManeeratDoc1, ControllerKind::Pi);
+    let mut config = DeviceConfig::new(Preset::ManeeratDoc1);
+    config.watchdog_timeout_s = 5.0;
+    config.faults.stuck_override_at_s = Some(0.0);
+    let run = lockstep(config, &spec, None);
+    let error = run.result.as_ref().err().unwrap().0.clone();
+    assert!(error.contains("stuck override"), "{error}");
+    let alarm = run.alarm.clone().unwrap();
+    assert_eq!(alarm.kind, None);
+    let at = run
+        .events
+        .iter()
+        .find(|e| e.text.starts_with("stuck override"))
+        .unwrap();
+    assert!((1.5..2.5).contains(&at.time_s), "alarm at {} s", at.time_s);
+}
+
+/// A line that loses every Sample frame carrying "program end".
+struct LosesProgramEnd {
+    inner: LockstepLine,
+    decoder: cutlab::protocol::codec::Decoder,
+    lost: usize,
+}
+
+impl Line for LosesProgramEnd {
+    fn send(&mut self, bytes: &[u8]) -> std::io::Result<()> {
+        self.inner.send(bytes)
+    }
+
+    fn receive(&mut self, timeout: std::time::Duration) -> Result<Vec<u8>, RecvTimeoutError> {
+        use cutlab::protocol::frame::sample_flag;
+        let bytes = self.inner.receive(timeout)?;
+        let mut kept = Vec::new();
+        for b in bytes {
+            match self.decoder.push(b) {
+                Some(Ok(Frame::Sample(s))) if s.flags & sample_flag::PROGRAM_END != 0 => {
+                    self.lost += 1
+                }
+                Some(Ok(f)) => kept.extend(wire(f)),
+                _ => {}
+            }
+        }
+        Ok(kept)
+    }
+}
+
+/// Issue 27 item 20: one lost "program end" frame made the host declare the link lost and
+/// abandon the run while the device ended the part and kept sending heartbeats. The heartbeat
+/// says no program runs any more: the host takes that as the end.
+#[test]
+fn a_lost_program_end_sample_is_taken_from_the_devices_heartbeat() {
+    let _one = ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner());
+    let (spec, sim, config) = maneerat_calibrated();
+    let config_again = config.clone();
+    let device = Rc::new(RefCell::new(DeviceEmulator::new(config).unwrap()));
+    let line = Box::new(LosesProgramEnd {
+        inner: LockstepLine::new(Rc::clone(&device)),
+        decoder: cutlab::protocol::codec::Decoder::new(),
+        lost: 0,
+    });
+    let link = HostLink::connect_line(line, HostOptions::default()).unwrap();
+    let run = run_on_link(link, &spec, None, Some(sim.calibration.clone()));
+    assert!(!run.link_lost, "{:?}", texts(&run));
+    let result = run.result.as_ref().unwrap();
+    assert!(result.metrics.completed, "{:?}", texts(&run));
+    // The same run on a line that loses nothing ends one sample later, at most.
+    let whole = lockstep(config_again, &spec, Some(sim.calibration.clone()));
+    let whole_s = whole.result.unwrap().metrics.cycle_time_s;
+    assert!(
+        (result.metrics.cycle_time_s - whole_s).abs() <= 0.0011,
+        "{} s with the end sample lost, {whole_s} s without",
+        result.metrics.cycle_time_s
+    );
+    assert!(texts(&run)
+        .iter()
+        .any(|t| t.contains("the device's heartbeat says the part ended")));
+}
+
+/// Issue 27 items 2 and 3: numbers of seconds far out of range are refused with a message, not
+/// a panic converting them to a wait; and `--json` is written for an option error too.
+#[cfg(feature = "cli")]
+#[test]
+fn seconds_out_of_range_are_refused_and_the_report_is_written_for_option_errors() {
+    let error = |args: &[&str]| common::cutlab_text(args, "").0.unwrap_err();
+    let e = error(&[
+        "host",
+        "--device-cmd",
+        "true",
+        "--controller",
+        "pi",
+        "--link-timeout-s",
+        "1e300",
+    ]);
+    assert!(
+        e.contains("--link-timeout-s") && e.contains("0.1 to 60 s"),
+        "{e}"
+    );
+    let e = error(&[
+        "device",
+        "--stdio",
+        "--scenario",
+        "kim-step-doc",
+        "--time-scale",
+        "1e-300",
+    ]);
+    assert!(e.contains("--time-scale must be 0.01 to 1000"), "{e}");
+    let dir = scratch("option-error");
+    let (out, report) = cutlab_host(
+        &dir,
+        &[
+            "--device-cmd",
+            "true",
+            "--controller",
+            "pi",
+            "--link-timeout-s",
+            "-1",
+        ],
+    );
+    assert!(!out.status.success());
+    let report = report.expect("the report, written whatever happens");
+    assert!(
+        report["error"]
+            .as_str()
+            .unwrap()
+            .contains("--link-timeout-s"),
+        "{report}"
+    );
+    assert_eq!(report["metrics"], serde_json::Value::Null);
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Issue 27 item 19: `cutlab host` left its `--device-cmd` child running when it gave up (the
+/// shell killed, what it started reparented to PID 1). Now the child's whole process group ends
+/// with the host, on every way out.
+#[cfg(feature = "cli")]
+#[test]
+fn the_device_command_and_what_it_started_end_with_the_host() {
+    let dir = scratch("child");
+    let pid_file = dir.join("pid");
+    let device = format!("sleep 30 & echo $! > {}; wait", pid_file.display());
+    let (out, _) = cutlab_host(
+        &dir,
+        &[
+            "--device-cmd",
+            &device,
+            "--controller",
+            "pi",
+            "--link-timeout-s",
+            "0.2",
+        ],
+    );
+    assert!(!out.status.success());
+    let pid = std::fs::read_to_string(&pid_file).unwrap();
+    let stat = format!("/proc/{}/stat", pid.trim());
+    // Reparented and reaped by init, or never: give it a moment to go.
+    let gone = (0..100).any(|_| {
+        let alive = std::fs::read_to_string(&stat)
+            .is_ok_and(|s| !s.split(") ").nth(1).is_some_and(|t| t.starts_with('Z')));
+        if alive {
+            std::thread::sleep(std::time::Duration::from_millis(30));
+        }
+        !alive
+    });
+    assert!(
+        gone,
+        "the device's sleep (pid {}) outlived the host",
+        pid.trim()
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// The operator's reset (`cutlab host --reset-hold`, `HostLink::reset_hold`): refused while the
+/// hold's cause lasts, granted once it is gone; the device then moves again.
+#[test]
+fn the_operators_reset_releases_a_latched_hold_once_its_cause_is_gone() {
+    use cutlab::protocol::frame::Arm;
+    let mut config = DeviceConfig::new(Preset::KimStepDoc);
+    config.watchdog_timeout_s = 30.0;
+    config.faults.over_current_at_s = Some(0.5);
+    config.faults.over_current_s = 1.0;
+    let device = Rc::new(RefCell::new(DeviceEmulator::new(config).unwrap()));
+    let mut out = Vec::new();
+    {
+        let mut d = device.borrow_mut();
+        d.receive(&wire(Frame::Arm(Arm { seq: 1 })), &mut out);
+        while d.hold_latched().is_none() {
+            d.step_frame(&mut out);
+        }
+    }
+    let line = Box::new(LockstepLine::new(Rc::clone(&device)));
+    let mut link = HostLink::connect_line(line, HostOptions::default()).unwrap();
+    let answer = link.reset_hold().unwrap();
+    assert!(answer.contains("keeps the feed hold"), "{answer}");
+    assert_eq!(device.borrow().hold_latched(), Some(HoldCause::OverCurrent));
+    {
+        let mut d = device.borrow_mut();
+        for _ in 0..1500 {
+            d.step_frame(&mut out);
+        }
+    }
+    let answer = link.reset_hold().unwrap();
+    assert!(answer.contains("released"), "{answer}");
+    assert_eq!(device.borrow().hold_latched(), None);
+    assert!(!device.borrow().feed_hold());
+}
+
+/// `cutlab host --reset-hold` against a device with nothing latched: it says so and succeeds.
+#[cfg(feature = "cli")]
+#[test]
+fn the_reset_hold_option_sends_the_reset_and_says_what_the_device_answered() {
+    let exe = env!("CARGO_BIN_EXE_cutlab");
+    let device = format!("{exe} device --stdio --scenario kim-step-doc --time-scale 10");
+    let (result, out) = common::cutlab_text(&["host", "--device-cmd", &device, "--reset-hold"], "");
+    result.unwrap();
+    assert!(out.starts_with("reset: the feed hold is released"), "{out}");
+}
+
+/// The stuck-override and phase-sum checks raise nothing on a healthy machine: every preset's
+/// first part, through the teach cut's steps (100, 30, 140, 60 %, 1.5 s each), with every
+/// command applied (docs/protocol.md §4 and §5 quote what this finds).
+#[test]
+fn no_preset_raises_a_stuck_override_or_a_sensor_fault_when_healthy() {
+    use cutlab::protocol::frame::{fault_flag, Arm, Hello, SetOverride};
+    use cutlab::protocol::host::HostSession;
+    let _one = ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner());
+    for preset in Preset::ALL {
+        let mut d = DeviceEmulator::new(DeviceConfig::new(preset)).unwrap();
+        let mut host = HostSession::new();
+        let mut out = Vec::new();
+        d.receive(
+            &wire(Frame::Hello(Hello {
+                version_major: 2,
+                version_minor: 0,
+            })),
+            &mut out,
+        );
+        d.receive(&wire(Frame::Arm(Arm { seq: 1 })), &mut out);
+        host.start_part();
+        host.receive(&out);
+        let mut seq = 1;
+        let mut faults = 0u8;
+        let mut frame = 0u64;
+        while d.in_cycle() && frame < 200_000 {
+            if frame.is_multiple_of(1500) {
+                seq += 1;
+                let pct = [100, 30, 140, 60][(frame / 1500 % 4) as usize];
+                let mut command = Vec::new();
+                host.set_override(
+                    cutlab::machine::OverrideCommand {
+                        override_pct: f64::from(pct),
+                        feed_hold: false,
+                    },
+                    &mut command,
+                );
+                let Ok(Frame::SetOverride(c)) = cutlab::protocol::codec::Decoder::new()
+                    .frames(&command)
+                    .next()
+                    .unwrap()
+                else {
+                    panic!("not a set-override")
+                };
+                d.receive(
+                    &wire(Frame::SetOverride(SetOverride { seq, ..c })),
+                    &mut out,
+                );
+            }
+            if frame.is_multiple_of(100) {
+                d.receive(&wire(Frame::Heartbeat(Default::default())), &mut out);
+            }
+            out.clear();
+            d.step_frame(&mut out);
+            host.receive(&out);
+            while host.next_sample().is_some() {}
+            faults |= d.fault_flags();
+            frame += 1;
+        }
+        assert!(!d.in_cycle(), "{} did not end", preset.name());
+        assert_eq!(faults & fault_flag::SENSOR, 0, "{}", preset.name());
+        assert_eq!(host.take_stuck_override(), None, "{}", preset.name());
+    }
+}
+
+/// `cutlab host` refuses, before it arms anything, a bridge that does not measure what the run
+/// needs (docs/protocol.md §4), as the Hardware page does.
+#[test]
+fn the_host_refuses_a_bridge_that_lacks_a_measurement_before_arming_it() {
+    use cutlab::protocol::frame::measured;
+    let mut config = kim_device(5.0);
+    config.measured = measured::ALL & !measured::ACTUAL_FEED;
+    let (run, device) = lockstep_for(config, &kim_threshold(), None, None);
+    let error = run.result.err().unwrap().0;
+    assert!(
+        error.contains("does not measure the actual feed"),
+        "{error}"
+    );
+    assert_eq!(device.stats().parts, 0);
 }

@@ -10,7 +10,7 @@ use wasm_bindgen_test::wasm_bindgen_test as test;
 use cutlab::protocol::codec::{encode_frame, DecodeError, Decoder, MAX_BLOCK_LEN, MAX_FRAME_LEN};
 use cutlab::protocol::frame::{
     padded, Ack, AckResult, Arm, Capabilities, Disarm, Fault, FaultKind, Frame, FrameType,
-    Heartbeat, Hello, OverrideModeCode, Sample, SetOverride, SimTruth,
+    Heartbeat, Hello, OverrideModeCode, Reset, Sample, SetOverride, SimTruth,
 };
 use cutlab::rng::Rng;
 
@@ -61,6 +61,9 @@ fn random_frame(t: FrameType, r: &mut Rng) -> Frame {
             fallback_override_cpct: u16r(r),
             over_current_a: f32r(r),
             features: u8r(r),
+            measured: u16r(r),
+            fallback_limit_ms: u16r(r),
+            line_baud: u32r(r),
         }),
         FrameType::Sample => Frame::Sample(Sample {
             seq: u32r(r),
@@ -75,6 +78,7 @@ fn random_frame(t: FrameType, r: &mut Rng) -> Frame {
             feed_mm_min: f32r(r),
             applied_override_cpct: u16r(r),
             dial_code: u8r(r),
+            faults: u8r(r),
         }),
         FrameType::SimTruth => {
             let seq = u32r(r);
@@ -87,9 +91,11 @@ fn random_frame(t: FrameType, r: &mut Rng) -> Frame {
             seq: u32r(r),
             override_cpct: u16r(r),
             flags: u8r(r),
+            sample_time_us: u32r(r),
         }),
         FrameType::Arm => Frame::Arm(Arm { seq: u32r(r) }),
         FrameType::Disarm => Frame::Disarm(Disarm { seq: u32r(r) }),
+        FrameType::Reset => Frame::Reset(Reset { seq: u32r(r) }),
         FrameType::Ack => Frame::Ack(Ack {
             seq: u32r(r),
             command: u8r(r),
@@ -108,6 +114,9 @@ fn random_frame(t: FrameType, r: &mut Rng) -> Frame {
         FrameType::Heartbeat => Frame::Heartbeat(Heartbeat {
             seq: u32r(r),
             time_us: u32r(r),
+            flags: u8r(r),
+            faults: u8r(r),
+            last_sample_seq: u32r(r),
         }),
     }
 }
@@ -228,13 +237,19 @@ fn a_longer_payload_from_a_newer_minor_version_decodes_and_an_unknown_type_is_sk
         v.push(0);
         v
     };
-    let mut stream = frame_of(&[0x40, 1, 0, 0, 0, 2, 0, 0, 0, 0xEE, 0xEE]);
+    let mut stream = frame_of(&[0x40, 1, 0, 0, 0, 2, 0, 0, 0, 0, 0, 3, 0, 0, 0, 0xEE, 0xEE]);
     stream.extend(frame_of(&[0x7A, 1, 2, 3]));
     stream.extend(frame_of(&[0x40, 1, 0]));
     let (got, d) = decode_all(&stream);
     assert_eq!(
         got[0],
-        Ok(Frame::Heartbeat(Heartbeat { seq: 1, time_us: 2 }))
+        Ok(Frame::Heartbeat(Heartbeat {
+            seq: 1,
+            time_us: 2,
+            flags: 0,
+            faults: 0,
+            last_sample_seq: 3,
+        }))
     );
     assert!(matches!(got[1], Err(DecodeError::Frame(_))));
     assert!(matches!(got[2], Err(DecodeError::Frame(_))));
@@ -511,7 +526,7 @@ fn the_command_line_encodes_and_decodes_json_lines() {
 
 /// `cutlab protocol encode` refuses what it would once have zero-filled: a misspelt field (an
 /// 80 % override that became a feed stop) and a frame with fields left out; only a `flags` byte
-/// may be left out. The message names the line, the frame type and the field.
+/// (or `faults`) byte may be left out. The message names the line, the frame type and the field.
 #[cfg(feature = "cli")]
 #[test]
 fn encode_refuses_unknown_and_missing_fields_naming_line_type_and_field() {
@@ -520,7 +535,7 @@ fn encode_refuses_unknown_and_missing_fields_naming_line_type_and_field() {
     assert_eq!(
         result.unwrap_err(),
         "line 1: set-override: unknown field \"override_pct\"; a set-override frame has seq, \
-         override_cpct, flags"
+         override_cpct, flags, sample_time_us"
     );
     assert!(out.is_empty());
     let (result, _) = encode("{\"type\":\"arm\",\"seq\":1}\n\n{\"type\":\"capabilities\"}\n");
@@ -529,26 +544,29 @@ fn encode_refuses_unknown_and_missing_fields_naming_line_type_and_field() {
         "line 3: capabilities: missing field \"version_major\""
     );
     // flags left out: no bit set.
-    let (result, out) = encode("{\"type\":\"set-override\",\"seq\":42,\"override_cpct\":8760}\n");
+    let (result, out) = encode(
+        "{\"type\":\"set-override\",\"seq\":42,\"override_cpct\":8760,\"sample_time_us\":1233000}\n",
+    );
     result.unwrap();
     let example = Frame::SetOverride(SetOverride {
         seq: 42,
         override_cpct: 8760,
         flags: 0,
+        sample_time_us: 1_233_000,
     });
     assert_eq!(out, encoded(&example));
 }
 
 /// The worked examples of docs/protocol.md, one per frame type.
 fn doc_examples() -> Vec<Frame> {
-    use cutlab::protocol::frame::{feature, sample_flag};
+    use cutlab::protocol::frame::{feature, measured, sample_flag};
     vec![
         Frame::Hello(Hello {
-            version_major: 1,
+            version_major: 2,
             version_minor: 0,
         }),
         Frame::Capabilities(Capabilities {
-            version_major: 1,
+            version_major: 2,
             version_minor: 0,
             device_id: padded("cutlab-emulator"),
             program: padded("wang-brake-bench"),
@@ -565,6 +583,9 @@ fn doc_examples() -> Vec<Frame> {
             fallback_override_cpct: 5000,
             over_current_a: 150.0,
             features: feature::SIM_TRUTH,
+            measured: measured::ALL,
+            fallback_limit_ms: 5000,
+            line_baud: 0,
         }),
         Frame::Sample(Sample {
             seq: 1234,
@@ -579,6 +600,7 @@ fn doc_examples() -> Vec<Frame> {
             feed_mm_min: 180.0,
             applied_override_cpct: 9000,
             dial_code: 9,
+            faults: 0,
         }),
         Frame::SimTruth(SimTruth::from_values(
             1234,
@@ -591,9 +613,11 @@ fn doc_examples() -> Vec<Frame> {
             seq: 42,
             override_cpct: 8760,
             flags: 0,
+            sample_time_us: 1_233_000,
         }),
         Frame::Arm(Arm { seq: 1 }),
         Frame::Disarm(Disarm { seq: 43 }),
+        Frame::Reset(Reset { seq: 44 }),
         Frame::Ack(Ack {
             seq: 42,
             command: FrameType::SetOverride as u8,
@@ -612,6 +636,9 @@ fn doc_examples() -> Vec<Frame> {
         Frame::Heartbeat(Heartbeat {
             seq: 7,
             time_us: 700_000,
+            flags: sample_flag::ARMED,
+            faults: 0,
+            last_sample_seq: 0,
         }),
     ]
 }
@@ -664,4 +691,83 @@ fn the_specifications_worked_examples_are_what_the_codec_writes() {
 
 fn frame_to_json_line(f: &Frame) -> String {
     cutlab::protocol::json::frame_to_json(f).to_string()
+}
+
+/// docs/protocol.md §1's table of what a stream asks of its line is `LineBudget`'s arithmetic.
+#[test]
+fn the_line_budget_table_in_the_specification_is_what_the_host_computes() {
+    use cutlab::protocol::frame::{feature, measured};
+    use cutlab::protocol::host::LineBudget;
+    let doc = include_str!("../docs/protocol.md");
+    let caps = |rate: f32, truth: bool, baud: u32| Capabilities {
+        version_major: 2,
+        version_minor: 0,
+        device_id: padded("bridge"),
+        program: padded("p"),
+        channel_mask: 0x7F,
+        spindle_current_a_per_count: 0.005,
+        feed_current_a_per_count: 0.005,
+        fv_v_per_count: 0.0005,
+        sample_rate_hz: rate,
+        override_mode: OverrideModeCode::WholePercent,
+        min_override_cpct: 0,
+        max_override_cpct: 10000,
+        dial_cpct: [0; 16],
+        watchdog_timeout_ms: 500,
+        fallback_override_cpct: 5000,
+        over_current_a: 150.0,
+        features: if truth { feature::SIM_TRUTH } else { 0 },
+        measured: measured::ALL,
+        fallback_limit_ms: 5000,
+        line_baud: baud,
+    };
+    let spaced = |n: f64| {
+        let digits = format!("{n:.0}");
+        let mut out = String::new();
+        for (i, c) in digits.chars().enumerate() {
+            if i > 0 && (digits.len() - i) % 3 == 0 {
+                out.push(' ');
+            }
+            out.push(c);
+        }
+        out
+    };
+    for (rate, truth) in [
+        (100.0, false),
+        (200.0, false),
+        (1000.0, false),
+        (1000.0, true),
+    ] {
+        let slow = LineBudget::of(&caps(rate, truth, 115_200));
+        let fast = LineBudget::of(&caps(rate, truth, 921_600));
+        let pct = |b: &LineBudget| format!("{:.0} %", 100.0 * b.bits_per_s / f64::from(b.baud));
+        let row_start = format!(
+            "| {rate:.0} | {} | {} |",
+            if truth { "yes" } else { "no" },
+            spaced(slow.bits_per_s)
+        );
+        let row = doc
+            .lines()
+            .find(|l| l.starts_with(&row_start))
+            .unwrap_or_else(|| panic!("docs/protocol.md §1 lacks the row {row_start}"));
+        for b in [&slow, &fast] {
+            let verdict = if b.fits() { "fits" } else { "refused" };
+            assert!(
+                row.contains(&format!("{} — {verdict}", pct(b)))
+                    || (!b.fits() && row.contains("| refused |")),
+                "{row}: {} baud should read {} — {verdict}",
+                b.baud,
+                pct(b)
+            );
+        }
+    }
+    // The most samples 115 200 baud carries, as §1 says.
+    let most = (1..2000)
+        .rev()
+        .find(|r| LineBudget::of(&caps(*r as f32, false, 115_200)).fits())
+        .unwrap();
+    assert!(
+        doc.contains(&format!("at 115 200 baud, at most {most} samples/s")),
+        "{most}"
+    );
 }

@@ -37,15 +37,16 @@ OUT = os.path.join(HERE, "..", "..", "tests", "reference", "protocol")
 # Frame type codes and payload lengths (type byte included), docs/protocol.md section 3.
 LAYOUTS = {
     "hello": (0x01, 3),
-    "capabilities": (0x02, 106),
-    "sample": (0x10, 43),
+    "capabilities": (0x02, 114),
+    "sample": (0x10, 44),
     "sim-truth": (0x11, 69),
-    "set-override": (0x20, 8),
+    "set-override": (0x20, 12),
     "arm": (0x21, 5),
     "disarm": (0x22, 5),
+    "reset": (0x23, 5),
     "ack": (0x30, 10),
     "fault": (0x31, 14),
-    "heartbeat": (0x40, 9),
+    "heartbeat": (0x40, 15),
 }
 
 

@@ -6,8 +6,9 @@
 
 use super::args::{value, value_or};
 use super::{CliError, Io};
+use crate::input::readable;
 use crate::plant::Preset;
-use crate::protocol::device::{DeviceConfig, DeviceEmulator, FaultInjection};
+use crate::protocol::device::{DeviceConfig, DeviceEmulator, FaultInjection, TIME_SCALE_RANGE};
 use crate::protocol::link::run_device;
 
 /// Help of `cutlab device`.
@@ -65,9 +66,41 @@ pub struct DeviceArgs {
     /// The device's watchdog timeout, device seconds (default 0.5)
     #[arg(long = "watchdog-s", value_name = "S", allow_hyphen_values = true)]
     watchdog_s: Option<String>,
-    /// The override the watchdog applies, % (default 50)
+    /// The override the watchdog applies at most, % (default 50; the fallback is the lower of
+    /// it and the override applied when the watchdog fires)
     #[arg(long = "fallback-pct", value_name = "PCT", allow_hyphen_values = true)]
     fallback_pct: Option<String>,
+    /// How long the fallback lasts before the device holds the feed, latched until the
+    /// operator's reset, device seconds (default 5)
+    #[arg(
+        long = "fallback-limit-s",
+        value_name = "S",
+        allow_hyphen_values = true
+    )]
+    fallback_limit_s: Option<String>,
+    /// The baud rate the device declares for its line (default 0: none, as a pipe); the host
+    /// refuses a stream that does not fit it
+    #[arg(long = "line-baud", value_name = "N")]
+    line_baud: Option<String>,
+    /// Open the spindle's phase-u transducer at this device time: it reads 0 A from then on
+    #[arg(
+        long = "sensor-open-at-s",
+        value_name = "T",
+        allow_hyphen_values = true
+    )]
+    sensor_open_at_s: Option<String>,
+    /// Make the CNC ignore the bridge's override outputs from this device time on (it keeps the
+    /// override it had; the bridge goes on acknowledging what it outputs)
+    #[arg(
+        long = "stuck-override-at-s",
+        value_name = "T",
+        allow_hyphen_values = true
+    )]
+    stuck_override_at_s: Option<String>,
+    /// Write what the bridge applied at each sample (override, feed hold, latched hold,
+    /// fallback, faults) to FILE as CSV
+    #[arg(long, value_name = "FILE")]
+    trace: Option<String>,
     /// Send no simulation truth, as a real bridge: the host must calibrate from the cut model or
     /// a saved calibration
     #[arg(long = "no-truth")]
@@ -87,6 +120,9 @@ pub fn emulator_from(args: &DeviceArgs) -> Result<DeviceEmulator, CliError> {
     config.seed = value_or("seed", &args.seed, config.seed)?;
     config.watchdog_timeout_s = value_or("watchdog-s", &args.watchdog_s, 0.5)?;
     config.fallback_override_pct = value_or("fallback-pct", &args.fallback_pct, 50.0)?;
+    config.fallback_limit_s = value_or("fallback-limit-s", &args.fallback_limit_s, 5.0)?;
+    config.line_baud = value_or("line-baud", &args.line_baud, 0)?;
+    config.trace = args.trace.is_some();
     config.sim_truth = !args.no_truth;
     let stall_at_s = value("stall-at-s", &args.stall_at_s)?;
     let stall_s: Option<f64> = value("stall-s", &args.stall_s)?;
@@ -112,6 +148,8 @@ pub fn emulator_from(args: &DeviceArgs) -> Result<DeviceEmulator, CliError> {
         estop_at_s: value("estop-at-s", &args.estop_at_s)?,
         over_current_at_s,
         over_current_s: over_current_s.unwrap_or(0.0),
+        sensor_open_at_s: value("sensor-open-at-s", &args.sensor_open_at_s)?,
+        stuck_override_at_s: value("stuck-override-at-s", &args.stuck_override_at_s)?,
     };
     DeviceEmulator::new(config).map_err(|e| CliError::new(e.to_string()))
 }
@@ -125,16 +163,36 @@ pub fn run(args: DeviceArgs, io: &mut Io<'_>) -> Result<(), CliError> {
         ));
     }
     let time_scale: f64 = value_or("time-scale", &args.time_scale, 1.0)?;
-    if !(time_scale.is_finite() && time_scale > 0.0 && time_scale <= 1000.0) {
+    let (lo, hi) = TIME_SCALE_RANGE;
+    if !(time_scale >= lo && time_scale <= hi) {
         return Err(CliError::new(format!(
-            "--time-scale must be above 0 and at most 1000, not {time_scale}"
+            "--time-scale must be {lo} to {hi}, not {}",
+            readable(time_scale)
         )));
     }
     let mut device = emulator_from(&args)?;
+    let mut trace = match args.trace.as_deref() {
+        Some(path) => Some(std::io::BufWriter::new(
+            std::fs::File::create(path)
+                .map_err(|e| CliError::new(format!("--trace: cannot create {path:?}: {e}")))?,
+        )),
+        None => None,
+    };
     // The process's own stdin, read on a thread of its own so the device keeps time while it
     // waits for bytes (io.stdin is a locked handle, which cannot move to that thread).
     let stdin = std::io::stdin();
     let mut stderr = std::io::stderr();
-    run_device(&mut device, stdin, io.stdout, &mut stderr, time_scale);
+    run_device(
+        &mut device,
+        stdin,
+        io.stdout,
+        &mut stderr,
+        trace.as_mut().map(|t| t as &mut dyn std::io::Write),
+        time_scale,
+    );
+    if let Some(mut t) = trace {
+        std::io::Write::flush(&mut t)
+            .map_err(|e| CliError::new(format!("--trace: cannot write: {e}")))?;
+    }
     Ok(())
 }

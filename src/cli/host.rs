@@ -24,9 +24,10 @@ use crate::closed_loop::lab::RunResult;
 use crate::closed_loop::references::{apply_references, references, References};
 use crate::closed_loop::trace::write_csv;
 use crate::control::registry::{ControllerConfig, ControllerKind};
+use crate::hardware::link_run::run_on_link;
 use crate::plant::Preset;
 use crate::protocol::host::{DeviceSummary, LinkEvent, LinkStats};
-use crate::protocol::link::{run_on_link, HostLink, HostOptions};
+use crate::protocol::link::{HostLink, HostOptions};
 
 /// Help of `cutlab host`.
 pub const ABOUT: &str = "Run the closed loop (teach cut, controller, safety envelope) against a \
@@ -37,9 +38,11 @@ Prints the metrics as cutlab sim does and what crossed the link, and the link's 
 as they happen; --json writes both, whatever happens (a run that never came about gets the \
 counts, the events and the error). The savings are measured against cutlab sim's simulated \
 fixed-feed references of the preset the device runs (--no-references skips them). A device fault \
-(over-current, sensor, E-stop) stops the loop: the host holds the device's fallback override \
-until the part ends (after an E-stop it disarms at once). The command fails after a link loss or \
-a device fault's alarm, with the results up to there printed and written.";
+(sensor, over-current, E-stop) or a stuck override stops the loop: the host holds the device's \
+fallback override until the part ends, or disarms at once after an E-stop or when the device \
+holds the feed latched (an overload, an over-current, a fallback that lasted its limit), which \
+stays until the operator resets it: --reset-hold. The command fails after a link loss or an \
+alarm, with the results up to there printed and written.";
 
 /// Options of `cutlab host`.
 #[derive(Debug, clap::Args)]
@@ -89,6 +92,10 @@ pub struct HostArgs {
     /// Skip the simulated fixed-feed reference runs (no savings; faster)
     #[arg(long = "no-references")]
     no_references: bool,
+    /// Send the operator's reset of a feed hold latched at the device, say what it answered,
+    /// and stop (no run): only once the cause (an over-current, a crash) is cleared
+    #[arg(long = "reset-hold", conflicts_with = "controller")]
+    reset_hold: bool,
 }
 
 /// The report `--json` writes: the link's counts, then everything `cutlab sim --json` reports.
@@ -132,7 +139,7 @@ enum RunPart<'a> {
 #[derive(Serialize)]
 struct NoRun<'a> {
     scenario: Option<&'static str>,
-    controller: &'a ControllerConfig,
+    controller: Option<&'a ControllerConfig>,
     metrics: Option<()>,
     references: Option<()>,
     calibration: Option<()>,
@@ -179,7 +186,7 @@ fn link_events(events: &[LinkEvent]) -> impl Iterator<Item = EventLine> + '_ {
 fn write_report(
     path: &str,
     outcome: &Outcome,
-    controller: &ControllerConfig,
+    controller: Option<&ControllerConfig>,
 ) -> Result<(), CliError> {
     let s = outcome.stats.as_ref();
     let count = |f: fn(&LinkStats) -> u64| s.map(f);
@@ -191,7 +198,7 @@ fn write_report(
         }
         _ => RunPart::None(NoRun {
             scenario: outcome.spec.as_ref().map(|s| s.preset.name()),
-            controller: outcome.spec.as_ref().map_or(controller, |s| &s.controller),
+            controller: outcome.spec.as_ref().map(|s| &s.controller).or(controller),
             metrics: None,
             references: None,
             calibration: None,
@@ -224,35 +231,76 @@ fn write_report(
 /// The device's end of the line, and the child process behind it, if any.
 struct Connection {
     link: HostLink,
-    child: Option<Child>,
+    child: Option<DeviceChild>,
+}
+
+/// The `--device-cmd` child, in a process group of its own so that what its shell started goes
+/// with it. Dropping it ends the group and reaps the child — on every way out of `cutlab host`,
+/// an early error or a panic's unwinding included — after giving it two seconds to end by
+/// itself once its stdin closed (a device should).
+struct DeviceChild {
+    child: Child,
+}
+
+impl DeviceChild {
+    /// Starts `cmd` with `sh -c`, its stdin and stdout piped, its stderr passed through.
+    fn spawn(cmd: &str) -> std::io::Result<Self> {
+        use std::os::unix::process::CommandExt;
+        let child = Command::new("sh")
+            .arg("-c")
+            .arg(cmd)
+            .stdin(Stdio::piped())
+            .stdout(Stdio::piped())
+            .stderr(Stdio::inherit())
+            .process_group(0)
+            .spawn()?;
+        Ok(Self { child })
+    }
+
+    /// Ends the whole group at once (`kill -KILL -- -PGID`: the shell and whatever it started)
+    /// and reaps the child.
+    fn kill_group(&mut self) {
+        let group = format!("-{}", self.child.id());
+        let _ = Command::new("kill")
+            .args(["-KILL", "--", &group])
+            .stderr(Stdio::null())
+            .status();
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
+
+impl Drop for DeviceChild {
+    fn drop(&mut self) {
+        // Its stdin is closed by now (the link that held it is gone, or was never made): a
+        // well-behaved device ends on its own; whatever is left of the group ends here.
+        let until = Instant::now() + Duration::from_secs(2);
+        while Instant::now() < until {
+            if let Ok(Some(_)) = self.child.try_wait() {
+                break;
+            }
+            std::thread::sleep(Duration::from_millis(20));
+        }
+        self.kill_group();
+    }
 }
 
 fn connect(args: &HostArgs, options: HostOptions) -> Result<Connection, CliError> {
     match (&args.device_cmd, &args.port) {
         (Some(cmd), None) => {
-            let mut child = Command::new("sh")
-                .arg("-c")
-                .arg(cmd)
-                .stdin(Stdio::piped())
-                .stdout(Stdio::piped())
-                .stderr(Stdio::inherit())
-                .spawn()
+            let mut child = DeviceChild::spawn(cmd)
                 .map_err(|e| CliError::new(format!("--device-cmd: cannot start {cmd:?}: {e}")))?;
-            let (Some(stdin), Some(stdout)) = (child.stdin.take(), child.stdout.take()) else {
-                let _ = child.kill();
+            let (Some(stdin), Some(stdout)) = (child.child.stdin.take(), child.child.stdout.take())
+            else {
                 return Err(CliError::new("--device-cmd: no pipes to the device"));
             };
-            match HostLink::connect(stdout, Box::new(stdin), options) {
-                Ok(link) => Ok(Connection {
-                    link,
-                    child: Some(child),
-                }),
-                Err(e) => {
-                    let _ = child.kill();
-                    let _ = child.wait();
-                    Err(CliError::new(format!("--device-cmd {cmd:?}: {e}")))
-                }
-            }
+            // On an error the child is dropped: its group is ended and it is reaped.
+            let link = HostLink::connect(stdout, Box::new(stdin), options)
+                .map_err(|e| CliError::new(format!("--device-cmd {cmd:?}: {e}")))?;
+            Ok(Connection {
+                link,
+                child: Some(child),
+            })
         }
         (None, Some(path)) => {
             if let Some(baud) = value::<u32>("baud", &args.baud)? {
@@ -284,22 +332,6 @@ fn connect(args: &HostArgs, options: HostOptions) -> Result<Connection, CliError
     }
 }
 
-/// Lets the device process end by itself (its stdin is closed), then ends it.
-fn reap(child: Option<Child>) {
-    let Some(mut child) = child else {
-        return;
-    };
-    let until = Instant::now() + Duration::from_secs(2);
-    while Instant::now() < until {
-        if let Ok(Some(_)) = child.try_wait() {
-            return;
-        }
-        std::thread::sleep(Duration::from_millis(20));
-    }
-    let _ = child.kill();
-    let _ = child.wait();
-}
-
 /// The run's settings from the options, checked before anything is connected.
 struct Plan {
     kind: ControllerKind,
@@ -318,11 +350,8 @@ fn plan(args: &HostArgs) -> Result<Plan, CliError> {
     let target_n: Option<f64> = value("target-n", &args.target_n)?;
     let duration_s: Option<f64> = value("duration-s", &args.duration_s)?;
     let link_timeout_s: f64 = value_or("link-timeout-s", &args.link_timeout_s, 2.0)?;
-    if !(link_timeout_s.is_finite() && link_timeout_s > 0.0) {
-        return Err(CliError::new(format!(
-            "--link-timeout-s must be positive, not {link_timeout_s}"
-        )));
-    }
+    let options = HostOptions::new(link_timeout_s)
+        .map_err(|e| CliError::new(format!("--link-timeout-s: {e}")))?;
     if let Some(d) = duration_s {
         if !(d.is_finite() && d > 0.0) {
             return Err(CliError::new(format!(
@@ -340,10 +369,7 @@ fn plan(args: &HostArgs) -> Result<Plan, CliError> {
         target_n,
         duration_s,
         calibration,
-        options: HostOptions {
-            link_timeout_s,
-            handshake_timeout_s: 5.0 * link_timeout_s,
-        },
+        options,
     })
 }
 
@@ -379,7 +405,7 @@ fn host_run(args: &HostArgs, plan: Plan) -> Outcome {
     let Some(preset) = Preset::from_name(&preset_name) else {
         let (stats, events) = (link.session().stats(), link.session().events().to_vec());
         drop(link);
-        reap(child);
+        drop(child);
         let error = match &args.scenario {
             Some(name) => format!(
                 "--scenario: unknown preset {name:?}; presets: {}",
@@ -402,7 +428,7 @@ fn host_run(args: &HostArgs, plan: Plan) -> Outcome {
         Ok(c) => c,
         Err(e) => {
             drop(link);
-            reap(child);
+            drop(child);
             return Outcome::failed(e.0);
         }
     };
@@ -420,7 +446,7 @@ fn host_run(args: &HostArgs, plan: Plan) -> Outcome {
         plan.duration_s,
         plan.calibration.map(|c| c.calibration),
     );
-    reap(child);
+    drop(child);
     let result = run.result.map_err(|e| {
         let last = run
             .events
@@ -478,14 +504,46 @@ fn fill_references(outcome: &mut Outcome, program: &str, no_references: bool) {
     };
 }
 
+/// `cutlab host --reset-hold`: the operator's reset of a feed hold latched at the device, and
+/// nothing more.
+fn reset_hold(args: &HostArgs, io: &mut Io<'_>) -> Result<(), CliError> {
+    let link_timeout_s: f64 = value_or("link-timeout-s", &args.link_timeout_s, 2.0)?;
+    let options = HostOptions::new(link_timeout_s)
+        .map_err(|e| CliError::new(format!("--link-timeout-s: {e}")))?;
+    let Connection { mut link, child } = connect(args, options)?;
+    let answer = link.reset_hold().map_err(|e| CliError::new(e.0))?;
+    let held = link.session().hold_latched();
+    drop(link);
+    drop(child);
+    writeln!(io.stdout, "reset: {answer}")?;
+    if held {
+        return Err(CliError::new(
+            "the device still holds the feed: clear its cause, then reset again",
+        ));
+    }
+    Ok(())
+}
+
 /// Runs `cutlab host`.
 pub fn run(args: HostArgs, io: &mut Io<'_>) -> Result<(), CliError> {
-    let plan = plan(&args)?;
+    if args.reset_hold {
+        return reset_hold(&args, io);
+    }
+    let plan = match plan(&args) {
+        Ok(plan) => plan,
+        Err(e) => {
+            // The report is written whatever happens, a refused option too.
+            if let Some(path) = args.json.as_deref() {
+                write_report(path, &Outcome::failed(e.0.clone()), None)?;
+            }
+            return Err(e);
+        }
+    };
     let fallback_controller = ControllerConfig::new(plan.kind);
     let from_file = args.calibration.clone();
     let outcome = host_run(&args, plan);
     if let Some(path) = args.json.as_deref() {
-        write_report(path, &outcome, &fallback_controller)?;
+        write_report(path, &outcome, Some(&fallback_controller))?;
     }
     if let (Some(path), Ok(result), Some(device), Some(spec)) = (
         args.save_calibration.as_deref(),

@@ -14,8 +14,7 @@ use super::trace::Trace;
 use crate::estimation::cut_forces::CutGeometry;
 use crate::estimation::estimator::{Calibration, Feedback};
 use crate::machine::Machine;
-use crate::plant::dynamometer::{DynamometerConfig, WithDynamometer};
-use crate::plant::presets::{PlantEdits, PlantKind};
+use crate::plant::presets::{PlantEdits, PlantKind, TEACH_SEED_OFFSET};
 use crate::plant::Preset;
 use crate::work::{Progress, Work};
 
@@ -91,33 +90,28 @@ pub enum RunMachines {
 impl RunMachines {
     /// The preset's machines for `spec`: the teach cut seeded apart from the run.
     pub fn for_preset(spec: &RunSpec) -> Result<Self, LoopError> {
-        Ok(RunMachines::Separate {
-            teach: preset_machine(spec, spec.seed.wrapping_add(TEACH_SEED_OFFSET))?,
-            run: preset_machine(spec, spec.seed)?,
-        })
+        let [teach, run] = spec
+            .preset
+            .teach_and_run_machines(spec.seed, &spec.plant, with_dynamometer(spec))
+            .map_err(LoopError::Machine)?;
+        Ok(RunMachines::Separate { teach, run })
     }
 }
 
-/// `spec`'s simulated machine seeded with `seed`, with a dynamometer under the part when the run
-/// feeds back the measured force.
-fn preset_machine(spec: &RunSpec, seed: u64) -> Result<Box<dyn Machine>, LoopError> {
-    let machine = Box::new(
-        spec.preset
-            .machine_with(seed, &spec.plant)
-            .map_err(LoopError::Machine)?,
-    );
+/// Whether `spec`'s machines carry a dynamometer: when the run feeds back the measured force.
+fn with_dynamometer(spec: &RunSpec) -> bool {
     let feedback = spec
         .settings
         .feedback
         .unwrap_or_else(|| default_feedback(spec.preset));
-    Ok(if feedback == Feedback::Dynamometer {
-        Box::new(
-            WithDynamometer::new(machine, DynamometerConfig::default(), seed)
-                .map_err(LoopError::Machine)?,
-        )
-    } else {
-        machine
-    })
+    feedback == Feedback::Dynamometer
+}
+
+/// `spec`'s simulated machine seeded with `seed` (one of [`RunMachines::for_preset`]'s).
+fn preset_machine(spec: &RunSpec, seed: u64) -> Result<Box<dyn Machine>, LoopError> {
+    spec.preset
+        .seeded_machine(seed, &spec.plant, with_dynamometer(spec))
+        .map_err(LoopError::Machine)
 }
 
 /// A run in progress: first the teach cut, then the closed loop. Advancing in chunks lets a
@@ -371,9 +365,6 @@ pub fn closed_loop_of(
         sample_rate_hz,
     )
 }
-
-/// The teach cut's seed is the run's plus this, so its noise differs from the run's.
-const TEACH_SEED_OFFSET: u64 = 0x7EAC;
 
 /// The metrics settings for a run of `preset` with `settings`.
 pub fn metrics_config(preset: Preset, settings: &LoopSettings) -> MetricsConfig {

@@ -24,7 +24,7 @@ use crate::machine::{Machine, OverrideCommand, SensorSample};
 use crate::signal::chain::{PeriodSummary, SignalChain};
 
 /// The overrides a teach cut cycles through, each held for [`TEACH_STEP_S`]: a spread of loads
-/// from one pass over the part.
+/// from one pass over the part. None is commanded above the run's highest override.
 pub const TEACH_OVERRIDES_PCT: [f64; 4] = [100.0, 30.0, 140.0, 60.0];
 /// How long each teach-cut override is held.
 pub const TEACH_STEP_S: f64 = 1.5;
@@ -112,6 +112,9 @@ pub struct TeachCut {
     feedback: Feedback,
     force_source: TeachForce,
     schedule: TeachSchedule,
+    /// The run's highest override: the schedule never commands more (reduce-only limits on a
+    /// machine's first cuts keep the teach cut at or below 100 %).
+    max_override_pct: f64,
     max_duration_s: f64,
     chain: SignalChain,
     clock: PeriodClock,
@@ -142,12 +145,13 @@ impl TeachCut {
             feedback: plan.chain.feedback,
             force_source,
             schedule,
+            max_override_pct: plan.limits.max_override_pct,
             max_duration_s: plan.max_duration_s,
             last: SensorSample::default(),
             periods: Vec::new(),
             max_phase_current_a: 0.0,
             time_s: 0.0,
-            command: Self::command_at(0.0),
+            command: Self::command_at(0.0, plan.limits.max_override_pct),
             override_sum_pct: 0.0,
             override_pct: f64::NAN,
             override_changed_s: f64::NEG_INFINITY,
@@ -155,11 +159,11 @@ impl TeachCut {
         })
     }
 
-    /// The override the schedule holds at machine time `time_s`.
-    fn command_at(time_s: f64) -> OverrideCommand {
+    /// The override the schedule holds at machine time `time_s`, at most `max_override_pct`.
+    fn command_at(time_s: f64, max_override_pct: f64) -> OverrideCommand {
         let step_index = (time_s / TEACH_STEP_S) as usize % TEACH_OVERRIDES_PCT.len();
         OverrideCommand {
-            override_pct: TEACH_OVERRIDES_PCT[step_index],
+            override_pct: TEACH_OVERRIDES_PCT[step_index].min(max_override_pct),
             feed_hold: false,
         }
     }
@@ -193,7 +197,7 @@ impl TeachCut {
         if self.time_s >= self.max_duration_s {
             self.done = true;
         }
-        self.command = Self::command_at(self.time_s);
+        self.command = Self::command_at(self.time_s, self.max_override_pct);
     }
 
     /// Fits the estimator to what was collected, with what the fit rests on.

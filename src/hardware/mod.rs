@@ -11,10 +11,20 @@
 //! the operator: teach cut, arm (after the page's confirmation), disarm / Escape, disconnect
 //! ```
 //!
+//! | file | what |
+//! |---|---|
+//! | [`commissioning`] | the checks of the commissioning procedure the page names before a new device's first Arm |
+//! | [`session`] | the link state and what the host does with the device, on the caller's clock (the Hardware page) |
+//! | [`recording`] | the rows as CSV chunks for IndexedDB, read back by the log reader |
+//! | `link_run` | the closed loop over a native byte link: `cutlab host`'s run (native only) |
+//!
 //! [`session`] holds the link state (closed, handshaking, streaming, armed, alarm) with the reason
 //! of its last change, and what the host does with the device; [`recording`] turns its rows into
 //! the CSV text the page writes to IndexedDB a chunk at a time, which the log reader
 //! ([`crate::log`]) reads back with each column's role guessed.
 
+pub mod commissioning;
+#[cfg(not(target_arch = "wasm32"))]
+pub mod link_run;
 pub mod recording;
 pub mod session;

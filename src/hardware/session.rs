@@ -58,8 +58,12 @@ use crate::closed_loop::teach_cut::{
 };
 use crate::estimation::estimator::{Calibration, Feedback};
 use crate::machine::OverrideCommand;
-use crate::protocol::frame::{sample_flag, Ack, Capabilities, FaultKind, FrameType, VERSION_MAJOR};
-use crate::protocol::host::{DeviceSummary, HostSession, KeepUp, LinkSample, LinkStats};
+use crate::protocol::frame::{
+    fault_flag, measured, sample_flag, Ack, Capabilities, FaultKind, FrameType, VERSION_MAJOR,
+};
+use crate::protocol::host::{
+    DeviceSummary, HostSession, KeepUp, LineBudget, LinkSample, LinkStats, HELLO_INTERVAL_S,
+};
 use crate::safety::OverrideResolution;
 
 /// The link's state, as the page shows it.
@@ -298,9 +302,6 @@ const NO_PERIOD: PeriodValues = PeriodValues {
 
 /// Event text waiting for the next row is cut off beyond this length.
 const MAX_PENDING_EVENT_TEXT: usize = 2048;
-
-/// The Hello is repeated this often until the device answers.
-const HELLO_INTERVAL_S: f64 = 0.25;
 
 /// The host's end of a link. See the module docs.
 ///
@@ -589,8 +590,8 @@ impl HardwareSession {
         self.host.link_lost(format!("link lost: {why}"));
         let fallback = match self.capabilities {
             Some(c) if was_holding => format!(
-                "; the device applies its fallback override ({} %) on its own after its \
-                 watchdog ({} s)",
+                "; the device applies its fallback override (at most {} %, never above the \
+                 applied) on its own after its watchdog ({} s), then holds the feed",
                 f64::from(c.fallback_override_cpct) / 100.0,
                 f64::from(c.watchdog_timeout_ms) / 1000.0
             ),
@@ -607,6 +608,13 @@ impl HardwareSession {
         let Some(caps) = self.capabilities else {
             return Err("no device: connect first".into());
         };
+        if self.host.hold_latched() {
+            return Err(
+                "the device holds the feed, latched: clear the cause, then reset the \
+                        feed hold"
+                    .into(),
+            );
+        }
         match self.state {
             LinkState::Streaming => Ok(caps),
             LinkState::Armed => Err("already armed: disarm first".into()),
@@ -619,12 +627,12 @@ impl HardwareSession {
     pub fn teach_limits(&self, spec: &RunSpec) -> Result<ArmLimits, String> {
         let caps = self.ready_to_arm()?;
         let force = teach_force(&caps, spec)?;
-        let settings = plan_on(spec, f64::from(caps.sample_rate_hz))
-            .map_err(|e| e.to_string())?
-            .chain;
+        let plan = plan_on(spec, f64::from(caps.sample_rate_hz)).map_err(|e| e.to_string())?;
+        let settings = plan.chain;
+        // The teach cut never exceeds the run's highest override (reduce-only limits: 100 %).
         let schedule = TEACH_OVERRIDES_PCT
             .iter()
-            .map(|p| format!("{p:.0} %"))
+            .map(|p| format!("{:.0} %", p.min(plan.limits.max_override_pct)))
             .collect::<Vec<_>>()
             .join(", ");
         let mut lines = vec![
@@ -752,6 +760,7 @@ impl HardwareSession {
         if let Some(why) = taught.mismatch(&plan.chain) {
             return Err(why);
         }
+        check_measured(caps, false)?;
         self.check_safe_override(caps)?;
         let run = closed_loop_of(spec, &plan, &taught.calibration, sample_rate_hz)
             .map_err(|e| e.to_string())?;
@@ -764,6 +773,7 @@ impl HardwareSession {
         let caps = self.ready_to_arm()?;
         self.check_safe_override(&caps)?;
         let plan = plan_on(spec, f64::from(caps.sample_rate_hz)).map_err(|e| e.to_string())?;
+        check_measured(&caps, true)?;
         let teach = TeachCut::new(
             f64::from(caps.sample_rate_hz),
             &plan,
@@ -818,6 +828,67 @@ impl HardwareSession {
         self.held = OverrideCommand::default();
         self.last_sample_s = now_s;
         self.set_state(LinkState::Armed, reason.to_string());
+    }
+
+    /// The operator resets the device's latched feed hold (after clearing its cause): a Reset
+    /// goes out; the device releases the hold unless the cause is still there.
+    pub fn reset_hold(&mut self) -> Result<(), String> {
+        if self.capabilities.is_none() || self.port_gone || self.state == LinkState::Closed {
+            return Err("no device: connect first".into());
+        }
+        self.host.reset(&mut self.out);
+        // The host's own feed hold goes too, or its next command would latch the hold again.
+        self.held.feed_hold = false;
+        let clock_s = self.device_time_s;
+        self.sent(clock_s);
+        self.event("the operator resets the device's latched feed hold".to_string());
+        Ok(())
+    }
+
+    /// The feed hold as the machine sees it: latched at the device (with its cause), or `None`.
+    pub fn hold_state(&self) -> Option<String> {
+        if !self.host.hold_latched() {
+            return None;
+        }
+        let faults = self.host.active_faults();
+        let cause = if faults & fault_flag::OVER_CURRENT != 0 {
+            "an over-current, still there: reset once it is cleared"
+        } else if faults & fault_flag::FALLBACK_LIMIT != 0 {
+            "the fallback lasted its time limit"
+        } else {
+            "the host's feed hold (the envelope's overload) or an over-current since cleared"
+        };
+        Some(format!(
+            "the device holds the feed, latched ({cause}): it stays through any link state \
+             until the operator resets it"
+        ))
+    }
+
+    /// What the machine gets if the link is lost now (docs/protocol.md §5): the device's
+    /// fallback — the lower of the override applied and its configured fallback — for its time
+    /// limit, then a latched feed hold; `None` when the host does not hold the device.
+    pub fn if_link_lost(&self) -> Option<String> {
+        let caps = self.capabilities?;
+        if !self.holding {
+            return None;
+        }
+        let applied = self
+            .host
+            .last_ack()
+            .map_or(f64::NAN, |a| f64::from(a.applied_override_cpct) / 100.0);
+        let configured = f64::from(caps.fallback_override_cpct) / 100.0;
+        let fallback = if applied.is_finite() {
+            applied.min(configured)
+        } else {
+            configured
+        };
+        Some(format!(
+            "If the link is lost now: after {} s the device applies {fallback} % (the lower of \
+             {applied} % applied and its {configured} % fallback) for at most {} s, then holds \
+             the feed until the operator resets it.",
+            f64::from(caps.watchdog_timeout_ms) / 1000.0,
+            f64::from(caps.fallback_limit_ms) / 1000.0
+        ))
     }
 
     /// The operator takes the host out of control (Disarm, or Escape): the run ends there and
@@ -941,6 +1012,10 @@ impl HardwareSession {
             ));
             return;
         }
+        if let Some(why) = LineBudget::of(&caps).refusal() {
+            self.close(why);
+            return;
+        }
         self.capabilities = Some(caps);
         self.keep_up = Some(KeepUp::new(&caps));
         self.last_frame_s = now_s;
@@ -958,6 +1033,20 @@ impl HardwareSession {
     /// until the part ends; after an E-stop — commands refused, the axes stopped — the device is
     /// handed back at once, so that after the reset the machine's own dial applies.
     fn watch_device_faults(&mut self, now_s: f64) {
+        let running = matches!(self.activity, Activity::Teach(_) | Activity::Loop(_));
+        if let Some(stuck) = self.host.take_stuck_override() {
+            if self.state != LinkState::Alarm {
+                self.alarm(stuck, now_s);
+            }
+        }
+        if running && self.host.hold_latched() {
+            self.alarm(
+                "the device holds the feed, latched: the operator resets it once the cause is \
+                 cleared"
+                    .to_string(),
+                now_s,
+            );
+        }
         let Some(kind) = self.host.take_alarm_faults().first().copied() else {
             return;
         };
@@ -966,7 +1055,7 @@ impl HardwareSession {
             .events()
             .iter()
             .rev()
-            .find(|e| e.text.starts_with("device fault") || e.text.contains("E-stop input"))
+            .find(|e| e.text.starts_with("device fault") || e.text.contains("fault is active"))
             .map_or_else(
                 || format!("device fault {}", kind.name()),
                 |e| e.text.clone(),
@@ -1245,6 +1334,35 @@ impl HardwareSession {
             );
         }
         self.set_state(LinkState::Alarm, text);
+    }
+}
+
+/// Whether the device measures what a teach cut (`teach`) or a closed loop needs
+/// (docs/protocol.md §3, `measured`): program end to end a part, the spindle's speed and command
+/// to judge it at speed, the actual feed for the teach cut's periods and the feed-drive model,
+/// and for the closed loop the programmed feed too, so that a stuck override is seen.
+pub fn check_measured(caps: &Capabilities, teach: bool) -> Result<(), String> {
+    let mut needed = measured::PROGRAM_END
+        | measured::SPINDLE_SPEED
+        | measured::SPINDLE_COMMAND
+        | measured::ACTUAL_FEED;
+    if !teach {
+        needed |= measured::PROGRAMMED_FEED;
+    }
+    let missing: Vec<&str> = measured::NAMES
+        .iter()
+        .filter(|(bit, _)| needed & bit != 0 && caps.measured & bit == 0)
+        .map(|(_, name)| *name)
+        .collect();
+    if missing.is_empty() {
+        Ok(())
+    } else {
+        Err(format!(
+            "the device does not measure the {} a {} needs: wire {} to the bridge (docs/hardware.md §1)",
+            missing.join(", "),
+            if teach { "teach cut" } else { "closed loop" },
+            if missing.len() == 1 { "it" } else { "them" }
+        ))
     }
 }
 

@@ -25,6 +25,7 @@ use serde::{Deserialize, Serialize};
 use super::bench::{BrakeBench, BrakeBenchConfig};
 use super::bond_graph::{BondGraphMachine, BondGraphRun};
 use super::cnc::{CncConfig, DialTable, OverrideMode};
+use super::dynamometer::{DynamometerConfig, WithDynamometer};
 use super::materials::Material;
 use super::mechanics::{mean_forces, Cutter, Immersion, MillingMode, MAX_TEETH};
 use super::scenario::{MaterialRegion, Move, MoveKind, Scenario, ScenarioSpec};
@@ -35,6 +36,10 @@ use super::{Plant, PlantError};
 use crate::input::readable;
 use crate::machine::{BlockStep, Machine, MachineStep, OverrideCommand, SensorlessEstimate};
 use crate::math;
+
+/// What the teach cut's machine adds to a run's seed: the teach cut and the closed loop run on
+/// two parts of one machine, cut with different noise ([`Preset::teach_and_run_machines`]).
+pub const TEACH_SEED_OFFSET: u64 = 0x7EAC;
 
 /// A named experiment. Serialised by its [`name`](Preset::name), e.g. `"maneerat-doc-1"`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
@@ -884,6 +889,53 @@ impl Preset {
             Scenario::new(spec)?,
             config,
         )?)))
+    }
+
+    /// The machines of one lab run: the teach cut's, seeded with `seed` plus
+    /// [`TEACH_SEED_OFFSET`], and the closed loop's, seeded with `seed` — each with `edits`, and
+    /// with a dynamometer under the part when the run feeds back the measured force. `cutlab
+    /// sim`'s runs and the device emulator's first two parts are these machines, so a run over
+    /// the protocol repeats a simulated one.
+    ///
+    /// ```
+    /// use cutlab::machine::{Machine, OverrideCommand};
+    /// use cutlab::plant::presets::{PlantEdits, Preset};
+    /// let [mut teach, mut run] =
+    ///     Preset::KimStepDoc.teach_and_run_machines(1, &PlantEdits::default(), false).unwrap();
+    /// let (a, b) = (teach.step(OverrideCommand::default()), run.step(OverrideCommand::default()));
+    /// assert_eq!(a.sensors.time_s, b.sensors.time_s);
+    /// assert_ne!(a.sensors.spindle_phase_currents_a, b.sensors.spindle_phase_currents_a);
+    /// ```
+    pub fn teach_and_run_machines(
+        self,
+        seed: u64,
+        edits: &PlantEdits,
+        dynamometer: bool,
+    ) -> Result<[Box<dyn Machine>; 2], PlantError> {
+        Ok([
+            self.seeded_machine(seed.wrapping_add(TEACH_SEED_OFFSET), edits, dynamometer)?,
+            self.seeded_machine(seed, edits, dynamometer)?,
+        ])
+    }
+
+    /// The preset's machine seeded with `seed`, with `edits`, and with a dynamometer under the
+    /// part if `dynamometer` (one of [`Preset::teach_and_run_machines`]).
+    pub fn seeded_machine(
+        self,
+        seed: u64,
+        edits: &PlantEdits,
+        dynamometer: bool,
+    ) -> Result<Box<dyn Machine>, PlantError> {
+        let machine = Box::new(self.machine_with(seed, edits)?);
+        Ok(if dynamometer {
+            Box::new(WithDynamometer::new(
+                machine,
+                DynamometerConfig::default(),
+                seed,
+            )?)
+        } else {
+            machine
+        })
     }
 
     /// The load schedule of a non-cutting preset, for drawing (`None` for mill presets, whose

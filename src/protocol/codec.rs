@@ -284,11 +284,23 @@ mod tests {
         let errors: Vec<_> = d.frames(&junk).collect();
         assert_eq!(errors, vec![Err(DecodeError::Oversized)]);
         let mut hb = [0u8; MAX_FRAME_LEN];
-        let n = encode_frame(&Frame::Heartbeat(Heartbeat { seq: 1, time_us: 2 }), &mut hb).unwrap();
+        let n = encode_frame(
+            &Frame::Heartbeat(Heartbeat {
+                seq: 1,
+                time_us: 2,
+                ..Heartbeat::default()
+            }),
+            &mut hb,
+        )
+        .unwrap();
         let got: Vec<_> = d.frames(&hb[..n]).collect();
         assert_eq!(
             got,
-            vec![Ok(Frame::Heartbeat(Heartbeat { seq: 1, time_us: 2 }))]
+            vec![Ok(Frame::Heartbeat(Heartbeat {
+                seq: 1,
+                time_us: 2,
+                ..Heartbeat::default()
+            }))]
         );
         assert_eq!(d.stats().bytes_dropped, junk.len() as u64);
         assert_eq!(d.stats().oversized, 1);

@@ -8,7 +8,8 @@
 //!
 //! ## What the emulator does
 //!
-//! * **Parts.** The machines are made by the code `cutlab sim` uses ([`RunMachines::for_preset`]):
+//! * **Parts.** The machines are made by the code `cutlab sim` uses
+//!   ([`Preset::teach_and_run_machines`]):
 //!   the first part is seeded like sim's teach cut, the second like its closed-loop run, and
 //!   every later part like a run with the seed plus its number. An `Arm` while no program runs
 //!   stands for the operator loading the next part and pressing cycle start; the part runs to
@@ -49,17 +50,18 @@
 
 use super::codec::{encode_frame, Decoder, MAX_FRAME_LEN};
 use super::frame::{
-    channel, command_flag, feature, padded, sample_flag, Ack, AckResult, Capabilities, Fault,
-    FaultKind, Frame, FrameType, Heartbeat, OverrideModeCode, Sample, SimTruth, NO_DIAL_CODE,
-    VERSION_MAJOR, VERSION_MINOR,
+    channel, command_flag, fault_flag, feature, measured, padded, sample_flag, Ack, AckResult,
+    Capabilities, Fault, FaultKind, Frame, FrameType, Heartbeat, OverrideModeCode, Sample,
+    SimTruth, NO_DIAL_CODE, VERSION_MAJOR, VERSION_MINOR,
 };
-use crate::closed_loop::definition::RunSpec;
-use crate::closed_loop::lab::RunMachines;
-use crate::control::registry::ControllerKind;
 use crate::machine::{Machine, OverrideCommand, PlantTruth, SensorSample};
 use crate::plant::cnc::{AppliedOverride, OverrideMode};
+use crate::plant::presets::PlantEdits;
 use crate::plant::Preset;
 use crate::rng::Rng;
+
+/// [`Fault::channel`] when the fault concerns no channel.
+const NO_CHANNEL: u8 = 0xFF;
 
 /// Amperes per count of the emulator's current channels.
 pub const CURRENT_A_PER_COUNT: f64 = 0.005;
@@ -67,8 +69,21 @@ pub const CURRENT_A_PER_COUNT: f64 = 0.005;
 pub const FV_V_PER_COUNT: f64 = 0.0005;
 /// The override of a disarmed device: the machine's own dial.
 pub const DISARMED_OVERRIDE_PCT: f64 = 100.0;
+/// Device seconds per wall second `cutlab device --time-scale` accepts: from a hundredth of real
+/// time to a thousand times it.
+pub const TIME_SCALE_RANGE: (f64, f64) = (0.01, 1000.0);
+
 /// How often the device sends a heartbeat, device time.
 pub const HEARTBEAT_INTERVAL_S: f64 = 0.1;
+/// The window, device time, over which the three phases of a drive are checked to sum to zero.
+pub const PHASE_CHECK_WINDOW_S: f64 = 0.1;
+/// Below this RMS phase current a drive's phase sum says nothing (noise and offsets dominate):
+/// its sensors are not judged.
+pub const PHASE_CHECK_MIN_A: f64 = 1.0;
+/// A drive whose three phases' sum has an RMS above this fraction of the phases' RMS has an open
+/// or stuck sensor (a healthy drive's sum is its sensors' noise and offsets: no preset raises
+/// the fault, tests/host.rs).
+pub const PHASE_SUM_TOLERANCE: f64 = 0.25;
 
 /// Faults the emulator injects.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
@@ -91,6 +106,13 @@ pub struct FaultInjection {
     pub over_current_at_s: Option<f64>,
     /// Length of the over-current.
     pub over_current_s: f64,
+    /// From this device time on, the spindle's phase-u transducer is open: it reads 0 A (a
+    /// closed-loop transducer without supply, its burden resistor and the mid-rail shift).
+    pub sensor_open_at_s: Option<f64>,
+    /// From this device time on, the CNC ignores the bridge's outputs (the selector on the
+    /// dial, a dead opto-coupler, a ladder that does not take the code): it keeps the override
+    /// it had, while the bridge goes on acknowledging what it outputs.
+    pub stuck_override_at_s: Option<f64>,
 }
 
 /// What the emulator emulates.
@@ -104,8 +126,19 @@ pub struct DeviceConfig {
     pub decimation: usize,
     /// The device's watchdog.
     pub watchdog_timeout_s: f64,
-    /// The override the watchdog applies.
+    /// The override the watchdog applies at most: the fallback is the lower of it and the
+    /// override applied when the watchdog fired.
     pub fallback_override_pct: f64,
+    /// How long the fallback lasts before the device holds the feed (latched until the
+    /// operator's reset).
+    pub fallback_limit_s: f64,
+    /// The Sample fields the device declares it measures ([`measured`]): all of them, for the
+    /// simulation; clear bits to emulate a bridge that lacks an input.
+    pub measured: u16,
+    /// The baud rate the device declares for its line (0: none, a pipe or USB CDC-ACM).
+    pub line_baud: u32,
+    /// Keep one [`DeviceTraceRow`] per sample ([`DeviceEmulator::take_trace`]).
+    pub trace: bool,
     /// A phase current beyond ± this is an over-current fault.
     pub over_current_a: f64,
     /// Faults to inject.
@@ -117,8 +150,9 @@ pub struct DeviceConfig {
 }
 
 impl DeviceConfig {
-    /// The defaults for `preset`: seed 1, 1 kHz samples, watchdog 0.5 s, fallback 50 %,
-    /// over-current at 150 A, no injected faults.
+    /// The defaults for `preset`: seed 1, 1 kHz samples, watchdog 0.5 s, fallback at most 50 %
+    /// for at most 5 s, over-current at 150 A, every field measured, no baud rate (a pipe), no
+    /// injected faults.
     pub fn new(preset: Preset) -> Self {
         Self {
             preset,
@@ -126,6 +160,10 @@ impl DeviceConfig {
             decimation: 10,
             watchdog_timeout_s: 0.5,
             fallback_override_pct: 50.0,
+            fallback_limit_s: 5.0,
+            measured: measured::ALL,
+            line_baud: 0,
+            trace: false,
             over_current_a: 150.0,
             faults: FaultInjection::default(),
             sim_truth: true,
@@ -226,6 +264,135 @@ pub fn cpct(pct: f64) -> u16 {
     }
 }
 
+/// Why the device holds the feed, latched until the operator resets it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum HoldCause {
+    /// The host asked for a feed hold (the safety envelope's overload).
+    Host,
+    /// The device read an over-current (a crash, a broken tool).
+    OverCurrent,
+    /// The watchdog's fallback lasted its time limit.
+    FallbackLimit,
+}
+
+impl HoldCause {
+    /// In words, for diagnostics and the trace.
+    pub fn name(self) -> &'static str {
+        match self {
+            HoldCause::Host => "host feed hold",
+            HoldCause::OverCurrent => "over-current",
+            HoldCause::FallbackLimit => "fallback time limit",
+        }
+    }
+}
+
+/// What the emulated bridge applied at one sample: what `cutlab device --trace` writes, so every
+/// fault path can be checked from outside.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct DeviceTraceRow {
+    /// Device time at the end of the sample.
+    pub time_s: f64,
+    /// The part (1 = the first).
+    pub part: u64,
+    /// The sample's sequence number.
+    pub seq: u32,
+    /// The host holds the override (armed, not in fallback).
+    pub armed: bool,
+    /// The watchdog's fallback is applied.
+    pub fallback: bool,
+    /// The feed is held (any cause).
+    pub feed_hold: bool,
+    /// The latched hold's cause, if the hold is latched.
+    pub hold_latched: Option<HoldCause>,
+    /// The override the bridge outputs.
+    pub bridge_override_pct: f64,
+    /// The override the CNC applies (it differs from the bridge's when the override is stuck).
+    pub cnc_override_pct: f64,
+    /// The block's programmed feed.
+    pub programmed_feed_mm_min: f64,
+    /// The actual feed.
+    pub feed_mm_min: f64,
+    /// Faults active ([`fault_flag`] bits).
+    pub faults: u8,
+}
+
+impl DeviceTraceRow {
+    /// The CSV header of [`DeviceTraceRow::csv_line`].
+    pub const CSV_HEADER: &'static str = "time_s,part,seq,armed,fallback,feed_hold,hold_latched,\
+bridge_override_pct,cnc_override_pct,programmed_feed_mm_min,feed_mm_min,faults";
+
+    /// The row as a CSV line (no newline).
+    pub fn csv_line(&self) -> String {
+        format!(
+            "{:.4},{},{},{},{},{},{},{},{},{},{},{}",
+            self.time_s,
+            self.part,
+            self.seq,
+            u8::from(self.armed),
+            u8::from(self.fallback),
+            u8::from(self.feed_hold),
+            self.hold_latched.map_or("", HoldCause::name),
+            self.bridge_override_pct,
+            self.cnc_override_pct,
+            self.programmed_feed_mm_min,
+            self.feed_mm_min,
+            self.faults
+        )
+    }
+}
+
+/// The running sums of one drive's phase check ([`PHASE_CHECK_WINDOW_S`]).
+#[derive(Debug, Clone, Copy, Default)]
+struct PhaseWindow {
+    sum_sq: f64,
+    phase_sq: [f64; 3],
+}
+
+impl PhaseWindow {
+    fn add(&mut self, i: [f64; 3]) {
+        let sum = i[0] + i[1] + i[2];
+        if sum.is_finite() {
+            self.sum_sq += sum * sum;
+            for (sq, x) in self.phase_sq.iter_mut().zip(i) {
+                *sq += x * x;
+            }
+        }
+    }
+
+    /// The verdict over `n` samples: `Some(channel offset)` of the sensor that reads least when
+    /// the phases do not sum to zero, `None` when they do; `Err(())` when the current is too low
+    /// to tell.
+    fn verdict(&self, n: f64) -> Result<Option<usize>, ()> {
+        let phase_rms = (self.phase_sq.iter().sum::<f64>() / (3.0 * n)).sqrt();
+        // NaN (no finite sample in the window) says nothing either.
+        if phase_rms.is_nan() || phase_rms <= PHASE_CHECK_MIN_A {
+            return Err(());
+        }
+        let sum_rms = (self.sum_sq / n).sqrt();
+        if sum_rms <= PHASE_SUM_TOLERANCE * phase_rms {
+            return Ok(None);
+        }
+        let weakest = (0..3)
+            .min_by(|&a, &b| self.phase_sq[a].total_cmp(&self.phase_sq[b]))
+            .unwrap_or(0);
+        Ok(Some(weakest))
+    }
+}
+
+/// Ends a phase-check window of `n` samples: each drive with enough current is judged by its
+/// three phases' sum (its verdict the channel bit of its open or stuck sensor, or none), a drive
+/// with too little keeps its verdict.
+fn judge_phases(windows: &mut [PhaseWindow; 2], n: &mut usize, verdicts: &mut [Option<u8>; 2]) {
+    for (drive, (window, verdict)) in windows.iter().zip(verdicts.iter_mut()).enumerate() {
+        if let Ok(v) = window.verdict(*n as f64) {
+            // Channel bits: spindle u, v, w = 0, 1, 2; feed u, v, w = 3, 4, 5.
+            *verdict = v.map(|k| (3 * drive + k) as u8);
+        }
+    }
+    *windows = [PhaseWindow::default(); 2];
+    *n = 0;
+}
+
 /// A part in the machine.
 struct Part {
     machine: Box<dyn Machine>,
@@ -280,6 +447,20 @@ pub struct DeviceEmulator {
     heartbeat_seq: u32,
     over_current: bool,
     sensor_fault: bool,
+    /// The drives' phase checks (spindle, feed), the samples in them, and each drive's verdict:
+    /// the channel bit of its open or stuck sensor.
+    phase_windows: [PhaseWindow; 2],
+    phase_window_n: usize,
+    phase_fault: [Option<u8>; 2],
+    /// The override the fallback applies, and when it began.
+    fallback_pct: f64,
+    fallback_since_s: f64,
+    hold_latched: Option<HoldCause>,
+    /// The latest command accepted since the host's Hello: a command must be newer.
+    last_command_seq: Option<u32>,
+    /// The override the CNC keeps once it ignores the bridge (injected).
+    stuck_override: Option<OverrideCommand>,
+    trace: Vec<DeviceTraceRow>,
     rng: Rng,
     stats: DeviceStats,
     stalled: bool,
@@ -317,6 +498,20 @@ impl DeviceEmulator {
             if !(t.is_finite() && t >= 0.0) {
                 return Err(bad("a fault's time", t));
             }
+        }
+        for t in [f.sensor_open_at_s, f.stuck_override_at_s]
+            .into_iter()
+            .flatten()
+        {
+            if !(t.is_finite() && t >= 0.0) {
+                return Err(bad("a fault's time", t));
+            }
+        }
+        if !(config.fallback_limit_s >= 0.1 && config.fallback_limit_s <= 65.0) {
+            return Err(bad(
+                "the fallback's time limit (0.1 to 65 s)",
+                config.fallback_limit_s,
+            ));
         }
         if !(config.watchdog_timeout_s > 0.0 && config.watchdog_timeout_s <= 65.0) {
             return Err(bad(
@@ -369,6 +564,9 @@ impl DeviceEmulator {
             watchdog_timeout_ms: (config.watchdog_timeout_s * 1000.0).round() as u16,
             fallback_override_cpct: cpct(config.fallback_override_pct),
             over_current_a: config.over_current_a as f32,
+            measured: config.measured,
+            fallback_limit_ms: (config.fallback_limit_s * 1000.0).round() as u16,
+            line_baud: config.line_baud,
             features: if config.sim_truth {
                 feature::SIM_TRUTH
             } else {
@@ -408,6 +606,15 @@ impl DeviceEmulator {
             heartbeat_seq: 0,
             over_current: false,
             sensor_fault: false,
+            phase_windows: [PhaseWindow::default(); 2],
+            phase_window_n: 0,
+            phase_fault: [None; 2],
+            fallback_pct: config.fallback_override_pct,
+            fallback_since_s: 0.0,
+            hold_latched: None,
+            last_command_seq: None,
+            stuck_override: None,
+            trace: Vec::new(),
             stats: DeviceStats::default(),
             stalled: false,
             unplugged: false,
@@ -417,17 +624,23 @@ impl DeviceEmulator {
     }
 
     /// The machines of parts `first` and `first + 1`, seeded as `cutlab sim` seeds its teach cut
-    /// and run (for `first` = 0), or as runs with the seed plus the part's number.
+    /// and run (for `first` = 0: [`Preset::teach_and_run_machines`]), or as runs with the seed
+    /// plus the part's number. A bridge carries no dynamometer.
     fn machines(config: &DeviceConfig, first: u64) -> Result<Vec<Box<dyn Machine>>, DeviceError> {
-        let mut spec = RunSpec::new(config.preset, ControllerKind::Fixed);
-        spec.seed = config.seed.wrapping_add(first);
-        let machines =
-            RunMachines::for_preset(&spec).map_err(|e| DeviceError(format!("machine: {e}")))?;
-        Ok(match machines {
-            RunMachines::Separate { teach, run } if first == 0 => vec![teach, run],
-            RunMachines::Separate { run, .. } => vec![run],
-            RunMachines::Shared(m) => vec![m],
-        })
+        let seed = config.seed.wrapping_add(first);
+        let edits = PlantEdits::default();
+        let machines = if first == 0 {
+            config
+                .preset
+                .teach_and_run_machines(seed, &edits, false)
+                .map(Vec::from)
+        } else {
+            config
+                .preset
+                .seeded_machine(seed, &edits, false)
+                .map(|m| vec![m])
+        };
+        machines.map_err(|e| DeviceError(format!("machine: {e}")))
     }
 
     /// What the device tells a host in its Capabilities.
@@ -468,6 +681,96 @@ impl DeviceEmulator {
     /// Whether a part's program is running.
     pub fn in_cycle(&self) -> bool {
         self.part.as_ref().is_some_and(|p| !p.ended)
+    }
+
+    /// Whether the watchdog's fallback is applied.
+    pub fn in_fallback(&self) -> bool {
+        self.fallback
+    }
+
+    /// The override the bridge outputs now.
+    pub fn applied_override_pct(&self) -> f64 {
+        self.applied.pct
+    }
+
+    /// Whether the feed is held now (the E-stop, a latched hold, or the host's feed hold).
+    pub fn feed_hold(&self) -> bool {
+        self.estop
+            || self.hold_latched.is_some()
+            || (self.armed && !self.fallback && self.requested.feed_hold)
+    }
+
+    /// Why the feed is held, latched until the operator's reset, if it is.
+    pub fn hold_latched(&self) -> Option<HoldCause> {
+        self.hold_latched
+    }
+
+    /// The faults active now ([`fault_flag`] bits).
+    pub fn fault_flags(&self) -> u8 {
+        let mut faults = 0;
+        for (on, bit) in [
+            (self.sensor_fault, fault_flag::SENSOR),
+            (self.over_current, fault_flag::OVER_CURRENT),
+            (self.fallback, fault_flag::WATCHDOG),
+            (self.estop, fault_flag::ESTOP),
+            (
+                self.hold_latched == Some(HoldCause::FallbackLimit),
+                fault_flag::FALLBACK_LIMIT,
+            ),
+        ] {
+            if on {
+                faults |= bit;
+            }
+        }
+        faults
+    }
+
+    /// The device's state as a Sample's flags, less the per-sample bits (spindle, program end).
+    fn state_flags(&self) -> u8 {
+        let mut flags = 0;
+        for (on, bit) in [
+            (self.in_cycle(), sample_flag::IN_CYCLE),
+            (self.feed_hold(), sample_flag::FEED_HOLD),
+            (self.armed && !self.fallback, sample_flag::ARMED),
+            (self.fallback, sample_flag::FALLBACK),
+            (self.estop, sample_flag::ESTOP),
+            (self.hold_latched.is_some(), sample_flag::HOLD_LATCHED),
+        ] {
+            if on {
+                flags |= bit;
+            }
+        }
+        flags
+    }
+
+    /// The rows traced since the last call (with [`DeviceConfig::trace`]).
+    pub fn take_trace(&mut self) -> Vec<DeviceTraceRow> {
+        std::mem::take(&mut self.trace)
+    }
+
+    /// Latches the feed hold for `cause` (a hold already latched keeps its first cause).
+    fn latch_hold(&mut self, cause: HoldCause) {
+        if self.hold_latched.is_none() {
+            self.hold_latched = Some(cause);
+            self.log(format!(
+                "feed hold latched ({}): it stays through any link state until the operator \
+                 resets it",
+                cause.name()
+            ));
+        }
+    }
+
+    /// Whether command `seq` is newer than the last one accepted since the Hello; it is then
+    /// the last one.
+    fn fresh_command(&mut self, seq: u32) -> bool {
+        if let Some(last) = self.last_command_seq {
+            let ahead = seq.wrapping_sub(last);
+            if ahead == 0 || ahead >= 1 << 31 {
+                return false;
+            }
+        }
+        self.last_command_seq = Some(seq);
+        true
     }
 
     fn log(&mut self, text: String) {
@@ -540,6 +843,9 @@ impl DeviceEmulator {
         match frame {
             Frame::Hello(h) => {
                 self.last_host_frame_s = now;
+                // A new session (a host started, or restarted): its commands count from its own
+                // first. A latched hold stays.
+                self.last_command_seq = None;
                 if h.version_major != VERSION_MAJOR {
                     self.log(format!(
                         "host speaks version {}.{}; answering with {VERSION_MAJOR}.{VERSION_MINOR}",
@@ -551,14 +857,17 @@ impl DeviceEmulator {
             }
             Frame::Heartbeat(_) => self.last_host_frame_s = now,
             Frame::Arm(a) => {
-                self.last_host_frame_s = now;
-                let result = if self.estop {
+                let result = if !self.fresh_command(a.seq) {
+                    AckResult::Stale
+                } else if self.estop {
+                    self.last_host_frame_s = now;
                     AckResult::Refused
                 } else {
+                    self.last_host_frame_s = now;
                     if self.fallback {
                         self.fallback = false;
                         self.log("re-armed by the host: watchdog fallback cleared".to_string());
-                        self.report_fault(FaultKind::Watchdog, false, out);
+                        self.report_fault(FaultKind::Watchdog, false, NO_CHANNEL, out);
                     }
                     self.armed = true;
                     if !self.in_cycle() {
@@ -569,25 +878,66 @@ impl DeviceEmulator {
                 self.ack(a.seq, FrameType::Arm, result, out);
             }
             Frame::Disarm(d) => {
-                self.last_host_frame_s = now;
-                self.armed = false;
-                self.requested = OverrideCommand::default();
-                self.apply_override();
-                self.ack(d.seq, FrameType::Disarm, AckResult::Applied, out);
+                let result = if self.fresh_command(d.seq) {
+                    self.last_host_frame_s = now;
+                    self.armed = false;
+                    self.requested = OverrideCommand::default();
+                    self.apply_override();
+                    AckResult::Applied
+                } else {
+                    AckResult::Stale
+                };
+                self.ack(d.seq, FrameType::Disarm, result, out);
+            }
+            Frame::Reset(r) => {
+                let result = if !self.fresh_command(r.seq) {
+                    AckResult::Stale
+                } else if self.hold_latched.is_some() && (self.over_current || self.estop) {
+                    self.last_host_frame_s = now;
+                    AckResult::CauseActive
+                } else {
+                    self.last_host_frame_s = now;
+                    if let Some(cause) = self.hold_latched.take() {
+                        self.requested.feed_hold = false;
+                        // Still without a host, the fallback runs for its time limit again.
+                        self.fallback_since_s = now;
+                        self.log(format!(
+                            "the operator reset the latched feed hold ({})",
+                            cause.name()
+                        ));
+                        if cause == HoldCause::FallbackLimit {
+                            self.report_fault(FaultKind::FallbackLimit, false, NO_CHANNEL, out);
+                        }
+                    }
+                    AckResult::Applied
+                };
+                self.ack(r.seq, FrameType::Reset, result, out);
             }
             Frame::SetOverride(c) => {
-                self.last_host_frame_s = now;
-                let result = if self.estop {
+                let age_us = self.time_us().wrapping_sub(c.sample_time_us);
+                let max_age_us = u32::from(self.capabilities.watchdog_timeout_ms) * 1000;
+                let result = if !self.fresh_command(c.seq) || age_us > max_age_us {
+                    // A replayed or reordered frame, or a decision on a sample too old to
+                    // stand for the machine now: neither applied nor feeding the watchdog.
+                    AckResult::Stale
+                } else if self.estop {
+                    self.last_host_frame_s = now;
                     AckResult::Refused
                 } else if !self.armed || self.fallback {
+                    self.last_host_frame_s = now;
                     AckResult::NotArmed
                 } else {
+                    self.last_host_frame_s = now;
                     let pct = f64::from(c.override_cpct) / 100.0;
                     let limited = pct.clamp(self.min_pct, self.max_pct);
+                    let feed_hold = c.flags & command_flag::FEED_HOLD != 0;
                     self.requested = OverrideCommand {
                         override_pct: limited,
-                        feed_hold: c.flags & command_flag::FEED_HOLD != 0,
+                        feed_hold,
                     };
+                    if feed_hold {
+                        self.latch_hold(HoldCause::Host);
+                    }
                     self.apply_override();
                     if limited != pct {
                         AckResult::Limited
@@ -609,19 +959,13 @@ impl DeviceEmulator {
     /// watchdog, the machine's own dial otherwise.
     fn apply_override(&mut self) {
         let pct = if self.fallback {
-            self.config.fallback_override_pct
+            self.fallback_pct
         } else if self.armed {
             self.requested.override_pct
         } else {
             DISARMED_OVERRIDE_PCT
         };
         self.applied = self.mode.apply(pct, self.applied);
-    }
-
-    /// The feed is held while the E-stop input is active (the control stops the axes), and
-    /// while the host asks for it.
-    fn feed_hold(&self) -> bool {
-        self.estop || (self.armed && !self.fallback && self.requested.feed_hold)
     }
 
     fn start_part(&mut self) {
@@ -656,19 +1000,23 @@ impl DeviceEmulator {
                 command_flag::FEED_HOLD
             } else {
                 0
+            } | if self.hold_latched.is_some() {
+                command_flag::HOLD_LATCHED
+            } else {
+                0
             },
         };
         self.send(&Frame::Ack(ack), out);
     }
 
-    fn report_fault(&mut self, kind: FaultKind, active: bool, out: &mut Vec<u8>) {
+    fn report_fault(&mut self, kind: FaultKind, active: bool, channel: u8, out: &mut Vec<u8>) {
         self.fault_seq = self.fault_seq.wrapping_add(1);
         let fault = Fault {
             seq: self.fault_seq,
             time_us: self.time_us(),
             kind,
             active: u8::from(active),
-            channel: 0xFF,
+            channel,
             applied_override_cpct: cpct(self.applied.pct),
         };
         self.send(&Frame::Fault(fault), out);
@@ -719,21 +1067,35 @@ impl DeviceEmulator {
             self.log(
                 "E-stop input active (injected): the feed stops; commands refused".to_string(),
             );
-            self.report_fault(FaultKind::EStop, true, out);
+            self.report_fault(FaultKind::EStop, true, NO_CHANNEL, out);
         }
         if self.armed
             && !self.fallback
             && start_s - self.last_host_frame_s > self.config.watchdog_timeout_s
         {
+            // Never faster than the loop left it: the fallback is the lower of the override
+            // applied now and the configured one.
+            self.fallback_pct = self.applied.pct.min(self.config.fallback_override_pct);
             self.fallback = true;
+            self.fallback_since_s = start_s;
             self.stats.watchdog_fallbacks += 1;
             self.apply_override();
             self.log(format!(
-                "watchdog: nothing from the host for {} s; fallback override {} % applied until \
-                 the host re-arms",
-                self.config.watchdog_timeout_s, self.applied.pct
+                "watchdog: nothing from the host for {} s; fallback override {} % (the lower of \
+                 the applied and the configured {} %) until the host re-arms, for at most {} s",
+                self.config.watchdog_timeout_s,
+                self.applied.pct,
+                self.config.fallback_override_pct,
+                self.config.fallback_limit_s
             ));
-            self.report_fault(FaultKind::Watchdog, true, out);
+            self.report_fault(FaultKind::Watchdog, true, NO_CHANNEL, out);
+        }
+        if self.fallback
+            && self.hold_latched.is_none()
+            && start_s - self.fallback_since_s >= self.config.fallback_limit_s
+        {
+            self.latch_hold(HoldCause::FallbackLimit);
+            self.report_fault(FaultKind::FallbackLimit, true, NO_CHANNEL, out);
         }
         if self.in_cycle() {
             self.run_block(out);
@@ -746,6 +1108,9 @@ impl DeviceEmulator {
             let hb = Heartbeat {
                 seq: self.heartbeat_seq,
                 time_us: self.time_us(),
+                flags: self.state_flags(),
+                faults: self.fault_flags(),
+                last_sample_seq: self.sample_seq,
             };
             self.send(&Frame::Heartbeat(hb), out);
         }
@@ -753,13 +1118,29 @@ impl DeviceEmulator {
 
     /// One block of plant samples, summarised into a SimTruth and a Sample.
     fn run_block(&mut self, out: &mut Vec<u8>) {
+        let f = self.config.faults;
+        let t0 = self.time_s();
+        if self.stuck_override.is_none() && f.stuck_override_at_s.is_some_and(|at| t0 >= at) {
+            self.log("the CNC ignores the bridge's outputs from now on (injected)".to_string());
+            self.stuck_override = Some(OverrideCommand {
+                override_pct: self.applied.pct,
+                feed_hold: false,
+            });
+        }
+        let feed_hold = self.feed_hold();
+        // What the CNC takes: the bridge's outputs, or what it kept when it stopped listening
+        // (a feed hold still reaches it through its own contact in the feed-hold chain).
         let command = OverrideCommand {
-            override_pct: self.applied.pct,
-            feed_hold: self.feed_hold(),
+            override_pct: self
+                .stuck_override
+                .map_or(self.applied.pct, |c| c.override_pct),
+            feed_hold,
         };
+        let sensor_open = f.sensor_open_at_s.is_some_and(|at| t0 >= at);
+        let window_n = ((PHASE_CHECK_WINDOW_S / self.plant_dt_s).round() as usize).max(1);
         let mut block = Block::default();
         let mut over_current = false;
-        let mut sensor_fault = false;
+        let mut non_finite = false;
         let mut ended = false;
         let limit = self.config.over_current_a;
         if let Some(part) = self.part.as_mut() {
@@ -767,19 +1148,29 @@ impl DeviceEmulator {
                 let step = part.machine.step(command);
                 self.ticks += 1;
                 let s = step.sensors;
-                for (sum, i) in block.spindle.iter_mut().zip(s.spindle_phase_currents_a) {
+                let mut spindle = s.spindle_phase_currents_a;
+                if sensor_open {
+                    spindle[0] = 0.0;
+                }
+                for (sum, i) in block.spindle.iter_mut().zip(spindle) {
                     *sum += i;
                 }
                 for (sum, i) in block.feed.iter_mut().zip(s.feed_phase_currents_a) {
                     *sum += i;
                 }
-                for i in s
-                    .spindle_phase_currents_a
-                    .iter()
-                    .chain(&s.feed_phase_currents_a)
-                {
-                    sensor_fault |= !i.is_finite();
+                for i in spindle.iter().chain(&s.feed_phase_currents_a) {
+                    non_finite |= !i.is_finite();
                     over_current |= i.abs() > limit;
+                }
+                self.phase_windows[0].add(spindle);
+                self.phase_windows[1].add(s.feed_phase_currents_a);
+                self.phase_window_n += 1;
+                if self.phase_window_n >= window_n {
+                    judge_phases(
+                        &mut self.phase_windows,
+                        &mut self.phase_window_n,
+                        &mut self.phase_fault,
+                    );
                 }
                 block.fv += s.spindle_fv_voltage_v;
                 block.speed += s.spindle_speed_rpm;
@@ -800,12 +1191,11 @@ impl DeviceEmulator {
                 }
             }
         }
-        let f = self.config.faults;
         let t = self.time_s();
         over_current |= f
             .over_current_at_s
             .is_some_and(|at| t > at && t <= at + f.over_current_s);
-        self.watch_currents(over_current, sensor_fault, out);
+        self.watch_currents(over_current, non_finite, out);
         let n = block.n.max(1) as f64;
         self.sample_seq = self.sample_seq.wrapping_add(1);
         if block.truth_seen && self.config.sim_truth {
@@ -821,19 +1211,16 @@ impl DeviceEmulator {
             );
         }
         let last = block.last;
-        let mut flags = sample_flag::IN_CYCLE;
+        let mut flags = sample_flag::IN_CYCLE | (self.state_flags() & !sample_flag::IN_CYCLE);
         for (on, bit) in [
             (last.spindle_running, sample_flag::SPINDLE_RUNNING),
             (ended, sample_flag::PROGRAM_END),
-            (command.feed_hold, sample_flag::FEED_HOLD),
-            (self.armed && !self.fallback, sample_flag::ARMED),
-            (self.fallback, sample_flag::FALLBACK),
-            (self.estop, sample_flag::ESTOP),
         ] {
             if on {
                 flags |= bit;
             }
         }
+        let faults = self.fault_flags();
         let sample = Sample {
             seq: self.sample_seq,
             time_us: self.time_us(),
@@ -847,8 +1234,25 @@ impl DeviceEmulator {
             feed_mm_min: (block.feed_mm_min / n) as f32,
             applied_override_cpct: cpct(last.applied_override_pct),
             dial_code: self.applied.dial_code.unwrap_or(NO_DIAL_CODE),
+            faults,
         };
         self.send(&Frame::Sample(sample), out);
+        if self.config.trace {
+            self.trace.push(DeviceTraceRow {
+                time_s: t,
+                part: self.stats.parts,
+                seq: self.sample_seq,
+                armed: self.armed && !self.fallback,
+                fallback: self.fallback,
+                feed_hold,
+                hold_latched: self.hold_latched,
+                bridge_override_pct: self.applied.pct,
+                cnc_override_pct: last.applied_override_pct,
+                programmed_feed_mm_min: last.programmed_feed_mm_min,
+                feed_mm_min: block.feed_mm_min / n,
+                faults,
+            });
+        }
         if ended {
             let n = self.stats.parts;
             self.log(format!("part {n}: program end"));
@@ -856,14 +1260,30 @@ impl DeviceEmulator {
         }
     }
 
-    fn watch_currents(&mut self, over_current: bool, sensor_fault: bool, out: &mut Vec<u8>) {
+    fn watch_currents(&mut self, over_current: bool, non_finite: bool, out: &mut Vec<u8>) {
         if over_current != self.over_current {
             self.over_current = over_current;
-            self.report_fault(FaultKind::OverCurrent, over_current, out);
+            if over_current {
+                self.latch_hold(HoldCause::OverCurrent);
+            }
+            self.report_fault(FaultKind::OverCurrent, over_current, NO_CHANNEL, out);
         }
+        let channel = self.phase_fault.iter().flatten().next().copied();
+        let sensor_fault = non_finite || channel.is_some();
         if sensor_fault != self.sensor_fault {
             self.sensor_fault = sensor_fault;
-            self.report_fault(FaultKind::Sensor, sensor_fault, out);
+            if let Some(c) = channel {
+                self.log(format!(
+                    "sensor fault on channel {c}: the drive's three phases do not sum to zero \
+                     (an open or stuck transducer)"
+                ));
+            }
+            self.report_fault(
+                FaultKind::Sensor,
+                sensor_fault,
+                channel.unwrap_or(NO_CHANNEL),
+                out,
+            );
         }
     }
 }
@@ -910,6 +1330,7 @@ mod tests {
                 seq: 2,
                 override_cpct: 8760,
                 flags: 0,
+                sample_time_us: 0,
             })),
             &mut out,
         );
@@ -962,6 +1383,7 @@ mod tests {
                 seq: 2,
                 override_cpct: 12000,
                 flags: 0,
+                sample_time_us: (d.time_s() * 1e6) as u32,
             })),
             &mut out,
         );
@@ -992,10 +1414,9 @@ mod tests {
         for _ in 0..3000 {
             // Keep the watchdog fed.
             d.receive(
-                &bytes_of(Frame::Heartbeat(crate::protocol::frame::Heartbeat {
-                    seq: 1,
-                    time_us: 0,
-                })),
+                &bytes_of(Frame::Heartbeat(
+                    crate::protocol::frame::Heartbeat::default(),
+                )),
                 &mut out,
             );
             d.step_frame(&mut out);

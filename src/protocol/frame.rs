@@ -14,7 +14,7 @@
 //! `core` only, no allocation, no panic on any bytes.
 
 /// The protocol's major version: a host refuses a device of another major version.
-pub const VERSION_MAJOR: u8 = 1;
+pub const VERSION_MAJOR: u8 = 2;
 /// The protocol's minor version: additions a host of a lower minor ignores.
 pub const VERSION_MINOR: u8 = 0;
 
@@ -43,6 +43,8 @@ pub enum FrameType {
     Arm = 0x21,
     /// Host → device: hand the override back to the machine's own dial.
     Disarm = 0x22,
+    /// Host → device: the operator resets a latched feed hold.
+    Reset = 0x23,
     /// Device → host: a host command was received, with what the device applied.
     Ack = 0x30,
     /// Device → host: a fault was raised or cleared.
@@ -53,7 +55,7 @@ pub enum FrameType {
 
 impl FrameType {
     /// Every frame type, in code order.
-    pub const ALL: [FrameType; 10] = [
+    pub const ALL: [FrameType; 11] = [
         FrameType::Hello,
         FrameType::Capabilities,
         FrameType::Sample,
@@ -61,6 +63,7 @@ impl FrameType {
         FrameType::SetOverride,
         FrameType::Arm,
         FrameType::Disarm,
+        FrameType::Reset,
         FrameType::Ack,
         FrameType::Fault,
         FrameType::Heartbeat,
@@ -81,6 +84,7 @@ impl FrameType {
             FrameType::SetOverride => "set-override",
             FrameType::Arm => "arm",
             FrameType::Disarm => "disarm",
+            FrameType::Reset => "reset",
             FrameType::Ack => "ack",
             FrameType::Fault => "fault",
             FrameType::Heartbeat => "heartbeat",
@@ -96,14 +100,14 @@ impl FrameType {
     pub const fn payload_len(self) -> usize {
         match self {
             FrameType::Hello => 3,
-            FrameType::Capabilities => 106,
-            FrameType::Sample => 43,
+            FrameType::Capabilities => 114,
+            FrameType::Sample => 44,
             FrameType::SimTruth => 69,
-            FrameType::SetOverride => 8,
-            FrameType::Arm | FrameType::Disarm => 5,
+            FrameType::SetOverride => 12,
+            FrameType::Arm | FrameType::Disarm | FrameType::Reset => 5,
             FrameType::Ack => 10,
             FrameType::Fault => 14,
-            FrameType::Heartbeat => 9,
+            FrameType::Heartbeat => 15,
         }
     }
 }
@@ -179,6 +183,41 @@ pub mod feature {
     pub const ESTOP_INPUT: u8 = 1 << 1;
 }
 
+/// [`Capabilities::measured`] bits: the [`Sample`] fields the bridge really measures. A field
+/// whose bit is clear is not a measurement (0, or what the bridge itself output), and the host
+/// refuses a run that needs it.
+pub mod measured {
+    /// `spindle_speed_rpm`: the control's speed output, or an F/V converter.
+    pub const SPINDLE_SPEED: u16 = 1 << 0;
+    /// `spindle_command_rpm`: the programmed S word, read from the control.
+    pub const SPINDLE_COMMAND: u16 = 1 << 1;
+    /// `programmed_feed_mm_min`: the block's F word, read from the control.
+    pub const PROGRAMMED_FEED: u16 = 1 << 2;
+    /// `feed_mm_min`: the actual path feed (the control's, or encoders).
+    pub const ACTUAL_FEED: u16 = 1 << 3;
+    /// `applied_override_cpct` read back from the CNC, not only what the bridge output.
+    pub const APPLIED_OVERRIDE: u16 = 1 << 4;
+    /// The in-cycle flag, from the control's cycle-on output.
+    pub const IN_CYCLE: u16 = 1 << 5;
+    /// The program-end flag, from the control (M30/M02 reached).
+    pub const PROGRAM_END: u16 = 1 << 6;
+    /// The feed-hold flag, read back from the control's feed-hold state.
+    pub const FEED_HOLD: u16 = 1 << 7;
+    /// Every field above.
+    pub const ALL: u16 = 0xFF;
+    /// Each bit with its field's name, for messages.
+    pub const NAMES: [(u16, &str); 8] = [
+        (SPINDLE_SPEED, "spindle speed"),
+        (SPINDLE_COMMAND, "spindle command"),
+        (PROGRAMMED_FEED, "programmed feed"),
+        (ACTUAL_FEED, "actual feed"),
+        (APPLIED_OVERRIDE, "applied override read back from the CNC"),
+        (IN_CYCLE, "in-cycle"),
+        (PROGRAM_END, "program end"),
+        (FEED_HOLD, "feed hold read back"),
+    ];
+}
+
 /// Device → host: who the device is and what it can do.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Capabilities {
@@ -217,6 +256,14 @@ pub struct Capabilities {
     pub over_current_a: f32,
     /// Optional features ([`feature`]).
     pub features: u8,
+    /// The [`Sample`] fields the bridge really measures ([`measured`]).
+    pub measured: u16,
+    /// How long the device stays in its watchdog fallback before it holds the feed (latched
+    /// until an operator reset), ms.
+    pub fallback_limit_ms: u16,
+    /// The baud rate of the device's UART, which the host checks the line's load against at
+    /// the handshake; 0 for a line without one (USB CDC-ACM, a pipe).
+    pub line_baud: u32,
 }
 
 /// [`Sample::flags`] bits.
@@ -235,6 +282,24 @@ pub mod sample_flag {
     pub const FALLBACK: u8 = 1 << 5;
     /// The E-stop input is active.
     pub const ESTOP: u8 = 1 << 6;
+    /// The device holds the feed, latched: it stays held through any link state, Disarm and
+    /// a host's restart, until the operator resets it ([`super::Reset`]).
+    pub const HOLD_LATCHED: u8 = 1 << 7;
+}
+
+/// [`Sample::faults`] and [`Heartbeat::faults`] bits: every fault active now, as a level (bit
+/// `kind − 1` for [`FaultKind`] `kind`), so a lost Fault report is seen at the next frame.
+pub mod fault_flag {
+    /// A sensor reads implausibly (an open transducer, three phases that do not sum to zero).
+    pub const SENSOR: u8 = 1 << 0;
+    /// A phase current beyond the over-current limit.
+    pub const OVER_CURRENT: u8 = 1 << 1;
+    /// The watchdog's fallback is applied.
+    pub const WATCHDOG: u8 = 1 << 2;
+    /// The E-stop input is active.
+    pub const ESTOP: u8 = 1 << 3;
+    /// The fallback lasted its time limit: the device holds the feed.
+    pub const FALLBACK_LIMIT: u8 = 1 << 4;
 }
 
 /// [`Sample::dial_code`] when no dial code is applied.
@@ -265,8 +330,11 @@ pub struct Sample {
     pub feed_mm_min: f32,
     /// The override the CNC applies now, 0.01 %.
     pub applied_override_cpct: u16,
-    /// The dial code on the PMC inputs (bit 3 X20.7 … bit 0 X20.2), or [`NO_DIAL_CODE`].
+    /// The dial code on the bridge's four outputs (bit 3 the most significant), or
+    /// [`NO_DIAL_CODE`].
     pub dial_code: u8,
+    /// Every fault active now ([`fault_flag`]).
+    pub faults: u8,
 }
 
 /// Device → host, simulation only: the truth of the sample with the same `seq`, sent just before
@@ -313,6 +381,8 @@ pub struct SimTruth {
 pub mod command_flag {
     /// Feed hold.
     pub const FEED_HOLD: u8 = 1 << 0;
+    /// [`super::Ack::flags`] only: the feed hold is latched until the operator resets it.
+    pub const HOLD_LATCHED: u8 = 1 << 1;
 }
 
 /// Host → device: the override to apply (while armed).
@@ -324,6 +394,9 @@ pub struct SetOverride {
     pub override_cpct: u16,
     /// [`command_flag`] bits.
     pub flags: u8,
+    /// The `time_us` of the latest sample (or device heartbeat) the host had when it decided:
+    /// a device ignores a command decided on a sample older than its watchdog timeout.
+    pub sample_time_us: u32,
 }
 
 /// Host → device: take control of the override.
@@ -340,6 +413,14 @@ pub struct Disarm {
     pub seq: u32,
 }
 
+/// Host → device: the operator resets the device's latched feed hold (sent only on the
+/// operator's explicit action).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Reset {
+    /// Command counter.
+    pub seq: u32,
+}
+
 /// What the device did with a command.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum AckResult {
@@ -351,6 +432,11 @@ pub enum AckResult {
     NotArmed,
     /// Refused: the E-stop input is active.
     Refused,
+    /// Ignored as stale: its sequence number is not newer than the last command's, or it was
+    /// decided on a sample older than the device's watchdog timeout.
+    Stale,
+    /// A Reset refused: what latched the hold is still there (an over-current, the E-stop).
+    CauseActive,
     /// A code this version does not know.
     Other(u8),
 }
@@ -363,6 +449,8 @@ impl AckResult {
             AckResult::Limited => 1,
             AckResult::NotArmed => 2,
             AckResult::Refused => 3,
+            AckResult::Stale => 4,
+            AckResult::CauseActive => 5,
             AckResult::Other(c) => c,
         }
     }
@@ -374,6 +462,8 @@ impl AckResult {
             1 => AckResult::Limited,
             2 => AckResult::NotArmed,
             3 => AckResult::Refused,
+            4 => AckResult::Stale,
+            5 => AckResult::CauseActive,
             c => AckResult::Other(c),
         }
     }
@@ -405,6 +495,8 @@ pub enum FaultKind {
     Watchdog,
     /// The E-stop input.
     EStop,
+    /// The watchdog's fallback lasted its time limit: the device holds the feed (latched).
+    FallbackLimit,
     /// A code this version does not know.
     Other(u8),
 }
@@ -417,7 +509,26 @@ impl FaultKind {
             FaultKind::OverCurrent => 2,
             FaultKind::Watchdog => 3,
             FaultKind::EStop => 4,
+            FaultKind::FallbackLimit => 5,
             FaultKind::Other(c) => c,
+        }
+    }
+
+    /// Every kind this version knows, in code order.
+    pub const KNOWN: [FaultKind; 5] = [
+        FaultKind::Sensor,
+        FaultKind::OverCurrent,
+        FaultKind::Watchdog,
+        FaultKind::EStop,
+        FaultKind::FallbackLimit,
+    ];
+
+    /// Its bit in the level flags ([`fault_flag`]): bit `code − 1`; 0 for a kind this version
+    /// does not know.
+    pub fn flag(self) -> u8 {
+        match self.code() {
+            c @ 1..=8 => 1 << (c - 1),
+            _ => 0,
         }
     }
 
@@ -428,6 +539,7 @@ impl FaultKind {
             2 => FaultKind::OverCurrent,
             3 => FaultKind::Watchdog,
             4 => FaultKind::EStop,
+            5 => FaultKind::FallbackLimit,
             c => FaultKind::Other(c),
         }
     }
@@ -439,6 +551,7 @@ impl FaultKind {
             FaultKind::OverCurrent => "over-current",
             FaultKind::Watchdog => "watchdog",
             FaultKind::EStop => "e-stop",
+            FaultKind::FallbackLimit => "fallback-limit",
             FaultKind::Other(_) => "other",
         }
     }
@@ -462,12 +575,19 @@ pub struct Fault {
 }
 
 /// Either way: alive. A host's heartbeat feeds the device's watchdog like a command.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub struct Heartbeat {
     /// The sender's heartbeat counter.
     pub seq: u32,
     /// The sender's clock, µs (a host sends the device time of the latest sample it read).
     pub time_us: u32,
+    /// A device's state now ([`sample_flag`] bits; "in cycle" clear once a part ended, so a
+    /// host that lost the program-end sample still sees the end); 0 from a host.
+    pub flags: u8,
+    /// A device's faults active now ([`fault_flag`]); 0 from a host.
+    pub faults: u8,
+    /// The `seq` of the latest Sample the sender sent (a device) or read (a host).
+    pub last_sample_seq: u32,
 }
 
 /// One frame.
@@ -487,6 +607,8 @@ pub enum Frame {
     Arm(Arm),
     /// See [`Disarm`].
     Disarm(Disarm),
+    /// See [`Reset`].
+    Reset(Reset),
     /// See [`Ack`].
     Ack(Ack),
     /// See [`Fault`].
@@ -635,6 +757,7 @@ impl Frame {
             Frame::SetOverride(_) => FrameType::SetOverride,
             Frame::Arm(_) => FrameType::Arm,
             Frame::Disarm(_) => FrameType::Disarm,
+            Frame::Reset(_) => FrameType::Reset,
             Frame::Ack(_) => FrameType::Ack,
             Frame::Fault(_) => FrameType::Fault,
             Frame::Heartbeat(_) => FrameType::Heartbeat,
@@ -646,8 +769,9 @@ impl Frame {
     /// ```
     /// use cutlab::protocol::frame::{Frame, Heartbeat};
     /// let mut buf = [0u8; 16];
-    /// let n = Frame::Heartbeat(Heartbeat { seq: 1, time_us: 2 }).write_payload(&mut buf).unwrap();
-    /// assert_eq!(&buf[..n], &[0x40, 1, 0, 0, 0, 2, 0, 0, 0]);
+    /// let hb = Heartbeat { seq: 1, time_us: 2, flags: 0x12, faults: 0, last_sample_seq: 3 };
+    /// let n = Frame::Heartbeat(hb).write_payload(&mut buf).unwrap();
+    /// assert_eq!(&buf[..n], &[0x40, 1, 0, 0, 0, 2, 0, 0, 0, 0x12, 0, 3, 0, 0, 0]);
     /// ```
     pub fn write_payload(&self, buf: &mut [u8]) -> Result<usize, FrameError> {
         let mut w = Writer::new(buf);
@@ -677,6 +801,9 @@ impl Frame {
                 w.u16(c.fallback_override_cpct);
                 w.f32(c.over_current_a);
                 w.u8(c.features);
+                w.u16(c.measured);
+                w.u16(c.fallback_limit_ms);
+                w.u32(c.line_baud);
             }
             Frame::Sample(s) => {
                 w.u32(s.seq);
@@ -695,6 +822,7 @@ impl Frame {
                 w.f32(s.feed_mm_min);
                 w.u16(s.applied_override_cpct);
                 w.u8(s.dial_code);
+                w.u8(s.faults);
             }
             Frame::SimTruth(t) => {
                 w.u32(t.seq);
@@ -706,8 +834,11 @@ impl Frame {
                 w.u32(c.seq);
                 w.u16(c.override_cpct);
                 w.u8(c.flags);
+                w.u32(c.sample_time_us);
             }
-            Frame::Arm(Arm { seq }) | Frame::Disarm(Disarm { seq }) => w.u32(*seq),
+            Frame::Arm(Arm { seq })
+            | Frame::Disarm(Disarm { seq })
+            | Frame::Reset(Reset { seq }) => w.u32(*seq),
             Frame::Ack(a) => {
                 w.u32(a.seq);
                 w.u8(a.command);
@@ -726,6 +857,9 @@ impl Frame {
             Frame::Heartbeat(h) => {
                 w.u32(h.seq);
                 w.u32(h.time_us);
+                w.u8(h.flags);
+                w.u8(h.faults);
+                w.u32(h.last_sample_seq);
             }
         }
         w.finish()
@@ -736,8 +870,9 @@ impl Frame {
     ///
     /// ```
     /// use cutlab::protocol::frame::{Frame, FrameError, Heartbeat};
-    /// let f = Frame::read_payload(&[0x40, 1, 0, 0, 0, 2, 0, 0, 0, 0xAA]).unwrap();
-    /// assert_eq!(f, Frame::Heartbeat(Heartbeat { seq: 1, time_us: 2 }));
+    /// let f = Frame::read_payload(&[0x40, 1, 0, 0, 0, 2, 0, 0, 0, 0, 0, 3, 0, 0, 0, 0xAA]).unwrap();
+    /// let hb = Heartbeat { seq: 1, time_us: 2, flags: 0, faults: 0, last_sample_seq: 3 };
+    /// assert_eq!(f, Frame::Heartbeat(hb));
     /// assert_eq!(Frame::read_payload(&[0x7E]), Err(FrameError::UnknownType(0x7E)));
     /// ```
     pub fn read_payload(payload: &[u8]) -> Result<Frame, FrameError> {
@@ -776,6 +911,9 @@ impl Frame {
                 fallback_override_cpct: r.u16(),
                 over_current_a: r.f32(),
                 features: r.u8(),
+                measured: r.u16(),
+                fallback_limit_ms: r.u16(),
+                line_baud: r.u32(),
             }),
             FrameType::Sample => Frame::Sample(Sample {
                 seq: r.u32(),
@@ -790,6 +928,7 @@ impl Frame {
                 feed_mm_min: r.f32(),
                 applied_override_cpct: r.u16(),
                 dial_code: r.u8(),
+                faults: r.u8(),
             }),
             FrameType::SimTruth => {
                 let seq = r.u32();
@@ -800,9 +939,11 @@ impl Frame {
                 seq: r.u32(),
                 override_cpct: r.u16(),
                 flags: r.u8(),
+                sample_time_us: r.u32(),
             }),
             FrameType::Arm => Frame::Arm(Arm { seq: r.u32() }),
             FrameType::Disarm => Frame::Disarm(Disarm { seq: r.u32() }),
+            FrameType::Reset => Frame::Reset(Reset { seq: r.u32() }),
             FrameType::Ack => Frame::Ack(Ack {
                 seq: r.u32(),
                 command: r.u8(),
@@ -821,6 +962,9 @@ impl Frame {
             FrameType::Heartbeat => Frame::Heartbeat(Heartbeat {
                 seq: r.u32(),
                 time_us: r.u32(),
+                flags: r.u8(),
+                faults: r.u8(),
+                last_sample_seq: r.u32(),
             }),
         })
     }

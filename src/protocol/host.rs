@@ -23,14 +23,153 @@ use serde::Serialize;
 use super::codec::{encode_frame, Decoder, MAX_FRAME_LEN};
 use super::device::cpct;
 use super::frame::{
-    command_flag, feature, sample_flag, text_field, Ack, Arm, Capabilities, Disarm, FaultKind,
-    Frame, Heartbeat, Hello, OverrideModeCode, Sample, SetOverride, SimTruth, VERSION_MAJOR,
-    VERSION_MINOR,
+    command_flag, fault_flag, feature, measured, sample_flag, text_field, Ack, AckResult, Arm,
+    Capabilities, Disarm, FaultKind, Frame, FrameType, Heartbeat, Hello, OverrideModeCode, Reset,
+    Sample, SetOverride, SimTruth, VERSION_MAJOR, VERSION_MINOR,
 };
 use crate::machine::{MachineStep, OverrideCommand, PlantTruth, SensorSample};
 
 /// The longest run of lost samples the host fills by interpolation.
 pub const MAX_FILLED_GAP: u32 = 8;
+
+/// The host repeats its Hello this often until the device answers (a device may be booting).
+pub const HELLO_INTERVAL_S: f64 = 0.25;
+
+/// The host's watchdog may be set from 0.1 s (a device that streams at all sends a sample far
+/// more often) to 60 s: the one range `cutlab host --link-timeout-s` and the Hardware page
+/// accept.
+pub const LINK_TIMEOUT_RANGE_S: (f64, f64) = (0.1, 60.0);
+
+/// `link_timeout_s` if it is in [`LINK_TIMEOUT_RANGE_S`], or why not.
+///
+/// ```
+/// use cutlab::protocol::host::check_link_timeout_s;
+/// assert_eq!(check_link_timeout_s(2.0), Ok(2.0));
+/// assert!(check_link_timeout_s(1e300).unwrap_err().contains("0.1 to 60 s"));
+/// assert!(check_link_timeout_s(f64::NAN).is_err());
+/// ```
+pub fn check_link_timeout_s(link_timeout_s: f64) -> Result<f64, String> {
+    let (lo, hi) = LINK_TIMEOUT_RANGE_S;
+    if link_timeout_s >= lo && link_timeout_s <= hi {
+        Ok(link_timeout_s)
+    } else {
+        Err(format!(
+            "the host watchdog must be {lo} to {hi} s, not {}",
+            crate::input::readable(link_timeout_s)
+        ))
+    }
+}
+
+/// Bits on the line per byte: 8 data bits, a start and a stop bit (8N1).
+pub const BITS_PER_BYTE: f64 = 10.0;
+
+/// The share of a UART's baud rate the protocol may plan to use: the rest is headroom for
+/// repeated commands, fault reports and the bursts a USB-serial adapter's latency timer makes.
+pub const LINE_LOAD_LIMIT: f64 = 0.7;
+
+/// Commands (and their Acks) a second the line budget allows for: one per control period of
+/// 20 ms, the shortest the lab uses, and more than the reference host sends.
+pub const COMMANDS_PER_S: f64 = 50.0;
+
+/// A frame's length on the wire: its payload, 4 bytes of CRC, 1 of COBS overhead (payload and
+/// CRC fit one COBS group up to 254 bytes) and the two delimiters.
+pub const fn wire_len(frame_type: FrameType) -> usize {
+    frame_type.payload_len() + 4 + 1 + 2
+}
+
+/// What a device's stream asks of its line, against its declared baud rate.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LineBudget {
+    /// Bits per second both ways at the busiest: the device's samples (and SimTruth frames) and
+    /// heartbeats, the host's commands and heartbeats, and the device's Acks.
+    pub bits_per_s: f64,
+    /// The device's declared baud rate (0: none).
+    pub baud: u32,
+}
+
+impl LineBudget {
+    /// The budget of a device with `caps`.
+    ///
+    /// ```
+    /// use cutlab::protocol::host::LineBudget;
+    /// # let mut caps = cutlab::protocol::device::DeviceEmulator::new(
+    /// #     cutlab::protocol::device::DeviceConfig::new(cutlab::plant::Preset::KimStepDoc)).unwrap()
+    /// #     .capabilities().clone();
+    /// caps.features = 0; // a real bridge: no SimTruth
+    /// caps.sample_rate_hz = 1000.0;
+    /// caps.line_baud = 921_600;
+    /// let b = LineBudget::of(&caps);
+    /// assert!((b.bits_per_s - 520_700.0).abs() < 1.0 && b.fits());
+    /// caps.line_baud = 115_200;
+    /// assert!(!LineBudget::of(&caps).fits());
+    /// ```
+    pub fn of(caps: &Capabilities) -> Self {
+        let rate = f64::from(caps.sample_rate_hz);
+        let sample = wire_len(FrameType::Sample) as f64
+            + if caps.features & feature::SIM_TRUTH != 0 {
+                wire_len(FrameType::SimTruth) as f64
+            } else {
+                0.0
+            };
+        let heartbeat = wire_len(FrameType::Heartbeat) as f64;
+        let device_heartbeats_per_s = 1.0 / super::device::HEARTBEAT_INTERVAL_S;
+        // Each way is its own wire; the device's way carries the most, and the Acks.
+        let device_bytes_per_s = rate * sample
+            + device_heartbeats_per_s * heartbeat
+            + COMMANDS_PER_S * wire_len(FrameType::Ack) as f64;
+        Self {
+            bits_per_s: device_bytes_per_s * BITS_PER_BYTE,
+            baud: caps.line_baud,
+        }
+    }
+
+    /// Whether the stream fits the line with its headroom (a line without a baud rate fits).
+    pub fn fits(&self) -> bool {
+        self.baud == 0 || self.bits_per_s <= LINE_LOAD_LIMIT * f64::from(self.baud)
+    }
+
+    /// Why the line cannot carry the stream, if it cannot: the message a host refuses with.
+    pub fn refusal(&self) -> Option<String> {
+        (!self.fits()).then(|| {
+            format!(
+                "the device's line cannot carry its stream: {:.0} bit/s at the busiest is {:.0} % \
+                 of its {} baud, above the {:.0} % a line may plan to use (docs/protocol.md §1): \
+                 lower the sample rate or raise the baud rate",
+                self.bits_per_s,
+                100.0 * self.bits_per_s / f64::from(self.baud),
+                self.baud,
+                100.0 * LINE_LOAD_LIMIT
+            )
+        })
+    }
+}
+
+/// How long the actual feed may disagree with the override the bridge applies before the host
+/// calls the override stuck (device time): longer than the feed drive takes to follow a change.
+pub const OVERRIDE_MISMATCH_S: f64 = 0.5;
+
+/// The disagreement that counts: the actual feed's share of the programmed feed off the applied
+/// override by more than this many percentage points (or [`OVERRIDE_MISMATCH_FRACTION`] of it).
+pub const OVERRIDE_MISMATCH_PCT: f64 = 10.0;
+
+/// See [`OVERRIDE_MISMATCH_PCT`].
+pub const OVERRIDE_MISMATCH_FRACTION: f64 = 0.15;
+
+/// Below this programmed feed the ratio says nothing (a dwell, a stop).
+pub const OVERRIDE_CHECK_MIN_FEED_MM_MIN: f64 = 1.0;
+
+/// The feed is judged only while it moves (above this share of the programmed feed: a standing
+/// axis is a dwell, a wait for the spindle, or a stop — none of them faster than asked) ...
+pub const OVERRIDE_CHECK_MOVING_FRACTION: f64 = 0.05;
+
+/// ... and is steady: within this share of the programmed feed of its own mean over the last
+/// [`OVERRIDE_CHECK_STEADY_S`] (a drive still following a change, a corner's slowdown, are
+/// not a stuck override). No preset's plant raises the alarm through the teach cut's steps
+/// (tests/host.rs).
+pub const OVERRIDE_CHECK_STEADY_FRACTION: f64 = 0.02;
+
+/// See [`OVERRIDE_CHECK_STEADY_FRACTION`].
+pub const OVERRIDE_CHECK_STEADY_S: f64 = 0.1;
 
 /// Counts of what crossed the link, for the host's report.
 #[derive(Debug, Clone, Copy, PartialEq, Default, Serialize)]
@@ -116,8 +255,28 @@ pub struct HostSession {
     fallback: bool,
     /// Faults raised that call for the host's alarm (all but the watchdog's), not yet taken.
     alarm_faults: Vec<FaultKind>,
-    /// The E-stop flag of the latest sample.
-    estop: bool,
+    /// The faults known active ([`fault_flag`] bits), from Fault reports and the level flags
+    /// of every Sample and device Heartbeat.
+    active_faults: u8,
+    /// The device's latest word on its latched feed hold.
+    hold_latched: bool,
+    /// The device clock of the latest Sample or device Heartbeat: what a command echoes.
+    latest_device_time_us: Option<u32>,
+    /// The part's program ended (its end sample, or a heartbeat that says so).
+    part_ended: bool,
+    /// The override the bridge says it applies while armed (its latest Ack), if it does.
+    bridge_override_pct: Option<f64>,
+    /// The override the host commanded last, within the device's range, while it holds the
+    /// device.
+    commanded_pct: Option<f64>,
+    /// Device time the actual feed has disagreed with the bridge's override for.
+    mismatch_s: f64,
+    /// The actual feed's mean over the last [`OVERRIDE_CHECK_STEADY_S`] (exponential).
+    feed_mean_mm_min: f64,
+    /// A stuck override found, not yet taken; and whether one was found in this part (it is
+    /// reported once a part).
+    stuck_override: Option<String>,
+    stuck_reported: bool,
     stats: LinkStats,
     latencies: u64,
     events: Vec<LinkEvent>,
@@ -152,7 +311,16 @@ impl HostSession {
             device_armed: false,
             fallback: false,
             alarm_faults: Vec::new(),
-            estop: false,
+            active_faults: 0,
+            hold_latched: false,
+            latest_device_time_us: None,
+            part_ended: false,
+            bridge_override_pct: None,
+            commanded_pct: None,
+            mismatch_s: 0.0,
+            feed_mean_mm_min: 0.0,
+            stuck_override: None,
+            stuck_reported: false,
             stats: LinkStats::default(),
             latencies: 0,
             events: Vec::new(),
@@ -216,6 +384,23 @@ impl HostSession {
         self.device_armed
     }
 
+    /// Whether the device holds the feed latched (until the operator's reset), by its latest
+    /// Sample, Heartbeat or Ack.
+    pub fn hold_latched(&self) -> bool {
+        self.hold_latched
+    }
+
+    /// The faults the device reports active ([`fault_flag`] bits).
+    pub fn active_faults(&self) -> u8 {
+        self.active_faults
+    }
+
+    /// A stuck override found since the last call (docs/protocol.md §5): the actual feed has
+    /// not followed the override the bridge applies for [`OVERRIDE_MISMATCH_S`].
+    pub fn take_stuck_override(&mut self) -> Option<String> {
+        self.stuck_override.take()
+    }
+
     /// Records one command's round trip, device time.
     pub fn record_latency(&mut self, latency_s: f64) {
         let n = self.latencies as f64;
@@ -248,6 +433,9 @@ impl HostSession {
         self.spindle_started_s = None;
         self.last = None;
         self.last_truth = None;
+        self.part_ended = false;
+        self.mismatch_s = 0.0;
+        self.stuck_reported = false;
     }
 
     /// The part under way (1 = the first).
@@ -288,13 +476,34 @@ impl HostSession {
 
     /// Encodes a Disarm into `out`; returns its sequence number.
     pub fn disarm(&mut self, out: &mut Vec<u8>) -> u32 {
+        self.commanded_pct = None;
         let seq = self.next_command_seq();
         Self::push_frame(&Frame::Disarm(Disarm { seq }), out);
         seq
     }
 
+    /// Encodes a Reset of the device's latched feed hold into `out` (only on the operator's
+    /// explicit action); returns its sequence number.
+    pub fn reset(&mut self, out: &mut Vec<u8>) -> u32 {
+        let seq = self.next_command_seq();
+        Self::push_frame(&Frame::Reset(Reset { seq }), out);
+        seq
+    }
+
+    /// Whether the device ignored command `seq` as stale (its latest Ack says so).
+    pub fn stale(&self, seq: u32) -> bool {
+        self.last_ack
+            .is_some_and(|a| a.seq == seq && a.result == AckResult::Stale)
+    }
+
     /// Encodes a SetOverride for `command` into `out`; returns its sequence number.
     pub fn set_override(&mut self, command: OverrideCommand, out: &mut Vec<u8>) -> u32 {
+        self.commanded_pct = self.capabilities.map(|c| {
+            command.override_pct.clamp(
+                f64::from(c.min_override_cpct) / 100.0,
+                f64::from(c.max_override_cpct) / 100.0,
+            )
+        });
         let seq = self.next_command_seq();
         let frame = Frame::SetOverride(SetOverride {
             seq,
@@ -304,6 +513,7 @@ impl HostSession {
             } else {
                 0
             },
+            sample_time_us: self.latest_device_time_us.unwrap_or(0),
         });
         Self::push_frame(&frame, out);
         seq
@@ -313,11 +523,14 @@ impl HostSession {
     pub fn heartbeat(&mut self, out: &mut Vec<u8>) {
         self.heartbeat_seq = self.heartbeat_seq.wrapping_add(1);
         self.stats.heartbeats_sent += 1;
-        let time_us = self.last_time_us.unwrap_or(0);
+        let time_us = self.latest_device_time_us.unwrap_or(0);
         Self::push_frame(
             &Frame::Heartbeat(Heartbeat {
                 seq: self.heartbeat_seq,
                 time_us,
+                flags: 0,
+                faults: 0,
+                last_sample_seq: self.expected_seq.map_or(0, |s| s.wrapping_sub(1)),
             }),
             out,
         );
@@ -346,6 +559,16 @@ impl HostSession {
                 self.stats.commands_acknowledged += 1;
                 self.last_ack_seq = Some(a.seq);
                 self.last_ack = Some(a);
+                self.hold_latched = a.flags & command_flag::HOLD_LATCHED != 0;
+                let applied = matches!(a.result, AckResult::Applied | AckResult::Limited);
+                if a.command == FrameType::Disarm as u8 && applied {
+                    self.bridge_override_pct = None;
+                } else if (a.command == FrameType::SetOverride as u8
+                    || a.command == FrameType::Arm as u8)
+                    && applied
+                {
+                    self.bridge_override_pct = Some(f64::from(a.applied_override_cpct) / 100.0);
+                }
             }
             Frame::Fault(f) => {
                 let raised = f.active != 0;
@@ -355,26 +578,140 @@ impl HostSession {
                 if f.kind == FaultKind::Watchdog && raised {
                     self.stats.watchdog_fallbacks += 1;
                     self.fallback = true;
-                } else if raised {
+                } else if raised && self.active_faults & f.kind.flag() == 0 {
                     self.alarm_faults.push(f.kind);
                 }
-                if f.kind == FaultKind::EStop {
-                    // Its samples' flag then says nothing new.
-                    self.estop = raised;
+                if raised {
+                    self.active_faults |= f.kind.flag();
+                } else {
+                    self.active_faults &= !f.kind.flag();
                 }
+                let channel = if f.channel == 0xFF {
+                    String::new()
+                } else {
+                    format!(", channel {}", f.channel)
+                };
                 self.event(format!(
-                    "device fault {} {} (override now {} %)",
+                    "device fault {} {}{channel} (override now {} %)",
                     f.kind.name(),
                     if raised { "raised" } else { "cleared" },
                     f64::from(f.applied_override_cpct) / 100.0
                 ));
             }
-            // Heartbeats only show the device is alive; a host ignores frames a host sends.
-            Frame::Heartbeat(_)
-            | Frame::Hello(_)
+            Frame::Heartbeat(h) => self.device_heartbeat(&h),
+            // A host ignores frames a host sends.
+            Frame::Hello(_)
             | Frame::SetOverride(_)
             | Frame::Arm(_)
-            | Frame::Disarm(_) => {}
+            | Frame::Disarm(_)
+            | Frame::Reset(_) => {}
+        }
+    }
+
+    /// The level flags of a Sample or a device Heartbeat: a fault active there whose report was
+    /// lost is raised now (once), and one no longer there is cleared.
+    fn level_faults(&mut self, faults: u8) {
+        let raised = faults & !self.active_faults;
+        for kind in FaultKind::KNOWN {
+            if raised & kind.flag() == 0 {
+                continue;
+            }
+            if kind == FaultKind::Watchdog {
+                // Answered by re-arming (the flag bit 5 of a Sample says the same).
+                continue;
+            }
+            self.event(format!(
+                "the device's {} fault is active (its report was lost on the line)",
+                kind.name()
+            ));
+            self.alarm_faults.push(kind);
+        }
+        self.active_faults = faults;
+    }
+
+    /// A device's heartbeat: its clock, its faults, its latched hold, and — when a part's
+    /// samples were streaming and it says no program runs any more — the part's end, in case
+    /// the program-end sample was lost.
+    fn device_heartbeat(&mut self, h: &Heartbeat) {
+        self.latest_device_time_us = Some(h.time_us);
+        self.level_faults(h.faults);
+        self.hold_latched = h.flags & sample_flag::HOLD_LATCHED != 0;
+        let Some(last) = self.last else {
+            return;
+        };
+        let after_last_sample = self
+            .last_time_us
+            .is_some_and(|t| h.time_us.wrapping_sub(t) < 1 << 31 && h.time_us != t);
+        if !self.part_ended && h.flags & sample_flag::IN_CYCLE == 0 && after_last_sample {
+            self.part_ended = true;
+            let lost = h
+                .last_sample_seq
+                .wrapping_sub(self.expected_seq.map_or(0, |e| e.wrapping_sub(1)));
+            self.event(format!(
+                "program end: the device's heartbeat says the part ended ({lost} last samples, \
+                 the program-end one among them, lost on the line)"
+            ));
+            self.stats.frames_lost += u64::from(lost);
+            self.queue.push_back(LinkSample {
+                program_end: true,
+                ..last
+            });
+        }
+    }
+
+    /// Compares the actual feed's share of the programmed feed with the override the bridge
+    /// says it applies; a disagreement that lasts [`OVERRIDE_MISMATCH_S`] is a stuck override
+    /// (the selector on the dial, a dead output, a ladder that ignores the code).
+    fn watch_override(&mut self, s: &Sample, period_s: f64) {
+        let feed = f64::from(s.feed_mm_min);
+        if feed.is_finite() {
+            let k = (period_s / OVERRIDE_CHECK_STEADY_S).min(1.0);
+            self.feed_mean_mm_min += (feed - self.feed_mean_mm_min) * k;
+        }
+        let held = s.flags & (sample_flag::FEED_HOLD | sample_flag::ESTOP) != 0;
+        let controlled = s.flags & sample_flag::ARMED != 0;
+        let programmed = f64::from(s.programmed_feed_mm_min);
+        // What the machine should do: the override the host commanded, or the one the bridge
+        // last acknowledged (a command still on its way, or an Ack lost on the line, leaves one
+        // of them behind; a stuck override disagrees with both).
+        let expected: Vec<f64> = [self.commanded_pct, self.bridge_override_pct]
+            .into_iter()
+            .flatten()
+            .collect();
+        let (Some(&bridge_pct), true, false) = (expected.last(), controlled, held) else {
+            self.mismatch_s = 0.0;
+            return;
+        };
+        let moving = feed > OVERRIDE_CHECK_MOVING_FRACTION * programmed;
+        let steady =
+            (feed - self.feed_mean_mm_min).abs() <= OVERRIDE_CHECK_STEADY_FRACTION * programmed;
+        if programmed.is_nan()
+            || programmed < OVERRIDE_CHECK_MIN_FEED_MM_MIN
+            || s.flags & sample_flag::SPINDLE_RUNNING == 0
+            || !moving
+            || !steady
+        {
+            self.mismatch_s = 0.0;
+            return;
+        }
+        let moving_pct = 100.0 * feed / programmed;
+        let agrees = |pct: &f64| {
+            (moving_pct - pct).abs() <= OVERRIDE_MISMATCH_PCT.max(OVERRIDE_MISMATCH_FRACTION * pct)
+        };
+        if expected.iter().any(agrees) || !moving_pct.is_finite() {
+            self.mismatch_s = 0.0;
+            return;
+        }
+        self.mismatch_s += period_s;
+        if self.mismatch_s >= OVERRIDE_MISMATCH_S && !self.stuck_reported {
+            let text = format!(
+                "stuck override: for {OVERRIDE_MISMATCH_S} s the machine has moved at {moving_pct:.0} % \
+                 of the programmed feed while the bridge applies {bridge_pct:.0} % (the selector on \
+                 the dial, a dead output, or a ladder that ignores the code)"
+            );
+            self.event(text.clone());
+            self.stuck_override = Some(text);
+            self.stuck_reported = true;
         }
     }
 
@@ -463,13 +800,20 @@ impl HostSession {
             }
         }
         self.last = Some(sample);
+        self.latest_device_time_us = Some(s.time_us);
         self.device_armed = s.flags & sample_flag::ARMED != 0;
-        let estop = s.flags & sample_flag::ESTOP != 0;
-        if estop && !self.estop {
-            self.event("the device's samples show its E-stop input active (its fault report lost)");
-            self.alarm_faults.push(FaultKind::EStop);
+        self.hold_latched = s.flags & sample_flag::HOLD_LATCHED != 0;
+        // The E-stop flag (bit 6) says what the faults' E-stop bit says.
+        let estop = if s.flags & sample_flag::ESTOP != 0 {
+            fault_flag::ESTOP
+        } else {
+            0
+        };
+        self.level_faults(s.faults | estop);
+        self.watch_override(s, period_s);
+        if sample.program_end {
+            self.part_ended = true;
         }
-        self.estop = estop;
         let fallback = s.flags & sample_flag::FALLBACK != 0;
         if self.fallback && !fallback {
             self.event("device back under the host's control");
@@ -644,8 +988,10 @@ impl KeepUp {
             session.arm(out);
         }
         let changed = self.command != Some(command);
-        let unacknowledged = !session.acknowledged(self.command_seq)
-            && now_s - self.command_sent_s >= 2.0 * interval;
+        // A command the device ignored as stale goes again at once, decided on fresher samples.
+        let unacknowledged = (!session.acknowledged(self.command_seq)
+            && now_s - self.command_sent_s >= 2.0 * interval)
+            || session.stale(self.command_seq);
         if changed || unacknowledged {
             self.command = Some(command);
             self.command_seq = session.set_override(command, out);
@@ -686,6 +1032,14 @@ pub struct DeviceSummary {
     pub fallback_override_pct: f64,
     /// Whether it sends simulation truth.
     pub sim_truth: bool,
+    /// How long its fallback lasts before it holds the feed.
+    pub fallback_limit_s: f64,
+    /// The Sample fields it really measures.
+    pub measured: Vec<&'static str>,
+    /// The missing ones.
+    pub not_measured: Vec<&'static str>,
+    /// Its line's baud rate (0: none declared).
+    pub line_baud: u32,
 }
 
 impl DeviceSummary {
@@ -709,6 +1063,18 @@ impl DeviceSummary {
             watchdog_timeout_s: f64::from(c.watchdog_timeout_ms) / 1000.0,
             fallback_override_pct: f64::from(c.fallback_override_cpct) / 100.0,
             sim_truth: c.features & feature::SIM_TRUTH != 0,
+            fallback_limit_s: f64::from(c.fallback_limit_ms) / 1000.0,
+            measured: measured::NAMES
+                .iter()
+                .filter(|(bit, _)| c.measured & bit != 0)
+                .map(|(_, name)| *name)
+                .collect(),
+            not_measured: measured::NAMES
+                .iter()
+                .filter(|(bit, _)| c.measured & bit == 0)
+                .map(|(_, name)| *name)
+                .collect(),
+            line_baud: c.line_baud,
         }
     }
 }
@@ -737,6 +1103,9 @@ mod tests {
             fallback_override_cpct: 5000,
             over_current_a: 150.0,
             features: 0,
+            measured: measured::ALL,
+            fallback_limit_ms: 5000,
+            line_baud: 0,
         }
     }
 
@@ -754,6 +1123,7 @@ mod tests {
             feed_mm_min: 200.0,
             applied_override_cpct: 10000,
             dial_code: 0xFF,
+            faults: 0,
         }
     }
 

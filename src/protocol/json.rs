@@ -7,8 +7,8 @@
 //! `kind`) are names, or numbers for codes this version does not know; `f32` fields are numbers
 //! (NaN and ±∞ are `null`, which encodes as NaN). Encoding takes the same objects, strictly: a
 //! field the frame type does not have is an error listing the fields it has ([`field_names`]),
-//! and so is a field left out, except a `flags` byte, which then has no bit set
-//! ([`DEFAULT_ZERO_FIELD`]); so are a field given twice ([`parse_line`]), a number beyond an
+//! and so is a field left out, except a `flags` or `faults` byte, which then has no bit set
+//! ([`DEFAULT_ZERO_FIELDS`]); so are a field given twice ([`parse_line`]), a number beyond an
 //! `f32` field's range (it would become ±∞ on the wire) and a NUL in a text field (it would end
 //! the text there). An error quotes at most 40 characters of a bad value.
 //!
@@ -27,8 +27,8 @@ use crate::input::excerpt;
 
 use super::frame::{
     padded, text_field, Ack, AckResult, Arm, Capabilities, Disarm, Fault, FaultKind, Frame,
-    FrameType, Heartbeat, Hello, OverrideModeCode, Sample, SetOverride, SimTruth, DEVICE_ID_LEN,
-    PROGRAM_LEN,
+    FrameType, Heartbeat, Hello, OverrideModeCode, Reset, Sample, SetOverride, SimTruth,
+    DEVICE_ID_LEN, PROGRAM_LEN,
 };
 
 fn mode_name(m: OverrideModeCode) -> Value {
@@ -46,6 +46,8 @@ fn result_name(r: AckResult) -> Value {
         AckResult::Limited => json!("limited"),
         AckResult::NotArmed => json!("not-armed"),
         AckResult::Refused => json!("refused"),
+        AckResult::Stale => json!("stale"),
+        AckResult::CauseActive => json!("cause-active"),
         AckResult::Other(c) => json!(c),
     }
 }
@@ -88,6 +90,9 @@ pub fn frame_to_json(frame: &Frame) -> Value {
             "fallback_override_cpct": c.fallback_override_cpct,
             "over_current_a": c.over_current_a,
             "features": c.features,
+            "measured": c.measured,
+            "fallback_limit_ms": c.fallback_limit_ms,
+            "line_baud": c.line_baud,
         }),
         Frame::Sample(s) => json!({
             "seq": s.seq,
@@ -102,6 +107,7 @@ pub fn frame_to_json(frame: &Frame) -> Value {
             "feed_mm_min": s.feed_mm_min,
             "applied_override_cpct": s.applied_override_cpct,
             "dial_code": s.dial_code,
+            "faults": s.faults,
         }),
         Frame::SimTruth(t) => {
             let mut m = Map::new();
@@ -112,10 +118,16 @@ pub fn frame_to_json(frame: &Frame) -> Value {
             Value::Object(m)
         }
         Frame::SetOverride(c) => {
-            json!({"seq": c.seq, "override_cpct": c.override_cpct, "flags": c.flags})
+            json!({
+                "seq": c.seq,
+                "override_cpct": c.override_cpct,
+                "flags": c.flags,
+                "sample_time_us": c.sample_time_us,
+            })
         }
         Frame::Arm(a) => json!({"seq": a.seq}),
         Frame::Disarm(d) => json!({"seq": d.seq}),
+        Frame::Reset(r) => json!({"seq": r.seq}),
         Frame::Ack(a) => json!({
             "seq": a.seq,
             "command": FrameType::from_code(a.command).map_or(json!(a.command), |t| json!(t.name())),
@@ -131,7 +143,13 @@ pub fn frame_to_json(frame: &Frame) -> Value {
             "channel": f.channel,
             "applied_override_cpct": f.applied_override_cpct,
         }),
-        Frame::Heartbeat(h) => json!({"seq": h.seq, "time_us": h.time_us}),
+        Frame::Heartbeat(h) => json!({
+            "seq": h.seq,
+            "time_us": h.time_us,
+            "flags": h.flags,
+            "faults": h.faults,
+            "last_sample_seq": h.last_sample_seq,
+        }),
     };
     if let Value::Object(m) = &mut v {
         m.insert("type".into(), json!(frame.frame_type().name()));
@@ -144,7 +162,10 @@ pub fn frame_to_json(frame: &Frame) -> Value {
 /// ```
 /// use cutlab::protocol::frame::FrameType;
 /// use cutlab::protocol::json::field_names;
-/// assert_eq!(field_names(FrameType::SetOverride), ["seq", "override_cpct", "flags"]);
+/// assert_eq!(
+///     field_names(FrameType::SetOverride),
+///     ["seq", "override_cpct", "flags", "sample_time_us"]
+/// );
 /// ```
 pub fn field_names(frame_type: FrameType) -> &'static [&'static str] {
     match frame_type {
@@ -167,6 +188,9 @@ pub fn field_names(frame_type: FrameType) -> &'static [&'static str] {
             "fallback_override_cpct",
             "over_current_a",
             "features",
+            "measured",
+            "fallback_limit_ms",
+            "line_baud",
         ],
         FrameType::Sample => &[
             "seq",
@@ -181,10 +205,11 @@ pub fn field_names(frame_type: FrameType) -> &'static [&'static str] {
             "feed_mm_min",
             "applied_override_cpct",
             "dial_code",
+            "faults",
         ],
         FrameType::SimTruth => &SIM_TRUTH_FIELDS,
-        FrameType::SetOverride => &["seq", "override_cpct", "flags"],
-        FrameType::Arm | FrameType::Disarm => &["seq"],
+        FrameType::SetOverride => &["seq", "override_cpct", "flags", "sample_time_us"],
+        FrameType::Arm | FrameType::Disarm | FrameType::Reset => &["seq"],
         FrameType::Ack => &["seq", "command", "result", "applied_override_cpct", "flags"],
         FrameType::Fault => &[
             "seq",
@@ -194,7 +219,7 @@ pub fn field_names(frame_type: FrameType) -> &'static [&'static str] {
             "channel",
             "applied_override_cpct",
         ],
-        FrameType::Heartbeat => &["seq", "time_us"],
+        FrameType::Heartbeat => &["seq", "time_us", "flags", "faults", "last_sample_seq"],
     }
 }
 
@@ -209,10 +234,10 @@ const SIM_TRUTH_FIELDS: [&str; 17] = {
     names
 };
 
-/// The one field that may be left out of an object: a `flags` byte, which then has no bit set
-/// (no feed hold, no state). Every other field is required: a value left out is far more often a
-/// typo than a wish for zero, and a zero override is a feed stop.
-pub const DEFAULT_ZERO_FIELD: &str = "flags";
+/// The fields that may be left out of an object: a `flags` or `faults` byte, which then has no
+/// bit set (no feed hold, no state, no fault). Every other field is required: a value left out
+/// is far more often a typo than a wish for zero, and a zero override is a feed stop.
+pub const DEFAULT_ZERO_FIELDS: [&str; 2] = ["flags", "faults"];
 
 /// Reads the fields of one object of a known frame type, naming the type and the field in
 /// errors.
@@ -226,7 +251,7 @@ impl Fields<'_> {
     fn get(&self, name: &str) -> Result<Option<&Value>, String> {
         match self.map.get(name) {
             Some(v) => Ok(Some(v)),
-            None if name == DEFAULT_ZERO_FIELD => Ok(None),
+            None if DEFAULT_ZERO_FIELDS.contains(&name) => Ok(None),
             None => Err(format!("{}: missing field {name:?}", self.type_name)),
         }
     }
@@ -485,13 +510,10 @@ pub fn frame_from_json(value: &Value) -> Result<Frame, String> {
         (1, "limited"),
         (2, "not-armed"),
         (3, "refused"),
+        (4, "stale"),
+        (5, "cause-active"),
     ];
-    let kinds = [
-        (1, "sensor"),
-        (2, "over-current"),
-        (3, "watchdog"),
-        (4, "e-stop"),
-    ];
+    let kinds = FaultKind::KNOWN.map(|k| (k.code(), k.name()));
     let commands: Vec<(u8, &str)> = FrameType::ALL
         .iter()
         .map(|t| (*t as u8, t.name()))
@@ -519,6 +541,9 @@ pub fn frame_from_json(value: &Value) -> Result<Frame, String> {
             fallback_override_cpct: f.int("fallback_override_cpct")?,
             over_current_a: f.f32("over_current_a")?,
             features: f.int("features")?,
+            measured: f.int("measured")?,
+            fallback_limit_ms: f.int("fallback_limit_ms")?,
+            line_baud: f.int("line_baud")?,
         }),
         FrameType::Sample => Frame::Sample(Sample {
             seq: f.int("seq")?,
@@ -533,6 +558,7 @@ pub fn frame_from_json(value: &Value) -> Result<Frame, String> {
             feed_mm_min: f.f32("feed_mm_min")?,
             applied_override_cpct: f.int("applied_override_cpct")?,
             dial_code: f.int("dial_code")?,
+            faults: f.int("faults")?,
         }),
         FrameType::SimTruth => {
             let mut v = [0f32; 16];
@@ -545,9 +571,11 @@ pub fn frame_from_json(value: &Value) -> Result<Frame, String> {
             seq: f.int("seq")?,
             override_cpct: f.int("override_cpct")?,
             flags: f.int("flags")?,
+            sample_time_us: f.int("sample_time_us")?,
         }),
         FrameType::Arm => Frame::Arm(Arm { seq: f.int("seq")? }),
         FrameType::Disarm => Frame::Disarm(Disarm { seq: f.int("seq")? }),
+        FrameType::Reset => Frame::Reset(Reset { seq: f.int("seq")? }),
         FrameType::Ack => Frame::Ack(Ack {
             seq: f.int("seq")?,
             command: f.code("command", &commands)?,
@@ -566,6 +594,9 @@ pub fn frame_from_json(value: &Value) -> Result<Frame, String> {
         FrameType::Heartbeat => Frame::Heartbeat(Heartbeat {
             seq: f.int("seq")?,
             time_us: f.int("time_us")?,
+            flags: f.int("flags")?,
+            faults: f.int("faults")?,
+            last_sample_seq: f.int("last_sample_seq")?,
         }),
     })
 }
@@ -622,7 +653,7 @@ mod tests {
         assert_eq!(
             e,
             "set-override: unknown field \"override_pct\"; a set-override frame has seq, \
-             override_cpct, flags"
+             override_cpct, flags, sample_time_us"
         );
         let e = frame_from_json(&json!({"type": "arm", "seq": 1, "a": 1, "b": 2})).unwrap_err();
         assert!(e.starts_with("arm: unknown fields \"a\", \"b\";"), "{e}");
@@ -684,14 +715,17 @@ mod tests {
     }
 
     #[test]
-    fn only_a_flags_byte_may_be_left_out_and_it_is_then_zero() {
-        let f = frame_from_json(&json!({"type": "set-override", "seq": 1, "override_cpct": 8000}));
+    fn only_a_flags_or_faults_byte_may_be_left_out_and_it_is_then_zero() {
+        let f = frame_from_json(
+            &json!({"type": "set-override", "seq": 1, "override_cpct": 8000, "sample_time_us": 5}),
+        );
         assert_eq!(
             f,
             Ok(Frame::SetOverride(SetOverride {
                 seq: 1,
                 override_cpct: 8000,
-                flags: 0
+                flags: 0,
+                sample_time_us: 5,
             }))
         );
         let mut caps = frame_to_json(&zero_frame(FrameType::Capabilities));

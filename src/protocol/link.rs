@@ -1,6 +1,7 @@
 //! Byte links in real time (native only): the device emulator driven by the wall clock, the
-//! host's end of a link with its watchdog and its answers to the device's faults, each part the
-//! device runs as a [`Machine`], and the closed loop over a link ([`run_on_link`]).
+//! host's end of a link with its watchdog and its answers to the device's faults, and each part
+//! the device runs as a [`Machine`] (the closed loop over a link is the application's:
+//! `crate::hardware::link_run`).
 //!
 //! Both ends read on a thread of their own ([`spawn_reader`]) so that a blocking `Read` (a pipe,
 //! a child's stdout, a serial port opened as a file) can be waited on with a timeout; the queue
@@ -19,21 +20,43 @@ use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 use super::device::DeviceEmulator;
-use super::frame::{Capabilities, FaultKind, VERSION_MAJOR, VERSION_MINOR};
-use super::host::{DeviceSummary, HostSession, KeepUp, LinkEvent, LinkSample, LinkStats};
-use crate::closed_loop::definition::RunSpec;
-use crate::closed_loop::error::LoopError;
-use crate::closed_loop::lab::{
-    cut_model_teach_force, metrics_config, LabRun, RunMachines, RunResult,
+use super::frame::{AckResult, Capabilities, FaultKind, VERSION_MAJOR, VERSION_MINOR};
+use super::host::{
+    check_link_timeout_s, HostSession, KeepUp, LineBudget, LinkSample, HELLO_INTERVAL_S,
 };
-use crate::closed_loop::metrics::compute;
-use crate::closed_loop::teach_cut::TeachForce;
-use crate::estimation::estimator::Calibration;
 use crate::machine::{Machine, MachineStep, OverrideCommand};
-use crate::work::Work;
 
 /// Bytes read at most per chunk.
 pub const READ_CHUNK: usize = 4096;
+
+/// `seconds` as a wait: the one place the link turns a number of seconds into a [`Duration`].
+/// It never panics: NaN and negative seconds wait nothing, more than a `Duration` holds waits
+/// the longest one (whoever waits that long is still waiting for an event, not a clock).
+///
+/// ```
+/// use std::time::Duration;
+/// use cutlab::protocol::link::wait_s;
+/// assert_eq!(wait_s(0.25), Duration::from_millis(250));
+/// assert_eq!((wait_s(-1.0), wait_s(f64::NAN)), (Duration::ZERO, Duration::ZERO));
+/// assert_eq!(wait_s(1e300), Duration::MAX);
+/// ```
+pub fn wait_s(seconds: f64) -> Duration {
+    if seconds > 0.0 {
+        Duration::try_from_secs_f64(seconds).unwrap_or(Duration::MAX)
+    } else {
+        Duration::ZERO
+    }
+}
+
+/// How long from now until `seconds` after `start`: zero once it has passed, the longest wait
+/// when `start + seconds` is beyond what an [`Instant`] holds.
+fn left_until(start: Instant, seconds: f64) -> Duration {
+    start
+        .checked_add(wait_s(seconds))
+        .map_or(Duration::MAX, |deadline| {
+            deadline.saturating_duration_since(Instant::now())
+        })
+}
 
 /// Chunks the device's reader queues before it waits (64 KiB): a host sends a few frames per
 /// control period, so a full queue is a flood, and the reader stops reading until the device has
@@ -138,15 +161,20 @@ pub struct DeviceRun {
 /// `input` ends: what arrives on `input` is handed to the device as it comes — at most
 /// two chunks between two runs of the frames that are due, so no flood
 /// starves its clock — what the device sends is written to `output` and flushed after every
-/// burst, its diagnostics go to `diagnostics` a line at a time. Device timestamps stay in device
-/// time.
+/// burst, its diagnostics go to `diagnostics` a line at a time, and, with `trace`, what it
+/// applied at each sample as CSV ([`super::device::DeviceTraceRow`]; the device must keep a
+/// trace, [`super::device::DeviceConfig::trace`]). Device timestamps stay in device time.
 pub fn run_device<R: Read + Send + 'static>(
     device: &mut DeviceEmulator,
     input: R,
     output: &mut dyn Write,
     diagnostics: &mut dyn Write,
+    mut trace: Option<&mut dyn Write>,
     time_scale: f64,
 ) -> DeviceRun {
+    if let Some(t) = trace.as_mut() {
+        let _ = writeln!(t, "{}", super::device::DeviceTraceRow::CSV_HEADER);
+    }
     let rx = spawn_reader(input, DEVICE_QUEUE_CHUNKS);
     let start = Instant::now();
     let mut out = Vec::with_capacity(64 * 1024);
@@ -174,6 +202,11 @@ pub fn run_device<R: Read + Send + 'static>(
         for line in device.drain_diagnostics() {
             let _ = writeln!(diagnostics, "{line}");
         }
+        if let Some(t) = trace.as_mut() {
+            for row in device.take_trace() {
+                let _ = writeln!(t, "{}", row.csv_line());
+            }
+        }
         if !out.is_empty() {
             if output
                 .write_all(&out)
@@ -190,7 +223,7 @@ pub fn run_device<R: Read + Send + 'static>(
         if frames == 0 {
             // Nothing due: wait for input or for the next frame, whichever comes first.
             let next_s = (device.time_s() + device.frame_period_s()) / time_scale;
-            let wait = Duration::from_secs_f64((next_s - start.elapsed().as_secs_f64()).max(0.0));
+            let wait = left_until(start, next_s);
             match rx.recv_timeout(wait) {
                 Ok(bytes) => device.receive(&bytes, &mut out),
                 Err(RecvTimeoutError::Timeout) => {}
@@ -237,6 +270,24 @@ impl Default for HostOptions {
             link_timeout_s: 2.0,
             handshake_timeout_s: 10.0,
         }
+    }
+}
+
+impl HostOptions {
+    /// A host watchdog of `link_timeout_s` (checked against [`super::host::LINK_TIMEOUT_RANGE_S`]),
+    /// the handshake waiting five times as long.
+    ///
+    /// ```
+    /// use cutlab::protocol::link::HostOptions;
+    /// assert_eq!(HostOptions::new(2.0).unwrap(), HostOptions::default());
+    /// assert!(HostOptions::new(1e300).is_err());
+    /// ```
+    pub fn new(link_timeout_s: f64) -> Result<Self, HostError> {
+        let link_timeout_s = check_link_timeout_s(link_timeout_s).map_err(HostError)?;
+        Ok(Self {
+            link_timeout_s,
+            handshake_timeout_s: 5.0 * link_timeout_s,
+        })
     }
 }
 
@@ -345,11 +396,13 @@ pub struct HostLink {
     events_logged: usize,
 }
 
-/// A device fault the host answered with an alarm: the loop stopped there.
+/// A device fault (or a stuck override, or a latched hold) the host answered with an alarm: the
+/// loop stopped there.
 #[derive(Debug, Clone, PartialEq)]
 pub struct HostAlarm {
-    /// The fault.
-    pub kind: FaultKind,
+    /// The device's fault; `None` for what the host found itself (a stuck override, a feed
+    /// hold latched at the device).
+    pub kind: Option<FaultKind>,
     /// The part it came in (1 = the first armed).
     pub part: u32,
     /// What the host did, in words.
@@ -393,9 +446,9 @@ impl HostLink {
             session.hello(&mut out);
             line.send(&out)
                 .map_err(|e| HostError(format!("cannot write to the device: {e}")))?;
-            let until = Instant::now() + Duration::from_millis(250);
+            let hello_sent = Instant::now();
             while session.capabilities().is_none() {
-                let left = until.saturating_duration_since(Instant::now());
+                let left = left_until(hello_sent, HELLO_INTERVAL_S);
                 if left.is_zero() {
                     break;
                 }
@@ -423,6 +476,9 @@ impl HostLink {
             return Err(HostError(format!(
                 "the device declares a sample rate of {rate} Hz"
             )));
+        }
+        if let Some(why) = LineBudget::of(&capabilities).refusal() {
+            return Err(HostError(why));
         }
         Ok(Self {
             session,
@@ -471,13 +527,12 @@ impl HostLink {
         f64::from(self.capabilities.fallback_override_cpct) / 100.0
     }
 
-    /// Answers the faults the device raised (docs/protocol.md §5): the first one while the host
-    /// holds the device stops the loop (the part ends for it) and is kept as the alarm.
+    /// Answers the faults the device raised (docs/protocol.md §5), a stuck override and a
+    /// feed hold latched at the device: the first while the host holds the device stops the
+    /// loop (the part ends for it) and is kept as the alarm.
     fn watch_faults(&mut self) {
+        let mut found: Vec<(Option<FaultKind>, String)> = Vec::new();
         for kind in self.session.take_alarm_faults() {
-            if self.alarm.is_some() {
-                continue;
-            }
             let text = match kind {
                 FaultKind::EStop => "alarm: the device's E-stop input is active: the loop stops; \
                      the host disarms the device (commands are refused under E-stop, and after \
@@ -485,11 +540,28 @@ impl HostLink {
                     .to_string(),
                 k => format!(
                     "alarm: device fault {} raised: the loop stops; the host holds the safe \
-                     override ({} %) until the part ends, then disarms",
+                     override ({} %) while the device still runs the part, then disarms",
                     k.name(),
                     self.safe_override_pct()
                 ),
             };
+            found.push((Some(kind), text));
+        }
+        if let Some(stuck) = self.session.take_stuck_override() {
+            found.push((None, format!("alarm: {stuck}: the loop stops")));
+        }
+        if self.part_running && self.session.hold_latched() {
+            found.push((
+                None,
+                "alarm: the device holds the feed, latched: the loop stops; the operator resets \
+                 it once the cause is cleared (cutlab host --reset-hold)"
+                    .to_string(),
+            ));
+        }
+        for (kind, text) in found {
+            if self.alarm.is_some() {
+                continue;
+            }
             self.session.event(text.clone());
             self.alarm = Some(HostAlarm {
                 kind,
@@ -538,8 +610,13 @@ impl HostLink {
         }
     }
 
+    /// The part under way when the link was lost, if it was.
+    pub fn lost_in_part(&self) -> Option<u32> {
+        self.lost_in_part
+    }
+
     /// The event that recorded the link's loss.
-    fn lost_reason(&self) -> String {
+    pub fn lost_reason(&self) -> String {
         self.session
             .events()
             .iter()
@@ -550,7 +627,7 @@ impl HostLink {
 
     /// The next sample of the running part, waiting for it up to the host's watchdog.
     fn next_sample(&mut self) -> Option<LinkSample> {
-        let deadline = Instant::now() + Duration::from_secs_f64(self.options.link_timeout_s);
+        let start = Instant::now();
         loop {
             if self.lost {
                 return None;
@@ -561,7 +638,7 @@ impl HostLink {
                 self.write_events();
                 return Some(s);
             }
-            let left = deadline.saturating_duration_since(Instant::now());
+            let left = left_until(start, self.options.link_timeout_s);
             match self.line.receive(left) {
                 Ok(bytes) => self.session.receive(&bytes),
                 Err(RecvTimeoutError::Timeout) => {
@@ -638,9 +715,16 @@ impl HostLink {
             let estop = self
                 .alarm
                 .as_ref()
-                .is_some_and(|a| a.kind == FaultKind::EStop);
+                .is_some_and(|a| a.kind == Some(FaultKind::EStop));
             let feed_hold = self.last_command.feed_hold;
-            if !estop && (self.alarm.is_some() || feed_hold) {
+            if self.session.hold_latched() {
+                // The device holds the feed on its own until the operator's reset: the part
+                // cannot end, and nothing the host sends would change it.
+                self.session.event(
+                    "the device holds the feed, latched: the host disarms; the hold stays until \
+                     the operator resets it",
+                );
+            } else if !estop && (self.alarm.is_some() || feed_hold) {
                 self.hold_until_part_ends(feed_hold);
             }
         }
@@ -678,10 +762,49 @@ impl HostLink {
                     self.part_running = false;
                     self.session.event("program end");
                 }
+                // A hold latched at the device outlasts the part: nothing more to wait for.
+                Some(_) if self.session.hold_latched() => break,
                 Some(_) => {}
                 None => break,
             }
         }
+    }
+
+    /// The operator's reset of a feed hold latched at the device (`cutlab host --reset-hold`):
+    /// sends Reset and waits, up to the host's watchdog, for its Ack. The answer says whether the
+    /// hold was released.
+    pub fn reset_hold(&mut self) -> Result<String, HostError> {
+        let seq = self.session.reset(&mut self.out);
+        self.flush_out();
+        let start = Instant::now();
+        while !self.session.acknowledged(seq) {
+            if self.lost {
+                return Err(HostError(self.lost_reason()));
+            }
+            match self
+                .line
+                .receive(left_until(start, self.options.link_timeout_s))
+            {
+                Ok(bytes) => self.session.receive(&bytes),
+                Err(_) => {
+                    return Err(HostError(format!(
+                        "no answer to the reset within {} s",
+                        self.options.link_timeout_s
+                    )))
+                }
+            }
+        }
+        let ack = self.session.last_ack();
+        Ok(match ack.map(|a| a.result) {
+            Some(AckResult::Applied) => "the feed hold is released (none was latched, or the \
+                 operator's reset cleared it)"
+                .to_string(),
+            Some(AckResult::CauseActive) => "the device keeps the feed hold: its cause (an \
+                 over-current, the E-stop) is still there"
+                .to_string(),
+            Some(other) => format!("the device answered the reset with {other:?}"),
+            None => "no answer".to_string(),
+        })
     }
 }
 
@@ -712,6 +835,13 @@ impl LinkPart {
             stop_at_s: None,
             stopped_at_limit: Rc::new(RefCell::new(false)),
         }
+    }
+
+    /// Ends the part for the loop at machine time `stop_at_s` (a duration limit); the flag
+    /// returned says, afterwards, whether it did end there.
+    pub fn stop_at(&mut self, stop_at_s: Option<f64>) -> Rc<RefCell<bool>> {
+        self.stop_at_s = stop_at_s;
+        Rc::clone(&self.stopped_at_limit)
     }
 }
 
@@ -758,118 +888,5 @@ impl Machine for LinkPart {
 
     fn finished(&self) -> bool {
         self.done
-    }
-}
-
-/// A closed-loop run made over a link.
-pub struct LinkRun {
-    /// The run (its trace marked incomplete and its metrics recomputed when the link was lost).
-    pub result: Result<RunResult, HostError>,
-    /// What crossed the link.
-    pub stats: LinkStats,
-    /// What happened on it.
-    pub events: Vec<LinkEvent>,
-    /// Whether the host's watchdog (or an I/O error) ended it.
-    pub link_lost: bool,
-    /// The device fault that stopped the loop, if one did.
-    pub alarm: Option<HostAlarm>,
-    /// The device.
-    pub device: DeviceSummary,
-}
-
-/// Runs `spec`'s teach cut and closed loop on the device at the other end of `link`, through the
-/// same [`LabRun`] `cutlab sim` uses: the first part is the teach cut, the second the run. With
-/// `calibration` (a saved calibration file) there is no teach cut: the first part is the run.
-/// The teach cut takes its force from the simulation's truth when the device sends it, otherwise
-/// from the model of the preset's cut ([`cut_model_teach_force`]); a program whose cut changes
-/// along the path needs a calibration. `duration_s` stops the closed loop early.
-///
-/// A link lost or a device fault's alarm (docs/protocol.md §5) during the teach cut is an error
-/// (no calibration, no run); during the run, the result holds the run up to there, its trace
-/// marked incomplete, and [`LinkRun::link_lost`] or [`LinkRun::alarm`] says why.
-pub fn run_on_link(
-    link: HostLink,
-    spec: &RunSpec,
-    duration_s: Option<f64>,
-    calibration: Option<Calibration>,
-) -> LinkRun {
-    let device = DeviceSummary::of(link.capabilities());
-    // The part the closed loop runs on: the second, after the teach cut's.
-    let run_part = if calibration.is_some() { 1 } else { 2 };
-    let teach_force = if device.sim_truth {
-        Some(TeachForce::SimulationTruth)
-    } else {
-        cut_model_teach_force(spec.preset)
-    };
-    let link = Rc::new(RefCell::new(link));
-    let part = || Box::new(LinkPart::new(Rc::clone(&link)));
-    // A loop that starts at once from a calibration is built before `limit_duration_s` can
-    // reach it, so its part ends at the limit instead.
-    let stopped_at_limit = Rc::new(RefCell::new(false));
-    let run = match (calibration, teach_force) {
-        (Some(calibration), _) => {
-            let mut run_part = part();
-            run_part.stop_at_s = duration_s;
-            run_part.stopped_at_limit = Rc::clone(&stopped_at_limit);
-            LabRun::calibrated_on(spec, run_part, calibration)
-        }
-        (None, Some(teach_force)) => LabRun::on_machines(
-            spec,
-            RunMachines::Separate {
-                teach: part(),
-                run: part(),
-            },
-            teach_force,
-        ),
-        (None, None) => Err(LoopError::NoTeachForce),
-    };
-    let result = run.and_then(|mut run| {
-        if let Some(d) = duration_s {
-            run.limit_duration_s(d);
-        }
-        run.run_to_end()
-    });
-    let result = result.map_err(|e: LoopError| HostError(e.to_string()));
-    let mut link = link.borrow_mut();
-    link.finish();
-    let lost = link.lost();
-    let alarm = link.alarm().cloned();
-    // What ended the session before the run's program could end, and in which part.
-    let stopped = match (&alarm, link.lost_in_part) {
-        (Some(a), _) => Some((a.part, a.text.clone())),
-        (None, Some(part)) => Some((part, link.lost_reason())),
-        (None, None) => None,
-    };
-    let result = match (result, stopped) {
-        (result, Some((part, why))) if part < run_part => {
-            let then = match result {
-                Err(HostError(e)) => format!(" ({e})"),
-                Ok(_) => String::new(),
-            };
-            Err(HostError(format!(
-                "the teach cut (part {part}) was abandoned, so there is no run: {why}{then}"
-            )))
-        }
-        (Ok(mut r), Some(_)) => {
-            // The loop saw the part end; it ended because the link or the alarm did.
-            r.trace.completed = false;
-            r.metrics = compute(&r.trace, &metrics_config(r.spec.preset, &r.settings));
-            Ok(r)
-        }
-        (Ok(mut r), None) if *stopped_at_limit.borrow() => {
-            r.trace.completed = false;
-            r.metrics = compute(&r.trace, &metrics_config(r.spec.preset, &r.settings));
-            Ok(r)
-        }
-        (result, _) => result,
-    };
-    let session = link.session();
-    LinkRun {
-        result,
-        stats: session.stats(),
-        events: session.events().to_vec(),
-        link_lost: lost,
-        alarm,
-        device,
     }
 }

@@ -7,10 +7,22 @@
 //!         ◄─────────────────────────────────────── Capabilities
 //!   Arm ─────────────────────────────────────────►
 //!         ◄────────────────────────── Ack, then Sample, Sample, … (SimTruth before each, if simulated)
-//!   SetOverride / Heartbeat ─────────────────────►  (feeds the device's watchdog)
-//!         ◄─────────────────────────────────────── Ack, Fault, Heartbeat
+//!   SetOverride / Heartbeat ─────────────────────►  (feeds the device's watchdog; stale ones ignored)
+//!         ◄─────────────────────────────────────── Ack, Fault, Heartbeat (faults as levels)
 //!   Disarm ──────────────────────────────────────►
+//!   Reset ───────────────────────────────────────►  (the operator's, of a latched feed hold)
 //! ```
+//!
+//! | file | what |
+//! |---|---|
+//! | [`crc`], [`cobs`], [`frame`], [`codec`] | the `no_std` codec: CRC-32, COBS, the frames and their layouts, framing |
+//! | [`json`] | frames as JSON lines (`cutlab protocol encode`/`decode`) |
+//! | [`host`] | the host's side without I/O: samples, faults, the stuck-override watch, the line budget, keeping a device up |
+//! | [`device`] | the device emulator without I/O: the simulated machine, its watchdog, fallback, latched hold and injected faults |
+//! | `link` | byte links in real time (native): the emulator on a clock, the host's end of a line, each part as a machine |
+//!
+//! This is a transport: it knows frames, parts and watchdogs, not runs. The closed loop over a
+//! link is the application's (`crate::hardware::link_run`).
 //!
 //! The codec — [`crc`], [`cobs`], [`frame`] and [`codec`] — uses `core` alone, allocates nothing
 //! and never panics, so a bridge's firmware can compile those four files as they are

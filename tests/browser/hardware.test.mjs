@@ -230,20 +230,37 @@ test('a real device behind a fake serial port: handshake, teach cut, arm, acknow
     assert.equal(opened.parity, 'even');
     assert.equal(opened.dataBits, 8);
     const identity = page.getByRole('definition');
-    await page.getByText('Why: handshake complete: cutlab-emulator (maneerat-doc-1), protocol 1.0').waitFor();
+    await page.getByText('Why: handshake complete: cutlab-emulator (maneerat-doc-1), protocol 2.0').waitFor();
     assert.ok(await identity.filter({ hasText: 'cutlab-emulator' }).count());
-    assert.ok(await identity.filter({ hasText: /^1\.0$/ }).count());
+    assert.ok(await identity.filter({ hasText: /^2\.0$/ }).count());
     assert.ok(await identity.filter({ hasText: '1000 Hz' }).count());
+    // A real port starts from reduce-only limits, and the machine's view of the feed hold shows.
+    await page.getByRole('alert').filter({ hasText: /A real port: reduce-only limits, the highest override set to 100 %/ }).waitFor();
+    assert.equal(await page.getByLabel(/Highest override/).inputValue(), '100');
+    await page.getByRole('status', { name: 'Feed hold at the machine' }).filter({ hasText: 'none latched' }).waitFor();
 
-    // Teach cut over the link: the next part, open loop.
-    await confirm(page, 'Teach cut…', 'Start the teach cut', [/100 %, 30 %, 140 %, 60 %/, /safe override/]);
+    // Teach cut over the link: the next part, open loop, inside the reduce-only limit. The first
+    // arming of this device names every commissioning check, and waits for each.
+    await page.getByRole('button', { name: 'Teach cut…' }).click();
+    const firstDialog = page.getByRole('dialog');
+    await firstDialog.waitFor();
+    assert.match(await firstDialog.textContent(), /100 %, 30 %, 100 %, 60 %/);
+    const checks = firstDialog.getByRole('group', { name: /First arming of cutlab-emulator: the commissioning checks/ }).getByRole('checkbox');
+    assert.equal(await checks.count(), 10);
+    assert.ok(await firstDialog.getByRole('button', { name: 'Start the teach cut' }).isDisabled());
+    await firstDialog.getByRole('checkbox', { name: /PMC diagnosis screen/ }).waitFor();
+    for (let i = 0; i < 10; i += 1) await checks.nth(i).check();
+    await firstDialog.getByRole('button', { name: 'Start the teach cut' }).click();
+    await firstDialog.waitFor({ state: 'hidden' });
     await page.getByText('Link state: armed').waitFor();
     await page.getByText(/teach cut over the link \(part 1\): \d+ periods/).waitFor({ timeout: LONG });
     await page.getByText('Link state: streaming').waitFor();
 
-    // Arm: the confirmation names the limits in force.
-    await confirm(page, 'Arm…', 'Arm now', [/Override 10–150 %/, /Overload: feed hold/, /falls back to 50 %/]);
+    // Arm: the confirmation names the limits in force (this device is commissioned now: no
+    // checks again).
+    await confirm(page, 'Arm…', 'Arm now', [/Override 10–100 %/, /Overload: feed hold/, /falls back to 50 %/]);
     await page.getByText('Link state: armed').waitFor();
+    await page.getByText(/If the link is lost now: after 2 s the device applies [\d.]+ %/).waitFor({ timeout: LONG });
     // Override commands reach the device and its acknowledgements come back.
     await waitForCounter(page, 'Commands acknowledged', (n) => n >= 6);
     await page.getByText(/Last acknowledgement: set-override #\d+: applied; override now [\d.]+ %/).waitFor({ timeout: LONG });
@@ -257,7 +274,7 @@ test('a real device behind a fake serial port: handshake, teach cut, arm, acknow
     await page.getByText('Link state: alarm').waitFor();
     await page.getByRole('alert').filter({ hasText: /link lost: .*unplugged|link lost: reading the port failed/ }).first().waitFor();
     assert.equal(await counter(page, 'Link losses (host watchdog, port lost)'), 1);
-    await page.getByText(/the device applies its fallback override \(50 %\) on its own/).first().waitFor();
+    await page.getByText(/the device applies its fallback override \(at most 50 %, never above the applied\) on its own/).first().waitFor();
     assert.ok((await longestTask()) < 200, `the page froze for ${await longestTask()} ms`);
     // The device, hearing nothing more, falls back on its own watchdog (2 s of device time).
     const first = bridge.current;
@@ -265,7 +282,7 @@ test('a real device behind a fake serial port: handshake, teach cut, arm, acknow
     while (!/watchdog: nothing from the host/.test(first.log) && Date.now() < until) {
       await new Promise((r) => setTimeout(r, 50));
     }
-    assert.match(first.log, /watchdog: nothing from the host for 2 s; fallback override 50 % applied/);
+    assert.match(first.log, /watchdog: nothing from the host for 2 s; fallback override [\d.]+ % \(the lower of the applied and the configured 50 %\)/);
     await bridge.close();
 
     // What crossed the line, decoded by the core's own tool: Arms and SetOverrides went out,

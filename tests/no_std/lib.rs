@@ -21,7 +21,10 @@ pub mod frame;
 
 /// One frame encoded and decoded, so the build exercises the whole path.
 pub fn round_trip_heartbeat(seq: u32) -> bool {
-    let frame = frame::Frame::Heartbeat(frame::Heartbeat { seq, time_us: 0 });
+    let frame = frame::Frame::Heartbeat(frame::Heartbeat {
+        seq,
+        ..frame::Heartbeat::default()
+    });
     let mut out = [0u8; codec::MAX_FRAME_LEN];
     let Ok(n) = codec::encode_frame(&frame, &mut out) else {
         return false;

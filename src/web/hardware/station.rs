@@ -58,6 +58,10 @@ pub struct Snapshot {
     pub recording: Option<String>,
     /// Which port: "virtual device", "serial port", or nothing.
     pub port: Option<&'static str>,
+    /// The feed hold the device latched, as the machine sees it (until the operator's reset).
+    pub hold: Option<String>,
+    /// What the machine gets if the link is lost now, while the host holds the device.
+    pub if_link_lost: Option<String>,
 }
 
 /// The station.
@@ -466,6 +470,25 @@ impl Station {
         Ok(effects)
     }
 
+    /// The operator resets the feed hold the device latched (its cause cleared).
+    pub fn reset_hold(&mut self) -> Result<Effects, String> {
+        let now = now_s();
+        let s = self
+            .session
+            .as_mut()
+            .ok_or_else(|| "no device: connect first".to_string())?;
+        s.reset_hold()?;
+        let mut effects = Effects::default();
+        self.after_session(now, &mut effects);
+        effects.state_changed = true;
+        Ok(effects)
+    }
+
+    /// Whether the port is a real serial port (not the virtual device).
+    pub fn on_serial_port(&self) -> bool {
+        self.port.as_ref().is_some_and(|p| !p.is_virtual())
+    }
+
     /// Whether the host is running a teach cut or the loop (Escape has something to stop).
     pub fn running(&self) -> bool {
         self.session
@@ -531,6 +554,8 @@ impl Station {
                 .collect(),
             recording,
             port,
+            hold: s.hold_state(),
+            if_link_lost: s.if_link_lost(),
         }
     }
 
@@ -627,10 +652,32 @@ fn details(c: &crate::protocol::frame::Capabilities) -> Vec<(String, String)> {
         (
             "Device watchdog".into(),
             format!(
-                "{} s, then {} % (its fallback)",
+                "{} s, then at most {} % (the lower of it and the override applied) for {} s, \
+                 then a latched feed hold",
                 f64::from(c.watchdog_timeout_ms) / 1000.0,
-                f64::from(c.fallback_override_cpct) / 100.0
+                f64::from(c.fallback_override_cpct) / 100.0,
+                f64::from(c.fallback_limit_ms) / 1000.0
             ),
+        ),
+        ("Measures".into(), {
+            let d = crate::protocol::host::DeviceSummary::of(c);
+            if d.not_measured.is_empty() {
+                d.measured.join(", ")
+            } else {
+                format!(
+                    "{}; not: {}",
+                    d.measured.join(", "),
+                    d.not_measured.join(", ")
+                )
+            }
+        }),
+        (
+            "Line".into(),
+            if c.line_baud == 0 {
+                "no baud rate declared (USB CDC-ACM or a pipe)".to_string()
+            } else {
+                format!("{} baud", c.line_baud)
+            },
         ),
         (
             "Over-current fault".into(),

@@ -22,6 +22,9 @@ use crate::closed_loop::definition::RunSetting;
 use crate::closed_loop::definition::RunSpec;
 use crate::closed_loop::lab::RunResult;
 use crate::control::registry::ControllerKind;
+use crate::hardware::commissioning::{
+    commissioned, with_commissioned, CHECKS, COMMISSIONED_DEVICES_KEY, REDUCE_ONLY_MAX_OVERRIDE_PCT,
+};
 use crate::hardware::recording::RecordingMeta;
 use crate::hardware::session::{LinkState, SessionOptions, Stage, TaughtCalibration};
 use crate::input::{parse_count, parse_number, parse_seed};
@@ -359,6 +362,26 @@ struct Confirm {
     teach: bool,
     lines: Vec<String>,
     spec: RunSpec,
+    /// The device's identity, when this is the first Arm on a real device not yet commissioned
+    /// in this browser: the confirmation then names every commissioning check.
+    uncommissioned: Option<String>,
+}
+
+/// The devices commissioned in this browser (their identities, one a line).
+fn commissioned_devices() -> Option<String> {
+    window()
+        .local_storage()
+        .ok()
+        .flatten()
+        .and_then(|s| s.get_item(COMMISSIONED_DEVICES_KEY).ok().flatten())
+}
+
+/// Remembers that the engineer confirmed every commissioning check for `device_id`.
+fn remember_commissioned(device_id: &str) {
+    if let Some(storage) = window().local_storage().ok().flatten() {
+        let text = with_commissioned(commissioned_devices().as_deref(), device_id);
+        let _ = storage.set_item(COMMISSIONED_DEVICES_KEY, &text);
+    }
 }
 
 /// The settings of the run shown in the Control panel, in order.
@@ -376,6 +399,22 @@ const SIGNAL_SETTINGS: [RunSetting; 4] = [
     RunSetting::SpindleCutoff,
     RunSetting::FeedCutoff,
 ];
+
+/// On a real port the run starts from reduce-only limits: the highest override at most
+/// [`REDUCE_ONLY_MAX_OVERRIDE_PCT`] (docs/hardware.md §7), whatever the form held.
+fn reduce_only(scenario: ScenarioForm, ui: Ui) {
+    let max = scenario.text(RunSetting::MaxOverride);
+    let above =
+        parse_number(&max.get_untracked()).map_or(true, |v| v > REDUCE_ONLY_MAX_OVERRIDE_PCT);
+    if above {
+        max.set(format!("{REDUCE_ONLY_MAX_OVERRIDE_PCT}"));
+        ui.message.set(Some(format!(
+            "A real port: reduce-only limits, the highest override set to \
+             {REDUCE_ONLY_MAX_OVERRIDE_PCT} % (raise it only after the commissioning checks, \
+             docs/hardware.md §10)."
+        )));
+    }
+}
 
 fn pct(v: f64) -> String {
     if v.is_finite() {
@@ -535,6 +574,8 @@ pub fn HardwarePage() -> impl IntoView {
                     });
                     if let Some(mut stale) = port {
                         stale.close();
+                    } else {
+                        reduce_only(scenario, ui);
                     }
                     ui.publish(station, true);
                 }
@@ -640,8 +681,10 @@ pub fn HardwarePage() -> impl IntoView {
     // Teach cut and arming, through the confirmation.
     let dialog_ref = NodeRef::<leptos::html::Dialog>::new();
     let pending = RwSignal::new(None::<Confirm>);
+    let ticked = RwSignal::new(vec![false; CHECKS.len()]);
     let ask = move |teach: bool| {
         ui.message.set(None);
+        ticked.set(vec![false; CHECKS.len()]);
         let Some(spec) = spec.get_untracked() else {
             ui.message.set(Some(
                 "Fix the settings marked in the Control panel first.".into(),
@@ -650,10 +693,17 @@ pub fn HardwarePage() -> impl IntoView {
         };
         match station.try_with_value(|s| s.limits(teach, &spec)) {
             Some(Ok(limits)) => {
+                let device_id = ui
+                    .snapshot
+                    .with_untracked(|s| s.device.as_ref().map(|d| d.device_id.clone()));
+                let on_serial = station.try_with_value(Station::on_serial_port) == Some(true);
+                let uncommissioned = device_id
+                    .filter(|id| on_serial && !commissioned(commissioned_devices().as_deref(), id));
                 pending.set(Some(Confirm {
                     teach,
                     lines: limits.lines,
                     spec,
+                    uncommissioned,
                 }));
                 if let Some(d) = dialog_ref.get_untracked() {
                     let _ = d.show_modal();
@@ -670,6 +720,12 @@ pub fn HardwarePage() -> impl IntoView {
         let Some(c) = pending.get_untracked() else {
             return;
         };
+        if let Some(id) = &c.uncommissioned {
+            if !ticked.with_untracked(|t| t.iter().all(|&x| x)) {
+                return;
+            }
+            remember_commissioned(id);
+        }
         pending.set(None);
         match station.try_update_value(|s| s.start(c.teach, &c.spec)) {
             Some(Ok(e)) => ui.apply(station, e),
@@ -687,6 +743,14 @@ pub fn HardwarePage() -> impl IntoView {
         if let Some(e) = station.try_update_value(|s| s.disarm("disarmed by the operator")) {
             ui.apply(station, e);
         }
+    };
+    let reset_hold = move |_| match station.try_update_value(Station::reset_hold) {
+        Some(Ok(e)) => {
+            ui.message.set(None);
+            ui.apply(station, e);
+        }
+        Some(Err(e)) => ui.message.set(Some(format!("Not reset: {e}."))),
+        None => {}
     };
     let acknowledge = move |_| match station.try_update_value(Station::acknowledge) {
         Some(Ok(e)) => {
@@ -941,6 +1005,14 @@ pub fn HardwarePage() -> impl IntoView {
                             <button type="button" on:click=acknowledge hidden=move || state.get() != Some(LinkState::Alarm)>
                                 "Acknowledge the alarm"
                             </button>
+                            <button
+                                type="button"
+                                class="danger"
+                                on:click=reset_hold
+                                hidden=move || ui.snapshot.with(|s| s.hold.is_none())
+                            >
+                                "Reset the feed hold"
+                            </button>
                         </div>
                         {move || ui.message.get().map(|m| view! { <p class="run-error" role="alert">{m}</p> })}
                     </LinkPanel>
@@ -981,10 +1053,34 @@ pub fn HardwarePage() -> impl IntoView {
                         <p>"The limits in force:"</p>
                         <ul>{c.lines.iter().map(|l| view! { <li>{l.clone()}</li> }).collect_view()}</ul>
                         <p class="hint">"Disarm or Escape returns the override to the safe value at once."</p>
+                        {c.uncommissioned.clone().map(|id| view! {
+                            <fieldset class="commissioning">
+                                <legend>{format!("First arming of {id}: the commissioning checks (docs/hardware.md §10)")}</legend>
+                                {CHECKS.iter().enumerate().map(|(i, check)| view! {
+                                    <label class="check">
+                                        <input
+                                            type="checkbox"
+                                            prop:checked=move || ticked.with(|t| t.get(i).copied().unwrap_or(false))
+                                            on:change=move |ev| {
+                                                let on = event_target_checked(&ev);
+                                                ticked.update(|t| if let Some(x) = t.get_mut(i) { *x = on });
+                                            }
+                                        />
+                                        {check.text}
+                                    </label>
+                                }).collect_view()}
+                            </fieldset>
+                        })}
                     }
                 })}
                 <div class="button-row">
-                    <button type="button" class="primary" on:click=confirm>
+                    <button
+                        type="button"
+                        class="primary"
+                        on:click=confirm
+                        disabled=move || pending.with(|p| p.as_ref().is_some_and(|c| c.uncommissioned.is_some()))
+                            && !ticked.with(|t| t.iter().all(|&x| x))
+                    >
                         {move || if pending.with(|p| p.as_ref().is_some_and(|c| c.teach)) { "Start the teach cut" } else { "Arm now" }}
                     </button>
                     <button type="button" on:click=cancel>"Cancel"</button>
@@ -1067,6 +1163,15 @@ fn LinkPanel(ui: Ui, children: Children) -> impl IntoView {
                     pct(s.applied_pct),
                     if s.fallback { " — the device is in its watchdog fallback" } else { "" },
                 ))}
+            </p>
+            <p class="hold" role="status" aria-label="Feed hold at the machine">
+                {move || s.with(|s| s.hold.clone().map_or_else(
+                    || "Feed hold: none latched at the device.".to_string(),
+                    |h| format!("Feed hold: {h}."),
+                ))}
+            </p>
+            <p class="hint if-link-lost">
+                {move || s.with(|s| s.if_link_lost.clone())}
             </p>
             <p class="hint">
                 {move || s.with(|s| s.last_ack.clone().map_or_else(
