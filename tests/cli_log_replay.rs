@@ -350,3 +350,49 @@ fn a_time_column_that_does_not_increase_is_named_as_such() {
     );
     assert!(!out.contains("line 0"), "{out}");
 }
+
+/// A control period that is not a whole number of the log's samples is rounded, and the replay
+/// says so; one shorter than a sample, or outside the run definition's range, is refused in the
+/// run definition's words.
+#[test]
+fn a_period_is_rounded_to_whole_log_samples_or_refused_as_the_run_definition_says() {
+    let replay = |period: &str| {
+        common::cutlab_text(
+            &[
+                "log",
+                "replay",
+                EXPORT,
+                "--current",
+                "S_Strom [A]",
+                "--controller",
+                "pi",
+                "--target-a",
+                "10",
+                "--period-s",
+                period,
+            ],
+            "",
+        )
+    };
+    // The export samples every 0.06 s: 0.1 s is 1.67 samples, run as 2.
+    let (result, out) = replay("0.1");
+    result.unwrap();
+    assert!(out.contains("control periods of 0.12 s"), "{out}");
+    assert!(
+        out.contains("the control period 0.1 s is rounded to 0.12 s, 2 samples of 0.06 s"),
+        "{out}"
+    );
+    let (result, _) = replay("0.02");
+    let e = result.unwrap_err();
+    assert!(
+        e.contains("--period-s: 0.02 s is shorter than one sample of the machine (0.06 s)"),
+        "{e}"
+    );
+    // Beyond the run definition's range, as `cutlab sim --period-s` says it: a 69 s log was
+    // replayed in one period before.
+    let (result, _) = replay("1000");
+    assert_eq!(
+        result.unwrap_err(),
+        "--period-s: 1000 s is outside 0.001–2 s"
+    );
+}
