@@ -401,3 +401,33 @@ fn the_checker_finds_what_it_is_meant_to() {
     assert_eq!(graph[&vec!["a".to_string()]], BTreeSet::from([x.clone()]));
     assert_eq!(cycles(&graph).len(), 1);
 }
+
+#[test]
+fn every_module_directory_lists_its_files() {
+    // A directory's mod.rs opens with a table of its files, as src/lib.rs has for the crate: each
+    // child module named in a `//! | …` row.
+    let known = source();
+    let mut missing = Vec::new();
+    for (module, text) in &known {
+        let children: Vec<&String> = known
+            .keys()
+            .filter(|m| m.len() == module.len() + 1 && m.starts_with(module))
+            .map(|m| &m[module.len()])
+            .collect();
+        if module.is_empty() || children.is_empty() {
+            continue;
+        }
+        let rows: Vec<&str> = text
+            .lines()
+            .take_while(|l| l.starts_with("//!"))
+            .filter(|l| l.starts_with("//! |"))
+            .collect();
+        for child in children {
+            let named = format!("`{child}`");
+            if !rows.iter().any(|r| r.contains(&named)) {
+                missing.push(format!("{}: no row for {child}", name(module)));
+            }
+        }
+    }
+    assert!(missing.is_empty(), "module tables:\n{}", missing.join("\n"));
+}

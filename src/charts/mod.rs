@@ -8,6 +8,12 @@
 //! Non-finite points are gaps: a series is split into separate polylines around them, so one bad
 //! sample never draws a line to infinity. On a logarithmic axis, points at or below zero are gaps
 //! too.
+//!
+//! | file | what |
+//! |---|---|
+//! | this file | line charts: series, axes, drawing on any `DrawingArea`, the geometry for the pointer |
+//! | [`pareto`] | a trade-off chart: every result as a dot, the Pareto front highlighted |
+//! | [`view`] | what part of a chart is shown: zoom, pan, hidden series, the hover readout |
 
 pub mod pareto;
 pub mod view;

@@ -3,6 +3,18 @@
 //! [`run`] takes the arguments and the standard streams, so tests drive the whole command line
 //! in-process. clap (derive) parses them: each subcommand lives in its own module with an
 //! `…Args` struct (its options, their help and value names) and a `run(args, io)` function.
+//!
+//! | file | what |
+//! |---|---|
+//! | [`args`] | option values and the errors of the command line |
+//! | [`sim`] | `cutlab sim` and `cutlab compare`: closed-loop runs on the presets, or a saved configuration |
+//! | [`tune`] | `cutlab tune`: sweeps, Nelder–Mead and teach-in |
+//! | [`controllers`], [`scenarios`] | `cutlab controllers` and `cutlab scenarios`: what the lab offers |
+//! | [`calibrate`] | `cutlab calibrate`: the current-to-force models from a log of control periods |
+//! | [`log`] | `cutlab log inspect`, `analyse`, `replay`: engineers' own logs |
+//! | [`force`], [`filter`], [`spectrum`] | one cut's forces; Butterworth design and filtering; Welch spectra |
+//! | [`fuzzy`] | `cutlab fuzzy eval` and `export`: the fuzzy engine on FLL files |
+//! | [`device`], [`host`], [`protocol`] | the device emulator on stdin/stdout, the closed loop over the protocol, frames as JSON |
 
 pub mod args;
 pub mod calibrate;

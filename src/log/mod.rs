@@ -19,6 +19,17 @@
 //! NaN and ±∞ in a numeric column (written as such, or a number beyond a double's range) are
 //! kept as values, counted per column ([`Column::not_finite`]) and left out of statistics, which
 //! say how many values they left out.
+//!
+//! | file | what |
+//! |---|---|
+//! | this file | [`Log`]: the builder that reads a file's records into columns, and what it could not read |
+//! | [`csv`] | the incremental reader of messy CSV: encodings, dialects, quotes, line ends |
+//! | [`analysis`] | the signal chain on a log's columns: statistics whole and per label, filtering, spectra |
+//! | [`mapping`] | which column is which signal of the machine, guessed and edited |
+//! | [`machine`] | a log as a machine, and what the run's settings need to know about it |
+//! | [`replay`] | controllers replayed on a log through the lab's closed loop |
+//! | [`calibration`] | calibration from a recorded log: the teach cut over the log |
+//! | [`period_log`] | calibration from a log whose rows are control periods (`cutlab calibrate`, logged teach-in) |
 
 pub mod analysis;
 pub mod calibration;

@@ -14,6 +14,11 @@
 //! the same bits too: [`Phasor`] keeps an advancing angle's cosine and sine by rotation,
 //! [`wrap_turn`] replaces `rem_euclid(2π)` for an angle that moved by less than a turn, and
 //! [`round_ties_even`] rounds without a call.
+//!
+//! | file | what |
+//! |---|---|
+//! | this file | sine, cosine, exponential and friends through libm, `Phasor`, `wrap_turn`, `round_ties_even` |
+//! | [`least_squares`] | ordinary least squares by Householder QR, for every calibration |
 
 pub mod least_squares;
 

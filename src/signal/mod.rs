@@ -19,7 +19,8 @@
 //! | [`spectrum`] | windowed single-sided amplitude spectrum, Welch PSD, peaks, spindle/tooth-passing markers, a check that time stamps are evenly spaced | `welch` |
 //! | [`chain`] | the closed loop's signal chain: every sensor sample's phase currents low-passed and three-phase RMS'd, summed into one [`PeriodSummary`](chain::PeriodSummary) per control period | — |
 //! | [`decimate`] | min/max decimation of long series for plotting | — |
-//! | [`stats`] | [`MinMeanMax`](stats::MinMeanMax): running minimum, mean and maximum of a stream | — |
+//! | [`stats`] | [`MinMeanMax`](stats::MinMeanMax): running minimum, mean and maximum of a stream; the one [`median`](stats::median) | `numpy.median` |
+//! | `complex` | complex arithmetic with the same bits natively and in wasm (private) | — |
 //!
 //! ## Design apart from state
 //!

@@ -16,6 +16,13 @@
 //! paper values and the caller's) with the tuned parameters set. Natively every (point, scenario)
 //! run of a sweep, and the scenarios of each search evaluation, share the machine's cores through
 //! one queue; the results are in the same order, bit for bit, however many threads ran them.
+//!
+//! | file | what |
+//! |---|---|
+//! | this file | the problem (controller, ranges, scenarios, objective), sweeps, searches, the Pareto front |
+//! | [`objective`] | the weighted objective a tuning minimises |
+//! | [`nelder_mead`] | Nelder–Mead inside a box, deterministic |
+//! | [`teach_in`] | what a teach cut learned and the target, reference current and gap proposed from it |
 
 pub mod nelder_mead;
 pub mod objective;

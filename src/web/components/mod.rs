@@ -1,4 +1,18 @@
 //! Reusable pieces of the UI.
+//!
+//! | file | what |
+//! |---|---|
+//! | [`chart`] | a chart on a canvas a person can explore: zoom, pan, readout, legend |
+//! | [`heat_map`] | a heat map on a canvas, cells picked by click or keyboard |
+//! | [`fields`] | labelled form fields that keep what was typed and say why it is not accepted |
+//! | [`run_form`] | the forms that define a run, from the run definition's table |
+//! | [`run_view`] | charts, metrics table and event log of closed-loop runs |
+//! | [`savings`] | the savings rows of the metrics tables |
+//! | [`teach_cuts`], [`recent`] | the last teach cuts' calibrations and other recent answers, by key |
+//! | [`saved_calibrations`] | the calibrations saved in this browser |
+//! | [`runner`], [`work_job`] | long computations in slices of a task, and the job a page shares |
+//! | [`later`] | a page mounted in pieces, a task each |
+//! | [`download`] | saving what the lab made as a file |
 
 pub mod chart;
 pub mod download;

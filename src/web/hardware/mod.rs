@@ -7,6 +7,12 @@
 //!   ─► bytes back to the Port; rows ─► live window (charts) and Recorder ─► Store (IndexedDB)
 //! page timer ─► Station::tick (watchdogs, heartbeats, flush); page ◄─ Station::snapshot
 //! ```
+//!
+//! | file | what |
+//! |---|---|
+//! | [`port`] | the byte ports: WebSerial, or the device emulator in the page |
+//! | [`station`] | the page's state outside the reactive system: the session, the port, the recorder |
+//! | [`store`] | the recordings in IndexedDB |
 
 pub mod port;
 pub mod station;

@@ -1,4 +1,16 @@
 //! One module per section of the lab.
+//!
+//! | file | what |
+//! |---|---|
+//! | [`simulate`] | one closed loop on a preset |
+//! | [`compare`] | two to four controllers on one scenario |
+//! | [`logs`] | engineers' own logs: read, analysed, calibrated from, replayed |
+//! | [`fuzzy`] | paper 002's fuzzy rules: table, surface, viewer, FLL |
+//! | [`plant`] | the simulated machine on its own, and the brake bench |
+//! | [`signal_chain`] | the Butterworth design and what it does to the bench's current |
+//! | [`tune`] | teach-in, sweeps and searches |
+//! | [`hardware`] | a real machine over WebSerial, or the virtual device |
+//! | [`learn`] | the ideas in four steps, with the papers' equations |
 
 pub mod compare;
 pub mod fuzzy;
