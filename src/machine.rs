@@ -2,7 +2,7 @@
 //!
 //! A [`Machine`] takes the feed-override command of one sample period and returns what its sensors
 //! read in that period. The simulated FANUC machine ([`crate::plant`]), a replayed CSV log
-//! ([`crate::log::replay::LogMachine`]) and a real machine behind the serial protocol implement
+//! ([`crate::log::machine::LogMachine`]) and a real machine behind the serial protocol implement
 //! it, so the signal chain, estimator, controllers and safety envelope above it stay one code path
 //! in every mode.
 //!

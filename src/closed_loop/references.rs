@@ -104,7 +104,7 @@ impl ReferenceSearch {
     }
 
     /// Starts with the programmed-feed run, calibrated by `calibration` (from a teach cut of a
-    /// run on the same scenario: [`TeachKey`]) instead of a teach cut of its own.
+    /// run on the same scenario: [`super::lab::TeachKey`]) instead of a teach cut of its own.
     pub fn calibrated(spec: &RunSpec, calibration: Calibration) -> Result<Self, LoopError> {
         let run = LabRun::calibrated(&fixed_feed_spec(spec, 100.0)?, calibration.clone())?;
         Self::starting(spec, run, Some(calibration))

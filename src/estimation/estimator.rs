@@ -167,7 +167,7 @@ impl Estimator {
 }
 
 /// What a teach cut produced. Saved and read back as a calibration file
-/// ([`super::calibration_file`]).
+/// ([`crate::closed_loop::calibration_file`]).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Calibration {

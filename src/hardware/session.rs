@@ -13,7 +13,7 @@
 //!   and the fit `cutlab sim` and `cutlab host` make. At the program's end the calibration is
 //!   kept and the device disarmed.
 //! * **Closed loop** ([`HardwareSession::arm`]): arms the device and pushes each sample into the
-//!   [`FeedbackLoop`] [`feedback_loop`] builds — estimator, controller and safety envelope, the
+//!   [`FeedbackLoop`] [`closed_loop_of`] builds — estimator, controller and safety envelope, the
 //!   loop [`crate::closed_loop::lab::LabRun`] runs on a simulated machine. Each period's command
 //!   goes out at once; at the program's end the run's metrics are computed as `cutlab sim`
 //!   computes them and the device is disarmed.

@@ -53,7 +53,7 @@
 //! | [`recording`] | open-loop runs summarised per block, the brake bench's load-step analysis and its phase currents, each a [`crate::work::Work`] |
 //! | [`signals`] | every internal signal of a sample, with units, for plots and CSV |
 //! | [`dynamics`] | exactly discretised first- and second-order lags |
-//! | [`linalg`] | small dense matrices on the stack: the matrix exponential that discretises the linear plants |
+//! | `linalg` | small dense matrices on the stack: the matrix exponential that discretises the linear plants |
 //! | [`dynamometer`] | a dynamometer under the part: the cutting force as a force sensor reads it |
 //!
 //! ## Contracts

@@ -22,7 +22,7 @@
 //! | this file | the problem (controller, ranges, scenarios, objective), sweeps, searches, the Pareto front |
 //! | [`objective`] | the weighted objective a tuning minimises |
 //! | [`nelder_mead`] | Nelder–Mead inside a box, deterministic |
-//! | [`teach_in`] | what a teach cut learned and the target, reference current and gap proposed from it |
+//! | [`teach_in`](mod@teach_in) | what a teach cut learned and the target, reference current and gap proposed from it |
 
 pub mod nelder_mead;
 pub mod objective;
