@@ -5,23 +5,29 @@
 //!
 //! 1. holds a fixed *arming* override until the spindle has run for the arming delay (its
 //!    starting current says nothing about the cut, paper 003);
-//! 2. holds the override at most at the entry override while the estimated force says the tool
-//!    is in air ([`EnvelopeConfig::air_cut_force_n`]), so no controller enters a cut wound up;
-//! 3. clamps the request to `[min, max]` and rate-limits it (a continuous internal value moves
+//! 2. holds the entry override while the estimated force says the tool is in air
+//!    ([`EnvelopeConfig::air_cut_force_n`]) and, once it enters a cut, until the cutter is
+//!    engaged ([`EnvelopeConfig::entry_hold_s`]) or the load reaches the target: no controller
+//!    enters a cut wound up, and none raises the feed while the cutter is still engaging (which
+//!    loads the tool beyond the fixed feed);
+//! 3. keeps the override where the feed per tooth stays inside the chip-load window of the tool in
+//!    the work material ([`EnvelopeConfig::chip_load`]), whatever the programmed feed and speed;
+//! 4. clamps the request to `[min, max]` and rate-limits it (a continuous internal value moves
 //!    by at most `max_rate_pct_per_s · dt` per period);
-//! 4. quantises it to what the machine can take (a 16-position dial, 1 % steps, or continuous),
+//! 5. quantises it to what the machine can take (a 16-position dial, 1 % steps, or continuous),
 //!    never outside `[min, max]`;
-//! 5. watches the sensors ([`SafetyEnvelope::observe`], every sample): non-finite, stuck or
+//! 6. watches the sensors ([`SafetyEnvelope::observe`], every sample): non-finite, stuck or
 //!    out-of-range currents and missing samples raise a fault, during which the override is held
 //!    (or moves to a fallback value) and the controller's request is ignored;
-//! 6. raises an overload alarm when the estimated force stays above a hard limit for longer than
+//! 7. raises an overload alarm when the estimated force stays above a hard limit for longer than
 //!    a set time, and then latches feed hold.
 //!
 //! Each of these emits a [`SafetyEvent`] for the event log.
 //!
 //! Guarantees, checked by property tests with random (also non-finite) inputs: the commanded
 //! override is always finite, inside `[min, max]`, one of the machine's positions, and moves per
-//! period by at most the rate limit plus one quantisation step.
+//! period by at most the rate limit plus one quantisation step — except where the chip-load window
+//! moves (a block with another programmed feed or speed): the window wins at once.
 
 use std::fmt;
 
@@ -119,10 +125,73 @@ pub struct EnvelopeConfig {
     pub air_cut_force_n: f64,
     /// The highest override while the tool is in air: the one it enters the next cut with.
     pub entry_override_pct: f64,
+    /// The entry hold: once the estimate shows the tool has entered a cut, the override stays at
+    /// the entry override for this long (the cutter engaging), or until the estimate reaches
+    /// [`Self::entry_release_n`], then the controller takes over. 0 turns the hold off (the
+    /// controller takes over as soon as the tool is in the cut).
+    pub entry_hold_s: f64,
+    /// An estimate at or above this ends the entry hold at once, N (the target: a cut already as
+    /// heavy as wanted needs the controller, which will only reduce the feed from there).
+    pub entry_release_n: f64,
+    /// The feed per tooth the override keeps inside, if the tool and material give a window.
+    pub chip_load: Option<ChipLoad>,
     /// The hard force limit of the overload alarm.
     pub overload_limit_n: f64,
     /// How long the force may exceed the hard limit before feed hold.
     pub overload_time_s: f64,
+}
+
+/// The chip-load window: the feed per tooth a cutter of `teeth` teeth may take in the work
+/// material. Below `min_mm` the edge rubs instead of cutting (its edge radius is of that order);
+/// above `max_mm` the chip overloads the edge. The override that keeps a period's feed per tooth
+/// inside follows from the programmed feed and spindle speed:
+/// `f_z = programmed feed × override / (teeth × rpm)`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ChipLoad {
+    /// Teeth of the cutter.
+    pub teeth: u32,
+    /// Smallest feed per tooth, mm.
+    pub min_mm: f64,
+    /// Largest feed per tooth, mm.
+    pub max_mm: f64,
+}
+
+impl ChipLoad {
+    /// The overrides, %, that keep the feed per tooth inside the window at `programmed_feed_mm_min`
+    /// and `spindle_rpm`; `None` where the two give no feed per tooth (the spindle or the axes
+    /// standing still).
+    ///
+    /// ```
+    /// use cutlab::safety::ChipLoad;
+    /// let window = ChipLoad { teeth: 2, min_mm: 0.02, max_mm: 0.15 };
+    /// // 200 mm/min at 1000 rpm is 0.1 mm per tooth: 20–150 % keeps it inside.
+    /// let (lo, hi) = window.override_range_pct(200.0, 1000.0).unwrap();
+    /// assert!((lo - 20.0).abs() < 1e-9 && (hi - 150.0).abs() < 1e-9);
+    /// assert!(window.override_range_pct(0.0, 1000.0).is_none());
+    /// ```
+    pub fn override_range_pct(
+        &self,
+        programmed_feed_mm_min: f64,
+        spindle_rpm: f64,
+    ) -> Option<(f64, f64)> {
+        let per_tooth_at_100 = programmed_feed_mm_min / (f64::from(self.teeth) * spindle_rpm);
+        (per_tooth_at_100.is_finite() && per_tooth_at_100 > 0.0).then(|| {
+            (
+                100.0 * self.min_mm / per_tooth_at_100,
+                100.0 * self.max_mm / per_tooth_at_100,
+            )
+        })
+    }
+
+    /// The feed per tooth at `override_pct`, mm (NaN where the spindle stands).
+    pub fn feed_per_tooth_mm(
+        &self,
+        programmed_feed_mm_min: f64,
+        spindle_rpm: f64,
+        override_pct: f64,
+    ) -> f64 {
+        programmed_feed_mm_min * override_pct / 100.0 / (f64::from(self.teeth) * spindle_rpm)
+    }
 }
 
 /// What the arming delay counts from. While the trigger is off, the envelope is disarmed and
@@ -164,6 +233,9 @@ impl EnvelopeConfig {
             fault_action: FaultAction::Hold,
             air_cut_force_n: 0.0,
             entry_override_pct: 100.0,
+            entry_hold_s: 0.0,
+            entry_release_n: f64::INFINITY,
+            chip_load: None,
             overload_limit_n: 0.0,
             overload_time_s: 0.2,
         }
@@ -267,6 +339,40 @@ pub enum SafetyEvent {
         /// The override held.
         entry_override_pct: f64,
     },
+    /// The tool entered a cut: the override stays at the entry override until the cutter is
+    /// engaged.
+    EntryHold {
+        /// When.
+        time_s: f64,
+        /// The override held at most.
+        entry_override_pct: f64,
+    },
+    /// The cutter is engaged after an entry, or the load reached the target: the controller takes
+    /// over.
+    EntrySettled {
+        /// When.
+        time_s: f64,
+        /// The estimated force it settled at.
+        force_n: f64,
+    },
+    /// The chip-load window held the override (once per stretch that it holds at that end).
+    ChipLoad {
+        /// When.
+        time_s: f64,
+        /// The window's end that held.
+        end: ChipLoadEnd,
+        /// The feed per tooth there, mm.
+        feed_per_tooth_mm: f64,
+    },
+}
+
+/// Which end of the chip-load window held the override.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ChipLoadEnd {
+    /// The smallest feed per tooth: the edge would rub.
+    Lowest,
+    /// The largest: the edge would be overloaded.
+    Highest,
 }
 
 impl SafetyEvent {
@@ -279,6 +385,9 @@ impl SafetyEvent {
             | SafetyEvent::Overload { time_s, .. }
             | SafetyEvent::CutBeforeArming { time_s, .. }
             | SafetyEvent::AirCut { time_s, .. }
+            | SafetyEvent::EntryHold { time_s, .. }
+            | SafetyEvent::EntrySettled { time_s, .. }
+            | SafetyEvent::ChipLoad { time_s, .. }
             | SafetyEvent::ControllerFault { time_s } => time_s,
         }
     }
@@ -306,6 +415,29 @@ impl SafetyEvent {
             } => format!(
                 "air cut: override held at {entry_override_pct:.0} % until the tool enters the cut"
             ),
+            SafetyEvent::EntryHold {
+                entry_override_pct, ..
+            } => format!(
+                "entry: the tool entered the cut; override held at {entry_override_pct:.0} % \
+                 until the cutter is engaged"
+            ),
+            SafetyEvent::EntrySettled { force_n, .. } => format!(
+                "entry: the cutter is in the cut at {force_n:.0} N; the controller takes over"
+            ),
+            SafetyEvent::ChipLoad {
+                end,
+                feed_per_tooth_mm,
+                ..
+            } => match end {
+                ChipLoadEnd::Highest => format!(
+                    "chip load: override held so the feed per tooth stays at most \
+                     {feed_per_tooth_mm:.3} mm"
+                ),
+                ChipLoadEnd::Lowest => format!(
+                    "chip load: override held so the feed per tooth stays at least \
+                     {feed_per_tooth_mm:.3} mm (below, the edge rubs)"
+                ),
+            },
         }
     }
 }
@@ -331,6 +463,15 @@ pub struct SafetyEnvelope {
     controller_fault: bool,
     /// Whether the air-cut rule is holding the override (for one event per stretch of air).
     holding_in_air: bool,
+    /// Whether the envelope held the entry override at the last period (in air, or an entry's
+    /// hold): the controller was not in charge.
+    holding: bool,
+    /// Whether the tool was in air at the last period (so the next cut is an entry).
+    was_in_air: bool,
+    /// When the entry hold under way began.
+    entry_since_s: Option<f64>,
+    /// The end of the chip-load window that held the override at the last period.
+    chip_limited: Option<ChipLoadEnd>,
     events: Vec<SafetyEvent>,
 }
 
@@ -357,6 +498,7 @@ impl SafetyEnvelope {
             c.overload_time_s,
             c.air_cut_force_n,
             c.entry_override_pct,
+            c.entry_hold_s,
             sample_rate_hz,
         ]
         .iter()
@@ -378,6 +520,20 @@ impl SafetyEnvelope {
         }
         if c.air_cut_force_n < 0.0 {
             return err("the air-cut force must not be negative (0 turns the rule off)".into());
+        }
+        if c.entry_hold_s < 0.0 || c.entry_release_n.is_nan() {
+            return err("the entry hold's time must not be negative (0 s: no hold)".into());
+        }
+        if let Some(w) = c.chip_load {
+            if !(w.teeth > 0 && w.min_mm.is_finite() && w.max_mm.is_finite())
+                || !(0.0 < w.min_mm && w.min_mm < w.max_mm)
+            {
+                return err(format!(
+                    "the chip-load window {}–{} mm per tooth must be positive and ascending, for \
+                     a cutter with teeth",
+                    w.min_mm, w.max_mm
+                ));
+            }
         }
         if c.max_current_a <= 0.0 || c.overload_limit_n <= 0.0 {
             return err("the current range and the overload limit must be positive".into());
@@ -431,6 +587,10 @@ impl SafetyEnvelope {
             programmed_feed_s: 0.0,
             controller_fault: false,
             holding_in_air: false,
+            holding: false,
+            was_in_air: false,
+            entry_since_s: None,
+            chip_limited: None,
             events: Vec::with_capacity(EVENT_CAPACITY),
             config,
         };
@@ -458,9 +618,17 @@ impl SafetyEnvelope {
         }
     }
 
-    /// Whether the controller is in charge.
+    /// Whether the envelope has armed (the arming delay passed).
     pub fn armed(&self) -> bool {
         self.armed
+    }
+
+    /// Whether the envelope held the entry override at the last period — the tool in air, or an
+    /// entry's hold — so the controller's request was not listened to. The loop does not step its
+    /// controller then (an integrating law would wind up on what it cannot change) and hands it
+    /// the override when the hold ends ([`crate::control::law::Controller::take_over`]).
+    pub fn holding(&self) -> bool {
+        self.holding
     }
 
     /// The sensor fault in force, if any.
@@ -628,26 +796,97 @@ impl SafetyEnvelope {
         // In air a controller sees no force and asks for ever more feed; entering the next cut at
         // that feed would load the tool far beyond the target before any loop could react. The
         // tool enters at the entry override, as commercial adaptive feed controls do (they do not
-        // adapt in air), and the controller takes over from there.
-        let in_air = self.armed
-            && self.fault.is_none()
-            && force_n.is_finite()
-            && force_n < c.air_cut_force_n;
+        // adapt in air), and — with the entry hold — stays at most there until the load has
+        // settled: a controller released while the cutter is still engaging sees a force below
+        // the target, raises the feed, and the full engagement then loads the tool beyond what the
+        // fixed feed would.
+        let watching = self.armed && self.fault.is_none() && force_n.is_finite();
+        // 0 turns the rule off (a negative estimate in air is no reason to act then).
+        let in_air = watching && c.air_cut_force_n > 0.0 && force_n < c.air_cut_force_n;
         let entry_override_pct = c.entry_override_pct;
-        let holds = in_air && wanted > entry_override_pct;
-        let wanted = if holds { entry_override_pct } else { wanted };
-        let wanted = wanted.clamp(c.min_override_pct, c.max_override_pct);
+        if !watching || in_air {
+            self.entry_since_s = None;
+        } else if self.was_in_air && c.entry_hold_s > 0.0 {
+            self.entry_since_s = Some(time_s);
+            self.emit(SafetyEvent::EntryHold {
+                time_s,
+                entry_override_pct,
+            });
+        } else if let Some(since_s) = self.entry_since_s {
+            // The cutter is engaged after its hold; a cut already as heavy as wanted needs the
+            // controller at once (it will only reduce the feed from there).
+            if time_s - since_s >= c.entry_hold_s || force_n >= c.entry_release_n {
+                self.entry_since_s = None;
+                self.emit(SafetyEvent::EntrySettled { time_s, force_n });
+            }
+        }
+        if watching {
+            self.was_in_air = in_air;
+        }
+        let c = &self.config;
+        // In air and through an entry's hold the override is the entry override, whatever the
+        // controller asks: the controller is not in charge ([`Self::holding`]).
+        self.holding = in_air || self.entry_since_s.is_some();
+        let wanted = if self.holding {
+            entry_override_pct
+        } else {
+            wanted
+        };
+        // The band, narrowed to the overrides that keep the feed per tooth inside the chip-load
+        // window at this period's programmed feed and speed.
+        let window = c.chip_load.and_then(|w| {
+            w.override_range_pct(sample.programmed_feed_mm_min, sample.spindle_command_rpm)
+                .map(|range| (w, range))
+        });
+        let (lowest, highest) = match window {
+            Some((_, (lo, hi))) => (
+                lo.clamp(c.min_override_pct, c.max_override_pct),
+                hi.clamp(c.min_override_pct, c.max_override_pct),
+            ),
+            None => (c.min_override_pct, c.max_override_pct),
+        };
+        let chip_end = match window {
+            Some((_, (_, hi))) if wanted > hi && hi < c.max_override_pct => {
+                Some(ChipLoadEnd::Highest)
+            }
+            Some((_, (lo, _))) if wanted < lo && lo > c.min_override_pct => {
+                Some(ChipLoadEnd::Lowest)
+            }
+            _ => None,
+        };
+        let wanted = wanted.clamp(lowest, highest);
         let max_step = c.max_rate_pct_per_s * dt_s;
-        if holds && !self.holding_in_air {
+        // One event per stretch of air.
+        if in_air && !self.holding_in_air {
             self.emit(SafetyEvent::AirCut {
                 time_s,
                 entry_override_pct,
             });
         }
-        // One event per stretch of air: only a cut ends it, not a controller asking for less.
-        self.holding_in_air = in_air && (self.holding_in_air || holds);
+        self.holding_in_air = in_air;
         self.continuous_pct += (wanted - self.continuous_pct).clamp(-max_step, max_step);
-        self.output_pct = self.quantize(self.continuous_pct);
+        // The window wins over the rate limit: where a block's programmed feed or speed moves
+        // it, the override follows at once (the feed per tooth is the limit, not the override).
+        self.continuous_pct = self.continuous_pct.clamp(lowest, highest);
+        self.output_pct = self
+            .config
+            .resolution
+            .nearest(self.continuous_pct, lowest, highest)
+            .unwrap_or_else(|| self.quantize(self.continuous_pct));
+        if let (Some(end), Some((w, _))) = (chip_end, window) {
+            if self.chip_limited != Some(end) {
+                let feed_per_tooth_mm = match end {
+                    ChipLoadEnd::Highest => w.max_mm,
+                    ChipLoadEnd::Lowest => w.min_mm,
+                };
+                self.emit(SafetyEvent::ChipLoad {
+                    time_s,
+                    end,
+                    feed_per_tooth_mm,
+                });
+            }
+        }
+        self.chip_limited = chip_end;
         OverrideCommand {
             override_pct: self.output_pct,
             feed_hold: self.feed_hold,
@@ -699,8 +938,9 @@ mod tests {
                 .count()
         };
         assert_eq!(air_events(&mut env), 1);
-        // Asking for less is granted in air too (rate-limited: 10 % per 0.1 s).
-        assert_eq!(step(&mut env, 50.0, 5.0), 90.0);
+        // Asking for less changes nothing either: in air the controller is not in charge.
+        assert_eq!(step(&mut env, 50.0, 5.0), 100.0);
+        assert!(env.holding());
         // In the cut the controller has the whole band again.
         let mut last = 0.0;
         for _ in 0..20 {
@@ -719,6 +959,107 @@ mod tests {
             last = step(&mut env, 150.0, 5.0);
         }
         assert_eq!(last, 150.0);
+    }
+
+    #[test]
+    fn after_an_entry_the_override_holds_until_the_cutter_is_engaged_or_the_target_reached() {
+        // Target 300 N: in air below 60 N; the cutter engages over 0.5 s.
+        let mut config = EnvelopeConfig::for_target(300.0);
+        config.entry_hold_s = 0.5;
+        config.entry_release_n = 300.0;
+        let mut env = envelope(config);
+        let mut t = 0.0;
+        let mut step = |env: &mut SafetyEnvelope, force_n: f64| {
+            t += 0.1;
+            env.command(150.0, force_n, t, 0.1, &running_sample(t))
+                .override_pct
+        };
+        step(&mut env, 5.0);
+        // The cutter engages: the force rises, the controller asks for 150 %, the envelope holds
+        // 100 % for the hold's 0.5 s.
+        for k in 1..=5 {
+            assert_eq!(step(&mut env, 40.0 * f64::from(k) + 30.0), 100.0);
+            assert!(env.holding(), "period {k}");
+        }
+        // Then the cutter is in the cut (within a period of the hold's end: times add up in
+        // floating point).
+        step(&mut env, 235.0);
+        step(&mut env, 236.0);
+        assert!(!env.holding());
+        let mut events = Vec::new();
+        env.drain_events(&mut events);
+        let kinds: Vec<&str> = events
+            .iter()
+            .map(|e| match e {
+                SafetyEvent::Armed { .. } => "armed",
+                SafetyEvent::AirCut { .. } => "air",
+                SafetyEvent::EntryHold { .. } => "hold",
+                SafetyEvent::EntrySettled { .. } => "settled",
+                _ => "other",
+            })
+            .collect();
+        assert_eq!(kinds, ["armed", "air", "hold", "settled"]);
+        // A cut already at the target ends the hold at once: the controller reduces from there.
+        step(&mut env, 5.0);
+        step(&mut env, 200.0);
+        assert!(env.holding());
+        step(&mut env, 320.0);
+        assert!(!env.holding());
+        // Off (0 s): the controller is in charge as soon as the tool is in the cut.
+        let mut config = EnvelopeConfig::for_target(300.0);
+        config.entry_hold_s = 0.0;
+        let mut env = envelope(config);
+        step(&mut env, 5.0);
+        step(&mut env, 100.0);
+        assert!(!env.holding());
+    }
+
+    #[test]
+    fn the_chip_load_window_keeps_every_command_inside_it_and_says_when_it_holds() {
+        // Two teeth at 1000 rpm, 200 mm/min: 0.1 mm per tooth at 100 %; a window of 0.02–0.15 mm
+        // allows 20–150 % of the 10–255 % band.
+        let mut config = EnvelopeConfig::for_target(300.0);
+        config.min_override_pct = 10.0;
+        config.max_override_pct = 255.0;
+        config.resolution = OverrideResolution::WholePercent;
+        config.chip_load = Some(ChipLoad {
+            teeth: 2,
+            min_mm: 0.02,
+            max_mm: 0.15,
+        });
+        let mut env = envelope(config);
+        let sample = |t: f64, feed: f64| SensorSample {
+            programmed_feed_mm_min: feed,
+            spindle_command_rpm: 1000.0,
+            ..running_sample(t)
+        };
+        let mut rng = Rng::seed_from(11);
+        let mut t = 0.0;
+        for _ in 0..2000 {
+            t += 0.05;
+            let feed = if rng.uniform() < 0.5 { 200.0 } else { 400.0 };
+            let request = -50.0 + 450.0 * rng.uniform();
+            let c = env.command(request, 300.0, t, 0.05, &sample(t, feed));
+            let per_tooth = feed * c.override_pct / 100.0 / 2000.0;
+            assert!(
+                (0.02 - 1e-12..=0.15 + 1e-12).contains(&per_tooth),
+                "{per_tooth} mm at {feed} mm/min, {} %",
+                c.override_pct
+            );
+        }
+        let mut events = Vec::new();
+        env.drain_events(&mut events);
+        // Held at each end, once per stretch (the last stretches' events; the queue holds 16).
+        assert!(events.iter().any(|e| matches!(
+            e,
+            SafetyEvent::ChipLoad {
+                end: ChipLoadEnd::Highest,
+                ..
+            }
+        )));
+        // No feed or no spindle: no window to keep.
+        let free = env.command(250.0, 300.0, t + 10.0, 10.0, &sample(t, 0.0));
+        assert_eq!(free.override_pct, 250.0);
     }
 
     #[test]

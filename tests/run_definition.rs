@@ -150,3 +150,17 @@ fn the_override_before_arming_is_refused_outside_the_band_and_the_default_follow
     let plan = preset_plan(&spec).unwrap();
     assert_eq!(plan.limits.arming_override_pct, 80.0);
 }
+
+/// docs/run-definition.md's table names every setting by its JSON field, URL key and option.
+#[test]
+fn the_documented_table_lists_every_setting_by_its_names() {
+    let docs = include_str!("../docs/run-definition.md");
+    for setting in RunSetting::ALL {
+        let spec = setting.spec();
+        let row = format!(
+            "| `{}` | `{}` | `--{}` |",
+            spec.json_field, spec.query_key, spec.cli_option
+        );
+        assert!(docs.contains(&row), "docs/run-definition.md lacks {row}");
+    }
+}

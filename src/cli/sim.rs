@@ -12,7 +12,7 @@ use crate::closed_loop::definition::{parse_texts, preset_controller, RunSetting,
 use crate::closed_loop::lab::{teach_cut_only, LabRun, RunResult, TeachKey};
 use crate::closed_loop::metrics::Metrics;
 use crate::closed_loop::references::{apply_references, ReferenceSearch, References};
-use crate::closed_loop::summary::{best, METRIC_ROWS};
+use crate::closed_loop::summary::{best_marks, not_best_note, METRIC_ROWS};
 use crate::closed_loop::trace::write_csv;
 use crate::control::registry::{ControllerConfig, ControllerKind};
 use crate::estimation::estimator::{Calibration, Feedback};
@@ -607,7 +607,8 @@ fn one_scenario(
     Ok((base, named))
 }
 
-/// A table of metrics, one column per run; `*` marks the best value of each row.
+/// A table of metrics, one column per run; `*` marks the best value of each row (never a run
+/// above the force limit for a share of its cycle, which a last line names).
 pub(crate) fn metrics_table(runs: &[(String, &RunResult)]) -> String {
     let shown = |v: f64| {
         if v.fract() == 0.0 {
@@ -633,14 +634,20 @@ pub(crate) fn metrics_table(runs: &[(String, &RunResult)]) -> String {
         let _ = write!(out, "  {name:>col_width$}");
     }
     out.push('\n');
+    let results: Vec<&RunResult> = runs.iter().map(|(_, r)| *r).collect();
     for row in &METRIC_ROWS {
         let values: Vec<Option<f64>> = runs.iter().map(|(_, r)| (row.value)(r)).collect();
-        let marks = best(&values, row.better, shown);
+        let marks = best_marks(row, &results, shown);
         let _ = write!(out, "{:label_width$}", row.heading());
         for (v, is_best) in values.into_iter().zip(marks) {
             let cell = format!("{}{}", row.show(v, shown), if is_best { "*" } else { " " });
             let _ = write!(out, "  {cell:>col_width$}");
         }
+        out.push('\n');
+    }
+    let named: Vec<(&str, &RunResult)> = runs.iter().map(|(n, r)| (n.as_str(), *r)).collect();
+    if let Some(note) = not_best_note(&named) {
+        out.push_str(&note);
         out.push('\n');
     }
     out

@@ -86,6 +86,18 @@ pub struct SettingsOverrides {
     /// Override held until the envelope arms.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub arming_override_pct: Option<f64>,
+    /// The override the tool enters a cut with.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub entry_override_pct: Option<f64>,
+    /// How long the entry override is held at most after an entry.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub entry_hold_s: Option<f64>,
+    /// Smallest feed per tooth.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub min_feed_per_tooth_mm: Option<f64>,
+    /// Largest feed per tooth.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub max_feed_per_tooth_mm: Option<f64>,
 }
 
 /// A run spec as a saved configuration writes it, before its controller takes the preset's
@@ -224,6 +236,14 @@ pub enum RunSetting {
     MaxRate,
     /// The override held until the envelope arms.
     ArmingOverride,
+    /// The override a cut is entered with.
+    EntryOverride,
+    /// How long the entry override is held at most after an entry.
+    EntryHoldTime,
+    /// Smallest feed per tooth.
+    MinFeedPerTooth,
+    /// Largest feed per tooth.
+    MaxFeedPerTooth,
     /// The controller's period.
     ControlPeriod,
     /// Order of both current low-passes.
@@ -275,7 +295,7 @@ const fn number(min: f64, max: f64) -> SettingKind {
 
 impl RunSetting {
     /// Every setting, in the order the form shows them.
-    pub const ALL: [RunSetting; 19] = [
+    pub const ALL: [RunSetting; 23] = [
         RunSetting::Seed,
         RunSetting::TargetForce,
         RunSetting::TargetCurrent,
@@ -284,6 +304,10 @@ impl RunSetting {
         RunSetting::MinOverride,
         RunSetting::MaxRate,
         RunSetting::ArmingOverride,
+        RunSetting::EntryOverride,
+        RunSetting::EntryHoldTime,
+        RunSetting::MinFeedPerTooth,
+        RunSetting::MaxFeedPerTooth,
         RunSetting::Material,
         RunSetting::SpindleSpeed,
         RunSetting::ProgrammedFeed,
@@ -386,6 +410,53 @@ impl RunSetting {
                 Scenario,
                 "override held until the envelope arms, within the lowest–highest band (default \
                  100, or the nearer end of the band)",
+            ),
+            RunSetting::EntryOverride => (
+                "entry_override_pct",
+                "entry_override",
+                "entry-override",
+                "Entry override",
+                "%",
+                number(1.0, MAX_OVERRIDE_PCT),
+                Scenario,
+                "override the tool enters a cut with, held at most until the load settles (default \
+                 100: the programmed feed)",
+            ),
+            RunSetting::EntryHoldTime => (
+                "entry_hold_s",
+                "entry_hold",
+                "entry-hold-s",
+                "Entry hold (blank: one cutter radius of feed; 0: none)",
+                "s",
+                number(0.0, 30.0),
+                Scenario,
+                "after the tool enters a cut, how long the entry override is held at most before \
+                 the controller takes over: until the cutter is engaged, or sooner if the force \
+                 reaches the target (default: the time to feed one cutter radius, 0.2–5 s; 0 turns \
+                 the hold off; a fixed feed never holds)",
+            ),
+            RunSetting::MinFeedPerTooth => (
+                "min_feed_per_tooth_mm",
+                "min_fz",
+                "min-fz-mm",
+                "Smallest feed per tooth (blank: the material's)",
+                "mm",
+                number(0.001, 1.0),
+                Scenario,
+                "smallest feed per tooth the override allows; below it the edge rubs (default: the \
+                 handbook window of the part's material for the cutter, mill presets)",
+            ),
+            RunSetting::MaxFeedPerTooth => (
+                "max_feed_per_tooth_mm",
+                "max_fz",
+                "max-fz-mm",
+                "Largest feed per tooth (blank: the material's)",
+                "mm",
+                number(0.001, 1.0),
+                Scenario,
+                "largest feed per tooth the override allows; above it the chip overloads the edge \
+                 (default: the handbook window of the part's material for the cutter, mill \
+                 presets)",
             ),
             RunSetting::ControlPeriod => (
                 "control_period_s",
@@ -537,7 +608,12 @@ impl RunSetting {
     pub fn range_on(self, machine_max_override_pct: f64) -> Option<(f64, f64)> {
         match self.spec().kind {
             SettingKind::Number { min, max }
-                if matches!(self, RunSetting::MaxOverride | RunSetting::ArmingOverride) =>
+                if matches!(
+                    self,
+                    RunSetting::MaxOverride
+                        | RunSetting::ArmingOverride
+                        | RunSetting::EntryOverride
+                ) =>
             {
                 Some((min, max.min(machine_max_override_pct)))
             }
@@ -679,6 +755,10 @@ impl RunSetting {
             RunSetting::MaxOverride => number(s.max_override_pct),
             RunSetting::MaxRate => number(s.max_rate_pct_per_s),
             RunSetting::ArmingOverride => number(s.arming_override_pct),
+            RunSetting::EntryOverride => number(s.entry_override_pct),
+            RunSetting::EntryHoldTime => number(s.entry_hold_s),
+            RunSetting::MinFeedPerTooth => number(s.min_feed_per_tooth_mm),
+            RunSetting::MaxFeedPerTooth => number(s.max_feed_per_tooth_mm),
             RunSetting::ControlPeriod => number(s.control_period_s),
             RunSetting::FilterOrder => s.lowpass_order.map(SettingValue::Count),
             RunSetting::SpindleCutoff => number(s.spindle_lowpass_hz),
@@ -753,6 +833,10 @@ impl RunSetting {
             RunSetting::MaxOverride => s.max_override_pct = number,
             RunSetting::MaxRate => s.max_rate_pct_per_s = number,
             RunSetting::ArmingOverride => s.arming_override_pct = number,
+            RunSetting::EntryOverride => s.entry_override_pct = number,
+            RunSetting::EntryHoldTime => s.entry_hold_s = number,
+            RunSetting::MinFeedPerTooth => s.min_feed_per_tooth_mm = number,
+            RunSetting::MaxFeedPerTooth => s.max_feed_per_tooth_mm = number,
             RunSetting::ControlPeriod => s.control_period_s = number,
             RunSetting::FilterOrder => s.lowpass_order = count,
             RunSetting::SpindleCutoff => s.spindle_lowpass_hz = number,
@@ -1023,6 +1107,13 @@ pub enum Problem {
     },
     /// Needed and not given, or given where it cannot be used; the text says why.
     Requires(&'static str),
+    /// The smallest feed per tooth not below the largest.
+    WindowInverted {
+        /// The smallest, mm.
+        min: f64,
+        /// The largest, mm.
+        max: f64,
+    },
     /// The lowest override above the highest.
     BandInverted {
         /// The run's lowest override.
@@ -1087,6 +1178,12 @@ impl fmt::Display for Problem {
                 readable(*max)
             ),
             Problem::Requires(why) => f.write_str(why),
+            Problem::WindowInverted { min, max } => write!(
+                f,
+                "the smallest feed per tooth {} mm is not below the largest, {} mm",
+                readable(*min),
+                readable(*max)
+            ),
             Problem::BandInverted { min, max } => write!(
                 f,
                 "the lowest override {} % is above the highest, {} %",

@@ -52,6 +52,8 @@ pub struct FeedbackLoop {
     warned_cut_before_arming: bool,
     /// The force estimate of the period before.
     previous_estimate_n: f64,
+    /// Whether the controller was stepped at the last period.
+    controller_in_charge: bool,
     done: bool,
 }
 
@@ -136,6 +138,7 @@ impl FeedbackLoop {
             settings,
             warned_cut_before_arming: false,
             previous_estimate_n: f64::NAN,
+            controller_in_charge: false,
             done: false,
         })
     }
@@ -199,11 +202,19 @@ impl FeedbackLoop {
         };
         let armed = self.envelope.armed();
         self.watch_cut_before_arming(&period, &estimate, armed);
-        // The controller runs only while armed: before that its output would be ignored, and an
-        // integrating law must not accumulate the spindle's starting transient.
-        if armed {
+        // The controller runs only while it is in charge: armed, and the envelope not holding the
+        // entry override (the tool in air, an entry's hold). Otherwise its output would be
+        // ignored, and an integrating law must not accumulate what it cannot change (the
+        // spindle's starting transient, the missing force in air). When it takes charge it starts
+        // from the override the machine runs at.
+        let in_charge = armed && !self.envelope.holding();
+        if in_charge {
+            if !self.controller_in_charge {
+                self.controller.take_over(last.applied_override_pct);
+            }
             self.last_request_pct = self.controller.step(&input);
         }
+        self.controller_in_charge = in_charge;
         self.command = self.envelope.command(
             self.last_request_pct,
             estimate.force_n,
@@ -211,7 +222,7 @@ impl FeedbackLoop {
             dt_s,
             &last,
         );
-        if !self.envelope.armed() {
+        if !self.envelope.armed() || self.envelope.holding() {
             self.last_request_pct = self.command.override_pct;
         }
         self.envelope.drain_events(&mut self.trace.events);

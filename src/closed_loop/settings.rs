@@ -29,7 +29,9 @@ use crate::estimation::estimator::{Calibration, Feedback};
 use crate::plant::cnc::OverrideMode;
 use crate::plant::presets::PlantKind;
 use crate::plant::Preset;
-use crate::safety::{ArmingTrigger, EnvelopeConfig, OverrideResolution, AIR_CUT_FRACTION};
+use crate::safety::{
+    ArmingTrigger, ChipLoad, EnvelopeConfig, OverrideResolution, AIR_CUT_FRACTION,
+};
 
 /// Paper 003's analog low-pass on the spindle phase currents, Hz.
 pub const DEFAULT_SPINDLE_LOWPASS_HZ: f64 = 260.0;
@@ -66,6 +68,10 @@ const STUCK_SAMPLES: f64 = 10.0;
 /// A phase current beyond this multiple of the largest the teach cut saw (its overrides reach
 /// 140 %) is a sensor fault, whatever the machine's size.
 const FAULT_CURRENT_FACTOR: f64 = 2.0;
+/// The entry hold's longest time where the machine gives no cutter to time it by, s.
+pub const DEFAULT_ENTRY_HOLD_S: f64 = 1.0;
+/// The bounds of an entry hold's settle time derived from the cutter, s.
+const ENTRY_HOLD_BOUNDS_S: (f64, f64) = (0.2, 5.0);
 /// The most samples a control period may hold.
 const MAX_SAMPLES_PER_PERIOD: f64 = 1e7;
 
@@ -231,6 +237,12 @@ pub struct MachineContext {
     pub spindle_current: CurrentSignal,
     /// The feed-drive current as delivered.
     pub feed_current: CurrentSignal,
+    /// How long the entry override is held at most after the tool enters a cut, when nobody
+    /// said, s.
+    pub entry_hold_s: f64,
+    /// The cutter's chip-load window in the work material, if the machine's tool and material
+    /// are known.
+    pub chip_load: Option<ChipLoad>,
 }
 
 /// The feedback path a preset measures force with by default: the brake bench has only a feed
@@ -297,8 +309,56 @@ impl MachineContext {
             },
             spindle_current: CurrentSignal::Phases,
             feed_current: CurrentSignal::Phases,
+            entry_hold_s: preset_entry_hold_s(spec),
+            chip_load: preset_chip_load(spec),
         }
     }
+}
+
+/// The time `spec`'s program takes to feed its cutter one radius at the programmed feed (the
+/// cutter is fully engaged by then, in a slot or a side cut), bounded to [`ENTRY_HOLD_BOUNDS_S`];
+/// the default without a cutter.
+fn preset_entry_hold_s(spec: &RunSpec) -> f64 {
+    let Some(scenario) = spec.preset.scenario_spec() else {
+        return DEFAULT_ENTRY_HOLD_S;
+    };
+    let diameter_mm = spec
+        .plant
+        .tool_diameter_mm
+        .unwrap_or(scenario.cutter.diameter_mm);
+    let feed_mm_s = OperatingPoint::of_preset(spec).feed_mm_min / 60.0;
+    let (lo, hi) = ENTRY_HOLD_BOUNDS_S;
+    let settle_s = 0.5 * diameter_mm / feed_mm_s;
+    if settle_s.is_finite() {
+        settle_s.clamp(lo, hi)
+    } else {
+        DEFAULT_ENTRY_HOLD_S
+    }
+}
+
+/// The chip-load window of `spec`'s cutter (its edits included) in the materials of its part: on
+/// a part of several, the window spans them all ([`crate::plant::materials::Material::Composite`]
+/// says why).
+fn preset_chip_load(spec: &RunSpec) -> Option<ChipLoad> {
+    let scenario = spec.preset.scenario_spec()?;
+    let diameter_mm = spec
+        .plant
+        .tool_diameter_mm
+        .unwrap_or(scenario.cutter.diameter_mm);
+    let teeth = spec.plant.teeth.unwrap_or(scenario.cutter.teeth);
+    let materials: Vec<_> = match spec.plant.material {
+        Some(m) => vec![m],
+        None => scenario.materials.iter().map(|r| r.material).collect(),
+    };
+    let (min_mm, max_mm) = materials.iter().fold((f64::INFINITY, 0.0), |(lo, hi), m| {
+        let (a, b) = m.feed_per_tooth_window_mm(diameter_mm);
+        (f64::min(lo, a), f64::max(hi, b))
+    });
+    (min_mm > 0.0 && min_mm < max_mm).then_some(ChipLoad {
+        teeth,
+        min_mm,
+        max_mm,
+    })
 }
 
 /// How the target will be set once the teach cut is known.
@@ -371,6 +431,15 @@ pub struct Plan {
     pub max_duration_s: f64,
     /// The shortest time readings must repeat to be a stuck sensor.
     pub stuck_after_s: f64,
+    /// The override the tool enters a cut with, held at most until the load settles, %.
+    pub entry_override_pct: f64,
+    /// How long the entry override is held at most after an entry, s (0: no entry hold).
+    pub entry_hold_s: f64,
+    /// Whether the envelope holds the entry override while the tool is in air (not for a fixed
+    /// feed).
+    pub holds_in_air: bool,
+    /// The feed-per-tooth window the override keeps inside.
+    pub chip_load: Option<ChipLoad>,
     /// What the resolution adapted to the machine (a low-pass skipped, the period rounded), for
     /// people.
     pub notes: Vec<String>,
@@ -456,6 +525,19 @@ pub fn plan(
     let stuck_after_s = EnvelopeConfig::default_for_dial()
         .stuck_after_s
         .max(STUCK_SAMPLES / context.sample_rate_hz);
+    // A fixed feed is the baseline the others are judged against, the program as a machinist
+    // runs it: neither the air rule nor an entry hold shapes it.
+    let adaptive = controller.fixed_override_pct().is_none();
+    let entry_hold_s = if adaptive {
+        settings.entry_hold_s.unwrap_or(context.entry_hold_s)
+    } else {
+        0.0
+    };
+    let entry_override_pct = settings
+        .entry_override_pct
+        .unwrap_or(EnvelopeConfig::default_for_dial().entry_override_pct)
+        .clamp(limits.min_override_pct, limits.max_override_pct);
+    let chip_load = chip_window(settings, context)?;
     Ok(Plan {
         chain,
         limits,
@@ -463,8 +545,41 @@ pub fn plan(
         operating_point: context.operating_point,
         max_duration_s,
         stuck_after_s,
+        entry_override_pct,
+        entry_hold_s,
+        holds_in_air: adaptive,
+        chip_load,
         notes,
     })
+}
+
+/// The machine's chip-load window with the ends the settings give in its place; refused when its
+/// smallest feed per tooth is not below its largest.
+fn chip_window(
+    settings: &SettingsOverrides,
+    context: &MachineContext,
+) -> Result<Option<ChipLoad>, LoopError> {
+    let Some(machine) = context.chip_load else {
+        return Ok(None);
+    };
+    let window = ChipLoad {
+        min_mm: settings.min_feed_per_tooth_mm.unwrap_or(machine.min_mm),
+        max_mm: settings.max_feed_per_tooth_mm.unwrap_or(machine.max_mm),
+        ..machine
+    };
+    if window.min_mm >= window.max_mm {
+        let setting = if settings.min_feed_per_tooth_mm.is_some() {
+            RunSetting::MinFeedPerTooth
+        } else {
+            RunSetting::MaxFeedPerTooth
+        };
+        let problem = Problem::WindowInverted {
+            min: window.min_mm,
+            max: window.max_mm,
+        };
+        return Err(refuse(setting, problem));
+    }
+    Ok(Some(window))
 }
 
 /// The control period: the one asked for, else the context's rule; in whole samples.
@@ -660,7 +775,15 @@ impl Plan {
             resolution: l.resolution.clone(),
             arming_trigger: l.arming_trigger,
             stuck_after_s: self.stuck_after_s,
-            air_cut_force_n: air_cut_force_n(target_force_n, calibration.air_force_estimate_n),
+            air_cut_force_n: if self.holds_in_air {
+                air_cut_force_n(target_force_n, calibration.air_force_estimate_n)
+            } else {
+                0.0
+            },
+            entry_override_pct: self.entry_override_pct,
+            entry_hold_s: self.entry_hold_s,
+            entry_release_n: target_force_n,
+            chip_load: self.chip_load,
             overload_limit_n: OVERLOAD_FACTOR * target_force_n,
             ..EnvelopeConfig::default_for_dial()
         };

@@ -1,5 +1,7 @@
 //! The metrics table both front ends show: which metrics, in which order, with their units, which
-//! way is better, and which runs have the best value of a row.
+//! way is better, and which runs have the best value of a row ([`best_marks`]: never a run that
+//! spent a share of its cycle above the force limit, which the table says with
+//! [`not_best_note`]).
 
 use super::lab::RunResult;
 
@@ -198,6 +200,50 @@ pub fn best(values: &[Option<f64>], better: Better, shown: impl Fn(f64) -> Strin
         return vec![false; values.len()];
     }
     marks
+}
+
+/// A run that spent more than this share of its cycle above the force limit is never marked
+/// best: a teaching lab must not crown a run that would break the tool. (A transient at a depth
+/// step, a few tenths of a second, is allowed.)
+pub const ABOVE_LIMIT_SHARE_NOT_BEST: f64 = 0.01;
+
+/// Whether `run` may be marked best on rows other than the time above the limit itself.
+pub fn may_be_best(run: &RunResult) -> bool {
+    let m = &run.metrics;
+    m.time_above_limit_s <= ABOVE_LIMIT_SHARE_NOT_BEST * m.cycle_time_s
+}
+
+/// The best marks of `row` over `runs` ([`best`]), a run above the force limit for more than
+/// [`ABOVE_LIMIT_SHARE_NOT_BEST`] of its cycle left out of every row but the time above the
+/// limit (where the least is best whoever it is).
+pub fn best_marks(
+    row: &MetricRow,
+    runs: &[&RunResult],
+    shown: impl Fn(f64) -> String,
+) -> Vec<bool> {
+    let judges_the_limit = row.label == "Time above limit";
+    let values: Vec<Option<f64>> = runs
+        .iter()
+        .map(|r| (row.value)(r).filter(|_| judges_the_limit || may_be_best(r)))
+        .collect();
+    best(&values, row.better, shown)
+}
+
+/// The sentence a table shows under its marks when a run was left out of them, naming each with
+/// its time above the limit; `None` when every run could be marked.
+pub fn not_best_note(runs: &[(&str, &RunResult)]) -> Option<String> {
+    let left_out: Vec<String> = runs
+        .iter()
+        .filter(|(_, r)| !may_be_best(r))
+        .map(|(name, r)| format!("{name} ({:.1} s)", r.metrics.time_above_limit_s))
+        .collect();
+    (!left_out.is_empty() && runs.len() > 1).then(|| {
+        format!(
+            "not marked best: above the force limit for more than {:.0} % of the cycle — {}",
+            ABOVE_LIMIT_SHARE_NOT_BEST * 100.0,
+            left_out.join(", ")
+        )
+    })
 }
 
 #[cfg(test)]

@@ -74,6 +74,16 @@ pub trait Controller {
 
     /// Returns to the state at construction.
     fn reset(&mut self);
+
+    /// Takes charge of a machine running at `applied_override_pct` after a stretch in which the
+    /// safety envelope held the override and this controller was not stepped (the tool in air, an
+    /// entry's hold): its next request starts from there rather than from whatever it held
+    /// before. The default starts afresh ([`Controller::reset`]); laws with an integrating state
+    /// set it so that they continue from the applied override.
+    fn take_over(&mut self, applied_override_pct: f64) {
+        let _ = applied_override_pct;
+        self.reset();
+    }
 }
 
 /// The relative force error `(target − force) / target`: positive when the cut is lighter than

@@ -170,6 +170,16 @@ impl Controller for ModelReferenceAdaptive {
     fn reset(&mut self) {
         *self = Self::new(self.params);
     }
+
+    /// Starts afresh with β̂ at the applied override (inside its bounds): the law's output at the
+    /// target is then the override the machine runs at.
+    fn take_over(&mut self, applied_override_pct: f64) {
+        self.reset();
+        if applied_override_pct.is_finite() {
+            self.beta_hat =
+                applied_override_pct.clamp(self.params.min_beta_pct, self.params.max_beta_pct);
+        }
+    }
 }
 
 #[cfg(test)]

@@ -100,6 +100,15 @@ impl Controller for PiController {
         &self.terms
     }
 
+    /// Bumpless: the integrator holds the applied override's difference from the initial one, so
+    /// the first request is the applied override plus the proportional term.
+    fn take_over(&mut self, applied_override_pct: f64) {
+        self.reset();
+        if applied_override_pct.is_finite() {
+            self.integral_pct = applied_override_pct - self.params.initial_override_pct;
+        }
+    }
+
     fn reset(&mut self) {
         self.integral_pct = 0.0;
         self.last_request_pct = None;

@@ -32,7 +32,7 @@ use crate::closed_loop::definition::{default_band_pct_of, max_override_pct_of};
 use crate::closed_loop::error::LoopError;
 use crate::closed_loop::settings::{
     envelope_resolution, CurrentSignal, MachineContext, OperatingPoint, PeriodRule, RateRule,
-    TimeLimit,
+    TimeLimit, DEFAULT_ENTRY_HOLD_S,
 };
 use crate::estimation::current_force::{
     FeedCurrentModel, FitQuality, Range, SpindleCurrentModel, SpindleSpeedRow,
@@ -41,7 +41,7 @@ use crate::estimation::estimator::{Calibration, Estimator, Feedback};
 use crate::estimation::speed::{in_high_speed_range, FvSpeedModel, GEAR_CHANGE_RPM};
 use crate::machine::{DynamometerReading, Machine, MachineStep, OverrideCommand, PlantTruth};
 use crate::plant::cnc::OverrideMode;
-use crate::safety::{ArmingTrigger, EnvelopeConfig};
+use crate::safety::{ArmingTrigger, ChipLoad, EnvelopeConfig};
 
 /// A spindle at or below this speed is stopped.
 const SPINDLE_RUNNING_RPM: f64 = 1.0;
@@ -383,6 +383,8 @@ pub struct LogOptions<'a> {
     pub calibration: Option<&'a Calibration>,
     /// The machine's override input (a log does not say: FANUC's dial unless told).
     pub override_mode: OverrideMode,
+    /// The chip-load window of the tool, when known.
+    pub chip_load: Option<ChipLoad>,
 }
 
 pub(super) fn setting(message: impl Into<String>) -> ReplayError {
@@ -530,6 +532,10 @@ pub fn log_setup(
         },
         spindle_current,
         feed_current,
+        // A log says nothing of the cutter: the entry hold takes its default time, and the
+        // chip-load window is the one given.
+        entry_hold_s: DEFAULT_ENTRY_HOLD_S,
+        chip_load: options.chip_load,
     };
     let machine = LogMachine::new(
         log.clone(),

@@ -37,7 +37,7 @@ use crate::closed_loop::trace::{csv_field, Trace, TraceRow};
 use crate::control::registry::ControllerConfig;
 use crate::estimation::estimator::{Calibration, Estimator, Feedback};
 use crate::plant::cnc::OverrideMode;
-use crate::safety::SafetyEvent;
+use crate::safety::{ChipLoad, SafetyEvent};
 use crate::work::{Progress, Work};
 
 /// The target a replay holds, as given (or chosen), for the report.
@@ -68,6 +68,9 @@ pub struct ReplaySettings {
     pub spindle_rpm: Option<f64>,
     /// The current → force model; `None` regulates the current itself.
     pub calibration: Option<Calibration>,
+    /// The chip-load window of the tool in the work material, when known (a log does not say
+    /// which cutter cut it).
+    pub chip_load: Option<ChipLoad>,
 }
 
 impl ReplaySettings {
@@ -84,6 +87,7 @@ impl ReplaySettings {
             spindle_rpm: self.spindle_rpm,
             calibration,
             override_mode: self.override_mode,
+            chip_load: self.chip_load,
         }
     }
 
@@ -615,7 +619,8 @@ pub struct EventReport {
     /// When.
     pub time_s: f64,
     /// What, in a word: `armed`, `sensor-fault`, `fault-cleared`, `overload`,
-    /// `controller-fault`, `cut-before-arming`.
+    /// `controller-fault`, `cut-before-arming`, `air-cut`, `entry-hold`, `entry-settled`,
+    /// `chip-load`.
     pub kind: &'static str,
     /// What, in a sentence.
     pub message: String,
@@ -636,6 +641,9 @@ pub fn events(trace: &Trace) -> Vec<EventReport> {
                 SafetyEvent::ControllerFault { .. } => "controller-fault",
                 SafetyEvent::CutBeforeArming { .. } => "cut-before-arming",
                 SafetyEvent::AirCut { .. } => "air-cut",
+                SafetyEvent::EntryHold { .. } => "entry-hold",
+                SafetyEvent::EntrySettled { .. } => "entry-settled",
+                SafetyEvent::ChipLoad { .. } => "chip-load",
             },
             message: e.describe(),
         })

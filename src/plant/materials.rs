@@ -130,6 +130,11 @@ pub enum Material {
     Composite,
 }
 
+/// The smallest feed per tooth a sharp carbide edge cuts rather than rubs, mm.
+const SMALLEST_CHIP_MM: f64 = 0.01;
+/// Below this diameter a cutter's feed per tooth scales with its diameter, mm.
+const SMALL_CUTTER_MM: f64 = 8.0;
+
 impl Material {
     /// Every material, in listing order.
     pub const ALL: [Material; 5] = [
@@ -209,6 +214,45 @@ impl Material {
             kre_n_mm,
             kae_n_mm,
         }
+    }
+
+    /// The feed per tooth a carbide end mill of `diameter_mm` may take in this material, mm:
+    /// (smallest, largest).
+    ///
+    /// The smallest is the chip a sharp carbide edge still cuts rather than rubs: edge radii are
+    /// 0.01–0.03 mm and the minimum chip thickness about a third of the edge radius, so 0.01 mm
+    /// in every material. The largest is the lab's choice inside the ranges the cutting-data
+    /// guides give for solid carbide end mills of 10–20 mm by ISO material group (Sandvik
+    /// Coromant, *Metal cutting technology — technical guide*, milling chapter; *Machinery's
+    /// Handbook*, 31st ed., "Speeds and feeds for milling"): unalloyed steel (ISO P, ≈ 200 HB)
+    /// 0.15 mm, grey cast iron (ISO K) 0.18 mm, aluminium (ISO N) 0.25 mm, hardened steel (ISO H,
+    /// ≈ 50 HRC) 0.08 mm. Smaller cutters take proportionally less: below 8 mm both ends scale
+    /// with the diameter. A composite spans the windows of both its materials: the window is a
+    /// limit of the chip, and which material the tool is in is the program's (a CAM system would
+    /// give each region its own); the force the controller holds keeps the harder one's chip
+    /// down.
+    ///
+    /// ```
+    /// use cutlab::plant::materials::Material;
+    /// assert_eq!(Material::Sm45c.feed_per_tooth_window_mm(20.0), (0.01, 0.15));
+    /// assert_eq!(Material::Composite.feed_per_tooth_window_mm(20.0), (0.01, 0.25));
+    /// let (lo, hi) = Material::Aluminium.feed_per_tooth_window_mm(4.0);
+    /// assert!((lo - 0.005).abs() < 1e-12 && (hi - 0.125).abs() < 1e-12);
+    /// ```
+    pub fn feed_per_tooth_window_mm(self, diameter_mm: f64) -> (f64, f64) {
+        let (min_mm, max_mm) = match self {
+            Material::Sm45c => (SMALLEST_CHIP_MM, 0.15),
+            Material::Gc30 => (SMALLEST_CHIP_MM, 0.18),
+            Material::Aluminium => (SMALLEST_CHIP_MM, 0.25),
+            Material::ToolSteel => (SMALLEST_CHIP_MM, 0.08),
+            Material::Composite => {
+                let (a, b) = Material::Sm45c.feed_per_tooth_window_mm(diameter_mm);
+                let (c, d) = Material::Aluminium.feed_per_tooth_window_mm(diameter_mm);
+                return (a.min(c), b.max(d));
+            }
+        };
+        let scale = (diameter_mm / SMALL_CUTTER_MM).min(1.0);
+        (min_mm * scale, max_mm * scale)
     }
 
     /// The single materials this one is made of, each with the fraction of a region's length it

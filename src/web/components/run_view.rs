@@ -8,7 +8,7 @@ use leptos::prelude::*;
 use crate::charts::{Axis, LineChart, Series, PALETTE};
 use crate::closed_loop::lab::RunResult;
 use crate::closed_loop::metrics::Metrics;
-use crate::closed_loop::summary::{best, format_metric, METRIC_ROWS};
+use crate::closed_loop::summary::{best_marks, format_metric, not_best_note, METRIC_ROWS};
 use crate::web::components::chart::ChartCanvas;
 
 /// A run with the name it is shown under.
@@ -216,7 +216,8 @@ pub fn MetricsTable(
                         .iter()
                         .map(|row| {
                             let values: Vec<Option<f64>> = runs.iter().map(|(_, r)| (row.value)(r)).collect();
-                            let marks = best(&values, row.better, format_metric);
+                            let results: Vec<&RunResult> = runs.iter().map(|(_, r)| r.as_ref()).collect();
+                            let marks = best_marks(row, &results, format_metric);
                             view! {
                                 <tr>
                                     <th scope="row">{row.heading()}</th>
@@ -238,6 +239,10 @@ pub fn MetricsTable(
                         .collect_view()}
                 </tbody>
             </table>
+            {not_best_note(
+                &runs.iter().map(|(n, r)| (n.as_str(), r.as_ref())).collect::<Vec<_>>(),
+            )
+            .map(|note| view! { <p class="note">{note}</p> })}
         })
     }
 }
