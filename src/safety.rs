@@ -525,9 +525,12 @@ impl SafetyEnvelope {
             return err("the entry hold's time must not be negative (0 s: no hold)".into());
         }
         if let Some(w) = c.chip_load {
-            if !(w.teeth > 0 && w.min_mm.is_finite() && w.max_mm.is_finite())
-                || !(0.0 < w.min_mm && w.min_mm < w.max_mm)
-            {
+            let valid = w.teeth > 0
+                && w.min_mm.is_finite()
+                && w.max_mm.is_finite()
+                && 0.0 < w.min_mm
+                && w.min_mm < w.max_mm;
+            if !valid {
                 return err(format!(
                     "the chip-load window {}–{} mm per tooth must be positive and ascending, for \
                      a cutter with teeth",
