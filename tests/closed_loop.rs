@@ -671,47 +671,6 @@ fn controllers_enter_the_cut_at_the_programmed_feed_not_wound_up_in_air() {
     }
 }
 
-/// docs/controllers.md quotes `scripts/controllers-table`; this holds one of its rows to what the
-/// tool computes now (mean |error| and time above the limit of every controller on
-/// maneerat-doc-2), so a change that moves the figures fails here until the docs are regenerated.
-#[cfg(not(target_arch = "wasm32"))]
-#[test]
-fn the_comparison_table_in_the_docs_is_what_the_tool_computes() {
-    let docs = include_str!("../docs/controllers.md");
-    let row = docs
-        .lines()
-        .find(|l| l.starts_with("| maneerat-doc-2 |"))
-        .unwrap();
-    let kinds = [
-        ControllerKind::Fixed,
-        ControllerKind::Restriction,
-        ControllerKind::Threshold,
-        ControllerKind::FuzzyExperience,
-        ControllerKind::FuzzyDynamics,
-        ControllerKind::Pi,
-        ControllerKind::Mrac,
-    ];
-    let cells: Vec<&str> = row
-        .split('|')
-        .map(str::trim)
-        .filter(|c| !c.is_empty())
-        .collect();
-    assert_eq!(cells.len(), 1 + kinds.len(), "{row}");
-    for (kind, cell) in kinds.iter().zip(&cells[1..]) {
-        let m = simulate(&RunSpec::new(Preset::ManeeratDoc2, *kind))
-            .unwrap()
-            .metrics;
-        let above = format!("{:.1}", m.time_above_limit_s);
-        let above = above.trim_end_matches('0').trim_end_matches('.');
-        let expected = format!("{:.1} ({above};", m.force_mean_abs_error_pct);
-        assert!(
-            cell.starts_with(&expected),
-            "{}: the docs say {cell:?}, the tool {expected:?}: rerun scripts/controllers-table",
-            kind.name()
-        );
-    }
-}
-
 /// Dynamometer feedback is a choice on every preset, not only on paper 001's own process.
 #[test]
 fn dynamometer_feedback_on_a_mill_holds_the_target() {

@@ -358,15 +358,22 @@ impl OnMachine<FeedbackLoop> {
     }
 }
 
-/// Whether two estimates differ by more than `tolerance` of the larger of them and the target
-/// (so two near-zero estimates in air never disagree).
 /// What a period without a sensorless estimate records.
 const NO_SENSORLESS_ESTIMATE: SensorlessEstimate = SensorlessEstimate {
     force_n: f64::NAN,
     relative_uncertainty: 0.0,
 };
 
-fn disagrees(current_based_n: f64, sensorless_n: f64, tolerance: f64, target_n: f64) -> bool {
+/// Whether two estimates differ by more than `tolerance` of the larger of them and a quarter of
+/// the target (so two near-zero estimates in air never disagree); no verdict (false) without
+/// two finite estimates. The cross-check's rule, for a period of the trace.
+///
+/// ```
+/// use cutlab::closed_loop::feedback_loop::disagrees;
+/// assert!(!disagrees(100.0, 130.0, 0.3, 100.0));
+/// assert!(disagrees(100.0, 150.0, 0.3, 100.0));
+/// ```
+pub fn disagrees(current_based_n: f64, sensorless_n: f64, tolerance: f64, target_n: f64) -> bool {
     if !(current_based_n.is_finite() && sensorless_n.is_finite()) {
         return false;
     }

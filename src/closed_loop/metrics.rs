@@ -367,13 +367,17 @@ fn metric_values(metrics: &Metrics) -> [(&'static str, Option<f64>); 22] {
     ]
 }
 
+/// A feed this share under what the override asks for is the machine slowing the path by itself.
+/// (Following an override change lags by a few percent at most: the envelope's rate limit keeps
+/// each change small.)
+pub const PATH_SLOWDOWN_SHARE: f64 = 0.2;
+
 /// Whether the machine is slowing the path down by itself (a corner, the end of the program): the
-/// feed is more than 20 % under what the override asks for. (Following an override change lags by
-/// a few percent at most: the envelope's rate limit keeps each change small.) NaN fields (a log
+/// feed is more than [`PATH_SLOWDOWN_SHARE`] under what the override asks for. NaN fields (a log
 /// without them) say no.
 fn path_slowdown(row: &TraceRow) -> bool {
     let asked = row.programmed_feed_mm_min * row.applied_override_pct / 100.0;
-    asked > 0.0 && row.feed_mm_min < 0.8 * asked
+    asked > 0.0 && row.feed_mm_min < (1.0 - PATH_SLOWDOWN_SHARE) * asked
 }
 
 /// Groups the rows where the depth changes by more than the step threshold into steps, as

@@ -44,6 +44,9 @@ pub fn references(spec: &RunSpec) -> Result<References, LoopError> {
 /// end is run unless the search comes down to it.
 const REFERENCE_BRACKET_PCT: (f64, f64) = (1.0, 250.0);
 
+/// The search stops once the bracket is this narrow, percent of override.
+pub const REFERENCE_RESOLUTION_PCT: f64 = 1.0;
+
 /// Probes the force model may place before the search falls back to halving the bracket.
 pub const GUIDED_PROBES: usize = 4;
 
@@ -178,12 +181,16 @@ impl ReferenceSearch {
         pct.is_finite().then_some(pct)
     }
 
-    /// The next override to run, or `None` when the bracket is down to 1 %.
+    /// The next override to run, or `None` when the bracket is down to
+    /// [`REFERENCE_RESOLUTION_PCT`].
     fn next_probe_pct(&mut self) -> Option<f64> {
-        if self.high_pct - self.low_pct <= 1.0 {
+        if self.high_pct - self.low_pct <= REFERENCE_RESOLUTION_PCT {
             return None;
         }
-        let (inside_low, inside_high) = (self.low_pct + 1.0, self.high_pct - 1.0);
+        let (inside_low, inside_high) = (
+            self.low_pct + REFERENCE_RESOLUTION_PCT,
+            self.high_pct - REFERENCE_RESOLUTION_PCT,
+        );
         let guided = (self.guided_probes < GUIDED_PROBES)
             .then(|| self.line_reaches_target_pct())
             .flatten();

@@ -35,6 +35,10 @@ pub struct ForceEstimate {
     pub in_range: bool,
 }
 
+/// An estimate whose current (or speed) lies outside the calibrated range by more than this
+/// fraction of the range's span is flagged as extrapolated.
+pub const RANGE_SLACK_FRACTION: f64 = 0.1;
+
 /// A closed interval of values seen during calibration.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -57,9 +61,10 @@ impl Range {
         Self { min, max }
     }
 
-    /// Whether `v` lies within the range widened by 10 % of its span on each side.
+    /// Whether `v` lies within the range widened by [`RANGE_SLACK_FRACTION`] of its span on each
+    /// side.
     pub fn contains_loosely(&self, v: f64) -> bool {
-        let slack = 0.1 * (self.max - self.min).abs();
+        let slack = RANGE_SLACK_FRACTION * (self.max - self.min).abs();
         v >= self.min - slack && v <= self.max + slack
     }
 }

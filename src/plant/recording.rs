@@ -104,7 +104,7 @@ pub const STEP_SPECTRUM_MAX_HZ: f64 = 20.0;
 pub const MIN_STEP_SAMPLES: usize = 1000;
 
 /// The part of each load step left out of its summary while the drive settles.
-const STEP_SETTLE_S: f64 = 1.0;
+pub const STEP_SETTLE_S: f64 = 1.0;
 
 /// A finished open-loop recording.
 #[derive(Debug, Clone, PartialEq, Serialize)]

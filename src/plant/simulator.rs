@@ -30,7 +30,9 @@ use super::cnc::{samples_per, AppliedOverride, CncConfig, Control, Every};
 use super::feed_drive::{three_phase_rms_a, FeedDrive, FeedDriveConfig};
 use super::materials::{CuttingCoefficients, Material};
 use super::mechanics::{mean_forces, Immersion, MillingForceModel, MillingMode};
-use super::power_law::{CachedPowerLaw, PowerLawInputs, PowerLawMaterial, PowerLawModel};
+use super::power_law::{
+    CachedPowerLaw, PowerLawInputs, PowerLawMaterial, PowerLawModel, PowerLawReading,
+};
 use super::scenario::Scenario;
 use super::sensors::{CurrentSensor, CurrentSensorConfig};
 use super::signals::{AxisSignals, PlantSignals};
@@ -155,17 +157,29 @@ const MAX_FEED_PER_TOOTH_MM: f64 = 1.0;
 /// Below this spindle speed the tool is not cutting.
 const MIN_CUTTING_RPM: f64 = 1.0;
 
-/// Paper 004's model for `material` (cast iron's weights for GC30, carbon steel's for the rest),
-/// its bias calibrated to the mechanistic mean resultant of the scenario's nominal cut: the
-/// first block's feed per tooth at its spindle speed, the largest depth and width.
-fn calibrated_power_law(
-    scenario: &Scenario,
-    material: Material,
-) -> (PowerLawModel, PowerLawInputs) {
-    let published = PowerLawModel::published(match material {
+/// The published weights paper 004 gives for a cutlab material: cast iron's for GC30, carbon
+/// steel's for the rest (the paper has no others).
+pub fn power_law_material(material: Material) -> PowerLawMaterial {
+    match material {
         Material::Gc30 => PowerLawMaterial::CastIron,
         _ => PowerLawMaterial::CarbonSteel,
-    });
+    }
+}
+
+/// The cut paper 004's power law is calibrated on for `material` in `scenario` — the first
+/// block's feed per tooth at its spindle speed, the largest depth and width — and the mechanistic
+/// mean resultant force there (`material`'s coefficients, [`mean_forces`]).
+///
+/// ```
+/// use cutlab::plant::materials::Material;
+/// use cutlab::plant::simulator::power_law_calibration_cut;
+/// use cutlab::plant::Preset;
+/// let scenario = Preset::KimStepDoc.scenario().unwrap();
+/// let (cut, mechanistic_n) = power_law_calibration_cut(&scenario, Material::Sm45c);
+/// assert_eq!((cut.axial_depth_mm, cut.feed_per_tooth_mm, cut.cutter_teeth), (5.0, 0.1, 2.0));
+/// assert!((mechanistic_n - 744.0).abs() < 0.5); // a Ø20 mm slot, 5 mm deep, in SM45C
+/// ```
+pub fn power_law_calibration_cut(scenario: &Scenario, material: Material) -> (PowerLawInputs, f64) {
     let cutter = scenario.cutter();
     let first = &scenario.segments()[0];
     let feed_per_tooth_mm = if first.spindle_rpm > 0.0 {
@@ -185,6 +199,7 @@ fn calibrated_power_law(
         axial_depth_mm: depth_mm,
         diameter_mm: cutter.diameter_mm,
         teeth_engaged: immersion.teeth_engaged(cutter.teeth),
+        cutter_teeth: f64::from(cutter.teeth),
     };
     let mean = mean_forces(
         cutter,
@@ -193,9 +208,21 @@ fn calibrated_power_law(
         depth_mm,
         feed_per_tooth_mm,
     );
+    (inputs, mean.resultant_n())
+}
+
+/// Paper 004's model for `material` ([`power_law_material`], read as
+/// [`PowerLawReading::USED`]), its bias calibrated to the mechanistic mean resultant of the
+/// scenario's nominal cut ([`power_law_calibration_cut`]).
+fn calibrated_power_law(
+    scenario: &Scenario,
+    material: Material,
+) -> (PowerLawModel, PowerLawInputs) {
+    let published = PowerLawModel::published(power_law_material(material), PowerLawReading::USED);
+    let (inputs, mechanistic_n) = power_law_calibration_cut(scenario, material);
     // A scenario without a nominal cut (no depth, no feed) keeps the published biases.
     let model = published
-        .calibrated(&inputs, mean.resultant_n())
+        .calibrated(&inputs, mechanistic_n)
         .unwrap_or(published);
     (model, inputs)
 }
@@ -460,6 +487,7 @@ impl Simulator {
                         axial_depth_mm: depth_mm,
                         diameter_mm: cutter.diameter_mm,
                         teeth_engaged: self.immersion.teeth_engaged(cutter.teeth),
+                        cutter_teeth: f64::from(cutter.teeth),
                     };
                     self.region_power_law[r].evaluate(&now)
                 }

@@ -1,0 +1,1469 @@
+//! docs/controllers.md and docs/papers.md say what the tool computes today.
+//!
+//! Every number the tool produces is marked in the Markdown source with an invisible HTML comment
+//! pair around the value as the page shows it:
+//!
+//! ```text
+//! slope <!-- tool:paper_000.bench.slope_a_per_nm -->0.588<!-- /tool --> A/N·m
+//! <!-- tool:controllers.table -->
+//! | preset | … |
+//! <!-- /tool -->
+//! ```
+//!
+//! Each key's value is computed once, below, by code calling the library, one function per group
+//! of facts (the comparison on the presets, the estimation, the envelope's and controllers'
+//! settings, paper 000's bench, paper 001, 003 and 004's figures), formatted as the page shows it.
+//! `cargo test --test docs` fails on a marked value the tool does not give, on a marker whose key
+//! no function computes, and on a fact no marker uses; `CUTLAB_BLESS=1 cargo test --test docs`
+//! (what `scripts/docs` runs) writes the computed values into the pages instead. Paper citations
+//! (equation and table numbers, the papers' own values) are not tool output and stay unmarked.
+//!
+//! The runs are shared between the facts: every controller on every preset with the fixed-feed
+//! references is run once (in parallel), and the prose's figures are read from those runs; only
+//! the figures no table run shows (another feedback path, another override ceiling, a fixed
+//! override, the bench's open-loop recording) add runs of their own. On the 2-core reference
+//! machine, with other builds running beside it, the test takes 20–27 s in the test profile
+//! (measured 2026-11-26: the 72 table runs and 9 reference searches 16.7 s, the other facts
+//! 3.4 s), so it runs with the rest of the suite.
+// Test code: unwrapping and panicking on a broken expectation is the point.
+#![cfg(not(target_arch = "wasm32"))]
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
+
+use std::collections::BTreeMap;
+use std::path::PathBuf;
+use std::time::Instant;
+
+use cutlab::closed_loop::definition::RunSpec;
+use cutlab::closed_loop::lab::metrics_config;
+use cutlab::closed_loop::lab::{teach_cut_only, LabRun, RunResult};
+use cutlab::closed_loop::metrics::{Metrics, FLUCTUATION_WINDOW_S, PATH_SLOWDOWN_SHARE};
+use cutlab::closed_loop::references::{
+    apply_references, ReferenceSearch, REFERENCE_RESOLUTION_PCT,
+};
+use cutlab::closed_loop::settings::{
+    air_cut_force_n, CROSS_CHECK_TOLERANCE, DEFAULT_CONTROL_PERIOD_S, DEFAULT_FEED_LOWPASS_HZ,
+    DEFAULT_LOWPASS_ORDER, DEFAULT_SPINDLE_LOWPASS_HZ, FORCE_LIMIT_FACTOR, MAX_AIR_CUT_FRACTION,
+    MIN_CONTROL_PERIOD_S, OVERLOAD_FACTOR,
+};
+use cutlab::closed_loop::teach_cut::{TEACH_OVERRIDES_PCT, TEACH_STEP_S};
+use cutlab::control::registry::{ControllerConfig, ControllerKind};
+use cutlab::estimation::current_force::RANGE_SLACK_FRACTION;
+use cutlab::estimation::estimator::{Estimator, Feedback};
+use cutlab::estimation::teach_fit::SETTLE_AFTER_CHANGE_S;
+use cutlab::plant::power_law::{PowerLawReading, EXPONENT_UNCERTAINTY};
+use cutlab::plant::presets::PlantKind;
+use cutlab::plant::simulator::{power_law_calibration_cut, power_law_material};
+use cutlab::plant::Preset;
+use cutlab::safety::{EnvelopeConfig, AIR_CUT_FRACTION};
+use cutlab::work::{parallel_map, Work};
+
+// ---------------------------------------------------------------------------------------------
+// The markers and the checker.
+// ---------------------------------------------------------------------------------------------
+
+const OPEN: &str = "<!-- tool:";
+const OPEN_END: &str = " -->";
+const CLOSE: &str = "<!-- /tool -->";
+
+/// One marked value: its key and where the value lies in the document (bytes).
+#[derive(Debug, PartialEq)]
+struct Marker {
+    key: String,
+    value: std::ops::Range<usize>,
+    line: usize,
+}
+
+/// The line (from 1) of byte `at`.
+fn line_of(text: &str, at: usize) -> usize {
+    text[..at].matches('\n').count() + 1
+}
+
+/// Every marker of `doc`, in order; an unterminated, nested or stray marker, or a key that is
+/// not a plain dotted name, is an error naming its line.
+fn markers(doc: &str) -> Result<Vec<Marker>, String> {
+    let mut found = Vec::new();
+    let mut at = 0;
+    loop {
+        let next_open = doc[at..].find(OPEN).map(|i| at + i);
+        let next_close = doc[at..].find(CLOSE).map(|i| at + i);
+        let open = match (next_open, next_close) {
+            (None, None) => return Ok(found),
+            (None, Some(close)) => {
+                return Err(format!(
+                    "line {}: {CLOSE} without a marker before it",
+                    line_of(doc, close)
+                ))
+            }
+            (Some(open), Some(close)) if close < open => {
+                return Err(format!(
+                    "line {}: {CLOSE} without a marker before it",
+                    line_of(doc, close)
+                ))
+            }
+            (Some(open), _) => open,
+        };
+        let line = line_of(doc, open);
+        let key_start = open + OPEN.len();
+        let key_end = doc[key_start..]
+            .find(OPEN_END)
+            .map(|i| key_start + i)
+            .ok_or_else(|| format!("line {line}: a marker without its closing \"-->\""))?;
+        let key = &doc[key_start..key_end];
+        if key.is_empty()
+            || !key
+                .chars()
+                .all(|c| c.is_ascii_lowercase() || c.is_ascii_digit() || "._-".contains(c))
+        {
+            return Err(format!(
+                "line {line}: marker key {key:?} is not a dotted lower-case name"
+            ));
+        }
+        let value_start = key_end + OPEN_END.len();
+        let close = doc[value_start..]
+            .find(CLOSE)
+            .map(|i| value_start + i)
+            .ok_or_else(|| format!("line {line}: marker {key} has no {CLOSE}"))?;
+        if let Some(inner) = doc[value_start..close].find(OPEN) {
+            return Err(format!(
+                "line {}: a marker inside marker {key} (opened on line {line})",
+                line_of(doc, value_start + inner)
+            ));
+        }
+        found.push(Marker {
+            key: key.to_string(),
+            value: value_start..close,
+            line,
+        });
+        at = close + CLOSE.len();
+    }
+}
+
+/// What is wrong with the documents against `facts`: a marker with an unknown key, a marked
+/// value other than the tool's, a fact no marker uses, a malformed marker. Empty when they
+/// agree.
+fn problems(docs: &[(&str, &str)], facts: &BTreeMap<String, String>) -> Vec<String> {
+    let mut out = Vec::new();
+    let mut used = std::collections::BTreeSet::new();
+    for (name, doc) in docs {
+        let found = match markers(doc) {
+            Ok(found) => found,
+            Err(e) => {
+                out.push(format!("{name}: {e}"));
+                continue;
+            }
+        };
+        for m in found {
+            let shown = &doc[m.value.clone()];
+            match facts.get(&m.key) {
+                None => out.push(format!(
+                    "{name} line {}: no fact is called {}",
+                    m.line, m.key
+                )),
+                Some(value) if value != shown => out.push(format!(
+                    "{name} line {}, {}: the docs say {shown:?}, the tool {value:?}",
+                    m.line, m.key
+                )),
+                Some(_) => {}
+            }
+            used.insert(m.key);
+        }
+    }
+    for (key, value) in facts {
+        if !used.contains(key) {
+            out.push(format!("no marker shows fact {key} ({value:?})"));
+        }
+    }
+    out
+}
+
+/// `doc` with every marked value whose key is a fact replaced by the fact.
+fn blessed(doc: &str, facts: &BTreeMap<String, String>) -> Result<String, String> {
+    let mut out = String::with_capacity(doc.len());
+    let mut copied = 0;
+    for m in markers(doc)? {
+        if let Some(value) = facts.get(&m.key) {
+            out.push_str(&doc[copied..m.value.start]);
+            out.push_str(value);
+            copied = m.value.end;
+        }
+    }
+    out.push_str(&doc[copied..]);
+    Ok(out)
+}
+
+// ---------------------------------------------------------------------------------------------
+// Formatting as the pages show numbers.
+// ---------------------------------------------------------------------------------------------
+
+/// `v` with `decimals` decimals.
+fn fixed(v: f64, decimals: usize) -> String {
+    format!("{v:.decimals$}")
+}
+
+/// `v` with at most `decimals` decimals, trailing zeros dropped ("18", "0.8").
+fn short(v: f64, decimals: usize) -> String {
+    let text = fixed(v, decimals);
+    if text.contains('.') {
+        text.trim_end_matches('0').trim_end_matches('.').to_string()
+    } else {
+        text
+    }
+}
+
+/// "low–high" with `decimals` decimals, or one number when both show alike.
+fn span(values: impl IntoIterator<Item = f64>, decimals: usize) -> String {
+    let (low, high) = values
+        .into_iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), v| {
+            (l.min(v), h.max(v))
+        });
+    let (low, high) = (fixed(low, decimals), fixed(high, decimals));
+    if low == high {
+        low
+    } else {
+        format!("{low}–{high}")
+    }
+}
+
+/// The facts, each set once.
+#[derive(Default)]
+struct Facts(BTreeMap<String, String>);
+
+impl Facts {
+    fn set(&mut self, key: &str, value: impl Into<String>) {
+        let previous = self.0.insert(key.to_string(), value.into());
+        assert!(previous.is_none(), "fact {key} is computed twice");
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// The runs the facts share.
+// ---------------------------------------------------------------------------------------------
+
+/// The controllers of the comparison table, in its column order.
+const TABLE_CONTROLLERS: [ControllerKind; 7] = ControllerKind::ALL;
+
+/// Every controller on every preset (seed 1) with the fixed-feed references, as `cutlab
+/// compare` runs them: one teach cut per preset, its calibration given to every run.
+struct Matrix {
+    runs: BTreeMap<(usize, usize), RunResult>,
+}
+
+impl Matrix {
+    fn run() -> Self {
+        let taught: Vec<_> = parallel_map(&Preset::ALL, |preset| {
+            teach_cut_only(&RunSpec::new(*preset, ControllerKind::Fixed))
+                .unwrap()
+                .1
+        });
+        // (preset index, None for the references or Some(controller index))
+        let jobs: Vec<(usize, Option<usize>)> = (0..Preset::ALL.len())
+            .flat_map(|p| {
+                std::iter::once((p, None))
+                    .chain((0..TABLE_CONTROLLERS.len()).map(move |k| (p, Some(k))))
+            })
+            .collect();
+        enum Done {
+            References(cutlab::closed_loop::references::References),
+            Run(Box<RunResult>),
+        }
+        let done = parallel_map(&jobs, |(p, job)| {
+            let preset = Preset::ALL[*p];
+            let calibration = taught[*p].clone();
+            match job {
+                None => Done::References(
+                    ReferenceSearch::calibrated(
+                        &RunSpec::new(preset, ControllerKind::Fixed),
+                        calibration,
+                    )
+                    .unwrap()
+                    .run_to_end()
+                    .unwrap(),
+                ),
+                Some(k) => Done::Run(Box::new(
+                    LabRun::calibrated(&RunSpec::new(preset, TABLE_CONTROLLERS[*k]), calibration)
+                        .unwrap()
+                        .run_to_end()
+                        .unwrap(),
+                )),
+            }
+        });
+        let mut references = BTreeMap::new();
+        let mut runs = BTreeMap::new();
+        for ((p, job), done) in jobs.into_iter().zip(done) {
+            match (job, done) {
+                (None, Done::References(r)) => {
+                    references.insert(p, r);
+                }
+                (Some(k), Done::Run(r)) => {
+                    runs.insert((p, k), *r);
+                }
+                _ => unreachable!(),
+            }
+        }
+        for ((p, _), run) in &mut runs {
+            apply_references(run, &references[p]);
+        }
+        Self { runs }
+    }
+
+    fn result(&self, preset: Preset, kind: ControllerKind) -> &RunResult {
+        let p = Preset::ALL.iter().position(|x| *x == preset).unwrap();
+        let k = TABLE_CONTROLLERS.iter().position(|x| *x == kind).unwrap();
+        &self.runs[&(p, k)]
+    }
+
+    fn metrics(&self, preset: Preset, kind: ControllerKind) -> &Metrics {
+        &self.result(preset, kind).metrics
+    }
+
+    /// The metrics of every feedback controller (all but the fixed feed) on `preset`.
+    fn feedback(&self, preset: Preset) -> impl Iterator<Item = &Metrics> + '_ {
+        TABLE_CONTROLLERS[1..]
+            .iter()
+            .map(move |k| self.metrics(preset, *k))
+    }
+}
+
+fn spec_with(preset: Preset, kind: ControllerKind, edit: impl FnOnce(&mut RunSpec)) -> RunSpec {
+    let mut spec = RunSpec::new(preset, kind);
+    edit(&mut spec);
+    spec
+}
+
+fn simulate(spec: &RunSpec) -> RunResult {
+    LabRun::new(spec).unwrap().run_to_end().unwrap()
+}
+
+/// Seconds the force spent above the run's limit, by the depth being cut.
+fn time_above_limit_at_depth_s(run: &RunResult, depth_mm: f64) -> f64 {
+    let rows = &run.trace.rows;
+    rows.windows(2)
+        .filter(|w| {
+            let r = &w[1];
+            r.armed
+                && (r.depth_mm - depth_mm).abs() < 1e-9
+                && r.force_n > run.settings.force_limit_n
+        })
+        // From +0: an empty sum of floats is −0, which would show as "-0.00".
+        .fold(0.0, |sum, w| sum + (w[1].time_s - w[0].time_s))
+}
+
+/// A kim-step-doc run's time above the limit in all, in the 2 mm section (after the step from the
+/// light 1 mm entry) and in the 5 mm one (the deepest step), two decimals.
+fn set_time_above_by_depth(facts: &mut Facts, prefix: &str, run: &RunResult) {
+    facts.set(
+        &format!("{prefix}.above_total_s"),
+        fixed(run.metrics.time_above_limit_s, 2),
+    );
+    for depth_mm in [2.0, 5.0] {
+        facts.set(
+            &format!("{prefix}.above_at_{depth_mm}mm_s"),
+            fixed(time_above_limit_at_depth_s(run, depth_mm), 2),
+        );
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// The facts, one function per group.
+// ---------------------------------------------------------------------------------------------
+
+/// docs/controllers.md's comparison table: every controller on every preset.
+fn comparison_table(facts: &mut Facts, m: &Matrix) {
+    let mut table = String::from(
+        "\n| preset | fixed 100 % | restriction | threshold | fuzzy exp. | fuzzy dyn. | PI | MRAC |\n\
+         |---|---|---|---|---|---|---|---|\n",
+    );
+    for preset in Preset::ALL {
+        let cells: Vec<String> = TABLE_CONTROLLERS
+            .iter()
+            .map(|kind| {
+                let metrics = m.metrics(preset, *kind);
+                // Force errors exist only where the controller held a cut (the bench has none).
+                let error = if metrics.controlled_cutting_time_s > 0.0 {
+                    fixed(metrics.force_mean_abs_error_pct, 1)
+                } else {
+                    "—".to_string()
+                };
+                let saving = metrics
+                    .saving_vs_safe_fixed_pct
+                    .map_or("—".to_string(), |s| format!("{s:+.0} %"));
+                format!(
+                    "{error} ({}; {saving})",
+                    short(metrics.time_above_limit_s, 1)
+                )
+            })
+            .collect();
+        table += &format!("| {} | {} |\n", preset.name(), cells.join(" | "));
+    }
+    facts.set("controllers.table", table);
+}
+
+/// A figure of a run's metrics, as the pages show it.
+#[derive(Clone, Copy)]
+enum Figure {
+    /// Mean |force error|, % of target, one decimal: `….error_pct`.
+    ErrorPct,
+    /// Time above the force limit, s, at most one decimal: `….above_s`.
+    AboveS,
+    /// Saving against the safe fixed feed, whole %: `….saving_pct`.
+    SavingPct,
+    /// Changes of the override: `….changes`.
+    Changes,
+}
+
+/// Sets `figures` of `metrics` under `prefix`.
+fn set_figures(facts: &mut Facts, prefix: &str, metrics: &Metrics, figures: &[Figure]) {
+    for figure in figures {
+        let (name, value) = match figure {
+            Figure::ErrorPct => ("error_pct", fixed(metrics.force_mean_abs_error_pct, 1)),
+            Figure::AboveS => ("above_s", short(metrics.time_above_limit_s, 1)),
+            Figure::SavingPct => (
+                "saving_pct",
+                // None where no fixed feed inside the envelope keeps the force at the target.
+                metrics
+                    .saving_vs_safe_fixed_pct
+                    .map_or("—".to_string(), |v| fixed(v, 0)),
+            ),
+            Figure::Changes => ("changes", metrics.override_changes.to_string()),
+        };
+        facts.set(&format!("{prefix}.{name}"), value);
+    }
+}
+
+/// The prose of docs/controllers.md's "What the comparison on the presets shows", and the
+/// figures papers.md takes from the same runs.
+fn comparison_prose(facts: &mut Facts, m: &Matrix) {
+    use ControllerKind::*;
+    use Figure::*;
+    use Preset::*;
+    let step = |kind| m.metrics(KimStepDoc, kind);
+    set_figures(facts, "kim_step.fixed", step(Fixed), &[ErrorPct, AboveS]);
+    facts.set(
+        "kim_step.fixed.error_pct_whole",
+        fixed(step(Fixed).force_mean_abs_error_pct, 0),
+    );
+    facts.set(
+        "kim_step.feedback.error_span_pct",
+        span(
+            m.feedback(KimStepDoc).map(|x| x.force_mean_abs_error_pct),
+            0,
+        ),
+    );
+    facts.set(
+        "kim_step.feedback.above_span_s",
+        span(m.feedback(KimStepDoc).map(|x| x.time_above_limit_s), 1),
+    );
+    set_figures(
+        facts,
+        "kim_step.threshold",
+        step(Threshold),
+        &[ErrorPct, AboveS, SavingPct, Changes],
+    );
+    set_figures(
+        facts,
+        "kim_step.restriction",
+        step(Restriction),
+        &[ErrorPct, Changes],
+    );
+
+    // Where the threshold law's time above the limit falls on the 0–255 % override.
+    let threshold = m.result(KimStepDoc, Threshold);
+    set_time_above_by_depth(facts, "kim_step.threshold", threshold);
+    let entry_max = threshold
+        .trace
+        .rows
+        .iter()
+        .filter(|r| r.armed && (r.depth_mm - 1.0).abs() < 1e-9)
+        .map(|r| r.override_pct)
+        .fold(0.0, f64::max);
+    facts.set("kim_step.threshold.entry_override_pct", fixed(entry_max, 0));
+
+    facts.set(
+        "kim_taper.feedback.saving_span_pct",
+        span(
+            m.feedback(KimMaterialTaper)
+                .filter_map(|x| x.saving_vs_safe_fixed_pct),
+            0,
+        ),
+    );
+    let taper = m.metrics(KimMaterialTaper, Threshold);
+    let circle = |kind| m.metrics(KimCircularTaper, kind);
+    set_figures(facts, "kim_taper.threshold", taper, &[ErrorPct, SavingPct]);
+    set_figures(
+        facts,
+        "kim_circle.threshold",
+        circle(Threshold),
+        &[ErrorPct, SavingPct, Changes],
+    );
+    set_figures(
+        facts,
+        "kim_circle.restriction",
+        circle(Restriction),
+        &[ErrorPct, Changes],
+    );
+    let no_time_above =
+        taper.time_above_limit_s == 0.0 && circle(Threshold).time_above_limit_s == 0.0;
+    facts.set(
+        "kim_tapers.threshold.above",
+        if no_time_above { "no time" } else { "time" },
+    );
+
+    // In aluminium (the second half of the material taper) the threshold law runs above the
+    // FANUC dial's ceiling.
+    let dial_max = EnvelopeConfig::default_for_dial().max_override_pct;
+    let aluminium_from_mm = KimMaterialTaper.scenario().unwrap().material_regions()[1].from_mm;
+    let aluminium_max = m
+        .result(KimMaterialTaper, Threshold)
+        .trace
+        .rows
+        .iter()
+        .filter(|r| r.armed && r.path_position_mm > aluminium_from_mm && r.depth_mm > 0.0)
+        .map(|r| r.override_pct)
+        .fold(0.0, f64::max);
+    assert!(aluminium_max > dial_max, "{aluminium_max}");
+    facts.set(
+        "kim_taper.threshold.aluminium_override_pct",
+        fixed(aluminium_max, 0),
+    );
+
+    // Paper 001's presets.
+    for (preset, key) in [
+        (ManeeratDoc1, "1"),
+        (ManeeratDoc2, "2"),
+        (ManeeratDoc4, "4"),
+    ] {
+        set_figures(
+            facts,
+            &format!("maneerat_{key}.mrac"),
+            m.metrics(preset, Mrac),
+            &[ErrorPct],
+        );
+        facts.set(
+            &format!("maneerat_{key}.mrac.peak_n"),
+            fixed(m.metrics(preset, Mrac).peak_force_n, 0),
+        );
+        facts.set(
+            &format!("maneerat_{key}.fixed.peak_n"),
+            fixed(m.metrics(preset, Fixed).peak_force_n, 0),
+        );
+    }
+    facts.set(
+        "maneerat.feedback.above_span_s",
+        span(
+            [ManeeratDoc2, ManeeratDoc4]
+                .into_iter()
+                .flat_map(|p| m.feedback(p).map(|x| x.time_above_limit_s)),
+            1,
+        ),
+    );
+    facts.set(
+        "maneerat_second_order.mrac.error_pct",
+        fixed(
+            m.metrics(ManeeratSecondOrder, Mrac)
+                .force_mean_abs_error_pct,
+            1,
+        ),
+    );
+    facts.set(
+        "maneerat_second_order.feedback.error_span_pct",
+        span(
+            m.feedback(ManeeratSecondOrder)
+                .map(|x| x.force_mean_abs_error_pct),
+            0,
+        ),
+    );
+    // The dynamometer's reading against the true force over the controlled cut.
+    let second = m.result(ManeeratSecondOrder, Mrac);
+    let sensor_error_pct = second
+        .trace
+        .rows
+        .iter()
+        .filter(|r| r.armed && r.depth_mm > 0.0 && r.force_n > 0.5 * r.target_force_n)
+        .map(|r| 100.0 * (r.force_est_n / r.force_n - 1.0).abs())
+        .fold(0.0, f64::max);
+    facts.set(
+        "maneerat_second_order.sensor_error_pct",
+        fixed(sensor_error_pct, 1),
+    );
+
+    // Cycle time where the programmed feed overloads the tool.
+    let overloaded = [KimStepDoc, KimCircularTaper, ManeeratDoc2, ManeeratDoc4];
+    facts.set(
+        "overloaded.fixed.above_span_s",
+        span(
+            overloaded
+                .iter()
+                .map(|p| m.metrics(*p, Fixed).time_above_limit_s),
+            0,
+        ),
+    );
+    facts.set(
+        "overloaded.feedback.saving_span_pct",
+        span(
+            overloaded
+                .iter()
+                .flat_map(|p| m.feedback(*p).filter_map(|x| x.saving_vs_safe_fixed_pct)),
+            0,
+        ),
+    );
+
+    // The brake bench: current restriction's dial walk and the threshold law's changes.
+    let bench = m.result(WangBrakeBench, Restriction);
+    let rows = &bench.trace.rows;
+    let (low, high) = (
+        bench.settings.envelope.min_override_pct,
+        bench.settings.envelope.max_override_pct,
+    );
+    let last_at = |from: usize, pct: f64| {
+        rows[from..]
+            .iter()
+            .position(|r| r.override_pct == pct)
+            .map(|i| from + i)
+    };
+    let top = last_at(0, high).unwrap();
+    let leaves_top = top
+        + rows[top..]
+            .iter()
+            .position(|r| r.override_pct < high)
+            .unwrap();
+    let floor = last_at(leaves_top, low).unwrap();
+    let leaves_floor = floor
+        + rows[floor..]
+            .iter()
+            .position(|r| r.override_pct > low)
+            .unwrap();
+    let back = last_at(leaves_floor, high).unwrap();
+    facts.set(
+        "bench.restriction.down_s",
+        span([rows[leaves_top].time_s, rows[floor].time_s], 0),
+    );
+    facts.set(
+        "bench.restriction.up_s",
+        span([rows[leaves_floor].time_s, rows[back].time_s], 0),
+    );
+    facts.set(
+        "bench.cycle_s",
+        fixed(m.metrics(WangBrakeBench, Fixed).cycle_time_s, 0),
+    );
+    facts.set(
+        "bench.threshold.changes",
+        m.metrics(WangBrakeBench, Threshold)
+            .override_changes
+            .to_string(),
+    );
+    facts.set(
+        "bench.arming_delay_s",
+        short(bench.settings.envelope.arming_delay_s, 1),
+    );
+    facts.set("bench.restriction.floor_pct", fixed(low, 0));
+    facts.set("bench.restriction.ceiling_pct", fixed(high, 0));
+}
+
+/// The fixed overrides at which the estimate is held against the true force.
+const ESTIMATE_CHECK_OVERRIDES_PCT: [f64; 2] = [20.0, 140.0];
+/// MRAC's K_d before it was lowered to today's default.
+const MRAC_KD_BEFORE_PCT_S: f64 = 20.0;
+/// How far off a cutting coefficient is taken to be, to show what it does to a calibration.
+const KTC_OFFSET_PCT: f64 = 20.0;
+
+/// Figures no table run shows: another override ceiling, another feedback path, fixed
+/// overrides, a detuned MRAC.
+fn extra_runs(facts: &mut Facts, m: &Matrix) {
+    use ControllerKind::*;
+    use Preset::*;
+    let specs = [
+        // Current restriction on maneerat-doc-1 without the entry hold.
+        spec_with(ManeeratDoc1, Restriction, |s| s.settings.entry_hold_s = Some(0.0)),
+        // Feed-current feedback on kim-step-doc.
+        spec_with(KimStepDoc, Threshold, |s| {
+            s.settings.feedback = Some(Feedback::FeedCurrent)
+        }),
+        // The estimate against the truth at the ends of the teach cut's range.
+        spec_with(KimStepDoc, Fixed, |s| {
+            s.controller
+                .set("override_pct", ESTIMATE_CHECK_OVERRIDES_PCT[0])
+                .unwrap()
+        }),
+        spec_with(KimStepDoc, Fixed, |s| {
+            s.controller
+                .set("override_pct", ESTIMATE_CHECK_OVERRIDES_PCT[1])
+                .unwrap()
+        }),
+        // MRAC at the K_d it had before.
+        spec_with(ManeeratDoc4, Mrac, |s| {
+            s.controller.set("kd_pct_s", MRAC_KD_BEFORE_PCT_S).unwrap()
+        }),
+    ];
+    let runs = parallel_map(&specs, simulate);
+    facts.set(
+        "maneerat_1.restriction_no_hold.peak_n",
+        fixed(runs[0].metrics.peak_force_n, 0),
+    );
+    let feed = &runs[1];
+    facts.set(
+        "kim_step.threshold_feed.cycle_s",
+        fixed(feed.metrics.cycle_time_s, 1),
+    );
+    facts.set(
+        "kim_step.threshold.cycle_s",
+        fixed(m.metrics(KimStepDoc, Threshold).cycle_time_s, 1),
+    );
+    let floor = feed.settings.envelope.min_override_pct;
+    let on_floor_at_5mm = feed
+        .trace
+        .rows
+        .iter()
+        .filter(|r| r.armed && (r.depth_mm - 5.0).abs() < 1e-9)
+        .any(|r| r.override_pct == floor && r.force_n > r.target_force_n);
+    assert!(
+        on_floor_at_5mm,
+        "the feed-current run never sat on the floor above target at 5 mm"
+    );
+    facts.set("kim_step.threshold_feed.floor_pct", fixed(floor, 0));
+    // The median |estimate − truth| / truth over the cut at a fixed 20 % and 140 %.
+    let estimate_error = |run: &RunResult| {
+        let mut errors: Vec<f64> = run
+            .trace
+            .rows
+            .iter()
+            .filter(|r| r.armed && r.depth_mm > 0.0 && r.force_n > 0.0)
+            .map(|r| 100.0 * (r.force_est_n / r.force_n - 1.0).abs())
+            .collect();
+        errors.sort_by(f64::total_cmp);
+        errors[errors.len() / 2]
+    };
+    facts.set(
+        "teach.check_low_pct",
+        fixed(ESTIMATE_CHECK_OVERRIDES_PCT[0], 0),
+    );
+    facts.set(
+        "teach.check_high_pct",
+        fixed(ESTIMATE_CHECK_OVERRIDES_PCT[1], 0),
+    );
+    facts.set(
+        "teach.estimate_error_low_pct",
+        fixed(estimate_error(&runs[2]), 1),
+    );
+    facts.set(
+        "teach.estimate_error_high_pct",
+        fixed(estimate_error(&runs[3]), 1),
+    );
+    let detuned = &runs[4];
+    let tuned = m.metrics(ManeeratDoc4, Mrac);
+    facts.set("mrac.kd_before", short(MRAC_KD_BEFORE_PCT_S, 1));
+    facts.set(
+        "mrac.kd_before.fluctuation_pct",
+        fixed(detuned.metrics.late_force_fluctuation_pct, 1),
+    );
+    facts.set(
+        "mrac.kd_default.fluctuation_pct",
+        fixed(tuned.late_force_fluctuation_pct, 1),
+    );
+}
+
+/// The teach cut, the estimators and the target conversion.
+fn estimation(facts: &mut Facts, m: &Matrix) {
+    use Preset::*;
+    facts.set(
+        "teach.overrides_pct",
+        TEACH_OVERRIDES_PCT
+            .iter()
+            .map(|v| fixed(*v, 0))
+            .collect::<Vec<_>>()
+            .join(", "),
+    );
+    facts.set("teach.step_s", short(TEACH_STEP_S, 1));
+    facts.set("teach.settle_s", short(SETTLE_AFTER_CHANGE_S, 1));
+    // R² of the spindle lines the teach cuts fit: paper 003's presets and paper 001's.
+    let r_squared = |presets: &[Preset]| -> Vec<f64> {
+        presets
+            .iter()
+            .flat_map(
+                |p| match &m.result(*p, ControllerKind::Fixed).calibration.estimator {
+                    Estimator::Spindle { model, .. } => model
+                        .rows
+                        .iter()
+                        .map(|r| r.quality.r_squared)
+                        .collect::<Vec<_>>(),
+                    other => panic!("{}: {other:?}", p.name()),
+                },
+            )
+            .collect()
+    };
+    facts.set(
+        "teach.kim.r_squared_span",
+        span(
+            r_squared(&[KimStepDoc, KimMaterialTaper, KimCircularTaper]),
+            4,
+        ),
+    );
+    let maneerat_low = r_squared(&[ManeeratDoc1, ManeeratDoc2, ManeeratDoc4])
+        .into_iter()
+        .fold(f64::INFINITY, f64::min);
+    // The number of nines the lowest of them reaches.
+    let nines = (-(1.0 - maneerat_low).log10()).floor() as usize;
+    facts.set(
+        "teach.maneerat.r_squared_above",
+        format!("0.{}", "9".repeat(nines)),
+    );
+    // The spindle's sensitivity at 1000 rpm and paper 003's 0.4 A gap in force.
+    let kim = &m.result(KimStepDoc, ControllerKind::Fixed);
+    let Estimator::Spindle { model, .. } = &kim.calibration.estimator else {
+        panic!("kim-step-doc teaches the spindle model")
+    };
+    let row = model
+        .rows
+        .iter()
+        .find(|r| (r.speed_rpm - 1000.0).abs() < 20.0)
+        .unwrap();
+    facts.set(
+        "kim_step.sensitivity_a_per_n",
+        fixed(row.sensitivity_a_per_n, 4),
+    );
+    let gap_n = 0.4 / row.sensitivity_a_per_n;
+    facts.set("kim_step.gap_0_4_a_n", fixed(gap_n, 0));
+    facts.set(
+        "kim_step.gap_0_4_a_pct_of_target",
+        fixed(100.0 * gap_n / kim.settings.target_force_n, 0),
+    );
+    facts.set("kim_step.target_n", fixed(kim.settings.target_force_n, 0));
+    // Feed-current feedback converts the target by the teach cut's feed/resultant ratio.
+    let (feed_settings, feed_calibration) =
+        teach_cut_only(&spec_with(KimStepDoc, ControllerKind::Threshold, |s| {
+            s.settings.feedback = Some(Feedback::FeedCurrent)
+        }))
+        .unwrap();
+    facts.set(
+        "kim_step.feed_per_resultant",
+        fixed(feed_calibration.regulated_per_resultant, 2),
+    );
+    facts.set(
+        "kim_step.feed_target_n",
+        fixed(feed_settings.target_force_n, 0),
+    );
+    // What paper 001's spindle lines read in air.
+    facts.set(
+        "maneerat.air_force_span_n",
+        span(
+            [ManeeratDoc1, ManeeratDoc2, ManeeratDoc4]
+                .into_iter()
+                .map(|p| {
+                    m.result(p, ControllerKind::Fixed)
+                        .calibration
+                        .air_force_estimate_n
+                }),
+            0,
+        ),
+    );
+    // Where that puts the air-cut threshold, as a share of each preset's target.
+    facts.set(
+        "maneerat.air_threshold_span_pct",
+        span(
+            [ManeeratDoc1, ManeeratDoc2, ManeeratDoc4]
+                .into_iter()
+                .map(|p| {
+                    let run = m.result(p, ControllerKind::Fixed);
+                    let target_n = run.settings.target_force_n;
+                    100.0 * air_cut_force_n(target_n, run.calibration.air_force_estimate_n)
+                        / target_n
+                }),
+            0,
+        ),
+    );
+    // Paper 003's 1 mm entry at 100 %, as a share of the target.
+    let fixed_run = m.result(KimStepDoc, ControllerKind::Fixed);
+    let entry: Vec<f64> = fixed_run
+        .trace
+        .rows
+        .iter()
+        .filter(|r| r.armed && (r.depth_mm - 1.0).abs() < 1e-9)
+        .map(|r| r.force_n / r.target_force_n)
+        .collect();
+    let entry_share =
+        entry[entry.len() / 2..].iter().sum::<f64>() / (entry.len() - entry.len() / 2) as f64;
+    facts.set("kim_step.entry_share_pct", fixed(100.0 * entry_share, 0));
+}
+
+/// The modelled-force calibration of the sample teach-cut log against its measured force.
+fn log_calibration(facts: &mut Facts) {
+    use cutlab::estimation::cut_forces::CutGeometry;
+    use cutlab::log::period_log::{calibrate_log, LogTable};
+    use cutlab::plant::materials::Material;
+    use cutlab::plant::mechanics::{Cutter, MillingMode};
+    let bytes = std::fs::read(root().join("www/data/kim-step-doc-teach-cut.csv")).unwrap();
+    let log = cutlab::log::load(&bytes, None).unwrap();
+    let table = LogTable::from_log(&log, &[]).unwrap();
+    let sensitivity = |geometry: Option<&CutGeometry>| {
+        let fit = calibrate_log(&table, geometry.map(|g| (g, "the model")), 900.0).unwrap();
+        fit.spindle.unwrap().rows[0].sensitivity_a_per_n
+    };
+    let measured = sensitivity(None);
+    let geometry = CutGeometry {
+        cutter: Cutter::new(20.0, 2, 0.0).unwrap(),
+        mode: MillingMode::Slot,
+        coefficients: Material::Sm45c.coefficients(),
+    };
+    let modelled = sensitivity(Some(&geometry));
+    facts.set(
+        "log.modelled_vs_measured_pct",
+        fixed(100.0 * (modelled / measured - 1.0).abs(), 1),
+    );
+    let mut harder = geometry.clone();
+    harder.coefficients.ktc_n_mm2 *= 1.0 + KTC_OFFSET_PCT / 100.0;
+    let off = sensitivity(Some(&harder));
+    facts.set("log.ktc_offset_pct", fixed(KTC_OFFSET_PCT, 0));
+    facts.set(
+        "log.ktc_sensitivity_pct",
+        fixed(100.0 * (1.0 - off / modelled), 0),
+    );
+}
+
+/// Settings and defaults the pages state: the signal chain, the envelope, the controllers', the
+/// metrics', the cross-check's.
+fn settings(facts: &mut Facts, m: &Matrix) {
+    use Preset::*;
+    facts.set(
+        "chain.spindle_lowpass_hz",
+        fixed(DEFAULT_SPINDLE_LOWPASS_HZ, 0),
+    );
+    facts.set("chain.feed_lowpass_hz", fixed(DEFAULT_FEED_LOWPASS_HZ, 0));
+    facts.set("chain.lowpass_order", DEFAULT_LOWPASS_ORDER.to_string());
+    facts.set(
+        "chain.min_period_ms",
+        fixed(1000.0 * MIN_CONTROL_PERIOD_S, 0),
+    );
+    facts.set(
+        "chain.default_period_ms",
+        fixed(1000.0 * DEFAULT_CONTROL_PERIOD_S, 0),
+    );
+    let period_ms = |p: Preset| {
+        fixed(
+            1000.0 * m.result(p, ControllerKind::Fixed).settings.control_period_s,
+            0,
+        )
+    };
+    facts.set("chain.period_1000_rpm_ms", period_ms(KimStepDoc));
+    facts.set("chain.period_3000_rpm_ms", period_ms(ManeeratDoc2));
+    assert_eq!(
+        period_ms(WangBrakeBench),
+        fixed(1000.0 * DEFAULT_CONTROL_PERIOD_S, 0)
+    );
+
+    let dial = EnvelopeConfig::default_for_dial();
+    facts.set("envelope.arming_delay_s", short(dial.arming_delay_s, 1));
+    facts.set(
+        "envelope.arming_override_pct",
+        fixed(dial.arming_override_pct, 0),
+    );
+    facts.set("envelope.min_override_pct", fixed(dial.min_override_pct, 0));
+    facts.set("envelope.max_override_pct", fixed(dial.max_override_pct, 0));
+    facts.set(
+        "envelope.kim_max_override_pct",
+        fixed(
+            m.result(KimStepDoc, ControllerKind::Fixed)
+                .settings
+                .envelope
+                .max_override_pct,
+            0,
+        ),
+    );
+    facts.set(
+        "envelope.max_rate_pct_per_s",
+        fixed(dial.max_rate_pct_per_s, 0),
+    );
+    let positions = match &dial.resolution {
+        cutlab::safety::OverrideResolution::Dial(p) => p.clone(),
+        other => panic!("{other:?}"),
+    };
+    facts.set("envelope.dial_positions", positions.len().to_string());
+    facts.set(
+        "envelope.dial_span_pct",
+        format!(
+            "{}–{}",
+            fixed(positions[0], 0),
+            fixed(positions[positions.len() - 1], 0)
+        ),
+    );
+    facts.set(
+        "envelope.dial_step_pct",
+        fixed(dial.resolution.step_pct(), 0),
+    );
+    facts.set("envelope.stuck_ms", fixed(1000.0 * dial.stuck_after_s, 0));
+    facts.set("envelope.max_gap_periods", short(dial.max_gap_periods, 1));
+    facts.set(
+        "envelope.recover_ms",
+        fixed(1000.0 * dial.recover_after_s, 0),
+    );
+    facts.set(
+        "envelope.entry_override_pct",
+        fixed(dial.entry_override_pct, 0),
+    );
+    facts.set("envelope.air_cut_fraction", short(AIR_CUT_FRACTION, 2));
+    facts.set(
+        "envelope.max_air_cut_pct",
+        fixed(100.0 * MAX_AIR_CUT_FRACTION, 0),
+    );
+    facts.set("envelope.overload_factor", short(OVERLOAD_FACTOR, 1));
+    facts.set("envelope.overload_s", short(dial.overload_time_s, 2));
+    facts.set("metrics.force_limit_factor", short(FORCE_LIMIT_FACTOR, 2));
+    facts.set(
+        "metrics.force_limit_above_target_pct",
+        fixed(100.0 * (FORCE_LIMIT_FACTOR - 1.0), 0),
+    );
+    let metrics_band = m
+        .result(KimStepDoc, ControllerKind::Threshold)
+        .metrics
+        .settling_band_pct;
+    facts.set("metrics.settling_band_pct", short(metrics_band, 1));
+    facts.set(
+        "cross_check.tolerance_pct",
+        fixed(100.0 * CROSS_CHECK_TOLERANCE, 0),
+    );
+    facts.set(
+        "cross_check.exponent_uncertainty",
+        short(EXPONENT_UNCERTAINTY, 2),
+    );
+    facts.set(
+        "cross_check.half_feed_widening_pct",
+        fixed(100.0 * EXPONENT_UNCERTAINTY * 2f64.ln(), 0),
+    );
+
+    // The controllers' defaults the table of controllers states.
+    for (kind, key) in [
+        (ControllerKind::Fixed, "override_pct"),
+        (ControllerKind::Restriction, "band_pct"),
+        (ControllerKind::Restriction, "step_pct"),
+        (ControllerKind::Threshold, "gap_pct"),
+        (ControllerKind::Threshold, "kp"),
+        (ControllerKind::Threshold, "ignore_after_start_s"),
+        (ControllerKind::Pi, "kp"),
+        (ControllerKind::Pi, "ki_per_s"),
+        (ControllerKind::Pi, "tracking_time_s"),
+        (ControllerKind::Mrac, "lambda_per_s"),
+        (ControllerKind::Mrac, "kd_pct_s"),
+        (ControllerKind::Mrac, "gamma_beta_pct_per_s"),
+        (ControllerKind::Mrac, "initial_beta_pct"),
+    ] {
+        let value = ControllerConfig::new(kind).get(key).unwrap();
+        facts.set(
+            &format!("controller.{}.{key}", kind.name()),
+            short(value, 3),
+        );
+    }
+    let tracking = ControllerKind::Pi
+        .params()
+        .iter()
+        .find(|p| p.key == "tracking_time_s")
+        .unwrap();
+    facts.set(
+        "controller.pi.tracking_time_s.range",
+        format!(
+            "{} ms–{} s",
+            short(1000.0 * tracking.min, 3),
+            short(tracking.max, 3)
+        ),
+    );
+    // The sensor-fault current: a multiple of the largest phase current the teach cut saw.
+    let kim = m.result(KimStepDoc, ControllerKind::Fixed);
+    facts.set(
+        "envelope.fault_current_factor",
+        short(
+            kim.settings.envelope.max_current_a / kim.calibration.max_phase_current_a,
+            2,
+        ),
+    );
+    // The air-cut threshold's margin over the air reading, where neither bound applies.
+    let margin = air_cut_force_n(100.0, 20.0) / 20.0;
+    facts.set("envelope.air_margin", short(margin, 2));
+    facts.set(
+        "estimation.range_slack_pct",
+        fixed(100.0 * RANGE_SLACK_FRACTION, 0),
+    );
+    facts.set(
+        "metrics.reference_resolution_pct",
+        short(REFERENCE_RESOLUTION_PCT, 1),
+    );
+    facts.set(
+        "metrics.path_slowdown_pct",
+        fixed(100.0 * PATH_SLOWDOWN_SHARE, 0),
+    );
+    facts.set(
+        "metrics.depth_step_mm",
+        short(metrics_config(KimStepDoc, &kim.settings).depth_step_mm, 2),
+    );
+    facts.set(
+        "metrics.fluctuation_window_s",
+        short(FLUCTUATION_WINDOW_S, 1),
+    );
+    facts.set(
+        "kim_taper.programmed_feed_mm_min",
+        fixed(KimMaterialTaper.mill_parameters().unwrap().feed_mm_min, 0),
+    );
+    let dyn_config = cutlab::plant::dynamometer::DynamometerConfig::default();
+    facts.set(
+        "dynamometer.bandwidth_hz",
+        fixed(dyn_config.bandwidth_hz, 0),
+    );
+    facts.set("dynamometer.noise_n", short(dyn_config.noise_n, 1));
+    let air_mm = -ManeeratDoc2.mill_parameters().unwrap().start_mm[0];
+    facts.set("maneerat.air_approach_mm", fixed(air_mm, 0));
+    facts.set(
+        "maneerat.teeth",
+        ManeeratDoc2
+            .mill_parameters()
+            .unwrap()
+            .cutter
+            .teeth
+            .to_string(),
+    );
+}
+
+/// Paper 000's brake bench: the current–load line, its friction, the spectrum.
+fn paper_000_bench(facts: &mut Facts) {
+    use cutlab::plant::bench::{BenchFrictionConfig, BrakeBenchConfig};
+    use cutlab::plant::feed_drive::ThreePhaseWaveform;
+    use cutlab::plant::recording::{OpenLoopRun, STEP_SETTLE_S};
+    let preset = Preset::WangBrakeBench;
+    let rec = OpenLoopRun::new(preset, 1, 100.0, 500, OpenLoopRun::time_limit_s(preset))
+        .unwrap()
+        .run_to_end()
+        .unwrap();
+    let line = rec.load_line().unwrap();
+    let config = BrakeBenchConfig::default();
+    let fd = &config.feed_drive;
+    let closed_form = ThreePhaseWaveform::new(fd.harmonic_5th, fd.harmonic_7th).rms_per_amplitude()
+        / fd.torque_constant_nm_per_a();
+    facts.set("bench.slope_a_per_nm", fixed(line.slope_a_per_nm, 3));
+    facts.set("bench.closed_form_a_per_nm", fixed(closed_form, 2));
+    facts.set("bench.idle_a", fixed(line.idle_current_a, 3));
+    facts.set("bench.r_squared", fixed(line.r_squared, 3));
+    facts.set("bench.steps", line.steps.to_string());
+    let friction = BenchFrictionConfig::default();
+    facts.set("bench.friction_sigma_nm", short(friction.scatter_nm, 3));
+    facts.set(
+        "bench.friction_correlation_s",
+        short(friction.correlation_time_s, 1),
+    );
+    facts.set(
+        "bench.friction_drift_nm_per_min",
+        short(friction.drift_nm_per_min, 3).replace('-', "−"),
+    );
+    facts.set("bench.hysteresis_a", short(config.brake.hysteresis_a, 3));
+    facts.set(
+        "bench.hysteresis_pct_of_range",
+        short(
+            100.0 * config.brake.hysteresis_a / config.brake.rated_current_a,
+            1,
+        ),
+    );
+    facts.set("bench.feed_mm_min", fixed(config.feed_mm_min, 0));
+    let excitation = &config.excitation_steps_a;
+    facts.set(
+        "bench.excitation_max_a",
+        short(excitation.iter().copied().fold(0.0, f64::max), 2),
+    );
+    facts.set(
+        "bench.excitation_step_a",
+        short(excitation[1] - excitation[0], 2),
+    );
+    facts.set("bench.step_s", short(config.step_duration_s, 1));
+    facts.set(
+        "bench.settled_s",
+        short(config.step_duration_s - STEP_SETTLE_S, 1),
+    );
+    facts.set("bench.screw_pitch_mm", short(fd.screw_pitch_mm, 1));
+    facts.set("bench.pole_pairs", fd.pole_pairs.to_string());
+    let electrical_hz = config.feed_mm_min / 60.0 / fd.screw_pitch_mm * f64::from(fd.pole_pairs);
+    facts.set("bench.electrical_hz", short(electrical_hz, 1));
+    // The strongest line of every loaded step's spectrum.
+    let peaks: Vec<f64> = rec
+        .load_steps
+        .iter()
+        .filter(|s| s.brake_torque_nm > 0.0)
+        .map(|s| {
+            s.spectrum
+                .iter()
+                .filter(|(f, _)| *f > 0.0)
+                .max_by(|a, b| a.1.total_cmp(&b.1))
+                .unwrap()
+                .0
+        })
+        .collect();
+    facts.set("bench.spectrum_peak_hz", span(peaks, 1));
+}
+
+/// Paper 004: the readings against the mechanistic force, and the cross-check on the circular
+/// taper.
+fn paper_004(facts: &mut Facts, m: &Matrix) {
+    let mills: Vec<Preset> = Preset::ALL
+        .into_iter()
+        .filter(|p| p.plant_kind() == PlantKind::Mill)
+        .collect();
+    let mut table = String::from("\n| preset | cut (a_e, f, a_p, d; z_e, z) | mechanistic |");
+    for reading in PowerLawReading::ALL {
+        table += &format!(" {} |", reading.label());
+    }
+    table += "\n|---|---|---|";
+    table += &"---|".repeat(PowerLawReading::ALL.len());
+    table += "\n";
+    let mut ratios: BTreeMap<&str, Vec<f64>> = BTreeMap::new();
+    for preset in &mills {
+        let scenario = preset.scenario().unwrap();
+        let material = scenario.material_regions()[0].material;
+        let (cut, mechanistic_n) = power_law_calibration_cut(&scenario, material);
+        table += &format!(
+            "| {} | {} mm, {} mm, {} mm, Ø{} mm; {}, {} | {} N |",
+            preset.name(),
+            short(cut.radial_width_mm, 1),
+            short(cut.feed_per_tooth_mm, 3),
+            short(cut.axial_depth_mm, 1),
+            short(cut.diameter_mm, 1),
+            short(cut.teeth_engaged, 2),
+            short(cut.cutter_teeth, 0),
+            fixed(mechanistic_n, 0)
+        );
+        for reading in PowerLawReading::ALL {
+            let model = cutlab::plant::power_law::PowerLawModel::published(
+                power_law_material(material),
+                reading,
+            );
+            let force_n = model.forces(&cut).resultant_n();
+            let ratio = force_n / mechanistic_n;
+            ratios.entry(reading.name()).or_default().push(ratio);
+            let force = if force_n >= 10_000.0 {
+                format!("{} kN", fixed(force_n / 1000.0, 0))
+            } else {
+                format!("{} N", fixed(force_n, 0))
+            };
+            table += &format!(
+                " {force} (× {}) |",
+                if ratio >= 10.0 {
+                    fixed(ratio, 0)
+                } else {
+                    fixed(ratio, 2)
+                }
+            );
+        }
+        table += "\n";
+    }
+    facts.set("paper_004.readings_table", table);
+    for reading in PowerLawReading::ALL {
+        let r = &ratios[reading.name()];
+        let decimals = if r.iter().all(|v| *v >= 10.0) { 0 } else { 2 };
+        facts.set(
+            &format!("paper_004.{}.ratio_span", reading.name()),
+            span(r.iter().copied(), decimals),
+        );
+    }
+    facts.set(
+        "paper_004.agreement_factor",
+        short(PowerLawReading::AGREEMENT_FACTOR, 1),
+    );
+    facts.set("paper_004.used", PowerLawReading::USED.label());
+
+    // The cross-check on the circular taper under the threshold law.
+    let run = m.result(Preset::KimCircularTaper, ControllerKind::Threshold);
+    facts.set(
+        "paper_004.circle.flagged_s",
+        fixed(run.metrics.time_cross_check_disagrees_s, 2),
+    );
+    facts.set(
+        "paper_004.circle.cut_s",
+        fixed(run.metrics.controlled_cutting_time_s, 0),
+    );
+    facts.set(
+        "paper_004.circle.flagged_pct",
+        fixed(
+            100.0 * run.metrics.time_cross_check_disagrees_s
+                / run.metrics.controlled_cutting_time_s,
+            2,
+        ),
+    );
+    // Without the exponents' uncertainty: the tolerance alone.
+    let rows = &run.trace.rows;
+    let (mut flagged_s, mut cut_s) = (0.0, 0.0);
+    for w in rows.windows(2) {
+        let r = &w[1];
+        if r.armed && r.depth_mm > 0.0 && r.width_mm > 0.0 && r.force_n.is_finite() {
+            let dt = r.time_s - w[0].time_s;
+            cut_s += dt;
+            if cutlab::closed_loop::feedback_loop::disagrees(
+                r.force_est_n,
+                r.force_power_law_n,
+                run.settings.cross_check_tolerance,
+                r.target_force_n,
+            ) {
+                flagged_s += dt;
+            }
+        }
+    }
+    facts.set(
+        "paper_004.circle.flagged_without_uncertainty_pct",
+        fixed(100.0 * flagged_s / cut_s, 0),
+    );
+}
+
+fn root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+/// The documents the facts are marked in.
+const DOCS: [&str; 2] = ["docs/controllers.md", "docs/papers.md"];
+
+fn all_facts() -> BTreeMap<String, String> {
+    let mut facts = Facts::default();
+    let clock = Instant::now();
+    let matrix = Matrix::run();
+    eprintln!(
+        "docs: every controller on every preset with references in {:.1} s",
+        clock.elapsed().as_secs_f64()
+    );
+    let clock = Instant::now();
+    comparison_table(&mut facts, &matrix);
+    comparison_prose(&mut facts, &matrix);
+    estimation(&mut facts, &matrix);
+    settings(&mut facts, &matrix);
+    paper_004(&mut facts, &matrix);
+    extra_runs(&mut facts, &matrix);
+    log_calibration(&mut facts);
+    paper_000_bench(&mut facts);
+    eprintln!(
+        "docs: the other facts in {:.1} s",
+        clock.elapsed().as_secs_f64()
+    );
+    facts.0
+}
+
+#[test]
+fn the_docs_state_what_the_tool_computes() {
+    let facts = all_facts();
+    let texts: Vec<(&str, String)> = DOCS
+        .iter()
+        .map(|name| (*name, std::fs::read_to_string(root().join(name)).unwrap()))
+        .collect();
+    if std::env::var_os("CUTLAB_BLESS").is_some() {
+        for (name, text) in &texts {
+            let new = blessed(text, &facts).unwrap_or_else(|e| panic!("{name}: {e}"));
+            if &new != text {
+                std::fs::write(root().join(name), new).unwrap();
+                eprintln!("docs: wrote {name}");
+            }
+        }
+        let again: Vec<(&str, String)> = DOCS
+            .iter()
+            .map(|name| (*name, std::fs::read_to_string(root().join(name)).unwrap()))
+            .collect();
+        let views: Vec<(&str, &str)> = again.iter().map(|(n, t)| (*n, t.as_str())).collect();
+        let left = problems(&views, &facts);
+        assert!(left.is_empty(), "after blessing:\n{}", left.join("\n"));
+        return;
+    }
+    let views: Vec<(&str, &str)> = texts.iter().map(|(n, t)| (*n, t.as_str())).collect();
+    let found = problems(&views, &facts);
+    assert!(
+        found.is_empty(),
+        "docs and tool disagree (CUTLAB_BLESS=1 cargo test --test docs, or scripts/docs, writes \
+         the tool's values):\n{}",
+        found.join("\n")
+    );
+}
+
+// ---------------------------------------------------------------------------------------------
+// The checker on small documents.
+// ---------------------------------------------------------------------------------------------
+
+fn facts_of(pairs: &[(&str, &str)]) -> BTreeMap<String, String> {
+    pairs
+        .iter()
+        .map(|(k, v)| (k.to_string(), v.to_string()))
+        .collect()
+}
+
+const SMALL_DOC: &str = "The slope is <!-- tool:bench.slope -->0.588<!-- /tool --> A/N·m.\n\
+<!-- tool:table -->\n| a | b |\n|---|---|\n| 1 | 2 |\n<!-- /tool -->\nAfter.\n";
+
+#[test]
+fn the_checker_passes_a_document_that_says_what_the_tool_computes() {
+    let facts = facts_of(&[
+        ("bench.slope", "0.588"),
+        ("table", "\n| a | b |\n|---|---|\n| 1 | 2 |\n"),
+    ]);
+    assert_eq!(
+        problems(&[("small.md", SMALL_DOC)], &facts),
+        Vec::<String>::new()
+    );
+}
+
+#[test]
+fn the_checker_fails_when_a_marked_number_is_edited_by_hand() {
+    let facts = facts_of(&[
+        ("bench.slope", "0.588"),
+        ("table", "\n| a | b |\n|---|---|\n| 1 | 2 |\n"),
+    ]);
+    let inline = SMALL_DOC.replace("0.588", "0.59");
+    let found = problems(&[("small.md", &inline)], &facts);
+    assert_eq!(
+        found,
+        ["small.md line 1, bench.slope: the docs say \"0.59\", the tool \"0.588\""]
+    );
+    let in_table = SMALL_DOC.replace("| 1 | 2 |", "| 1 | 3 |");
+    let found = problems(&[("small.md", &in_table)], &facts);
+    assert_eq!(found.len(), 1, "{found:?}");
+    assert!(
+        found[0].starts_with("small.md line 2, table: the docs say"),
+        "{found:?}"
+    );
+}
+
+#[test]
+fn the_checker_fails_on_an_unknown_key_and_on_a_fact_no_marker_shows() {
+    let facts = facts_of(&[
+        ("table", "\n| a | b |\n|---|---|\n| 1 | 2 |\n"),
+        ("bench.idle", "0.603"),
+    ]);
+    let found = problems(&[("small.md", SMALL_DOC)], &facts);
+    assert_eq!(
+        found,
+        [
+            "small.md line 1: no fact is called bench.slope",
+            "no marker shows fact bench.idle (\"0.603\")",
+        ]
+    );
+}
+
+#[test]
+fn the_checker_refuses_broken_markers_with_their_line() {
+    for (doc, expected) in [
+        (
+            "a\n<!-- tool:x -->1",
+            "line 2: marker x has no <!-- /tool -->",
+        ),
+        (
+            "a <!-- /tool -->",
+            "line 1: <!-- /tool --> without a marker before it",
+        ),
+        (
+            "<!-- tool:x -->1\n<!-- tool:y -->2<!-- /tool -->",
+            "line 2: a marker inside marker x (opened on line 1)",
+        ),
+        (
+            "<!-- tool:Bad Key -->1<!-- /tool -->",
+            "line 1: marker key \"Bad Key\" is not a dotted lower-case name",
+        ),
+    ] {
+        assert_eq!(markers(doc).unwrap_err(), expected, "{doc:?}");
+    }
+}
+
+#[test]
+fn blessing_writes_the_tools_values_and_leaves_the_rest() {
+    let facts = facts_of(&[("bench.slope", "0.601"), ("table", "\n| x |\n")]);
+    let new = blessed(&SMALL_DOC.replace("0.588", "0.5"), &facts).unwrap();
+    assert_eq!(
+        new,
+        "The slope is <!-- tool:bench.slope -->0.601<!-- /tool --> A/N·m.\n\
+         <!-- tool:table -->\n| x |\n<!-- /tool -->\nAfter.\n"
+    );
+    assert!(problems(&[("small.md", &new)], &facts).is_empty());
+}
