@@ -224,6 +224,8 @@ pub enum RunSetting {
     MaxRate,
     /// The override held until the envelope arms.
     ArmingOverride,
+    /// Size of paper 002's load step (liu-current-step).
+    LoadStep,
     /// The controller's period.
     ControlPeriod,
     /// Order of both current low-passes.
@@ -275,7 +277,7 @@ const fn number(min: f64, max: f64) -> SettingKind {
 
 impl RunSetting {
     /// Every setting, in the order the form shows them.
-    pub const ALL: [RunSetting; 19] = [
+    pub const ALL: [RunSetting; 20] = [
         RunSetting::Seed,
         RunSetting::TargetForce,
         RunSetting::TargetCurrent,
@@ -284,6 +286,7 @@ impl RunSetting {
         RunSetting::MinOverride,
         RunSetting::MaxRate,
         RunSetting::ArmingOverride,
+        RunSetting::LoadStep,
         RunSetting::Material,
         RunSetting::SpindleSpeed,
         RunSetting::ProgrammedFeed,
@@ -386,6 +389,18 @@ impl RunSetting {
                 Scenario,
                 "override held until the envelope arms, within the lowest–highest band (default \
                  100, or the nearer end of the band)",
+            ),
+            RunSetting::LoadStep => (
+                "load_step_pct",
+                "load_step",
+                "load-step-pct",
+                "Load step at 15 s (blank: preset's)",
+                "%",
+                number(PlantEdits::LOAD_STEP_PCT[0], PlantEdits::LOAD_STEP_PCT[1]),
+                Scenario,
+                "size of paper 002's step in depth of cut, percent of the depth (liu-current-step \
+                 only; default +40 %, the lab's choice: the paper's E range of ±25 A implies \
+                 full-scale steps, about +100 %)",
             ),
             RunSetting::ControlPeriod => (
                 "control_period_s",
@@ -690,6 +705,7 @@ impl RunSetting {
             RunSetting::ToolDiameter => number(p.tool_diameter_mm),
             RunSetting::Teeth => p.teeth.map(|z| SettingValue::Count(z as usize)),
             RunSetting::SensorNoise => number(p.sensor_noise_a),
+            RunSetting::LoadStep => number(p.load_step_pct),
         }
     }
 
@@ -725,6 +741,7 @@ impl RunSetting {
             RunSetting::ToolDiameter => p.tool_diameter_mm = number,
             RunSetting::Teeth => p.teeth = count.map(|n| n as u32),
             RunSetting::SensorNoise => p.sensor_noise_a = number,
+            RunSetting::LoadStep => p.load_step_pct = number,
             // Settings rows: applied above.
             _ => {}
         }
@@ -764,7 +781,8 @@ impl RunSetting {
             | RunSetting::DepthScale
             | RunSetting::ToolDiameter
             | RunSetting::Teeth
-            | RunSetting::SensorNoise => return false,
+            | RunSetting::SensorNoise
+            | RunSetting::LoadStep => return false,
         }
         true
     }
