@@ -8,6 +8,7 @@
 use serde::Serialize;
 
 use super::trace::{csv_field, Trace, TraceRow};
+use crate::plant::presets::ProgramLength;
 
 /// Settings of the metrics.
 #[derive(Debug, Clone, PartialEq, Default)]
@@ -89,9 +90,11 @@ pub struct Metrics {
     /// Mean material removal rate over the cycle.
     pub mean_material_removal_mm3_s: f64,
     /// Cycle-time saving against the programmed feed at 100 %, percent (positive = faster).
+    /// `None` until reference runs are made, and always for a program whose cycle time does not
+    /// depend on the feed ([`with_savings`]).
     pub saving_vs_programmed_pct: Option<f64>,
     /// Cycle-time saving against the highest fixed override that keeps the peak force under the
-    /// limit, percent.
+    /// limit, percent; `None` as [`Metrics::saving_vs_programmed_pct`].
     pub saving_vs_safe_fixed_pct: Option<f64>,
 }
 
@@ -259,14 +262,29 @@ fn late_fluctuation_pct(rows: &[TraceRow]) -> f64 {
 
 /// Fills the savings from the cycle times of the reference runs: the programmed feed at 100 %
 /// and the highest fixed override that keeps the peak force under the limit.
+///
+/// A program whose length is a [`ProgramLength::Time`] ([`crate::plant::Preset::program_length`]) gets none: every run of it, reference or
+/// controlled, ends at the same moment, so its "saving" would be 0 % by construction and would
+/// read as "this controller saves nothing" when the program cannot show a saving at all.
+///
+/// ```
+/// use cutlab::closed_loop::metrics::{compute, with_savings, MetricsConfig};
+/// use cutlab::plant::presets::ProgramLength;
+/// use cutlab::closed_loop::trace::Trace;
+/// let m = compute(&Trace::default(), &MetricsConfig::default());
+/// let timed = with_savings(m, ProgramLength::Time, Some(40.0), Some(40.0));
+/// assert_eq!(timed.saving_vs_programmed_pct, None);
+/// ```
 pub fn with_savings(
     mut metrics: Metrics,
+    length: ProgramLength,
     programmed_cycle_time_s: Option<f64>,
     safe_fixed_cycle_time_s: Option<f64>,
 ) -> Metrics {
     let saving = |reference: f64| 100.0 * (reference - metrics.cycle_time_s) / reference;
-    metrics.saving_vs_programmed_pct = programmed_cycle_time_s.filter(|t| *t > 0.0).map(saving);
-    metrics.saving_vs_safe_fixed_pct = safe_fixed_cycle_time_s.filter(|t| *t > 0.0).map(saving);
+    let reference = |t: Option<f64>| t.filter(|t| *t > 0.0 && length == ProgramLength::Path);
+    metrics.saving_vs_programmed_pct = reference(programmed_cycle_time_s).map(saving);
+    metrics.saving_vs_safe_fixed_pct = reference(safe_fixed_cycle_time_s).map(saving);
     metrics
 }
 
@@ -631,9 +649,14 @@ mod tests {
 
     #[test]
     fn savings_compare_cycle_times() {
-        let m = with_savings(compute(&step_trace(), &config()), Some(4.0), Some(6.0));
-        assert_eq!(m.saving_vs_programmed_pct, Some(25.0));
-        assert_eq!(m.saving_vs_safe_fixed_pct, Some(50.0));
+        let m = compute(&step_trace(), &config());
+        let path = with_savings(m.clone(), ProgramLength::Path, Some(4.0), Some(6.0));
+        assert_eq!(path.saving_vs_programmed_pct, Some(25.0));
+        assert_eq!(path.saving_vs_safe_fixed_pct, Some(50.0));
+        // The same cycle times on a program that runs for a time show no saving, not 0 %.
+        let time = with_savings(m, ProgramLength::Time, Some(3.0), Some(3.0));
+        assert_eq!(time.saving_vs_programmed_pct, None);
+        assert_eq!(time.saving_vs_safe_fixed_pct, None);
     }
 
     #[test]

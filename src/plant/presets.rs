@@ -169,6 +169,17 @@ pub struct PresetSummary {
     pub choices: &'static [&'static str],
 }
 
+/// How long a program runs.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ProgramLength {
+    /// A path: the program ends when the path is cut, sooner at a higher feed (the mills, and
+    /// paper 001's process on a mill's path).
+    Path,
+    /// A time: the program ends at the same moment whatever the feed (the brake bench's
+    /// excitation schedule, paper 002's 40 s around its load step).
+    Time,
+}
+
 /// Everything about one preset.
 #[derive(Debug)]
 pub struct Definition {
@@ -673,6 +684,23 @@ impl Preset {
             PlantDefinition::BondGraph { .. } => PlantKind::BondGraph,
             PlantDefinition::BrakeBench => PlantKind::BrakeBench,
             PlantDefinition::SecondOrder(_) => PlantKind::SecondOrder,
+        }
+    }
+
+    /// Whether the program ends when its path is cut (the mills, and paper 001's process on a
+    /// mill's path) or at a time whatever the feed (the brake bench's excitation schedule, paper
+    /// 002's run around its load step): only the first can save cycle time.
+    ///
+    /// ```
+    /// use cutlab::plant::presets::ProgramLength;
+    /// use cutlab::plant::Preset;
+    /// assert_eq!(Preset::KimStepDoc.program_length(), ProgramLength::Path);
+    /// assert_eq!(Preset::LiuCurrentStep.program_length(), ProgramLength::Time);
+    /// ```
+    pub fn program_length(self) -> ProgramLength {
+        match self.plant_kind() {
+            PlantKind::Mill | PlantKind::SecondOrder => ProgramLength::Path,
+            PlantKind::BondGraph | PlantKind::BrakeBench => ProgramLength::Time,
         }
     }
 
