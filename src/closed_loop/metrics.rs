@@ -440,12 +440,16 @@ fn step_responses(rows: &[TraceRow], config: &MetricsConfig) -> Vec<StepResponse
     for &t in &config.load_step_times_s {
         // The first row at or after the step: its period saw the new load.
         if let Some(i) = rows.iter().position(|r| r.time_s >= t).filter(|&i| i > 0) {
-            // A load step the depth shows too is that depth step, measured as a load step.
+            // A load step the depth shows too is that depth step, measured as a load step from
+            // the period that saw it.
             match spans
-                .iter()
+                .iter_mut()
                 .find(|(first, last)| *first <= i + 1 && i <= *last + 1)
             {
-                Some(&(first, _)) => load_step_starts.push(first),
+                Some(span) => {
+                    span.0 = span.0.min(i);
+                    load_step_starts.push(span.0);
+                }
                 None => {
                     spans.push((i, i));
                     load_step_starts.push(i);
@@ -550,6 +554,26 @@ mod tests {
             completed: true,
             ..Trace::default()
         }
+    }
+
+    #[test]
+    fn a_scheduled_load_step_the_depth_shows_is_one_step_from_its_period() {
+        // The row at 0.9 s ends with the step's first sample: a sliver of the new depth.
+        let mut trace = step_trace();
+        trace.rows[9].depth_mm = 1.01;
+        let scheduled = MetricsConfig {
+            load_step_times_s: vec![0.9],
+            ..config()
+        };
+        let m = compute(&trace, &scheduled);
+        assert_eq!(m.steps.len(), 1, "{:?}", m.steps);
+        let step = m.steps[0];
+        assert!((step.time_s - 0.9).abs() < 1e-9);
+        assert_eq!((step.depth_before_mm, step.depth_after_mm), (1.0, 2.0));
+        // Without the schedule it is the same depth step, seen from 1 s.
+        let unscheduled = compute(&trace, &config());
+        assert_eq!(unscheduled.steps.len(), 1);
+        assert!((unscheduled.steps[0].time_s - 1.0).abs() < 1e-9);
     }
 
     #[test]

@@ -577,8 +577,9 @@ static LIU_CURRENT_STEP: Definition = Definition {
         "spindle at speed from t = 0 (eq 5's steady state, table still), feed after 3 s",
         "S_e2 set for the smoothed commanded feed in steady state",
         "continuous override",
-        "the paper's k_u as the fuzzy output (100 % per period), an envelope rate limit that lets \
-         it through, and its Table 2's 50 ms sampling as the control period",
+        "the fuzzy controllers at the paper's scalings: k_u's 100 % of the feed added each period \
+         (eq 1), let through by the envelope's rate limit, and EC read in A/s (Table 2)",
+        "Table 2's 0.05 s spacing as the control period (the paper states none)",
     ],
     override_mode: OverrideMode::Continuous,
     plant: PlantDefinition::BondGraph {
