@@ -407,6 +407,58 @@ fn feed_current_feedback_converts_the_target_and_refuses_down_milling() {
     assert!(e.contains("down milling"), "{e}");
 }
 
+/// tests/reference/plant/liu_cut.csv (scripts/reference/plant_reference.py): liu-current-step's
+/// cut in closed form.
+const LIU_CUT: &str = include_str!("reference/plant/liu_cut.csv");
+
+/// Issue 26: every quantity in liu-current-step's trace is a machining centre's, whatever the
+/// controller does with the feed. Each period's cutting force is the closed form's at its depth and
+/// feed per tooth (the reference's resultant per millimetre of depth and of feed per tooth: the
+/// chip's force is proportional to both), its removal rate is depth × width × feed, the x axis
+/// draws a servo's few amperes (the 100 A of the issue's bound is never approached) and the
+/// spindle stays within its 100 A channel.
+#[test]
+fn liu_current_steps_traces_are_a_machining_centres_for_every_controller() {
+    let header: Vec<&str> = LIU_CUT.lines().next().unwrap().split(',').collect();
+    let reference: Vec<f64> = LIU_CUT
+        .lines()
+        .nth(1)
+        .unwrap()
+        .split(',')
+        .map(|c| c.parse().unwrap())
+        .collect();
+    let col = |name: &str| reference[header.iter().position(|h| *h == name).unwrap()];
+    let resultant_per_mm_mm =
+        col("mean_resultant_n") / (col("depth_mm") * col("feed_per_tooth_mm"));
+    let (teeth, width_mm) = (5.0, 40.0);
+    for kind in ControllerKind::ALL {
+        let r = run(Preset::LiuCurrentStep, kind);
+        let who = kind.name();
+        for row in r.trace.rows.iter().filter(|row| row.feed_mm_min > 100.0) {
+            let at = format!("{who} at {} s", row.time_s);
+            let feed_per_tooth = row.feed_mm_min / (teeth * row.spindle_speed_rpm);
+            let closed_form = resultant_per_mm_mm * row.depth_mm * feed_per_tooth;
+            assert!(
+                (row.force_n - closed_form).abs() < 0.02 * closed_form,
+                "{at}: {} N against {closed_form} N",
+                row.force_n
+            );
+            let removal = row.depth_mm * width_mm * row.feed_mm_min / 60.0;
+            assert!(
+                (row.material_removal_mm3_s - removal).abs() < 0.005 * removal,
+                "{at}"
+            );
+            let feed_phase_peak = row.feed_current_u_max_a.max(-row.feed_current_u_min_a);
+            assert!(
+                row.feed_current_rms_a < 5.0 && feed_phase_peak < 7.0,
+                "{at}: x axis {} A RMS, {feed_phase_peak} A peak",
+                row.feed_current_rms_a
+            );
+            assert!(row.spindle_current_rms_a < 100.0, "{at}");
+        }
+    }
+}
+
 /// Paper 002's Fig. 7 under the readings docs/papers.md's grid compares (scripts/paper-002-table),
 /// at the preset's +40 % step. The preset reads the paper as printed where it speaks: k_u's
 /// 100 % per period let through by the envelope, EC in A/s (Table 2), Table 2's 50 ms spacing as
