@@ -399,3 +399,42 @@ fn a_saved_calibration_reproduces_the_teach_cut_run_and_is_refused_for_another_f
         "{e}"
     );
 }
+
+/// Issue 26: a program that runs for a time (paper 002's 40 s, the brake bench's schedule)
+/// ends at the same moment at any feed, so it shows no saving ("—", null in the JSON), where a
+/// path's program shows one.
+#[test]
+fn savings_are_none_where_the_cycle_time_does_not_follow_the_feed() {
+    let dir = scratch("savings");
+    let saving = |scenario: &str, controller: &str| {
+        let json = dir.join(format!("{scenario}.json"));
+        let (result, out) = cutlab(&[
+            "sim",
+            "--scenario",
+            scenario,
+            "--controller",
+            controller,
+            "--json",
+            json.to_str().unwrap(),
+        ]);
+        result.unwrap();
+        let line = out
+            .lines()
+            .find(|l| l.starts_with("Saving vs programmed feed"))
+            .unwrap()
+            .to_string();
+        let report: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+        (report["metrics"]["saving_vs_programmed_pct"].clone(), line)
+    };
+    for (scenario, controller) in [
+        ("liu-current-step", "fuzzy-dynamics"),
+        ("wang-brake-bench", "restriction"),
+    ] {
+        let (value, line) = saving(scenario, controller);
+        assert!(value.is_null(), "{scenario}: {value}");
+        assert!(line.trim_end().ends_with('—'), "{scenario}: {line}");
+    }
+    let (value, _) = saving("maneerat-doc-1", "pi");
+    assert!(value.is_number(), "{value}");
+}

@@ -40,7 +40,8 @@ fn matrix() -> Vec<(Preset, ControllerKind)> {
 
 /// Inside the envelope: every command finite, in the band, rate-limited; on a mill inside the
 /// chip-load window of its cutter and material; and no adaptive controller loads the tool more than
-/// the fixed feed does (the entry hold: a controller released while the cutter engages would).
+/// the fixed feed does (the entry hold: a controller released while the cutter engages would),
+/// but for the settling band a controller may hold above the target when a load step arrives.
 #[test]
 fn every_controller_runs_on_every_preset_inside_the_envelope() {
     let mut fixed_peak_n = std::collections::HashMap::new();
@@ -51,11 +52,20 @@ fn every_controller_runs_on_every_preset_inside_the_envelope() {
         if kind == ControllerKind::Fixed {
             fixed_peak_n.insert(preset, r.metrics.peak_force_n);
         } else {
+            // A load step in mid-cut (paper 002's) meets each controller wherever its band
+            // holds the force, up to the settling band above the target the fixed feed sits on:
+            // its peak may be that much higher, and no more.
+            let band = if preset.load_step_times_s().is_empty() {
+                0.0
+            } else {
+                r.metrics.settling_band_pct / 100.0
+            };
             let fixed = fixed_peak_n[&preset];
             assert!(
-                r.metrics.peak_force_n <= fixed + 1e-9,
-                "{who}: peak force {} N above the fixed feed's {fixed} N",
-                r.metrics.peak_force_n
+                r.metrics.peak_force_n <= fixed * (1.0 + band) + 1e-9,
+                "{who}: peak force {} N above the fixed feed's {fixed} N (+{} % allowed)",
+                r.metrics.peak_force_n,
+                100.0 * band
             );
         }
         let spindle_rpm = OperatingPoint::of_preset(&RunSpec::new(preset, kind)).spindle_rpm;
@@ -451,38 +461,69 @@ fn feed_current_feedback_converts_the_target_and_refuses_down_milling() {
     assert!(e.contains("down milling"), "{e}");
 }
 
-/// Time after the load step until the force stays within `band` of the target, and the standard
-/// deviation of the force over the last 10 s, relative to the target.
-fn settling_and_fluctuation(r: &RunResult, step_s: f64, band: f64) -> (f64, f64) {
-    let rows: Vec<_> = r
-        .trace
-        .rows
-        .iter()
-        .filter(|row| row.time_s >= step_s)
+/// tests/reference/plant/liu_cut.csv (scripts/reference/plant_reference.py): liu-current-step's
+/// cut in closed form.
+const LIU_CUT: &str = include_str!("reference/plant/liu_cut.csv");
+
+/// Issue 26: every quantity in liu-current-step's trace is a machining centre's, whatever the
+/// controller does with the feed. Each period's cutting force is the closed form's at its depth and
+/// feed per tooth (the reference's resultant per millimetre of depth and of feed per tooth: the
+/// chip's force is proportional to both), its removal rate is depth × width × feed, the x axis
+/// draws a servo's few amperes (the 100 A of the issue's bound is never approached) and the
+/// spindle stays within its 100 A channel.
+#[test]
+fn liu_current_steps_traces_are_a_machining_centres_for_every_controller() {
+    let header: Vec<&str> = LIU_CUT.lines().next().unwrap().split(',').collect();
+    let reference: Vec<f64> = LIU_CUT
+        .lines()
+        .nth(1)
+        .unwrap()
+        .split(',')
+        .map(|c| c.parse().unwrap())
         .collect();
-    let outside = rows
-        .iter()
-        .rev()
-        .find(|row| (row.force_n - row.target_force_n).abs() > band * row.target_force_n)
-        .map_or(0.0, |row| row.time_s - step_s);
-    let end = rows.last().unwrap().time_s;
-    let late: Vec<f64> = rows
-        .iter()
-        .filter(|row| row.time_s > end - 10.0)
-        .map(|row| row.force_n / row.target_force_n)
-        .collect();
-    let mean = late.iter().sum::<f64>() / late.len() as f64;
-    let var = late.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / late.len() as f64;
-    (outside, var.sqrt())
+    let col = |name: &str| reference[header.iter().position(|h| *h == name).unwrap()];
+    let resultant_per_mm_mm =
+        col("mean_resultant_n") / (col("depth_mm") * col("feed_per_tooth_mm"));
+    let (teeth, width_mm) = (5.0, 40.0);
+    for kind in ControllerKind::ALL {
+        let r = run(Preset::LiuCurrentStep, kind);
+        let who = kind.name();
+        for row in r.trace.rows.iter().filter(|row| row.feed_mm_min > 100.0) {
+            let at = format!("{who} at {} s", row.time_s);
+            let feed_per_tooth = row.feed_mm_min / (teeth * row.spindle_speed_rpm);
+            let closed_form = resultant_per_mm_mm * row.depth_mm * feed_per_tooth;
+            assert!(
+                (row.force_n - closed_form).abs() < 0.02 * closed_form,
+                "{at}: {} N against {closed_form} N",
+                row.force_n
+            );
+            let removal = row.depth_mm * width_mm * row.feed_mm_min / 60.0;
+            assert!(
+                (row.material_removal_mm3_s - removal).abs() < 0.005 * removal,
+                "{at}"
+            );
+            let feed_phase_peak = row.feed_current_u_max_a.max(-row.feed_current_u_min_a);
+            assert!(
+                row.feed_current_rms_a < 5.0 && feed_phase_peak < 7.0,
+                "{at}: x axis {} A RMS, {feed_phase_peak} A peak",
+                row.feed_current_rms_a
+            );
+            assert!(row.spindle_current_rms_a < 100.0, "{at}");
+        }
+    }
 }
 
-/// Paper 002's Fig. 7 under its own conditions: k_u's 100 % per period let through by the
-/// envelope, and its Table 2's 50 ms sampling. There the two rule tables respond alike (Fig. 7's
-/// "settles earlier with small fluctuation" is not reproduced); the dynamics table's advantage
-/// appears only when the loop samples ten times more slowly. docs/papers.md has the analysis.
+/// Paper 002's Fig. 7 under the readings docs/papers.md's grid compares (scripts/paper-002-table),
+/// at the preset's +40 % step. The preset reads the paper as printed where it speaks: k_u's
+/// 100 % per period let through by the envelope, EC in A/s (Table 2), Table 2's 50 ms spacing as
+/// the period. There both tables limit-cycle, the dynamics table less; at 0.1 s the experience
+/// table keeps cycling while the dynamics table settles (the Compare page's comparison). With
+/// EC and k_u per period, as eq 6 and eq 1 print them, the tables answer alike at the short
+/// periods; and with k_u per second (its gain per second held) they still answer alike at 0.5 s,
+/// where per-period k_u made them differ: lengthening the period alone does not.
 #[test]
-fn paper_002_rule_tables_differ_only_when_the_loop_samples_slowly() {
-    let runs = |period: Option<f64>| {
+fn paper_002s_claim_holds_where_the_grid_says() {
+    let runs = |period: Option<f64>, ec_base_s: f64, ku_base_s: f64| {
         [
             ControllerKind::FuzzyExperience,
             ControllerKind::FuzzyDynamics,
@@ -490,42 +531,54 @@ fn paper_002_rule_tables_differ_only_when_the_loop_samples_slowly() {
         .map(|kind| {
             let mut spec = RunSpec::new(Preset::LiuCurrentStep, kind);
             spec.settings.control_period_s = period;
+            spec.controller
+                .set("change_time_base_s", ec_base_s)
+                .unwrap();
+            spec.controller
+                .set("output_time_base_s", ku_base_s)
+                .unwrap();
             simulate(&spec).unwrap()
         })
     };
-    let [experience, dynamics] = runs(None);
-    assert_eq!(dynamics.settings.control_period_s, 0.05);
-    assert_eq!(
-        dynamics.spec.controller.get("output_range_pct"),
-        Some(100.0)
-    );
-    assert_eq!(dynamics.settings.envelope.max_rate_pct_per_s, 2000.0);
-    // The load step is measured like a depth step.
-    assert_eq!(dynamics.metrics.steps.len(), 1);
-    assert_eq!(dynamics.metrics.steps[0].time_s, 15.0);
-    let (settle_e, _) = settling_and_fluctuation(&experience, 15.0, 0.02);
-    let (settle_d, _) = settling_and_fluctuation(&dynamics, 15.0, 0.02);
-    assert!(
-        (settle_d - settle_e).abs() <= 0.2 * settle_e,
-        "at 50 ms: dynamics {settle_d} s, experience {settle_e} s"
-    );
-    let iae = |r: &RunResult| r.metrics.force_iae_n_s;
-    assert!((iae(&dynamics) - iae(&experience)).abs() < 0.1 * iae(&experience));
+    let settled = |r: &RunResult| r.metrics.max_settling_time_s.unwrap_or(f64::INFINITY);
+    let wobble = |r: &RunResult| r.metrics.late_force_fluctuation_pct;
 
-    let [experience, dynamics] = runs(Some(0.5));
-    let (settle_e, wobble_e) = settling_and_fluctuation(&experience, 15.0, 0.02);
-    let (settle_d, wobble_d) = settling_and_fluctuation(&dynamics, 15.0, 0.02);
-    assert!(
-        settle_d * 2.0 < settle_e,
-        "at 0.5 s, settling to ±2 %: dynamics {settle_d} s, experience {settle_e} s"
+    // The preset's reading at its 50 ms: both cycle, the dynamics table less.
+    let [experience, dynamics] = runs(None, 1.0, 0.0);
+    assert_eq!(dynamics.settings.control_period_s, 0.05);
+    assert_eq!(dynamics.settings.envelope.max_rate_pct_per_s, 2000.0);
+    let c = &dynamics.spec.controller;
+    assert_eq!(
+        (c.get("output_range_pct"), c.get("change_time_base_s")),
+        (Some(100.0), Some(1.0))
     );
+    // The load step is measured once, at 15 s, with its depths.
+    assert_eq!(dynamics.metrics.steps.len(), 1);
+    let step = dynamics.metrics.steps[0];
+    assert_eq!(step.time_s, 15.0);
+    assert!((step.depth_after_mm / step.depth_before_mm - 1.4).abs() < 1e-9);
+    assert!(wobble(&experience) > 1.0 && wobble(&dynamics) > 1.0);
+    assert!(wobble(&dynamics) < 0.8 * wobble(&experience));
+
+    // At 0.1 s the experience table cycles (10 % of the target) and the dynamics table settles.
+    let [experience, dynamics] = runs(Some(0.1), 1.0, 0.0);
+    assert!(experience.metrics.max_settling_time_s.is_none());
+    assert!(settled(&dynamics) < 10.0 && wobble(&dynamics) < 0.5);
+    assert!(wobble(&experience) > 5.0);
+
+    // Eq 6 and eq 1 as printed, at 50 ms: alike, within a fifth.
+    let [experience, dynamics] = runs(None, 0.0, 0.0);
+    assert!((settled(&dynamics) - settled(&experience)).abs() <= 0.2 * settled(&experience));
+
+    // At 0.5 s per-period k_u makes them differ; with k_u's gain per second held they do not.
+    let [experience, dynamics] = runs(Some(0.5), 0.0, 0.0);
+    assert!(settled(&dynamics) * 1.5 < settled(&experience));
+    let [experience, dynamics] = runs(Some(0.5), 0.0, 1.0);
     assert!(
-        wobble_d * 2.0 < wobble_e,
-        "at 0.5 s, fluctuation over the last 10 s: dynamics {wobble_d}, experience {wobble_e}"
-    );
-    assert!(
-        dynamics.metrics.override_total_variation_pct
-            < experience.metrics.override_total_variation_pct
+        settled(&dynamics) >= 0.8 * settled(&experience),
+        "dynamics {} s, experience {} s",
+        settled(&dynamics),
+        settled(&experience)
     );
 }
 
@@ -606,10 +659,13 @@ fn the_papers_comparisons_give_the_verdicts_the_docs_report() {
         // Needs the reference runs for its saving: judged without them, it waits.
         ("Paper 003: across the material change", None),
         (
-            "Paper 002: experience-based vs dynamics-based fuzzy rules",
-            Some(false),
+            "Paper 002: experience vs dynamics rules, sampled every 0.1 s",
+            Some(true),
         ),
-        ("Paper 002 at 0.5 s sampling", Some(true)),
+        (
+            "Paper 002: experience vs dynamics rules, sampled every 0.2 s",
+            Some(true),
+        ),
         ("Paper 001: adaptive control at DOC 4 mm", Some(true)),
         ("Paper 001's own model with a dynamometer", Some(true)),
         // No claim to judge: the figures side by side.

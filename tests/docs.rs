@@ -548,6 +548,21 @@ fn comparison_prose(facts: &mut Facts, m: &Matrix) {
             fixed(m.metrics(preset, Fixed).peak_force_n, 0),
         );
     }
+    // Paper 002's peak is its load step, met from wherever each controller's band holds the force.
+    let liu_fixed_peak_n = m.metrics(LiuCurrentStep, Fixed).peak_force_n;
+    facts.set(
+        "liu.feedback.peak_over_fixed_max_pct",
+        fixed(
+            m.feedback(LiuCurrentStep)
+                .map(|x| 100.0 * (x.peak_force_n / liu_fixed_peak_n - 1.0))
+                .fold(f64::NEG_INFINITY, f64::max),
+            1,
+        ),
+    );
+    facts.set(
+        "liu.settling_band_pct",
+        short(m.metrics(LiuCurrentStep, Fixed).settling_band_pct, 1),
+    );
     facts.set(
         "maneerat.feedback.above_span_s",
         span(

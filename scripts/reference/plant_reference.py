@@ -9,7 +9,12 @@ Writes tests/reference/plant/*.csv (see the README there):
 * second_order.csv  - step response of paper 001's eq 2.3 as a transfer function
                       k / (m s^2 + (mc + d) s + dc), by scipy.signal.step;
 * bond_graph.csv    - paper 002's eq 5 with Table 1, rated voltages from rest, by
-                      scipy.integrate.solve_ivp (Radau, rtol 1e-10).
+                      scipy.integrate.solve_ivp (Radau, rtol 1e-10);
+* liu_cut.csv       - liu-current-step's machining centre in steady state: the cut's mean forces,
+                      torque and power (Altintas' closed form, chip forces only) at the feed per
+                      tooth the spindle actually turns at, the spindle current from the motor's
+                      torque and voltage balances, the x-axis current from the screw's, for
+                      three depths and two overrides.
 
 Run from the repository root:  python3 scripts/reference/plant_reference.py
 Needs numpy and scipy (pip install numpy scipy).
@@ -193,10 +198,70 @@ def write_bond_graph():
                           repr(float(x[5] / mass)), repr(float(kl * x[4]))])
 
 
+def write_liu_cut():
+    """liu-current-step's steady states, from the balances written out by hand (not from eq 5's
+    matrix): the DC spindle motor S_e1 = R_s1*i + r_s*w with r_s*i = b_s*w + T_cut(f_z), the
+    feed per tooth f_z = v / (z * n) at the speed n it turns at (solved by fixed point, the force
+    falling as the spindle droops), and the x axis r_x*i_x = m_x*(C_z*v + F_feed)."""
+    # The machine (src/plant/bond_graph.rs, BondGraphParams::machining_centre and paper_002).
+    se1, r1, ks, bs = 380.0, 0.132, 2.4, 0.03
+    rx, mx, cz = 1.2, 0.01 / (2.0 * math.pi), 18e3
+    i_ref, feed_ref = 25.0, 1500.0
+    # The cut (BondGraphCut::paper_002): a 50 mm 5-insert face mill climb milling SM45C 40 mm
+    # wide, shearing coefficients only.
+    d, z, width, mode = 50.0, 5, 40.0, "down"
+    ktc, krc, kac = MATERIALS["sm45c"][:3]
+    k = (ktc, krc, kac, 0.0, 0.0, 0.0)
+    st, ex = immersion(mode, width, d)
+
+    def forces(depth, fz):
+        fx, fy, _, tq = mean_forces(z, depth, fz, d / 2.0, k, st, ex)
+        return fx, fy, tq
+
+    # The depth at which the spindle draws I_ref at the programmed feed.
+    w_ref = (se1 - r1 * i_ref) / ks
+    n_ref = w_ref * 60.0 / (2.0 * math.pi)
+    torque_per_mm = forces(1.0, feed_ref / (z * n_ref))[2]
+    depth_ref = (ks * i_ref - bs * w_ref) / torque_per_mm
+
+    rows = []
+    for step_pct in (0.0, 40.0, 100.0):
+        depth = depth_ref * (1.0 + step_pct / 100.0)
+        for override_pct in (100.0, 50.0):
+            feed = feed_ref * override_pct / 100.0
+            w = w_ref
+            for _ in range(200):
+                fz = feed / (z * w * 60.0 / (2.0 * math.pi))
+                torque = forces(depth, fz)[2]
+                i_s = (bs * w + torque) / ks
+                w_next = (se1 - r1 * i_s) / ks
+                if abs(w_next - w) < 1e-13:
+                    break
+                w = w_next
+            n = w * 60.0 / (2.0 * math.pi)
+            fz = feed / (z * n)
+            fx, fy, torque = forces(depth, fz)
+            v = feed / 60e3
+            screw = cz * v - fx
+            i_x = mx * screw / rx
+            rows.append([step_pct, override_pct, feed, depth, n, fz, fx, fy, math.hypot(fx, fy),
+                         torque, torque * w, (bs * w + torque) / ks, i_x, screw,
+                         depth * width * feed / 60.0])
+    with open(os.path.join(OUT, "liu_cut.csv"), "w", newline="") as fh:
+        out = csv.writer(fh)
+        out.writerow(["load_step_pct", "override_pct", "feed_mm_min", "depth_mm", "spindle_rpm",
+                      "feed_per_tooth_mm", "mean_fx_n", "mean_fy_n", "mean_resultant_n",
+                      "cutting_torque_nm", "cutting_power_w", "spindle_current_a",
+                      "feed_current_a", "screw_force_n", "removal_mm3_s"])
+        for r in rows:
+            out.writerow([repr(float(v)) for v in r])
+
+
 if __name__ == "__main__":
     os.makedirs(OUT, exist_ok=True)
     write_mean_forces()
     write_power_law()
     write_second_order()
     write_bond_graph()
+    write_liu_cut()
     print("wrote", ", ".join(sorted(os.listdir(OUT))))

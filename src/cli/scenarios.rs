@@ -8,6 +8,7 @@ use serde::Serialize;
 
 use super::args::value_or;
 use super::{write_json, CliError, Io};
+use crate::input::readable;
 use crate::machine::{Machine, OverrideCommand};
 use crate::plant::signals::{csv_header, csv_row};
 use crate::plant::{Plant, Preset};
@@ -140,6 +141,7 @@ fn list(args: &ScenariosArgs, io: &mut Io<'_>) -> Result<(), CliError> {
             facts.push(format!("{f:.0} mm/min"));
         }
         if let Some([lo, hi]) = s.depth_mm {
+            let (lo, hi) = (readable(lo), readable(hi));
             facts.push(if lo == hi {
                 format!("DOC {lo} mm")
             } else {

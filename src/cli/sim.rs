@@ -11,6 +11,7 @@ use crate::closed_loop::definition::RunSpec;
 use crate::closed_loop::definition::{parse_texts, preset_controller, RunSetting, SettingKind};
 use crate::closed_loop::lab::{teach_cut_only, LabRun, RunResult, TeachKey};
 use crate::closed_loop::metrics::Metrics;
+use crate::closed_loop::paper_comparisons::PAPER_COMPARISONS;
 use crate::closed_loop::references::{apply_references, ReferenceSearch, References};
 use crate::closed_loop::summary::{best_marks, not_best_note, METRIC_ROWS};
 use crate::closed_loop::trace::write_csv;
@@ -568,6 +569,16 @@ pub fn run_compare(args: CompareArgs, io: &mut Io<'_>) -> Result<(), CliError> {
         io.stdout.write_all(line.as_bytes())?;
     }
     io.stdout.write_all(metrics_table(&borrowed).as_bytes())?;
+    // Runs of one of the papers' comparisons (its preset and controllers, whatever the settings)
+    // are judged as the Compare page judges them.
+    let shown: Vec<&RunResult> = results.iter().map(|(_, _, r)| r).collect();
+    let judged = PAPER_COMPARISONS
+        .iter()
+        .find_map(|c| c.finding(&shown).map(|f| (c.claim, f)));
+    if let Some((claim, finding)) = judged {
+        io.stdout
+            .write_all(format!("{claim}\n{}\n", finding.text()).as_bytes())?;
+    }
     fail_on_controller_faults(results.iter().map(|(n, _, r)| (n.as_str(), r)))
 }
 

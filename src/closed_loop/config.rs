@@ -261,8 +261,10 @@ mod tests {
                 }
             }
         }
+        // Both outcomes are exercised often (most damage lands in a controller's parameters and
+        // is refused).
         assert!(
-            loaded > 100 && refused > 300,
+            loaded > 60 && refused > 300,
             "{loaded} loaded, {refused} refused"
         );
     }

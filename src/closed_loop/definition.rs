@@ -20,6 +20,7 @@ use serde::{Deserialize, Serialize};
 use crate::control::registry::{ControllerConfig, ControllerKind};
 use crate::estimation::estimator::Feedback;
 use crate::input::{parse_count, parse_number, parse_seed, readable};
+use crate::plant::bond_graph::PAPER_002_FEED_MM_MIN;
 use crate::plant::cnc::{OverrideMode, MAX_OVERRIDE_PCT};
 use crate::plant::materials::Material;
 use crate::plant::mechanics::MAX_TEETH;
@@ -244,6 +245,8 @@ pub enum RunSetting {
     MinFeedPerTooth,
     /// Largest feed per tooth.
     MaxFeedPerTooth,
+    /// Size of paper 002's load step (liu-current-step).
+    LoadStep,
     /// The controller's period.
     ControlPeriod,
     /// Order of both current low-passes.
@@ -295,7 +298,7 @@ const fn number(min: f64, max: f64) -> SettingKind {
 
 impl RunSetting {
     /// Every setting, in the order the form shows them.
-    pub const ALL: [RunSetting; 23] = [
+    pub const ALL: [RunSetting; 24] = [
         RunSetting::Seed,
         RunSetting::TargetForce,
         RunSetting::TargetCurrent,
@@ -308,6 +311,7 @@ impl RunSetting {
         RunSetting::EntryHoldTime,
         RunSetting::MinFeedPerTooth,
         RunSetting::MaxFeedPerTooth,
+        RunSetting::LoadStep,
         RunSetting::Material,
         RunSetting::SpindleSpeed,
         RunSetting::ProgrammedFeed,
@@ -457,6 +461,18 @@ impl RunSetting {
                 "largest feed per tooth the override allows; above it the chip overloads the edge \
                  (default: the handbook window of the part's material for the cutter, mill \
                  presets)",
+            ),
+            RunSetting::LoadStep => (
+                "load_step_pct",
+                "load_step",
+                "load-step-pct",
+                "Load step at 15 s (blank: preset's)",
+                "%",
+                number(PlantEdits::LOAD_STEP_PCT[0], PlantEdits::LOAD_STEP_PCT[1]),
+                Scenario,
+                "size of paper 002's step in depth of cut, percent of the depth (liu-current-step \
+                 only; default +40 %, the lab's choice: the paper's E range of ±25 A implies \
+                 full-scale steps, about +100 %)",
             ),
             RunSetting::ControlPeriod => (
                 "control_period_s",
@@ -770,6 +786,7 @@ impl RunSetting {
             RunSetting::ToolDiameter => number(p.tool_diameter_mm),
             RunSetting::Teeth => p.teeth.map(|z| SettingValue::Count(z as usize)),
             RunSetting::SensorNoise => number(p.sensor_noise_a),
+            RunSetting::LoadStep => number(p.load_step_pct),
         }
     }
 
@@ -805,6 +822,7 @@ impl RunSetting {
             RunSetting::ToolDiameter => p.tool_diameter_mm = number,
             RunSetting::Teeth => p.teeth = count.map(|n| n as u32),
             RunSetting::SensorNoise => p.sensor_noise_a = number,
+            RunSetting::LoadStep => p.load_step_pct = number,
             // Settings rows: applied above.
             _ => {}
         }
@@ -848,7 +866,8 @@ impl RunSetting {
             | RunSetting::DepthScale
             | RunSetting::ToolDiameter
             | RunSetting::Teeth
-            | RunSetting::SensorNoise => return false,
+            | RunSetting::SensorNoise
+            | RunSetting::LoadStep => return false,
         }
         true
     }
@@ -933,9 +952,11 @@ pub fn parse_texts<T: AsRef<str>>(
 
 /// A controller at the defaults of `preset`: the generic defaults, except where the preset's paper
 /// states the controller's own parameters. Paper 002 states k_u = 250 mm/min per unit of U at
-/// 1500 mm/min, so on its preset (`liu-current-step`) the fuzzy controllers' output range is the
-/// paper's 100 % per control period (6 × 250 of 1500 mm/min) instead of the 20 % that keeps the
-/// fuzzy law from chattering at the mill presets' rate-limited 40 ms periods.
+/// 1500 mm/min, added to the feed each sampling period (eq 1), and gives the current change EC
+/// in A/s (Table 2). So on its preset (`liu-current-step`) the fuzzy controllers' output range is
+/// the paper's 100 % per control period (6 × 250 of 1500 mm/min) instead of the 20 % that keeps
+/// the fuzzy law from chattering at the mill presets' rate-limited 40 ms periods, and EC is read
+/// as a rate over 1 s instead of per period.
 ///
 /// ```
 /// use cutlab::closed_loop::definition::preset_controller;
@@ -943,8 +964,11 @@ pub fn parse_texts<T: AsRef<str>>(
 /// use cutlab::plant::Preset;
 /// let liu = preset_controller(Preset::LiuCurrentStep, ControllerKind::FuzzyDynamics);
 /// assert_eq!(liu.get("output_range_pct"), Some(100.0));
+/// assert_eq!(liu.get("change_time_base_s"), Some(1.0)); // Table 2: EC in A/s
+/// assert_eq!(liu.get("output_time_base_s"), Some(0.0)); // eq 1: k_u per period
 /// let kim = preset_controller(Preset::KimStepDoc, ControllerKind::FuzzyDynamics);
 /// assert_eq!(kim.get("output_range_pct"), Some(20.0));
+/// assert_eq!(kim.get("change_time_base_s"), Some(0.0));
 /// ```
 pub fn preset_controller(preset: Preset, kind: ControllerKind) -> ControllerConfig {
     let mut config = ControllerConfig::new(kind);
@@ -959,7 +983,10 @@ pub fn preset_controller(preset: Preset, kind: ControllerKind) -> ControllerConf
 pub fn paper_parameters(preset: Preset, kind: ControllerKind) -> &'static [(&'static str, f64)] {
     match (preset.plant_kind(), kind) {
         (PlantKind::BondGraph, ControllerKind::FuzzyExperience | ControllerKind::FuzzyDynamics) => {
-            &[("output_range_pct", PAPER_002_OUTPUT_RANGE_PCT)]
+            &[
+                ("output_range_pct", PAPER_002_OUTPUT_RANGE_PCT),
+                ("change_time_base_s", PAPER_002_EC_TIME_BASE_S),
+            ]
         }
         _ => &[],
     }
@@ -970,13 +997,13 @@ pub const PAPER_002_OUTPUT_RANGE_PCT: f64 =
     PAPER_002_K_U_MM_MIN * 6.0 / PAPER_002_FEED_MM_MIN * 100.0;
 /// Paper 002's output quantification factor k_u, mm/min of feed change per unit of U.
 const PAPER_002_K_U_MM_MIN: f64 = 250.0;
-/// Paper 002's programmed feed.
-const PAPER_002_FEED_MM_MIN: f64 = 1500.0;
+/// The time base of paper 002's EC: its Table 2 gives the current change in A/s (−11.5 → 8.5 A
+/// in 0.05 s is its 400 A/s), so k_ec = 3/25 saturates at 50 A/s.
+pub const PAPER_002_EC_TIME_BASE_S: f64 = 1.0;
 
-/// The control period on paper 002's preset: the paper's sampling, the 50 ms between the rows of
-/// its Table 2 (the data its rules were drawn from; Fig. 7's period is not stated).
-/// docs/papers.md shows both rule tables from 40 ms to 1 s: the dynamics table's advantage
-/// appears only when the loop samples far more slowly than this.
+/// The control period on paper 002's preset. The paper states no control period; 50 ms is the
+/// spacing of its Table 2's rows (the data its rules were drawn from). docs/papers.md shows both
+/// rule tables from 40 ms to 1 s, with EC and k_u each per period or per second.
 pub const PAPER_002_CONTROL_PERIOD_S: f64 = 0.05;
 
 /// The seed of a run that names none.

@@ -388,10 +388,12 @@ impl ScenarioKey {
     }
 }
 
-/// Fills a result's savings from the references.
+/// Fills a result's savings from the references (none for a program that runs for a time:
+/// [`with_savings`]).
 pub fn apply_references(result: &mut RunResult, references: &References) {
     result.metrics = with_savings(
         result.metrics.clone(),
+        result.spec.preset.program_length(),
         Some(references.programmed_cycle_time_s),
         Some(references.safe_fixed_cycle_time_s),
     );

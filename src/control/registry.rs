@@ -152,9 +152,13 @@ tuning! {
     /// Paper 002's fuzzy controller (both rule bases).
     pub struct FuzzyTuning {
         error_range_pct: ("Error range", "% of target", 100.0, 1.0, 1000.0, "|E| that saturates the error input (paper 002: 25 A of 25 A, k_e = 6/25)"),
-        change_range_pct: ("Error-change range", "% of target", 200.0, 1.0, 2000.0, "|EC| per control period that saturates the change input (paper 002: k_ec = 3/25)"),
-        output_range_pct: ("Output range", "%", 20.0, 0.1, 255.0, "override change per period at |U| = 6 (paper 002's k_u = 250 of 1500 mm/min is 100 %, \
+        change_range_pct: ("Error-change range", "% of target", 200.0, 1.0, 2000.0, "|EC| that saturates the change input, per control period or per the EC time base (paper 002: k_ec = 3/25, 50 A of 25 A)"),
+        output_range_pct: ("Output range", "%", 20.0, 0.1, 255.0, "override change at |U| = 6 per control period, or per the k_u time base (paper 002's k_u = 250 of 1500 mm/min is 100 %, \
          the default on its own preset; 20 % on the mills, whose 40–60 ms periods run under a 100 %/s rate limit)"),
+        change_time_base_s: ("EC time base", "s", 0.0, 0.0, 10.0, "0 reads EC per control period (eq 6: E(i) − E(i−1)); t > 0 reads it as the change over t, \
+         (E(i) − E(i−1))·t/T: 1 s is paper 002's Table 2 (EC in A/s), and makes the error-change range per second"),
+        output_time_base_s: ("k_u time base", "s", 0.0, 0.0, 10.0, "0 applies k_u per control period (eq 1: a_f(i+1) = a_f(i) + k_u·U); t > 0 applies it per t, \
+         k_u·U·T/t each period: 1 s makes the output range the override's change per second, whatever the period"),
     }
 }
 
@@ -543,6 +547,8 @@ impl ControllerConfig {
                             error_range_pct: t.error_range_pct,
                             change_range_pct: t.change_range_pct,
                             output_range_pct: t.output_range_pct,
+                            change_time_base_s: t.change_time_base_s,
+                            output_time_base_s: t.output_time_base_s,
                             defuzzifier: Defuzzifier::WeightedAverage,
                         },
                     )

@@ -29,7 +29,8 @@
 //!
 //! The reduced models stand in for the whole chain when a paper's own plant is wanted:
 //! [`second_order::SecondOrderMachine`] (paper 001's m·F̈ + (mc+d)·Ḟ + dc·F = k·f_r) and
-//! [`bond_graph::BondGraphMachine`] (paper 002's eq 5 with Table 1). [`bench::BrakeBench`] is
+//! [`bond_graph::BondGraphMachine`] (paper 002's eq 5, on a machining centre cutting a stated
+//! cut; Table 1 as printed is [`bond_graph::BondGraphParams::default`]). [`bench::BrakeBench`] is
 //! paper 000's magnetic-particle brake bench. [`power_law`] is paper 004's empirical model, a
 //! sensorless cross-check rather than a plant.
 //!

@@ -6,7 +6,7 @@
 //! | `kim-material-taper` | paper 003 Fig. 11: SM45C then aluminium, DOC 1 → 4 mm, 600 rpm, 160 mm/min | mill |
 //! | `kim-circular-taper` | paper 003 Fig. 12–13: line at DOC 2 mm, then a circle with DOC 2 → 5 → 2 mm, 3000 rpm, 170 mm/min | mill |
 //! | `maneerat-doc-1/2/4` | paper 001 Fig. 7–9: Ø10 flat end mill, 3000 rpm, DOC 1/2/4 mm, targets 150/200/320 N | mill |
-//! | `liu-current-step` | paper 002 Fig. 7: bond-graph plant, 1500 mm/min, a step in load, I_ref 25 A | bond graph |
+//! | `liu-current-step` | paper 002 Fig. 7: bond-graph spindle and x axis of a machining centre, a Ø50 face mill in SM45C at 1500 mm/min, a step in depth, I_ref 25 A | bond graph |
 //! | `wang-brake-bench` | paper 000 §4: magnetic-particle brake in excitation steps, with hysteresis | brake bench |
 //!
 //! Each preset is one [`Definition`] (a `static` below: names, source, the values chosen where
@@ -23,7 +23,7 @@ use std::fmt;
 use serde::{Deserialize, Serialize};
 
 use super::bench::{BrakeBench, BrakeBenchConfig};
-use super::bond_graph::{BondGraphMachine, BondGraphRun};
+use super::bond_graph::{BondGraphMachine, BondGraphRun, PAPER_002_REFERENCE_CURRENT_A};
 use super::cnc::{CncConfig, DialTable, OverrideMode};
 use super::dynamometer::{DynamometerConfig, WithDynamometer};
 use super::materials::Material;
@@ -167,6 +167,17 @@ pub struct PresetSummary {
     pub target_spindle_current_a: Option<f64>,
     /// Values chosen where the paper is silent.
     pub choices: &'static [&'static str],
+}
+
+/// How long a program runs.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ProgramLength {
+    /// A path: the program ends when the path is cut, sooner at a higher feed (the mills, and
+    /// paper 001's process on a mill's path).
+    Path,
+    /// A time: the program ends at the same moment whatever the feed (the brake bench's
+    /// excitation schedule, paper 002's 40 s around its load step).
+    Time,
 }
 
 /// Everything about one preset.
@@ -553,17 +564,26 @@ static LIU_CURRENT_STEP: Definition = Definition {
     label: "Bond-graph plant, load step",
     source: "paper 002 (Liu, Wang, Wang), eq 5, Table 1, Fig. 7",
     choices: &[
-        "cutting resistance C_cut so the spindle draws the 25 A reference at 1500 mm/min",
-        "load step +40 % of the total resistance at 15 s; 40 s run",
-        "spindle at its rated voltage's speed from t = 0 (eq 5's steady state, table still), feed after 3 s",
-        "S_e2 set for the commanded feed in steady state",
+        "eq 5 on a machining centre: Table 1's voltages, resistances, x-axis inertia, stiffness, \
+         mass and damping; a 2.4 N·m/A spindle motor (1500 rpm at 380 V, J 0.1 kg·m², drag \
+         0.03 N·m·s/rad), a 1.2 N·m/A x-axis servo on a 10 mm-lead screw, 5 mH armatures, m_s = 0 \
+         (spindle and table meet in the cut)",
+        "the cut: a Ø50 mm 5-insert face mill climb-milling SM45C 40 mm wide at 0.2 mm per tooth, \
+         mean chip forces without edge forces, at the depth where the spindle draws the 25 A \
+         reference at 1500 mm/min",
+        "the load step: the depth +40 % at 15 s (a setting: paper 002 gives no size); 40 s run",
+        "the control smooths the commanded feed with Table 1's x-axis time constant \
+         L_q2/R_s2 = 0.57 s (exponential acceleration/deceleration), keeping eq 5's ~3 s response",
+        "spindle at speed from t = 0 (eq 5's steady state, table still), feed after 3 s",
+        "S_e2 set for the smoothed commanded feed in steady state",
         "continuous override",
-        "the paper's k_u as the fuzzy output (100 % per period), an envelope rate limit that lets \
-         it through, and its Table 2's 50 ms sampling as the control period",
+        "the fuzzy controllers at the paper's scalings: k_u's 100 % of the feed added each period \
+         (eq 1), let through by the envelope's rate limit, and EC read in A/s (Table 2)",
+        "Table 2's 0.05 s spacing as the control period (the paper states none)",
     ],
     override_mode: OverrideMode::Continuous,
     plant: PlantDefinition::BondGraph {
-        target_spindle_current_a: 25.0,
+        target_spindle_current_a: PAPER_002_REFERENCE_CURRENT_A,
     },
 };
 
@@ -668,6 +688,23 @@ impl Preset {
         }
     }
 
+    /// Whether the program ends when its path is cut (the mills, and paper 001's process on a
+    /// mill's path) or at a time whatever the feed (the brake bench's excitation schedule, paper
+    /// 002's run around its load step): only the first can save cycle time.
+    ///
+    /// ```
+    /// use cutlab::plant::presets::ProgramLength;
+    /// use cutlab::plant::Preset;
+    /// assert_eq!(Preset::KimStepDoc.program_length(), ProgramLength::Path);
+    /// assert_eq!(Preset::LiuCurrentStep.program_length(), ProgramLength::Time);
+    /// ```
+    pub fn program_length(self) -> ProgramLength {
+        match self.plant_kind() {
+            PlantKind::Mill | PlantKind::SecondOrder => ProgramLength::Path,
+            PlantKind::BondGraph | PlantKind::BrakeBench => ProgramLength::Time,
+        }
+    }
+
     /// Every value this preset had to choose because its paper does not give it.
     pub fn choices(self) -> &'static [&'static str] {
         self.definition().choices
@@ -762,12 +799,12 @@ impl Preset {
         }
     }
 
-    /// The bond graph's run (liu-current-step only).
+    /// The bond graph's run (liu-current-step only), with the load step of its definition.
     pub fn bond_graph_run(self, seed: u64) -> Option<BondGraphRun> {
         matches!(self.definition().plant, PlantDefinition::BondGraph { .. }).then(|| BondGraphRun {
             seed,
             cnc: self.cnc_config(),
-            ..BondGraphRun::paper_002()
+            ..BondGraphRun::paper_002(BondGraphRun::DEFAULT_LOAD_STEP_PCT)
         })
     }
 
@@ -840,6 +877,28 @@ impl Preset {
     pub fn machine_with(self, seed: u64, edits: &PlantEdits) -> Result<PresetMachine, PlantError> {
         if *edits == PlantEdits::default() {
             return self.machine(seed);
+        }
+        let others = PlantEdits {
+            load_step_pct: None,
+            ..*edits
+        };
+        if let (Some(pct), Some(run)) = (edits.load_step_pct, self.bond_graph_run(seed)) {
+            if others == PlantEdits::default() {
+                edits.check_load_step()?;
+                return Ok(PresetMachine::BondGraph(Box::new(BondGraphMachine::new(
+                    run.with_load_step_pct(pct),
+                )?)));
+            }
+        }
+        if edits.load_step_pct.is_some() && self.plant_kind() != PlantKind::BondGraph {
+            // Ignoring it would run something other than what the user asked for.
+            return Err(PlantError::new(
+                "load_step_pct",
+                format!(
+                    "the load step is paper 002's (liu-current-step); {} has none",
+                    self.name()
+                ),
+            ));
         }
         if self.plant_kind() != PlantKind::Mill {
             // Ignoring them would run something other than what the user asked for.
@@ -962,12 +1021,12 @@ impl Preset {
             });
         }
         self.bond_graph_run(0).map(|run| LoadSchedule {
-            quantity: "cutting resistance",
-            unit: "kN·s/m",
+            quantity: "depth of cut",
+            unit: "mm",
             points: run
                 .load_steps
                 .iter()
-                .map(|s| (s.time_s, s.cutting_damping_n_s_per_m * 1e-3))
+                .map(|s| (s.time_s, s.depth_mm))
                 .collect(),
             end_s: run.duration_s,
         })
@@ -1043,23 +1102,34 @@ impl Preset {
     pub fn summary(self) -> PresetSummary {
         let p = self.mill_parameters();
         let scenario = self.scenario();
-        let materials = scenario.as_ref().map(|s| {
-            let mut names: Vec<&str> = Vec::new();
-            for r in s.material_regions() {
-                if !names.contains(&r.material.name()) {
-                    names.push(r.material.name());
+        let bench = self.bench_config(0);
+        let bond_graph = self.bond_graph_run(0);
+        let bond_graph_cut = bond_graph.as_ref().map(|r| r.cut);
+        let materials = scenario
+            .as_ref()
+            .map(|s| {
+                let mut names: Vec<&str> = Vec::new();
+                for r in s.material_regions() {
+                    if !names.contains(&r.material.name()) {
+                        names.push(r.material.name());
+                    }
                 }
-            }
-            names.join(" then ")
-        });
-        let depth = scenario.as_ref().map(|s| {
-            let values: Vec<f64> = s.depth_profile().points().iter().map(|q| q.value).collect();
+                names.join(" then ")
+            })
+            .or_else(|| bond_graph_cut.map(|c| c.material.name().to_string()));
+        let span = |values: Vec<f64>| {
             let lo = values.iter().copied().fold(f64::INFINITY, f64::min);
             let hi = values.iter().copied().fold(f64::NEG_INFINITY, f64::max);
             [lo, hi]
-        });
-        let bench = self.bench_config(0);
-        let bond_graph = self.bond_graph_run(0);
+        };
+        let depth = scenario
+            .as_ref()
+            .map(|s| span(s.depth_profile().points().iter().map(|q| q.value).collect()))
+            .or_else(|| {
+                bond_graph
+                    .as_ref()
+                    .map(|r| span(r.load_steps.iter().map(|s| s.depth_mm).collect()))
+            });
         let nominal_duration_s = match (&scenario, &bench, &bond_graph) {
             (Some(s), _, _) => s.nominal_duration_s(),
             (None, Some(b), _) => b.duration_s(),
@@ -1069,32 +1139,30 @@ impl Preset {
         let (spindle_rpm, programmed_feed_mm_min) = match (p, &bench, &bond_graph) {
             (Some(p), _, _) => (Some(p.spindle_rpm), Some(p.feed_mm_min)),
             (None, Some(b), _) => (None, Some(b.feed_mm_min)),
-            (None, None, Some(r)) => (
-                Some(super::rpm_from_rad_s(
-                    r.params.spindle_voltage_v / r.params.spindle_armature_coefficient,
-                )),
-                Some(r.programmed_feed_mm_min),
-            ),
+            // The speed of the reference cut, at which its forces are evaluated.
+            (None, None, Some(r)) => (Some(r.cut.spindle_rpm), Some(r.programmed_feed_mm_min)),
             (None, None, None) => (None, None),
         };
+        let cutter = p.map(|p| p.cutter).or(bond_graph_cut.map(|c| c.cutter));
         PresetSummary {
             name: self.name(),
             label: self.label(),
             source: self.source(),
             plant: self.plant_kind().name(),
-            tool: p.map(|p| {
-                let c = &p.cutter;
+            tool: cutter.map(|c| {
                 format!(
                     "Ø{} mm, {} teeth, {}° helix",
                     c.diameter_mm, c.teeth, c.helix_deg
                 )
             }),
             material: materials,
-            mode: p.map(|p| p.mode.name()),
+            mode: p
+                .map(|p| p.mode.name())
+                .or(bond_graph_cut.map(|c| c.mode.name())),
             spindle_rpm,
             programmed_feed_mm_min,
             depth_mm: depth,
-            width_mm: p.map(|p| p.width_mm),
+            width_mm: p.map(|p| p.width_mm).or(bond_graph_cut.map(|c| c.width_mm)),
             path_length_mm: scenario.as_ref().map(Scenario::total_length_mm),
             nominal_duration_s,
             override_mode: self.override_mode().name(),
@@ -1119,6 +1187,7 @@ impl Preset {
 /// | `teeth` | 1 … 16 | what the force model holds |
 /// | `depth_scale` | 0.01 … the factor that makes the deepest cut 4 tool diameters | a long-series end mill's flute length (standard ones: 2–3 diameters) |
 /// | `sensor_noise_a` | 0 … 5 A | beyond the feed channel's full scale (±4.8 A) noise only saturates it |
+/// | `load_step_pct` | −90 … +150 % (liu-current-step only) | from a tenth of the depth to 2.5 times it: up to the paper's full-scale E of 25 A above I_ref and beyond, on a 10 mm insert edge |
 ///
 /// A tool diameter that makes the preset's own deepest cut deeper than 4 diameters is refused
 /// as `tool_diameter_mm`.
@@ -1146,6 +1215,9 @@ pub struct PlantEdits {
     /// Standard deviation of the Hall sensors' noise, both channels.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub sensor_noise_a: Option<f64>,
+    /// Size of paper 002's load step, percent of the depth of cut (liu-current-step only).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub load_step_pct: Option<f64>,
 }
 
 impl PlantEdits {
@@ -1161,6 +1233,8 @@ impl PlantEdits {
     pub const MIN_DEPTH_SCALE: f64 = 0.01;
     /// The sensor noise accepted (standard deviation), [least, most].
     pub const SENSOR_NOISE_A: [f64; 2] = [0.0, 5.0];
+    /// The load steps accepted, percent of the depth, [least, most].
+    pub const LOAD_STEP_PCT: [f64; 2] = [-90.0, 150.0];
 
     /// Checks every edit against its accepted range for the mill preset cutting `cut` on
     /// `machine` (see the table on [`PlantEdits`]); the error names the first edit out of
@@ -1178,17 +1252,8 @@ impl PlantEdits {
     /// assert_eq!(e.to_string(), "depth_scale: 41 is outside the accepted 0.01–40 (the deepest cut at most 4 tool diameters)");
     /// ```
     pub fn check(&self, cut: &MillParameters, machine: &SimConfig) -> Result<(), EditError> {
-        let within = |field, value: Option<f64>, [min, max]: [f64; 2], unit, why| match value {
-            Some(v) if !(v >= min && v <= max) => Err(EditError {
-                field,
-                value: v,
-                min,
-                max,
-                unit,
-                why,
-            }),
-            _ => Ok(()),
-        };
+        let within = Self::within;
+        self.check_load_step()?;
         within(
             "spindle_rpm",
             self.spindle_rpm,
@@ -1251,6 +1316,50 @@ impl PlantEdits {
                 depth_why,
             ),
         }
+    }
+}
+
+impl PlantEdits {
+    /// `value`, if given, inside `[min, max]`; the error names `field` and the range.
+    fn within(
+        field: &'static str,
+        value: Option<f64>,
+        [min, max]: [f64; 2],
+        unit: &'static str,
+        why: &'static str,
+    ) -> Result<(), EditError> {
+        match value {
+            Some(v) if !(v >= min && v <= max) => Err(EditError {
+                field,
+                value: v,
+                min,
+                max,
+                unit,
+                why,
+            }),
+            _ => Ok(()),
+        }
+    }
+
+    /// Checks the load step against its accepted range (see the table on [`PlantEdits`]).
+    ///
+    /// ```
+    /// use cutlab::plant::presets::PlantEdits;
+    /// let full_scale = PlantEdits { load_step_pct: Some(100.0), ..PlantEdits::default() };
+    /// assert!(full_scale.check_load_step().is_ok());
+    /// let e = PlantEdits { load_step_pct: Some(-95.0), ..PlantEdits::default() }
+    ///     .check_load_step()
+    ///     .unwrap_err();
+    /// assert_eq!(e.to_string(), "load_step_pct: -95 % is outside the accepted -90–150 % (from a tenth of the depth to 2.5 times it)");
+    /// ```
+    pub fn check_load_step(&self) -> Result<(), EditError> {
+        Self::within(
+            "load_step_pct",
+            self.load_step_pct,
+            Self::LOAD_STEP_PCT,
+            "%",
+            "from a tenth of the depth to 2.5 times it",
+        )
     }
 }
 
@@ -1539,6 +1648,7 @@ mod tests {
             depth_scale: Some(0.01),
             sensor_noise_a: Some(5.0),
             material: Some(Material::Aluminium),
+            load_step_pct: None,
         };
         assert_eq!(check(edge), Ok(()));
         assert!(p.machine_with(1, &edge).is_ok());
@@ -1554,6 +1664,52 @@ mod tests {
         assert_eq!(
             e.to_string(),
             "tool_diameter_mm: 1000000 mm is outside the accepted 0.5–100 mm (end mills)"
+        );
+    }
+
+    #[test]
+    fn the_load_step_is_liu_current_steps_own_edit() {
+        let liu = Preset::LiuCurrentStep;
+        let step = |pct| PlantEdits {
+            load_step_pct: Some(pct),
+            ..PlantEdits::default()
+        };
+        // The ends of its range are accepted; beyond them the error names the edit.
+        for pct in PlantEdits::LOAD_STEP_PCT {
+            assert!(liu.machine_with(1, &step(pct)).is_ok());
+        }
+        for pct in [-91.0, 151.0, f64::NAN] {
+            assert_eq!(
+                liu.machine_with(1, &step(pct)).unwrap_err().field,
+                "load_step_pct"
+            );
+        }
+        // A mill has no load step, and the bond graph takes no other edit.
+        assert_eq!(
+            Preset::KimStepDoc
+                .machine_with(1, &step(40.0))
+                .unwrap_err()
+                .field,
+            "load_step_pct"
+        );
+        let both = PlantEdits {
+            sensor_noise_a: Some(0.1),
+            ..step(40.0)
+        };
+        assert_eq!(liu.machine_with(1, &both).unwrap_err().field, "plant");
+        // The size reaches the machine: the depth doubles at 15 s.
+        let mut m = liu.machine_with(1, &step(100.0)).unwrap();
+        let depth_at = |m: &mut PresetMachine, t_s: f64| loop {
+            let s = m.step(OverrideCommand::default());
+            if s.sensors.time_s >= t_s {
+                break s.truth.map_or(f64::NAN, |t| t.depth_mm);
+            }
+        };
+        let before = depth_at(&mut m, 14.9);
+        let after = depth_at(&mut m, 15.1);
+        assert!(
+            (after - 2.0 * before).abs() < 1e-12,
+            "{before} → {after} mm"
         );
     }
 

@@ -16,6 +16,22 @@
 //! override per unit of U. Since U lies in [−6, 6], one step changes the override by at most
 //! `output_range_pct`; the override itself is limited by the safety envelope, not here.
 //!
+//! ## Per period or per second
+//!
+//! Eq 6 reads EC as the difference of two successive errors and eq 1 adds k_u·U once per period,
+//! so both depend on the period T: a longer period sees a larger EC and, per second, a smaller
+//! gain. Paper 002's Table 2 gives EC in A/s (−11.5 → 8.5 A in 0.05 s is its 400 A/s). Each
+//! reading has a time base t (0 for per period, eq 6 and eq 1 as printed):
+//!
+//! ```text
+//! EC  = (E(i) − E(i−1)) · t_ec/T        the change over t_ec: t_ec = 1 s reads EC in A/s (N/s)
+//! Δu  = k_u·U · T/t_u                   k_u per t_u: t_u = 1 s makes it a rate, % per second
+//! ```
+//!
+//! With t_ec = 1 s the change range is per second (the paper's 50 A/s at k_ec = 3/25); with
+//! t_u = 1 s the output range is the override's rate of change at |U| = 6. Both at 0 keep the
+//! per-period law, on every preset. A period that is not positive and finite reads both per period.
+//!
 //! Paper 002 regulates the spindle current with k_e = 6/25 A⁻¹ and k_ec = 3/25 A⁻¹ for
 //! I_ref = 25 A, and k_u = 250 mm/min for a 1500 mm/min feed: an error of the whole reference
 //! saturates E, a change of twice the reference saturates EC, and a saturated output changes the
@@ -38,6 +54,11 @@ pub struct FuzzyParams {
     pub change_range_pct: f64,
     /// Override change at |U| = 6, percentage points (paper: 6 · 250 mm/min of 1500 = 100 %).
     pub output_range_pct: f64,
+    /// EC's time base t_ec: 0 reads EC per period (eq 6), t > 0 as the change over t (1 s:
+    /// Table 2's A/s).
+    pub change_time_base_s: f64,
+    /// k_u's time base t_u: 0 applies k_u per period (eq 1), t > 0 per t (1 s: a rate).
+    pub output_time_base_s: f64,
     /// How U is defuzzified.
     pub defuzzifier: Defuzzifier,
 }
@@ -51,6 +72,7 @@ pub struct FuzzyParams {
 /// use cutlab::control::law::{Controller, ControlInput};
 /// let mut c = FuzzyController::new(&RuleBase::Dynamics.table(), FuzzyParams {
 ///     error_range_pct: 100.0, change_range_pct: 200.0, output_range_pct: 100.0,
+///     change_time_base_s: 0.0, output_time_base_s: 0.0,
 ///     defuzzifier: Defuzzifier::WeightedAverage }).unwrap();
 /// let input = ControlInput { time_s: 10.0, dt_s: 0.05, force_n: 300.0, target_force_n: 300.0,
 ///     programmed_feed_mm_min: 1500.0, applied_override_pct: 100.0, time_since_start_s: 10.0 };
@@ -105,16 +127,29 @@ impl Controller for FuzzyController {
             return input.applied_override_pct;
         }
         self.held = false;
-        let change_n = error_n - self.previous_error_n.unwrap_or(error_n);
-        self.previous_error_n = Some(error_n);
         let p = self.params;
+        let period_s = input.dt_s;
+        // (EC's scale, Δu's scale) of the readings' time bases: 1 per period.
+        let per = |base_s: f64| base_s > 0.0 && period_s.is_finite() && period_s > 0.0;
+        let change_scale = if per(p.change_time_base_s) {
+            p.change_time_base_s / period_s
+        } else {
+            1.0
+        };
+        let output_scale = if per(p.output_time_base_s) {
+            period_s / p.output_time_base_s
+        } else {
+            1.0
+        };
+        let change_n = (error_n - self.previous_error_n.unwrap_or(error_n)) * change_scale;
+        self.previous_error_n = Some(error_n);
         let ke = 6.0 / (input.target_force_n * p.error_range_pct / 100.0);
         let kec = 6.0 / (input.target_force_n * p.change_range_pct / 100.0);
         let e = (ke * error_n).clamp(-6.0, 6.0);
         let ec = (kec * change_n).clamp(-6.0, 6.0);
         self.engine.evaluate(&[e, ec], &mut self.output);
         let u = self.output[0];
-        let change_pct = u / 6.0 * p.output_range_pct;
+        let change_pct = u / 6.0 * p.output_range_pct * output_scale;
         self.terms[0].value = e;
         self.terms[1].value = ec;
         self.terms[2].value = u;
@@ -163,6 +198,8 @@ mod tests {
             error_range_pct: error,
             change_range_pct: change,
             output_range_pct: output,
+            change_time_base_s: 0.0,
+            output_time_base_s: 0.0,
             defuzzifier: Defuzzifier::WeightedAverage,
         }
     }
@@ -319,6 +356,49 @@ mod tests {
         assert_close(wide_change[1][0], 2.0, "E with half k_ec");
         assert_close(wide_change[1][1], 0.5, "EC with half k_ec");
         assert_close(wide_change[1][3], 250.0 / 6.0, "Δ with half k_ec");
+    }
+
+    #[test]
+    fn ec_read_as_a_rate_and_k_u_per_second_scale_with_the_period() {
+        // The periods of `input` are 0.05 s. E: 0 N, then 100 N → 2 (PS).
+        let steps = |p: FuzzyParams| {
+            let mut c = controller(p);
+            c.step(&input(300.0, 100.0));
+            let request = c.step(&input(200.0, 100.0));
+            (terms(&c), request)
+        };
+        // Per period (eq 6): EC = 100 N → 1, as in the hand calculation above.
+        let (per_period, _) = steps(paper());
+        assert_close(per_period[1], 1.0, "EC per period");
+        // As a rate over 1 s: EC = 100 N / 0.05 s = 2000 N/s; k_ec = 6 / (300 N/s · 200 %)
+        // = 0.01 s/N gives 20, saturated at 6. Over 0.05 s (one period) it is eq 6 again.
+        let rate = |t| FuzzyParams {
+            change_time_base_s: t,
+            ..paper()
+        };
+        let (per_second, _) = steps(rate(1.0));
+        assert_close(per_second[1], 6.0, "EC per second");
+        let (per_table_2_row, _) = steps(rate(0.05));
+        assert_eq!(per_table_2_row, per_period);
+        // A smaller change: 1 N in 0.05 s is 20 N/s → 0.2 per second, 0.01 per period.
+        let mut c = controller(rate(1.0));
+        c.step(&input(300.0, 100.0));
+        c.step(&input(299.0, 100.0));
+        assert_close(terms(&c)[1], 0.2, "1 N in 0.05 s per second");
+        // k_u per second: U = 3 asks for 50 % per second, 2.5 % in a 0.05 s period; E, EC and U
+        // are the per-period law's.
+        let (eq_1, request_eq_1) = steps(paper());
+        let (rated, request_rated) = steps(FuzzyParams {
+            output_time_base_s: 1.0,
+            ..paper()
+        });
+        assert_eq!(&rated[..3], &eq_1[..3]);
+        assert_close(rated[3], 50.0 * 0.05, "Δ per period at 50 %/s");
+        assert_close(
+            request_rated - 100.0,
+            0.05 * (request_eq_1 - 100.0),
+            "request",
+        );
     }
 
     #[test]
