@@ -689,7 +689,9 @@ fn extra_runs(facts: &mut Facts, m: &Matrix) {
     use Preset::*;
     let specs = [
         // Current restriction on maneerat-doc-1 without the entry hold.
-        spec_with(ManeeratDoc1, Restriction, |s| s.settings.entry_hold_s = Some(0.0)),
+        spec_with(ManeeratDoc1, Restriction, |s| {
+            s.settings.entry_hold_s = Some(0.0)
+        }),
         // Feed-current feedback on kim-step-doc.
         spec_with(KimStepDoc, Threshold, |s| {
             s.settings.feedback = Some(Feedback::FeedCurrent)

@@ -5,7 +5,7 @@
 // Test code: unwrapping and panicking on a broken expectation is the point.
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
 // Runs the command line and writes files: native only.
-#![cfg(not(target_arch = "wasm32"))]
+#![cfg(all(feature = "cli", not(target_arch = "wasm32")))]
 
 mod common;
 
