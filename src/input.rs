@@ -2,6 +2,11 @@
 //!
 //! The browser forms keep what the user typed and parse it with these; an `Err` is the message
 //! shown beside the field.
+//!
+//! [`table`] describes settings as rows of a table (name, unit, range, default) that a form and
+//! the command line parse alike.
+
+pub mod table;
 
 /// Parses a decimal number typed by a person: surrounding space is ignored and a decimal comma is
 /// accepted, since many of our users' locales write `2,5`; a comma that could as well be a

@@ -17,6 +17,7 @@ pub mod protocol;
 pub mod scenarios;
 pub mod sim;
 pub mod spectrum;
+pub mod table_args;
 pub mod tune;
 
 use std::io::{BufRead, Write};
