@@ -22,7 +22,7 @@ use crate::estimation::estimator::Feedback;
 use crate::input::{parse_count, parse_number, parse_seed, readable, table};
 use crate::plant::cnc::{OverrideMode, MAX_OVERRIDE_PCT};
 use crate::plant::materials::Material;
-use crate::plant::mechanics::MAX_TEETH;
+use crate::plant::mechanics::{DIAMETER_RANGE_MM, MAX_TEETH};
 use crate::plant::presets::{PlantEdits, PlantKind};
 use crate::plant::Preset;
 use crate::safety::EnvelopeConfig;
@@ -474,7 +474,7 @@ impl RunSetting {
                 "diameter-mm",
                 "Tool diameter",
                 "mm",
-                number(0.5, 100.0),
+                number(DIAMETER_RANGE_MM.0, DIAMETER_RANGE_MM.1),
                 Machine,
                 "cutter diameter (mill presets)",
             ),
@@ -1067,7 +1067,7 @@ impl fmt::Display for Problem {
                 let noun = noun
                     .split_whitespace()
                     .last()
-                    .unwrap_or("value")
+                    .unwrap_or_default()
                     .to_lowercase();
                 table::write_out_of_range(f, *value, *min, *max, unit, &noun)
             }

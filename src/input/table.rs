@@ -83,6 +83,57 @@ pub struct Row {
 }
 
 impl Row {
+    /// A row of a number with no range yet (see [`Row::takes`]), its default blank, its help
+    /// empty; `cli_option` empty where the command line has no option for it.
+    ///
+    /// ```
+    /// use cutlab::input::table::{Kind, Row, Shown};
+    /// let row = Row::new("order", "order", "Order", "")
+    ///     .takes(Kind::Count { min: 1, max: 20 }, Shown::Count(4))
+    ///     .noun("order")
+    ///     .help("filter order");
+    /// assert_eq!((row.default_text(), row.range()), ("4".to_string(), Some((1.0, 20.0))));
+    /// ```
+    pub const fn new(
+        key: &'static str,
+        cli_option: &'static str,
+        label: &'static str,
+        unit: &'static str,
+    ) -> Row {
+        Row {
+            key,
+            cli_option,
+            label,
+            unit,
+            help: "",
+            kind: Kind::Number {
+                min: f64::NEG_INFINITY,
+                max: f64::INFINITY,
+            },
+            default: Shown::Blank,
+            noun: "",
+        }
+    }
+
+    /// This row taking `kind` of value, `default` where left out.
+    pub const fn takes(self, kind: Kind, default: Shown) -> Row {
+        Row {
+            kind,
+            default,
+            ..self
+        }
+    }
+
+    /// This row naming its value `noun` in messages.
+    pub const fn noun(self, noun: &'static str) -> Row {
+        Row { noun, ..self }
+    }
+
+    /// This row with its help.
+    pub const fn help(self, help: &'static str) -> Row {
+        Row { help, ..self }
+    }
+
     /// The text a fresh form shows.
     ///
     /// ```
@@ -372,44 +423,10 @@ pub trait Table: Copy + Eq + fmt::Debug + 'static {
     }
 
     /// Reads what a person typed as this row's kind of value, without its range: blank text is
-    /// `Ok(None)` (the default, or nothing where the default is blank).
+    /// `Ok(None)` (the default, or nothing where the default is blank). A table whose choices
+    /// have other spellings reads them here ([`read_text`] is the plain reading).
     fn read(self, text: &str) -> Result<Option<Value>, RowError<Self>> {
-        let text = text.trim();
-        if text.is_empty() {
-            return Ok(None);
-        }
-        let parse =
-            |r: Result<Value, String>| r.map_err(|m| RowError::new(self, Problem::Parse(m)));
-        let value = match self.row().kind {
-            Kind::Number { .. } => parse(parse_number(text).map(Value::Number))?,
-            Kind::Count { .. } => parse(parse_count(text).map(Value::Count))?,
-            Kind::Seed => parse(parse_seed(text).map(Value::Seed))?,
-            Kind::Choice => {
-                let choices = self.choices();
-                let found = choices
-                    .iter()
-                    .find(|(name, _)| !name.is_empty() && name.eq_ignore_ascii_case(text));
-                match found {
-                    Some((name, _)) => Value::Choice(name),
-                    None => {
-                        return Err(RowError::new(
-                            self,
-                            Problem::Unknown {
-                                what: self.row().noun,
-                                text: text.to_string(),
-                                choices: choices
-                                    .iter()
-                                    .filter(|(name, _)| !name.is_empty())
-                                    .map(|(name, _)| *name)
-                                    .collect::<Vec<_>>()
-                                    .join(", "),
-                            },
-                        ))
-                    }
-                }
-            }
-        };
-        Ok(Some(value))
+        read_text(self, text)
     }
 
     /// Checks a value against the row's range.
@@ -444,6 +461,148 @@ pub trait Table: Copy + Eq + fmt::Debug + 'static {
         match text {
             Some(text) => self.parse(text),
             None => Ok(self.row().default_value()),
+        }
+    }
+}
+
+/// Reads `text` as `setting`'s kind of value, without its range: a number, a whole number, a
+/// seed, or one of its choices by name (any case). Blank text is `Ok(None)`.
+pub fn read_text<S: Table>(setting: S, text: &str) -> Result<Option<Value>, RowError<S>> {
+    let text = text.trim();
+    if text.is_empty() {
+        return Ok(None);
+    }
+    let parse = |r: Result<Value, String>| r.map_err(|m| RowError::new(setting, Problem::Parse(m)));
+    let value = match setting.row().kind {
+        Kind::Number { .. } => parse(parse_number(text).map(Value::Number))?,
+        Kind::Count { .. } => parse(parse_count(text).map(Value::Count))?,
+        Kind::Seed => parse(parse_seed(text).map(Value::Seed))?,
+        Kind::Choice => {
+            let found = setting
+                .choices()
+                .into_iter()
+                .find(|(name, _)| !name.is_empty() && name.eq_ignore_ascii_case(text));
+            match found {
+                Some((name, _)) => Value::Choice(name),
+                None => return Err(unknown_choice(setting, text)),
+            }
+        }
+    };
+    Ok(Some(value))
+}
+
+/// The refusal of `text`, which names none of `setting`'s choices; the message lists them.
+pub fn unknown_choice<S: Table>(setting: S, text: &str) -> RowError<S> {
+    let choices: Vec<&str> = setting
+        .choices()
+        .into_iter()
+        .map(|(name, _)| name)
+        .filter(|name| !name.is_empty())
+        .collect();
+    RowError::new(
+        setting,
+        Problem::Unknown {
+            what: setting.row().noun,
+            text: text.trim().to_string(),
+            choices: choices.join(", "),
+        },
+    )
+}
+
+/// Reads the rows of a table from typed text, each once, those not given (or blank) taking their
+/// defaults, and keeps every refusal: what each table's parse does before it builds its value.
+///
+/// ```
+/// use cutlab::input::table::Reader;
+/// use cutlab::protocol::device_settings::DeviceSetting;
+/// let texts = [(DeviceSetting::TimeScale, "4"), (DeviceSetting::DropRate, "2")];
+/// let mut reader = Reader::new(&texts);
+/// assert_eq!(reader.number(DeviceSetting::TimeScale), Some(4.0));
+/// assert_eq!(reader.number(DeviceSetting::Watchdog), Some(0.5));
+/// assert_eq!(reader.number(DeviceSetting::DropRate), None);
+/// assert_eq!(reader.errors().len(), 1);
+/// ```
+pub struct Reader<'a, S, T> {
+    texts: &'a [(S, T)],
+    errors: Vec<RowError<S>>,
+}
+
+impl<'a, S: Table, T: AsRef<str>> Reader<'a, S, T> {
+    /// A reader of `texts` (the last text given for a setting counts).
+    pub fn new(texts: &'a [(S, T)]) -> Self {
+        Self {
+            texts,
+            errors: Vec::new(),
+        }
+    }
+
+    /// The text given for `setting`, if any.
+    pub fn text(&self, setting: S) -> Option<&'a str> {
+        self.texts
+            .iter()
+            .rev()
+            .find(|(given, _)| *given == setting)
+            .map(|(_, t)| t.as_ref())
+    }
+
+    /// `setting`'s value ([`Table::parse_given`]); `None` where blank without a default or
+    /// refused (the refusal kept).
+    pub fn value(&mut self, setting: S) -> Option<Value> {
+        match setting.parse_given(self.text(setting)) {
+            Ok(value) => value,
+            Err(e) => {
+                self.errors.push(e);
+                None
+            }
+        }
+    }
+
+    /// `setting`'s value as read, without its range ([`Table::read`]), or its default.
+    pub fn read(&mut self, setting: S) -> Option<Value> {
+        match setting.read(self.text(setting).unwrap_or_default()) {
+            Ok(value) => value.or_else(|| setting.row().default_value()),
+            Err(e) => {
+                self.errors.push(e);
+                None
+            }
+        }
+    }
+
+    /// `setting`'s number.
+    pub fn number(&mut self, setting: S) -> Option<f64> {
+        self.value(setting).and_then(Value::number)
+    }
+
+    /// `setting`'s whole number.
+    pub fn count(&mut self, setting: S) -> Option<usize> {
+        self.value(setting).and_then(Value::count)
+    }
+
+    /// `setting`'s choice, by name.
+    pub fn choice(&mut self, setting: S) -> Option<&'static str> {
+        self.value(setting).and_then(Value::choice)
+    }
+
+    /// A refusal of the table's own (two settings that go together).
+    pub fn refuse(&mut self, error: RowError<S>) {
+        self.errors.push(error);
+    }
+
+    /// Whether `setting` was refused.
+    pub fn refused(&self, setting: S) -> bool {
+        self.errors.iter().any(|e| e.setting == setting)
+    }
+
+    /// The refusals so far.
+    pub fn errors(&self) -> &[RowError<S>] {
+        &self.errors
+    }
+
+    /// `value` if nothing was refused, else every refusal.
+    pub fn finish<V>(self, value: Option<V>) -> Result<V, Vec<RowError<S>>> {
+        match value {
+            Some(value) if self.errors.is_empty() => Ok(value),
+            _ => Err(self.errors),
         }
     }
 }
@@ -523,9 +682,10 @@ pub fn check_table<S: Table>() -> Result<(), String> {
         }
         if let Some((min, max)) = row.range() {
             for v in [min, max] {
+                // Every digit, so the ends read back exactly (1.7976931348623157e308).
                 let text = match row.kind {
                     Kind::Count { .. } => format!("{v}"),
-                    _ => readable(v),
+                    _ => format!("{v:e}"),
                 };
                 s.parse(&text)
                     .map_err(|e| format!("{s:?}: the end {v} of its range is refused: {e}"))?;

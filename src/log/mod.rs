@@ -27,6 +27,7 @@ pub mod machine;
 pub mod mapping;
 pub mod period_log;
 pub mod replay;
+pub mod settings;
 
 use serde::Serialize;
 

@@ -11,7 +11,7 @@ use super::device::{
     DEFAULT_WATCHDOG_S, FALLBACK_LIMIT_RANGE_S, FAULT_RATE_RANGE, TIME_SCALE_RANGE,
     WATCHDOG_RANGE_S,
 };
-use crate::input::table::{Kind, Problem, Row, RowError, Shown, Table, Value};
+use crate::input::table::{Kind, Problem, Reader, Row, RowError, Shown, Table, Value};
 use crate::plant::Preset;
 
 /// Every setting of an emulated bridge device.
@@ -83,200 +83,76 @@ impl Table for DeviceSetting {
 
     fn row(self) -> Row {
         use DeviceSetting as D;
-        let (key, cli_option, label, unit, kind, default, noun, help) = match self {
-            D::Program => (
-                "program",
-                "scenario",
-                "Program (preset)",
-                "",
-                Kind::Choice,
-                Shown::Blank,
-                "preset",
-                "the preset whose machine and program the device emulates (see cutlab scenarios)",
-            ),
-            D::Seed => (
-                "seed",
-                "seed",
-                "Seed",
-                "",
-                Kind::Seed,
-                Shown::Seed(1),
-                "seed",
-                "seed of the machines (as cutlab sim --seed) and of the injected faults",
-            ),
-            D::TimeScale => (
-                "time_scale",
-                "time-scale",
-                "Time scale",
-                "× real time",
-                range(TIME_SCALE_RANGE),
-                Shown::Number(1.0),
-                "time scale",
-                "device seconds per wall second (1: real time); the device's watchdog, in device \
+        match self {
+            D::Program => Row::new("program", "scenario", "Program (preset)", "")
+                .takes(Kind::Choice, Shown::Blank)
+                .noun("preset")
+                .help("the preset whose machine and program the device emulates (see cutlab scenarios)"),
+            D::Seed => Row::new("seed", "seed", "Seed", "")
+                .takes(Kind::Seed, Shown::Seed(1))
+                .noun("seed")
+                .help("seed of the machines (as cutlab sim --seed) and of the injected faults"),
+            D::TimeScale => Row::new("time_scale", "time-scale", "Time scale", "× real time")
+                .takes(range(TIME_SCALE_RANGE), Shown::Number(1.0))
+                .noun("time scale")
+                .help("device seconds per wall second (1: real time); the device's watchdog, in device \
                  time, is that much shorter in wall time. In the browser the virtual device runs \
-                 at most 400 frames per 10 ms tick (40× real time); faster, it lags its clock",
-            ),
-            D::DropRate => (
-                "drop_rate",
-                "drop-rate",
-                "Drop rate",
-                "per frame",
-                range(FAULT_RATE_RANGE),
-                Shown::Number(0.0),
-                "drop rate",
-                "probability that a frame, either way, is lost",
-            ),
-            D::NoiseRate => (
-                "noise_rate",
-                "noise-rate",
-                "Noise rate",
-                "per frame",
-                range(FAULT_RATE_RANGE),
-                Shown::Number(0.0),
-                "noise rate",
-                "probability that a frame, either way, is corrupted",
-            ),
-            D::StallAt => (
-                "stall_at",
-                "stall-at-s",
-                "Receiver stall at (blank: none)",
-                "s",
-                DEVICE_TIME_S,
-                Shown::Blank,
-                "",
-                "stall the device's receiver at this device time (with its length)",
-            ),
-            D::StallFor => (
-                "stall_for",
-                "stall-s",
-                "Receiver stall for",
-                "s",
-                DEVICE_TIME_S,
-                Shown::Blank,
-                "",
-                "length of the receiver stall, device seconds",
-            ),
-            D::UnplugAt => (
-                "unplug_at",
-                "unplug-at-s",
-                "Cable pulled at (blank: never)",
-                "s",
-                DEVICE_TIME_S,
-                Shown::Blank,
-                "",
-                "pull the cable at this device time: nothing in or out from then on",
-            ),
-            D::Watchdog => (
-                "watchdog",
-                "watchdog-s",
-                "Device watchdog",
-                "s",
-                range(WATCHDOG_RANGE_S),
-                Shown::Number(DEFAULT_WATCHDOG_S),
-                "",
-                "the device's watchdog timeout, device seconds",
-            ),
-            D::Fallback => (
-                "fallback",
-                "fallback-pct",
-                "Device fallback override",
-                "%",
-                Kind::Number {
+                 at most 400 frames per 10 ms tick (40× real time); faster, it lags its clock"),
+            D::DropRate => Row::new("drop_rate", "drop-rate", "Drop rate", "per frame")
+                .takes(range(FAULT_RATE_RANGE), Shown::Number(0.0))
+                .noun("drop rate")
+                .help("probability that a frame, either way, is lost"),
+            D::NoiseRate => Row::new("noise_rate", "noise-rate", "Noise rate", "per frame")
+                .takes(range(FAULT_RATE_RANGE), Shown::Number(0.0))
+                .noun("noise rate")
+                .help("probability that a frame, either way, is corrupted"),
+            D::StallAt => Row::new("stall_at", "stall-at-s", "Receiver stall at (blank: none)", "s")
+                .takes(DEVICE_TIME_S, Shown::Blank)
+                .help("stall the device's receiver at this device time (with its length)"),
+            D::StallFor => Row::new("stall_for", "stall-s", "Receiver stall for", "s")
+                .takes(DEVICE_TIME_S, Shown::Blank)
+                .help("length of the receiver stall, device seconds"),
+            D::UnplugAt => Row::new("unplug_at", "unplug-at-s", "Cable pulled at (blank: never)", "s")
+                .takes(DEVICE_TIME_S, Shown::Blank)
+                .help("pull the cable at this device time: nothing in or out from then on"),
+            D::Watchdog => Row::new("watchdog", "watchdog-s", "Device watchdog", "s")
+                .takes(range(WATCHDOG_RANGE_S), Shown::Number(DEFAULT_WATCHDOG_S))
+                .help("the device's watchdog timeout, device seconds"),
+            D::Fallback => Row::new("fallback", "fallback-pct", "Device fallback override", "%")
+                .takes(Kind::Number {
                     min: 0.0,
                     max: crate::plant::cnc::MAX_OVERRIDE_PCT,
-                },
-                Shown::Number(DEFAULT_FALLBACK_PCT),
-                "",
-                "the override the watchdog applies at most (the fallback is the lower of it and \
-                 the override applied when the watchdog fires; at most what the machine applies)",
-            ),
-            D::FallbackLimit => (
-                "fallback_limit",
-                "fallback-limit-s",
-                "Fallback time limit",
-                "s",
-                range(FALLBACK_LIMIT_RANGE_S),
-                Shown::Number(DEFAULT_FALLBACK_LIMIT_S),
-                "",
-                "how long the fallback lasts before the device holds the feed, latched until the \
-                 operator's reset, device seconds",
-            ),
-            D::LineBaud => (
-                "line_baud",
-                "line-baud",
-                "Declared line speed (0: none)",
-                "bit/s",
-                Kind::Count {
+                }, Shown::Number(DEFAULT_FALLBACK_PCT))
+                .help("the override the watchdog applies at most (the fallback is the lower of it and \
+                 the override applied when the watchdog fires; at most what the machine applies)"),
+            D::FallbackLimit => Row::new("fallback_limit", "fallback-limit-s", "Fallback time limit", "s")
+                .takes(range(FALLBACK_LIMIT_RANGE_S), Shown::Number(DEFAULT_FALLBACK_LIMIT_S))
+                .help("how long the fallback lasts before the device holds the feed, latched until the \
+                 operator's reset, device seconds"),
+            D::LineBaud => Row::new("line_baud", "line-baud", "Declared line speed (0: none)", "bit/s")
+                .takes(Kind::Count {
                     min: 0,
                     max: u32::MAX as usize,
-                },
-                Shown::Count(0),
-                "",
-                "the baud rate the device declares for its line (0: none, as a pipe); the host \
-                 refuses a stream that does not fit it",
-            ),
-            D::OverCurrentAt => (
-                "over_current_at",
-                "over-current-at-s",
-                "Over-current at (blank: none)",
-                "s",
-                DEVICE_TIME_S,
-                Shown::Blank,
-                "",
-                "read an over-current from this device time (with its length) while a part runs",
-            ),
-            D::OverCurrentFor => (
-                "over_current_for",
-                "over-current-s",
-                "Over-current for",
-                "s",
-                DEVICE_TIME_S,
-                Shown::Blank,
-                "",
-                "length of the over-current, device seconds",
-            ),
-            D::EstopAt => (
-                "estop_at",
-                "estop-at-s",
-                "E-stop at (blank: never)",
-                "s",
-                DEVICE_TIME_S,
-                Shown::Blank,
-                "",
-                "make the E-stop input active at this device time (it stays active; the device \
-                 then declares an E-stop input)",
-            ),
-            D::SensorOpenAt => (
-                "sensor_open_at",
-                "sensor-open-at-s",
-                "Spindle transducer opens at (blank: never)",
-                "s",
-                DEVICE_TIME_S,
-                Shown::Blank,
-                "",
-                "open the spindle's phase-u transducer at this device time: it reads 0 A from then on",
-            ),
-            D::StuckOverrideAt => (
-                "stuck_override_at",
-                "stuck-override-at-s",
-                "Override stuck from (blank: never)",
-                "s",
-                DEVICE_TIME_S,
-                Shown::Blank,
-                "",
-                "make the CNC ignore the bridge's override outputs from this device time on (it \
-                 keeps the override it had; the bridge goes on acknowledging what it outputs)",
-            ),
-        };
-        Row {
-            key,
-            cli_option,
-            label,
-            unit,
-            help,
-            kind,
-            default,
-            noun,
+                }, Shown::Count(0))
+                .help("the baud rate the device declares for its line (0: none, as a pipe); the host \
+                 refuses a stream that does not fit it"),
+            D::OverCurrentAt => Row::new("over_current_at", "over-current-at-s", "Over-current at (blank: none)", "s")
+                .takes(DEVICE_TIME_S, Shown::Blank)
+                .help("read an over-current from this device time (with its length) while a part runs"),
+            D::OverCurrentFor => Row::new("over_current_for", "over-current-s", "Over-current for", "s")
+                .takes(DEVICE_TIME_S, Shown::Blank)
+                .help("length of the over-current, device seconds"),
+            D::EstopAt => Row::new("estop_at", "estop-at-s", "E-stop at (blank: never)", "s")
+                .takes(DEVICE_TIME_S, Shown::Blank)
+                .help("make the E-stop input active at this device time (it stays active; the device \
+                 then declares an E-stop input)"),
+            D::SensorOpenAt => Row::new("sensor_open_at", "sensor-open-at-s", "Spindle transducer opens at (blank: never)", "s")
+                .takes(DEVICE_TIME_S, Shown::Blank)
+                .help("open the spindle's phase-u transducer at this device time: it reads 0 A from then on"),
+            D::StuckOverrideAt => Row::new("stuck_override_at", "stuck-override-at-s", "Override stuck from (blank: never)", "s")
+                .takes(DEVICE_TIME_S, Shown::Blank)
+                .help("make the CNC ignore the bridge's override outputs from this device time on (it \
+                 keeps the override it had; the bridge goes on acknowledging what it outputs)"),
         }
     }
 
@@ -315,62 +191,57 @@ pub struct VirtualDevice {
 pub fn parse_device<T: AsRef<str>>(
     texts: &[(DeviceSetting, T)],
 ) -> Result<VirtualDevice, Vec<RowError<DeviceSetting>>> {
-    let mut errors = Vec::new();
-    let values: Vec<(DeviceSetting, Option<Value>)> = DeviceSetting::ROWS
-        .iter()
-        .map(|&s| {
-            let text = texts
-                .iter()
-                .rev()
-                .find(|(given, _)| *given == s)
-                .map(|(_, t)| t.as_ref());
-            match s.parse_given(text) {
-                Ok(value) => (s, value),
-                Err(e) => {
-                    errors.push(e);
-                    (s, None)
-                }
-            }
-        })
-        .collect();
-    let value = |s: DeviceSetting| values.iter().find(|(v, _)| *v == s).and_then(|(_, v)| *v);
-    let number = |s: DeviceSetting| value(s).and_then(Value::number);
-    let preset = value(DeviceSetting::Program)
-        .and_then(Value::choice)
-        .and_then(Preset::from_name);
-    if preset.is_none() && errors.iter().all(|e| e.setting != DeviceSetting::Program) {
-        errors.push(RowError::new(
-            DeviceSetting::Program,
+    use DeviceSetting as D;
+    let mut reader = Reader::new(texts);
+    let preset = reader.choice(D::Program).and_then(Preset::from_name);
+    let seed = reader.value(D::Seed).and_then(Value::seed);
+    let time_scale = reader.number(D::TimeScale);
+    let drop_rate = reader.number(D::DropRate);
+    let noise_rate = reader.number(D::NoiseRate);
+    let stall_at_s = reader.number(D::StallAt);
+    let stall_s = reader.number(D::StallFor);
+    let unplug_at_s = reader.number(D::UnplugAt);
+    let watchdog_s = reader.number(D::Watchdog);
+    let fallback_pct = reader.number(D::Fallback);
+    let fallback_limit_s = reader.number(D::FallbackLimit);
+    let line_baud = reader.count(D::LineBaud);
+    let over_current_at_s = reader.number(D::OverCurrentAt);
+    let over_current_s = reader.number(D::OverCurrentFor);
+    let estop_at_s = reader.number(D::EstopAt);
+    let sensor_open_at_s = reader.number(D::SensorOpenAt);
+    let stuck_override_at_s = reader.number(D::StuckOverrideAt);
+    if preset.is_none() && !reader.refused(D::Program) {
+        reader.refuse(RowError::new(
+            D::Program,
             Problem::Parse("choose the preset the device emulates".to_string()),
         ));
     }
-    for (at, length, what) in [
+    for ((at, at_s), (length, length_s), what) in [
         (
-            DeviceSetting::StallAt,
-            DeviceSetting::StallFor,
+            (D::StallAt, stall_at_s),
+            (D::StallFor, stall_s),
             "a stall needs both when it starts and how long it lasts (or neither)",
         ),
         (
-            DeviceSetting::OverCurrentAt,
-            DeviceSetting::OverCurrentFor,
+            (D::OverCurrentAt, over_current_at_s),
+            (D::OverCurrentFor, over_current_s),
             "an over-current needs both when it starts and how long it lasts (or neither)",
         ),
     ] {
-        let failed = |s| errors.iter().any(|e: &RowError<_>| e.setting == s);
-        if failed(at) || failed(length) {
+        if reader.refused(at) || reader.refused(length) {
             continue;
         }
-        match (number(at).is_some(), number(length).is_some()) {
-            (true, false) => errors.push(RowError::other(length, what)),
-            (false, true) => errors.push(RowError::other(at, what)),
+        match (at_s.is_some(), length_s.is_some()) {
+            (true, false) => reader.refuse(RowError::other(length, what)),
+            (false, true) => reader.refuse(RowError::other(at, what)),
             _ => {}
         }
     }
-    if let (Some(p), Some(fallback)) = (preset, number(DeviceSetting::Fallback)) {
+    if let (Some(p), Some(fallback)) = (preset, fallback_pct) {
         let max = p.override_mode().max_pct();
         if fallback > max {
-            errors.push(RowError::other(
-                DeviceSetting::Fallback,
+            reader.refuse(RowError::other(
+                D::Fallback,
                 format!(
                     "{} % is more than this machine applies ({} %)",
                     crate::input::readable(fallback),
@@ -379,41 +250,33 @@ pub fn parse_device<T: AsRef<str>>(
             ));
         }
     }
-    let Some(preset) = preset.filter(|_| errors.is_empty()) else {
-        return Err(errors);
-    };
-    let mut config = DeviceConfig::new(preset);
-    let set = |s: DeviceSetting, slot: &mut f64| {
-        if let Some(v) = number(s) {
-            *slot = v;
-        }
-    };
-    set(DeviceSetting::Watchdog, &mut config.watchdog_timeout_s);
-    set(DeviceSetting::Fallback, &mut config.fallback_override_pct);
-    set(DeviceSetting::FallbackLimit, &mut config.fallback_limit_s);
-    if let Some(seed) = value(DeviceSetting::Seed).and_then(Value::seed) {
-        config.seed = seed;
-    }
-    if let Some(baud) = value(DeviceSetting::LineBaud).and_then(Value::count) {
+    let device = preset.map(|preset| {
+        let mut config = DeviceConfig::new(preset);
+        config.seed = seed.unwrap_or(config.seed);
+        config.watchdog_timeout_s = watchdog_s.unwrap_or(config.watchdog_timeout_s);
+        config.fallback_override_pct = fallback_pct.unwrap_or(config.fallback_override_pct);
+        config.fallback_limit_s = fallback_limit_s.unwrap_or(config.fallback_limit_s);
         // The row's range is a u32's.
-        config.line_baud = u32::try_from(baud).unwrap_or(u32::MAX);
-    }
-    config.faults = FaultInjection {
-        drop_rate: number(DeviceSetting::DropRate).unwrap_or(0.0),
-        noise_rate: number(DeviceSetting::NoiseRate).unwrap_or(0.0),
-        stall_at_s: number(DeviceSetting::StallAt),
-        stall_s: number(DeviceSetting::StallFor).unwrap_or(0.0),
-        unplug_at_s: number(DeviceSetting::UnplugAt),
-        estop_at_s: number(DeviceSetting::EstopAt),
-        over_current_at_s: number(DeviceSetting::OverCurrentAt),
-        over_current_s: number(DeviceSetting::OverCurrentFor).unwrap_or(0.0),
-        sensor_open_at_s: number(DeviceSetting::SensorOpenAt),
-        stuck_override_at_s: number(DeviceSetting::StuckOverrideAt),
-    };
-    Ok(VirtualDevice {
-        config,
-        time_scale: number(DeviceSetting::TimeScale).unwrap_or(1.0),
-    })
+        config.line_baud =
+            line_baud.map_or(config.line_baud, |b| u32::try_from(b).unwrap_or(u32::MAX));
+        config.faults = FaultInjection {
+            drop_rate: drop_rate.unwrap_or(0.0),
+            noise_rate: noise_rate.unwrap_or(0.0),
+            stall_at_s,
+            stall_s: stall_s.unwrap_or(0.0),
+            unplug_at_s,
+            estop_at_s,
+            over_current_at_s,
+            over_current_s: over_current_s.unwrap_or(0.0),
+            sensor_open_at_s,
+            stuck_override_at_s,
+        };
+        VirtualDevice {
+            config,
+            time_scale: time_scale.unwrap_or(1.0),
+        }
+    });
+    reader.finish(device)
 }
 
 #[cfg(test)]
