@@ -21,6 +21,7 @@ use crate::tuning::{
 use crate::web::components::chart::ChartCanvas;
 use crate::web::components::fields::{NumberField, SelectField};
 use crate::web::components::heat_map::HeatMapCanvas;
+use crate::web::components::page::PageShell;
 use crate::web::components::runner::{RunProgress, Runner};
 use crate::web::js::read_chosen_file;
 use crate::web::route::Page;
@@ -388,8 +389,7 @@ pub fn TunePage() -> impl IntoView {
     });
 
     view! {
-        <section class="page" aria-labelledby="tune-title">
-            <h1 id="tune-title">"Tune a controller"</h1>
+        <PageShell id="tune" title="Tune a controller">
             <p class="lede">
                 "Find settings instead of trying them: a teach-in proposes a target and a threshold "
                 "gap from one teach cut; a sweep runs a grid of one or two parameters; a search "
@@ -646,7 +646,7 @@ pub fn TunePage() -> impl IntoView {
                     }}
                 </div>
             </div>
-        </section>
+        </PageShell>
     }
 }
 
