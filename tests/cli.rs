@@ -991,7 +991,8 @@ fn negative_values_get_the_options_own_message() {
                 "--controller",
                 "pi",
             ][..],
-            "--baud: cannot parse \"-1\" as a non-negative integer",
+            // The Hardware page's words for its Baud rate field, with the option.
+            "--baud: \"-1\" is not a whole number",
         ),
     ] {
         let (result, _) = cutlab(args, "");

@@ -1330,7 +1330,8 @@ fn seconds_out_of_range_are_refused_and_the_report_is_written_for_option_errors(
         "1e300",
     ]);
     assert!(
-        e.contains("--link-timeout-s") && e.contains("0.1 to 60 s"),
+        // The Hardware page's words for its Host watchdog field, with the option.
+        e.contains("--link-timeout-s: 1e300 s is outside 0.1–60 s"),
         "{e}"
     );
     let e = error(&[
