@@ -6,7 +6,7 @@
 
 use leptos::prelude::*;
 
-pub use crate::input::{parse_count, parse_number};
+pub use crate::input::parse_number;
 
 /// A labelled numeric input with its unit and an error slot.
 #[component]

@@ -16,7 +16,7 @@ use crate::web::components::runner::next_task;
 
 /// `false` until the task after the one that calls it, then `true`. An effect that returns early
 /// while it reads `false` does its work in that task instead of the one that mounts the page.
-pub fn from_next_task() -> ReadSignal<bool> {
+fn from_next_task() -> ReadSignal<bool> {
     let (ready, set_ready) = signal(false);
     next_task(move || {
         let _ = set_ready.try_set(true);

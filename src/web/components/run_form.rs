@@ -15,7 +15,7 @@ use crate::input::table::Table;
 use crate::plant::presets::PlantEdits;
 use crate::plant::Preset;
 use crate::web::components::fields::{parse_number, NumberField, SelectField};
-use crate::web::components::table_form::{FieldErrors, SettingField, TableForm};
+use crate::web::components::table_form::{self, FieldErrors, TableForm};
 
 /// Text of the scenario fields: the preset, and every setting of the run definition
 /// ([`RunSetting::ALL`]), each parsed and checked by the core's table, so the form accepts exactly
@@ -135,10 +135,7 @@ fn parse_scenario(preset: RwSignal<String>, settings: TableForm<RunSetting>) -> 
 
 /// The fields of `settings`, in order.
 fn setting_fields(form: ScenarioForm, settings: impl Iterator<Item = RunSetting>) -> impl IntoView {
-    let errors = form.errors();
-    settings
-        .map(|setting| view! { <SettingField form=form.settings setting=setting errors=errors /> })
-        .collect_view()
+    view! { <table_form::SettingFields form=form.settings settings=settings.collect() errors=form.errors() /> }
 }
 
 /// The fields of one group of settings.
