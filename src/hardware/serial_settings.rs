@@ -107,7 +107,7 @@ pub struct SerialSettings {
 /// let line = parse_serial(&[(SerialSetting::Baud, "460800"), (SerialSetting::Parity, "even")]).unwrap();
 /// assert_eq!((line.baud_rate, line.parity, line.data_bits), (460_800, "even", 8));
 /// let e = parse_serial(&[(SerialSetting::Baud, "100")]).unwrap_err();
-/// assert_eq!(e[0].for_cli(), "--baud: 100 bit/s is outside 300–16000000 bit/s");
+/// assert_eq!(e[0].for_cli(), "--baud: 100 bit/s is outside 300–1.6e7 bit/s");
 /// ```
 pub fn parse_serial<T: AsRef<str>>(
     texts: &[(SerialSetting, T)],
