@@ -2,6 +2,15 @@
 //!
 //! The browser forms keep what the user typed and parse it with these; an `Err` is the message
 //! shown beside the field.
+//!
+//! [`table`] describes settings as rows of a table (name, unit, range, default) that a form and
+//! the command line parse alike.
+//!
+//! | file | what |
+//! |---|---|
+//! | [`table`] | tables of settings: each setting a page or the command line accepts is a row |
+
+pub mod table;
 
 /// Parses a decimal number typed by a person: surrounding space is ignored and a decimal comma is
 /// accepted, since many of our users' locales write `2,5`; a comma that could as well be a

@@ -966,7 +966,8 @@ fn negative_values_get_the_options_own_message() {
                 "--sweep",
                 "-1",
             ][..],
-            "--sweep: cannot be negative, got -1",
+            // The Tune page's words for its "Values per parameter" field, with the option.
+            "--sweep: \"-1\" is not a whole number",
         ),
         (
             &[
@@ -978,7 +979,7 @@ fn negative_values_get_the_options_own_message() {
                 "--max-evals",
                 "-5",
             ][..],
-            "--max-evals: cannot be negative, got -5",
+            "--max-evals: \"-5\" is not a whole number",
         ),
         (
             &[
@@ -990,7 +991,8 @@ fn negative_values_get_the_options_own_message() {
                 "--controller",
                 "pi",
             ][..],
-            "--baud: cannot parse \"-1\" as a non-negative integer",
+            // The Hardware page's words for its Baud rate field, with the option.
+            "--baud: \"-1\" is not a whole number",
         ),
     ] {
         let (result, _) = cutlab(args, "");

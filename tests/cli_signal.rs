@@ -150,10 +150,21 @@ fn filter_design_errors_name_the_option() {
         "--cutoff: cut-off 5000 Hz must be below the Nyquist frequency, 5000 Hz"
     );
     assert!(error_of(&with(5, "-3"), b"").starts_with("--cutoff: cut-off must be above 0 Hz"));
-    assert!(error_of(&with(5, "abc"), b"").starts_with("--cutoff: cannot parse \"abc\""));
+    // The words the Signal chain page shows beside its fields (one table of the design's rows).
+    assert_eq!(
+        error_of(&with(5, "abc"), b""),
+        "--cutoff: \"abc\" is not a number"
+    );
     assert!(error_of(&with(5, "1,2,3"), b"").starts_with("--cutoff: expected one frequency"));
-    assert!(error_of(&with(7, "inf"), b"").starts_with("--fs: sample rate"));
-    assert!(error_of(&with(3, "-1"), b"").starts_with("--order: cannot parse"));
+    assert_eq!(
+        error_of(&with(7, "inf"), b""),
+        "--fs: \"inf\" is not a number"
+    );
+    assert!(error_of(&with(7, "0"), b"").starts_with("--fs: sample rate"));
+    assert_eq!(
+        error_of(&with(3, "-1"), b""),
+        "--order: \"-1\" is not a whole number"
+    );
     let kind = error_of(
         &[
             "filter", "design", "--kind", "comb", "--order", "2", "--cutoff", "5", "--fs", "100",

@@ -1377,7 +1377,8 @@ fn seconds_out_of_range_are_refused_and_the_report_is_written_for_option_errors(
         "1e300",
     ]);
     assert!(
-        e.contains("--link-timeout-s") && e.contains("0.1 to 60 s"),
+        // The Hardware page's words for its Host watchdog field, with the option.
+        e.contains("--link-timeout-s: 1e300 s is outside 0.1–60 s"),
         "{e}"
     );
     let e = error(&[
@@ -1388,7 +1389,12 @@ fn seconds_out_of_range_are_refused_and_the_report_is_written_for_option_errors(
         "--time-scale",
         "1e-300",
     ]);
-    assert!(e.contains("--time-scale must be 0.01 to 1000"), "{e}");
+    // The words the Hardware page's virtual device shows beside its Time scale field, with the
+    // option named (one row of the device table).
+    assert!(
+        e.contains("--time-scale: time scale 1e-300 is outside 0.01–1000"),
+        "{e}"
+    );
     let dir = scratch("option-error");
     let (out, report) = cutlab_host(
         &dir,

@@ -9,11 +9,11 @@ use serde::Serialize;
 
 use super::args::{required, value_or};
 use super::{write_json, CliError, Io};
-use crate::estimation::cut_forces::{cutting_material, CutGeometry};
+use crate::estimation::cut_forces::CutGeometry;
+use crate::estimation::cut_settings::{parse_cut, CutSetting};
 use crate::estimation::estimator::{Calibration, Feedback};
 use crate::estimation::speed::GEAR_CHANGE_RPM;
 use crate::log::period_log::{calibrate_log, LogCalibration, LogError, LogTable};
-use crate::plant::mechanics::{Cutter, MillingMode};
 
 pub(crate) const ABOUT: &str =
     "Fit paper 003's spindle-current model and paper 000's feed-current model from a\n\
@@ -142,9 +142,9 @@ impl LogCalibrationArgs {
     }
 
     /// The cut from `--material` and its companions, if given, with a description for the
-    /// report.
+    /// report: through the cut table's rows, as the Logs page's modelled force.
     pub fn geometry(&self) -> Result<Option<(CutGeometry, String)>, CliError> {
-        let Some(name) = self.material.as_deref() else {
+        let Some(material) = self.material.as_deref() else {
             let given = [&self.diameter_mm, &self.teeth, &self.mode].map(Option::is_some);
             if let Some((stray, _)) = GEOMETRY_OPTIONS.iter().zip(given).find(|(_, g)| *g) {
                 return Err(CliError::new(format!(
@@ -153,31 +153,22 @@ impl LogCalibrationArgs {
             }
             return Ok(None);
         };
-        let material =
-            cutting_material(name).map_err(|e| CliError::new(format!("--material: {e}")))?;
-        let diameter_mm: f64 = required("diameter-mm", &self.diameter_mm)?;
-        let teeth: u32 = required("teeth", &self.teeth)?;
-        let mode_text: String = required("mode", &self.mode)?;
-        let mode = MillingMode::from_name(&mode_text).ok_or_else(|| {
-            CliError::new(format!(
-                "--mode: expected up, down or slot, got {mode_text:?}"
-            ))
+        // Each needed with --material: the page's defaults are no guess to make for a log.
+        let diameter: String = required("diameter-mm", &self.diameter_mm)?;
+        let teeth: String = required("teeth", &self.teeth)?;
+        let mode: String = required("mode", &self.mode)?;
+        let texts = [
+            (CutSetting::Material, material),
+            (CutSetting::Diameter, diameter.as_str()),
+            (CutSetting::Teeth, teeth.as_str()),
+            (CutSetting::Mode, mode.as_str()),
+        ];
+        let cut = parse_cut(&texts).map_err(|errors| match errors.first() {
+            Some(e) => CliError::new(e.for_cli()),
+            None => CliError::new("--material: the cut was refused"),
         })?;
-        let cutter = Cutter::new(diameter_mm, teeth, 0.0)
-            .map_err(|e| CliError::new(format!("--diameter-mm/--teeth: {e}")))?;
-        let description = format!(
-            "the mechanistic model (material {}, Ø{diameter_mm} mm, {teeth} teeth, {} milling)",
-            material.name(),
-            mode.name()
-        );
-        Ok(Some((
-            CutGeometry {
-                cutter,
-                mode,
-                coefficients: material.coefficients(),
-            },
-            description,
-        )))
+        let description = format!("the mechanistic model ({})", cut.describe());
+        Ok(Some((cut.geometry, description)))
     }
 }
 

@@ -11,7 +11,9 @@ use std::sync::atomic::{AtomicU64, Ordering};
 
 use super::args::{reject_extra, required, value_or};
 use super::{CliError, Io};
-use crate::signal::butterworth::{butter, ButterworthSpec, Cutoff, DesignError, FilterKind};
+use crate::input::table::Table;
+use crate::signal::butterworth::{DesignError, FilterKind};
+use crate::signal::design_settings::{parse_design, FilterSetting};
 use crate::signal::filtfilt::{filter_stream, filtfilt_stream, StreamError, MAX_STREAM_CHANNELS};
 use crate::signal::sos::Sos;
 
@@ -179,47 +181,58 @@ fn apply(args: ApplyArgs, io: &mut Io<'_>) -> Result<(), CliError> {
     Ok(())
 }
 
-/// The design the options describe; errors name the option.
+/// The design the options describe, through the design table's rows (as the Signal chain
+/// page's): errors name the option.
 pub(crate) fn design_from(args: &DesignOptions) -> Result<Sos, CliError> {
-    let kind = match args.kind.as_deref() {
-        Some(text) => text
-            .parse::<FilterKind>()
-            .map_err(|e| CliError::new(format!("--kind: {e}")))?,
-        None => FilterKind::Lowpass,
-    };
-    let order: usize = required("order", &args.order)?;
-    let sample_rate_hz: f64 = required("fs", &args.fs)?;
+    let order = required::<String>("order", &args.order)?;
+    let rate = required::<String>("fs", &args.fs)?;
     let cutoff_text = args
         .cutoff
         .as_deref()
         .ok_or_else(|| CliError::new("missing required option --cutoff"))?;
-    let values = cutoff_text
-        .split(',')
-        .map(|part| super::args::parse_value::<f64>("cutoff", part))
-        .collect::<Result<Vec<f64>, CliError>>()?;
-    let cutoff_hz = match values.as_slice() {
-        [f] => Cutoff::Single(*f),
-        [lower, upper] => Cutoff::Band(*lower, *upper),
+    let edges: Vec<&str> = cutoff_text.split(',').collect();
+    let mut texts = vec![
+        (FilterSetting::Order, order.as_str()),
+        (FilterSetting::SampleRate, rate.as_str()),
+    ];
+    if let Some(kind) = args.kind.as_deref() {
+        texts.push((FilterSetting::Kind, kind));
+    }
+    match edges.as_slice() {
+        [single] => texts.push((FilterSetting::Cutoff, single)),
+        [lower, upper] => {
+            texts.push((FilterSetting::Cutoff, lower));
+            texts.push((FilterSetting::Upper, upper));
+        }
         _ => {
             return Err(CliError::new(format!(
                 "--cutoff: expected one frequency or two separated by a comma, got {cutoff_text:?}"
             )))
         }
-    };
-    let spec = ButterworthSpec {
-        kind,
-        order,
-        cutoff_hz,
-        sample_rate_hz,
-    };
-    butter(&spec).map_err(|e| {
-        let option = match e {
-            DesignError::Order { .. } => "--order",
-            DesignError::SampleRate { .. } => "--fs",
-            _ => "--cutoff",
-        };
-        CliError::new(format!("{option}: {e}"))
-    })
+    }
+    // One edge for a band or two for a low/high-pass: the design's own words.
+    let kind = FilterSetting::Kind
+        .read(args.kind.as_deref().unwrap_or_default())
+        .ok()
+        .flatten()
+        .and_then(|v| v.choice())
+        .and_then(|name| name.parse::<FilterKind>().ok());
+    if let Some(kind) = kind.filter(|k| k.is_band() != (edges.len() == 2)) {
+        return Err(CliError::new(format!(
+            "--cutoff: {}",
+            DesignError::CutoffCount { kind }
+        )));
+    }
+    parse_design(&texts)
+        .map(|(_, sos)| sos)
+        .map_err(|errors| match errors.first() {
+            // The upper edge is the second value of --cutoff.
+            Some(e) if e.setting == FilterSetting::Upper => {
+                CliError::new(format!("--cutoff: {}", e.problem))
+            }
+            Some(e) => CliError::new(e.for_cli()),
+            None => CliError::new("the design was refused"),
+        })
 }
 
 /// `{"sos": [[…], …]}` with one section per line and every coefficient at full precision

@@ -14,7 +14,7 @@ use std::time::{Duration, Instant};
 
 use serde::Serialize;
 
-use super::args::{required, value, value_or};
+use super::args::{required, value};
 use super::sim::{fail_on_controller_faults, metrics_table, EventLine, SimReport};
 use super::{write_json, CliError, Io};
 use crate::closed_loop::calibration_file::CalibrationFile;
@@ -24,7 +24,10 @@ use crate::closed_loop::lab::RunResult;
 use crate::closed_loop::references::{apply_references, references, References};
 use crate::closed_loop::trace::write_csv;
 use crate::control::registry::{ControllerConfig, ControllerKind};
+use crate::hardware::host_settings::HostSetting;
 use crate::hardware::link_run::run_on_link;
+use crate::hardware::serial_settings::SerialSetting;
+use crate::input::table;
 use crate::plant::Preset;
 use crate::protocol::host::{DeviceSummary, LinkEvent, LinkStats};
 use crate::protocol::link::{HostLink, HostOptions};
@@ -285,6 +288,15 @@ impl Drop for DeviceChild {
     }
 }
 
+/// `--link-timeout-s`, through its row of the host's table (the Hardware page's Host watchdog).
+fn link_timeout(args: &HostArgs) -> Result<f64, CliError> {
+    table::number(
+        HostSetting::LinkTimeout,
+        args.link_timeout_s.as_deref().unwrap_or_default(),
+    )
+    .map_err(|e| CliError::new(e.for_cli()))
+}
+
 fn connect(args: &HostArgs, options: HostOptions) -> Result<Connection, CliError> {
     match (&args.device_cmd, &args.port) {
         (Some(cmd), None) => {
@@ -303,7 +315,14 @@ fn connect(args: &HostArgs, options: HostOptions) -> Result<Connection, CliError
             })
         }
         (None, Some(path)) => {
-            if let Some(baud) = value::<u32>("baud", &args.baud)? {
+            // Through its row of the serial table, as the Hardware page's Baud rate.
+            let baud = args
+                .baud
+                .as_deref()
+                .map(|text| table::count(SerialSetting::Baud, text))
+                .transpose()
+                .map_err(|e| CliError::new(e.for_cli()))?;
+            if let Some(baud) = baud {
                 let status = Command::new("stty")
                     .args(["-F", path, &baud.to_string(), "raw", "-echo"])
                     .status()
@@ -349,7 +368,7 @@ fn plan(args: &HostArgs) -> Result<Plan, CliError> {
     controller_for(Preset::ALL[0], kind, &args.set)?;
     let target_n: Option<f64> = value("target-n", &args.target_n)?;
     let duration_s: Option<f64> = value("duration-s", &args.duration_s)?;
-    let link_timeout_s: f64 = value_or("link-timeout-s", &args.link_timeout_s, 2.0)?;
+    let link_timeout_s = link_timeout(args)?;
     let options = HostOptions::new(link_timeout_s)
         .map_err(|e| CliError::new(format!("--link-timeout-s: {e}")))?;
     if let Some(d) = duration_s {
@@ -507,7 +526,7 @@ fn fill_references(outcome: &mut Outcome, program: &str, no_references: bool) {
 /// `cutlab host --reset-hold`: the operator's reset of a feed hold latched at the device, and
 /// nothing more.
 fn reset_hold(args: &HostArgs, io: &mut Io<'_>) -> Result<(), CliError> {
-    let link_timeout_s: f64 = value_or("link-timeout-s", &args.link_timeout_s, 2.0)?;
+    let link_timeout_s = link_timeout(args)?;
     let options = HostOptions::new(link_timeout_s)
         .map_err(|e| CliError::new(format!("--link-timeout-s: {e}")))?;
     let Connection { mut link, child } = connect(args, options)?;

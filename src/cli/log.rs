@@ -6,12 +6,15 @@ use std::sync::Arc;
 use serde::Serialize;
 
 use super::args::required;
+use super::table_args::{OptionRows, TableArgs};
 use super::{write_json, CliError, Io};
 use crate::closed_loop::definition::{max_override_pct_of, parse_settings, RunSetting};
 use crate::control::registry::{ControllerConfig, ControllerKind};
 use crate::estimation::estimator::Feedback;
+use crate::input::table::RowError;
 use crate::log::mapping::{Channel, Mapping};
 use crate::log::replay::{write_replay_csv, ReplayRun, ReplaySettings, Target};
+use crate::log::settings::{parse_analysis, sample_period, LogSetting};
 use crate::log::{ColumnKind, LogBuilder, Role};
 use crate::plant::cnc::OverrideMode;
 use crate::work::Work;
@@ -65,18 +68,13 @@ pub struct AnalyseArgs {
     /// A label column to group the statistics by
     #[arg(long, value_name = "LABEL_COLUMN")]
     by: Option<String>,
-    /// Zero-phase Butterworth low-pass cut-off (skipped, and said, above the log's Nyquist frequency)
-    #[arg(long, value_name = "HZ")]
-    lowpass_hz: Option<f64>,
-    /// Order of the low-pass (default 4)
-    #[arg(long, value_name = "N")]
-    order: Option<usize>,
+    /// The analysis: the low-pass and the sample period (rows of the log table, as the Logs
+    /// page's fields)
+    #[command(flatten)]
+    settings: TableArgs<AnalyseRows>,
     /// Find the strongest peaks of each column's spectrum (Welch)
     #[arg(long)]
     spectrum: bool,
-    /// The sample period of a log without a time column, in seconds
-    #[arg(long, value_name = "S")]
-    sample_period_s: Option<f64>,
     /// Print JSON instead of a table
     #[arg(long)]
     json: bool,
@@ -103,9 +101,8 @@ pub struct ReplayArgs {
     /// feed, programmed-feed, override, force, depth, label; an empty COLUMN unmaps the channel)
     #[arg(long = "map", value_name = "CHANNEL=COLUMN")]
     map: Vec<String>,
-    /// The sample period of a log without a time column, in seconds
-    #[arg(long, value_name = "S")]
-    sample_period_s: Option<f64>,
+    #[command(flatten)]
+    period: TableArgs<PeriodRow>,
     /// Which current measures the force: spindle or feed (default: the calibration's, else the
     /// axis prefix of the current column: X_/Y_/Z_ is the feed drive's)
     #[arg(long, value_name = "spindle|feed")]
@@ -149,12 +146,46 @@ pub struct InspectArgs {
     /// The CSV file ("-" for standard input)
     #[arg(value_name = "FILE")]
     file: Option<String>,
-    /// The sample period of a log without a time column, in seconds
-    #[arg(long, value_name = "S")]
-    sample_period_s: Option<f64>,
+    #[command(flatten)]
+    period: TableArgs<PeriodRow>,
     /// Print one JSON object instead of a table
     #[arg(long)]
     json: bool,
+}
+
+/// The log table's rows `cutlab log analyse` takes.
+#[derive(Debug, Clone, Default)]
+pub struct AnalyseRows;
+
+impl OptionRows for AnalyseRows {
+    type Setting = LogSetting;
+    const ROWS: &'static [LogSetting] = &[
+        LogSetting::Lowpass,
+        LogSetting::Order,
+        LogSetting::SamplePeriod,
+    ];
+}
+
+/// The sample period, the one row `cutlab log inspect` and `replay` take of the log table.
+#[derive(Debug, Clone, Default)]
+pub struct PeriodRow;
+
+impl OptionRows for PeriodRow {
+    type Setting = LogSetting;
+    const ROWS: &'static [LogSetting] = &[LogSetting::SamplePeriod];
+}
+
+/// `--sample-period-s`, through its row.
+fn given_period(args: &TableArgs<PeriodRow>) -> Result<Option<f64>, CliError> {
+    sample_period(args.given(LogSetting::SamplePeriod)).map_err(|e| CliError::new(e.for_cli()))
+}
+
+/// The first of a table's errors, naming its option.
+fn first_for_cli<S: crate::input::table::Table>(errors: Vec<RowError<S>>) -> CliError {
+    match errors.first() {
+        Some(e) => CliError::new(e.for_cli()),
+        None => CliError::new("the options were refused"),
+    }
 }
 
 /// Runs `cutlab log`.
@@ -215,14 +246,6 @@ fn read_log(
     sample_period_s: Option<f64>,
     io: &mut Io<'_>,
 ) -> Result<crate::log::Log, CliError> {
-    if let Some(p) = sample_period_s {
-        if !(p.is_finite() && p > 0.0) {
-            return Err(CliError::new(format!(
-                "--sample-period-s: must be a positive number of seconds, got {}",
-                crate::input::readable(p)
-            )));
-        }
-    }
     let mut builder = LogBuilder::new();
     // A megabyte at a time: few system calls, and little beside the columns in memory.
     let mut buffer = vec![0u8; 1 << 20];
@@ -256,7 +279,7 @@ fn read_log(
 
 fn inspect(args: InspectArgs, io: &mut Io<'_>) -> Result<(), CliError> {
     let path: String = required("FILE", &args.file)?;
-    let log = read_log(&path, args.sample_period_s, io)?;
+    let log = read_log(&path, given_period(&args.period)?, io)?;
     let report = InspectReport {
         rows: log.rows,
         delimiter: log.dialect.delimiter_name(),
@@ -397,29 +420,14 @@ fn analyse(args: AnalyseArgs, io: &mut Io<'_>) -> Result<(), CliError> {
             "--column: name at least one column to analyse",
         ));
     }
-    if args.order.is_some() && args.lowpass_hz.is_none() {
+    if args.settings.given(LogSetting::Order).is_some()
+        && args.settings.given(LogSetting::Lowpass).is_none()
+    {
         return Err(CliError::new("--order: give --lowpass-hz too"));
     }
-    let lowpass = match args.lowpass_hz {
-        Some(f) if !(f.is_finite() && f > 0.0) => {
-            return Err(CliError::new(format!(
-                "--lowpass-hz: must be a positive frequency, got {}",
-                crate::input::readable(f)
-            )))
-        }
-        Some(f) => {
-            let order = args.order.unwrap_or(4);
-            if !(1..=crate::signal::butterworth::MAX_ORDER).contains(&order) {
-                return Err(CliError::new(format!(
-                    "--order: must be 1 to {}, got {order}",
-                    crate::signal::butterworth::MAX_ORDER
-                )));
-            }
-            Some((f, order))
-        }
-        None => None,
-    };
-    let log = read_log(&path, args.sample_period_s, io)?;
+    let analysis = parse_analysis(&args.settings.texts()).map_err(first_for_cli)?;
+    let lowpass = analysis.lowpass;
+    let log = read_log(&path, analysis.sample_period_s, io)?;
     let request = crate::log::analysis::AnalysisRequest {
         by: args.by.clone(),
         lowpass,
@@ -676,11 +684,12 @@ fn replay(args: ReplayArgs, io: &mut Io<'_>) -> Result<(), CliError> {
         .as_deref()
         .map(super::read_calibration)
         .transpose()?;
-    let log = Arc::new(read_log(&path, args.sample_period_s, io)?);
+    let sample_period_s = given_period(&args.period)?;
+    let log = Arc::new(read_log(&path, sample_period_s, io)?);
     if log.rows == 0 {
         return Err(CliError::new(format!("{path}: no rows to replay")));
     }
-    if args.sample_period_s.is_none() {
+    if sample_period_s.is_none() {
         if let Some(why) = log.period_unknown() {
             return Err(CliError::new(format!(
                 "{path}: the log's sample period is unknown: {why}; give it with \
@@ -693,7 +702,7 @@ fn replay(args: ReplayArgs, io: &mut Io<'_>) -> Result<(), CliError> {
     run_settings.feedback = Some(feedback);
     let settings = ReplaySettings {
         run: run_settings,
-        sample_period_s: args.sample_period_s,
+        sample_period_s,
         calibration: calibration.as_ref().map(|c| c.calibration.clone()),
         ..ReplaySettings::default()
     };
@@ -714,7 +723,7 @@ fn replay(args: ReplayArgs, io: &mut Io<'_>) -> Result<(), CliError> {
             settings: ReplaySettingsReport {
                 file: &path,
                 rows: log.rows,
-                sample_period_s: log.sample_period_s.or(args.sample_period_s),
+                sample_period_s: log.sample_period_s.or(sample_period_s),
                 mapping: &mapping,
                 feedback: s.feedback.name(),
                 controller: &result.controller,

@@ -15,6 +15,7 @@
 //! | [`force`], [`filter`], [`spectrum`] | one cut's forces; Butterworth design and filtering; Welch spectra |
 //! | [`fuzzy`] | `cutlab fuzzy eval` and `export`: the fuzzy engine on FLL files |
 //! | [`device`], [`host`], [`protocol`] | the device emulator on stdin/stdout, the closed loop over the protocol, frames as JSON |
+//! | [`table_args`] | command-line options made from a table of settings, one option per row |
 
 pub mod args;
 pub mod calibrate;
@@ -29,6 +30,7 @@ pub mod protocol;
 pub mod scenarios;
 pub mod sim;
 pub mod spectrum;
+pub mod table_args;
 pub mod tune;
 
 use std::io::{BufRead, Write};

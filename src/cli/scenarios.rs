@@ -8,8 +8,9 @@ use serde::Serialize;
 
 use super::args::value_or;
 use super::{write_json, CliError, Io};
-use crate::input::readable;
+use crate::input::{readable, table};
 use crate::machine::{Machine, OverrideCommand};
+use crate::plant::recording::OpenLoopSetting;
 use crate::plant::signals::{csv_header, csv_row};
 use crate::plant::{Plant, Preset};
 
@@ -165,12 +166,12 @@ fn list(args: &ScenariosArgs, io: &mut Io<'_>) -> Result<(), CliError> {
 
 fn run_preset(preset: Preset, args: &ScenariosArgs, io: &mut Io<'_>) -> Result<(), CliError> {
     let seed: u64 = value_or("seed", &args.seed, 0)?;
-    let override_pct: f64 = value_or("override", &args.r#override, 100.0)?;
-    if !(override_pct.is_finite() && (0.0..=255.0).contains(&override_pct)) {
-        return Err(CliError::new(format!(
-            "--override: must lie in [0, 255], got {override_pct}"
-        )));
-    }
+    // The Machine page's field, with the option named.
+    let override_pct = table::number(
+        OpenLoopSetting::Override,
+        args.r#override.as_deref().unwrap_or_default(),
+    )
+    .map_err(|e| CliError::new(e.for_cli()))?;
     let every: u64 = value_or("every", &args.every, 100)?;
     if every == 0 {
         return Err(CliError::new("--every: must be at least 1"));

@@ -11,13 +11,16 @@ use serde::Serialize;
 use super::args::required;
 use super::calibrate::{problem_notes, read_log, LogCalibrationArgs};
 use super::sim::controller_with_settings;
+use super::table_args::{OptionRows, TableArgs};
 use super::{write_json, CliError, Io};
 use crate::closed_loop::definition::RunSpec;
 use crate::closed_loop::definition::DEFAULT_SEED;
 use crate::control::registry::ControllerKind;
 use crate::estimation::estimator::Feedback;
+use crate::input::table::{self, RowError};
 use crate::plant::Preset;
 use crate::tuning::nelder_mead::NelderMead;
+use crate::tuning::settings::{objective_from_terms, TuneSetting};
 use crate::tuning::teach_in::{
     teach_in_calibration, teach_in_log, teach_in_scenarios, LogTeachIn, TeachIn,
 };
@@ -71,12 +74,9 @@ pub struct TuneArgs {
     /// Weights of the objective's terms: cycle, error, above, activity (default 1,1,1,0.1)
     #[arg(long, value_name = "TERM=W,...")]
     objective: Option<String>,
-    /// Run a grid of N values per parameter instead of searching
-    #[arg(long, value_name = "N")]
-    sweep: Option<usize>,
-    /// Largest number of evaluations of the search (default 60)
-    #[arg(long, value_name = "N")]
-    max_evals: Option<usize>,
+    /// --sweep and --max-evals: rows of the tuning's table, as the Tune page's fields
+    #[command(flatten)]
+    method: TableArgs<MethodRows>,
     /// Seed of every run (default 1)
     #[arg(long, value_name = "N")]
     seed: Option<u64>,
@@ -118,6 +118,15 @@ struct TuneReport<'a> {
     best: &'a Evaluation,
     pareto: Vec<&'a Evaluation>,
     evaluations: usize,
+}
+
+/// The rows of the tuning's table that are options of their own: `--sweep` and `--max-evals`.
+#[derive(Debug, Clone, Default)]
+pub struct MethodRows;
+
+impl OptionRows for MethodRows {
+    type Setting = TuneSetting;
+    const ROWS: &'static [TuneSetting] = &[TuneSetting::Steps, TuneSetting::Evaluations];
 }
 
 /// Progress lines on stderr (nothing with --quiet).
@@ -238,29 +247,27 @@ pub fn run(args: TuneArgs, io: &mut Io<'_>) -> Result<(), CliError> {
     }
     let objective = match &args.objective {
         Some(text) => {
-            Objective::parse(text).map_err(|e| CliError::new(format!("--objective: {e}")))?
+            objective_from_terms(text).map_err(|e| CliError::new(format!("--objective: {e}")))?
         }
         None => Objective::default(),
     };
-    if args.sweep == Some(0) {
-        return Err(CliError::new(
-            "--sweep: give at least 1 value per parameter",
-        ));
-    }
-    if args.sweep.is_some() && args.max_evals.is_some() {
+    let sweep_text = args.method.given(TuneSetting::Steps);
+    let evals_text = args.method.given(TuneSetting::Evaluations);
+    if sweep_text.is_some() && evals_text.is_some() {
         return Err(CliError::new(
             "--max-evals applies to the search; a sweep (--sweep) runs every grid point",
         ));
     }
+    let for_cli = |e: RowError<TuneSetting>| CliError::new(e.for_cli());
+    let sweep = sweep_text
+        .map(|text| table::count(TuneSetting::Steps, text))
+        .transpose()
+        .map_err(for_cli)?;
     let search = NelderMead {
-        max_evaluations: args
-            .max_evals
-            .unwrap_or(NelderMead::default().max_evaluations),
+        max_evaluations: table::count(TuneSetting::Evaluations, evals_text.unwrap_or_default())
+            .map_err(for_cli)?,
         ..NelderMead::default()
     };
-    if search.max_evaluations == 0 {
-        return Err(CliError::new("--max-evals: give at least 1"));
-    }
     let scenarios: Vec<RunSpec> = presets
         .iter()
         .zip(controllers)
@@ -289,7 +296,7 @@ pub fn run(args: TuneArgs, io: &mut Io<'_>) -> Result<(), CliError> {
     .map_err(|e| CliError::new(e.to_string()))?;
     let kind = controller.kind().name();
 
-    if let Some(steps) = args.sweep {
+    if let Some(steps) = sweep {
         let points = tuner
             .sweep_reporting(steps, &mut |r| progress.report(r))
             .map_err(|e| CliError::new(e.to_string()))?;
@@ -384,9 +391,12 @@ fn run_teach_in(
     let tuning_options = [
         ("--controller", args.controller.is_some()),
         ("--param", !args.params.is_empty()),
-        ("--sweep", args.sweep.is_some()),
+        ("--sweep", args.method.given(TuneSetting::Steps).is_some()),
         ("--objective", args.objective.is_some()),
-        ("--max-evals", args.max_evals.is_some()),
+        (
+            "--max-evals",
+            args.method.given(TuneSetting::Evaluations).is_some(),
+        ),
     ];
     if let Some((name, _)) = tuning_options.iter().find(|(_, given)| *given) {
         return Err(CliError::new(format!(

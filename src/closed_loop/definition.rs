@@ -19,11 +19,11 @@ use serde::{Deserialize, Serialize};
 
 use crate::control::registry::{ControllerConfig, ControllerKind};
 use crate::estimation::estimator::Feedback;
-use crate::input::{parse_count, parse_number, parse_seed, readable};
+use crate::input::{parse_count, parse_number, parse_seed, readable, table};
 use crate::plant::bond_graph::PAPER_002_FEED_MM_MIN;
 use crate::plant::cnc::{OverrideMode, MAX_OVERRIDE_PCT};
 use crate::plant::materials::Material;
-use crate::plant::mechanics::MAX_TEETH;
+use crate::plant::mechanics::{DIAMETER_RANGE_MM, MAX_TEETH};
 use crate::plant::presets::{PlantEdits, PlantKind};
 use crate::plant::Preset;
 use crate::safety::EnvelopeConfig;
@@ -561,7 +561,7 @@ impl RunSetting {
                 "diameter-mm",
                 "Tool diameter",
                 "mm",
-                number(0.5, 100.0),
+                number(DIAMETER_RANGE_MM.0, DIAMETER_RANGE_MM.1),
                 Machine,
                 "cutter diameter (mill presets)",
             ),
@@ -738,17 +738,18 @@ impl RunSetting {
                         "override before arming"
                     },
                 }
-            } else if v <= 0.0 && min > 0.0 && !spec.unit.is_empty() {
-                Problem::NotPositive(v)
-            } else if v < 0.0 && min == 0.0 {
-                Problem::Negative(v)
             } else {
-                Problem::OutOfRange {
-                    value: v,
-                    min,
-                    max,
-                    unit: spec.unit,
-                    noun: if spec.unit.is_empty() { spec.label } else { "" },
+                let noun = if spec.unit.is_empty() { spec.label } else { "" };
+                match table::Problem::outside(v, min, max, spec.unit, noun) {
+                    Some(table::Problem::NotPositive(v)) => Problem::NotPositive(v),
+                    Some(table::Problem::Negative(v)) => Problem::Negative(v),
+                    _ => Problem::OutOfRange {
+                        value: v,
+                        min,
+                        max,
+                        unit: spec.unit,
+                        noun,
+                    },
                 }
             };
         Err(SettingError {
@@ -1171,32 +1172,22 @@ impl fmt::Display for Problem {
         match self {
             Problem::Parse(message) => f.write_str(message),
             Problem::Unknown { what, text } => write!(f, "unknown {what} {text:?}"),
-            Problem::NotPositive(v) => write!(f, "must be positive, got {}", readable(*v)),
-            Problem::Negative(v) => write!(f, "must be zero or positive, got {}", readable(*v)),
-            Problem::OutOfRange {
-                value,
-                min,
-                max,
-                unit: "",
-                noun,
-            } => {
-                let noun = noun
-                    .split_whitespace()
-                    .last()
-                    .unwrap_or("value")
-                    .to_lowercase();
-                let (value, min, max) = (readable(*value), readable(*min), readable(*max));
-                write!(f, "{noun} {value} is outside {min}–{max}")
-            }
+            Problem::NotPositive(v) => table::write_not_positive(f, *v),
+            Problem::Negative(v) => table::write_negative(f, *v),
             Problem::OutOfRange {
                 value,
                 min,
                 max,
                 unit,
-                ..
+                noun,
             } => {
-                let (value, min, max) = (readable(*value), readable(*min), readable(*max));
-                write!(f, "{value} {unit} is outside {min}–{max} {unit}")
+                // The label's last word: "Current filter order" counts orders.
+                let noun = noun
+                    .split_whitespace()
+                    .last()
+                    .unwrap_or_default()
+                    .to_lowercase();
+                table::write_out_of_range(f, *value, *min, *max, unit, &noun)
             }
             Problem::AboveMachine { value, max, what } => write!(
                 f,

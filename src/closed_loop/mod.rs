@@ -8,6 +8,7 @@
 //! | [`definition`] | the run definition: every setting a person may change ([`definition::RunSetting`], one table for the form, the command line and a saved configuration) and [`definition::RunSpec`], a run as asked for |
 //! | [`error`] | [`error::LoopError`], why a run could not be set up or made |
 //! | [`settings`] | the one resolution of a request on a machine: [`settings::plan`] before the teach cut, [`settings::Plan::settle`] after it |
+//! | [`run_table`] | the run's settings as rows of the generic tables ([`crate::input::table`]), with the defaults a fresh form shows |
 //! | [`sample_loop`] | the pushed-sample shape every loop shares, and [`sample_loop::OnMachine`], which pulls from a machine |
 //! | [`teach_cut`] | the teach cut as a sample loop, fitted by [`crate::estimation::teach_fit`] |
 //! | [`trace`] | one row per control period and the safety events |
@@ -33,6 +34,7 @@ pub mod metrics;
 pub mod paper_comparisons;
 pub mod precomputed;
 pub mod references;
+pub mod run_table;
 pub mod sample_loop;
 pub mod settings;
 pub mod summary;

@@ -5,11 +5,13 @@
 //! | [`current_force`] | paper 000's feed-current model and paper 003's spindle-current model, their calibration from a teach cut, and range checks |
 //! | [`estimator`] | [`Feedback`](estimator::Feedback) (which current measures the force), the calibrated [`Estimator`](estimator::Estimator) a loop calls every period, and the [`Calibration`](estimator::Calibration) a teach cut makes |
 //! | [`cut_forces`] | a logged cut's force from its feed, speed, depth and width (mechanistic model), for calibration without a dynamometer |
+//! | [`cut_settings`] | such a cut's settings as one table (material, cutter, mode, depth, width) that the Logs page and `cutlab calibrate` parse alike |
 //! | [`teach_fit`] | the one teach-cut fit: control periods at known loads → a calibration, with the periods it used and why it left the others out |
 //! | [`speed`] | spindle speed from the F/V converter voltage, per gear range |
 
 pub mod current_force;
 pub mod cut_forces;
+pub mod cut_settings;
 pub mod estimator;
 pub mod speed;
 pub mod teach_fit;

@@ -14,7 +14,9 @@
 //! | file | what |
 //! |---|---|
 //! | [`commissioning`] | the checks of the commissioning procedure the page names before a new device's first Arm |
+//! | [`host_settings`] | the host's own safety settings (its watchdog, the safe override) as one table, which the Hardware page and `cutlab host` parse alike |
 //! | [`session`] | the link state and what the host does with the device, on the caller's clock (the Hardware page) |
+//! | [`serial_settings`] | a serial line's settings as one table (the page's Serial port fields, `cutlab host --baud`) |
 //! | [`recording`] | the rows as CSV chunks for IndexedDB, read back by the log reader |
 //! | `link_run` | the closed loop over a native byte link: `cutlab host`'s run (native only) |
 //!
@@ -24,7 +26,9 @@
 //! ([`crate::log`]) reads back with each column's role guessed.
 
 pub mod commissioning;
+pub mod host_settings;
 #[cfg(not(target_arch = "wasm32"))]
 pub mod link_run;
 pub mod recording;
+pub mod serial_settings;
 pub mod session;

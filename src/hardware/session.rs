@@ -58,6 +58,7 @@ use crate::closed_loop::teach_cut::{
 };
 use crate::estimation::estimator::{Calibration, Feedback};
 use crate::machine::OverrideCommand;
+use crate::plant::cnc::MAX_OVERRIDE_PCT;
 use crate::protocol::frame::{
     fault_flag, measured, sample_flag, Ack, Capabilities, FaultKind, FrameType, VERSION_MAJOR,
 };
@@ -161,14 +162,13 @@ impl SessionOptions {
     /// assert!(SessionOptions::new(2.0, Some(-5.0)).is_err());
     /// ```
     pub fn new(link_timeout_s: f64, safe_override_pct: Option<f64>) -> Result<Self, String> {
-        if !(link_timeout_s.is_finite() && (0.1..=60.0).contains(&link_timeout_s)) {
-            return Err(format!(
-                "the host watchdog must be 0.1 to 60 s, not {link_timeout_s} s"
-            ));
-        }
+        let link_timeout_s = crate::protocol::host::check_link_timeout_s(link_timeout_s)?;
         if let Some(pct) = safe_override_pct {
-            if !(pct.is_finite() && (0.0..=255.0).contains(&pct)) {
-                return Err(format!("the safe override must be 0 to 255 %, not {pct} %"));
+            if !(0.0..=MAX_OVERRIDE_PCT).contains(&pct) {
+                return Err(format!(
+                    "the safe override must be 0 to {MAX_OVERRIDE_PCT} %, not {} %",
+                    crate::input::readable(pct)
+                ));
             }
         }
         Ok(Self {

@@ -30,6 +30,7 @@
 //! | [`replay`] | controllers replayed on a log through the lab's closed loop |
 //! | [`calibration`] | calibration from a recorded log: the teach cut over the log |
 //! | [`period_log`] | calibration from a log whose rows are control periods (`cutlab calibrate`, logged teach-in) |
+//! | [`settings`] | the settings of a log's analysis as one table (Logs page fields, CLI options) |
 
 pub mod analysis;
 pub mod calibration;
@@ -38,6 +39,7 @@ pub mod machine;
 pub mod mapping;
 pub mod period_log;
 pub mod replay;
+pub mod settings;
 
 use serde::Serialize;
 

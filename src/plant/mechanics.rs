@@ -78,6 +78,10 @@ pub const MAX_EDGE_TURNS: f64 = 64.0;
 /// 10⁶ mm "cutter" is a typo).
 pub const MAX_DIAMETER_MM: f64 = 200.0;
 
+/// The cutter diameters the lab's forms and options take, mm: from a small end mill to a large
+/// one (the model itself stands for up to [`MAX_DIAMETER_MM`]).
+pub const DIAMETER_RANGE_MM: (f64, f64) = (0.5, 100.0);
+
 /// The longest flute of an end mill, in diameters: a deeper cut is no cut a mill makes.
 pub const MAX_DEPTH_DIAMETERS: f64 = 5.0;
 

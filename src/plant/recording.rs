@@ -18,8 +18,10 @@
 use serde::Serialize;
 use std::fmt;
 
+use super::cnc::MAX_OVERRIDE_PCT;
 use super::signals::PlantSignals;
 use super::{Plant, PlantError, Preset, PresetMachine};
+use crate::input::table::{Kind, Row, Shown, Table};
 use crate::machine::{Machine, OverrideCommand};
 use crate::math::least_squares::{fit, FitError};
 use crate::signal::spectrum::{amplitude_spectrum, AmplitudeSpectrum, SpectrumError, Window};
@@ -260,6 +262,34 @@ impl Block {
             feed_mm_min: self.feed_mm_min.mean(),
             spindle_rpm: self.spindle_rpm.mean(),
             brake_torque_nm: self.brake_torque_nm.mean(),
+        }
+    }
+}
+
+/// The open-loop run's one setting as a table: the override held for the whole run, which the
+/// Machine page's field and `cutlab scenarios --run --override` parse alike.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum OpenLoopSetting {
+    /// The feed override held for the whole run.
+    Override,
+}
+
+impl Table for OpenLoopSetting {
+    const ROWS: &'static [Self] = &[OpenLoopSetting::Override];
+
+    fn row(self) -> Row {
+        Row {
+            key: "override",
+            cli_option: "override",
+            label: "Feed override",
+            unit: "%",
+            help: "override held for the whole run (a dial's machine applies its nearest grade)",
+            kind: Kind::Number {
+                min: 0.0,
+                max: MAX_OVERRIDE_PCT,
+            },
+            default: Shown::Number(100.0),
+            noun: "",
         }
     }
 }
@@ -594,6 +624,17 @@ impl Work for BenchRecording {
 
 #[cfg(test)]
 mod tests {
+    #[test]
+    fn the_open_loop_override_is_one_row_of_a_table() {
+        assert_eq!(
+            crate::input::table::check_table::<OpenLoopSetting>(),
+            Ok(())
+        );
+        let e = OpenLoopSetting::Override.parse("300").unwrap_err();
+        assert_eq!(e.problem.to_string(), "300 % is outside 0–255 %");
+        assert_eq!(e.for_cli(), "--override: 300 % is outside 0–255 %");
+    }
+
     use super::*;
 
     #[test]

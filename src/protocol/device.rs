@@ -69,9 +69,22 @@ pub const CURRENT_A_PER_COUNT: f64 = 0.005;
 pub const FV_V_PER_COUNT: f64 = 0.0005;
 /// The override of a disarmed device: the machine's own dial.
 pub const DISARMED_OVERRIDE_PCT: f64 = 100.0;
-/// Device seconds per wall second `cutlab device --time-scale` accepts: from a hundredth of real
-/// time to a thousand times it.
+/// Device seconds per wall second `cutlab device --time-scale` and the Hardware page's virtual
+/// device accept: from a hundredth of real time to a thousand times it.
 pub const TIME_SCALE_RANGE: (f64, f64) = (0.01, 1000.0);
+/// The probability that a frame is lost or corrupted: 0 to 1.
+pub const FAULT_RATE_RANGE: (f64, f64) = (0.0, 1.0);
+/// The device's watchdog timeout, s: from a millisecond (the Capabilities frame carries it in
+/// whole ms) to the 65 s its 16 bits hold.
+pub const WATCHDOG_RANGE_S: (f64, f64) = (0.001, 65.0);
+/// How long the fallback may last before the device holds the feed, s (whole ms in 16 bits).
+pub const FALLBACK_LIMIT_RANGE_S: (f64, f64) = (0.1, 65.0);
+/// The device's watchdog timeout unless told, s.
+pub const DEFAULT_WATCHDOG_S: f64 = 0.5;
+/// The override the watchdog applies at most unless told, %.
+pub const DEFAULT_FALLBACK_PCT: f64 = 50.0;
+/// How long the fallback lasts before the feed hold unless told, s.
+pub const DEFAULT_FALLBACK_LIMIT_S: f64 = 5.0;
 
 /// How often the device sends a heartbeat, device time.
 pub const HEARTBEAT_INTERVAL_S: f64 = 0.1;
@@ -158,9 +171,9 @@ impl DeviceConfig {
             preset,
             seed: 1,
             decimation: 10,
-            watchdog_timeout_s: 0.5,
-            fallback_override_pct: 50.0,
-            fallback_limit_s: 5.0,
+            watchdog_timeout_s: DEFAULT_WATCHDOG_S,
+            fallback_override_pct: DEFAULT_FALLBACK_PCT,
+            fallback_limit_s: DEFAULT_FALLBACK_LIMIT_S,
             measured: measured::ALL,
             line_baud: 0,
             trace: false,
@@ -472,7 +485,8 @@ impl DeviceEmulator {
     /// An emulator of `config.preset`, powered on, waiting for a Hello.
     pub fn new(config: DeviceConfig) -> Result<Self, DeviceError> {
         let bad = |what: &str, v: f64| DeviceError(format!("{what} cannot be {v}"));
-        let rate = |p: f64| p.is_finite() && (0.0..=1.0).contains(&p);
+        let within = |v: f64, (lo, hi): (f64, f64)| v >= lo && v <= hi;
+        let rate = |p: f64| within(p, FAULT_RATE_RANGE);
         let f = &config.faults;
         if !rate(f.drop_rate) {
             return Err(bad("the drop rate (0 to 1)", f.drop_rate));
@@ -507,15 +521,15 @@ impl DeviceEmulator {
                 return Err(bad("a fault's time", t));
             }
         }
-        if !(config.fallback_limit_s >= 0.1 && config.fallback_limit_s <= 65.0) {
+        if !within(config.fallback_limit_s, FALLBACK_LIMIT_RANGE_S) {
             return Err(bad(
                 "the fallback's time limit (0.1 to 65 s)",
                 config.fallback_limit_s,
             ));
         }
-        if !(config.watchdog_timeout_s > 0.0 && config.watchdog_timeout_s <= 65.0) {
+        if !within(config.watchdog_timeout_s, WATCHDOG_RANGE_S) {
             return Err(bad(
-                "the watchdog timeout (0 to 65 s)",
+                "the watchdog timeout (0.001 to 65 s)",
                 config.watchdog_timeout_s,
             ));
         }

@@ -39,6 +39,8 @@ pub const HELLO_INTERVAL_S: f64 = 0.25;
 /// more often) to 60 s: the one range `cutlab host --link-timeout-s` and the Hardware page
 /// accept.
 pub const LINK_TIMEOUT_RANGE_S: (f64, f64) = (0.1, 60.0);
+/// The host's watchdog unless told, s.
+pub const DEFAULT_LINK_TIMEOUT_S: f64 = 2.0;
 
 /// `link_timeout_s` if it is in [`LINK_TIMEOUT_RANGE_S`], or why not.
 ///

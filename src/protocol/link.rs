@@ -22,7 +22,8 @@ use std::time::{Duration, Instant};
 use super::device::DeviceEmulator;
 use super::frame::{AckResult, Capabilities, FaultKind, VERSION_MAJOR, VERSION_MINOR};
 use super::host::{
-    check_link_timeout_s, HostSession, KeepUp, LineBudget, LinkSample, HELLO_INTERVAL_S,
+    check_link_timeout_s, HostSession, KeepUp, LineBudget, LinkSample, DEFAULT_LINK_TIMEOUT_S,
+    HELLO_INTERVAL_S,
 };
 use crate::machine::{Machine, MachineStep, OverrideCommand};
 
@@ -267,8 +268,8 @@ pub struct HostOptions {
 impl Default for HostOptions {
     fn default() -> Self {
         Self {
-            link_timeout_s: 2.0,
-            handshake_timeout_s: 10.0,
+            link_timeout_s: DEFAULT_LINK_TIMEOUT_S,
+            handshake_timeout_s: 5.0 * DEFAULT_LINK_TIMEOUT_S,
         }
     }
 }

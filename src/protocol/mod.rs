@@ -19,6 +19,7 @@
 //! | [`json`] | frames as JSON lines (`cutlab protocol encode`/`decode`) |
 //! | [`host`] | the host's side without I/O: samples, faults, the stuck-override watch, the line budget, keeping a device up |
 //! | [`device`] | the device emulator without I/O: the simulated machine, its watchdog, fallback, latched hold and injected faults |
+//! | [`device_settings`] | the emulator's settings as one table, which `cutlab device` and the Hardware page's virtual device parse alike |
 //! | `link` | byte links in real time (native): the emulator on a clock, the host's end of a line, each part as a machine |
 //!
 //! This is a transport: it knows frames, parts and watchdogs, not runs. The closed loop over a
@@ -32,6 +33,7 @@ pub mod cobs;
 pub mod codec;
 pub mod crc;
 pub mod device;
+pub mod device_settings;
 pub mod frame;
 pub mod host;
 pub mod json;

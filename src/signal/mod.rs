@@ -10,6 +10,7 @@
 //! | module | what it holds | scipy counterpart |
 //! |---|---|---|
 //! | [`butterworth`] | [`butter`](butterworth::butter): Butterworth low/high/band-pass/band-stop of order 1–20, bilinear transform with pre-warping, as second-order sections | `butter(N, Wn, btype, fs=fs, output='sos')` |
+//! | [`design_settings`] | a design's settings as one table (kind, order, cut-offs, rate) that the Signal chain page and `cutlab filter` parse alike, and the papers' filters | — |
 //! | [`zpk`] | zeros/poles/gain and their pairing into sections | `zpk2sos(..., pairing='nearest')` |
 //! | [`sos`] | [`Sos`](sos::Sos) and [`Biquad`](sos::Biquad): coefficients only (no state), frequency response, steady-state initial conditions | `sosfreqz`/`freqz_sos`, `sosfilt_zi` |
 //! | [`filter`] | [`SosFilter`](filter::SosFilter) (one channel) and [`SosFilterBank`](filter::SosFilterBank) (interleaved channels, e.g. three phase currents): transposed direct form II | `sosfilt` |
@@ -41,6 +42,7 @@
 pub mod butterworth;
 pub mod chain;
 pub mod decimate;
+pub mod design_settings;
 pub mod dq;
 pub mod filter;
 pub mod filtfilt;

@@ -23,9 +23,11 @@
 //! | [`objective`] | the weighted objective a tuning minimises |
 //! | [`nelder_mead`] | Nelder–Mead inside a box, deterministic |
 //! | [`teach_in`](mod@teach_in) | what a teach cut learned and the target, reference current and gap proposed from it |
+//! | [`settings`] | a tuning's settings as one table (Tune page fields, `cutlab tune` options) |
 
 pub mod nelder_mead;
 pub mod objective;
+pub mod settings;
 pub mod teach_in;
 
 use serde::Serialize;
@@ -53,7 +55,8 @@ pub struct ParamRange {
 }
 
 impl ParamRange {
-    /// Parses `key=lo:hi`, as typed on the command line.
+    /// Parses `key=lo:hi`, as typed on the command line: each bound through its row of the
+    /// tuning's table ([`settings::parse_range`]), as the Tune page's fields.
     ///
     /// ```
     /// use cutlab::tuning::ParamRange;
@@ -69,19 +72,9 @@ impl ParamRange {
         let (lo, hi) = range
             .split_once(':')
             .ok_or_else(|| format!("{text:?}: the range must be lo:hi"))?;
-        let number =
-            |s: &str| crate::input::parse_number(s).map_err(|e| format!("{}: {e}", key.trim()));
-        let (lo, hi) = (number(lo)?, number(hi)?);
-        if lo > hi {
-            return Err(format!(
-                "{}: the lower bound {lo} is above the upper {hi}",
-                key.trim()
-            ));
-        }
-        Ok(Self {
-            key: key.trim().to_string(),
-            lo,
-            hi,
+        settings::parse_range(key, lo, hi, None).map_err(|errors| {
+            let problem = errors.first().map(|e| e.problem.to_string());
+            format!("{}: {}", key.trim(), problem.unwrap_or_default())
         })
     }
 }

@@ -9,8 +9,9 @@
 //!   + w_u · TV / 100 %        override activity (total variation Σ|Δu|), per 100 % of travel
 //! ```
 //!
-//! A run that did not finish its program costs +∞: it never wins. The default weights (1, 1, 1,
-//! 0.1) trade a 10 % longer cycle for one point of force error or 0.1 s above the limit, and only
+//! A run that did not finish its program costs +∞: it never wins. The weights are rows of the
+//! tuning's table ([`super::settings`]), which the Tune page and `cutlab tune --objective` parse
+//! alike. The default weights (1, 1, 1, 0.1) trade a 10 % longer cycle for one point of force error or 0.1 s above the limit, and only
 //! penalise chatter lightly.
 
 use serde::Serialize;
@@ -42,61 +43,6 @@ impl Default for Objective {
 }
 
 impl Objective {
-    /// The names the command line accepts, in the order of the terms.
-    pub const TERMS: [&'static str; 4] = ["cycle", "error", "above", "activity"];
-
-    /// Parses `cycle=1,error=2` (unnamed terms keep their default weight).
-    ///
-    /// ```
-    /// use cutlab::tuning::Objective;
-    /// let o = Objective::parse("error=2, activity=0").unwrap();
-    /// assert_eq!((o.cycle_time, o.force_error, o.override_activity), (1.0, 2.0, 0.0));
-    /// assert!(Objective::parse("speed=1").unwrap_err().contains("cycle, error, above, activity"));
-    /// assert!(Objective::parse("error=-1").is_err());
-    /// assert!(Objective::parse("cycle=0,error=0,above=0,activity=0").unwrap_err().contains("every weight is 0"));
-    /// ```
-    pub fn parse(text: &str) -> Result<Self, String> {
-        let mut objective = Self::default();
-        for part in text.split(',').map(str::trim).filter(|p| !p.is_empty()) {
-            let (name, value) = part
-                .split_once('=')
-                .ok_or_else(|| format!("{part:?} is not of the form term=weight"))?;
-            let weight = crate::input::parse_number(value.trim())
-                .map_err(|e| format!("{}: {e}", name.trim()))?;
-            if weight < 0.0 {
-                return Err(format!("{}: a weight cannot be negative", name.trim()));
-            }
-            let slot = match name.trim() {
-                "cycle" => &mut objective.cycle_time,
-                "error" => &mut objective.force_error,
-                "above" => &mut objective.time_above_limit,
-                "activity" => &mut objective.override_activity,
-                other => {
-                    return Err(format!(
-                        "unknown objective term {other:?}; terms: {}",
-                        Self::TERMS.join(", ")
-                    ))
-                }
-            };
-            *slot = weight;
-        }
-        let weights = [
-            objective.cycle_time,
-            objective.force_error,
-            objective.time_above_limit,
-            objective.override_activity,
-        ];
-        // Every run would cost 0 and the "best" would be whichever came first.
-        if weights.iter().all(|w| *w == 0.0) {
-            return Err(format!(
-                "every weight is 0: nothing is minimised, so no run could be better than \
-                 another; give one of {} a positive weight",
-                Self::TERMS.join(", ")
-            ));
-        }
-        Ok(objective)
-    }
-
     /// The cost of a run whose program lasts `nominal_duration_s` at 100 % override.
     ///
     /// ```

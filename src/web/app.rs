@@ -40,7 +40,6 @@ pub fn App() -> impl IntoView {
         </header>
         <ChartHelp />
         <main id="main">
-            // The page mounts in the task after the shell's, so the two never add up in one task.
             <Later>
             {move || match page.get() {
                 Page::SignalChain => view! { <pages::signal_chain::SignalChainPage /> }.into_any(),

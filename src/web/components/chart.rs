@@ -314,68 +314,94 @@ pub fn ChartCanvas(
                 </canvas>
                 {readout_view}
             </div>
-            <figcaption class="legend">
-                <span class="chart-title">{label}</span>
-                {move || {
-                    chart
-                        .with(|c| {
-                            c.series
-                                .iter()
-                                .enumerate()
-                                .map(|(i, s)| {
-                                    let swatch = format!("background: {}", s.color.css());
-                                    let is_hidden = move || hidden.with(|h| h.get(i).copied().unwrap_or(false));
-                                    view! {
-                                        <button
-                                            type="button"
-                                            class="legend-item"
-                                            aria-pressed=move || if is_hidden() { "false" } else { "true" }
-                                            title="Show or hide this series"
-                                            on:click=move |_| {
-                                                hidden.update(|h| {
-                                                    if h.len() <= i {
-                                                        h.resize(i + 1, false);
-                                                    }
-                                                    h[i] = !h[i];
-                                                })
-                                            }
-                                        >
-                                            <span class="swatch" style=swatch></span>
-                                            {s.label.clone()}
-                                        </button>
-                                    }
-                                })
-                                .collect_view()
-                        })
-                }}
-                <button
-                    type="button"
-                    class="chart-reset"
-                    aria-label=format!("Save {label} as PNG")
-                    on:click=move |_| {
-                        if let Some(canvas) = canvas_ref.get_untracked() {
-                            let result = download_canvas_png(&canvas, &png_name(label));
-                            set_draw_error.set(result.err());
-                        }
-                    }
-                >
-                    "PNG"
-                </button>
-                {move || {
-                    x_view
-                        .get()
-                        .is_some()
-                        .then(|| {
+            <ChartLegend
+                label=label
+                chart=chart
+                hidden=hidden
+                x_view=x_view
+                canvas_ref=canvas_ref
+                draw_error=draw_error
+                set_draw_error=set_draw_error
+            />
+        </figure>
+    }
+}
+
+/// A chart's caption: its title, a toggle button per series, PNG export, Reset zoom while
+/// zoomed, and why it could not be drawn.
+#[component]
+fn ChartLegend(
+    label: &'static str,
+    chart: Signal<LineChart>,
+    /// Which series are hidden, by index.
+    hidden: RwSignal<Vec<bool>>,
+    x_view: RwSignal<Option<Range<f64>>>,
+    canvas_ref: NodeRef<leptos::html::Canvas>,
+    draw_error: ReadSignal<Option<String>>,
+    set_draw_error: WriteSignal<Option<String>>,
+) -> impl IntoView {
+    view! {
+    <figcaption class="legend">
+        <span class="chart-title">{label}</span>
+        {move || {
+            chart
+                .with(|c| {
+                    c.series
+                        .iter()
+                        .enumerate()
+                        .map(|(i, s)| {
+                            let swatch = format!("background: {}", s.color.css());
+                            let is_hidden = move || hidden.with(|h| h.get(i).copied().unwrap_or(false));
                             view! {
-                                <button type="button" class="chart-reset" on:click=move |_| x_view.set(None)>
-                                    "Reset zoom"
+                                <button
+                                    type="button"
+                                    class="legend-item"
+                                    aria-pressed=move || if is_hidden() { "false" } else { "true" }
+                                    title="Show or hide this series"
+                                    on:click=move |_| {
+                                        hidden.update(|h| {
+                                            if h.len() <= i {
+                                                h.resize(i + 1, false);
+                                            }
+                                            h[i] = !h[i];
+                                        })
+                                    }
+                                >
+                                    <span class="swatch" style=swatch></span>
+                                    {s.label.clone()}
                                 </button>
                             }
                         })
-                }}
-                {move || draw_error.get().map(|e| view! { <span class="chart-error" role="alert">{e}</span> })}
-            </figcaption>
-        </figure>
+                        .collect_view()
+                })
+        }}
+        <button
+            type="button"
+            class="chart-reset"
+            aria-label=format!("Save {label} as PNG")
+            on:click=move |_| {
+                if let Some(canvas) = canvas_ref.get_untracked() {
+                    let result = download_canvas_png(&canvas, &png_name(label));
+                    set_draw_error.set(result.err());
+                }
+            }
+        >
+            "PNG"
+        </button>
+        {move || {
+            x_view
+                .get()
+                .is_some()
+                .then(|| {
+                    view! {
+                        <button type="button" class="chart-reset" on:click=move |_| x_view.set(None)>
+                            "Reset zoom"
+                        </button>
+                    }
+                })
+        }}
+        {move || draw_error.get().map(|e| view! { <span class="chart-error" role="alert">{e}</span> })}
+    </figcaption>
     }
 }
 

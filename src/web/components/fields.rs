@@ -6,7 +6,7 @@
 
 use leptos::prelude::*;
 
-pub use crate::input::{parse_count, parse_number};
+pub use crate::input::parse_number;
 
 /// A labelled numeric input with its unit and an error slot.
 #[component]
@@ -71,26 +71,69 @@ pub fn SelectField(
     options: Vec<(&'static str, &'static str)>,
     /// The selected value.
     value: RwSignal<String>,
+    /// Why the choice is not accepted, for a select whose value is checked.
+    #[prop(optional, into)]
+    error: Option<Signal<Option<String>>>,
+    /// Hides the field without losing its choice.
+    #[prop(into, optional)]
+    hidden: Signal<bool>,
 ) -> impl IntoView {
+    let options = Signal::stored(
+        options
+            .into_iter()
+            .map(|(v, text)| (v.to_string(), text.to_string()))
+            .collect::<Vec<_>>(),
+    );
+    view! { <ChoiceField id=id label=label options=options value=value error=error hidden=hidden /> }
+}
+
+/// A labelled drop-down over choices that may change (a log's columns), keeping its value, with
+/// an error slot where the choice is checked.
+#[component]
+pub fn ChoiceField(
+    /// Element id, also used to link label and error.
+    #[prop(into)]
+    id: String,
+    /// Visible label (the accessible name).
+    label: &'static str,
+    /// `(value, text)` for each option.
+    #[prop(into)]
+    options: Signal<Vec<(String, String)>>,
+    /// The selected value.
+    value: RwSignal<String>,
+    /// Why the choice is not accepted, for a select whose value is checked.
+    #[prop(default = None)]
+    error: Option<Signal<Option<String>>>,
+    /// Hides the field without losing its choice.
+    #[prop(into, optional)]
+    hidden: Signal<bool>,
+) -> impl IntoView {
+    let error_id = format!("{id}-error");
+    let described = error.map(|_| error_id.clone());
+    let invalid = move || error.is_some_and(|e| e.get().is_some());
     view! {
-        <div class="field">
+        <div class="field" class:field-invalid=invalid hidden=move || hidden.get()>
             <label for=id.clone()>{label}</label>
             <select
                 id=id
                 on:change=move |ev| value.set(event_target_value(&ev))
                 prop:value=move || value.get()
+                aria-describedby=described
             >
-                {options
-                    .into_iter()
-                    .map(|(v, text)| {
-                        view! {
-                            <option value=v selected=move || value.get() == v>
-                                {text}
-                            </option>
-                        }
-                    })
-                    .collect_view()}
+                {move || {
+                    options
+                        .get()
+                        .into_iter()
+                        .map(|(v, text)| {
+                            let selected = v.clone();
+                            view! { <option value=v selected=move || value.get() == selected>{text}</option> }
+                        })
+                        .collect_view()
+                }}
             </select>
+            {error.map(|error| view! {
+                <p class="field-error" id=error_id aria-live="polite">{move || error.get().unwrap_or_default()}</p>
+            })}
         </div>
     }
 }

@@ -1,22 +1,21 @@
-//! The forms that define a run: the scenario (preset, seed, target, override limit) and a
-//! controller with its parameters. Both keep the typed text and turn it into the core's validated
-//! types, with one message per field; both read from and write to the URL query.
+//! The forms that define a run: the scenario (the preset and the run definition's settings,
+//! rendered from the core's table by [`SettingField`]) and a controller with its parameters. Both
+//! keep the typed text and turn it into the core's validated types, with one message per field;
+//! both read from and write to the URL query.
 
 use std::collections::BTreeMap;
 
 use leptos::prelude::*;
 
 use crate::closed_loop::definition::SettingsOverrides;
-use crate::closed_loop::definition::{
-    parse_texts, preset_controller, RunSetting, SettingGroup, SettingKind,
-};
+use crate::closed_loop::definition::{parse_texts, preset_controller, RunSetting, SettingGroup};
 use crate::control::fuzzy::rules::RuleTable;
 use crate::control::registry::{ControllerConfig, ControllerKind};
-use crate::estimation::estimator::Feedback;
-use crate::plant::materials::Material;
+use crate::input::table::Table;
 use crate::plant::presets::PlantEdits;
 use crate::plant::Preset;
 use crate::web::components::fields::{parse_number, NumberField, SelectField};
+use crate::web::components::table_form::{self, FieldErrors, TableForm};
 
 /// Text of the scenario fields: the preset, and every setting of the run definition
 /// ([`RunSetting::ALL`]), each parsed and checked by the core's table, so the form accepts exactly
@@ -25,15 +24,15 @@ use crate::web::components::fields::{parse_number, NumberField, SelectField};
 pub struct ScenarioForm {
     /// Preset name.
     pub preset: RwSignal<String>,
-    /// The typed text of each setting, in the order of [`RunSetting::ALL`].
-    settings: [RwSignal<String>; RunSetting::ALL.len()],
+    /// The typed text of each setting.
+    settings: TableForm<RunSetting>,
     /// The fields parsed, once per change for every reader (the page's run and each fieldset's
     /// messages), instead of once per reader.
     parsed: Memo<ParsedScenario>,
 }
 
 /// A parsed scenario form: the choice, or the message of each field that did not parse.
-type ParsedScenario = Result<ScenarioChoice, BTreeMap<&'static str, String>>;
+type ParsedScenario = Result<ScenarioChoice, FieldErrors>;
 
 /// The preset a fresh form shows.
 const DEFAULT_PRESET: &str = "kim-step-doc";
@@ -51,34 +50,12 @@ pub struct ScenarioChoice {
     pub plant: PlantEdits,
 }
 
-/// The text a fresh form shows for `setting` (blank keeps the preset's value).
-fn shown_default(setting: RunSetting) -> &'static str {
-    match setting {
-        RunSetting::Seed => "1",
-        RunSetting::FilterOrder => "4",
-        RunSetting::SpindleCutoff => "260",
-        RunSetting::FeedCutoff => "50",
-        RunSetting::DepthScale => "1",
-        _ => "",
-    }
-}
-
-/// Settings always written to the URL, so a shared link keeps them whatever the defaults become.
-fn always_in_query(setting: RunSetting) -> bool {
-    matches!(setting, RunSetting::Seed)
-}
-
 impl ScenarioForm {
     /// A form with the defaults, then whatever `query` says.
     pub fn new(query: &[(String, String)]) -> Self {
         let typed = |key: &str| query.iter().find(|(k, _)| k == key).map(|(_, v)| v.clone());
         let preset = RwSignal::new(typed("preset").unwrap_or_else(|| DEFAULT_PRESET.to_string()));
-        let settings = RunSetting::ALL.map(|setting| {
-            RwSignal::new(
-                typed(setting.spec().query_key)
-                    .unwrap_or_else(|| shown_default(setting).to_string()),
-            )
-        });
+        let settings = TableForm::new(query);
         Self {
             preset,
             settings,
@@ -88,35 +65,26 @@ impl ScenarioForm {
 
     /// The text signal of `setting`.
     pub fn text(&self, setting: RunSetting) -> RwSignal<String> {
-        let index = RunSetting::ALL
-            .iter()
-            .position(|s| *s == setting)
-            .unwrap_or_default();
-        self.settings[index]
-    }
-
-    fn fields(&self) -> impl Iterator<Item = (RunSetting, RwSignal<String>)> + '_ {
-        RunSetting::ALL.into_iter().zip(self.settings)
+        self.settings.text(setting)
     }
 
     /// Every field back to its default, on `preset`: a one-click experiment starts from the
     /// paper's own values, not from edits made for another preset.
     pub fn reset_to(&self, preset: Preset) {
-        for (setting, text) in self.fields() {
-            text.set(shown_default(setting).to_string());
-        }
+        self.settings.reset();
         self.preset.set(preset.name().to_string());
     }
 
-    /// The query pairs that reproduce this form.
+    /// The query pairs that reproduce this form; the seed always, so a shared link keeps it
+    /// whatever the default becomes.
     pub fn query(&self) -> Vec<(String, String)> {
-        std::iter::once(("preset".to_string(), self.preset.get()))
-            .chain(self.fields().filter_map(|(setting, signal)| {
-                let text = signal.get();
-                (always_in_query(setting) || text.trim() != shown_default(setting))
-                    .then(|| (setting.spec().query_key.to_string(), text))
-            }))
-            .collect()
+        let seed = RunSetting::Seed.row().key;
+        let mut query = vec![("preset".to_string(), self.preset.get())];
+        if !self.settings.query().iter().any(|(k, _)| k == seed) {
+            query.push((seed.to_string(), self.text(RunSetting::Seed).get()));
+        }
+        query.extend(self.settings.query());
+        query
     }
 
     /// The fields parsed through the run definition ([`parse_texts`], as the command line
@@ -124,24 +92,26 @@ impl ScenarioForm {
     pub fn parse(&self) -> ParsedScenario {
         self.parsed.get()
     }
+
+    /// The message of each field that did not parse (tracked).
+    fn errors(&self) -> Signal<FieldErrors> {
+        let form = *self;
+        Signal::derive(move || form.parse().err().unwrap_or_default())
+    }
 }
 
 /// Parses a scenario form's fields (see [`ScenarioForm::parse`]).
-fn parse_scenario(
-    preset: RwSignal<String>,
-    settings: [RwSignal<String>; RunSetting::ALL.len()],
-) -> ParsedScenario {
+fn parse_scenario(preset: RwSignal<String>, settings: TableForm<RunSetting>) -> ParsedScenario {
     let Some(preset) = Preset::from_name(&preset.get()) else {
         return Err(BTreeMap::from([("preset", "choose a preset".to_string())]));
     };
     // The machine fields are hidden for presets without a mill; what they hold then must
     // neither block the run nor change it.
     let has_mill = preset.scenario().is_some();
-    let texts: Vec<(RunSetting, String)> = RunSetting::ALL
+    let texts: Vec<(RunSetting, String)> = settings
+        .texts()
         .into_iter()
-        .zip(settings)
         .filter(|(setting, _)| has_mill || setting.spec().group != SettingGroup::Machine)
-        .map(|(setting, text)| (setting, text.get()))
         .collect();
     match parse_texts(preset, ControllerConfig::new(ControllerKind::Fixed), &texts) {
         Ok(spec) => Ok(ScenarioChoice {
@@ -163,79 +133,24 @@ fn parse_scenario(
     }
 }
 
-/// The form field of one setting: a select for named choices, a number field otherwise.
-fn setting_field(
-    form: ScenarioForm,
-    setting: RunSetting,
-    errors: Memo<BTreeMap<&'static str, String>>,
-) -> AnyView {
-    let spec = setting.spec();
-    let id = spec.query_key.replace('_', "-");
-    let value = form.text(setting);
-    let preset_s = "The preset's";
-    match spec.kind {
-        SettingKind::Material => view! {
-            <SelectField
-                id=id
-                label=spec.label
-                options=std::iter::once(("", preset_s))
-                    .chain(Material::ALL.iter().map(|m| (m.name(), m.label())))
-                    .collect()
-                value=value
-            />
-        }
-        .into_any(),
-        SettingKind::Feedback => view! {
-            <SelectField
-                id=id
-                label=spec.label
-                options=std::iter::once(("", preset_s))
-                    .chain(Feedback::ALL.iter().map(|f| (f.name(), f.label())))
-                    .collect()
-                value=value
-            />
-        }
-        .into_any(),
-        SettingKind::Count { .. } | SettingKind::Seed | SettingKind::Number { .. } => {
-            let key = spec.query_key;
-            let error = Signal::derive(move || errors.with(|e| e.get(key).cloned()));
-            let step = if matches!(spec.kind, SettingKind::Number { .. }) {
-                "any"
-            } else {
-                "1"
-            };
-            view! {
-                <NumberField
-                    id=id
-                    label=spec.label.to_string()
-                    unit=spec.unit
-                    value=value
-                    error=error
-                    step=step
-                />
-            }
-            .into_any()
-        }
-    }
+/// The fields of `settings`, in order.
+fn setting_fields(form: ScenarioForm, settings: impl Iterator<Item = RunSetting>) -> impl IntoView {
+    view! { <table_form::SettingFields form=form.settings settings=settings.collect() errors=form.errors() /> }
 }
 
 /// The fields of one group of settings.
-fn group_fields(
-    form: ScenarioForm,
-    group: SettingGroup,
-    errors: Memo<BTreeMap<&'static str, String>>,
-) -> Vec<AnyView> {
-    RunSetting::ALL
-        .into_iter()
-        .filter(|s| s.spec().group == group)
-        .map(|s| setting_field(form, s, errors))
-        .collect()
+fn group_fields(form: ScenarioForm, group: SettingGroup) -> impl IntoView {
+    setting_fields(
+        form,
+        RunSetting::ALL
+            .into_iter()
+            .filter(move |s| s.spec().group == group),
+    )
 }
 
 /// The scenario fields.
 #[component]
 pub fn ScenarioFields(form: ScenarioForm) -> impl IntoView {
-    let errors = Memo::new(move |_| form.parse().err().unwrap_or_default());
     let summary = move || {
         Preset::from_name(&form.preset.get()).map(|p| {
             let s = p.summary();
@@ -268,7 +183,7 @@ pub fn ScenarioFields(form: ScenarioForm) -> impl IntoView {
                 value=form.preset
             />
             <p class="hint">{summary}</p>
-            {group_fields(form, SettingGroup::Scenario, errors)}
+            {group_fields(form, SettingGroup::Scenario)}
         </fieldset>
     }
 }
@@ -283,11 +198,10 @@ pub fn SettingFields(
     /// The settings, in order.
     settings: Vec<RunSetting>,
 ) -> impl IntoView {
-    let errors = Memo::new(move |_| form.parse().err().unwrap_or_default());
     view! {
         <fieldset>
             <legend>{legend}</legend>
-            {settings.into_iter().map(|s| setting_field(form, s, errors)).collect_view()}
+            {setting_fields(form, settings.into_iter())}
         </fieldset>
     }
 }
@@ -295,17 +209,16 @@ pub fn SettingFields(
 /// The machine, cut and signal-chain fields of a scenario form (shown after the controller).
 #[component]
 pub fn MachineAndSignalFields(form: ScenarioForm) -> impl IntoView {
-    let errors = Memo::new(move |_| form.parse().err().unwrap_or_default());
     view! {
         <fieldset hidden=move || {
             Preset::from_name(&form.preset.get()).is_none_or(|p| p.scenario().is_none())
         }>
             <legend>"Machine and cut (blank: the preset's)"</legend>
-            {group_fields(form, SettingGroup::Machine, errors)}
+            {group_fields(form, SettingGroup::Machine)}
         </fieldset>
         <fieldset>
             <legend>"Signal chain"</legend>
-            {group_fields(form, SettingGroup::SignalChain, errors)}
+            {group_fields(form, SettingGroup::SignalChain)}
         </fieldset>
     }
 }
@@ -359,8 +272,12 @@ pub fn decode_rule_table(text: &str) -> Option<RuleTable> {
     Some(table)
 }
 
+/// Whether the controller named `kind` takes a rule table.
 fn is_fuzzy(kind: &str) -> bool {
-    kind.starts_with("fuzzy")
+    matches!(
+        kind.parse::<ControllerKind>(),
+        Ok(ControllerKind::FuzzyExperience | ControllerKind::FuzzyDynamics)
+    )
 }
 
 impl ScenarioForm {

@@ -29,22 +29,7 @@ pub enum PortEvent {
 /// Where a port delivers what happens.
 pub type Sink = Rc<dyn Fn(PortEvent)>;
 
-/// The serial settings beside the Connect button.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct SerialSettings {
-    /// Bits per second.
-    pub baud_rate: u32,
-    /// 7 or 8.
-    pub data_bits: u8,
-    /// 1 or 2.
-    pub stop_bits: u8,
-    /// "none", "even" or "odd".
-    pub parity: &'static str,
-    /// "none" or "hardware".
-    pub flow_control: &'static str,
-    /// The browser's read buffer, bytes.
-    pub buffer_size: u32,
-}
+pub use crate::hardware::serial_settings::SerialSettings;
 
 /// Whether this page can use WebSerial, and if not, why.
 pub fn web_serial_unavailable() -> Option<&'static str> {

@@ -7,6 +7,7 @@
 use leptos::prelude::*;
 
 use crate::control::fuzzy::rules::RuleBase;
+use crate::web::components::page::PageShell;
 use crate::web::components::run_form::encode_rule_table;
 use crate::web::route::{hash_with_query, Page};
 
@@ -243,8 +244,7 @@ pub fn LearnPage() -> impl IntoView {
     let handle = window_event_listener(leptos::ev::hashchange, move |_| scroll_to_lesson());
     on_cleanup(move || handle.remove());
     view! {
-        <section class="page learn" aria-labelledby="learn-title">
-            <h1 id="learn-title">"Learn: cutting force from motor current"</h1>
+        <PageShell id="learn" title="Learn: cutting force from motor current" class="learn">
             <p class="lede">
                 "Four short steps from the cutter to the controller. Each ends with a link that opens "
                 "the lab where you can try it."
@@ -294,6 +294,6 @@ pub fn LearnPage() -> impl IntoView {
                     }
                 })
                 .collect_view()}
-        </section>
+        </PageShell>
     }
 }

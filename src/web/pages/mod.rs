@@ -1,4 +1,5 @@
-//! One module per section of the lab.
+//! One module per section of the lab: a file, or a directory whose `mod.rs` composes the page
+//! from its panels, one file each.
 //!
 //! | file | what |
 //! |---|---|

@@ -9,11 +9,14 @@ use std::time::Duration;
 use leptos::prelude::*;
 
 use crate::charts::{Axis, LineChart, Rgb, Series, PALETTE};
-use crate::plant::recording::{BlockRow, OpenLoopRecording, OpenLoopRun};
+use crate::input::table::{self, form_errors};
+use crate::plant::recording::{BlockRow, OpenLoopRecording, OpenLoopRun, OpenLoopSetting};
 use crate::plant::Preset;
 use crate::web::components::chart::ChartCanvas;
-use crate::web::components::fields::{parse_number, NumberField, SelectField};
+use crate::web::components::fields::SelectField;
+use crate::web::components::page::PageShell;
 use crate::web::components::runner::{Debounce, RunProgress, RunStatus, Runner};
+use crate::web::components::table_form::{SettingField, TableForm};
 use crate::web::components::work_job::Shared;
 use crate::web::route::{query_params, replace_query, Page};
 
@@ -260,11 +263,17 @@ pub fn PlantPage() -> impl IntoView {
             .map_or(default.to_string(), |(_, v)| v.clone())
     };
     let preset = RwSignal::new(get("preset", Preset::KimStepDoc.name()));
-    let override_text = RwSignal::new(get("override", "100"));
-    let override_error = Signal::derive(move || match parse_number(&override_text.get()) {
-        Ok(v) if (0.0..=255.0).contains(&v) => None,
-        Ok(v) => Some(format!("{v} % is outside 0–255 %")),
-        Err(e) => Some(e),
+    // The override through its row of the core's table, as `cutlab scenarios --override`.
+    let form = TableForm::<OpenLoopSetting>::new(&query);
+    let override_text = form.text(OpenLoopSetting::Override);
+    let override_pct =
+        Memo::new(move |_| table::number(OpenLoopSetting::Override, &override_text.get()));
+    let errors = Signal::derive(move || {
+        override_pct
+            .get()
+            .err()
+            .map(|e| form_errors(&[e]))
+            .unwrap_or_default()
     });
     let runner = Runner::<Arc<OpenLoopRecording>>::new();
     let debounce = Debounce::new(RERUN_DELAY);
@@ -279,12 +288,9 @@ pub fn PlantPage() -> impl IntoView {
                 ("override".into(), text.clone()),
             ],
         );
-        let (Some(p), Ok(pct)) = (Preset::from_name(&name), parse_number(&text)) else {
+        let (Some(p), Ok(pct)) = (Preset::from_name(&name), override_pct.get()) else {
             return;
         };
-        if !(0.0..=255.0).contains(&pct) {
-            return;
-        }
         let runner = runner_for_effect.clone();
         debounce.request(move || {
             match OpenLoopRun::new(p, 1, pct, BLOCK_SAMPLES, OpenLoopRun::time_limit_s(p)) {
@@ -332,8 +338,7 @@ pub fn PlantPage() -> impl IntoView {
     };
 
     view! {
-        <section class="page" aria-labelledby="plant-title">
-            <h1 id="plant-title">"The simulated machine"</h1>
+        <PageShell id="plant" title="The simulated machine">
             <p class="lede">
                 "Each preset is one of the papers' experiments run on the simulated FANUC mill (or, for "
                 "paper 000, its brake bench). Here it runs open-loop at a fixed feed override, so you see "
@@ -349,7 +354,7 @@ pub fn PlantPage() -> impl IntoView {
                     />
                     <p class="hint">{summary}</p>
                     <p class="hint">{move || regions().map(|r| format!("Material: {r}"))}</p>
-                    <NumberField id="plant-override" label="Feed override" unit="%" value=override_text error=override_error />
+                    <SettingField form=form setting=OpenLoopSetting::Override errors=errors id_prefix="plant-" />
                     <RunProgress runner=runner.clone() />
                 </form>
                 <div class="charts">
@@ -389,6 +394,6 @@ pub fn PlantPage() -> impl IntoView {
                     }}
                 </div>
             </div>
-        </section>
+        </PageShell>
     }
 }

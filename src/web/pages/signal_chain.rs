@@ -1,231 +1,94 @@
 //! Signal chain: design the Butterworth low-pass that cleans the motor current, and see what it
 //! does to magnitude and phase.
 //!
-//! The form lives in the URL query (`#/signal?preset=wang-10th-5hz`,
-//! `#/signal?kind=bandpass&cutoff=40&upper=400`; defaults are left out), so a link reproduces the
-//! design and the Learn page can open a paper's filter.
+//! The form is the design table's rows ([`crate::signal::design_settings`]) and lives in the URL
+//! query (`#/signal?preset=wang-10th-5hz`, `#/signal?kind=bandpass&cutoff=40&upper=400`; defaults
+//! are left out), so a link reproduces the design and the Learn page can open a paper's filter.
 
 use std::sync::Arc;
 
 use leptos::prelude::*;
 
 use crate::charts::{Axis, LineChart, Scale, Series, PALETTE};
+use crate::input::table::{form_errors, Table};
 use crate::plant::recording::{BenchRecording, PhaseRecording};
-use crate::signal::butterworth::{butter, ButterworthSpec, Cutoff, FilterKind};
+use crate::signal::butterworth::{ButterworthSpec, FilterKind};
+use crate::signal::design_settings::{parse_design, FilterPreset, FilterSetting, PAPER_FILTERS};
 use crate::signal::filter::SosFilterBank;
 use crate::signal::rms::three_phase_rms;
 use crate::signal::sos::Sos;
 use crate::signal::spectrum::{amplitude_spectrum, find_peaks, Window};
 use crate::web::components::chart::ChartCanvas;
-use crate::web::components::fields::{parse_count, parse_number, NumberField, SelectField};
-use crate::web::components::later::{from_next_task, Later};
+use crate::web::components::later::{effect_after_mount, Later};
+use crate::web::components::page::PageShell;
 use crate::web::components::runner::{next_task, RunProgress, RunStatus, Runner};
+use crate::web::components::table_form::{FieldErrors, SettingField, TableForm};
 use crate::web::components::work_job::Shared;
 use crate::web::route::{query_params, replace_query, Page};
 
-/// A filter the papers use, one click away.
-struct FilterPreset {
-    /// The name in the URL: `#/signal?preset=wang-10th-5hz`.
-    name: &'static str,
-    label: &'static str,
-    kind: FilterKind,
-    order: usize,
-    cutoff_hz: f64,
-    sample_rate_hz: f64,
-}
-
-static PRESETS: [FilterPreset; 3] = [
-    FilterPreset {
-        name: "wang-10th-5hz",
-        label: "Wang et al.: 10th-order low-pass, 5 Hz",
-        kind: FilterKind::Lowpass,
-        order: 10,
-        cutoff_hz: 5.0,
-        sample_rate_hz: 10_000.0,
-    },
-    FilterPreset {
-        name: "kim-feed-50hz",
-        label: "Kim et al.: feed motor, 50 Hz",
-        kind: FilterKind::Lowpass,
-        order: 2,
-        cutoff_hz: 50.0,
-        sample_rate_hz: 10_000.0,
-    },
-    FilterPreset {
-        name: "kim-spindle-260hz",
-        label: "Kim et al.: spindle motor, 260 Hz",
-        kind: FilterKind::Lowpass,
-        order: 2,
-        cutoff_hz: 260.0,
-        sample_rate_hz: 10_000.0,
-    },
-];
-
-/// The form as typed, which is also what the URL query holds.
-#[derive(Debug, Clone, PartialEq)]
-struct FormText {
-    /// A [`FilterKind::name`].
-    kind: String,
-    order: String,
-    cutoff: String,
-    upper: String,
-    rate: String,
-}
-
-impl Default for FormText {
-    fn default() -> Self {
-        Self {
-            kind: FilterKind::Lowpass.name().to_string(),
-            order: "10".to_string(),
-            cutoff: "50".to_string(),
-            upper: "200".to_string(),
-            rate: "10000".to_string(),
-        }
-    }
-}
-
-impl FormText {
-    /// The fields with their query keys, in the order they are written.
-    fn fields(&self) -> [(&'static str, &String); 5] {
-        [
-            ("kind", &self.kind),
-            ("order", &self.order),
-            ("cutoff", &self.cutoff),
-            ("upper", &self.upper),
-            ("rate", &self.rate),
-        ]
-    }
-
-    /// This text with `preset`'s kind, order, cut-off and sample rate; the upper cut-off, which
-    /// no preset uses, keeps its text.
-    fn with_preset(self, preset: &FilterPreset) -> Self {
-        Self {
-            kind: preset.kind.name().to_string(),
-            order: preset.order.to_string(),
-            cutoff: preset.cutoff_hz.to_string(),
-            rate: preset.sample_rate_hz.to_string(),
-            ..self
-        }
-    }
-
-    /// The preset whose values the form holds, exactly as that preset's button fills them in.
-    fn preset(&self) -> Option<&'static FilterPreset> {
-        PRESETS
+/// The paper filter whose values the form holds, exactly as its button fills them in.
+fn chosen_preset(texts: &[(FilterSetting, String)]) -> Option<&'static FilterPreset> {
+    PAPER_FILTERS.iter().find(|p| {
+        p.texts()
             .iter()
-            .find(|p| self.clone().with_preset(p) == *self)
-    }
-
-    /// The form a URL query describes: the defaults, then the named preset, then each field's
-    /// own key. An unknown preset and a kind that is not a filter kind are ignored (the select
-    /// could not show it); numbers are kept as typed, so their field explains what is wrong.
-    fn from_query(query: &[(String, String)]) -> Self {
-        let value = |key: &str| query.iter().find(|(k, _)| k == key).map(|(_, v)| v);
-        let mut text = Self::default();
-        if let Some(preset) = value("preset").and_then(|n| PRESETS.iter().find(|p| p.name == n)) {
-            text = text.with_preset(preset);
-        }
-        if let Some(kind) = value("kind").and_then(|k| k.parse::<FilterKind>().ok()) {
-            text.kind = kind.name().to_string();
-        }
-        for (key, field) in [
-            ("order", &mut text.order),
-            ("cutoff", &mut text.cutoff),
-            ("upper", &mut text.upper),
-            ("rate", &mut text.rate),
-        ] {
-            if let Some(typed) = value(key) {
-                field.clone_from(typed);
-            }
-        }
-        text
-    }
-
-    /// The URL query of this form: the preset's name when the form holds one, else every field
-    /// whose text differs from its default. The upper cut-off, which no preset sets, is written
-    /// whenever it differs from its default, also while it is hidden, so its text survives.
-    fn query(&self) -> Vec<(String, String)> {
-        let defaults = Self::default();
-        let preset = self.preset();
-        let mut query: Vec<(String, String)> = preset
-            .map(|p| ("preset".to_string(), p.name.to_string()))
-            .into_iter()
-            .collect();
-        query.extend(
-            self.fields()
-                .into_iter()
-                .zip(defaults.fields())
-                .filter(|((key, _), _)| preset.is_none() || *key == "upper")
-                .filter(|((_, text), (_, default))| text.trim() != default.as_str())
-                .map(|((key, text), _)| (key.to_string(), text.clone())),
-        );
-        query
-    }
+            .all(|given| texts.iter().any(|typed| typed == given))
+    })
 }
 
-/// Number of frequencies at which the response is evaluated, log-spaced.
-const RESPONSE_POINTS: usize = 600;
-
-/// What the form's text parses into: the design, or one error per field.
-#[derive(Clone, PartialEq)]
-struct FilterForm {
-    design: Option<(ButterworthSpec, Sos)>,
-    order_error: Option<String>,
-    cutoff_error: Option<String>,
-    upper_error: Option<String>,
-    rate_error: Option<String>,
-}
-
-fn parse_form(text: &FormText) -> FilterForm {
-    let kind = text
-        .kind
-        .parse::<FilterKind>()
-        .unwrap_or(FilterKind::Lowpass);
-    let band = kind.is_band();
-    let order = parse_count(&text.order);
-    let cutoff = parse_number(&text.cutoff);
-    let upper = if band {
-        parse_number(&text.upper).map(Some)
-    } else {
-        Ok(None)
-    };
-    let rate = parse_number(&text.rate);
-    let mut form = FilterForm {
-        design: None,
-        order_error: order.as_ref().err().cloned(),
-        cutoff_error: cutoff.as_ref().err().cloned(),
-        upper_error: upper.as_ref().err().cloned(),
-        rate_error: rate.as_ref().err().cloned(),
-    };
-    let (Ok(order), Ok(cutoff), Ok(upper), Ok(rate)) = (order, cutoff, upper, rate) else {
-        return form;
-    };
-    let spec = ButterworthSpec {
-        kind,
-        order,
-        cutoff_hz: match upper {
-            Some(upper) => Cutoff::Band(cutoff, upper),
-            None => Cutoff::Single(cutoff),
-        },
-        sample_rate_hz: rate,
-    };
-    match butter(&spec) {
-        Ok(sos) => form.design = Some((spec, sos)),
-        Err(e) => {
-            let message = e.to_string();
-            // Put the design error beside the field it is about.
-            if message.contains("order") {
-                form.order_error = Some(message);
-            } else if message.contains("sample rate") || message.contains("sample_rate") {
-                form.rate_error = Some(message);
-            } else if band && (message.contains("upper") || message.contains("second")) {
-                form.upper_error = Some(message);
-            } else {
-                form.cutoff_error = Some(message);
+/// The form a URL query describes: the defaults, then the named preset, then each field's own
+/// key. An unknown preset and a kind that is not a filter kind are ignored (the select could not
+/// show it); numbers are kept as typed, so their field explains what is wrong.
+fn form_from_query(query: &[(String, String)]) -> TableForm<FilterSetting> {
+    let form = TableForm::new(&[]);
+    let value = |key: &str| query.iter().find(|(k, _)| k == key).map(|(_, v)| v);
+    if let Some(preset) = value("preset").and_then(|n| PAPER_FILTERS.iter().find(|p| p.name == n)) {
+        fill(form, preset);
+    }
+    for (key, text) in query {
+        match FilterSetting::from_key(key) {
+            Some(FilterSetting::Kind) => {
+                if let Ok(kind) = text.parse::<FilterKind>() {
+                    form.text(FilterSetting::Kind).set(kind.name().to_string());
+                }
             }
+            Some(setting) => form.text(setting).set(text.clone()),
+            None => {}
         }
     }
     form
 }
+
+/// Fills the form with `preset`'s values; the upper cut-off, which no preset uses, keeps its text.
+fn fill(form: TableForm<FilterSetting>, preset: &FilterPreset) {
+    for (setting, text) in preset.texts() {
+        form.text(setting).set(text);
+    }
+}
+
+/// The URL query of the form: the preset's name when the form holds one, else every field whose
+/// text differs from its default. The upper cut-off, which no preset sets, is written whenever it
+/// differs from its default, also while it is hidden, so its text survives.
+fn design_query(texts: &[(FilterSetting, String)]) -> Vec<(String, String)> {
+    let preset = chosen_preset(texts);
+    let mut query: Vec<(String, String)> = preset
+        .map(|p| ("preset".to_string(), p.name.to_string()))
+        .into_iter()
+        .collect();
+    query.extend(
+        texts
+            .iter()
+            .filter(|(s, _)| preset.is_none() || *s == FilterSetting::Upper)
+            .filter(|(s, text)| text.trim() != s.row().default_text())
+            .map(|(s, text)| (s.row().key.to_string(), text.clone())),
+    );
+    query
+}
+
+/// A design, or the message of each field that does not give one.
+type Design = Result<(ButterworthSpec, Sos), FieldErrors>;
+
+/// Number of frequencies at which the response is evaluated, log-spaced.
+const RESPONSE_POINTS: usize = 600;
 
 /// Magnitude (dB) and phase (degrees, unwrapped) charts of a design.
 fn response_charts(spec: &ButterworthSpec, sos: &Sos) -> (LineChart, LineChart) {
@@ -366,41 +229,118 @@ fn current_charts(
 /// The signal-chain page.
 #[component]
 pub fn SignalChainPage() -> impl IntoView {
-    let initial = FormText::from_query(&query_params(
+    let form = form_from_query(&query_params(
         &window().location().hash().unwrap_or_default(),
     ));
-    let kind = RwSignal::new(initial.kind);
-    let order = RwSignal::new(initial.order);
-    let cutoff = RwSignal::new(initial.cutoff);
-    let upper = RwSignal::new(initial.upper);
-    let rate = RwSignal::new(initial.rate);
-
-    let text = Memo::new(move |_| FormText {
-        kind: kind.get(),
-        order: order.get(),
-        cutoff: cutoff.get(),
-        upper: upper.get(),
-        rate: rate.get(),
-    });
+    let texts = Memo::new(move |_| form.texts());
     // Keep the URL in step with the form, so a link reproduces the design.
-    // Written from the task after the page's: the page's own work, not its mount's.
-    let mounted = from_next_task();
-    Effect::new(move |_| {
-        if mounted.get() {
-            replace_query(Page::SignalChain, &text.with(FormText::query));
-        }
+    effect_after_mount(move || {
+        replace_query(Page::SignalChain, &texts.with(|t| design_query(t)));
     });
-    let chosen_preset = Memo::new(move |_| text.with(|t| t.preset().map(|p| p.name)));
+    let design: Memo<Design> =
+        Memo::new(move |_| texts.with(|t| parse_design(t)).map_err(|e| form_errors(&e)));
+    view! {
+        <PageShell id="signal" title="Signal chain: filter design">
+            <p class="lede">
+                "Motor current carries the cutting load, buried under the supply frequency, its harmonics "
+                "and switching noise. Wang et al. clean it with a 10th-order Butterworth low-pass before "
+                "taking the RMS; Kim et al. use analog 50 Hz and 260 Hz filters. Design one here: the "
+                "filter is computed as second-order sections, the form that stays stable at high order "
+                "and low cut-off."
+            </p>
+            <div class="layout-two">
+                <DesignForm form=form texts=texts design=design />
+                <div class="charts">
+                    <Later>
+                        <ResponseCharts design=design />
+                    </Later>
+                </div>
+            </div>
+            <BenchFiltered design=design />
+        </PageShell>
+    }
+}
 
-    let form = Memo::new(move |_| text.with(parse_form));
+/// The papers' filters and the design's fields.
+#[component]
+fn DesignForm(
+    form: TableForm<FilterSetting>,
+    texts: Memo<Vec<(FilterSetting, String)>>,
+    design: Memo<Design>,
+) -> impl IntoView {
+    let chosen = Memo::new(move |_| texts.with(|t| chosen_preset(t).map(|p| p.name)));
+    let kind = form.text(FilterSetting::Kind);
     let is_band = Signal::derive(move || {
         kind.get()
             .parse::<FilterKind>()
             .is_ok_and(FilterKind::is_band)
     });
-    // The last valid design stays on screen while the user types an invalid value.
+    let errors = Signal::derive(move || design.get().err().unwrap_or_default());
+    let sections = move || design.with(|d| d.as_ref().map_or(0, |(_, sos)| sos.sections().len()));
+    let field = move |setting: FilterSetting| {
+        view! { <SettingField form=form setting=setting errors=errors id_prefix="filter-" /> }
+    };
+    view! {
+        <form class="panel" aria-label="Filter design" on:submit=|ev| ev.prevent_default()>
+            <fieldset>
+                <legend>"Presets from the papers"</legend>
+                <div class="preset-row">
+                    {PAPER_FILTERS
+                        .iter()
+                        .map(|p| {
+                            let name = p.name;
+                            view! {
+                                <button
+                                    type="button"
+                                    class="preset"
+                                    aria-pressed=move || {
+                                        if chosen.get() == Some(name) { "true" } else { "false" }
+                                    }
+                                    on:click=move |_| fill(form, p)
+                                >
+                                    {p.label}
+                                </button>
+                            }
+                        })
+                        .collect_view()}
+                </div>
+            </fieldset>
+            <Later>
+                {field(FilterSetting::Kind)}
+                {field(FilterSetting::Order)}
+                <SettingField
+                    form=form
+                    setting=FilterSetting::Cutoff
+                    errors=errors
+                    id_prefix="filter-"
+                    label=Signal::derive(move || if is_band.get() { "Lower cut-off" } else { "Cut-off" }.to_string())
+                />
+                <SettingField
+                    form=form
+                    setting=FilterSetting::Upper
+                    errors=errors
+                    id_prefix="filter-"
+                    hidden=Signal::derive(move || !is_band.get())
+                />
+                {field(FilterSetting::SampleRate)}
+                <p class="hint" aria-live="polite">
+                    {move || match sections() {
+                        0 => "No valid design yet: the charts show the last valid one.".to_string(),
+                        1 => "1 second-order section".to_string(),
+                        n => format!("{n} second-order sections"),
+                    }}
+                </p>
+            </Later>
+        </form>
+    }
+}
+
+/// The design's magnitude and phase response; the last valid design stays on screen while the
+/// user types an invalid value.
+#[component]
+fn ResponseCharts(design: Memo<Design>) -> impl IntoView {
     let charts = Memo::new(move |previous: Option<&Option<(LineChart, LineChart)>>| {
-        match form.with(|f| f.design.clone()) {
+        match design.with(|d| d.as_ref().ok().cloned()) {
             Some((spec, sos)) => Some(response_charts(&spec, &sos)),
             None => previous.cloned().flatten(),
         }
@@ -419,9 +359,17 @@ pub fn SignalChainPage() -> impl IntoView {
                 LineChart::new(Axis::log("frequency (Hz)"), Axis::linear("phase (°)"))
             })
     });
-    // The bench recording is made once, in pieces, starting in the task after the page's (its
-    // machine and first compiles are not the mount's work); the filter is re-applied whenever
-    // the design changes.
+    view! {
+        <ChartCanvas label="Magnitude response" chart=magnitude />
+        <ChartCanvas label="Phase response" chart=phase />
+    }
+}
+
+/// Paper 000's bench current through the design: the recording is made once, in pieces, from the
+/// task after the page's (its machine and first compiles are not the mount's work); the filter
+/// is re-applied whenever the design changes.
+#[component]
+fn BenchFiltered(design: Memo<Design>) -> impl IntoView {
     let bench = Runner::<Arc<PhaseRecording>>::new();
     let bench_to_start = bench.clone();
     next_task(move || match BenchRecording::loaded_step(1) {
@@ -434,14 +382,11 @@ pub fn SignalChainPage() -> impl IntoView {
     });
     let recording = bench.finished();
     let currents = Memo::new(
-        move |previous: Option<&Option<(LineChart, LineChart, LineChart, String)>>| {
-            let design = form.with(|f| f.design.clone());
-            match design {
-                Some((_, sos)) => {
-                    recording.with(|r| r.as_ref().and_then(|r| current_charts(r, &sos)))
-                }
-                None => previous.cloned().flatten(),
-            }
+        move |previous: Option<&Option<(LineChart, LineChart, LineChart, String)>>| match design
+            .with(|d| d.as_ref().ok().map(|(_, sos)| sos.clone()))
+        {
+            Some(sos) => recording.with(|r| r.as_ref().and_then(|r| current_charts(r, &sos))),
+            None => previous.cloned().flatten(),
         },
     );
     let current_chart = move |i: usize| {
@@ -454,128 +399,22 @@ pub fn SignalChainPage() -> impl IntoView {
         })
     };
     let peak_text = move || currents.with(|c| c.as_ref().map(|c| c.3.clone()).unwrap_or_default());
-    let sections = move || {
-        form.with(|f| {
-            f.design
-                .as_ref()
-                .map(|(_, sos)| sos.sections().len())
-                .unwrap_or_default()
-        })
-    };
-
     view! {
-        <section class="page" aria-labelledby="signal-title">
-            <h1 id="signal-title">"Signal chain: filter design"</h1>
-            <p class="lede">
-                "Motor current carries the cutting load, buried under the supply frequency, its harmonics "
-                "and switching noise. Wang et al. clean it with a 10th-order Butterworth low-pass before "
-                "taking the RMS; Kim et al. use analog 50 Hz and 260 Hz filters. Design one here: the "
-                "filter is computed as second-order sections, the form that stays stable at high order "
-                "and low cut-off."
-            </p>
-            <div class="layout-two">
-                <form class="panel" aria-label="Filter design" on:submit=|ev| ev.prevent_default()>
-                    <fieldset>
-                        <legend>"Presets from the papers"</legend>
-                        <div class="preset-row">
-                            {PRESETS
-                                .iter()
-                                .map(|p| {
-                                    let name = p.name;
-                                    view! {
-                                        <button
-                                            type="button"
-                                            class="preset"
-                                            aria-pressed=move || {
-                                                if chosen_preset.get() == Some(name) { "true" } else { "false" }
-                                            }
-                                            on:click=move |_| {
-                                                let filled = text.get_untracked().with_preset(p);
-                                                kind.set(filled.kind);
-                                                order.set(filled.order);
-                                                cutoff.set(filled.cutoff);
-                                                rate.set(filled.rate);
-                                            }
-                                        >
-                                            {p.label}
-                                        </button>
-                                    }
-                                })
-                                .collect_view()}
-                        </div>
-                    </fieldset>
-                    // The fields and the design they give a task after the presets: with the
-                    // page's other work they took its first task past 50 ms.
-                    <Later>
-                        <SelectField
-                            id="filter-kind"
-                            label="Filter type"
-                            options=FilterKind::ALL.iter().map(|k| (k.name(), k.label())).collect()
-                            value=kind
-                        />
-                        <NumberField
-                            id="filter-order"
-                            label="Order"
-                            value=order
-                            step="1"
-                            error=Signal::derive(move || form.with(|f| f.order_error.clone()))
-                        />
-                        <NumberField
-                            id="filter-cutoff"
-                            label=Signal::derive(move || if is_band.get() { "Lower cut-off" } else { "Cut-off" }.to_string())
-                            unit="Hz"
-                            value=cutoff
-                            error=Signal::derive(move || form.with(|f| f.cutoff_error.clone()))
-                        />
-                        <NumberField
-                            id="filter-upper"
-                            label="Upper cut-off"
-                            unit="Hz"
-                            value=upper
-                            hidden=Signal::derive(move || !is_band.get())
-                            error=Signal::derive(move || form.with(|f| f.upper_error.clone()))
-                        />
-                        <NumberField
-                            id="filter-rate"
-                            label="Sample rate"
-                            unit="Hz"
-                            value=rate
-                            error=Signal::derive(move || form.with(|f| f.rate_error.clone()))
-                        />
-                        <p class="hint" aria-live="polite">
-                            {move || match sections() {
-                                0 => "No valid design yet: the charts show the last valid one.".to_string(),
-                                1 => "1 second-order section".to_string(),
-                                n => format!("{n} second-order sections"),
-                            }}
-                        </p>
-                    </Later>
-                </form>
-                // The charts in the task after the form's: together they took the page's first
-                // task past 50 ms.
-                <div class="charts">
-                    <Later>
-                        <ChartCanvas label="Magnitude response" chart=magnitude />
-                        <ChartCanvas label="Phase response" chart=phase />
-                    </Later>
-                </div>
-            </div>
-            <h2>"The filter on a motor current"</h2>
-            <p class="lede">
-                "Four seconds of the feed motor's phase currents on paper 000's brake bench (a "
-                "magnetic-particle brake loads the servo; 600 mm/min), through the filter designed "
-                "above. The three-phase RMS of a balanced set is steady — the amplitude over √2 — "
-                "and the spectrum shows the 4 Hz supply frequency that paper 000 found rising with load."
-            </p>
-            <RunProgress runner=bench.clone() id="bench-progress" />
-            <p class="hint" aria-live="polite">{peak_text}</p>
-            <div class="charts">
-                <Later>
-                    <ChartCanvas label="Phase current before and after filtering" chart=current_chart(0) />
-                    <ChartCanvas label="Three-phase RMS current" chart=current_chart(1) height_px=200 />
-                    <ChartCanvas label="Amplitude spectrum of i_u" chart=current_chart(2) />
-                </Later>
-            </div>
-        </section>
+        <h2>"The filter on a motor current"</h2>
+        <p class="lede">
+            "Four seconds of the feed motor's phase currents on paper 000's brake bench (a "
+            "magnetic-particle brake loads the servo; 600 mm/min), through the filter designed "
+            "above. The three-phase RMS of a balanced set is steady — the amplitude over √2 — "
+            "and the spectrum shows the 4 Hz supply frequency that paper 000 found rising with load."
+        </p>
+        <RunProgress runner=bench.clone() id="bench-progress" />
+        <p class="hint" aria-live="polite">{peak_text}</p>
+        <div class="charts">
+            <Later>
+                <ChartCanvas label="Phase current before and after filtering" chart=current_chart(0) />
+                <ChartCanvas label="Three-phase RMS current" chart=current_chart(1) height_px=200 />
+                <ChartCanvas label="Amplitude spectrum of i_u" chart=current_chart(2) />
+            </Later>
+        </div>
     }
 }

@@ -11,7 +11,8 @@ use crate::closed_loop::metrics::metrics_csv;
 use crate::closed_loop::trace::write_csv;
 use crate::control::registry::ControllerKind;
 use crate::web::components::download::{download_configuration, download_text, download_written};
-use crate::web::components::later::{from_next_task, Later};
+use crate::web::components::later::{effect_after_mount, Later};
+use crate::web::components::page::PageShell;
 use crate::web::components::run_form::{
     ControllerFields, ControllerForm, MachineAndSignalFields, ScenarioFields, ScenarioForm,
 };
@@ -78,27 +79,18 @@ pub fn SimulatePage() -> impl IntoView {
     };
 
     // Keep the URL in step with the form, and re-run when a valid spec changes: the first run at
-    // once (in the task after the page's, see `mounted`), edits in the next task.
+    // once, edits in the next task.
     let debounce = Debounce::first_at_once(RERUN_DELAY);
-    // Both effects wait for the task after the page's: parsing the form and writing the URL are
-    // the page's own work, not its mount's.
-    let mounted = from_next_task();
     let savings_for_edits = savings.clone();
     let start_for_effect = start_run.clone();
-    Effect::new(move |_| {
-        if !mounted.get() {
-            return;
-        }
+    effect_after_mount(move || {
         let mut q = scenario.query();
         q.extend(controller.query(""));
         replace_query(Page::Simulate, &q);
     });
     // Re-run when the valid spec changes, and only then: `spec` is a memo, so the form's signals
     // settling after the page mounts, or a field set to what it held, start nothing.
-    Effect::new(move |_| {
-        if !mounted.get() {
-            return;
-        }
+    effect_after_mount(move || {
         let Some(spec) = spec.get() else {
             return;
         };
@@ -178,8 +170,7 @@ pub fn SimulatePage() -> impl IntoView {
     };
 
     view! {
-        <section class="page" aria-labelledby="simulate-title">
-            <h1 id="simulate-title">"Simulate a closed loop"</h1>
+        <PageShell id="simulate" title="Simulate a closed loop">
             <p class="lede">
                 "Pick one of the papers' experiments and a controller. A teach cut first calibrates "
                 "the current-to-force model; then the controller holds the force through the "
@@ -187,9 +178,6 @@ pub fn SimulatePage() -> impl IntoView {
             </p>
             <div class="layout-two">
                 <form class="panel" aria-label="Run settings" on:submit=|ev| ev.prevent_default()>
-                    // The page mounts in pieces, a task each (the page itself with its state, the
-                    // scenario and controller, the rest of the form, the results), so that no
-                    // task of a first load takes more than 50 ms.
                     <Later>
                     <ScenarioFields form=scenario />
                     <ControllerFields form=controller />
@@ -229,6 +217,6 @@ pub fn SimulatePage() -> impl IntoView {
                     </Later>
                 </div>
             </div>
-        </section>
+        </PageShell>
     }
 }

@@ -1,4 +1,15 @@
 //! Compare: one scenario, two to four controller variants, overlaid and side by side.
+//!
+//! | file | panel |
+//! |---|---|
+//! | `mod.rs` | the page: the scenario, the variants, the runs and their charts and metrics |
+//! | `papers.rs` | the papers' comparisons, one click away, with what the lab measures of each claim |
+//! | `export.rs` | traces, metrics and the configuration as files |
+//! | [`export`] | the comparison as files: traces and metrics as CSV, the configuration as JSON |
+//! | [`papers`] | the papers' comparisons, one click away, each with its claim and measured finding |
+
+mod export;
+mod papers;
 
 use std::sync::Arc;
 use std::time::Duration;
@@ -7,12 +18,9 @@ use leptos::prelude::*;
 
 use crate::closed_loop::definition::RunSpec;
 use crate::closed_loop::lab::{LabRuns, RunResult};
-use crate::closed_loop::metrics::metrics_csv_columns;
-use crate::closed_loop::paper_comparisons::PAPER_COMPARISONS;
-use crate::closed_loop::trace::write_csv_runs;
 use crate::control::registry::ControllerKind;
-use crate::web::components::download::{download_configuration, download_text, download_written};
-use crate::web::components::later::{from_next_task, Later};
+use crate::web::components::later::{effect_after_mount, Later};
+use crate::web::components::page::PageShell;
 use crate::web::components::run_form::{
     ControllerFields, ControllerForm, MachineAndSignalFields, ScenarioFields, ScenarioForm,
 };
@@ -21,6 +29,8 @@ use crate::web::components::runner::{Debounce, RunProgress, RunStatus, Runner};
 use crate::web::components::savings::Savings;
 use crate::web::components::teach_cuts::KeptCalibrations;
 use crate::web::route::{query_params, replace_query, Page};
+use export::ExportPanel;
+use papers::PaperComparisons;
 
 /// Wait after an edit before re-running: none beyond the task that made it, so the events of one
 /// edit start one run. A new run cancels the one before and its first chunk waits for a task of
@@ -65,8 +75,6 @@ pub fn ComparePage() -> impl IntoView {
             }
         }
     });
-    // The paper comparison last chosen: its claim, and what its runs measure once they are done.
-    let chosen_comparison = RwSignal::new(None::<usize>);
     let initial_count = query
         .iter()
         .find(|(k, _)| k == "variants")
@@ -95,16 +103,10 @@ pub fn ComparePage() -> impl IntoView {
 
     let calibrations = KeptCalibrations::new(KEPT_CALIBRATIONS);
     let debounce = Debounce::first_at_once(RERUN_DELAY);
-    // Both effects wait for the task after the page's: parsing the forms and writing the URL are
-    // the page's own work, not its mount's.
-    let mounted = from_next_task();
     let savings_for_edits = savings.clone();
     let runner_for_effect = runner.clone();
     // Keep the URL in step with the forms.
-    Effect::new(move |_| {
-        if !mounted.get() {
-            return;
-        }
+    effect_after_mount(move || {
         let mut q = scenario.query();
         q.push(("variants".into(), count.get().to_string()));
         for (form, prefix) in forms.iter().zip(VARIANT_PREFIXES).take(count.get()) {
@@ -114,10 +116,7 @@ pub fn ComparePage() -> impl IntoView {
     });
     // Re-run when the valid specs change, and only then: `specs` is a memo, so the forms' signals
     // settling after the page mounts, or a field set to what it held, start nothing.
-    Effect::new(move |_| {
-        if !mounted.get() {
-            return;
-        }
+    effect_after_mount(move || {
         let Some(specs) = specs.get() else {
             return;
         };
@@ -163,103 +162,16 @@ pub fn ComparePage() -> impl IntoView {
         _ => runs.get(),
     });
 
-    // The claim at once; the measured finding when the runs shown are the comparison's (an edit
-    // that changes the controllers or the preset leaves the claim alone).
-    let finding = move || {
-        let comparison = &PAPER_COMPARISONS[chosen_comparison.get()?];
-        let measured = runs.with(|shown| {
-            let results: Vec<&RunResult> = shown.iter().map(|(_, r)| r.as_ref()).collect();
-            comparison.finding(&results)
-        });
-        Some(match measured {
-            Some(f) => format!("{} {}", comparison.claim, f.text()),
-            None => format!(
-                "{} (what the lab measures appears when this comparison's runs are shown)",
-                comparison.claim
-            ),
-        })
-    };
-
-    let (export_error, set_export_error) = signal(None::<String>);
-    let export_traces = move |_| {
-        let shown = runs.get_untracked();
-        let named: Vec<(&str, &crate::closed_loop::trace::Trace)> =
-            shown.iter().map(|(n, r)| (n.as_str(), &r.trace)).collect();
-        let outcome = download_written("cutlab-compare-traces.csv", "text/csv", |out| {
-            write_csv_runs(&named, out)
-        });
-        set_export_error.set(outcome.err());
-    };
-    let export_metrics = move |_| {
-        let shown = runs.get_untracked();
-        let named: Vec<(&str, &crate::closed_loop::metrics::Metrics)> = shown
-            .iter()
-            .map(|(n, r)| (n.as_str(), &r.metrics))
-            .collect();
-        set_export_error.set(
-            download_text(
-                "cutlab-compare-metrics.csv",
-                "text/csv",
-                &metrics_csv_columns(&named),
-            )
-            .err(),
-        );
-    };
-    let export_config = move |_| {
-        set_export_error.set(
-            specs
-                .get_untracked()
-                .ok_or_else(|| "fix the settings marked above first".to_string())
-                .and_then(download_configuration)
-                .err(),
-        );
-    };
-
     view! {
-        <section class="page" aria-labelledby="compare-title">
-            <h1 id="compare-title">"Compare controllers"</h1>
+        <PageShell id="compare" title="Compare controllers">
             <p class="lede">
                 "One scenario and seed, two to four controllers or tunings. The traces are overlaid "
                 "on linked time axes and the metrics table marks the best value of each row."
             </p>
             <div class="layout-two">
                 <form class="panel" aria-label="Comparison settings" on:submit=|ev| ev.prevent_default()>
-                    // The page mounts in pieces, a task each (the page itself with its state, the
-                    // papers' comparisons and the scenario, the variants, the rest of the form, the
-                    // results), so that no task of a first load takes more than 50 ms.
                     <Later>
-                    <fieldset>
-                        <legend>"The papers' comparisons"</legend>
-                        <div class="preset-row">
-                            {PAPER_COMPARISONS
-                                .iter()
-                                .enumerate()
-                                .map(|(index, c)| {
-                                    view! {
-                                        <button
-                                            type="button"
-                                            class="preset"
-                                            on:click=move |_| {
-                                                scenario.reset_to(c.preset);
-                                                for (setting, text) in c.settings {
-                                                    scenario.text(*setting).set(text.to_string());
-                                                }
-                                                count.set(c.controllers.len().clamp(2, 4));
-                                                for (form, kind) in forms.iter().zip(c.controllers) {
-                                                    form.follow_preset(c.preset);
-                                                    form.reset_to(*kind);
-                                                }
-                                                chosen_comparison.set(Some(index));
-                                            }
-                                        >
-                                            {c.label}
-                                        </button>
-                                    }
-                                })
-                                .collect_view()}
-                        </div>
-                        <p class="finding" role="status">{finding}</p>
-                    </fieldset>
+                    <PaperComparisons scenario=scenario forms=forms count=count runs=runs />
                     <ScenarioFields form=scenario />
                     </Later>
                     <Later>
@@ -283,21 +195,7 @@ pub fn ComparePage() -> impl IntoView {
                         </button>
                     </div>
                     <RunProgress runner=runner.clone() />
-                    <fieldset>
-                        <legend>"Export"</legend>
-                        <div class="button-row">
-                            <button type="button" on:click=export_traces disabled=move || runs.with(Vec::is_empty)>
-                                "Traces (CSV)"
-                            </button>
-                            <button type="button" on:click=export_metrics disabled=move || runs.with(Vec::is_empty)>
-                                "Metrics (CSV)"
-                            </button>
-                            <button type="button" on:click=export_config disabled=move || specs.get().is_none()>
-                                "Configuration (JSON)"
-                            </button>
-                        </div>
-                        {move || export_error.get().map(|e| view! { <p class="run-error" role="alert">{e}</p> })}
-                    </fieldset>
+                    <ExportPanel runs=runs specs=specs />
                     </Later>
                 </form>
                 <div class="results">
@@ -308,6 +206,6 @@ pub fn ComparePage() -> impl IntoView {
                     </Later>
                 </div>
             </div>
-        </section>
+        </PageShell>
     }
 }

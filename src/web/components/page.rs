@@ -1,0 +1,30 @@
+//! The one page shell: a section named by its heading, the page's panels inside.
+
+use leptos::prelude::*;
+
+/// A page of the lab: `<section class="page …">` labelled by its `<h1>`, then `children` (the
+/// lede and the page's panels).
+#[component]
+pub fn PageShell(
+    /// The page's id: its heading is `{id}-title`.
+    id: &'static str,
+    /// The heading.
+    title: &'static str,
+    /// A class beside `page`, for the page's own styles (empty: none).
+    #[prop(default = "")]
+    class: &'static str,
+    children: Children,
+) -> impl IntoView {
+    let (labelled_by, title_id) = (format!("{id}-title"), format!("{id}-title"));
+    let class = if class.is_empty() {
+        "page".to_string()
+    } else {
+        format!("page {class}")
+    };
+    view! {
+        <section class=class aria-labelledby=labelled_by>
+            <h1 id=title_id>{title}</h1>
+            {children()}
+        </section>
+    }
+}

@@ -1,0 +1,179 @@
+//! Fuzzy rules: paper 002's membership functions, the 7×7 rule table (editable), the control
+//! surface U(E, EC), a rule viewer for a chosen (E, EC) or a moment of a simulated run, and FLL
+//! import and export.
+//!
+//! | file | panel |
+//! |---|---|
+//! | `mod.rs` | the page: the engine studied, from the table or an imported FLL |
+//! | `table.rs` | the rule table, the rule bases and the defuzzifier |
+//! | `viewer.rs` | the rules that fire at a chosen (E, EC) |
+//! | `moment.rs` | a simulated run with the table, and the moment picked on it |
+//! | `fll.rs` | FLL export and import |
+//! | `charts.rs` | the control surface, the run's inputs and the membership functions |
+//! | [`table`] | the 7×7 rule table, cell by cell, with the rule bases one click away |
+//! | [`charts`] | the control surface U(E, EC) and the run's E and EC |
+//! | [`viewer`] | the rule viewer: the output and the rules that fire for a chosen E and EC |
+//! | [`moment`] | a moment of a simulated run, chosen with a slider |
+//! | [`fll`] | FLL (fuzzylite) export and import |
+
+mod charts;
+mod fll;
+mod moment;
+mod table;
+mod viewer;
+
+use std::sync::Arc;
+
+use leptos::prelude::*;
+
+use crate::control::fuzzy::engine::{Defuzzifier, Engine};
+use crate::control::fuzzy::rules::{paper_002_engine, RuleBase, RuleTable};
+use crate::web::components::fields::parse_number;
+use crate::web::components::later::{effect_after_mount, Later};
+use crate::web::components::page::PageShell;
+use crate::web::components::run_form::{decode_rule_table, encode_rule_table};
+use crate::web::route::{query_params, replace_query, Page};
+use charts::FuzzyCharts;
+use fll::FllPanel;
+use moment::{RunMoment, RunMomentPanel};
+use table::RuleTablePanel;
+use viewer::RuleViewer;
+
+/// The engine being studied: paper 002's with an editable table, or one imported from FLL with
+/// the reason it is not such a table.
+#[derive(Clone)]
+enum Source {
+    Table,
+    Imported(Arc<Engine>, String),
+}
+
+/// The output at the viewer's point and the rules that fire there, with their strengths.
+type Firing = (f64, Vec<(usize, f64)>);
+
+/// What the panels share: the table, the engine made of it and the viewer's point.
+#[derive(Clone, Copy)]
+struct Fuzzy {
+    table: RwSignal<RuleTable>,
+    defuzzifier: RwSignal<String>,
+    source: RwSignal<Source>,
+    e_text: RwSignal<String>,
+    ec_text: RwSignal<String>,
+    engine: Memo<Result<Arc<Engine>, String>>,
+    viewer: Memo<Option<Firing>>,
+}
+
+impl Fuzzy {
+    fn new(table: RuleTable) -> Self {
+        let table = RwSignal::new(table);
+        let defuzzifier = RwSignal::new(Defuzzifier::WeightedAverage.name().to_string());
+        let source = RwSignal::new(Source::Table);
+        let e_text = RwSignal::new("2".to_string());
+        let ec_text = RwSignal::new("-1".to_string());
+        let engine = Memo::new(move |_| -> Result<Arc<Engine>, String> {
+            let d = Defuzzifier::from_name(&defuzzifier.get()).unwrap_or(Defuzzifier::Centroid);
+            match source.get() {
+                Source::Table => paper_002_engine(&table.get(), d)
+                    .map(Arc::new)
+                    .map_err(|e| e.to_string()),
+                Source::Imported(engine, _) => {
+                    let mut e = (*engine).clone();
+                    e.set_defuzzifier(d);
+                    Ok(Arc::new(e))
+                }
+            }
+            .and_then(|e| {
+                if e.inputs().len() == 2 && !e.outputs().is_empty() {
+                    Ok(e)
+                } else {
+                    Err("the rule viewer and surface need an engine with two inputs".to_string())
+                }
+            })
+        });
+        let viewer = Memo::new(move |_| {
+            let (Ok(e), Ok(ec)) = (parse_number(&e_text.get()), parse_number(&ec_text.get()))
+            else {
+                return None;
+            };
+            engine.with(|engine| {
+                let mut engine = (**engine.as_ref().ok()?).clone();
+                let mut out = vec![0.0; engine.outputs().len()];
+                engine.evaluate(&[e, ec], &mut out);
+                let firing: Vec<(usize, f64)> = engine
+                    .activations()
+                    .iter()
+                    .copied()
+                    .enumerate()
+                    .filter(|(_, a)| *a > 0.0)
+                    .collect();
+                Some((out[0], firing))
+            })
+        });
+        Self {
+            table,
+            defuzzifier,
+            source,
+            e_text,
+            ec_text,
+            engine,
+            viewer,
+        }
+    }
+
+    /// Whether the rule of cell (E level `e`, EC level `ec`) fires at the viewer's point.
+    fn is_firing(&self, e: usize, ec: usize) -> bool {
+        matches!(self.source.get(), Source::Table)
+            && self.viewer.with(|v| {
+                v.as_ref()
+                    .is_some_and(|(_, f)| f.iter().any(|(r, _)| *r == e * 7 + ec))
+            })
+    }
+}
+
+/// The Fuzzy rules page.
+#[component]
+pub fn FuzzyPage() -> impl IntoView {
+    let query = query_params(&window().location().hash().unwrap_or_default());
+    let initial = query
+        .iter()
+        .find(|(k, _)| k == "rules")
+        .and_then(|(_, v)| decode_rule_table(v))
+        .unwrap_or_else(|| RuleBase::Dynamics.table());
+    let fuzzy = Fuzzy::new(initial);
+    effect_after_mount(move || {
+        replace_query(
+            Page::Fuzzy,
+            &[("rules".to_string(), encode_rule_table(&fuzzy.table.get()))],
+        );
+    });
+    let run = RunMoment::new(fuzzy);
+    let run_for_charts = run.clone();
+    view! {
+        <PageShell id="fuzzy" title="Fuzzy rules">
+            <p class="lede">
+                "Paper 002's controller sorts the force error E and its change EC into seven sets each "
+                "and looks up the feed change U in a 7×7 table. Edit the table cell by cell, see the "
+                "control surface change, and watch which rules fire for an (E, EC) you choose or for "
+                "a moment of a simulated run."
+            </p>
+            <div class="layout-fuzzy">
+                <div class="panel">
+                    <RuleTablePanel fuzzy=fuzzy />
+                    <Later>
+                        <RuleViewer fuzzy=fuzzy />
+                    </Later>
+                    <Later>
+                        <RunMomentPanel fuzzy=fuzzy run=run.clone() />
+                    </Later>
+                    <Later>
+                        <FllPanel fuzzy=fuzzy />
+                    </Later>
+                </div>
+                <div class="charts">
+                    <Later>
+                        <FuzzyCharts fuzzy=fuzzy run=run_for_charts.clone() />
+                    </Later>
+                </div>
+            </div>
+        </PageShell>
+    }
+}

@@ -1,0 +1,212 @@
+//! The recordings in this browser's IndexedDB: listed, exported as CSV, deleted; one a reload or
+//! a crash cut short is offered first.
+
+use leptos::prelude::*;
+use wasm_bindgen::JsCast;
+
+use super::ui::{StationRef, Ui};
+use crate::hardware::recording::RecordingMeta;
+use crate::web::hardware::station::Station;
+use crate::web::js::describe;
+
+/// Offers the chunks of a recording, joined, as a CSV download.
+fn download_chunks(file_name: &str, chunks: &js_sys::Array) -> Result<(), String> {
+    let fail = |what: &str| format!("could not save {file_name}: {what}");
+    let options = web_sys::BlobPropertyBag::new();
+    options.set_type("text/csv");
+    let blob = web_sys::Blob::new_with_str_sequence_and_options(chunks, &options)
+        .map_err(|e| fail(&describe(&e)))?;
+    let url =
+        web_sys::Url::create_object_url_with_blob(&blob).map_err(|_| fail("no object URL"))?;
+    let anchor: web_sys::HtmlAnchorElement = document()
+        .create_element("a")
+        .map_err(|_| fail("no anchor"))?
+        .dyn_into()
+        .map_err(|_| fail("not an anchor"))?;
+    anchor.set_href(&url);
+    anchor.set_download(file_name);
+    anchor.click();
+    let _ = web_sys::Url::revoke_object_url(&url);
+    Ok(())
+}
+
+/// The recordings: listed, exported as CSV, deleted; an unfinished one (a reload or crash cut it
+/// short) is offered first.
+#[component]
+pub fn Recordings(ui: Ui, station: StationRef) -> impl IntoView {
+    let export = move |meta: RecordingMeta| {
+        if ui.active_recording.get_untracked() == Some(meta.id) {
+            if let Some(e) = station.try_update_value(Station::flush_now) {
+                ui.apply(station, e);
+            }
+        }
+        let Some(store) = station.try_with_value(|s| s.store.clone()).flatten() else {
+            // No IndexedDB: the recording is in memory.
+            let chunks = station
+                .try_with_value(|s| s.memory_chunks(meta.id))
+                .flatten()
+                .unwrap_or_default();
+            let array: js_sys::Array = chunks
+                .iter()
+                .map(|c| wasm_bindgen::JsValue::from_str(c))
+                .collect();
+            let result = if chunks.is_empty() {
+                Err("nothing of it was kept yet".to_string())
+            } else {
+                download_chunks(&meta.file_name(), &array)
+            };
+            ui.store_error.set(
+                result
+                    .err()
+                    .map(|e| format!("“{}” could not be exported: {e}", meta.name)),
+            );
+            return;
+        };
+        leptos::task::spawn_local(async move {
+            let result = match store.chunks(meta.id).await {
+                Ok(chunks) if chunks.length() == 0 => {
+                    Err("nothing of it was stored yet".to_string())
+                }
+                Ok(chunks) => download_chunks(&meta.file_name(), &chunks),
+                Err(e) => Err(e),
+            };
+            ui.store_error.set(
+                result
+                    .err()
+                    .map(|e| format!("“{}” could not be exported: {e}", meta.name)),
+            );
+        });
+    };
+    let delete = move |meta: RecordingMeta| {
+        if ui.active_recording.get_untracked() == Some(meta.id) {
+            ui.store_error.set(Some(format!(
+                "“{}” is still recording: it ends with the part, or at Disconnect.",
+                meta.name
+            )));
+            return;
+        }
+        let Some(store) = station.try_with_value(|s| s.store.clone()).flatten() else {
+            station.try_update_value(|s| s.memory_delete(meta.id));
+            ui.refresh_recordings(station);
+            return;
+        };
+        leptos::task::spawn_local(async move {
+            match store.delete(meta.id).await {
+                Ok(()) => {
+                    ui.store_error.set(None);
+                    ui.refresh_recordings(station);
+                }
+                Err(e) => ui
+                    .store_error
+                    .set(Some(format!("“{}” could not be deleted: {e}", meta.name))),
+            }
+        });
+    };
+    let keep = move |mut meta: RecordingMeta| {
+        meta.finished = true;
+        meta.end = "cut short: the page closed while it recorded (kept up to its last stored \
+                    half second)"
+            .to_string();
+        let Some(store) = station.try_with_value(|s| s.store.clone()).flatten() else {
+            return;
+        };
+        leptos::task::spawn_local(async move {
+            match store.put(&meta, None).await {
+                Ok(()) => ui.refresh_recordings(station),
+                Err(e) => ui.store_error.set(Some(format!("“{}”: {e}", meta.name))),
+            }
+        });
+    };
+    let unfinished = Memo::new(move |_| {
+        let active = ui.active_recording.get();
+        ui.recordings.with(|list| {
+            list.iter()
+                .filter(|m| !m.finished && Some(m.id) != active)
+                .cloned()
+                .collect::<Vec<_>>()
+        })
+    });
+    view! {
+        <section class="recordings" aria-labelledby="recordings-title">
+            <h2 id="recordings-title">"Recordings"</h2>
+            <p class="hint">
+                "Every sample received, written to this browser's storage (IndexedDB) every half "
+                "second while it streams: a reload or a crash loses at most that. CSV for the Logs "
+                "page and " <code>"cutlab log inspect"</code> "."
+            </p>
+            {move || ui.store_error.get().map(|e| view! { <p class="run-error" role="alert">{e}</p> })}
+            {move || {
+                let list = unfinished.get();
+                (!list.is_empty()).then(|| view! {
+                    <div class="panel notice" role="region" aria-label="Unfinished recordings">
+                        <p>
+                            "Found after a reload: recording(s) the page did not get to close. "
+                            "Each is intact up to its last stored half second."
+                        </p>
+                        <ul>
+                            {list.into_iter().map(|m| {
+                                let name = m.name.clone();
+                                let for_keep = m.clone();
+                                view! {
+                                    <li>
+                                        {format!("{} — {} rows, {:.1} s ", m.name, m.rows, m.duration_s)}
+                                        <button type="button" aria-label=format!("Keep {name}") on:click=move |_| keep(for_keep.clone())>"Keep"</button>
+                                    </li>
+                                }
+                            }).collect_view()}
+                        </ul>
+                    </div>
+                })
+            }}
+            {move || {
+                let list = ui.recordings.get();
+                if list.is_empty() {
+                    return view! { <p class="hint">"No recordings yet."</p> }.into_any();
+                }
+                let active = ui.active_recording.get();
+                view! {
+                    <table class="metrics recordings-table">
+                        <caption>"Stored recordings"</caption>
+                        <thead>
+                            <tr>
+                                <th scope="col">"Recording"</th>
+                                <th scope="col">"Rows"</th>
+                                <th scope="col">"Duration (s)"</th>
+                                <th scope="col">"Status"</th>
+                                <th scope="col">"Actions"</th>
+                            </tr>
+                        </thead>
+                        <tbody>
+                            {list.into_iter().rev().map(|m| {
+                                let status = if Some(m.id) == active {
+                                    "recording".to_string()
+                                } else if m.finished {
+                                    m.end.clone()
+                                } else {
+                                    "unfinished".to_string()
+                                };
+                                let status = if m.summary.is_empty() { status } else { format!("{status}; {}", m.summary) };
+                                let for_export = m.clone();
+                                let for_delete = m.clone();
+                                view! {
+                                    <tr>
+                                        <th scope="row">{m.name.clone()}</th>
+                                        <td>{m.rows.to_string()}</td>
+                                        <td>{format!("{:.1}", m.duration_s)}</td>
+                                        <td>{status}</td>
+                                        <td class="actions">
+                                            <button type="button" aria-label=format!("Export {} as CSV", m.name) on:click=move |_| export(for_export.clone())>"Export CSV"</button>
+                                            " "
+                                            <button type="button" aria-label=format!("Delete {}", m.name) on:click=move |_| delete(for_delete.clone())>"Delete"</button>
+                                        </td>
+                                    </tr>
+                                }
+                            }).collect_view()}
+                        </tbody>
+                    </table>
+                }
+                .into_any()
+            }}
+        </section>
+    }
+}

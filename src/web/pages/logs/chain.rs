@@ -1,0 +1,144 @@
+//! The signal chain on one column of the active log: a zero-phase low-pass, a moving RMS, the
+//! spectrum and statistics per label, re-run (debounced, in pieces) whenever a setting changes.
+
+use std::sync::Arc;
+use std::time::Duration;
+
+use leptos::prelude::*;
+
+use super::charts::{channel_column, CURRENTS};
+use super::Shared;
+use crate::log::analysis::{ChainOutput, ChainRequest, ChainWork};
+use crate::log::mapping::Channel;
+use crate::log::settings::LogSetting;
+use crate::log::ColumnKind;
+use crate::web::components::fields::ChoiceField;
+use crate::web::components::runner::{Debounce, RunProgress, Runner};
+use crate::web::components::table_form::SettingField;
+use crate::web::components::work_job::Shared as SharedWork;
+
+/// The chain's column, its grouping and its run.
+#[derive(Clone, Copy)]
+pub struct Chain {
+    /// The column analysed.
+    pub column: RwSignal<String>,
+    /// The label column the statistics are grouped by (empty: none).
+    pub by: RwSignal<String>,
+    runner: StoredValue<Runner<Arc<ChainOutput>>>,
+    /// The last chain's output.
+    pub done: ReadSignal<Option<Arc<ChainOutput>>>,
+    error: RwSignal<Option<String>>,
+}
+
+impl Chain {
+    /// The chain of `shared`'s active log, run whenever the log or a setting changes.
+    pub fn new(shared: Shared) -> Self {
+        let column = RwSignal::new(String::new());
+        let by = RwSignal::new(String::new());
+        let runner = Runner::<Arc<ChainOutput>>::new();
+        let error = RwSignal::new(None::<String>);
+        // A new log: analyse its current (or first numeric) column, grouped by its label.
+        Effect::new(move |_| {
+            shared.active.with(|l| {
+                let Some(l) = l else { return };
+                let present = |name: &str| l.log.columns.iter().any(|c| c.name == name);
+                if !present(&column.get_untracked()) {
+                    let pick = channel_column(l, &CURRENTS)
+                        .or_else(|| l.log.columns.iter().find(|c| c.kind == ColumnKind::Number))
+                        .map(|c| c.name.clone())
+                        .unwrap_or_default();
+                    column.set(pick);
+                }
+                if !present(&by.get_untracked()) {
+                    by.set(
+                        l.mapping
+                            .columns_of(Channel::Label)
+                            .first()
+                            .map_or(String::new(), |s| s.to_string()),
+                    );
+                }
+            })
+        });
+        let debounce = Debounce::new(Duration::from_millis(250));
+        let runner_for_effect = runner.clone();
+        Effect::new(move |_| {
+            let Some(l) = shared.active.get() else { return };
+            let Ok(analysis) = shared.analysis.get() else {
+                return;
+            };
+            let request = ChainRequest {
+                column: column.get(),
+                lowpass: analysis.lowpass,
+                rms_window_s: analysis.rms_window_s,
+                by: Some(by.get()).filter(|b| !b.is_empty()),
+                sample_period_s: shared.period_s(),
+            };
+            let runner = runner_for_effect.clone();
+            debounce.request(move || match ChainWork::new(l.log.clone(), request) {
+                Ok(work) => {
+                    error.set(None);
+                    runner.start(SharedWork(work));
+                }
+                Err(e) => error.set(Some(e)),
+            });
+        });
+        let done = runner.finished();
+        Self {
+            column,
+            by,
+            runner: StoredValue::new(runner),
+            done,
+            error,
+        }
+    }
+}
+
+/// The signal chain's fieldset.
+#[component]
+pub fn ChainPanel(shared: Shared, chain: Chain) -> impl IntoView {
+    let column_options = Signal::derive(move || {
+        shared.active.with(|l| {
+            l.as_ref()
+                .map(|l| {
+                    l.log
+                        .columns
+                        .iter()
+                        .filter(|c| matches!(c.kind, ColumnKind::Number))
+                        .map(|c| (c.name.clone(), c.name.clone()))
+                        .collect()
+                })
+                .unwrap_or_default()
+        })
+    });
+    let label_options = Signal::derive(move || {
+        let mut options = vec![(String::new(), "No grouping".to_string())];
+        shared.active.with(|l| {
+            if let Some(l) = l {
+                options.extend(
+                    l.log
+                        .columns
+                        .iter()
+                        .filter(|c| c.kind == ColumnKind::Text)
+                        .map(|c| (c.name.clone(), c.name.clone())),
+                );
+            }
+        });
+        options
+    });
+    let error = chain.error;
+    let field = move |setting: LogSetting| {
+        view! { <SettingField form=shared.settings setting=setting errors=shared.errors id_prefix="chain-" /> }
+    };
+    view! {
+        <fieldset>
+            <legend>"Signal chain"</legend>
+            <ChoiceField id="chain-column" label="Column" options=column_options value=chain.column error=Some(Signal::derive(move || error.get())) />
+            {field(LogSetting::Lowpass)}
+            {field(LogSetting::Order)}
+            {field(LogSetting::RmsWindow)}
+            {field(LogSetting::MarkerTeeth)}
+            <ChoiceField id="chain-by" label="Statistics per label of" options=label_options value=chain.by />
+            <RunProgress runner=chain.runner.get_value() id="chain-progress" failure="The signal chain failed" />
+        </fieldset>
+    }
+}

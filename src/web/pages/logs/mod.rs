@@ -1,0 +1,175 @@
+//! Logs: engineers' own machine logs, loaded as they are, analysed, calibrated from and replayed.
+//!
+//! ```text
+//! File / drop / sample ─► streamed in chunks (Blob.slice + arrayBuffer) ─► LogBuilder::push
+//!   ─► Log + guessed Mapping (editable, kept per file name)
+//!   ─► signal chain on a column (ChainWork): zero-phase low-pass, moving RMS, spectrum, statistics
+//!   ─► calibration (LogFitWork) ─► saved in localStorage (calibration_store::STORAGE_KEY)
+//!   ─► replay of controllers (ReplayRuns) ─► charts on linked time axes, CSV export
+//! ```
+//!
+//! Every long job runs in pieces (the file a chunk per task, the chain a stage per task, fits and
+//! replays a budget of periods per task), so the page never freezes. Every field is a row of a
+//! core table: the analysis's ([`crate::log::settings`]), the modelled cut's
+//! ([`crate::estimation::cut_settings`]) and the run definition's target
+//! ([`crate::closed_loop::definition::RunSetting`]), checked as typed.
+//!
+//! | file | panel |
+//! |---|---|
+//! | `mod.rs` | the page, and what its panels share: the open logs, the active one, the time axis, the analysis settings |
+//! | `loader.rs` | opening a file, a drop or a sample, in chunks |
+//! | `open.rs` | the Open a log and Open logs panels |
+//! | `chain.rs` | the signal chain on a column |
+//! | `calibration.rs` | the calibration from the log, saved or downloaded |
+//! | `replay.rs` | controllers replayed on the log |
+//! | `export.rs` | the analysed channels and the replays as CSV |
+//! | `results.rs`, `summary.rs`, `reports.rs`, `charts.rs` | the results column: the log and its mapping, the charts, the statistics and the replays' numbers |
+//! | [`open`] | opening logs: file picker, drop zone, sample logs |
+//! | [`loader`] | a log streamed in chunks into the core's reader |
+//! | [`summary`] | what the reader found in the active log: dialect, problems, what it did not read |
+//! | [`chain`] | the signal chain on one column of the active log |
+//! | [`calibration`] | the current-to-force fit from the active log |
+//! | [`replay`] | controllers replayed on the active log |
+//! | [`results`] | the results column: the active log, its mapping, every open log |
+//! | [`charts`] | the page's charts, made of what the core computed |
+//! | [`reports`] | the chain's statistics, notes and peaks; each replay's numbers |
+//! | [`export`] | the analysed channels and the replays' overrides as CSV |
+
+mod calibration;
+mod chain;
+mod charts;
+mod export;
+mod loader;
+mod open;
+mod replay;
+mod reports;
+mod results;
+mod summary;
+
+use std::ops::Range;
+
+use leptos::prelude::*;
+
+use crate::input::table::{self, form_errors, RowError};
+use crate::log::settings::{parse_analysis, sample_period, AnalysisSettings, LogSetting};
+use crate::web::components::later::Later;
+use crate::web::components::page::PageShell;
+use crate::web::components::table_form::{FieldErrors, TableForm};
+use calibration::{CalibrationPanel, Fit};
+use chain::{Chain, ChainPanel};
+use export::ExportPanel;
+use loader::{LoadedLog, Logs};
+use open::{OpenLogsPanel, OpenPanel};
+use replay::{Replay, ReplayPanel};
+use results::LogResults;
+
+/// What the panels share: the open logs and the active one, the linked time axis, and the
+/// analysis settings (the sample period of a log without a time column, the chain's low-pass,
+/// RMS window and marker teeth), each parsed through its row.
+#[derive(Clone, Copy)]
+struct Shared {
+    logs: Logs,
+    active: Memo<Option<LoadedLog>>,
+    time_view: RwSignal<Option<Range<f64>>>,
+    settings: TableForm<LogSetting>,
+    period: Memo<Result<Option<f64>, RowError<LogSetting>>>,
+    analysis: Memo<Result<AnalysisSettings, Vec<RowError<LogSetting>>>>,
+    teeth: Memo<Result<usize, RowError<LogSetting>>>,
+    errors: Memo<FieldErrors>,
+}
+
+impl Shared {
+    fn new() -> Self {
+        let logs = Logs::new();
+        let active = Memo::new(move |_| {
+            let id = logs.active.get();
+            logs.logs
+                .with(|l| l.iter().find(|x| Some(x.id) == id).cloned())
+        });
+        let settings = TableForm::<LogSetting>::new(&[]);
+        let text = move |s: LogSetting| settings.text(s).get();
+        let period = Memo::new(move |_| sample_period(Some(&text(LogSetting::SamplePeriod))));
+        // The chain's own rows: the period and the marker's teeth do not stop it.
+        let analysis = Memo::new(move |_| {
+            let rows = [
+                LogSetting::Lowpass,
+                LogSetting::Order,
+                LogSetting::RmsWindow,
+            ];
+            parse_analysis(&rows.map(|s| (s, text(s))))
+        });
+        let teeth = Memo::new(move |_| {
+            table::count(LogSetting::MarkerTeeth, &text(LogSetting::MarkerTeeth))
+        });
+        let errors = Memo::new(move |_| {
+            let mut all: Vec<RowError<LogSetting>> = analysis.get().err().unwrap_or_default();
+            all.extend(period.get().err());
+            all.extend(teeth.get().err());
+            form_errors(&all)
+        });
+        Self {
+            logs,
+            active,
+            time_view: RwSignal::new(None),
+            settings,
+            period,
+            analysis,
+            teeth,
+            errors,
+        }
+    }
+
+    /// The sample period given, if it parses (tracked).
+    fn period_s(&self) -> Option<f64> {
+        self.period.get().ok().flatten()
+    }
+
+    /// The sample period given, if it parses (untracked, for an action).
+    fn period_s_untracked(&self) -> Option<f64> {
+        self.period.get_untracked().ok().flatten()
+    }
+}
+
+/// The Logs page.
+#[component]
+pub fn LogsPage() -> impl IntoView {
+    let shared = Shared::new();
+    let chain = Chain::new(shared);
+    let fit = Fit::new();
+    let replay = Replay::new();
+    view! {
+        <PageShell id="logs" title="Machine logs">
+            <p class="lede">
+                "Bring a log from your own machine — a CNC's spindle or servo monitor export, a DAQ, a "
+                "logging script — as it is: comma, semicolon or tab, decimal commas, quotes, a header "
+                "with units or none. Map its columns, run the signal chain on a current, calibrate the "
+                "current-to-force model from it, and replay controllers on it: the override each would "
+                "have commanded and when the safety envelope would have acted. Replay is open-loop: the "
+                "log cannot react to a command."
+            </p>
+            <div class="layout-two">
+                <form class="panel" aria-label="Logs" on:submit=|ev| ev.prevent_default()>
+                    <OpenPanel logs=shared.logs />
+                    <OpenLogsPanel logs=shared.logs />
+                    <Later>
+                        <ChainPanel shared=shared chain=chain />
+                    </Later>
+                    <Later>
+                        <CalibrationPanel shared=shared fit=fit />
+                    </Later>
+                    <Later>
+                        <ReplayPanel shared=shared fit=fit replay=replay />
+                    </Later>
+                    <Later>
+                        <ExportPanel shared=shared chain=chain replay=replay />
+                    </Later>
+                </form>
+                <div class="results">
+                    <Later>
+                        <LogResults shared=shared chain=chain fit=fit replay=replay />
+                    </Later>
+                </div>
+            </div>
+        </PageShell>
+    }
+}

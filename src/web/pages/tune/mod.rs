@@ -1,0 +1,176 @@
+//! Tune: teach-in (the chosen scenarios' simulated teach cuts, or a saved calibration file), a
+//! grid sweep or a Nelder–Mead search over a controller's parameters across scenarios, sliced
+//! between frames (`tuning::TuningWork`); the table, the heat map of a two-parameter sweep and
+//! the chart of the Pareto front fill in when it is done. Every field is a row of the tuning's
+//! table ([`crate::tuning::settings`]), as `cutlab tune`'s options are.
+//!
+//! | file | panel |
+//! |---|---|
+//! | `mod.rs` | the page: the run of a tuning from the form |
+//! | `teach_in.rs` | the scenarios and the teach-in |
+//! | `params.rs` | the controller and the parameters tuned |
+//! | `method.rs` | search or sweep, and the objective's weights |
+//! | `results.rs` | the proposals, the best evaluation, the trade-off, the heat map, the evaluations |
+//! | [`params`] | the controller tuned and its parameters with their bounds |
+//! | [`method`] | how the parameters are tried: Nelder–Mead or a grid |
+//! | [`teach_in`] | the scenarios tuned, and the teach-in |
+//! | [`results`] | what a tuning and a teach-in found |
+
+mod method;
+mod params;
+mod results;
+mod teach_in;
+
+use leptos::prelude::*;
+
+use crate::closed_loop::definition::{preset_controller, RunSpec};
+use crate::control::registry::ControllerKind;
+use crate::input::table::{self, Table};
+use crate::plant::Preset;
+use crate::tuning::nelder_mead::NelderMead;
+use crate::tuning::settings::{parse_objective, TuneSetting};
+use crate::tuning::{ParamRange, TeachIn, Tuned, TuningMode, TuningProblem, TuningWork};
+use crate::web::components::page::PageShell;
+use crate::web::components::runner::{RunProgress, Runner};
+use crate::web::components::table_form::TableForm;
+use method::{method_errors, MethodPanel};
+use params::{ParamRow, ParamsPanel};
+use results::{TeachInTable, TuningResults};
+use teach_in::{Scenarios, ScenariosPanel, TeachInPanel};
+
+/// What the last finished tuning was asked: its ranges, a sweep's values per parameter (0 for a
+/// search), the first scenario and the controller, for the heat map and the links.
+type Asked = (Vec<ParamRange>, usize, Preset, ControllerKind);
+
+/// The Tune page.
+#[component]
+pub fn TunePage() -> impl IntoView {
+    let kind_text = RwSignal::new(ControllerKind::Pi.name().to_string());
+    let kind = Memo::new(move |_| {
+        kind_text
+            .get()
+            .parse::<ControllerKind>()
+            .unwrap_or(ControllerKind::Pi)
+    });
+    let scenarios = Scenarios::new();
+    let rows = [ParamRow::new(kind, 0), ParamRow::new(kind, 1)];
+    let second_on = RwSignal::new(true);
+    Effect::new(move |previous: Option<ControllerKind>| {
+        let k = kind.get();
+        if previous.is_some_and(|p| p != k) {
+            for (i, row) in rows.iter().enumerate() {
+                row.reset(k, i);
+            }
+        }
+        k
+    });
+    let mode = RwSignal::new("search".to_string());
+    let form = TableForm::<TuneSetting>::new(&[]);
+    let errors = Memo::new(move |_| method_errors(form));
+
+    let runner = Runner::<Tuned>::new();
+    let teach_runner = Runner::<Vec<TeachIn>>::new();
+    let (form_error, set_form_error) = signal(None::<String>);
+    let asked = RwSignal::new(None::<Asked>);
+    let from_file = RwSignal::new(None::<TeachIn>);
+
+    let runner_for_start = runner.clone();
+    let start = move |_| {
+        let presets = scenarios.chosen();
+        let Some(&first) = presets.first() else {
+            set_form_error.set(Some("Choose at least one scenario.".into()));
+            return;
+        };
+        let k = kind.get_untracked();
+        let count = if second_on.get_untracked() { 2 } else { 1 };
+        // What is wrong, by the label of its field: the message beside the Run button names
+        // them, each field's own message stands beside it.
+        let mut wrong: Vec<String> = Vec::new();
+        let mut params = Vec::new();
+        for (i, row) in rows[..count].iter().enumerate() {
+            match row.parse() {
+                Ok(range) => params.push(range),
+                Err(e) => wrong.extend(e.keys().map(|side| format!("Parameter {} {side}", i + 1))),
+            }
+        }
+        let texts = form.texts_untracked();
+        let text = |s: TuneSetting| {
+            texts
+                .iter()
+                .find(|(t, _)| *t == s)
+                .map_or("", |(_, x)| x.as_str())
+        };
+        let tuning_mode = if mode.get_untracked() == "sweep" {
+            table::count(TuneSetting::Steps, text(TuneSetting::Steps)).map(TuningMode::Sweep)
+        } else {
+            table::count(TuneSetting::Evaluations, text(TuneSetting::Evaluations)).map(|n| {
+                TuningMode::Search(NelderMead {
+                    max_evaluations: n,
+                    ..NelderMead::default()
+                })
+            })
+        };
+        let objective = parse_objective(&texts);
+        if let Err(e) = &tuning_mode {
+            wrong.push(e.setting.row().label.to_string());
+        }
+        if let Err(errors) = &objective {
+            wrong.extend(errors.iter().map(|e| e.setting.row().label.to_string()));
+        }
+        let (true, Ok(tuning_mode), Ok(objective)) = (wrong.is_empty(), tuning_mode, objective)
+        else {
+            set_form_error.set(Some(format!(
+                "Fix the fields marked above: {}.",
+                wrong.join(", ")
+            )));
+            return;
+        };
+        let problem = TuningProblem {
+            controller: preset_controller(first, k),
+            params: params.clone(),
+            scenarios: presets.iter().map(|&p| RunSpec::new(p, k)).collect(),
+            objective,
+        };
+        match TuningWork::new(problem, tuning_mode) {
+            Ok(work) => {
+                set_form_error.set(None);
+                let steps = match tuning_mode {
+                    TuningMode::Sweep(n) => n,
+                    TuningMode::Search(_) => 0,
+                };
+                asked.set(Some((params, steps, first, k)));
+                runner_for_start.start(work);
+            }
+            Err(e) => set_form_error.set(Some(e.to_string())),
+        }
+    };
+
+    view! {
+        <PageShell id="tune" title="Tune a controller">
+            <p class="lede">
+                "Find settings instead of trying them: a teach-in proposes a target and a threshold "
+                "gap from one teach cut; a sweep runs a grid of one or two parameters; a search "
+                "(Nelder–Mead) minimises the weighted objective across the scenarios. Every "
+                "evaluation runs the same closed loop as Simulate."
+            </p>
+            <div class="layout-two">
+                <form class="panel" aria-label="Tuning settings" on:submit=|ev| ev.prevent_default()>
+                    <ScenariosPanel scenarios=scenarios />
+                    <TeachInPanel scenarios=scenarios runner=teach_runner.clone() from_file=from_file form_error=set_form_error />
+                    <ParamsPanel kind_text=kind_text kind=kind rows=rows second_on=second_on />
+                    <MethodPanel form=form mode=mode errors=errors />
+                    <div class="button-row">
+                        <button type="button" on:click=start>"Run"</button>
+                    </div>
+                    {move || form_error.get().map(|e| view! { <p class="run-error" role="alert">{e}</p> })}
+                </form>
+                <div class="results">
+                    <RunProgress runner=teach_runner.clone() id="teach-progress" failure="The teach-in could not be made" />
+                    <TeachInTable taught=teach_runner.finished() from_file=from_file />
+                    <RunProgress runner=runner.clone() id="tune-progress" failure="The tuning could not be made" />
+                    <TuningResults tuned=runner.finished() asked=asked />
+                </div>
+            </div>
+        </PageShell>
+    }
+}
