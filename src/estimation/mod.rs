@@ -8,11 +8,13 @@
 //! | [`cut_settings`] | such a cut's settings as one table (material, cutter, mode, depth, width) that the Logs page and `cutlab calibrate` parse alike |
 //! | [`teach_fit`] | the one teach-cut fit: control periods at known loads → a calibration, with the periods it used and why it left the others out |
 //! | [`speed`] | spindle speed from the F/V converter voltage, per gear range |
+//! | [`power_law_fit`] | paper 004's network learned from trial cuts: the power law's exponents and bias for this machine, with their uncertainty |
 
 pub mod current_force;
 pub mod cut_forces;
 pub mod cut_settings;
 pub mod estimator;
+pub mod power_law_fit;
 pub mod speed;
 pub mod teach_fit;
 

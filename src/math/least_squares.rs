@@ -50,6 +50,9 @@ pub struct Fit {
     pub r_squared: f64,
     /// Standard deviation of the residuals, √(SS_res / (n − p)).
     pub residual_std: f64,
+    /// Standard error of each coefficient, σ·√((XᵀX)⁻¹)_jj with σ = [`Self::residual_std`]
+    /// (0 where n = p: an exact fit says nothing about its spread).
+    pub standard_errors: Vec<f64>,
     /// Samples used (rows with any non-finite value are dropped).
     pub samples: usize,
 }
@@ -130,6 +133,28 @@ pub fn fit(columns: &[(&'static str, &[f64])], y: &[f64]) -> Result<Fit, FitErro
         beta[j] = (b[j] - s) / r[j][j];
     }
     let ss_res: f64 = b[p..].iter().map(|v| v * v).sum();
+    let residual_std = if n > p {
+        (ss_res / (n - p) as f64).sqrt()
+    } else {
+        0.0
+    };
+    // (XᵀX)⁻¹ = R⁻¹·R⁻ᵀ, so the j-th diagonal entry is the squared norm of R⁻¹'s row j. Column
+    // e of R⁻¹ solves R·x = e_e by back substitution (upper triangular: x_j = 0 below e).
+    let mut row_norms_sq = vec![0.0; p];
+    for e in 0..p {
+        let mut x = vec![0.0; p];
+        for j in (0..=e).rev() {
+            let s: f64 = (j + 1..=e).map(|m| r[j][m] * x[m]).sum();
+            x[j] = (if j == e { 1.0 } else { 0.0 } - s) / r[j][j];
+        }
+        for (sum, v) in row_norms_sq.iter_mut().zip(&x) {
+            *sum += v * v;
+        }
+    }
+    let standard_errors = row_norms_sq
+        .iter()
+        .map(|sq| residual_std * sq.sqrt())
+        .collect();
     let y_used: Vec<f64> = rows.iter().map(|&i| y[i]).collect();
     let mean = y_used.iter().sum::<f64>() / n as f64;
     let ss_tot: f64 = y_used.iter().map(|v| (v - mean).powi(2)).sum();
@@ -140,11 +165,8 @@ pub fn fit(columns: &[(&'static str, &[f64])], y: &[f64]) -> Result<Fit, FitErro
         } else {
             1.0
         },
-        residual_std: if n > p {
-            (ss_res / (n - p) as f64).sqrt()
-        } else {
-            0.0
-        },
+        residual_std,
+        standard_errors,
         samples: n,
     })
 }
@@ -173,6 +195,14 @@ mod tests {
         assert!((f.coefficients[1] - 0.002).abs() < 2e-5);
         assert!((f.coefficients[2] - 0.01).abs() < 2e-5);
         assert!((f.residual_std - 0.05).abs() < 0.005);
+        // Each coefficient's true error is within a few of its standard errors.
+        for (got, (truth, se)) in f
+            .coefficients
+            .iter()
+            .zip([1.5, 0.002, 0.01].iter().zip(&f.standard_errors))
+        {
+            assert!((got - truth).abs() < 4.0 * se, "{got} vs {truth} ± {se}");
+        }
         assert!(f.r_squared > 0.99);
     }
 
@@ -211,5 +241,22 @@ mod tests {
                 unknowns: 2
             })
         );
+    }
+
+    #[test]
+    fn standard_errors_are_the_closed_form_of_a_straight_line() {
+        // y = a + b·x: SE(b) = σ / √Σ(x − x̄)², SE(a) = σ·√(1/n + x̄² / Σ(x − x̄)²).
+        let x = [1.0, 2.0, 4.0, 7.0, 11.0, 16.0];
+        let y = [2.1, 2.9, 5.2, 7.8, 12.5, 16.4];
+        let ones = [1.0; 6];
+        let f = fit(&[("intercept", &ones), ("x", &x)], &y).unwrap();
+        let n = x.len() as f64;
+        let mean = x.iter().sum::<f64>() / n;
+        let sxx: f64 = x.iter().map(|v| (v - mean).powi(2)).sum();
+        let se_b = f.residual_std / sxx.sqrt();
+        let se_a = f.residual_std * (1.0 / n + mean * mean / sxx).sqrt();
+        assert!((f.standard_errors[1] - se_b).abs() < 1e-12 * se_b.max(1.0));
+        assert!((f.standard_errors[0] - se_a).abs() < 1e-12 * se_a.max(1.0));
+        assert!(f.standard_errors[1] > 0.0);
     }
 }
