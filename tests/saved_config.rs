@@ -58,7 +58,7 @@ fn every_exported_comparison_runs_as_the_flags_run_it() {
 }
 
 /// The paper-002 comparison shipped in www/data runs with paper 002's k_u (the preset's fuzzy
-/// output range, 100 % per period): the runs `scripts/paper-002-table` makes for docs/papers.md,
+/// output range, 100 % per period): the runs `tests/docs.rs` makes for docs/papers.md's grid,
 /// not the generic 20 % it ran with when a file's controller without parameters took its kind's
 /// defaults.
 #[test]
