@@ -513,7 +513,7 @@ fn liu_current_steps_traces_are_a_machining_centres_for_every_controller() {
     }
 }
 
-/// Paper 002's Fig. 7 under the readings docs/papers.md's grid compares (scripts/paper-002-table),
+/// Paper 002's Fig. 7 under the readings docs/papers.md's grid compares (tests/docs.rs makes it),
 /// at the preset's +40 % step. The preset reads the paper as printed where it speaks: k_u's
 /// 100 % per period let through by the envelope, EC in A/s (Table 2), Table 2's 50 ms spacing as
 /// the period. There both tables limit-cycle, the dynamics table less; at 0.1 s the experience

@@ -1,11 +1,14 @@
 //! The comparisons the papers make, as runs the lab repeats: each states the paper's claim, and
 //! its finding is *measured* from the runs just made — never a sentence written beforehand that
 //! an edit, a new seed or a changed model could silently contradict. The Compare page offers each
-//! one click away; `tests/closed_loop.rs` holds the verdicts docs/papers.md reports.
+//! one click away; `tests/closed_loop.rs` holds the verdicts docs/papers.md reports, and
+//! `tests/docs.rs` writes docs/papers.md's grid for paper 002 through the same judgement
+//! ([`fig_7_judgement`]).
 
 use super::definition::RunSpec;
 use super::definition::{parse_texts, preset_controller, RunSetting, SettingError};
 use super::lab::RunResult;
+use super::metrics::FLUCTUATION_WINDOW_S;
 use super::summary::format_metric;
 use crate::control::registry::ControllerKind;
 use crate::plant::Preset;
@@ -240,7 +243,7 @@ const NEGLIGIBLE_FLUCTUATION_PCT: f64 = 0.05;
 /// How long the force must stay inside the settling band before its step's window ends for the
 /// step to count as settled: a force that enters the band in the last periods of a limit cycle
 /// has not shown that it stays.
-const SETTLED_FOR_S: f64 = 2.0;
+pub const SETTLED_FOR_S: f64 = 2.0;
 
 /// The longest settling time over `r`'s steps, each backed by [`SETTLED_FOR_S`] inside the band;
 /// `None` if a step never settled so (or there is no step).
@@ -258,27 +261,87 @@ fn settled_after_steps_s(r: &RunResult) -> Option<f64> {
     longest
 }
 
-/// Paper 002's Fig. 7: the dynamics-based table settles clearly sooner (by a fifth at least, or
-/// where the experience-based one never settles) and fluctuates no more than the experience-based
-/// one over the last 10 s.
-fn dynamics_rules_settle_sooner(runs: &[&RunResult]) -> Finding {
-    let [experience, dynamics] = runs else {
-        return incomplete();
-    };
-    let (e, d) = (&experience.metrics, &dynamics.metrics);
+/// One settling time is clearly sooner than another at this fraction of it or less (a fifth
+/// sooner); closer times are read as alike.
+pub const CLEARLY_SOONER: f64 = 0.8;
+
+/// Paper 002's Fig. 7 judged on a pair of runs (experience-based rules, dynamics-based rules):
+/// the figures the Compare page's finding states and docs/papers.md's grid tabulates, and the
+/// verdict on them. One definition, so the page and the docs cannot read the runs differently.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Fig7Judgement {
+    /// When the experience rules' force settled after the load step(s) and stayed
+    /// ([`SETTLED_FOR_S`]), s after the step; `None`: never before the run's end.
+    pub experience_settling_s: Option<f64>,
+    /// The same for the dynamics rules.
+    pub dynamics_settling_s: Option<f64>,
+    /// The experience rules' force fluctuation over the last [`FLUCTUATION_WINDOW_S`] of the
+    /// cut, % of the target.
+    pub experience_fluctuation_pct: f64,
+    /// The same for the dynamics rules.
+    pub dynamics_fluctuation_pct: f64,
+    /// Both fluctuate less than the simulation's noise: neither fluctuates more.
+    pub both_steady: bool,
+    /// Fig. 7's claim holds: the dynamics rules settle clearly sooner (in [`CLEARLY_SOONER`] of
+    /// the experience rules' time at most, or where those never settle) and fluctuate no more.
+    pub holds: bool,
+}
+
+/// Judges Fig. 7's claim on a run of each rule table (same preset, settings and seed).
+///
+/// ```
+/// use cutlab::closed_loop::definition::RunSpec;
+/// use cutlab::closed_loop::lab::simulate;
+/// use cutlab::closed_loop::paper_comparisons::fig_7_judgement;
+/// use cutlab::control::registry::ControllerKind;
+/// use cutlab::plant::Preset;
+/// let run = |kind| {
+///     let mut spec = RunSpec::new(Preset::LiuCurrentStep, kind);
+///     spec.settings.control_period_s = Some(0.1);
+///     simulate(&spec).unwrap()
+/// };
+/// let judged = fig_7_judgement(
+///     &run(ControllerKind::FuzzyExperience),
+///     &run(ControllerKind::FuzzyDynamics),
+/// );
+/// // At 0.1 s the experience table keeps cycling; the dynamics table settles within 10 s.
+/// assert!(judged.holds && judged.experience_settling_s.is_none());
+/// assert!(judged.dynamics_settling_s.unwrap() < 10.0);
+/// assert!(judged.experience_fluctuation_pct > 5.0 && judged.dynamics_fluctuation_pct < 0.5);
+/// ```
+pub fn fig_7_judgement(experience: &RunResult, dynamics: &RunResult) -> Fig7Judgement {
     let (e_settle, d_settle) = (
         settled_after_steps_s(experience),
         settled_after_steps_s(dynamics),
     );
-    let (e_wobble, d_wobble) = (e.late_force_fluctuation_pct, d.late_force_fluctuation_pct);
+    let (e_wobble, d_wobble) = (
+        experience.metrics.late_force_fluctuation_pct,
+        dynamics.metrics.late_force_fluctuation_pct,
+    );
     let settles_sooner = match (e_settle, d_settle) {
         (_, None) => false,
         (None, Some(_)) => true,
-        (Some(e), Some(d)) => d <= 0.8 * e,
+        (Some(e), Some(d)) => d <= CLEARLY_SOONER * e,
     };
     let both_steady =
         e_wobble < NEGLIGIBLE_FLUCTUATION_PCT && d_wobble < NEGLIGIBLE_FLUCTUATION_PCT;
     let fluctuates_no_more = both_steady || d_wobble <= e_wobble;
+    Fig7Judgement {
+        experience_settling_s: e_settle,
+        dynamics_settling_s: d_settle,
+        experience_fluctuation_pct: e_wobble,
+        dynamics_fluctuation_pct: d_wobble,
+        both_steady,
+        holds: settles_sooner && fluctuates_no_more,
+    }
+}
+
+/// Paper 002's Fig. 7 on the Compare page: [`fig_7_judgement`]'s figures and verdict.
+fn dynamics_rules_settle_sooner(runs: &[&RunResult]) -> Finding {
+    let [experience, dynamics] = runs else {
+        return incomplete();
+    };
+    let judged = fig_7_judgement(experience, dynamics);
     let settle_text = |t: Option<f64>| match t {
         Some(t) => format!("{} s", figure(t)),
         None => "never".to_string(),
@@ -286,16 +349,21 @@ fn dynamics_rules_settle_sooner(runs: &[&RunResult]) -> Finding {
     Finding {
         measured: format!(
             "after the load step the dynamics rules settle to ±{} % in {} against {} for the \
-             experience rules; over the last 10 s the force fluctuates {} % against {} % of \
+             experience rules; over the last {} s the force fluctuates {} % against {} % of \
              the target{}.",
-            figure(d.settling_band_pct),
-            settle_text(d_settle),
-            settle_text(e_settle),
-            figure(d_wobble),
-            figure(e_wobble),
-            if both_steady { " (both steady)" } else { "" }
+            figure(dynamics.metrics.settling_band_pct),
+            settle_text(judged.dynamics_settling_s),
+            settle_text(judged.experience_settling_s),
+            figure(FLUCTUATION_WINDOW_S),
+            figure(judged.dynamics_fluctuation_pct),
+            figure(judged.experience_fluctuation_pct),
+            if judged.both_steady {
+                " (both steady)"
+            } else {
+                ""
+            }
         ),
-        reproduced: Some(settles_sooner && fluctuates_no_more),
+        reproduced: Some(judged.holds),
     }
 }
 
