@@ -1908,6 +1908,123 @@ fn paper_002(facts: &mut Facts) {
     facts.set("liu.open_loop.peak_force_kn", fixed(force_n / 1000.0, 2));
 }
 
+/// Paper 004's network learned from trial cuts: on the stepped specimen's mechanistic forces,
+/// and on kim-step-doc's depth sections at three feeds, from the force and from the estimate.
+fn paper_004_learning(facts: &mut Facts) {
+    use cutlab::closed_loop::settings::OperatingPoint;
+    use cutlab::closed_loop::trial_cuts::{trial_cuts, TrialForce};
+    use cutlab::estimation::power_law_fit::{learn, local_exponent, stepped_specimen, TrialCut};
+    use cutlab::plant::mechanics::{mean_forces, Cutter, Immersion, MillingMode};
+    use cutlab::plant::power_law::{PowerLawInput, PowerLawInputs, PowerLawMaterial};
+
+    let mechanistic_n = |p: &PowerLawInputs| {
+        let cutter = Cutter::new(p.diameter_mm, 2, 30.0).unwrap();
+        let immersion = Immersion::new(MillingMode::Down, p.radial_width_mm, p.diameter_mm);
+        let k = cutlab::plant::materials::Material::Sm45c.coefficients();
+        mean_forces(
+            &cutter,
+            &k,
+            &immersion,
+            p.axial_depth_mm,
+            p.feed_per_tooth_mm,
+        )
+        .resultant_n()
+    };
+    let specimen = stepped_specimen(20.0, 2);
+    let cuts: Vec<TrialCut> = specimen
+        .iter()
+        .map(|&inputs| TrialCut {
+            inputs,
+            force_n: mechanistic_n(&inputs),
+        })
+        .collect();
+    facts.set("paper_004.learning.specimen_cuts", cuts.len().to_string());
+    let law = learn(&cuts, PowerLawReading::USED, PowerLawMaterial::CarbonSteel).unwrap();
+    for (input, key) in [
+        (PowerLawInput::RadialWidth, "a_e"),
+        (PowerLawInput::FeedPerTooth, "f"),
+        (PowerLawInput::AxialDepth, "a_p"),
+    ] {
+        let e = law.exponent(input).unwrap();
+        facts.set(
+            &format!("paper_004.learning.mechanistic.{key}"),
+            format!("{} ± {}", fixed(e.exponent, 2), fixed(e.uncertainty, 2)),
+        );
+        let local: Vec<f64> = specimen
+            .iter()
+            .map(|at| local_exponent(mechanistic_n, at, input))
+            .collect();
+        facts.set(&format!("paper_004.learning.model.{key}"), span(local, 2));
+        facts.set(
+            &format!("paper_004.learning.published.{key}"),
+            fixed(e.published, 2),
+        );
+    }
+    facts.set(
+        "paper_004.learning.mechanistic.residual_max_pct",
+        fixed(
+            law.residuals_pct
+                .iter()
+                .fold(0.0, |m: f64, r| m.max(r.abs())),
+            1,
+        ),
+    );
+
+    let preset = Preset::KimStepDoc;
+    let scenario = preset.scenario().unwrap();
+    let (teeth, diameter_mm) = (scenario.cutter().teeth, scenario.cutter().diameter_mm);
+    let programmed = OperatingPoint::of_preset(&RunSpec::new(preset, ControllerKind::Fixed)).feed_mm_min;
+    let (mut truth, mut estimated) = (Vec::new(), Vec::new());
+    for factor in [0.6, 0.8, 1.0] {
+        let run = simulate(&spec_with(preset, ControllerKind::Fixed, |s| {
+            s.plant.programmed_feed_mm_min = Some(programmed * factor)
+        }));
+        truth.extend(trial_cuts(
+            &run.trace,
+            teeth,
+            diameter_mm,
+            TrialForce::Measured,
+        ));
+        estimated.extend(trial_cuts(
+            &run.trace,
+            teeth,
+            diameter_mm,
+            TrialForce::Estimated,
+        ));
+    }
+    facts.set("paper_004.learning.kim.sections", truth.len().to_string());
+    let from_force = learn(&truth, PowerLawReading::USED, PowerLawMaterial::CarbonSteel).unwrap();
+    let from_estimate = learn(
+        &estimated,
+        PowerLawReading::USED,
+        PowerLawMaterial::CarbonSteel,
+    )
+    .unwrap();
+    for (input, key) in [
+        (PowerLawInput::FeedPerTooth, "f"),
+        (PowerLawInput::AxialDepth, "a_p"),
+    ] {
+        let (t, e) = (
+            from_force.exponent(input).unwrap(),
+            from_estimate.exponent(input).unwrap(),
+        );
+        facts.set(
+            &format!("paper_004.learning.kim.{key}"),
+            format!(
+                "{} ± {} from the force, {} ± {} from the estimate",
+                fixed(t.exponent, 2),
+                fixed(t.uncertainty, 2),
+                fixed(e.exponent, 2),
+                fixed(e.uncertainty, 2)
+            ),
+        );
+    }
+    facts.set(
+        "paper_004.learning.kim.bias_move_pct",
+        short(100.0 * (from_estimate.bias_n / from_force.bias_n - 1.0), 0),
+    );
+}
+
 fn root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
 }
@@ -1929,6 +2046,7 @@ fn all_facts() -> BTreeMap<String, String> {
     estimation(&mut facts, &matrix);
     settings(&mut facts, &matrix);
     paper_004(&mut facts, &matrix);
+    paper_004_learning(&mut facts);
     extra_runs(&mut facts, &matrix);
     log_calibration(&mut facts);
     paper_000_bench(&mut facts);

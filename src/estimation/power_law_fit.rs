@@ -281,6 +281,30 @@ impl LearnedPowerLaw {
     }
 }
 
+/// A designed set of trial cuts, as paper 004's stepped specimen: four depths in steps of 1 mm,
+/// three widths (a fifth to three tenths of the diameter) and three feeds per tooth
+/// (0.08–0.12 mm) crossed, 36 cuts on the cutter of `diameter_mm` with `teeth`. The ranges are
+/// modest around a common finishing-to-roughing cut so that a power law fitted over them stays
+/// close to the local behaviour of a force that is not one.
+pub fn stepped_specimen(diameter_mm: f64, teeth: u32) -> Vec<PowerLawInputs> {
+    let mut cuts = Vec::new();
+    for width_fraction in [0.2, 0.25, 0.3] {
+        for feed_per_tooth_mm in [0.08, 0.1, 0.12] {
+            for axial_depth_mm in [1.0, 2.0, 3.0, 4.0] {
+                cuts.push(PowerLawInputs {
+                    radial_width_mm: width_fraction * diameter_mm,
+                    feed_per_tooth_mm,
+                    axial_depth_mm,
+                    diameter_mm,
+                    teeth_engaged: f64::NAN,
+                    cutter_teeth: f64::from(teeth),
+                });
+            }
+        }
+    }
+    cuts
+}
+
 /// The local exponent of `force_n` in `input` at `at`: d ln F / d ln p by a central difference
 /// of ±1 % — what a power law fitted near `at` would find for a model that is not one (the
 /// mechanistic model's feed exponent K_c·f / (K_c·f + K_e), for instance).

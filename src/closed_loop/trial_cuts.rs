@@ -1,0 +1,106 @@
+//! Trial cuts read from a run: the steady part of each depth section of a trace, with its
+//! conditions, the force the plant made and the force the lab estimated from the currents —
+//! what paper 004's network learns from ([`crate::estimation::power_law_fit`]).
+
+use super::trace::{Trace, TraceRow};
+use crate::estimation::power_law_fit::TrialCut;
+use crate::plant::power_law::PowerLawInputs;
+
+/// Which force a trial cut carries.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum TrialForce {
+    /// The force on the tool (the simulation's truth, a dynamometer's reading).
+    Measured,
+    /// The lab's current-based estimate.
+    Estimated,
+}
+
+/// Periods a section needs, after its transient half is left out, to count as a trial cut.
+const MIN_STEADY_PERIODS: usize = 5;
+
+/// One trial cut per section of constant depth (in work) in `trace`: the mean over the later half
+/// of the section, the first half being the feed's and the force's transient after the step.
+/// `teeth` and `diameter_mm` are the cutter's.
+pub fn trial_cuts(trace: &Trace, teeth: u32, diameter_mm: f64, force: TrialForce) -> Vec<TrialCut> {
+    let rows = &trace.rows;
+    let mut cuts = Vec::new();
+    let mut start = 0;
+    for end in 1..=rows.len() {
+        let boundary =
+            end == rows.len() || (rows[end].depth_mm - rows[start].depth_mm).abs() > 1e-9;
+        if !boundary {
+            continue;
+        }
+        let steady = &rows[start + (end - start) / 2..end];
+        start = end;
+        if steady.len() < MIN_STEADY_PERIODS || steady[0].depth_mm <= 0.0 {
+            continue;
+        }
+        let mean = |value: fn(&TraceRow) -> f64| {
+            steady.iter().map(value).sum::<f64>() / steady.len() as f64
+        };
+        let teeth_f = f64::from(teeth);
+        let feed_per_tooth_mm = steady
+            .iter()
+            .map(|r| r.feed_mm_min / (r.spindle_speed_rpm * teeth_f))
+            .sum::<f64>()
+            / steady.len() as f64;
+        let inputs = PowerLawInputs {
+            radial_width_mm: mean(|r| r.width_mm),
+            feed_per_tooth_mm,
+            axial_depth_mm: steady[0].depth_mm,
+            diameter_mm,
+            // Not read by the handbook reading the lab uses; the mean over a revolution is the
+            // cutter's engagement, which a trace does not carry.
+            teeth_engaged: f64::NAN,
+            cutter_teeth: teeth_f,
+        };
+        let force_n = match force {
+            TrialForce::Measured => mean(|r| r.force_n),
+            TrialForce::Estimated => mean(|r| r.force_est_n),
+        };
+        cuts.push(TrialCut { inputs, force_n });
+    }
+    cuts
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn row(time_s: f64, depth_mm: f64, force_n: f64) -> TraceRow {
+        TraceRow {
+            time_s,
+            depth_mm,
+            width_mm: 20.0,
+            feed_mm_min: 200.0,
+            spindle_speed_rpm: 1000.0,
+            force_n,
+            force_est_n: force_n * 1.1,
+            ..TraceRow::default()
+        }
+    }
+
+    #[test]
+    fn each_depth_section_gives_its_steady_mean() {
+        let mut trace = Trace::default();
+        // Air, then 1 mm (transient 50 → 100 N, then 100 N), then a section too short to count.
+        for k in 0..10 {
+            trace.rows.push(row(f64::from(k), 0.0, 0.0));
+        }
+        for k in 0..20 {
+            let force = if k < 10 { 50.0 } else { 100.0 };
+            trace.rows.push(row(10.0 + f64::from(k), 1.0, force));
+        }
+        for k in 0..6 {
+            trace.rows.push(row(30.0 + f64::from(k), 2.0, 200.0));
+        }
+        let cuts = trial_cuts(&trace, 2, 20.0, TrialForce::Measured);
+        assert_eq!(cuts.len(), 1);
+        assert_eq!(cuts[0].force_n, 100.0);
+        assert_eq!(cuts[0].inputs.axial_depth_mm, 1.0);
+        assert!((cuts[0].inputs.feed_per_tooth_mm - 0.1).abs() < 1e-12);
+        let estimated = trial_cuts(&trace, 2, 20.0, TrialForce::Estimated);
+        assert!((estimated[0].force_n - 110.0).abs() < 1e-9);
+    }
+}
