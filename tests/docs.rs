@@ -1973,7 +1973,8 @@ fn paper_004_learning(facts: &mut Facts) {
     let preset = Preset::KimStepDoc;
     let scenario = preset.scenario().unwrap();
     let (teeth, diameter_mm) = (scenario.cutter().teeth, scenario.cutter().diameter_mm);
-    let programmed = OperatingPoint::of_preset(&RunSpec::new(preset, ControllerKind::Fixed)).feed_mm_min;
+    let programmed =
+        OperatingPoint::of_preset(&RunSpec::new(preset, ControllerKind::Fixed)).feed_mm_min;
     let (mut truth, mut estimated) = (Vec::new(), Vec::new());
     for factor in [0.6, 0.8, 1.0] {
         let run = simulate(&spec_with(preset, ControllerKind::Fixed, |s| {
@@ -2025,6 +2026,49 @@ fn paper_004_learning(facts: &mut Facts) {
     );
 }
 
+/// Paper 004's cutting-force-induced error: the tool's stiffness and the surface error's range
+/// along the wall for the fixed feed and the feedback laws.
+fn paper_004_surface_error(facts: &mut Facts, m: &Matrix) {
+    use cutlab::plant::deflection::ToolStiffness;
+    let kim = Preset::KimStepDoc.scenario().unwrap();
+    let k = ToolStiffness::of_cutter(kim.cutter());
+    facts.set("paper_004.cfie.kim_tool_n_um", fixed(k.tool_n_mm / 1e3, 1));
+    facts.set(
+        "paper_004.cfie.kim_combined_n_um",
+        fixed(k.combined_n_mm() / 1e3, 1),
+    );
+    for (preset, key) in [
+        (Preset::KimStepDoc, "kim_step"),
+        (Preset::ManeeratDoc4, "maneerat_4"),
+    ] {
+        facts.set(
+            &format!("paper_004.cfie.{key}.fixed_um"),
+            fixed(
+                m.metrics(preset, ControllerKind::Fixed)
+                    .surface_error_range_um,
+                1,
+            ),
+        );
+        facts.set(
+            &format!("paper_004.cfie.{key}.feedback_span_um"),
+            span(m.feedback(preset).map(|x| x.surface_error_range_um), 1),
+        );
+    }
+    // The prose's readings.
+    let kim_fixed = m
+        .metrics(Preset::KimStepDoc, ControllerKind::Fixed)
+        .surface_error_range_um;
+    assert!(m
+        .feedback(Preset::KimStepDoc)
+        .all(|x| x.surface_error_range_um < kim_fixed));
+    let maneerat_fixed = m
+        .metrics(Preset::ManeeratDoc4, ControllerKind::Fixed)
+        .surface_error_range_um;
+    assert!(m
+        .feedback(Preset::ManeeratDoc4)
+        .all(|x| x.surface_error_range_um > maneerat_fixed));
+}
+
 fn root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
 }
@@ -2047,6 +2091,7 @@ fn all_facts() -> BTreeMap<String, String> {
     settings(&mut facts, &matrix);
     paper_004(&mut facts, &matrix);
     paper_004_learning(&mut facts);
+    paper_004_surface_error(&mut facts, &matrix);
     extra_runs(&mut facts, &matrix);
     log_calibration(&mut facts);
     paper_000_bench(&mut facts);

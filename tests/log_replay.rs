@@ -139,8 +139,8 @@ fn replaying_a_recorded_run_through_its_controller_gives_the_loops_decisions() {
     assert_eq!(mapping.count(Channel::SpindlePhase), 3);
     assert_eq!(mapping.columns_of(Channel::Override), ["Override [%]"]);
     // The replay is asked what the run was asked: its target, its control period, its entry
-    // hold, the machine's override input and the tool's chip-load window (a log knows neither
-    // cutter nor material); the rest it derives as the lab did.
+    // hold, the machine's override input, the tool's chip-load window and stiffness (a log knows
+    // neither cutter nor material); the rest it derives as the lab did.
     let replay_settings = ReplaySettings {
         override_mode: spec.preset.override_mode(),
         run: SettingsOverrides {
@@ -152,6 +152,7 @@ fn replaying_a_recorded_run_through_its_controller_gives_the_loops_decisions() {
         },
         calibration: Some(calibration.clone()),
         chip_load: settings.envelope.chip_load,
+        stiffness: settings.stiffness,
         ..ReplaySettings::default()
     };
     let replayed = replay(&log, &mapping, &replay_settings, &spec.controller);

@@ -22,6 +22,7 @@ use crate::control::registry::{ControllerConfig, RunContext};
 use crate::estimation::current_force::ForceEstimate;
 use crate::estimation::estimator::{Calibration, Estimator};
 use crate::machine::{Machine, OverrideCommand, SensorSample, SensorlessEstimate};
+use crate::plant::deflection::normal_force_n;
 use crate::safety::{SafetyEnvelope, SafetyEvent};
 use crate::signal::chain::{PeriodSummary, SignalChain};
 use crate::work::Work;
@@ -251,6 +252,14 @@ impl FeedbackLoop {
             feed_current_u_max_a: period.feed_current_u_min_max_a.1,
             spindle_speed_rpm: period.spindle_speed_rpm,
             material_removal_mm3_s: period.material_removal_mm3_s,
+            surface_error_um: match self.settings.stiffness {
+                Some(k) if period.depth_mm > 0.0 => k.surface_error_um(normal_force_n(
+                    period.force_mean_resultant_n,
+                    period.feed_force_n,
+                )),
+                Some(_) if period.depth_mm == 0.0 => 0.0,
+                _ => f64::NAN,
+            },
             armed,
             sensor_fault: self.envelope.fault().is_some(),
             feed_hold: self.command.feed_hold,

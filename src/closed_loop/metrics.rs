@@ -89,6 +89,10 @@ pub struct Metrics {
     pub removed_volume_mm3: f64,
     /// Mean material removal rate over the cycle.
     pub mean_material_removal_mm3_s: f64,
+    /// The spread of the wall's force-induced error along the part once the cutter is engaged,
+    /// largest minus smallest, µm: what a CMM would see along the wall after the tool-radius
+    /// offset took out its constant part. NaN where the tool's stiffness is not known.
+    pub surface_error_range_um: f64,
     /// Cycle-time saving against the programmed feed at 100 %, percent (positive = faster).
     /// `None` until reference runs are made, and always for a program whose cycle time does not
     /// depend on the feed ([`with_savings`]).
@@ -221,6 +225,7 @@ pub fn compute(trace: &Trace, config: &MetricsConfig) -> Metrics {
         override_total_variation_pct: total_variation,
         override_changes: changes,
         removed_volume_mm3: removed,
+        surface_error_range_um: surface_error_range_um(rows),
         mean_material_removal_mm3_s: if cycle_time_s > 0.0 {
             removed / cycle_time_s
         } else {
@@ -234,6 +239,43 @@ pub fn compute(trace: &Trace, config: &MetricsConfig) -> Metrics {
 /// The standard deviation of force ÷ target over the last [`FLUCTUATION_WINDOW_S`] of the
 /// controlled cut, percent (population form, as a steady signal's spread; NaN with fewer than two
 /// periods).
+/// Largest minus smallest surface error along the wall, NaN when none is known: over the periods
+/// in work at least the width of cut from each entry into and exit from the part. There the
+/// cutter is still engaging or already leaving and the wall it leaves is a ramp, the same for
+/// every controller; between them the error follows the force the controller holds. A constant
+/// error is taken out by the tool-radius offset; what no offset removes is this spread.
+fn surface_error_range_um(rows: &[TraceRow]) -> f64 {
+    let mut lo = f64::INFINITY;
+    let mut hi = f64::NEG_INFINITY;
+    let in_work = |r: &TraceRow| r.depth_mm > 0.0;
+    let mut start = 0;
+    while start < rows.len() {
+        if !in_work(&rows[start]) {
+            start += 1;
+            continue;
+        }
+        let end = rows[start..]
+            .iter()
+            .position(|r| !in_work(r))
+            .map_or(rows.len(), |k| start + k);
+        let (first, last) = (&rows[start], &rows[end - 1]);
+        for r in &rows[start..end] {
+            let engaged = r.path_position_mm - first.path_position_mm >= first.width_mm
+                && last.path_position_mm - r.path_position_mm >= last.width_mm;
+            if engaged && r.surface_error_um.is_finite() {
+                lo = lo.min(r.surface_error_um);
+                hi = hi.max(r.surface_error_um);
+            }
+        }
+        start = end;
+    }
+    if hi >= lo {
+        hi - lo
+    } else {
+        f64::NAN
+    }
+}
+
 fn late_fluctuation_pct(rows: &[TraceRow]) -> f64 {
     let Some(end_s) = rows
         .iter()
@@ -316,7 +358,7 @@ pub fn metrics_csv(metrics: &Metrics) -> String {
 /// ```
 pub fn metrics_csv_columns(runs: &[(&str, &Metrics)]) -> String {
     let value = |v: Option<f64>| v.map_or(String::new(), |v| v.to_string());
-    let table: Vec<[(&str, Option<f64>); 22]> =
+    let table: Vec<[(&str, Option<f64>); 23]> =
         runs.iter().map(|(_, m)| metric_values(m)).collect();
     let mut out = String::from("metric");
     for (name, _) in runs {
@@ -339,7 +381,7 @@ pub fn metrics_csv_columns(runs: &[(&str, &Metrics)]) -> String {
 }
 
 /// Every metric as (CSV name, value), in the CSV's order.
-fn metric_values(metrics: &Metrics) -> [(&'static str, Option<f64>); 22] {
+fn metric_values(metrics: &Metrics) -> [(&'static str, Option<f64>); 23] {
     [
         ("cycle_time_s", Some(metrics.cycle_time_s)),
         ("completed", Some(f64::from(u8::from(metrics.completed)))),
@@ -383,6 +425,10 @@ fn metric_values(metrics: &Metrics) -> [(&'static str, Option<f64>); 22] {
         (
             "late_force_fluctuation_pct",
             Some(metrics.late_force_fluctuation_pct).filter(|v| v.is_finite()),
+        ),
+        (
+            "surface_error_range_um",
+            Some(metrics.surface_error_range_um).filter(|v| v.is_finite()),
         ),
     ]
 }
@@ -699,5 +745,45 @@ mod tests {
         let m = compute(&trace, &config());
         // Rows 10–30 remain, each standing for the 0.1 s before it.
         assert!((m.controlled_cutting_time_s - 2.1).abs() < 1e-9);
+    }
+
+    #[test]
+    fn the_surface_error_range_leaves_out_the_entry_and_exit_ramps() {
+        // Air, then 30 mm of work 10 mm wide: the error ramps 0 → 20 µm over the first 10 mm,
+        // holds 20–24 µm, and ramps down over the last 10 mm; then air again.
+        let mut trace = Trace::default();
+        let mut push = |position_mm: f64, depth_mm: f64, error_um: f64| {
+            trace.rows.push(TraceRow {
+                path_position_mm: position_mm,
+                depth_mm,
+                width_mm: 10.0,
+                surface_error_um: error_um,
+                ..TraceRow::default()
+            })
+        };
+        push(0.0, 0.0, 0.0);
+        for k in 0..=30 {
+            let x = f64::from(k);
+            let error = if x < 10.0 {
+                2.0 * x
+            } else if x > 20.0 {
+                2.0 * (30.0 - x)
+            } else {
+                20.0 + 0.4 * (x - 10.0)
+            };
+            push(x, 2.0, error);
+        }
+        push(31.0, 0.0, 0.0);
+        let m = compute(&trace, &config());
+        assert!(
+            (m.surface_error_range_um - 4.0).abs() < 1e-9,
+            "{}",
+            m.surface_error_range_um
+        );
+        // Without a known stiffness (NaN errors) there is no range.
+        for r in &mut trace.rows {
+            r.surface_error_um = f64::NAN;
+        }
+        assert!(compute(&trace, &config()).surface_error_range_um.is_nan());
     }
 }

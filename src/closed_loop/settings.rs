@@ -27,6 +27,9 @@ use super::error::LoopError;
 use crate::control::registry::ControllerConfig;
 use crate::estimation::estimator::{Calibration, Feedback};
 use crate::plant::cnc::OverrideMode;
+use crate::plant::deflection::{
+    ToolStiffness, DEFAULT_SPINDLE_STIFFNESS_N_MM, DEFAULT_STICK_OUT_DIAMETERS,
+};
 use crate::plant::presets::PlantKind;
 use crate::plant::Preset;
 use crate::safety::{
@@ -118,6 +121,8 @@ pub struct LoopSettings {
     /// Relative disagreement between the current-based and the power-law estimate above which a
     /// period is flagged.
     pub cross_check_tolerance: f64,
+    /// The tool and spindle as springs, if the tool is known: the trace's surface error.
+    pub stiffness: Option<ToolStiffness>,
 }
 
 impl LoopSettings {
@@ -243,6 +248,8 @@ pub struct MachineContext {
     /// The cutter's chip-load window in the work material, if the machine's tool and material
     /// are known.
     pub chip_load: Option<ChipLoad>,
+    /// The tool and spindle as springs, if the machine's tool is known: the surface error.
+    pub stiffness: Option<ToolStiffness>,
 }
 
 /// The feedback path a preset measures force with by default: the brake bench has only a feed
@@ -311,6 +318,7 @@ impl MachineContext {
             feed_current: CurrentSignal::Phases,
             entry_hold_s: preset_entry_hold_s(spec),
             chip_load: preset_chip_load(spec),
+            stiffness: preset_stiffness(spec),
         }
     }
 }
@@ -334,6 +342,22 @@ fn preset_entry_hold_s(spec: &RunSpec) -> f64 {
     } else {
         DEFAULT_ENTRY_HOLD_S
     }
+}
+
+/// The stiffness of `spec`'s cutter (its diameter edit included) at the default stick-out, on
+/// a mill; `None` on the plants without a tool (the bench, paper 001's process, paper 002's
+/// bond graph).
+fn preset_stiffness(spec: &RunSpec) -> Option<ToolStiffness> {
+    if spec.preset.plant_kind() != PlantKind::Mill {
+        return None;
+    }
+    let cutter = spec.preset.scenario_spec()?.cutter;
+    let diameter_mm = spec.plant.tool_diameter_mm.unwrap_or(cutter.diameter_mm);
+    Some(ToolStiffness::carbide(
+        diameter_mm,
+        DEFAULT_STICK_OUT_DIAMETERS * diameter_mm,
+        DEFAULT_SPINDLE_STIFFNESS_N_MM,
+    ))
 }
 
 /// The chip-load window of `spec`'s cutter (its edits included) in the materials of its part: on
@@ -440,6 +464,8 @@ pub struct Plan {
     pub holds_in_air: bool,
     /// The feed-per-tooth window the override keeps inside.
     pub chip_load: Option<ChipLoad>,
+    /// The tool and spindle as springs, for the surface error.
+    pub stiffness: Option<ToolStiffness>,
     /// What the resolution adapted to the machine (a low-pass skipped, the period rounded), for
     /// people.
     pub notes: Vec<String>,
@@ -549,6 +575,7 @@ pub fn plan(
         entry_hold_s,
         holds_in_air: adaptive,
         chip_load,
+        stiffness: context.stiffness,
         notes,
     })
 }
@@ -802,6 +829,7 @@ impl Plan {
             envelope,
             max_duration_s: self.max_duration_s,
             cross_check_tolerance: CROSS_CHECK_TOLERANCE,
+            stiffness: self.stiffness,
         })
     }
 }

@@ -77,7 +77,7 @@ fn if_controlled(r: &RunResult, value: f64) -> Option<f64> {
 }
 
 /// The rows, in the order shown.
-pub const METRIC_ROWS: [MetricRow; 19] = [
+pub const METRIC_ROWS: [MetricRow; 20] = [
     row("Target force", "N", Better::Neither, |r| {
         Some(r.settings.target_force_n)
     }),
@@ -107,6 +107,9 @@ pub const METRIC_ROWS: [MetricRow; 19] = [
     }),
     row("Peak force", "N", Better::Lower, |r| {
         Some(r.metrics.peak_force_n)
+    }),
+    row("Surface error range", "µm", Better::Lower, |r| {
+        Some(r.metrics.surface_error_range_um).filter(|v| v.is_finite())
     }),
     row("Time above limit", "s", Better::Lower, |r| {
         Some(r.metrics.time_above_limit_s)

@@ -60,6 +60,10 @@ pub struct TraceRow {
     pub sensor_fault: bool,
     /// Whether feed hold was latched.
     pub feed_hold: bool,
+    /// The wall's error from the tool and spindle deflecting under the period's mean normal
+    /// force, µm ([`crate::plant::deflection`]; NaN where the tool's stiffness or the force is
+    /// not known, 0 in air).
+    pub surface_error_um: f64,
     /// Whether the estimator's inputs lay inside its calibrated range.
     pub estimate_in_range: bool,
     /// Whether the current-based and the sensorless (power-law) estimates disagree.
@@ -106,7 +110,7 @@ macro_rules! csv_columns {
 }
 
 /// The numeric columns [`write_csv`] writes, in order.
-pub const CSV_COLUMNS: [CsvColumn<f64>; 17] = csv_columns![f64;
+pub const CSV_COLUMNS: [CsvColumn<f64>; 18] = csv_columns![f64;
     time_s,
     depth_mm,
     width_mm,
@@ -124,6 +128,7 @@ pub const CSV_COLUMNS: [CsvColumn<f64>; 17] = csv_columns![f64;
     feed_current_rms_a,
     spindle_speed_rpm,
     material_removal_mm3_s,
+    surface_error_um,
 ];
 
 /// The state flags [`write_csv`] writes after the values and terms, as 0/1.

@@ -37,6 +37,7 @@ use crate::closed_loop::trace::{csv_field, Trace, TraceRow};
 use crate::control::registry::ControllerConfig;
 use crate::estimation::estimator::{Calibration, Estimator, Feedback};
 use crate::plant::cnc::OverrideMode;
+use crate::plant::deflection::ToolStiffness;
 use crate::safety::{ChipLoad, SafetyEvent};
 use crate::work::{Progress, Work};
 
@@ -71,6 +72,9 @@ pub struct ReplaySettings {
     /// The chip-load window of the tool in the work material, when known (a log does not say
     /// which cutter cut it).
     pub chip_load: Option<ChipLoad>,
+    /// The tool and spindle as springs, when known: the replay's surface error (a log does not
+    /// say which tool cut it).
+    pub stiffness: Option<ToolStiffness>,
 }
 
 impl ReplaySettings {
@@ -88,6 +92,7 @@ impl ReplaySettings {
             calibration,
             override_mode: self.override_mode,
             chip_load: self.chip_load,
+            stiffness: self.stiffness,
         }
     }
 

@@ -41,6 +41,7 @@
 //! | [`materials`] | work materials and their mechanistic cutting coefficients, with sources |
 //! | [`mechanics`] | cutter, immersion, instantaneous and mean milling forces, paper 003's Martelotti relations |
 //! | [`power_law`] | paper 004's power-law force model with its published weights |
+//! | [`deflection`] | the cutting-force-induced error: tool and spindle deflecting under the normal force (paper 004's CFIE) |
 //! | [`feed_drive`] | ball screw, guides, table and PMSM of one feed axis (paper 000) |
 //! | [`spindle_drive`] | induction spindle motor, gearbox and F/V converter (paper 003) |
 //! | [`sensors`] | Hall current sensors and the ADC |
@@ -72,6 +73,7 @@
 pub mod bench;
 pub mod bond_graph;
 pub mod cnc;
+pub mod deflection;
 pub mod dynamics;
 pub mod dynamometer;
 pub mod feed_drive;

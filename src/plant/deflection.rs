@@ -1,0 +1,131 @@
+//! The cutting-force-induced error (paper 004's CFIE): the tool and the spindle deflect under the
+//! force normal to the machined wall, and the wall comes out off by that deflection.
+//!
+//! Paper 004 takes its error model from an earlier indirect-monitoring system and prints none.
+//! cutlab uses the textbook static one: the tool a cantilever clamped in the holder, stiffness
+//! k_t = 3·E·I / L³ with I = π·d_e⁴ / 64, in series with the spindle's stiffness k_s at the nose,
+//!
+//! ```text
+//! δ = F_n / k,    1/k = 1/k_t + 1/k_s
+//! ```
+//!
+//! where d_e is the fluted tool's equivalent solid diameter ([`FLUTED_DIAMETER_RATIO`] of its
+//! nominal diameter), L its stick-out and E its Young's modulus (carbide). The force is the mean
+//! normal force of a control period, so the error is the mean wall position over the period:
+//! what a CMM sees along the wall, without the tooth-passing ripple or the tool's dynamics.
+
+use serde::{Deserialize, Serialize};
+
+use super::mechanics::Cutter;
+
+/// Young's modulus of cemented carbide (WC–Co, 6–10 % Co: 550–650 GPa), GPa.
+pub const CARBIDE_YOUNGS_MODULUS_GPA: f64 = 600.0;
+
+/// A fluted end mill's equivalent solid diameter as a fraction of its nominal diameter (two- to
+/// four-flute cutters: 0.75–0.85 for the second moment of area; Kops and Vo, 1990, give 0.8).
+pub const FLUTED_DIAMETER_RATIO: f64 = 0.8;
+
+/// Stick-out from the holder when nobody says, in tool diameters (a common 3×D end mill).
+pub const DEFAULT_STICK_OUT_DIAMETERS: f64 = 3.0;
+
+/// Radial stiffness at the spindle nose of a machining-centre spindle (20–200 N/µm; a mid-size
+/// BT40 spindle about 50), N/mm.
+pub const DEFAULT_SPINDLE_STIFFNESS_N_MM: f64 = 50_000.0;
+
+/// The tool and spindle as springs between the force and the wall.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct ToolStiffness {
+    /// The tool's cantilever stiffness at its tip, N/mm.
+    pub tool_n_mm: f64,
+    /// The spindle's stiffness at its nose, N/mm.
+    pub spindle_n_mm: f64,
+}
+
+impl ToolStiffness {
+    /// A carbide tool of `diameter_mm` sticking out `stick_out_mm`, on a spindle of
+    /// `spindle_n_mm`.
+    ///
+    /// ```
+    /// use cutlab::plant::deflection::ToolStiffness;
+    /// // Ø20 mm, 60 mm out: k_t = 3·600 GPa·π·16⁴/64 mm⁴ / 60³ mm³ ≈ 26.8 N/µm.
+    /// let k = ToolStiffness::carbide(20.0, 60.0, 50_000.0);
+    /// assert!((k.tool_n_mm - 26_808.0).abs() < 1.0);
+    /// // In series with a 50 N/µm spindle: 17.5 N/µm, so 500 N deflect the wall 28.6 µm.
+    /// assert!((k.surface_error_um(500.0) - 28.6).abs() < 0.1);
+    /// ```
+    pub fn carbide(diameter_mm: f64, stick_out_mm: f64, spindle_n_mm: f64) -> Self {
+        let equivalent_mm = FLUTED_DIAMETER_RATIO * diameter_mm;
+        let second_moment_mm4 = std::f64::consts::PI * equivalent_mm.powi(4) / 64.0;
+        let youngs_n_mm2 = CARBIDE_YOUNGS_MODULUS_GPA * 1e3;
+        Self {
+            tool_n_mm: 3.0 * youngs_n_mm2 * second_moment_mm4 / stick_out_mm.powi(3),
+            spindle_n_mm,
+        }
+    }
+
+    /// The stiffness of `cutter` at the default stick-out on the default spindle.
+    pub fn of_cutter(cutter: &Cutter) -> Self {
+        Self::carbide(
+            cutter.diameter_mm,
+            DEFAULT_STICK_OUT_DIAMETERS * cutter.diameter_mm,
+            DEFAULT_SPINDLE_STIFFNESS_N_MM,
+        )
+    }
+
+    /// Tool and spindle in series, N/mm.
+    pub fn combined_n_mm(&self) -> f64 {
+        1.0 / (1.0 / self.tool_n_mm + 1.0 / self.spindle_n_mm)
+    }
+
+    /// The wall's error under a normal force of `normal_force_n`, µm (NaN stays NaN).
+    pub fn surface_error_um(&self, normal_force_n: f64) -> f64 {
+        1e3 * normal_force_n / self.combined_n_mm()
+    }
+}
+
+/// The mean force normal to the feed in the plane, N, from the mean in-plane resultant and its
+/// feed-direction part: √(F² − F_f²), 0 when rounding makes it negative.
+pub fn normal_force_n(in_plane_resultant_n: f64, feed_force_n: f64) -> f64 {
+    let square = in_plane_resultant_n * in_plane_resultant_n - feed_force_n * feed_force_n;
+    if square.is_nan() {
+        f64::NAN
+    } else {
+        square.max(0.0).sqrt()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_tool_is_the_cantilever_closed_form() {
+        // δ = F·L³ / (3·E·I) for a tip load on a clamped round bar.
+        let (d, l, f) = (10.0_f64, 45.0_f64, 200.0_f64);
+        let k = ToolStiffness::carbide(d, l, f64::INFINITY);
+        let i = std::f64::consts::PI * (0.8 * d).powi(4) / 64.0;
+        let deflection_mm = f * l.powi(3) / (3.0 * 600e3 * i);
+        assert!((k.surface_error_um(f) - 1e3 * deflection_mm).abs() < 1e-9);
+        // Twice the stick-out: eight times the deflection.
+        let longer = ToolStiffness::carbide(d, 2.0 * l, f64::INFINITY);
+        assert!((longer.surface_error_um(f) / k.surface_error_um(f) - 8.0).abs() < 1e-9);
+    }
+
+    #[test]
+    fn springs_in_series_deflect_by_the_sum() {
+        let k = ToolStiffness {
+            tool_n_mm: 20_000.0,
+            spindle_n_mm: 50_000.0,
+        };
+        let f = 400.0;
+        let sum_um = 1e3 * (f / 20_000.0 + f / 50_000.0);
+        assert!((k.surface_error_um(f) - sum_um).abs() < 1e-9);
+    }
+
+    #[test]
+    fn the_normal_force_is_the_in_plane_part_off_the_feed() {
+        assert!((normal_force_n(500.0, 300.0) - 400.0).abs() < 1e-9);
+        assert_eq!(normal_force_n(300.0, 300.0 + 1e-12), 0.0);
+        assert!(normal_force_n(f64::NAN, 1.0).is_nan());
+    }
+}
