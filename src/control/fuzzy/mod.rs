@@ -11,7 +11,9 @@
 
 pub mod controller;
 pub mod engine;
+pub mod fis;
 pub mod fll;
+pub mod function;
 pub mod membership;
 pub mod rules;
 
