@@ -25,10 +25,12 @@
 //!   other norms) samples the aggregate at the midpoints of `resolution` cells of the universe,
 //!   as fuzzylite does, with its tolerance of 1e-6 when comparing degrees.
 //! * **Weighted average** Σ wᵢ·zᵢ / Σ wᵢ and **weighted sum** Σ wᵢ·zᵢ over the activated terms: zᵢ
-//!   is a Takagi–Sugeno term's value (Constant, Linear, Function at wᵢ), a monotonic term's
-//!   inverse at wᵢ (Tsukamoto: Ramp, Sigmoid, SShape, ZShape, Concave), and for any other shape
-//!   its centre ([`Shape::centre`], paper 002 eq 7; fuzzylite 6 takes that term's degree at wᵢ
-//!   there, which is not a point of the output axis).
+//!   is a Takagi–Sugeno term's value (Constant, Linear, Function at wᵢ); on an output whose
+//!   terms are all monotonic (Ramp, Sigmoid, SShape, ZShape, Concave: a Tsukamoto engine) the
+//!   term's inverse at wᵢ; on any other (Mamdani) output the term's centre ([`Shape::centre`],
+//!   paper 002 eq 7). fuzzylite 6 differs on a Mamdani output: it inverts the monotonic terms
+//!   among others and takes a non-monotonic term's degree at wᵢ, which is not a point of the
+//!   output axis.
 //!
 //! When an output's fuzzy output is empty (no rule fired for it) its value is the previous value
 //! if `lock_previous` is set and there is a finite one, else the variable's `default_value` (NaN
@@ -1120,20 +1122,26 @@ impl Engine {
             outputs: &self.output_values,
         };
         if !var.defuzzifier.is_integral() {
-            let kind = match var.weighted_kind {
+            // Automatic: Takagi–Sugeno when the first activated term is such a term (as
+            // fuzzylite infers it), Tsukamoto when every term of the output is monotonic (a
+            // Tsukamoto engine), else a Mamdani output whose terms weigh in at their centres
+            // (paper 002 eq 7) — where fuzzylite would invert the monotonic terms among them.
+            let (takagi_sugeno, centres) = match var.weighted_kind {
                 WeightedKind::Automatic => match fired.first() {
-                    Some(a) if var.terms[a.term].shape.is_takagi_sugeno() => {
-                        WeightedKind::TakagiSugeno
-                    }
-                    _ => WeightedKind::Tsukamoto,
+                    Some(a) if var.terms[a.term].shape.is_takagi_sugeno() => (true, false),
+                    _ => (false, !var.terms.iter().all(|t| t.shape.is_monotonic())),
                 },
-                kind => kind,
+                WeightedKind::TakagiSugeno => (true, false),
+                WeightedKind::Tsukamoto => (false, false),
             };
             let z = |a: &Activated| {
                 let shape = &var.terms[a.term].shape;
-                match kind {
-                    WeightedKind::TakagiSugeno => shape.degree_in(a.degree, values),
-                    _ => shape.tsukamoto(a.degree, var.min, var.max, values),
+                if takagi_sugeno {
+                    shape.degree_in(a.degree, values)
+                } else if centres {
+                    shape.centre()
+                } else {
+                    shape.tsukamoto(a.degree, var.min, var.max, values)
                 }
             };
             if var.defuzzifier == Defuzzifier::WeightedSum {

@@ -470,9 +470,12 @@ mod tests {
             let e = Formula::parse(text, |_| None).unwrap_err().to_string();
             assert!(e.contains(message), "{text}: {e}");
         }
-        let deep = format!("{}1{}", "(".repeat(10_000), ")".repeat(10_000));
+        let deep = format!("{}1{}", "(".repeat(100), ")".repeat(100));
         let e = Formula::parse(&deep, |_| None).unwrap_err().to_string();
         assert!(e.contains("nested deeper than 64"), "{e}");
+        let long = format!("{}1", "1+".repeat(10_000));
+        let e = Formula::parse(&long, |_| None).unwrap_err().to_string();
+        assert!(e.contains("longer than 1024 tokens"), "{e}");
         let negations = format!("{}1", "-".repeat(10_000));
         assert!(Formula::parse(&negations, |_| None).is_err());
     }
