@@ -654,7 +654,14 @@ pub fn write(engine: &Engine) -> Result<String, FuzzyError> {
                 first.name, v.name
             )));
         }
-        if v.weighted_kind != WeightedKind::Automatic {
+        // FIS has no type: it reads back as Automatic, which means the same when the terms
+        // leave Automatic no other choice.
+        let same_as_automatic = match v.weighted_kind {
+            WeightedKind::Automatic => true,
+            WeightedKind::TakagiSugeno => v.terms.iter().all(|t| t.shape.is_takagi_sugeno()),
+            WeightedKind::Tsukamoto => v.terms.iter().all(|t| t.shape.is_monotonic()),
+        };
+        if !v.defuzzifier.is_integral() && !same_as_automatic {
             return Err(cannot(format!(
                 "output {}: FIS has no {} type for a weighted defuzzifier",
                 v.name,
