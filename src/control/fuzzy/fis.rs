@@ -263,6 +263,11 @@ pub fn parse(text: &str) -> Result<Engine, FuzzyError> {
         implication: t_norm(imp_line, &imp)?,
     };
     let aggregation = s_norm(agg_line, &agg)?;
+    if methods[4].is_none() {
+        return Err(FuzzyError::new(
+            "the [System] section has no DefuzzMethod (centroid, wtaver, …)",
+        ));
+    }
     let defuzzifier = DEFUZZIFIERS
         .iter()
         .find(|(n, _)| *n == defuzz)
