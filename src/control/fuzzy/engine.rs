@@ -502,6 +502,9 @@ pub struct Conclusion {
     pub term: usize,
 }
 
+/// A (variable, term) pair of indices.
+pub type Pair = (usize, usize);
+
 /// `if … then … (with w)`, with indices into the engine's variables and terms.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Rule {
@@ -556,7 +559,7 @@ impl Rule {
 
     /// The (input, term) and (output, term) pairs of a rule [`Rule::all_of`] could build: inputs
     /// joined by `and` only, no hedges. `None` for any other rule.
-    pub fn as_all_of(&self) -> Option<(Vec<(usize, usize)>, Vec<(usize, usize)>)> {
+    pub fn as_all_of(&self) -> Option<(Vec<Pair>, Vec<Pair>)> {
         fn walk(a: &Antecedent, out: &mut Vec<(usize, usize)>) -> bool {
             match a {
                 Antecedent::Is(Proposition {

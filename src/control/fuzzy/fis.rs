@@ -468,12 +468,11 @@ fn membership(
     Ok(Term { name, shape })
 }
 
-/// The hedges and the term index (0-based, `None` for `any`) of a rule code.
-fn code(
-    line: usize,
-    text: &str,
-    terms: usize,
-) -> Result<Option<(Vec<Hedge>, Option<usize>)>, FuzzyError> {
+/// A rule code's hedges and term index (0-based, `None` for `any`).
+type Coded = (Vec<Hedge>, Option<usize>);
+
+/// The hedges and the term of a rule code; `None` for 0 (the variable is not named).
+fn code(line: usize, text: &str, terms: usize) -> Result<Option<Coded>, FuzzyError> {
     let value = number(line, text, "rule code")?;
     if !value.is_finite() {
         return Err(error(

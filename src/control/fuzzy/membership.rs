@@ -846,7 +846,7 @@ impl Shape {
                 let top = points.iter().map(|p| p.1).fold(f64::NEG_INFINITY, f64::max);
                 let mut at_top = points.iter().filter(|p| p.1 == top).map(|p| p.0);
                 let first = at_top.next().unwrap_or(0.0);
-                let last = at_top.last().unwrap_or(first);
+                let last = at_top.next_back().unwrap_or(first);
                 first + (last - first) / 2.0
             }
             Shape::Bell { center, .. }
