@@ -31,7 +31,7 @@ use super::engine::{
     OutputVariable, Proposition, Rule, RuleBlock, SNorm, Term, VariableRef, WeightedKind,
     DEFAULT_RESOLUTION, FUZZYLITE_EPSILON,
 };
-use super::fll::{formula_names, number};
+use super::fll::{float, formula_names, number};
 use super::function::Formula;
 use super::membership::Shape;
 use super::FuzzyError;
@@ -576,15 +576,6 @@ fn rule(
         consequents,
         weight,
     })
-}
-
-/// A number as FIS writes it: as Rust prints it (shortest that reads back), `nan` for NaN.
-fn float(v: f64) -> String {
-    if v.is_nan() {
-        "nan".into()
-    } else {
-        format!("{v}")
-    }
 }
 
 /// The FIS code of a term with hedges, or why there is none.

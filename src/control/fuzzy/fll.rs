@@ -721,7 +721,9 @@ pub(crate) fn rule(line: usize, text: &str, names: &Names) -> Result<Rule, Fuzzy
     })
 }
 
-fn float(v: f64) -> String {
+/// A number as FLL and FIS write it: as Rust prints it (the shortest that reads back), `nan` for
+/// NaN.
+pub(crate) fn float(v: f64) -> String {
     if v.is_nan() {
         "nan".into()
     } else {
