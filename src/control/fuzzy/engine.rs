@@ -55,10 +55,7 @@ use std::ops::Range;
 
 use super::membership::{Shape, Values};
 use super::FuzzyError;
-
-/// fuzzylite's tolerance when it compares degrees (its `macheps`): a rule fires when its
-/// activation exceeds it, and sampled defuzzifiers count degrees this close as equal.
-pub const FUZZYLITE_EPSILON: f64 = 1e-6;
+pub use super::FUZZYLITE_EPSILON;
 
 /// The resolution fuzzylite gives an integral defuzzifier that names none.
 pub const DEFAULT_RESOLUTION: usize = 100;

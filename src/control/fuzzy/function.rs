@@ -14,8 +14,16 @@
 
 use std::fmt;
 
-use super::membership::Values;
 use super::FuzzyError;
+
+/// The values a Takagi–Sugeno term reads: the engine's current inputs and outputs.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Values<'a> {
+    /// Input values, in the engine's order.
+    pub inputs: &'a [f64],
+    /// Output values, in the engine's order (the latest defuzzified).
+    pub outputs: &'a [f64],
+}
 
 /// How deeply parentheses and operators may nest: evaluation recurses, and a hostile file must
 /// not overflow the stack.

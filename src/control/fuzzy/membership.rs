@@ -16,18 +16,9 @@
 
 use std::fmt;
 
-use super::engine::FUZZYLITE_EPSILON;
 use super::function::Formula;
-use super::FuzzyError;
-
-/// The values a Takagi–Sugeno term reads: the engine's current inputs and outputs.
-#[derive(Debug, Clone, Copy, Default)]
-pub struct Values<'a> {
-    /// Input values, in the engine's order.
-    pub inputs: &'a [f64],
-    /// Output values, in the engine's order (the latest defuzzified).
-    pub outputs: &'a [f64],
-}
+pub use super::function::Values;
+use super::{FuzzyError, FUZZYLITE_EPSILON};
 
 /// The shape of one linguistic term.
 #[derive(Debug, Clone, PartialEq)]

@@ -21,6 +21,11 @@ pub mod rules;
 
 use std::fmt;
 
+/// fuzzylite's tolerance when it compares degrees (its `macheps`): a rule fires when its
+/// activation exceeds it, and sampled defuzzifiers and fuzzylite's shapes count values this
+/// close as equal.
+pub const FUZZYLITE_EPSILON: f64 = 1e-6;
+
 /// A fuzzy definition that cannot be used; the message says what and where.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct FuzzyError(pub String);
