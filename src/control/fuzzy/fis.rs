@@ -125,7 +125,7 @@ enum Section {
 /// assert!((out[0] - 0.75).abs() < 1e-12);
 /// assert_eq!(parse(&write(&engine).unwrap()).unwrap().rules(), engine.rules());
 /// assert!(parse(&text.replace("2, 1 (1)", "2, 3 (1)")).unwrap_err().to_string()
-///     .starts_with("line 24:"));
+///     .starts_with("line 25:"));
 /// ```
 pub fn parse(text: &str) -> Result<Engine, FuzzyError> {
     let mut name = String::from("engine");
