@@ -74,7 +74,7 @@ fn filtering_and_fuzzy_inference_allocate_nothing() {
 #[test]
 fn an_engine_with_many_output_terms_reserves_memory_linear_in_them() {
     use cutlab::control::fuzzy::engine::{
-        Defuzzifier, Engine, InputVariable, Norm, OutputVariable, Rule, Term,
+        Defuzzifier, Engine, InputVariable, Norm, OutputVariable, Rule, SNorm, Term, WeightedKind,
     };
     use cutlab::control::fuzzy::membership::Shape;
     // 10 000 output terms once reserved their pairwise crossings: about 25 GB.
@@ -107,13 +107,12 @@ fn an_engine_with_many_output_terms_reserves_memory_linear_in_them() {
         defuzzifier: Defuzzifier::Centroid,
         default_value: 0.0,
         lock_previous: false,
+        aggregation: Some(SNorm::Maximum),
+        resolution: 100,
+        weighted_kind: WeightedKind::Automatic,
     };
     let rules: Vec<Rule> = (0..n)
-        .map(|i| Rule {
-            antecedents: vec![(0, i)],
-            consequents: vec![(0, i)],
-            weight: 1.0,
-        })
+        .map(|i| Rule::all_of(&[(0, i)], &[(0, i)], 1.0).unwrap())
         .collect();
     let info = allocation_counter::measure(|| {
         let engine = Engine::new(

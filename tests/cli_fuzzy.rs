@@ -47,14 +47,14 @@ fn exported_engine_evaluates_line_by_line_at_full_precision() {
     let broken = dir.join("broken.fll");
     std::fs::write(
         &broken,
-        fll.replace("term: PB Triangle 4 6 6", "term: PB Gaussian 6 1"),
+        fll.replace("term: PB Triangle 4 6 6", "term: PB Blob 6 1"),
     )
     .unwrap();
     let (result, _) = cutlab(&["fuzzy", "eval", "--fll", broken.to_str().unwrap()], "");
     let message = result.unwrap_err();
     assert!(message.contains(": line "), "{message}");
     assert!(
-        message.contains("shape Gaussian is not supported"),
+        message.contains("shape Blob is not one of fuzzylite's terms"),
         "{message}"
     );
     std::fs::remove_dir_all(dir).ok();

@@ -6,7 +6,7 @@
 use wasm_bindgen_test::wasm_bindgen_test as test;
 
 use cutlab::control::fuzzy::engine::{
-    Defuzzifier, Engine, InputVariable, Norm, OutputVariable, Rule, Term,
+    Defuzzifier, Engine, InputVariable, Norm, OutputVariable, Rule, SNorm, Term, WeightedKind,
 };
 use cutlab::control::fuzzy::fll::{parse, write};
 use cutlab::control::fuzzy::membership::Shape;
@@ -65,7 +65,7 @@ fn engine_matches_fuzzylite_scikit_fuzzy_and_eq_7() {
             let text =
                 write(&engine).replace("implication: Minimum", "implication: AlgebraicProduct");
             engine = parse(&text).unwrap();
-            assert_eq!(engine.implication(), Norm::AlgebraicProduct);
+            assert_eq!(engine.implication(), Some(Norm::AlgebraicProduct));
         }
         let tool = case["tool"].as_str().unwrap();
         let tol = tolerance(defuzzifier_name, tool);
@@ -358,6 +358,7 @@ fn with_outputs_moved(engine: &Engine, scale: f64, shift: f64) -> Engine {
                             Shape::trapezoid(map(a), map(b), map(c), map(d))
                         }
                         Shape::Ramp { start, end } => Shape::ramp(map(start), map(end)),
+                        ref other => panic!("the references hold no {other}"),
                     }
                     .unwrap(),
                 })
@@ -370,8 +371,8 @@ fn with_outputs_moved(engine: &Engine, scale: f64, shift: f64) -> Engine {
         engine.inputs().to_vec(),
         outputs,
         engine.rules().to_vec(),
-        engine.conjunction(),
-        engine.implication(),
+        engine.conjunction().unwrap(),
+        engine.implication().unwrap(),
     )
     .unwrap()
 }
@@ -460,8 +461,8 @@ fn product_conjunction_matches_fuzzylite_scikit_fuzzy_and_eq_7() {
     ] {
         let (engines, count) = compare_with_references(name);
         for e in &engines {
-            assert_eq!(e.conjunction(), Norm::AlgebraicProduct, "{name}");
-            assert_eq!(e.implication(), implication, "{name}");
+            assert_eq!(e.conjunction(), Some(Norm::AlgebraicProduct), "{name}");
+            assert_eq!(e.implication(), Some(implication), "{name}");
         }
         checked += count;
     }
@@ -573,12 +574,11 @@ fn a_triangle_centroid_is_the_mean_of_its_vertices_at_any_magnitude() {
                 defuzzifier: Defuzzifier::Centroid,
                 default_value: f64::NAN,
                 lock_previous: false,
+                aggregation: Some(SNorm::Maximum),
+                resolution: 100,
+                weighted_kind: WeightedKind::Automatic,
             };
-            let rule = Rule {
-                antecedents: vec![(0, 0)],
-                consequents: vec![(0, 0)],
-                weight: 1.0,
-            };
+            let rule = Rule::all_of(&[(0, 0)], &[(0, 0)], 1.0).unwrap();
             let mut engine = Engine::new(
                 "one",
                 vec![input],

@@ -1,18 +1,19 @@
-//! `cutlab fuzzy eval` and `cutlab fuzzy export`: the fuzzy engine on FLL files.
+//! `cutlab fuzzy eval` and `cutlab fuzzy export`: the fuzzy engine on FLL and FIS files.
 
 use std::io::BufRead;
 
 use super::args::{reject_extra, required};
 use super::{CliError, Io};
-use crate::control::fuzzy::engine::Defuzzifier;
-use crate::control::fuzzy::fll::{parse, write};
+use crate::control::fuzzy::engine::{Defuzzifier, Engine};
 use crate::control::fuzzy::rules::{paper_002_engine, RuleBase};
+use crate::control::fuzzy::{fis, fll, Format};
 
-/// Evaluate a Mamdani engine given in fuzzylite's FLL format (one evaluation per stdin line: the
-/// input values in the order the file declares them), or print paper 002's engine as FLL.
-pub(crate) const ABOUT: &str = "Evaluate a Mamdani engine given in fuzzylite's FLL format (one \
-evaluation per stdin\nline: the input values in the order the file declares them), or print \
-paper 002's engine as FLL.";
+/// Evaluate a fuzzy engine given in fuzzylite's FLL or MATLAB's FIS format (one evaluation per
+/// stdin line: the input values in the order the file declares them), or print an engine as FLL
+/// or FIS.
+pub(crate) const ABOUT: &str = "Evaluate a fuzzy engine given in fuzzylite's FLL or MATLAB's FIS \
+format (one\nevaluation per stdin line: the input values in the order the file declares them), \
+or print\npaper 002's engine or an engine file as FLL or FIS.";
 
 /// The options of `cutlab fuzzy`: a subcommand (its help says what each does).
 #[derive(Debug, clap::Args)]
@@ -23,14 +24,15 @@ pub struct FuzzyArgs {
 
 #[derive(Debug, clap::Subcommand)]
 enum FuzzyCommand {
-    /// Evaluate an FLL engine on each line of standard input
+    /// Evaluate an FLL or FIS engine on each line of standard input
     ///
     /// Read one evaluation per line of standard input (input values separated by spaces, in the
-    /// order the FLL file declares its input variables) and print the output values,
+    /// order the file declares its input variables) and print the output values,
     /// space-separated, at full precision. Blank lines and lines starting with # are skipped.
     #[command(verbatim_doc_comment)]
     Eval(EvalArgs),
-    /// Print paper 002's engine (E, EC → U on [-6, 6], seven triangles each, 49 rules) as FLL
+    /// Print paper 002's engine (E, EC → U on [-6, 6], seven triangles each, 49 rules), or an
+    /// engine file, as FLL or (--fis) FIS
     Export(ExportArgs),
 }
 
@@ -38,11 +40,18 @@ enum FuzzyCommand {
 pub struct EvalArgs {
     #[arg(
         long = "fll",
-        help = "The engine, in fuzzylite's FLL format (Mamdani)",
+        help = "The engine, in fuzzylite's FLL format",
         value_name = "FILE",
         allow_hyphen_values = true
     )]
     fll: Option<String>,
+    #[arg(
+        long = "fis",
+        help = "The engine, in MATLAB's FIS format",
+        value_name = "FILE",
+        allow_hyphen_values = true
+    )]
+    fis: Option<String>,
     /// Stray words: refused with a hint where such input goes.
     #[arg(hide = true)]
     extra: Vec<String>,
@@ -57,6 +66,15 @@ pub struct ExportArgs {
         allow_hyphen_values = true
     )]
     rules: Option<String>,
+    #[arg(
+        long = "engine",
+        help = "An engine file to convert instead (FLL or FIS, by extension or content)",
+        value_name = "FILE",
+        allow_hyphen_values = true
+    )]
+    engine: Option<String>,
+    #[arg(long = "fis", help = "Write MATLAB's FIS format instead of FLL")]
+    fis: bool,
     #[arg(
         long = "defuzzifier",
         help = "How the output is defuzzified (default centroid)",
@@ -80,10 +98,21 @@ pub fn run(args: FuzzyArgs, io: &mut Io<'_>) -> Result<(), CliError> {
 
 fn eval(args: EvalArgs, io: &mut Io<'_>) -> Result<(), CliError> {
     reject_extra(&args.extra, "the inputs come on standard input")?;
-    let path: String = required("fll", &args.fll)?;
+    let (path, format) = match (&args.fll, &args.fis) {
+        (Some(p), None) => (p.clone(), Format::Fll),
+        (None, Some(p)) => (p.clone(), Format::Fis),
+        (Some(_), Some(_)) => {
+            return Err(CliError::new(
+                "give the engine once: --fll FILE or --fis FILE",
+            ))
+        }
+        (None, None) => return Err(CliError::new("missing required option --fll or --fis")),
+    };
     let text = std::fs::read_to_string(&path)
         .map_err(|e| CliError::new(format!("{path}: cannot read: {e}")))?;
-    let mut engine = parse(&text).map_err(|e| CliError::new(format!("{path}: {e}")))?;
+    let mut engine = format
+        .parse(&text)
+        .map_err(|e| CliError::new(format!("{path}: {e}")))?;
     let n_inputs = engine.inputs().len();
     let mut outputs = vec![0.0; engine.outputs().len()];
     let mut inputs = Vec::with_capacity(n_inputs);
@@ -134,6 +163,37 @@ fn eval(args: EvalArgs, io: &mut Io<'_>) -> Result<(), CliError> {
 
 fn export(args: ExportArgs, io: &mut Io<'_>) -> Result<(), CliError> {
     reject_extra(&args.extra, "")?;
+    let engine = match (&args.engine, &args.rules) {
+        (Some(path), None) => {
+            if args.defuzzifier.is_some() {
+                return Err(CliError::new(
+                    "--defuzzifier applies to paper 002's engine (--rules), not to --engine",
+                ));
+            }
+            let text = std::fs::read_to_string(path)
+                .map_err(|e| CliError::new(format!("{path}: cannot read: {e}")))?;
+            Format::of(path, &text)
+                .parse(&text)
+                .map_err(|e| CliError::new(format!("{path}: {e}")))?
+        }
+        (None, _) => paper_002(&args)?,
+        (Some(_), Some(_)) => {
+            return Err(CliError::new(
+                "export either paper 002's engine (--rules) or an engine file (--engine)",
+            ))
+        }
+    };
+    let text = if args.fis {
+        fis::write(&engine).map_err(|e| CliError::new(e.to_string()))?
+    } else {
+        fll::write(&engine)
+    };
+    io.stdout.write_all(text.as_bytes())?;
+    Ok(())
+}
+
+/// Paper 002's engine with the table and defuzzifier the options name.
+fn paper_002(args: &ExportArgs) -> Result<Engine, CliError> {
     let rules: String = required("rules", &args.rules)?;
     let base = RuleBase::ALL
         .into_iter()
@@ -151,8 +211,5 @@ fn export(args: ExportArgs, io: &mut Io<'_>) -> Result<(), CliError> {
             )))
         }
     };
-    let engine =
-        paper_002_engine(&base.table(), defuzzifier).map_err(|e| CliError::new(e.to_string()))?;
-    io.stdout.write_all(write(&engine).as_bytes())?;
-    Ok(())
+    paper_002_engine(&base.table(), defuzzifier).map_err(|e| CliError::new(e.to_string()))
 }

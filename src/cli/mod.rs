@@ -13,7 +13,7 @@
 //! | [`calibrate`] | `cutlab calibrate`: the current-to-force models from a log of control periods |
 //! | [`log`] | `cutlab log inspect`, `analyse`, `replay`: engineers' own logs |
 //! | [`force`], [`filter`], [`spectrum`] | one cut's forces; Butterworth design and filtering; Welch spectra |
-//! | [`fuzzy`] | `cutlab fuzzy eval` and `export`: the fuzzy engine on FLL files |
+//! | [`fuzzy`] | `cutlab fuzzy eval` and `export`: the fuzzy engine on FLL and FIS files |
 //! | [`device`], [`host`], [`protocol`] | the device emulator on stdin/stdout, the closed loop over the protocol, frames as JSON |
 //! | [`table_args`] | command-line options made from a table of settings, one option per row |
 
@@ -86,7 +86,7 @@ enum Command {
     /// Mean and peak milling forces of one cut (mechanistic model, whole revolutions)
     #[command(long_about = force::ABOUT)]
     Force(force::ForceArgs),
-    /// Evaluate a fuzzy engine from an FLL file, or export paper 002's engine as FLL
+    /// Evaluate a fuzzy engine from an FLL or FIS file, or export an engine as FLL or FIS
     #[command(long_about = fuzzy::ABOUT)]
     Fuzzy(fuzzy::FuzzyArgs),
     /// Run the closed loop against a device over the feed-override protocol

@@ -442,7 +442,11 @@ mod tests {
         // at the saturated corners with eq 7 and approached but not reached with the centroid.
         let mut rng = Rng::seed_from(11);
         for base in RuleBase::ALL {
-            for defuzzifier in Defuzzifier::ALL {
+            // A weighted sum adds the rules' values up: it is not bounded by the universe.
+            let bounded = Defuzzifier::ALL
+                .into_iter()
+                .filter(|d| *d != Defuzzifier::WeightedSum);
+            for defuzzifier in bounded {
                 let p = FuzzyParams {
                     defuzzifier,
                     ..params(100.0, 200.0, 37.0)

@@ -1,21 +1,30 @@
-//! fuzzylite's FLL format for Mamdani engines, read and written.
+//! fuzzylite's FLL format, read and written: fuzzylite 6's whole language.
 //!
-//! The subset is what fuzzylite 6 writes for a Mamdani engine: `Engine:`, `InputVariable:` and
-//! `OutputVariable:` with `enabled`, `range`, `lock-range` and `term:` lines (`Triangle`,
-//! `Trapezoid`, `Ramp`), the output's `aggregation: Maximum`, `defuzzifier:` (`Centroid`,
-//! `WeightedAverage [Automatic]`, `MeanOfMaximum`; a resolution, a whole number ≥ 1, is accepted
-//! and ignored, since cutlab defuzzifies exactly), `default:` and `lock-previous:`, and one `RuleBlock:` with `conjunction`
-//! (`Minimum` or `AlgebraicProduct`), `disjunction`, `implication`, `activation: General` and
-//! `rule: if … and … then … [with w]` lines. `description:` lines and `#` comments are skipped.
+//! `Engine:`, `InputVariable:` and `OutputVariable:` with `enabled`, `range`, `lock-range` and
+//! `term:` lines (every shape of [`Shape`], Function formulas of [`super::function`]), the
+//! output's `aggregation:` (any S-norm or `none`), `defuzzifier:` (Centroid, Bisector,
+//! SmallestOfMaximum, LargestOfMaximum, MeanOfMaximum with a resolution; WeightedAverage,
+//! WeightedSum with a type Automatic, TakagiSugeno or Tsukamoto), `default:` and `lock-previous:`,
+//! and any number of `RuleBlock:`s with `conjunction` (any T-norm or `none`), `disjunction` (any
+//! S-norm or `none`), `implication` (any T-norm or `none`), `activation: General` and `rule: if
+//! … then … [with w]` lines: `and`, `or` (looser than `and`), parentheses, hedges `not seldom
+//! somewhat very extremely any`, output variables in conditions (chained engines), several
+//! conclusions with hedges. `description:` lines and `#` comments are skipped. Engines read here
+//! fire a rule above fuzzylite's activation threshold ([`FUZZYLITE_EPSILON`]).
 //!
-//! Anything else — other term shapes, `or`, hedges such as `very`, disabled variables, a second
-//! rule block, another aggregation — is an error naming the line, never silently dropped: an engine
-//! that loads here evaluates exactly as written.
+//! Not supported, each an error naming the line: disabled variables or rule blocks, activation
+//! methods other than General, terms of a height other than 1, a missing defuzzifier. Nothing is
+//! silently dropped: an engine that loads here evaluates as written.
 
 use std::collections::{HashMap, HashSet};
 use std::fmt::Write as _;
 
-use super::engine::{Defuzzifier, Engine, InputVariable, Norm, OutputVariable, Rule, Term};
+use super::engine::{
+    Antecedent, Conclusion, Defuzzifier, Engine, Hedge, InputVariable, Norm, Operators,
+    OutputVariable, Proposition, Rule, RuleBlock, SNorm, Term, VariableRef, WeightedKind,
+    DEFAULT_RESOLUTION, FUZZYLITE_EPSILON,
+};
+use super::function::{Formula, Var};
 use super::membership::Shape;
 use super::FuzzyError;
 
@@ -23,7 +32,7 @@ fn error(line: usize, message: impl AsRef<str>) -> FuzzyError {
     FuzzyError::new(format!("line {line}: {}", message.as_ref()))
 }
 
-fn number(line: usize, text: &str, what: &str) -> Result<f64, FuzzyError> {
+pub(crate) fn number(line: usize, text: &str, what: &str) -> Result<f64, FuzzyError> {
     match text.trim() {
         "nan" | "NaN" => Ok(f64::NAN),
         t => t
@@ -48,8 +57,19 @@ enum Section {
     Engine,
     Input(usize),
     Output(usize),
-    Rules,
+    Rules(usize),
 }
+
+/// A rule block as read: its operators and its rule lines.
+struct BlockText {
+    name: String,
+    operators: Operators,
+    rules: Vec<(usize, String)>,
+}
+
+/// A Function term waiting for every variable to be known: (line, output?, variable, term,
+/// formula).
+type PendingFormula = (usize, bool, usize, usize, String);
 
 /// Parses an FLL document.
 ///
@@ -62,7 +82,7 @@ enum Section {
 /// let mut out = [0.0];
 /// again.evaluate(&[2.0, -1.0], &mut out);
 /// assert!(out[0].is_finite());
-/// assert!(parse("Engine: x\nInputVariable: E\n  term: A Gaussian 0 1\n").unwrap_err()
+/// assert!(parse("Engine: x\nInputVariable: E\n  term: A Gaussian 0 0\n").unwrap_err()
 ///     .to_string().starts_with("line 3:"));
 /// ```
 pub fn parse(text: &str) -> Result<Engine, FuzzyError> {
@@ -73,10 +93,8 @@ pub fn parse(text: &str) -> Result<Engine, FuzzyError> {
     // The term names of the variable being read.
     let mut term_names: HashSet<String> = HashSet::new();
     let mut outputs: Vec<OutputVariable> = Vec::new();
-    let mut rule_lines: Vec<(usize, String)> = Vec::new();
-    let mut conjunction = Norm::Minimum;
-    let mut implication = Norm::Minimum;
-    let mut rule_blocks = 0;
+    let mut blocks: Vec<BlockText> = Vec::new();
+    let mut pending: Vec<PendingFormula> = Vec::new();
     let mut section = Section::None;
 
     for (index, raw) in text.lines().enumerate() {
@@ -123,16 +141,24 @@ pub fn parse(text: &str) -> Result<Engine, FuzzyError> {
                     defuzzifier: Defuzzifier::Centroid,
                     default_value: f64::NAN,
                     lock_previous: false,
+                    aggregation: Some(SNorm::Maximum),
+                    resolution: DEFAULT_RESOLUTION,
+                    weighted_kind: WeightedKind::Automatic,
                 });
                 section = Section::Output(outputs.len() - 1);
                 continue;
             }
             "RuleBlock" => {
-                rule_blocks += 1;
-                if rule_blocks > 1 {
-                    return Err(error(line_no, "only one rule block is supported"));
-                }
-                section = Section::Rules;
+                blocks.push(BlockText {
+                    name: value.to_string(),
+                    operators: Operators {
+                        conjunction: Some(Norm::Minimum),
+                        disjunction: Some(SNorm::Maximum),
+                        implication: Some(Norm::Minimum),
+                    },
+                    rules: Vec::new(),
+                });
+                section = Section::Rules(blocks.len() - 1);
                 continue;
             }
             "description" => continue,
@@ -158,7 +184,11 @@ pub fn parse(text: &str) -> Result<Engine, FuzzyError> {
                     }
                     "range" => (v.min, v.max) = range(line_no, value)?,
                     "lock-range" => v.lock_range = boolean(line_no, value, key)?,
-                    "term" => add_term(line_no, value, &v.name, &mut v.terms, &mut term_names)?,
+                    "term" => {
+                        let at = (false, i, v.terms.len());
+                        add_term(line_no, value, &v.name, &mut v.terms, &mut term_names)?;
+                        note_formula(line_no, value, at, &mut pending);
+                    }
                     _ => {
                         return Err(error(
                             line_no,
@@ -177,18 +207,18 @@ pub fn parse(text: &str) -> Result<Engine, FuzzyError> {
                     }
                     "range" => (v.min, v.max) = range(line_no, value)?,
                     "lock-range" => v.lock_range = boolean(line_no, value, key)?,
-                    "aggregation" => {
-                        if value != "Maximum" {
-                            return Err(error(
-                                line_no,
-                                format!("aggregation {value:?} is not supported (only Maximum)"),
-                            ));
-                        }
+                    "aggregation" => v.aggregation = s_norm(line_no, value, key)?,
+                    "defuzzifier" => {
+                        (v.defuzzifier, v.resolution, v.weighted_kind) =
+                            defuzzifier(line_no, value)?;
                     }
-                    "defuzzifier" => v.defuzzifier = defuzzifier(line_no, value)?,
                     "default" => v.default_value = number(line_no, value, "default")?,
                     "lock-previous" => v.lock_previous = boolean(line_no, value, key)?,
-                    "term" => add_term(line_no, value, &v.name, &mut v.terms, &mut term_names)?,
+                    "term" => {
+                        let at = (true, o, v.terms.len());
+                        add_term(line_no, value, &v.name, &mut v.terms, &mut term_names)?;
+                        note_formula(line_no, value, at, &mut pending);
+                    }
                     _ => {
                         return Err(error(
                             line_no,
@@ -197,32 +227,26 @@ pub fn parse(text: &str) -> Result<Engine, FuzzyError> {
                     }
                 }
             }
-            Section::Rules => {
+            Section::Rules(b) => {
+                let block = &mut blocks[b];
                 match key {
                     "enabled" => {
                         if !boolean(line_no, value, key)? {
                             return Err(error(line_no, "a disabled rule block is not supported"));
                         }
                     }
-                    "conjunction" => conjunction = norm(line_no, value, key)?,
-                    "implication" => implication = norm(line_no, value, key)?,
-                    "disjunction" => {
-                        if !matches!(value, "Maximum" | "none" | "") {
-                            return Err(error(
-                            line_no,
-                            format!("disjunction {value:?} is not supported (rules use only \"and\")"),
-                        ));
-                        }
-                    }
+                    "conjunction" => block.operators.conjunction = t_norm(line_no, value, key)?,
+                    "disjunction" => block.operators.disjunction = s_norm(line_no, value, key)?,
+                    "implication" => block.operators.implication = t_norm(line_no, value, key)?,
                     "activation" => {
-                        if value != "General" && !value.is_empty() {
+                        if value != "General" && !value.is_empty() && value != "none" {
                             return Err(error(
                                 line_no,
                                 format!("activation {value:?} is not supported (only General)"),
                             ));
                         }
                     }
-                    "rule" => rule_lines.push((line_no, value.to_string())),
+                    "rule" => block.rules.push((line_no, value.to_string())),
                     _ => return Err(error(line_no, format!("unknown rule-block key {key:?}"))),
                 }
             }
@@ -244,13 +268,75 @@ pub fn parse(text: &str) -> Result<Engine, FuzzyError> {
             )));
         }
     }
-    let input_names = VariableNames::of(inputs.iter().map(|v| (v.name.as_str(), &v.terms[..])));
-    let output_names = VariableNames::of(outputs.iter().map(|v| (v.name.as_str(), &v.terms[..])));
-    let rules = rule_lines
-        .iter()
-        .map(|(line_no, text)| rule(*line_no, text, &input_names, &output_names))
-        .collect::<Result<Vec<_>, _>>()?;
-    Engine::new(name, inputs, outputs, rules, conjunction, implication)
+    resolve_formulas(&pending, &mut inputs, &mut outputs)?;
+    let names = Names::of(&inputs, &outputs);
+    let blocks = blocks
+        .into_iter()
+        .map(|b| {
+            let rules = b
+                .rules
+                .iter()
+                .map(|(line_no, text)| rule(*line_no, text, &names))
+                .collect::<Result<Vec<_>, _>>()?;
+            Ok(RuleBlock {
+                name: b.name,
+                operators: b.operators,
+                rules,
+            })
+        })
+        .collect::<Result<Vec<_>, FuzzyError>>()?;
+    Engine::with_blocks(name, inputs, outputs, blocks, FUZZYLITE_EPSILON)
+}
+
+/// Remembers a Function term for [`resolve_formulas`], which parses it once every variable is
+/// known (a formula may name a variable declared after it).
+fn note_formula(
+    line_no: usize,
+    value: &str,
+    (output, variable, term): (bool, usize, usize),
+    pending: &mut Vec<PendingFormula>,
+) {
+    let mut words = value.split_whitespace();
+    let _name = words.next();
+    if words.next() == Some("Function") {
+        let formula = words.collect::<Vec<_>>().join(" ");
+        pending.push((line_no, output, variable, term, formula));
+    }
+}
+
+/// What a name in a formula means: an input or an output of these variables.
+pub(crate) fn formula_names<'a>(
+    inputs: &'a [InputVariable],
+    outputs: &'a [OutputVariable],
+) -> impl Fn(&str) -> Option<Var> + 'a {
+    move |name: &str| {
+        inputs
+            .iter()
+            .position(|v| v.name == name)
+            .map(Var::Input)
+            .or_else(|| outputs.iter().position(|v| v.name == name).map(Var::Output))
+    }
+}
+
+/// Parses every pending Function formula now that every variable is known.
+fn resolve_formulas(
+    pending: &[PendingFormula],
+    inputs: &mut [InputVariable],
+    outputs: &mut [OutputVariable],
+) -> Result<(), FuzzyError> {
+    for (line_no, output, variable, term, text) in pending {
+        let formula = Formula::parse(text, formula_names(inputs, outputs))
+            .map_err(|e| error(*line_no, e.to_string()))?;
+        let terms = if *output {
+            outputs.get_mut(*variable).map(|v| &mut v.terms)
+        } else {
+            inputs.get_mut(*variable).map(|v| &mut v.terms)
+        };
+        if let Some(t) = terms.and_then(|terms| terms.get_mut(*term)) {
+            t.shape = Shape::Function(formula);
+        }
+    }
+    Ok(())
 }
 
 fn range(line: usize, value: &str) -> Result<(f64, f64), FuzzyError> {
@@ -292,6 +378,12 @@ fn unique_variable(
     name: &str,
     names: &mut HashSet<String>,
 ) -> Result<(), FuzzyError> {
+    if name.is_empty() || name.contains(char::is_whitespace) {
+        return Err(error(
+            line_no,
+            format!("a variable's name is one word, got {name:?}"),
+        ));
+    }
     if !names.insert(name.to_string()) {
         return Err(error(
             line_no,
@@ -301,6 +393,7 @@ fn unique_variable(
     Ok(())
 }
 
+/// A term; a Function's shape is a placeholder until [`resolve_formulas`].
 fn term(line: usize, value: &str) -> Result<Term, FuzzyError> {
     let parts: Vec<&str> = value.split_whitespace().collect();
     let Some((&name, rest)) = parts.split_first() else {
@@ -309,67 +402,66 @@ fn term(line: usize, value: &str) -> Result<Term, FuzzyError> {
     let Some((&kind, params)) = rest.split_first() else {
         return Err(error(line, format!("term {name} has no shape")));
     };
+    if kind == "Function" {
+        return Ok(Term {
+            name: name.to_string(),
+            shape: Shape::Constant { value: 0.0 },
+        });
+    }
     let values = params
         .iter()
         .map(|p| number(line, p, "term parameter"))
         .collect::<Result<Vec<f64>, _>>()?;
-    // fuzzylite appends an optional height; only the full height 1 is supported.
-    let take = |n: usize| -> Result<&[f64], FuzzyError> {
-        match values.len() {
-            l if l == n => Ok(&values[..n]),
-            l if l == n + 1 && values[n] == 1.0 => Ok(&values[..n]),
-            _ => Err(error(
-                line,
-                format!("{kind} {name} needs {n} numbers, got {}", values.len()),
-            )),
-        }
-    };
-    let shape = match kind {
-        "Triangle" => {
-            let v = take(3)?;
-            Shape::triangle(v[0], v[1], v[2])
-        }
-        "Trapezoid" => {
-            let v = take(4)?;
-            Shape::trapezoid(v[0], v[1], v[2], v[3])
-        }
-        "Ramp" => {
-            let v = take(2)?;
-            Shape::ramp(v[0], v[1])
-        }
-        other => {
-            return Err(error(
-                line,
-                format!("term {name}: shape {other} is not supported (Triangle, Trapezoid, Ramp)"),
-            ))
-        }
-    }
-    .map_err(|e| error(line, format!("term {name}: {e}")))?;
+    let shape =
+        Shape::from_fll(kind, &values).map_err(|e| error(line, format!("term {name}: {e}")))?;
     Ok(Term {
         name: name.to_string(),
         shape,
     })
 }
 
-fn norm(line: usize, value: &str, key: &str) -> Result<Norm, FuzzyError> {
-    match value {
-        "Minimum" => Ok(Norm::Minimum),
-        "AlgebraicProduct" => Ok(Norm::AlgebraicProduct),
-        other => Err(error(
-            line,
-            format!("{key} {other:?} is not supported (Minimum or AlgebraicProduct)"),
-        )),
+fn t_norm(line: usize, value: &str, key: &str) -> Result<Option<Norm>, FuzzyError> {
+    if matches!(value, "none" | "") {
+        return Ok(None);
     }
-}
-
-fn defuzzifier(line: usize, value: &str) -> Result<Defuzzifier, FuzzyError> {
-    let mut words = value.split_whitespace();
-    let kind = words.next().unwrap_or_default();
-    let defuzzifier = Defuzzifier::from_name(kind).ok_or_else(|| {
+    Norm::from_name(value).map(Some).ok_or_else(|| {
+        let names: Vec<&str> = Norm::ALL.iter().map(|n| n.name()).collect();
         error(
             line,
             format!(
-                "defuzzifier {kind:?} is not supported (Centroid, WeightedAverage, MeanOfMaximum)"
+                "{key} {value:?} is not a T-norm ({} or none)",
+                names.join(", ")
+            ),
+        )
+    })
+}
+
+fn s_norm(line: usize, value: &str, key: &str) -> Result<Option<SNorm>, FuzzyError> {
+    if matches!(value, "none" | "") {
+        return Ok(None);
+    }
+    SNorm::from_name(value).map(Some).ok_or_else(|| {
+        let names: Vec<&str> = SNorm::ALL.iter().map(|n| n.name()).collect();
+        error(
+            line,
+            format!(
+                "{key} {value:?} is not an S-norm ({} or none)",
+                names.join(", ")
+            ),
+        )
+    })
+}
+
+fn defuzzifier(line: usize, value: &str) -> Result<(Defuzzifier, usize, WeightedKind), FuzzyError> {
+    let mut words = value.split_whitespace();
+    let kind = words.next().unwrap_or_default();
+    let defuzzifier = Defuzzifier::from_name(kind).ok_or_else(|| {
+        let names: Vec<&str> = Defuzzifier::ALL.iter().map(|d| d.name()).collect();
+        error(
+            line,
+            format!(
+                "defuzzifier {kind:?} is not supported ({})",
+                names.join(", ")
             ),
         )
     })?;
@@ -380,60 +472,185 @@ fn defuzzifier(line: usize, value: &str) -> Result<Defuzzifier, FuzzyError> {
             format!("defuzzifier {kind}: unexpected {extra:?} after {parameter:?}"),
         ));
     }
-    match (defuzzifier, parameter) {
-        (_, None) | (Defuzzifier::WeightedAverage, Some("Automatic")) => Ok(defuzzifier),
-        (Defuzzifier::WeightedAverage, Some(other)) => Err(error(
-            line,
-            format!(
-                "WeightedAverage {other:?}: only the Automatic type of a Mamdani engine is \
-                 supported"
-            ),
-        )),
-        // A resolution: cutlab integrates exactly and ignores it, but a value fuzzylite would
-        // refuse (0, negative, NaN, not whole) is a mistake to say.
-        (_, Some(resolution)) => match resolution.parse::<u64>() {
-            Ok(r) if r >= 1 => Ok(defuzzifier),
-            _ => Err(error(
-                line,
-                format!(
-                    "{kind}: the resolution must be a whole number of at least 1 (fuzzylite's \
-                     default is 100), got {resolution:?}"
-                ),
-            )),
-        },
-    }
-}
-
-/// Each variable's index and its terms' indices by name, built once so that every proposition
-/// of every rule is found in constant time (a list of every variable's terms built per
-/// proposition made rules × terms work and allocation).
-struct VariableNames<'a>(HashMap<&'a str, (usize, HashMap<&'a str, usize>)>);
-
-impl<'a> VariableNames<'a> {
-    fn of(variables: impl Iterator<Item = (&'a str, &'a [Term])>) -> Self {
-        Self(
-            variables
-                .enumerate()
-                .map(|(v, (name, terms))| {
-                    let terms = terms.iter().enumerate();
-                    (
-                        name,
-                        (v, terms.map(|(t, term)| (term.name.as_str(), t)).collect()),
+    if !defuzzifier.is_integral() {
+        let weighted = match parameter {
+            None => WeightedKind::Automatic,
+            Some(p) => WeightedKind::ALL
+                .into_iter()
+                .find(|k| k.name() == p)
+                .ok_or_else(|| {
+                    error(
+                        line,
+                        format!("{kind} {p:?}: the type is Automatic, TakagiSugeno or Tsukamoto"),
                     )
-                })
-                .collect(),
-        )
+                })?,
+        };
+        return Ok((defuzzifier, DEFAULT_RESOLUTION, weighted));
+    }
+    let resolution = match parameter {
+        None => DEFAULT_RESOLUTION,
+        // A value fuzzylite would refuse (0, negative, NaN, not whole) is a mistake to say.
+        Some(r) => match r.parse::<usize>() {
+            Ok(r) if r >= 1 => r,
+            _ => {
+                return Err(error(
+                    line,
+                    format!(
+                        "{kind}: the resolution must be a whole number of at least 1 \
+                         (fuzzylite's default is 100), got {r:?}"
+                    ),
+                ))
+            }
+        },
+    };
+    Ok((defuzzifier, resolution, WeightedKind::Automatic))
+}
+
+/// Each variable's reference and its terms' indices by name, built once so that every
+/// proposition of every rule is found in constant time (a list of every variable's terms built
+/// per proposition made rules × terms work and allocation).
+pub(crate) struct Names<'a>(HashMap<&'a str, (VariableRef, HashMap<&'a str, usize>)>);
+
+impl<'a> Names<'a> {
+    pub(crate) fn of(inputs: &'a [InputVariable], outputs: &'a [OutputVariable]) -> Self {
+        let terms = |terms: &'a [Term]| {
+            terms
+                .iter()
+                .enumerate()
+                .map(|(t, term)| (term.name.as_str(), t))
+                .collect::<HashMap<_, _>>()
+        };
+        let mut map = HashMap::new();
+        for (v, var) in inputs.iter().enumerate() {
+            map.insert(
+                var.name.as_str(),
+                (VariableRef::Input(v), terms(&var.terms)),
+            );
+        }
+        for (v, var) in outputs.iter().enumerate() {
+            map.insert(
+                var.name.as_str(),
+                (VariableRef::Output(v), terms(&var.terms)),
+            );
+        }
+        Self(map)
     }
 }
 
-fn rule(
-    line: usize,
-    text: &str,
-    inputs: &VariableNames,
-    outputs: &VariableNames,
-) -> Result<Rule, FuzzyError> {
+/// The most propositions a rule may hold: its condition is a tree that evaluation recurses over.
+pub const MAX_PROPOSITIONS: usize = 1000;
+
+/// A recursive-descent reader of a rule's condition: `or` of `and`s of propositions or
+/// parenthesised conditions.
+struct Condition<'a, 'n> {
+    words: &'a [&'a str],
+    at: usize,
+    names: &'a Names<'n>,
+    propositions: usize,
+}
+
+impl Condition<'_, '_> {
+    fn peek(&self) -> Option<&str> {
+        self.words.get(self.at).copied()
+    }
+
+    fn or(&mut self, depth: usize) -> Result<Antecedent, String> {
+        if depth > super::function::MAX_DEPTH {
+            return Err(format!(
+                "parentheses nested deeper than {}",
+                super::function::MAX_DEPTH
+            ));
+        }
+        let mut left = self.and(depth)?;
+        while self.peek() == Some("or") {
+            self.at += 1;
+            let right = self.and(depth)?;
+            left = Antecedent::Or(Box::new(left), Box::new(right));
+        }
+        Ok(left)
+    }
+
+    fn and(&mut self, depth: usize) -> Result<Antecedent, String> {
+        let mut left = self.factor(depth)?;
+        while self.peek() == Some("and") {
+            self.at += 1;
+            let right = self.factor(depth)?;
+            left = Antecedent::And(Box::new(left), Box::new(right));
+        }
+        Ok(left)
+    }
+
+    fn factor(&mut self, depth: usize) -> Result<Antecedent, String> {
+        if self.peek() == Some("(") {
+            self.at += 1;
+            let inner = self.or(depth + 1)?;
+            if self.peek() != Some(")") {
+                return Err("a \"(\" is not closed".into());
+            }
+            self.at += 1;
+            return Ok(inner);
+        }
+        self.propositions += 1;
+        if self.propositions > MAX_PROPOSITIONS {
+            return Err(format!("more than {MAX_PROPOSITIONS} propositions"));
+        }
+        let (variable, hedges, term) = proposition(self.words, &mut self.at, self.names, true)?;
+        Ok(Antecedent::Is(Proposition {
+            variable,
+            hedges,
+            term,
+        }))
+    }
+}
+
+/// `X is h₁ … T` from `words` at `at`: the variable, the hedges and the term (none after `any`
+/// when `any_allowed`).
+fn proposition(
+    words: &[&str],
+    at: &mut usize,
+    names: &Names,
+    any_allowed: bool,
+) -> Result<(VariableRef, Vec<Hedge>, Option<usize>), String> {
+    let var = words
+        .get(*at)
+        .ok_or_else(|| "a proposition is missing".to_string())?;
+    let (variable, terms) = names
+        .0
+        .get(var)
+        .ok_or_else(|| format!("unknown variable {var:?}"))?;
+    *at += 1;
+    if words.get(*at) != Some(&"is") {
+        return Err(format!("expected \"is\" after {var}"));
+    }
+    *at += 1;
+    let mut hedges = Vec::new();
+    loop {
+        let word = words
+            .get(*at)
+            .ok_or_else(|| format!("{var} is … needs a term"))?;
+        *at += 1;
+        if let Some(h) = Hedge::from_name(word) {
+            hedges.push(h);
+            if h == Hedge::Any {
+                if any_allowed {
+                    return Ok((*variable, hedges, None));
+                }
+                return Err("\"any\" cannot conclude a rule".into());
+            }
+            continue;
+        }
+        let t = terms
+            .get(word)
+            .ok_or_else(|| format!("unknown term {word:?} of {var}"))?;
+        return Ok((*variable, hedges, Some(*t)));
+    }
+}
+
+/// Parses a rule's text (after `rule:`) against the engine's variables.
+pub(crate) fn rule(line: usize, text: &str, names: &Names) -> Result<Rule, FuzzyError> {
     let fail = |m: String| error(line, format!("{m} in rule {text:?}"));
-    let words: Vec<&str> = text.split_whitespace().collect();
+    let spaced = text.replace('(', " ( ").replace(')', " ) ");
+    let words: Vec<&str> = spaced.split_whitespace().collect();
     if words.first() != Some(&"if") {
         return Err(fail("a rule starts with \"if\"".into()));
     }
@@ -461,36 +678,52 @@ fn rule(
         }
         None => (words.get(then + 1..).unwrap_or_default(), 1.0),
     };
-    let propositions = |part: &[&str], names: &VariableNames| {
-        part.split(|w| *w == "and")
-            .map(|p| match p {
-                [var, "is", term] => {
-                    let (v, terms) = names
-                        .0
-                        .get(var)
-                        .ok_or_else(|| fail(format!("unknown variable {var:?}")))?;
-                    let t = terms
-                        .get(term)
-                        .ok_or_else(|| fail(format!("unknown term {term:?} of {var}")))?;
-                    Ok((*v, *t))
-                }
-                _ if p.contains(&"or") => Err(fail("\"or\" is not supported".into())),
-                [_, "is", ..] => Err(fail(format!(
-                    "hedges such as {:?} are not supported",
-                    p.get(2).copied().unwrap_or_default()
-                ))),
-                _ => Err(fail(format!("cannot read {:?}", p.join(" ")))),
-            })
-            .collect::<Result<Vec<(usize, usize)>, FuzzyError>>()
+    let condition_words = &words[1..then];
+    if condition_words.is_empty() {
+        return Err(fail("the condition is empty".into()));
+    }
+    let mut condition = Condition {
+        words: condition_words,
+        at: 0,
+        names,
+        propositions: 0,
     };
+    let antecedent = condition.or(0).map_err(&fail)?;
+    if let Some(extra) = condition.peek() {
+        return Err(fail(format!("unexpected {extra:?} in the condition")));
+    }
+    let mut consequents = Vec::new();
+    let mut at = 0;
+    loop {
+        let (variable, hedges, term) =
+            proposition(consequent_words, &mut at, names, false).map_err(&fail)?;
+        let (VariableRef::Output(output), Some(term)) = (variable, term) else {
+            return Err(fail("a conclusion names an output variable".into()));
+        };
+        consequents.push(Conclusion {
+            output,
+            hedges,
+            term,
+        });
+        match consequent_words.get(at) {
+            None => break,
+            Some(&"and") => at += 1,
+            Some(other) => return Err(fail(format!("expected \"and\", found {other:?}"))),
+        }
+        if consequents.len() > MAX_PROPOSITIONS {
+            return Err(fail(format!("more than {MAX_PROPOSITIONS} conclusions")));
+        }
+    }
     Ok(Rule {
-        antecedents: propositions(&words[1..then], inputs)?,
-        consequents: propositions(consequent_words, outputs)?,
+        antecedent,
+        consequents,
         weight,
     })
 }
 
-fn float(v: f64) -> String {
+/// A number as FLL and FIS write it: as Rust prints it (the shortest that reads back), `nan` for
+/// NaN.
+pub(crate) fn float(v: f64) -> String {
     if v.is_nan() {
         "nan".into()
     } else {
@@ -498,9 +731,9 @@ fn float(v: f64) -> String {
     }
 }
 
-/// Writes `engine` as FLL that fuzzylite 6 loads. Centroid and mean of maximum are written with a
-/// resolution of 100 (fuzzylite's default; cutlab ignores it); raise it in fuzzylite to approach
-/// cutlab's exact values.
+/// Writes `engine` as FLL that fuzzylite 6 loads. Integral defuzzifiers are written with their
+/// resolution (cutlab's exact paths ignore it; raise it in fuzzylite to approach cutlab's exact
+/// values).
 pub fn write(engine: &Engine) -> String {
     let mut out = String::new();
     let _ = writeln!(out, "Engine: {}", engine.name);
@@ -518,53 +751,44 @@ pub fn write(engine: &Engine) -> String {
         let _ = writeln!(out, "  enabled: true");
         let _ = writeln!(out, "  range: {} {}", float(v.min), float(v.max));
         let _ = writeln!(out, "  lock-range: {}", v.lock_range);
-        let _ = writeln!(out, "  aggregation: Maximum");
-        let defuzzifier = match v.defuzzifier {
-            Defuzzifier::Centroid => "Centroid 100",
-            Defuzzifier::WeightedAverage => "WeightedAverage Automatic",
-            Defuzzifier::MeanOfMaximum => "MeanOfMaximum 100",
+        let _ = writeln!(
+            out,
+            "  aggregation: {}",
+            v.aggregation.map_or("none", |a| a.name())
+        );
+        let parameter = if v.defuzzifier.is_integral() {
+            v.resolution.to_string()
+        } else {
+            v.weighted_kind.name().to_string()
         };
-        let _ = writeln!(out, "  defuzzifier: {defuzzifier}");
+        let _ = writeln!(out, "  defuzzifier: {} {parameter}", v.defuzzifier.name());
         let _ = writeln!(out, "  default: {}", float(v.default_value));
         let _ = writeln!(out, "  lock-previous: {}", v.lock_previous);
         for t in &v.terms {
             let _ = writeln!(out, "  term: {} {}", t.name, t.shape);
         }
     }
-    let _ = writeln!(out, "RuleBlock: rules");
-    let _ = writeln!(out, "  enabled: true");
-    let _ = writeln!(out, "  conjunction: {}", engine.conjunction().name());
-    let _ = writeln!(out, "  disjunction: Maximum");
-    let _ = writeln!(out, "  implication: {}", engine.implication().name());
-    let _ = writeln!(out, "  activation: General");
-    for r in engine.rules() {
-        let part = |pairs: &[(usize, usize)], output: bool| -> String {
-            pairs
-                .iter()
-                .map(|&(v, t)| {
-                    let (name, term) = if output {
-                        let var = &engine.outputs()[v];
-                        (&var.name, &var.terms[t].name)
-                    } else {
-                        let var = &engine.inputs()[v];
-                        (&var.name, &var.terms[t].name)
-                    };
-                    format!("{name} is {term}")
-                })
-                .collect::<Vec<_>>()
-                .join(" and ")
-        };
-        let weight = if r.weight == 1.0 {
-            String::new()
-        } else {
-            format!(" with {}", r.weight)
-        };
+    let mut index = 0;
+    for (name, operators, rules) in engine.rule_blocks() {
+        let t = |n: Option<Norm>| n.map_or("none", |n| n.name());
         let _ = writeln!(
             out,
-            "  rule: if {} then {}{weight}",
-            part(&r.antecedents, false),
-            part(&r.consequents, true)
+            "RuleBlock: {}",
+            if name.is_empty() { "rules" } else { name }
         );
+        let _ = writeln!(out, "  enabled: true");
+        let _ = writeln!(out, "  conjunction: {}", t(operators.conjunction));
+        let _ = writeln!(
+            out,
+            "  disjunction: {}",
+            operators.disjunction.map_or("none", |n| n.name())
+        );
+        let _ = writeln!(out, "  implication: {}", t(operators.implication));
+        let _ = writeln!(out, "  activation: General");
+        for _ in rules {
+            let _ = writeln!(out, "  rule: {}", engine.rule_text(index));
+            index += 1;
+        }
     }
     out
 }
@@ -630,23 +854,23 @@ mod tests {
             ),
             (
                 "rule: if E is NB and EC is NB then U is NB",
-                "rule: if E is NB or EC is NB then U is NB",
-                "\"or\" is not supported",
+                "rule: if (E is NB or EC is NB then U is NB",
+                "a \"(\" is not closed",
             ),
             (
                 "rule: if E is NB and EC is NB then U is NB",
-                "rule: if E is very NB then U is NB",
-                "hedges",
+                "rule: if E is very then U is NB",
+                "E is … needs a term",
             ),
             (
                 "aggregation: Maximum",
-                "aggregation: AlgebraicSum",
-                "aggregation \"AlgebraicSum\"",
+                "aggregation: Sum",
+                "aggregation \"Sum\" is not an S-norm",
             ),
             (
                 "term: NB Triangle -6 -6 -4",
-                "term: NB Bell -6 1 2",
-                "shape Bell",
+                "term: NB Blob -6 1 2",
+                "shape Blob",
             ),
             (
                 "defuzzifier: Centroid 100",
@@ -670,8 +894,8 @@ mod tests {
             ),
             (
                 "defuzzifier: Centroid 100",
-                "defuzzifier: WeightedAverage TakagiSugeno",
-                "only the Automatic type",
+                "defuzzifier: WeightedAverage Linear",
+                "the type is Automatic, TakagiSugeno or Tsukamoto",
             ),
         ];
         for (from, to, expected) in cases {

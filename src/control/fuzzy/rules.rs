@@ -16,7 +16,10 @@
 //! makes all seven rows agree with the output levels of Table 5's second lines; `tests/fuzzy.rs`
 //! checks the repaired table against Table 5.
 
-use super::engine::{Defuzzifier, Engine, InputVariable, Norm, OutputVariable, Rule, Term};
+use super::engine::{
+    Defuzzifier, Engine, InputVariable, Norm, OutputVariable, Rule, SNorm, Term, WeightedKind,
+    DEFAULT_RESOLUTION,
+};
 use super::membership::Shape;
 use super::FuzzyError;
 
@@ -138,13 +141,18 @@ pub fn paper_002_engine(table: &RuleTable, defuzzifier: Defuzzifier) -> Result<E
         defuzzifier,
         default_value: 0.0,
         lock_previous: false,
+        aggregation: Some(SNorm::Maximum),
+        resolution: DEFAULT_RESOLUTION,
+        weighted_kind: WeightedKind::Automatic,
     };
     let rules = (0..7)
         .flat_map(|e| {
-            (0..7).map(move |ec| Rule {
-                antecedents: vec![(0, e), (1, ec)],
-                consequents: vec![(0, (table[e][ec] + 3).clamp(0, 6) as usize)],
-                weight: 1.0,
+            (0..7).filter_map(move |ec| {
+                Rule::all_of(
+                    &[(0, e), (1, ec)],
+                    &[(0, (table[e][ec] + 3).clamp(0, 6) as usize)],
+                    1.0,
+                )
             })
         })
         .collect();
@@ -250,16 +258,29 @@ pub fn paper_002_table(engine: &Engine) -> Result<RuleTable, FuzzyError> {
             u.default_value, paper_u.default_value
         )));
     }
+    if engine.rule_blocks().count() != 1 {
+        return Err(FuzzyError::new(format!(
+            "{} rule blocks; paper 002's engine has one",
+            engine.rule_blocks().count()
+        )));
+    }
+    if u.aggregation != paper_u.aggregation {
+        return Err(FuzzyError::new(format!(
+            "output U: aggregation {}, paper 002's is Maximum",
+            u.aggregation.map_or("none", |a| a.name())
+        )));
+    }
     let operators = [
         ("conjunction", engine.conjunction(), paper.conjunction()),
         ("implication", engine.implication(), paper.implication()),
     ];
     for (key, mine, theirs) in operators {
         if mine != theirs {
+            let name = |n: Option<Norm>| n.map_or("none", |n| n.name());
             return Err(FuzzyError::new(format!(
                 "{key} {}, paper 002's is {}",
-                mine.name(),
-                theirs.name()
+                name(mine),
+                name(theirs)
             )));
         }
     }
@@ -268,12 +289,18 @@ pub fn paper_002_table(engine: &Engine) -> Result<RuleTable, FuzzyError> {
     let mut table = [[0i8; 7]; 7];
     for (index, rule) in engine.rules().iter().enumerate() {
         let number = index + 1;
-        let (&[(0, i), (1, j)] | &[(1, j), (0, i)]) = rule.antecedents.as_slice() else {
+        let Some((antecedents, consequents)) = rule.as_all_of() else {
+            return Err(FuzzyError::new(format!(
+                "rule {number}: a table cell is \"if E is … and EC is … then U is …\", without \
+                 hedges or \"or\""
+            )));
+        };
+        let (&[(0, i), (1, j)] | &[(1, j), (0, i)]) = antecedents.as_slice() else {
             return Err(FuzzyError::new(format!(
                 "rule {number}: a table cell needs one E term and one EC term joined by \"and\""
             )));
         };
-        let &[(0, t)] = rule.consequents.as_slice() else {
+        let &[(0, t)] = consequents.as_slice() else {
             return Err(FuzzyError::new(format!(
                 "rule {number}: a table cell names one U term"
             )));

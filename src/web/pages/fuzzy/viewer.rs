@@ -21,27 +21,7 @@ pub fn RuleViewer(fuzzy: Fuzzy) -> impl IntoView {
             let Ok(engine) = engine else {
                 return String::new();
             };
-            let rule = &engine.rules()[index];
-            let side = |pairs: &[(usize, usize)], out: bool| {
-                pairs
-                    .iter()
-                    .map(|&(v, t)| {
-                        if out {
-                            let var = &engine.outputs()[v];
-                            format!("{} is {}", var.name, var.terms[t].name)
-                        } else {
-                            let var = &engine.inputs()[v];
-                            format!("{} is {}", var.name, var.terms[t].name)
-                        }
-                    })
-                    .collect::<Vec<_>>()
-                    .join(" and ")
-            };
-            format!(
-                "if {} then {}",
-                side(&rule.antecedents, false),
-                side(&rule.consequents, true)
-            )
+            engine.rule_text(index)
         })
     };
     view! {
