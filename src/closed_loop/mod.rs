@@ -15,6 +15,7 @@
 //! | [`feedback_loop`] | the closed loop itself |
 //! | [`metrics`] | what a trace is judged by |
 //! | [`lab`] | runs on the papers' presets: teach cut then loop, in pieces; several runs in turn |
+//! | [`transfer`] | runs sent to a computation worker and back, bit for bit (the browser's worker pool) |
 //! | [`references`] | the fixed-feed reference runs the savings are measured against |
 //! | [`summary`] | the metrics as a table, and the best of several runs |
 //! | [`paper_comparisons`] | the comparisons the papers make, as runs the lab repeats |
@@ -40,3 +41,4 @@ pub mod settings;
 pub mod summary;
 pub mod teach_cut;
 pub mod trace;
+pub mod transfer;
