@@ -118,7 +118,7 @@ impl RunParts {
     pub fn into_result(self, spec: RunSpec) -> Result<RunResult, String> {
         let header: Header = serde_json::from_str(&self.header_json)
             .map_err(|e| format!("the worker's result could not be read: {e}"))?;
-        if self.rows.len() % ROW_VALUES != 0 {
+        if !self.rows.len().is_multiple_of(ROW_VALUES) {
             return Err(format!(
                 "the worker's trace holds {} numbers, not a whole number of rows of {ROW_VALUES}",
                 self.rows.len()
@@ -137,7 +137,11 @@ impl RunParts {
         let trace = Trace {
             rows: self.rows.chunks_exact(ROW_VALUES).map(row_from).collect(),
             events: header.events,
-            term_names: controller.terms().iter().map(|t| (t.name, t.unit)).collect(),
+            term_names: controller
+                .terms()
+                .iter()
+                .map(|t| (t.name, t.unit))
+                .collect(),
             terms: self.terms,
             completed: header.completed,
         };
@@ -282,7 +286,11 @@ mod tests {
             .to_json()
             .unwrap();
         let request = RunRequest::from_json(&json).unwrap();
-        assert_eq!(request.calibrations.len(), 1, "the matching calibration travels");
+        assert_eq!(
+            request.calibrations.len(),
+            1,
+            "the matching calibration travels"
+        );
         let in_worker = request.into_work().run_to_end().unwrap();
         let on_page = LabRuns::with_calibrations(vec![spec], known)
             .run_to_end()
@@ -308,6 +316,9 @@ mod tests {
         let spec = short_spec(ControllerKind::Threshold);
         let mut parts = RunParts::of(&simulate(&spec).unwrap()).unwrap();
         parts.rows.pop();
-        assert!(parts.into_result(spec).unwrap_err().contains("whole number"));
+        assert!(parts
+            .into_result(spec)
+            .unwrap_err()
+            .contains("whole number"));
     }
 }
