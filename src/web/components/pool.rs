@@ -16,9 +16,10 @@
 use std::cell::RefCell;
 use std::collections::{HashMap, VecDeque};
 use std::sync::Arc;
+use std::time::Duration;
 
 use js_sys::{Array, Float64Array, Reflect};
-use leptos::prelude::window;
+use leptos::prelude::{set_timeout, window};
 use wasm_bindgen::prelude::{Closure, JsCast, JsValue};
 use web_sys::{ErrorEvent, MessageEvent, Worker};
 
@@ -26,7 +27,6 @@ use crate::closed_loop::definition::RunSpec;
 use crate::closed_loop::lab::{RunResult, TeachKey};
 use crate::closed_loop::transfer::{RunParts, RunRequest};
 use crate::estimation::estimator::Calibration;
-use crate::web::components::runner::next_task;
 use crate::work::Progress;
 
 /// The most workers the pool starts, whatever the browser reports: each holds a module and its
@@ -127,7 +127,7 @@ pub fn submit(
             start_workers();
             dispatch();
         }
-        Err(message) => next_task(move || listener(JobEvent::Failed(message))),
+        Err(message) => set_timeout(move || listener(JobEvent::Failed(message)), Duration::ZERO),
     }
     JobId(id)
 }
