@@ -356,10 +356,12 @@ fn received_runs(runs: &Array, specs: Vec<RunSpec>) -> Result<Vec<Arc<RunResult>
 /// could not load its module; the jobs waiting fail with it rather than wait for a worker that
 /// will not come.
 fn on_error(index: usize, serial: u64, message: &str) {
+    // The job is taken off the slot before its listener hears, so a listener that cancels it
+    // does not replace the worker a second time.
     let state = POOL.with(|pool| {
-        let pool = pool.borrow();
-        let slot = pool.slots.get(index)?.as_ref()?;
-        (slot.serial == serial).then(|| (slot.ready, slot.running.as_ref().map(|(id, _)| *id)))
+        let mut pool = pool.borrow_mut();
+        let slot = pool.slots.get_mut(index)?.as_mut()?;
+        (slot.serial == serial).then(|| (slot.ready, slot.running.take().map(|(id, _)| id)))
     });
     let Some((ready, running)) = state else {
         return;
