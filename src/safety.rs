@@ -265,7 +265,7 @@ impl fmt::Display for EnvelopeError {
 impl std::error::Error for EnvelopeError {}
 
 /// A sensor fault the envelope recognises.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub enum SensorFault {
     /// A phase current is NaN or infinite.
     NonFinite,
@@ -290,16 +290,20 @@ impl SensorFault {
 }
 
 /// Something the envelope did or saw, for the event log.
-#[derive(Debug, Clone, Copy, PartialEq)]
+/// Serialised for a trace sent from a worker to the page (a NaN is written as null and read back
+/// as NaN).
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub enum SafetyEvent {
     /// The arming delay passed: the controller is now in charge.
     Armed {
         /// When.
+        #[serde(deserialize_with = "crate::estimation::null_as_nan")]
         time_s: f64,
     },
     /// A sensor fault began; the override is held or falls back.
     FaultDetected {
         /// When.
+        #[serde(deserialize_with = "crate::estimation::null_as_nan")]
         time_s: f64,
         /// Which fault.
         fault: SensorFault,
@@ -307,27 +311,33 @@ pub enum SafetyEvent {
     /// The sensors have been healthy for the recovery time.
     FaultCleared {
         /// When.
+        #[serde(deserialize_with = "crate::estimation::null_as_nan")]
         time_s: f64,
     },
     /// The estimated force stayed above the hard limit: feed hold is latched.
     Overload {
         /// When.
+        #[serde(deserialize_with = "crate::estimation::null_as_nan")]
         time_s: f64,
         /// The force that tripped the alarm.
+        #[serde(deserialize_with = "crate::estimation::null_as_nan")]
         force_n: f64,
     },
     /// The controller asked for a non-finite override (a law fed garbage, or one that diverged):
     /// the envelope holds the override until the requests are numbers again.
     ControllerFault {
         /// When.
+        #[serde(deserialize_with = "crate::estimation::null_as_nan")]
         time_s: f64,
     },
     /// The tool was cutting before the loop armed: the controller enters the cut uncontrolled
     /// (a part program should approach in air until the arming delay has passed).
     CutBeforeArming {
         /// When the cut was first seen.
+        #[serde(deserialize_with = "crate::estimation::null_as_nan")]
         time_s: f64,
         /// The estimated force then.
+        #[serde(deserialize_with = "crate::estimation::null_as_nan")]
         force_n: f64,
     },
     /// The tool is in air and the controller asked for more than the entry override: the
@@ -335,39 +345,47 @@ pub enum SafetyEvent {
     /// of air).
     AirCut {
         /// When.
+        #[serde(deserialize_with = "crate::estimation::null_as_nan")]
         time_s: f64,
         /// The override held.
+        #[serde(deserialize_with = "crate::estimation::null_as_nan")]
         entry_override_pct: f64,
     },
     /// The tool entered a cut: the override stays at the entry override until the cutter is
     /// engaged.
     EntryHold {
         /// When.
+        #[serde(deserialize_with = "crate::estimation::null_as_nan")]
         time_s: f64,
         /// The override held at most.
+        #[serde(deserialize_with = "crate::estimation::null_as_nan")]
         entry_override_pct: f64,
     },
     /// The cutter is engaged after an entry, or the load reached the target: the controller takes
     /// over.
     EntrySettled {
         /// When.
+        #[serde(deserialize_with = "crate::estimation::null_as_nan")]
         time_s: f64,
         /// The estimated force it settled at.
+        #[serde(deserialize_with = "crate::estimation::null_as_nan")]
         force_n: f64,
     },
     /// The chip-load window held the override (once per stretch that it holds at that end).
     ChipLoad {
         /// When.
+        #[serde(deserialize_with = "crate::estimation::null_as_nan")]
         time_s: f64,
         /// The window's end that held.
         end: ChipLoadEnd,
         /// The feed per tooth there, mm.
+        #[serde(deserialize_with = "crate::estimation::null_as_nan")]
         feed_per_tooth_mm: f64,
     },
 }
 
 /// Which end of the chip-load window held the override.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub enum ChipLoadEnd {
     /// The smallest feed per tooth: the edge would rub.
     Lowest,

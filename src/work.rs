@@ -5,8 +5,9 @@
 //! delivers its samples as they come. So every long job in cutlab is a [`Work`]: it advances by a
 //! budget of units (control periods for a loop, periods or samples for a recording), says how far
 //! it has got, and hands over its output once done. The browser's runner slices any `Work` across
-//! frames with a progress bar and a Cancel button; the command line and the tests call
-//! [`Work::run_to_end`].
+//! frames with a progress bar and a Cancel button; the command line, the tests and the browser's
+//! computation workers (which take closed-loop runs off the page's thread) call
+//! [`Work::run_to_end`] or advance it in one go.
 
 use std::fmt;
 

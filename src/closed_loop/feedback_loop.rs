@@ -76,19 +76,7 @@ impl FeedbackLoop {
         at: OperatingPoint,
         sample_rate_hz: f64,
     ) -> Result<Self, LoopError> {
-        // A program without a spindle speed reads the line at rest.
-        let rpm = if at.spindle_rpm.is_finite() {
-            at.spindle_rpm
-        } else {
-            0.0
-        };
-        let built = controller
-            .build(&RunContext {
-                target_force_n: settings.target_force_n,
-                control_period_s: settings.control_period_s,
-                amps_per_newton: calibration.estimator.sensitivity_a_per_n(rpm),
-            })
-            .map_err(LoopError::Controller)?;
+        let built = controller_for(controller, &settings, calibration, at)?;
         Self::new(
             sample_rate_hz,
             built,
@@ -391,6 +379,30 @@ pub fn disagrees(current_based_n: f64, sensorless_n: f64, tolerance: f64, target
         .max(sensorless_n.abs())
         .max(target_n * 0.25);
     (current_based_n - sensorless_n).abs() > tolerance * scale
+}
+
+/// `controller` built for a loop with `settings` and `calibration` at `at`: what
+/// [`FeedbackLoop::wire`] runs, and what tells a trace received from elsewhere (a worker) its
+/// controller's term names.
+pub fn controller_for(
+    controller: &ControllerConfig,
+    settings: &LoopSettings,
+    calibration: &Calibration,
+    at: OperatingPoint,
+) -> Result<Box<dyn Controller>, LoopError> {
+    // A program without a spindle speed reads the line at rest.
+    let rpm = if at.spindle_rpm.is_finite() {
+        at.spindle_rpm
+    } else {
+        0.0
+    };
+    controller
+        .build(&RunContext {
+            target_force_n: settings.target_force_n,
+            control_period_s: settings.control_period_s,
+            amps_per_newton: calibration.estimator.sensitivity_a_per_n(rpm),
+        })
+        .map_err(LoopError::Controller)
 }
 
 #[cfg(test)]

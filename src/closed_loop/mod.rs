@@ -16,6 +16,7 @@
 //! | [`metrics`] | what a trace is judged by |
 //! | [`lab`] | runs on the papers' presets: teach cut then loop, in pieces; several runs in turn |
 //! | [`trial_cuts`] | trial cuts read from a run's depth sections, for paper 004's network |
+//! | [`transfer`] | runs sent to a computation worker and back, bit for bit (the browser's worker pool) |
 //! | [`references`] | the fixed-feed reference runs the savings are measured against |
 //! | [`summary`] | the metrics as a table, and the best of several runs |
 //! | [`paper_comparisons`] | the comparisons the papers make, as runs the lab repeats |
@@ -41,4 +42,5 @@ pub mod settings;
 pub mod summary;
 pub mod teach_cut;
 pub mod trace;
+pub mod transfer;
 pub mod trial_cuts;

@@ -9,18 +9,15 @@
 import { test, before, after } from 'node:test';
 import assert from 'node:assert/strict';
 import { spawn, execFileSync } from 'node:child_process';
-import { existsSync } from 'node:fs';
 import { readFile, writeFile, mkdir } from 'node:fs/promises';
 import { join } from 'node:path';
-import { serveDist, launchBrowser, root, artifacts, screenshot, watchLongTasks } from './harness.mjs';
+import { serveDist, launchBrowser, artifacts, screenshot, watchLongTasks, nativeCli } from './harness.mjs';
 
-const cutlab = join(root, 'target', 'debug', 'cutlab');
+let cutlab;
 let server;
 let browser;
 before(async () => {
-  if (!existsSync(cutlab)) {
-    execFileSync('cargo', ['build', '--features', 'cli', '--bin', 'cutlab'], { cwd: root, stdio: 'inherit' });
-  }
+  cutlab = nativeCli();
   server = await serveDist();
   browser = await launchBrowser();
 });

@@ -4,6 +4,8 @@
 import { createServer } from 'node:http';
 import { readFile, mkdir } from 'node:fs/promises';
 import { createRequire } from 'node:module';
+import { execFileSync } from 'node:child_process';
+import { existsSync } from 'node:fs';
 import { extname, join, normalize, dirname } from 'node:path';
 import { fileURLToPath } from 'node:url';
 
@@ -111,4 +113,14 @@ export async function watchLongTasks(page) {
 export async function screenshot(page, name) {
   await mkdir(artifacts, { recursive: true });
   await page.screenshot({ path: join(artifacts, `${name}.png`), fullPage: true });
+}
+
+/** The native `cutlab` CLI the tests compare the browser with: the one `cargo test --features
+ * cli,charts` builds (scripts/test's native step, before the browser tests), built here if missing. */
+export function nativeCli() {
+  const cutlab = join(root, 'target', 'debug', 'cutlab');
+  if (!existsSync(cutlab)) {
+    execFileSync('cargo', ['build', '--features', 'cli', '--bin', 'cutlab'], { cwd: root, stdio: 'inherit' });
+  }
+  return cutlab;
 }

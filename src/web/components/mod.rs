@@ -13,6 +13,7 @@
 //! | [`teach_cuts`], [`recent`] | the last teach cuts' calibrations and other recent answers, by key |
 //! | [`saved_calibrations`] | the calibrations saved in this browser |
 //! | [`runner`], [`work_job`] | long computations in slices of a task, and the job a page shares |
+//! | [`pool`] | the computation workers: closed-loop runs off the page's thread, one worker per core |
 //! | [`later`] | a page mounted in pieces, and its own work after its mount (the reason, once) |
 //! | [`download`] | saving what the lab made as a file |
 
@@ -22,6 +23,7 @@ pub mod fields;
 pub mod heat_map;
 pub mod later;
 pub mod page;
+pub mod pool;
 pub mod recent;
 pub mod run_form;
 pub mod run_view;

@@ -7,17 +7,24 @@
 //! Starting a new job or cancelling bumps a generation counter; a pump that sees a newer
 //! generation stops, so a stale job never overwrites a fresh result, and a job whose page was left
 //! ends quietly.
+//!
+//! Closed-loop runs need not share the page's thread at all: [`Runner::start_in_workers`] hands
+//! them to the worker pool ([`super::pool`]) behind the same status, progress bar and Cancel.
 
 use std::cell::RefCell;
 use std::collections::VecDeque;
 use std::rc::Rc;
 use std::sync::atomic::{AtomicU64, Ordering};
-use std::sync::Arc;
+use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
 use leptos::prelude::*;
 use wasm_bindgen::prelude::{Closure, JsCast, JsValue};
 
+use crate::closed_loop::definition::RunSpec;
+use crate::closed_loop::lab::{RunResult, TeachKey};
+use crate::estimation::estimator::Calibration;
+use crate::web::components::pool::{self, JobEvent, JobId};
 use crate::work::{Progress, Work};
 
 /// Longest duration of one chunk of work: a chunk ends before a step that would take it past
@@ -25,7 +32,9 @@ use crate::work::{Progress, Work};
 /// between chunks the browser draws a frame (a few ms), so shorter chunks would cost the run time.
 pub const CHUNK_BUDGET_MS: f64 = 35.0;
 
-/// How often a job's output so far is shown while it runs ([`Runner::start_previewing`]). A
+/// How often a job's output so far is shown while it runs (a previewing job: none today, since
+/// Simulate's and Compare's runs moved to the workers, whose streamed traces are issue 28's next
+/// step). A
 /// preview redraws every chart of the page, tens of milliseconds in all: each one would add that
 /// much to a short run, so a run done within half a second is drawn once, finished, and a longer
 /// one fills in twice a second.
@@ -57,15 +66,18 @@ pub enum RunStatus<T> {
     Cancelled,
 }
 
-/// Drives jobs and publishes their status.
+/// Drives jobs — sliced on the page's thread, or closed-loop runs in the worker pool
+/// ([`Runner::start_in_workers`]) — and publishes their status.
 pub struct Runner<T: Send + Sync + 'static> {
     /// The status, for the page to show.
     pub status: RwSignal<RunStatus<T>>,
-    /// The output so far of a job started with [`Runner::start_previewing`], refreshed every
+    /// The output so far of a previewing job, refreshed every
     /// [`PREVIEW_EVERY_MS`] while it runs and set to its output when it is done; `None` for
     /// other jobs, before the first preview, and after a failure or cancel.
     pub preview: RwSignal<Option<T>>,
     generation: Arc<AtomicU64>,
+    /// The worker-pool jobs of the job under way, cancelled with it.
+    pool_jobs: Arc<Mutex<Vec<JobId>>>,
 }
 
 impl<T: Send + Sync + 'static> Clone for Runner<T> {
@@ -74,7 +86,19 @@ impl<T: Send + Sync + 'static> Clone for Runner<T> {
             status: self.status,
             preview: self.preview,
             generation: self.generation.clone(),
+            pool_jobs: self.pool_jobs.clone(),
         }
+    }
+}
+
+/// Cancels the pool jobs in `jobs`.
+fn cancel_pool_jobs(jobs: &Mutex<Vec<JobId>>) {
+    let taken = jobs
+        .lock()
+        .map(|mut j| std::mem::take(&mut *j))
+        .unwrap_or_default();
+    for job in taken {
+        pool::cancel(job);
     }
 }
 
@@ -82,14 +106,17 @@ impl<T: Clone + Send + Sync + 'static> Runner<T> {
     /// A runner with nothing started; whatever it runs stops when the page that made it is left.
     pub fn new() -> Self {
         let generation = Arc::new(AtomicU64::new(0));
-        let on_leave = generation.clone();
+        let pool_jobs = Arc::new(Mutex::new(Vec::new()));
+        let (on_leave, jobs_on_leave) = (generation.clone(), pool_jobs.clone());
         on_cleanup(move || {
             on_leave.fetch_add(1, Ordering::SeqCst);
+            cancel_pool_jobs(&jobs_on_leave);
         });
         Self {
             status: RwSignal::new(RunStatus::Idle),
             preview: RwSignal::new(None),
             generation,
+            pool_jobs,
         }
     }
 
@@ -112,6 +139,7 @@ impl<T: Clone + Send + Sync + 'static> Runner<T> {
     /// Cancels whatever is running.
     pub fn cancel(&self) {
         self.generation.fetch_add(1, Ordering::SeqCst);
+        cancel_pool_jobs(&self.pool_jobs);
         let _ = self.preview.try_set(None);
         if matches!(
             self.status.try_get_untracked(),
@@ -126,22 +154,13 @@ impl<T: Clone + Send + Sync + 'static> Runner<T> {
         self.start_with(job, None);
     }
 
-    /// Starts `job`, replacing anything running, and publishes `preview(&job)` — its output so
-    /// far — in [`Runner::preview`] as it goes, so a page can draw a run while it advances.
-    pub fn start_previewing<J: Work<Output = T> + 'static>(
-        &self,
-        job: J,
-        preview: fn(&J) -> Option<T>,
-    ) {
-        self.start_with(job, Some(preview));
-    }
-
     fn start_with<J: Work<Output = T> + 'static>(
         &self,
         job: J,
         preview: Option<fn(&J) -> Option<T>>,
     ) {
         let generation = self.generation.fetch_add(1, Ordering::SeqCst) + 1;
+        cancel_pool_jobs(&self.pool_jobs);
         let Progress { stage, fraction } = job.progress();
         let _ = self.status.try_set(RunStatus::Running { stage, fraction });
         let _ = self.preview.try_set(None);
@@ -166,6 +185,92 @@ impl<T: Clone + Send + Sync + 'static> Runner<T> {
 impl<T: Clone + Send + Sync + 'static> Default for Runner<T> {
     fn default() -> Self {
         Self::new()
+    }
+}
+
+impl Runner<Vec<Arc<RunResult>>> {
+    /// Runs `specs` in the worker pool, replacing anything running: each spec a job of its own,
+    /// so independent runs compute at once on different workers, each starting from the `known`
+    /// calibration of its teach cut if there is one. The status shows their mean progress; the
+    /// output is the runs in `specs`' order, published in a task of its own once all are done
+    /// (the first failure fails the whole and cancels the rest).
+    pub fn start_in_workers(&self, specs: Vec<RunSpec>, known: Vec<(TeachKey, Calibration)>) {
+        let generation = self.generation.fetch_add(1, Ordering::SeqCst) + 1;
+        cancel_pool_jobs(&self.pool_jobs);
+        let _ = self.preview.try_set(None);
+        let count = specs.len();
+        if count == 0 {
+            let _ = self.status.try_set(RunStatus::Done(Vec::new()));
+            return;
+        }
+        let workers = pool::pool_size().min(count);
+        let stage = move |fractions: &[f64]| {
+            let label = match (count, workers) {
+                (1, _) => "Running in a worker".to_string(),
+                (_, 1) => format!("{count} runs in a worker"),
+                _ => format!("{count} runs on {workers} workers"),
+            };
+            RunStatus::Running {
+                stage: label,
+                fraction: fractions.iter().sum::<f64>() / count as f64,
+            }
+        };
+        let _ = self.status.try_set(stage(&vec![0.0; count]));
+        // What the jobs have reported, shared by their listeners.
+        let fractions = std::rc::Rc::new(RefCell::new(vec![0.0; count]));
+        let results = std::rc::Rc::new(RefCell::new(vec![None::<Arc<RunResult>>; count]));
+        let progress_at_ms = std::rc::Rc::new(RefCell::new(f64::NEG_INFINITY));
+        let mut jobs = Vec::with_capacity(count);
+        for (index, spec) in specs.into_iter().enumerate() {
+            let (status, runner) = (self.status, self.clone());
+            let (fractions, results) = (fractions.clone(), results.clone());
+            let progress_at_ms = progress_at_ms.clone();
+            let generations = self.generation.clone();
+            let current = move || generations.load(Ordering::SeqCst) == generation;
+            let job = pool::submit(vec![spec], &known, move |event| {
+                if !current() {
+                    return;
+                }
+                match event {
+                    JobEvent::Progress(p) => {
+                        fractions.borrow_mut()[index] = p.fraction;
+                        // At most every PROGRESS_EVERY_MS, as for a sliced job.
+                        let due = now_ms() - *progress_at_ms.borrow() >= PROGRESS_EVERY_MS;
+                        if due {
+                            *progress_at_ms.borrow_mut() = now_ms();
+                            let _ = status.try_set(stage(&fractions.borrow()));
+                        }
+                    }
+                    JobEvent::Done(mut runs) => {
+                        results.borrow_mut()[index] = runs.pop();
+                        fractions.borrow_mut()[index] = 1.0;
+                        let all: Option<Vec<_>> = results.borrow().iter().cloned().collect();
+                        match all {
+                            Some(all) => {
+                                let current = current.clone();
+                                // The redraw the output starts runs in a task of its own.
+                                next_task(move || {
+                                    if current() {
+                                        let _ = status.try_set(RunStatus::Done(all));
+                                    }
+                                });
+                            }
+                            None => {
+                                let _ = status.try_set(stage(&fractions.borrow()));
+                            }
+                        }
+                    }
+                    JobEvent::Failed(message) => {
+                        runner.cancel();
+                        let _ = status.try_set(RunStatus::Failed(message));
+                    }
+                }
+            });
+            jobs.push(job);
+        }
+        if let Ok(mut pool_jobs) = self.pool_jobs.lock() {
+            *pool_jobs = jobs;
+        }
     }
 }
 

@@ -6,7 +6,7 @@ use std::time::Duration;
 use leptos::prelude::*;
 
 use crate::closed_loop::definition::RunSpec;
-use crate::closed_loop::lab::{LabRuns, RunResult};
+use crate::closed_loop::lab::RunResult;
 use crate::closed_loop::metrics::metrics_csv;
 use crate::closed_loop::trace::write_csv;
 use crate::control::registry::ControllerKind;
@@ -30,11 +30,6 @@ const RERUN_DELAY: Duration = Duration::ZERO;
 /// Teach cuts whose calibrations the page keeps: an edit that leaves the teach cut as it was (a
 /// controller parameter, the target, the envelope) re-runs only the loop.
 const KEPT_CALIBRATIONS: usize = 4;
-
-/// What the page shows while a run advances: the runs so far (the closed loop up to now).
-fn runs_so_far(runs: &LabRuns) -> Option<Vec<Arc<RunResult>>> {
-    Some(runs.partial()).filter(|r| !r.is_empty())
-}
 
 /// The Simulate page.
 #[component]
@@ -74,7 +69,8 @@ pub fn SimulatePage() -> impl IntoView {
         let runner = runner.clone();
         move |spec: RunSpec| {
             let known = calibrations.known();
-            runner.start_previewing(LabRuns::with_calibrations(vec![spec], known), runs_so_far);
+            // In a computation worker: the page's thread stays free while the run computes.
+            runner.start_in_workers(vec![spec], known);
         }
     };
 

@@ -17,7 +17,7 @@ use std::time::Duration;
 use leptos::prelude::*;
 
 use crate::closed_loop::definition::RunSpec;
-use crate::closed_loop::lab::{LabRuns, RunResult};
+use crate::closed_loop::lab::RunResult;
 use crate::control::registry::ControllerKind;
 use crate::web::components::later::{effect_after_mount, Later};
 use crate::web::components::page::PageShell;
@@ -40,10 +40,6 @@ const RERUN_DELAY: Duration = Duration::ZERO;
 /// Teach cuts whose calibrations the page keeps, so an edit of a controller re-runs only loops.
 const KEPT_CALIBRATIONS: usize = 4;
 
-/// The runs so far while a comparison advances (the one under way up to now).
-fn runs_so_far(runs: &LabRuns) -> Option<Vec<Arc<RunResult>>> {
-    Some(runs.partial()).filter(|r| !r.is_empty())
-}
 const VARIANT_PREFIXES: [&str; 4] = ["a.", "b.", "c.", "d."];
 const VARIANT_NAMES: [&str; 4] = ["A", "B", "C", "D"];
 
@@ -124,10 +120,8 @@ pub fn ComparePage() -> impl IntoView {
             savings_for_edits.keep_only(first);
         }
         let runner = runner_for_effect.clone();
-        let start = move || {
-            let runs = LabRuns::with_calibrations(specs, calibrations.known());
-            runner.start_previewing(runs, runs_so_far);
-        };
+        // Each variant in a computation worker of its own, all at once.
+        let start = move || runner.start_in_workers(specs, calibrations.known());
         debounce.request(start);
     });
 

@@ -1,0 +1,144 @@
+//! The browser lab's computation worker, built by Trunk (`data-type="worker"` in index.html) from
+//! the core alone: no Leptos, no pages. The page's worker pool (`cutlab::web::components::pool`)
+//! starts one per core; each runs one request at a time and answers with messages:
+//!
+//! | message | fields |
+//! |---|---|
+//! | `ready` | — (the module is loaded: requests posted before this would be lost) |
+//! | `progress` | `job`, `stage`, `fraction` (about ten times a second) |
+//! | `done` | `job`, `runs`: one `{ header, rows, terms }` per spec ([`RunParts`]; `rows` and `terms` are `Float64Array`s, transferred) |
+//! | `failed` | `job`, `message` (shown to a person as is) |
+//!
+//! A request is `{ job, request }`, `request` being a [`RunRequest`] as JSON. The run is done in
+//! one go: the page cancels it by terminating the worker.
+
+#[cfg(target_arch = "wasm32")]
+fn main() {
+    worker::start();
+}
+
+#[cfg(not(target_arch = "wasm32"))]
+fn main() {
+    eprintln!("cutlab-worker runs only in a browser's Web Worker (trunk builds it for wasm32)");
+}
+
+#[cfg(target_arch = "wasm32")]
+mod worker {
+    use cutlab::closed_loop::transfer::{RunParts, RunRequest};
+    use cutlab::work::Work;
+    use js_sys::{Array, Float64Array, Object, Reflect};
+    use wasm_bindgen::prelude::{Closure, JsCast, JsValue};
+    use web_sys::{DedicatedWorkerGlobalScope, MessageEvent};
+
+    /// How often progress is posted: a page shows it, and more would only cost messages.
+    const PROGRESS_EVERY_MS: f64 = 100.0;
+
+    /// Control periods advanced between looks at the clock.
+    const BUDGET: usize = 200;
+
+    pub fn start() {
+        let scope: DedicatedWorkerGlobalScope = js_sys::global().unchecked_into();
+        let replies = scope.clone();
+        let on_message = Closure::<dyn FnMut(MessageEvent)>::new(move |event: MessageEvent| {
+            let data = event.data();
+            let job = Reflect::get(&data, &"job".into())
+                .ok()
+                .and_then(|j| j.as_f64())
+                .unwrap_or(-1.0);
+            let outcome = Reflect::get(&data, &"request".into())
+                .ok()
+                .and_then(|r| r.as_string())
+                .ok_or_else(|| "the worker received a request without a run".to_string())
+                .and_then(|json| run(&replies, job, &json));
+            if let Err(message) = outcome {
+                // A failure that cannot be posted either leaves the page to its onerror.
+                let _ = post(
+                    &replies,
+                    &[
+                        ("kind", "failed".into()),
+                        ("job", job.into()),
+                        ("message", message.into()),
+                    ],
+                    None,
+                );
+            }
+        });
+        scope.set_onmessage(Some(on_message.as_ref().unchecked_ref()));
+        // The handler lives as long as the worker.
+        on_message.forget();
+        let _ = post(&scope, &[("kind", "ready".into())], None);
+    }
+
+    /// Runs `json`'s request, posting progress and, at the end, the runs.
+    fn run(scope: &DedicatedWorkerGlobalScope, job: f64, json: &str) -> Result<(), String> {
+        let mut work = RunRequest::from_json(json)?.into_work();
+        let mut posted_at_ms = f64::NEG_INFINITY;
+        while !work.advance(BUDGET).map_err(|e| e.to_string())? {
+            let now_ms = js_sys::Date::now();
+            if now_ms - posted_at_ms >= PROGRESS_EVERY_MS {
+                posted_at_ms = now_ms;
+                let progress = work.progress();
+                let _ = post(
+                    scope,
+                    &[
+                        ("kind", "progress".into()),
+                        ("job", job.into()),
+                        ("stage", progress.stage.into()),
+                        ("fraction", progress.fraction.into()),
+                    ],
+                    None,
+                );
+            }
+        }
+        let runs = work.finish().map_err(|e| e.to_string())?;
+        let sent = Array::new();
+        let transfer = Array::new();
+        for run in &runs {
+            let parts = RunParts::of(run)?;
+            let rows = Float64Array::from(parts.rows.as_slice());
+            let terms = Float64Array::from(parts.terms.as_slice());
+            transfer.push(&rows.buffer());
+            transfer.push(&terms.buffer());
+            sent.push(&object(&[
+                ("header", parts.header_json.into()),
+                ("rows", rows.into()),
+                ("terms", terms.into()),
+            ]));
+        }
+        if post(
+            scope,
+            &[
+                ("kind", "done".into()),
+                ("job", job.into()),
+                ("runs", sent.into()),
+            ],
+            Some(&transfer),
+        ) {
+            Ok(())
+        } else {
+            Err("the worker could not send the finished run".into())
+        }
+    }
+
+    fn object(fields: &[(&str, JsValue)]) -> JsValue {
+        let object = Object::new();
+        for (name, value) in fields {
+            let _ = Reflect::set(&object, &(*name).into(), value);
+        }
+        object.into()
+    }
+
+    /// Posts a message to the page; false if it could not be sent.
+    fn post(
+        scope: &DedicatedWorkerGlobalScope,
+        fields: &[(&str, JsValue)],
+        transfer: Option<&Array>,
+    ) -> bool {
+        let message = object(fields);
+        match transfer {
+            Some(list) => scope.post_message_with_transfer(&message, list),
+            None => scope.post_message(&message),
+        }
+        .is_ok()
+    }
+}

@@ -1,0 +1,461 @@
+//! The computation workers: closed-loop runs computed off the page's thread, one Web Worker per
+//! core the browser reports.
+//!
+//! Each worker instantiates the core-only module (`src/bin/cutlab-worker.rs`, no Leptos, no
+//! pages) and runs one [`RunRequest`] at a time; jobs wait in one queue and each goes to the next
+//! free worker, so independent runs (a comparison's variants) compute at once on different
+//! cores. A job's progress and result reach the caller through its listener. The result is
+//! rebuilt on the page from what the worker sends ([`RunParts`]), equal bit for bit to a run
+//! made here. Cancelling a running job terminates its worker at once and starts a fresh one; a
+//! worker that throws fails its job with the browser's message and is replaced, so a caller
+//! never waits for an answer that will not come.
+//!
+//! The page's `<html>` element carries `data-busy-workers` (the workers computing now) and
+//! `data-workers` (the pool's size), for a person's devtools and the browser tests.
+
+use std::cell::RefCell;
+use std::collections::{HashMap, VecDeque};
+use std::sync::Arc;
+use std::time::Duration;
+
+use js_sys::{Array, Float64Array, Reflect};
+use leptos::prelude::{set_timeout, window};
+use wasm_bindgen::prelude::{Closure, JsCast, JsValue};
+use web_sys::{ErrorEvent, MessageEvent, Worker};
+
+use crate::closed_loop::definition::RunSpec;
+use crate::closed_loop::lab::{RunResult, TeachKey};
+use crate::closed_loop::transfer::{RunParts, RunRequest};
+use crate::estimation::estimator::Calibration;
+use crate::work::Progress;
+
+/// The most workers the pool starts, whatever the browser reports: each holds a module and its
+/// runs' memory, and a comparison has at most four variants.
+pub const MAX_WORKERS: usize = 8;
+
+/// The worker's script and module as Trunk writes them (`data-type="worker"` keeps their names).
+const WORKER_SCRIPT: &str = "cutlab-worker.js";
+const WORKER_MODULE: &str = "cutlab-worker_bg.wasm";
+
+/// What a job tells its caller.
+pub enum JobEvent {
+    /// How far it has got.
+    Progress(Progress),
+    /// Its runs, in the order asked for.
+    Done(Vec<Arc<RunResult>>),
+    /// Why it could not be done (a worker that threw included).
+    Failed(String),
+}
+
+/// A job given to the pool.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub struct JobId(u64);
+
+type Listener = Box<dyn FnMut(JobEvent)>;
+
+/// A job waiting for a worker.
+struct Queued {
+    id: u64,
+    specs: Vec<RunSpec>,
+    request_json: String,
+}
+
+/// One worker and what it is doing.
+struct Slot {
+    worker: Worker,
+    /// Which worker of this slot it is (a replaced worker's late events are ignored).
+    serial: u64,
+    /// The module has loaded: requests posted before this would be lost.
+    ready: bool,
+    /// The job it computes, and that job's specs (the result is rebuilt from them).
+    running: Option<(u64, Vec<RunSpec>)>,
+    _on_message: Closure<dyn FnMut(MessageEvent)>,
+    _on_error: Closure<dyn FnMut(ErrorEvent)>,
+}
+
+#[derive(Default)]
+struct Pool {
+    slots: Vec<Option<Slot>>,
+    queue: VecDeque<Queued>,
+    listeners: HashMap<u64, Listener>,
+    next_id: u64,
+    next_serial: u64,
+    /// The worker's loader as a script URL (a blob: it imports the script and instantiates the
+    /// module from the page's own address).
+    loader_url: Option<String>,
+}
+
+thread_local! {
+    static POOL: RefCell<Pool> = RefCell::default();
+}
+
+/// The workers the pool runs: one per core the browser reports, at least one, at most
+/// [`MAX_WORKERS`].
+pub fn pool_size() -> usize {
+    let cores = window().navigator().hardware_concurrency();
+    if cores.is_finite() {
+        (cores as usize).clamp(1, MAX_WORKERS)
+    } else {
+        1
+    }
+}
+
+/// Queues the runs of `specs` (starting from those of the `known` calibrations they would
+/// teach) as one job; `listener` hears its progress, then its result or why it failed, never
+/// in the task that submits it.
+pub fn submit(
+    specs: Vec<RunSpec>,
+    known: &[(TeachKey, Calibration)],
+    mut listener: impl FnMut(JobEvent) + 'static,
+) -> JobId {
+    let id = POOL.with(|pool| {
+        let mut pool = pool.borrow_mut();
+        pool.next_id += 1;
+        pool.next_id
+    });
+    match RunRequest::new(specs.clone(), known).to_json() {
+        Ok(request_json) => {
+            POOL.with(|pool| {
+                let mut pool = pool.borrow_mut();
+                pool.listeners.insert(id, Box::new(listener));
+                pool.queue.push_back(Queued {
+                    id,
+                    specs,
+                    request_json,
+                });
+            });
+            start_workers();
+            dispatch();
+        }
+        Err(message) => set_timeout(move || listener(JobEvent::Failed(message)), Duration::ZERO),
+    }
+    JobId(id)
+}
+
+/// Drops job `id`: out of the queue if it waits, its worker terminated (and a fresh one
+/// started) if it runs. Its listener hears nothing more.
+pub fn cancel(JobId(id): JobId) {
+    let running_in = POOL.with(|pool| {
+        let mut pool = pool.borrow_mut();
+        pool.listeners.remove(&id);
+        pool.queue.retain(|q| q.id != id);
+        pool.slots.iter().position(|slot| {
+            slot.as_ref()
+                .and_then(|s| s.running.as_ref())
+                .is_some_and(|(job, _)| *job == id)
+        })
+    });
+    if let Some(index) = running_in {
+        replace_worker(index);
+    }
+    show_busy();
+}
+
+/// Starts the pool's workers that are not running yet.
+fn start_workers() {
+    let size = pool_size();
+    let missing: Vec<usize> = POOL.with(|pool| {
+        let mut pool = pool.borrow_mut();
+        if pool.slots.len() < size {
+            pool.slots.resize_with(size, || None);
+        }
+        (0..pool.slots.len())
+            .filter(|&i| pool.slots[i].is_none())
+            .collect()
+    });
+    for index in missing {
+        replace_worker(index);
+    }
+    set_root_attribute("data-workers", &size.to_string());
+}
+
+/// Terminates slot `index`'s worker, if any, and starts a fresh one there; a worker that cannot
+/// be started fails the jobs waiting (none would ever run).
+fn replace_worker(index: usize) {
+    let old = POOL.with(|pool| {
+        let mut pool = pool.borrow_mut();
+        pool.slots.get_mut(index).and_then(Option::take)
+    });
+    if let Some(old) = old {
+        old.worker.terminate();
+    }
+    match spawn(index) {
+        Ok(slot) => POOL.with(|pool| {
+            if let Some(place) = pool.borrow_mut().slots.get_mut(index) {
+                *place = Some(slot);
+            }
+        }),
+        Err(message) => fail_waiting(&format!("a computation worker could not start: {message}")),
+    }
+}
+
+/// A new worker for slot `index`.
+fn spawn(index: usize) -> Result<Slot, String> {
+    let loader = loader_url()?;
+    let worker = Worker::new(&loader).map_err(|e| crate::web::js::describe(&e))?;
+    let serial = POOL.with(|pool| {
+        let mut pool = pool.borrow_mut();
+        pool.next_serial += 1;
+        pool.next_serial
+    });
+    let on_message = Closure::<dyn FnMut(MessageEvent)>::new(move |event: MessageEvent| {
+        on_message(index, serial, &event.data());
+    });
+    let on_error = Closure::<dyn FnMut(ErrorEvent)>::new(move |event: ErrorEvent| {
+        // Reported here, in the page, as the job's failure.
+        event.prevent_default();
+        on_error(index, serial, &event.message());
+    });
+    worker.set_onmessage(Some(on_message.as_ref().unchecked_ref()));
+    worker.set_onerror(Some(on_error.as_ref().unchecked_ref()));
+    Ok(Slot {
+        worker,
+        serial,
+        ready: false,
+        running: None,
+        _on_message: on_message,
+        _on_error: on_error,
+    })
+}
+
+/// The worker loader's URL, made once: a script that imports the worker's script and
+/// instantiates its module from the page's address.
+fn loader_url() -> Result<String, String> {
+    if let Some(url) = POOL.with(|pool| pool.borrow().loader_url.clone()) {
+        return Ok(url);
+    }
+    let page = window()
+        .location()
+        .href()
+        .map_err(|e| crate::web::js::describe(&e))?;
+    let absolute = |name: &str| {
+        web_sys::Url::new_with_base(name, &page)
+            .map(|u| u.href())
+            .map_err(|e| crate::web::js::describe(&e))
+    };
+    let quoted = |text: String| serde_json::to_string(&text).map_err(|e| e.to_string());
+    let source = format!(
+        "importScripts({});wasm_bindgen({{ module_or_path: {} }});",
+        quoted(absolute(WORKER_SCRIPT)?)?,
+        quoted(absolute(WORKER_MODULE)?)?,
+    );
+    let parts = Array::of1(&JsValue::from_str(&source));
+    let options = web_sys::BlobPropertyBag::new();
+    options.set_type("text/javascript");
+    let blob = web_sys::Blob::new_with_str_sequence_and_options(&parts, &options)
+        .map_err(|e| crate::web::js::describe(&e))?;
+    let url = web_sys::Url::create_object_url_with_blob(&blob)
+        .map_err(|e| crate::web::js::describe(&e))?;
+    POOL.with(|pool| pool.borrow_mut().loader_url = Some(url.clone()));
+    Ok(url)
+}
+
+/// Gives waiting jobs to the ready workers that are free.
+fn dispatch() {
+    loop {
+        let posted = POOL.with(|pool| {
+            let mut pool = pool.borrow_mut();
+            let free = pool
+                .slots
+                .iter()
+                .position(|s| s.as_ref().is_some_and(|s| s.ready && s.running.is_none()))?;
+            let job = pool.queue.pop_front()?;
+            let slot = pool.slots.get_mut(free)?.as_mut()?;
+            let message = js_sys::Object::new();
+            let _ = Reflect::set(&message, &"job".into(), &(job.id as f64).into());
+            let _ = Reflect::set(&message, &"request".into(), &job.request_json.into());
+            let sent = slot.worker.post_message(&message);
+            slot.running = Some((job.id, job.specs));
+            Some(sent.map_err(|e| (free, job.id, crate::web::js::describe(&e))))
+        });
+        match posted {
+            None => break,
+            Some(Ok(())) => {}
+            Some(Err((slot, job, message))) => {
+                finish(
+                    slot,
+                    job,
+                    Err(format!("the run could not be sent to a worker: {message}")),
+                );
+            }
+        }
+    }
+    show_busy();
+}
+
+/// What worker `serial` of slot `index` posted.
+fn on_message(index: usize, serial: u64, data: &JsValue) {
+    let field = |name: &str| Reflect::get(data, &name.into()).unwrap_or(JsValue::UNDEFINED);
+    let job = field("job").as_f64().map(|j| j as u64);
+    let kind = field("kind").as_string().unwrap_or_default();
+    // The job this worker computes, if the message is from the slot's current worker.
+    let running = POOL.with(|pool| {
+        let mut pool = pool.borrow_mut();
+        let slot = pool.slots.get_mut(index)?.as_mut()?;
+        if slot.serial != serial {
+            return None;
+        }
+        if kind == "ready" {
+            slot.ready = true;
+        }
+        slot.running
+            .as_ref()
+            .map(|(id, specs)| (*id, specs.clone()))
+    });
+    match (kind.as_str(), running) {
+        ("ready", _) => dispatch(),
+        ("progress", Some((id, _))) if job == Some(id) => {
+            let stage = field("stage").as_string().unwrap_or_default();
+            let fraction = field("fraction").as_f64().unwrap_or(0.0);
+            tell(id, JobEvent::Progress(Progress::new(stage, fraction)));
+        }
+        ("done", Some((id, specs))) if job == Some(id) => {
+            let runs = Array::from(&field("runs"));
+            finish(index, id, received_runs(&runs, specs));
+        }
+        ("failed", Some((id, _))) if job == Some(id) => {
+            let message = field("message").as_string().unwrap_or_default();
+            finish(index, id, Err(message));
+        }
+        _ => {}
+    }
+}
+
+/// The runs a worker sent, rebuilt for `specs`.
+fn received_runs(runs: &Array, specs: Vec<RunSpec>) -> Result<Vec<Arc<RunResult>>, String> {
+    if runs.length() as usize != specs.len() {
+        return Err(format!(
+            "the worker sent {} runs for {} asked for",
+            runs.length(),
+            specs.len()
+        ));
+    }
+    runs.iter()
+        .zip(specs)
+        .map(|(run, spec)| {
+            let field = |name: &str| Reflect::get(&run, &name.into()).unwrap_or(JsValue::UNDEFINED);
+            let numbers = |name: &str| {
+                field(name)
+                    .dyn_into::<Float64Array>()
+                    .map(|a| a.to_vec())
+                    .map_err(|_| format!("the worker's run lacks its {name}"))
+            };
+            RunParts {
+                header_json: field("header").as_string().unwrap_or_default(),
+                rows: numbers("rows")?,
+                terms: numbers("terms")?,
+            }
+            .into_result(spec)
+            .map(Arc::new)
+        })
+        .collect()
+}
+
+/// Worker `serial` of slot `index` threw (a bug or out of memory): its job fails with the
+/// browser's message and a fresh worker takes its place. A worker that threw before it was ready
+/// could not load its module; the jobs waiting fail with it rather than wait for a worker that
+/// will not come.
+fn on_error(index: usize, serial: u64, message: &str) {
+    // The job is taken off the slot before its listener hears, so a listener that cancels it
+    // does not replace the worker a second time.
+    let state = POOL.with(|pool| {
+        let mut pool = pool.borrow_mut();
+        let slot = pool.slots.get_mut(index)?.as_mut()?;
+        (slot.serial == serial).then(|| (slot.ready, slot.running.take().map(|(id, _)| id)))
+    });
+    let Some((ready, running)) = state else {
+        return;
+    };
+    let why = format!("the computation worker stopped: {message}");
+    if let Some(id) = running {
+        tell(id, JobEvent::Failed(why.clone()));
+    }
+    if ready {
+        replace_worker(index);
+        dispatch();
+    } else {
+        let old = POOL.with(|pool| {
+            pool.borrow_mut()
+                .slots
+                .get_mut(index)
+                .and_then(Option::take)
+        });
+        if let Some(old) = old {
+            old.worker.terminate();
+        }
+        fail_waiting(&why);
+    }
+    show_busy();
+}
+
+/// Job `id` on slot `index` is over: its listener hears the outcome and the slot takes the next.
+fn finish(index: usize, id: u64, outcome: Result<Vec<Arc<RunResult>>, String>) {
+    POOL.with(|pool| {
+        if let Some(Some(slot)) = pool.borrow_mut().slots.get_mut(index) {
+            if slot.running.as_ref().is_some_and(|(job, _)| *job == id) {
+                slot.running = None;
+            }
+        }
+    });
+    tell(
+        id,
+        match outcome {
+            Ok(runs) => JobEvent::Done(runs),
+            Err(message) => JobEvent::Failed(message),
+        },
+    );
+    dispatch();
+}
+
+/// Fails every job waiting for a worker.
+fn fail_waiting(message: &str) {
+    let waiting: Vec<u64> =
+        POOL.with(|pool| pool.borrow_mut().queue.drain(..).map(|q| q.id).collect());
+    for id in waiting {
+        tell(id, JobEvent::Failed(message.to_string()));
+    }
+}
+
+/// Tells job `id`'s listener, outside the pool's borrow (a listener may submit or cancel); a
+/// final event drops the listener.
+fn tell(id: u64, event: JobEvent) {
+    let last = !matches!(event, JobEvent::Progress(_));
+    let Some(mut listener) = POOL.with(|pool| pool.borrow_mut().listeners.remove(&id)) else {
+        return;
+    };
+    listener(event);
+    if !last {
+        // Kept unless the listener cancelled its job meanwhile.
+        POOL.with(|pool| {
+            let mut pool = pool.borrow_mut();
+            let alive = pool.queue.iter().any(|q| q.id == id)
+                || pool
+                    .slots
+                    .iter()
+                    .flatten()
+                    .any(|s| s.running.as_ref().is_some_and(|(job, _)| *job == id));
+            if alive {
+                pool.listeners.entry(id).or_insert(listener);
+            }
+        });
+    }
+}
+
+/// Publishes how many workers compute now.
+fn show_busy() {
+    let busy = POOL.with(|pool| {
+        pool.borrow()
+            .slots
+            .iter()
+            .flatten()
+            .filter(|s| s.running.is_some())
+            .count()
+    });
+    set_root_attribute("data-busy-workers", &busy.to_string());
+}
+
+fn set_root_attribute(name: &str, value: &str) {
+    if let Some(root) = window().document().and_then(|d| d.document_element()) {
+        let _ = root.set_attribute(name, value);
+    }
+}

@@ -1,0 +1,157 @@
+// The computation workers (issue 28): Simulate's run and Compare's variants compute in Web Workers
+// built from the core alone, so the page's thread stays free; independent variants compute at once
+// on different workers; Cancel terminates the worker at once; a run made in a worker equals the
+// native CLI's, byte for byte in the exported trace.
+//
+// The pool publishes `data-workers` (its size) and `data-busy-workers` (the workers computing now)
+// on <html>; the tests wait on those and on what the page shows, never on time.
+//
+// The CLI binary is the one `cargo test --features cli,charts` builds; if missing, it is built here.
+import { test, before, after } from 'node:test';
+import assert from 'node:assert/strict';
+import { execFileSync } from 'node:child_process';
+import { readFile, writeFile, mkdir } from 'node:fs/promises';
+import { join } from 'node:path';
+import { serveDist, launchBrowser, openLab, artifacts, watchLongTasks, nativeCli } from './harness.mjs';
+
+let cutlab;
+const RUN_TIMEOUT = 60_000;
+let server;
+let browser;
+before(async () => {
+  cutlab = nativeCli();
+  server = await serveDist();
+  browser = await launchBrowser();
+});
+after(async () => {
+  await browser?.close();
+  await server?.close();
+});
+
+/** Waits until `count` workers compute at once. */
+async function waitForBusyWorkers(page, count) {
+  await page.waitForFunction((n) => document.documentElement.dataset.busyWorkers === String(n), count, { timeout: RUN_TIMEOUT });
+}
+
+test('a long run computes in a worker while the page thread stays free', async () => {
+  const { page, problems, context } = await openLab(browser, server.url, '#/simulate?preset=kim-circular-taper&controller=pi');
+  const longestTask = await watchLongTasks(page);
+  await waitForBusyWorkers(page, 1);
+  // From here until the result arrives the run computes in the worker: no task of the page's own
+  // thread may take more than the browser's 50 ms long-task threshold (the observer reports only
+  // those), so none may be reported at all.
+  await page.evaluate(() => { window.cutlabLongTasks.length = 0; });
+  await waitForBusyWorkers(page, 0);
+  const duringRun = await longestTask();
+  assert.equal(duringRun, 0, `a page task took ${duringRun} ms while the worker computed`);
+  const table = page.getByRole('table', { name: /Metrics of the run/ });
+  await table.getByRole('row', { name: /Cycle time/ }).getByRole('cell').first().waitFor({ timeout: RUN_TIMEOUT });
+  assert.match(await table.getByRole('row', { name: /Cycle time/ }).textContent(), /\d/);
+  // One worker per core the browser reports (2 on the reference machine), each started from the
+  // pool's loader (a blob URL that imports cutlab-worker.js).
+  const size = await page.evaluate(() => Number(document.documentElement.dataset.workers));
+  const cores = await page.evaluate(() => navigator.hardwareConcurrency);
+  assert.equal(size, Math.min(Math.max(cores, 1), 8));
+  const workers = page.workers().map((w) => w.url());
+  assert.equal(workers.length, size);
+  assert.ok(workers.every((u) => u.startsWith('blob:')), `workers: ${workers}`);
+  assert.deepEqual(problems, []);
+  await context.close();
+});
+
+test('two Compare variants compute at once, on two workers', async () => {
+  const { page, problems, context } = await openLab(browser, server.url, '#/compare?preset=kim-circular-taper&variants=2');
+  const cores = await page.evaluate(() => navigator.hardwareConcurrency);
+  if (cores < 2) {
+    // A one-core browser gets a pool of one; the variants then take turns.
+    await context.close();
+    return;
+  }
+  // Both variants are under way before either has finished: two workers busy at once, and the
+  // progress says so.
+  await waitForBusyWorkers(page, 2);
+  await page.getByRole('status').filter({ hasText: '2 runs on 2 workers' }).waitFor({ timeout: RUN_TIMEOUT });
+  const table = page.getByRole('table', { name: /Metrics of the runs/ });
+  await table.getByRole('columnheader', { name: /^B: / }).waitFor({ timeout: RUN_TIMEOUT });
+  await waitForBusyWorkers(page, 0);
+  assert.deepEqual(problems, []);
+  await context.close();
+});
+
+test('Cancel terminates the worker at once and a fresh one runs the next run', async () => {
+  const { page, problems, context } = await openLab(browser, server.url, '#/simulate?preset=kim-circular-taper&controller=threshold');
+  const started = [];
+  page.on('worker', (w) => started.push(w));
+  await waitForBusyWorkers(page, 1);
+  const before = started.length;
+  await page.getByRole('button', { name: 'Cancel' }).click();
+  // No worker computes any more, and the cancelled one was replaced by a new worker.
+  await waitForBusyWorkers(page, 0);
+  await page.getByText(/^Cancelled\./).waitFor();
+  // A fresh worker replaces the cancelled one (started in the click's task; its event may follow).
+  if (started.length <= before) await page.waitForEvent('worker', { timeout: RUN_TIMEOUT });
+  assert.ok(started.length > before);
+  // The next run completes.
+  await page.getByLabel('Seed').fill('2');
+  await waitForBusyWorkers(page, 1);
+  await waitForBusyWorkers(page, 0);
+  const table = page.getByRole('table', { name: /Metrics of the run/ });
+  await table.getByRole('row', { name: /Cycle time/ }).getByRole('cell').first().waitFor({ timeout: RUN_TIMEOUT });
+  assert.deepEqual(problems, []);
+  await context.close();
+});
+
+test("a run made in a worker exports the native CLI's trace, byte for byte", async () => {
+  const { page, problems, context } = await openLab(browser, server.url, '#/simulate?preset=maneerat-doc-1&controller=pi&kp=1.5');
+  const table = page.getByRole('table', { name: /Metrics of the run/ });
+  await table.getByRole('row', { name: /Cycle time/ }).getByRole('cell').first().waitFor({ timeout: RUN_TIMEOUT });
+  await page.getByRole('status').filter({ hasText: 'Running' }).waitFor({ state: 'detached', timeout: RUN_TIMEOUT });
+  const download = async (name) => {
+    const [file] = await Promise.all([page.waitForEvent('download'), page.getByRole('button', { name }).click()]);
+    return readFile(await file.path(), 'utf8');
+  };
+  const config = await download('Configuration (JSON)');
+  const trace = await download('Trace (CSV)');
+  const metrics = await download('Metrics (CSV)');
+  const dir = join(artifacts, 'workers');
+  await mkdir(dir, { recursive: true });
+  await writeFile(join(dir, 'config.json'), config);
+  execFileSync(cutlab, ['sim', '--config', join(dir, 'config.json'), '--csv', join(dir, 'native.csv')]);
+  const native = await readFile(join(dir, 'native.csv'), 'utf8');
+  assert.ok(trace.split('\n').length > 100);
+  assert.equal(trace, native, 'the worker-made trace differs from the CLI run of the same configuration');
+  assert.match(metrics, /^metric,value\ncycle_time_s,\d/);
+  assert.deepEqual(problems, []);
+  await context.close();
+});
+
+test('a worker that throws fails its run with the reason, is replaced, and the next run succeeds', async () => {
+  const context = await browser.newContext({ viewport: { width: 1280, height: 720 } });
+  // The first worker to start loads a stand-in that reports ready and throws on its first
+  // request (a bug in the worker); the ones after it load the real module.
+  let served = 0;
+  await context.route(/cutlab-worker\.js$/, (route) => {
+    served += 1;
+    if (served > 1) return route.continue();
+    return route.fulfill({
+      contentType: 'text/javascript',
+      body: "var wasm_bindgen = function () { self.onmessage = function () { throw new Error('worker bug for the test'); }; self.postMessage({ kind: 'ready' }); };",
+    });
+  });
+  const page = await context.newPage();
+  const problems = [];
+  page.on('console', (msg) => {
+    if (msg.type() === 'error' && !msg.text().includes('worker bug for the test')) problems.push(msg.text());
+  });
+  page.on('pageerror', (err) => problems.push(err.message));
+  await page.goto(server.url + '#/simulate?preset=maneerat-doc-1&controller=pi');
+  await page.getByRole('alert').filter({ hasText: /the computation worker stopped: .*worker bug for the test/ }).waitFor({ timeout: RUN_TIMEOUT });
+  // A fresh worker took the thrower's place: the next run completes.
+  await page.getByLabel('Seed').fill('2');
+  const table = page.getByRole('table', { name: /Metrics of the run/ });
+  await table.getByRole('row', { name: /Cycle time/ }).getByRole('cell').first().waitFor({ timeout: RUN_TIMEOUT });
+  await page.getByRole('alert').filter({ hasText: /worker bug/ }).waitFor({ state: 'detached' });
+  assert.ok(served >= 2, `${served} worker scripts served`);
+  assert.deepEqual(problems, []);
+  await context.close();
+});
