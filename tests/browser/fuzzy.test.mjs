@@ -77,9 +77,9 @@ test('FLL exports, a broken FLL is explained by line, and a run supplies a momen
   const fll = await readFile(await download.path(), 'utf8');
   assert.match(fll, /RuleBlock: rules/);
   const text = page.getByLabel('FLL text');
-  await text.fill(fll.replace('term: PB Triangle 4 6 6', 'term: PB Bell 4 6 6'));
+  await text.fill(fll.replace('term: PB Triangle 4 6 6', 'term: PB Zigzag 4 6 6'));
   await page.getByRole('button', { name: 'Import FLL' }).click();
-  await page.getByText(/The FLL could not be read: line \d+: term PB: shape Bell is not supported/).waitFor();
+  await page.getByText(/The FLL could not be read: line \d+: term PB: shape Zigzag is not one of fuzzylite's terms/).waitFor();
   // A file that changes one rule changes that cell of the table.
   const cell = page.getByLabel('Output when E is NB and EC is NB');
   const before = await cell.inputValue();
