@@ -1913,23 +1913,19 @@ fn paper_002(facts: &mut Facts) {
 fn paper_004_learning(facts: &mut Facts) {
     use cutlab::closed_loop::settings::OperatingPoint;
     use cutlab::closed_loop::trial_cuts::{trial_cuts, TrialForce};
-    use cutlab::estimation::power_law_fit::{learn, local_exponent, stepped_specimen, TrialCut};
-    use cutlab::plant::mechanics::{mean_forces, Cutter, Immersion, MillingMode};
+    use cutlab::estimation::cut_forces::CutGeometry;
+    use cutlab::estimation::power_law_fit::{
+        learn, local_exponent, mechanistic_resultant_n, stepped_specimen, TrialCut,
+    };
+    use cutlab::plant::mechanics::{Cutter, MillingMode};
     use cutlab::plant::power_law::{PowerLawInput, PowerLawInputs, PowerLawMaterial};
 
-    let mechanistic_n = |p: &PowerLawInputs| {
-        let cutter = Cutter::new(p.diameter_mm, 2, 30.0).unwrap();
-        let immersion = Immersion::new(MillingMode::Down, p.radial_width_mm, p.diameter_mm);
-        let k = cutlab::plant::materials::Material::Sm45c.coefficients();
-        mean_forces(
-            &cutter,
-            &k,
-            &immersion,
-            p.axial_depth_mm,
-            p.feed_per_tooth_mm,
-        )
-        .resultant_n()
+    let cut = CutGeometry {
+        cutter: Cutter::new(20.0, 2, 30.0).unwrap(),
+        mode: MillingMode::Down,
+        coefficients: cutlab::plant::materials::Material::Sm45c.coefficients(),
     };
+    let mechanistic_n = |p: &PowerLawInputs| mechanistic_resultant_n(&cut, p);
     let specimen = stepped_specimen(20.0, 2);
     let cuts: Vec<TrialCut> = specimen
         .iter()

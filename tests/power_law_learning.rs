@@ -8,24 +8,22 @@
 use wasm_bindgen_test::wasm_bindgen_test as test;
 
 use cutlab::closed_loop::trial_cuts::{trial_cuts, TrialForce};
-use cutlab::estimation::power_law_fit::{learn, local_exponent, stepped_specimen, TrialCut};
+use cutlab::estimation::cut_forces::CutGeometry;
+use cutlab::estimation::power_law_fit::{
+    learn, local_exponent, mechanistic_resultant_n, stepped_specimen, TrialCut,
+};
 use cutlab::plant::materials::Material;
-use cutlab::plant::mechanics::{mean_forces, Cutter, Immersion, MillingMode};
+use cutlab::plant::mechanics::{Cutter, MillingMode};
 use cutlab::plant::power_law::{PowerLawInput, PowerLawInputs, PowerLawMaterial, PowerLawReading};
 
-/// The mechanistic mean resultant in the plane and along the axis, N, of a Ø20 mm two-tooth
-/// cutter in SM45C, down milling.
+/// The mechanistic mean resultant of a Ø20 mm two-tooth cutter in SM45C, down milling, N.
 fn mechanistic_n(p: &PowerLawInputs) -> f64 {
-    let cutter = Cutter::new(p.diameter_mm, 2, 30.0).unwrap();
-    let immersion = Immersion::new(MillingMode::Down, p.radial_width_mm, p.diameter_mm);
-    mean_forces(
-        &cutter,
-        &Material::Sm45c.coefficients(),
-        &immersion,
-        p.axial_depth_mm,
-        p.feed_per_tooth_mm,
-    )
-    .resultant_n()
+    let cut = CutGeometry {
+        cutter: Cutter::new(20.0, 2, 30.0).unwrap(),
+        mode: MillingMode::Down,
+        coefficients: Material::Sm45c.coefficients(),
+    };
+    mechanistic_resultant_n(&cut, p)
 }
 
 #[test]

@@ -22,6 +22,7 @@
 
 use std::fmt;
 
+use super::cut_forces::CutGeometry;
 use crate::math;
 use crate::math::least_squares::{fit, FitError};
 use crate::plant::power_law::{PowerLawInput, PowerLawInputs, PowerLawMaterial, PowerLawReading};
@@ -303,6 +304,23 @@ pub fn stepped_specimen(diameter_mm: f64, teeth: u32) -> Vec<PowerLawInputs> {
         }
     }
     cuts
+}
+
+/// The mechanistic model's mean resultant for the conditions `inputs` cut with `cut` (its cutter,
+/// mode and material; the inputs' own diameter and teeth are the cutter's), N: what a trial cut
+/// of the stepped specimen gives in the simulated machine, on average over a revolution. NaN for
+/// conditions that are not a cut the model can take.
+pub fn mechanistic_resultant_n(cut: &CutGeometry, inputs: &PowerLawInputs) -> f64 {
+    // Any speed: the mean force depends on the chip, not on how fast it is cut.
+    let spindle_rpm = 1000.0;
+    let feed_mm_min = inputs.feed_per_tooth_mm * spindle_rpm * f64::from(cut.cutter.teeth);
+    cut.mean_forces(
+        feed_mm_min,
+        spindle_rpm,
+        inputs.axial_depth_mm,
+        inputs.radial_width_mm,
+    )
+    .map_or(f64::NAN, |f| f.resultant_n())
 }
 
 /// The local exponent of `force_n` in `input` at `at`: d ln F / d ln p by a central difference
