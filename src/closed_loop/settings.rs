@@ -20,7 +20,7 @@
 //! complete: nothing here stands for "not known yet".
 
 use super::definition::{
-    check_band, machine_max_override_pct, Problem, RunSetting, RunSpec, SettingError,
+    check_band, machine_max_override_pct, RunProblem, RunSetting, RunSpec, SettingError,
     SettingsOverrides, PAPER_002_CONTROL_PERIOD_S, PAPER_002_OUTPUT_RANGE_PCT,
 };
 use super::error::LoopError;
@@ -471,7 +471,7 @@ pub struct Plan {
     pub notes: Vec<String>,
 }
 
-fn refuse(setting: RunSetting, problem: Problem) -> LoopError {
+fn refuse(setting: RunSetting, problem: RunProblem) -> LoopError {
     LoopError::Setting(SettingError { setting, problem })
 }
 
@@ -600,7 +600,7 @@ fn chip_window(
         } else {
             RunSetting::MaxFeedPerTooth
         };
-        let problem = Problem::WindowInverted {
+        let problem = RunProblem::WindowInverted {
             min: window.min_mm,
             max: window.max_mm,
         };
@@ -632,7 +632,7 @@ fn control_period_s(
     });
     let samples = (period_s * rate_hz).round();
     if !(1.0..=MAX_SAMPLES_PER_PERIOD).contains(&samples) {
-        let problem = Problem::PeriodInSamples {
+        let problem = RunProblem::PeriodInSamples {
             period_s,
             sample_period_s: 1.0 / rate_hz,
         };

@@ -28,7 +28,7 @@ use serde::Serialize;
 use super::machine::{current_as_force, log_setup, LogOptions, ReplayError};
 use super::mapping::Mapping;
 use super::Log;
-use crate::closed_loop::definition::{Problem, RunSetting, SettingError, SettingsOverrides};
+use crate::closed_loop::definition::{RunProblem, RunSetting, SettingError, SettingsOverrides};
 use crate::closed_loop::error::LoopError;
 use crate::closed_loop::feedback_loop::{ClosedLoop, FeedbackLoop};
 use crate::closed_loop::sample_loop::OnMachine;
@@ -132,7 +132,7 @@ struct Prepared {
 fn refuse(setting: RunSetting, why: &'static str) -> ReplayError {
     ReplayError::Loop(LoopError::Setting(SettingError {
         setting,
-        problem: Problem::Requires(why),
+        problem: RunProblem::other(why),
     }))
 }
 

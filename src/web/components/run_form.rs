@@ -122,13 +122,7 @@ fn parse_scenario(preset: RwSignal<String>, settings: TableForm<RunSetting>) -> 
         }),
         Err(errors) => Err(errors
             .into_iter()
-            .map(|e| {
-                let message = match e.choices() {
-                    Some(choices) => format!("{}; choices: {choices}", e.problem),
-                    None => e.problem.to_string(),
-                };
-                (e.setting.spec().query_key, message)
-            })
+            .map(|e| (e.setting.spec().query_key, e.problem.to_string()))
             .collect()),
     }
 }
