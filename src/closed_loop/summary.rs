@@ -77,7 +77,7 @@ fn if_controlled(r: &RunResult, value: f64) -> Option<f64> {
 }
 
 /// The rows, in the order shown.
-pub const METRIC_ROWS: [MetricRow; 20] = [
+pub const METRIC_ROWS: [MetricRow; 22] = [
     row("Target force", "N", Better::Neither, |r| {
         Some(r.settings.target_force_n)
     }),
@@ -111,6 +111,18 @@ pub const METRIC_ROWS: [MetricRow; 20] = [
     row("Surface error range", "µm", Better::Lower, |r| {
         Some(r.metrics.surface_error_range_um).filter(|v| v.is_finite())
     }),
+    row(
+        "Surface error range, compensated from the power law",
+        "µm",
+        Better::Lower,
+        |r| Some(r.metrics.compensated_range_power_law_um).filter(|v| v.is_finite()),
+    ),
+    row(
+        "Surface error range, compensated from the current",
+        "µm",
+        Better::Lower,
+        |r| Some(r.metrics.compensated_range_current_um).filter(|v| v.is_finite()),
+    ),
     row("Time above limit", "s", Better::Lower, |r| {
         Some(r.metrics.time_above_limit_s)
     }),

@@ -37,7 +37,7 @@ use crate::closed_loop::trace::{csv_field, Trace, TraceRow};
 use crate::control::registry::ControllerConfig;
 use crate::estimation::estimator::{Calibration, Estimator, Feedback};
 use crate::plant::cnc::OverrideMode;
-use crate::plant::deflection::ToolStiffness;
+use crate::plant::deflection::ErrorModel;
 use crate::safety::{ChipLoad, SafetyEvent};
 use crate::work::{Progress, Work};
 
@@ -74,7 +74,7 @@ pub struct ReplaySettings {
     pub chip_load: Option<ChipLoad>,
     /// The tool and spindle as springs, when known: the replay's surface error (a log does not
     /// say which tool cut it).
-    pub stiffness: Option<ToolStiffness>,
+    pub error_model: Option<ErrorModel>,
 }
 
 impl ReplaySettings {
@@ -92,7 +92,7 @@ impl ReplaySettings {
             calibration,
             override_mode: self.override_mode,
             chip_load: self.chip_load,
-            stiffness: self.stiffness,
+            error_model: self.error_model,
         }
     }
 
