@@ -1911,8 +1911,7 @@ fn paper_002(facts: &mut Facts) {
 /// Paper 004's network learned from trial cuts: on the stepped specimen's mechanistic forces,
 /// and on kim-step-doc's depth sections at three feeds, from the force and from the estimate.
 fn paper_004_learning(facts: &mut Facts) {
-    use cutlab::closed_loop::settings::OperatingPoint;
-    use cutlab::closed_loop::trial_cuts::{trial_cuts, TrialForce};
+    use cutlab::closed_loop::trial_cuts::{preset_trial_cuts, DEFAULT_TRIAL_FEEDS_PCT};
     use cutlab::estimation::cut_forces::CutGeometry;
     use cutlab::estimation::power_law_fit::{
         learn, local_exponent, mechanistic_resultant_n, stepped_specimen, TrialCut,
@@ -1966,37 +1965,13 @@ fn paper_004_learning(facts: &mut Facts) {
         ),
     );
 
-    let preset = Preset::KimStepDoc;
-    let scenario = preset.scenario().unwrap();
-    let (teeth, diameter_mm) = (scenario.cutter().teeth, scenario.cutter().diameter_mm);
-    let programmed =
-        OperatingPoint::of_preset(&RunSpec::new(preset, ControllerKind::Fixed)).feed_mm_min;
-    let (mut truth, mut estimated) = (Vec::new(), Vec::new());
-    for factor in [0.6, 0.8, 1.0] {
-        let run = simulate(&spec_with(preset, ControllerKind::Fixed, |s| {
-            s.plant.programmed_feed_mm_min = Some(programmed * factor)
-        }));
-        truth.extend(trial_cuts(
-            &run.trace,
-            teeth,
-            diameter_mm,
-            TrialForce::Measured,
-        ));
-        estimated.extend(trial_cuts(
-            &run.trace,
-            teeth,
-            diameter_mm,
-            TrialForce::Estimated,
-        ));
-    }
+    let cuts = preset_trial_cuts(Preset::KimStepDoc, &DEFAULT_TRIAL_FEEDS_PCT)
+        .unwrap()
+        .unwrap();
+    let (truth, estimated) = (&cuts.measured, &cuts.estimated);
     facts.set("paper_004.learning.kim.sections", truth.len().to_string());
-    let from_force = learn(&truth, PowerLawReading::USED, PowerLawMaterial::CarbonSteel).unwrap();
-    let from_estimate = learn(
-        &estimated,
-        PowerLawReading::USED,
-        PowerLawMaterial::CarbonSteel,
-    )
-    .unwrap();
+    let from_force = learn(truth, PowerLawReading::USED, cuts.material).unwrap();
+    let from_estimate = learn(estimated, PowerLawReading::USED, cuts.material).unwrap();
     for (input, key) in [
         (PowerLawInput::FeedPerTooth, "f"),
         (PowerLawInput::AxialDepth, "a_p"),

@@ -1,10 +1,69 @@
 //! Trial cuts read from a run: the steady part of each depth section of a trace, with its
 //! conditions, the force the plant made and the force the lab estimated from the currents —
 //! what paper 004's network learns from ([`crate::estimation::power_law_fit`]).
+//!
+//! [`preset_trial_cuts`] makes them as a shop would on its own machine: the preset's program
+//! cut at a fixed feed, once per feed, each depth section a trial cut.
 
+use super::definition::RunSpec;
+use super::error::LoopError;
+use super::lab::simulate;
+use super::settings::OperatingPoint;
 use super::trace::{Trace, TraceRow};
+use crate::control::registry::ControllerKind;
 use crate::estimation::power_law_fit::TrialCut;
-use crate::plant::power_law::PowerLawInputs;
+use crate::plant::power_law::{PowerLawInputs, PowerLawMaterial};
+use crate::plant::simulator::power_law_material;
+use crate::plant::Preset;
+
+/// The feeds [`preset_trial_cuts`] cuts a program at when nobody says, percent of its programmed
+/// feed: three feeds per tooth, so the feed's exponent can be learned beside the depth's.
+pub const DEFAULT_TRIAL_FEEDS_PCT: [f64; 3] = [60.0, 80.0, 100.0];
+
+/// The trial cuts of a preset's program: each depth section's steady mean, at each feed.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PresetTrialCuts {
+    /// With the force on the tool (the simulation's truth, as a dynamometer would read it).
+    pub measured: Vec<TrialCut>,
+    /// With the lab's current-based estimate of the same cuts.
+    pub estimated: Vec<TrialCut>,
+    /// The published weights the learned ones are compared with: the part's first material's.
+    pub material: PowerLawMaterial,
+}
+
+/// Cuts `preset`'s program at a fixed feed of each of `feeds_pct` (percent of its programmed
+/// feed; the run definition's other settings the preset's) and reads the trial cuts of each run.
+/// `None` for a preset without a cutter (the bench, paper 001's process, paper 002's bond graph).
+pub fn preset_trial_cuts(
+    preset: Preset,
+    feeds_pct: &[f64],
+) -> Option<Result<PresetTrialCuts, LoopError>> {
+    let scenario = preset.scenario_spec()?;
+    let (teeth, diameter_mm) = (scenario.cutter.teeth, scenario.cutter.diameter_mm);
+    let material = power_law_material(scenario.materials.first()?.material);
+    let programmed =
+        OperatingPoint::of_preset(&RunSpec::new(preset, ControllerKind::Fixed)).feed_mm_min;
+    let mut cuts = PresetTrialCuts {
+        measured: Vec::new(),
+        estimated: Vec::new(),
+        material,
+    };
+    for pct in feeds_pct {
+        let mut spec = RunSpec::new(preset, ControllerKind::Fixed);
+        spec.plant.programmed_feed_mm_min = Some(programmed * pct / 100.0);
+        let run = match simulate(&spec) {
+            Ok(run) => run,
+            Err(e) => return Some(Err(e)),
+        };
+        for (force, out) in [
+            (TrialForce::Measured, &mut cuts.measured),
+            (TrialForce::Estimated, &mut cuts.estimated),
+        ] {
+            out.extend(trial_cuts(&run.trace, teeth, diameter_mm, force));
+        }
+    }
+    Some(Ok(cuts))
+}
 
 /// Which force a trial cut carries.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
