@@ -33,6 +33,11 @@ test('a run shows force, current, override, feed, depth and wall-error charts, m
   }
   const cycle = await table.getByRole('row', { name: /Cycle time/ }).textContent();
   assert.match(cycle, /\d/);
+  // Every metric explains itself: its heading opens its glossary entry.
+  const help = table.getByText(/^Time from the spindle start to the program's end/);
+  assert.equal(await help.isVisible(), false);
+  await table.getByRole('rowheader', { name: /Cycle time/ }).getByText('Cycle time (s)').click();
+  await help.waitFor();
   // The savings fill in once the reference runs at fixed feed are done, in the background.
   for (const name of ['Saving vs programmed feed (%)', 'Saving vs safe fixed feed (%)']) {
     const row = table.getByRole('row').filter({ has: page.getByRole('rowheader', { name }) });

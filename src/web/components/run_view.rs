@@ -255,7 +255,12 @@ pub fn MetricsTable(
                             let marks = best_marks(row, &results, format_metric);
                             view! {
                                 <tr>
-                                    <th scope="row">{row.heading()}</th>
+                                    <th scope="row">
+                                        <details class="metric-help">
+                                            <summary>{row.heading()}</summary>
+                                            <p>{row.help}</p>
+                                        </details>
+                                    </th>
                                     {values
                                         .into_iter()
                                         .zip(marks)
