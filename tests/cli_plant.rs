@@ -327,6 +327,11 @@ fn learn_fits_paper_004s_network_on_a_presets_trial_cuts_and_refuses_what_it_can
             "--feeds-pct:",
         ),
         (vec!["learn", "--scenario", "nowhere"], "unknown preset"),
+        (
+            // One depth at three feeds: four cuts are needed for the feed's exponent and the bias.
+            vec!["learn", "--scenario", "maneerat-doc-2"],
+            "give at least 4 (each feed of --feeds-pct cuts every depth of the program once",
+        ),
         (vec!["learn"], "--scenario"),
     ] {
         let (result, _) = cutlab(&args);

@@ -10,13 +10,11 @@ use serde::Serialize;
 
 use super::args::{reject_extra, required};
 use super::{write_json, CliError, Io};
-use crate::closed_loop::trial_cuts::{preset_trial_cuts, DEFAULT_TRIAL_FEEDS_PCT};
-use crate::estimation::cut_forces::CutGeometry;
-use crate::estimation::power_law_fit::{
-    learn, local_exponent, mechanistic_resultant_n, LearnedPowerLaw, TrialCut,
+use crate::closed_loop::trial_cuts::{
+    learn_on_preset, LearningError, PresetLearning, DEFAULT_TRIAL_FEEDS_PCT,
 };
+use crate::estimation::power_law_fit::{LearnError, TrialCut};
 use crate::input::{parse_number, readable};
-use crate::plant::power_law::PowerLawReading;
 use crate::plant::Preset;
 
 pub(crate) const ABOUT: &str =
@@ -61,8 +59,8 @@ struct LearnReport<'a> {
     feeds_pct: &'a [f64],
     cuts_measured: &'a [TrialCut],
     cuts_estimated: &'a [TrialCut],
-    from_force: &'a LearnedPowerLaw,
-    from_estimate: &'a LearnedPowerLaw,
+    #[serde(flatten)]
+    learning: &'a PresetLearning,
 }
 
 /// Runs `cutlab learn`.
@@ -79,23 +77,22 @@ pub fn run(args: LearnArgs, io: &mut Io<'_>) -> Result<(), CliError> {
         Some(text) => feeds(text)?,
         None => DEFAULT_TRIAL_FEEDS_PCT.to_vec(),
     };
-    let no_cutter = || {
-        CliError::new(format!(
-            "--scenario: {} has no cutter to make trial cuts with; use a mill preset",
-            preset.name()
-        ))
-    };
-    let cuts = preset_trial_cuts(preset, &feeds_pct)
-        .ok_or_else(no_cutter)?
-        .map_err(|e| CliError::new(format!("a trial run failed: {e}")))?;
-    // The published weights of the part's material are the ones the learned are compared with.
+    let learning = learn_on_preset(preset, &feeds_pct).map_err(|e| match e {
+        LearningError::Learn {
+            error: LearnError::TooFewCuts { .. },
+            ..
+        } => CliError::new(format!(
+            "{e} (each feed of --feeds-pct cuts every depth of the program once: give more feeds)"
+        )),
+        _ => CliError::new(e.to_string()),
+    })?;
+    let PresetLearning {
+        cuts,
+        from_force,
+        from_estimate,
+        mechanistic,
+    } = &learning;
     let material = cuts.material;
-    let learned = |cuts: &[TrialCut], what: &str| {
-        learn(cuts, PowerLawReading::USED, material)
-            .map_err(|e| CliError::new(format!("learning from the {what}: {e}")))
-    };
-    let from_force = learned(&cuts.measured, "force")?;
-    let from_estimate = learned(&cuts.estimated, "estimate")?;
     if args.json {
         return write_json(
             io.stdout,
@@ -104,19 +101,10 @@ pub fn run(args: LearnArgs, io: &mut Io<'_>) -> Result<(), CliError> {
                 feeds_pct: &feeds_pct,
                 cuts_measured: &cuts.measured,
                 cuts_estimated: &cuts.estimated,
-                from_force: &from_force,
-                from_estimate: &from_estimate,
+                learning: &learning,
             },
         );
     }
-    // The mechanistic model of the same cutter, mode and (first) material.
-    let mechanistic = preset.scenario_spec().and_then(|spec| {
-        Some(CutGeometry {
-            coefficients: spec.materials.first()?.material.coefficients(),
-            cutter: spec.cutter,
-            mode: spec.mode,
-        })
-    });
     let mut out = String::new();
     let _ = writeln!(
         out,
@@ -138,21 +126,16 @@ pub fn run(args: LearnArgs, io: &mut Io<'_>) -> Result<(), CliError> {
     );
     for (learned_force, learned_estimate) in from_force.learned.iter().zip(&from_estimate.learned) {
         let input = learned_force.input;
-        let local = mechanistic.as_ref().map(|cut| {
-            let values: Vec<f64> = cuts
-                .measured
-                .iter()
-                .map(|c| local_exponent(|p| mechanistic_resultant_n(cut, p), &c.inputs, input))
-                .filter(|v| v.is_finite())
-                .collect();
-            let lo = values.iter().copied().fold(f64::INFINITY, f64::min);
-            let hi = values.iter().copied().fold(f64::NEG_INFINITY, f64::max);
-            if (hi - lo).abs() < 0.005 {
-                format!("{lo:.2}")
-            } else {
-                format!("{lo:.2}–{hi:.2}")
-            }
-        });
+        let local = mechanistic
+            .iter()
+            .find(|(i, _, _)| *i == input)
+            .map(|&(_, lo, hi)| {
+                if (hi - lo).abs() < 0.005 {
+                    format!("{lo:.2}")
+                } else {
+                    format!("{lo:.2}–{hi:.2}")
+                }
+            });
         let _ = writeln!(
             out,
             "{:<6} {:>16} {:>18} {:>10.2} {:>14}",

@@ -11,8 +11,11 @@ use super::lab::simulate;
 use super::settings::OperatingPoint;
 use super::trace::{Trace, TraceRow};
 use crate::control::registry::ControllerKind;
-use crate::estimation::power_law_fit::TrialCut;
-use crate::plant::power_law::{PowerLawInputs, PowerLawMaterial};
+use crate::estimation::cut_forces::CutGeometry;
+use crate::estimation::power_law_fit::{
+    learn, local_exponent, mechanistic_resultant_n, LearnError, LearnedPowerLaw, TrialCut,
+};
+use crate::plant::power_law::{PowerLawInput, PowerLawInputs, PowerLawMaterial, PowerLawReading};
 use crate::plant::simulator::power_law_material;
 use crate::plant::Preset;
 
@@ -121,6 +124,102 @@ pub fn trial_cuts(trace: &Trace, teeth: u32, diameter_mm: f64, force: TrialForce
         cuts.push(TrialCut { inputs, force_n });
     }
     cuts
+}
+
+/// Paper 004's network learned on a preset's trial cuts, from the force and from the estimate,
+/// beside the mechanistic model's local exponents: what `cutlab learn` prints.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct PresetLearning {
+    /// The trial cuts.
+    #[serde(skip)]
+    pub cuts: PresetTrialCuts,
+    /// Learned on the force on the tool.
+    pub from_force: LearnedPowerLaw,
+    /// Learned on the lab's current-based estimate.
+    pub from_estimate: LearnedPowerLaw,
+    /// For each learned input, the mechanistic model's local exponent (smallest, largest) over
+    /// the cuts: what a power law fitted near each cut would find.
+    pub mechanistic: Vec<(PowerLawInput, f64, f64)>,
+}
+
+/// Why a preset's network could not be learned.
+#[derive(Debug, Clone, PartialEq)]
+pub enum LearningError {
+    /// The preset has no cutter (the bench, paper 001's process, paper 002's bond graph).
+    NoCutter(Preset),
+    /// A trial run failed.
+    Run(LoopError),
+    /// The cuts do not determine the network; `from` says which force ("force", "estimate").
+    Learn {
+        /// Which force the network was learned on.
+        from: &'static str,
+        /// Why.
+        error: LearnError,
+    },
+}
+
+impl std::fmt::Display for LearningError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            LearningError::NoCutter(preset) => write!(
+                f,
+                "{} has no cutter to make trial cuts with; use a mill preset",
+                preset.name()
+            ),
+            LearningError::Run(e) => write!(f, "a trial run failed: {e}"),
+            LearningError::Learn { from, error } => write!(f, "learning from the {from}: {error}"),
+        }
+    }
+}
+
+impl std::error::Error for LearningError {}
+
+/// Learns paper 004's network on `preset`'s trial cuts at `feeds_pct` ([`preset_trial_cuts`]),
+/// in the reading the lab uses, against the published weights of the part's material.
+pub fn learn_on_preset(preset: Preset, feeds_pct: &[f64]) -> Result<PresetLearning, LearningError> {
+    let cuts = preset_trial_cuts(preset, feeds_pct)
+        .ok_or(LearningError::NoCutter(preset))?
+        .map_err(LearningError::Run)?;
+    let material = cuts.material;
+    let learned = |cuts: &[TrialCut], from: &'static str| {
+        learn(cuts, PowerLawReading::USED, material)
+            .map_err(|error| LearningError::Learn { from, error })
+    };
+    let from_force = learned(&cuts.measured, "force")?;
+    let from_estimate = learned(&cuts.estimated, "estimate")?;
+    let geometry = preset.scenario_spec().and_then(|spec| {
+        Some(CutGeometry {
+            coefficients: spec.materials.first()?.material.coefficients(),
+            cutter: spec.cutter,
+            mode: spec.mode,
+        })
+    });
+    let mechanistic = match &geometry {
+        Some(cut) => from_force
+            .learned
+            .iter()
+            .map(|e| {
+                let (lo, hi) = cuts
+                    .measured
+                    .iter()
+                    .map(|c| {
+                        local_exponent(|p| mechanistic_resultant_n(cut, p), &c.inputs, e.input)
+                    })
+                    .filter(|v| v.is_finite())
+                    .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| {
+                        (lo.min(v), hi.max(v))
+                    });
+                (e.input, lo, hi)
+            })
+            .collect(),
+        None => Vec::new(),
+    };
+    Ok(PresetLearning {
+        cuts,
+        from_force,
+        from_estimate,
+        mechanistic,
+    })
 }
 
 #[cfg(test)]
