@@ -133,6 +133,7 @@ pub const COMMANDS: &[CommandInfo] = &[
     CommandInfo { name: "force" },
     CommandInfo { name: "fuzzy" },
     CommandInfo { name: "host" },
+    CommandInfo { name: "learn" },
     CommandInfo { name: "log" },
     CommandInfo { name: "protocol" },
     CommandInfo { name: "scenarios" },

@@ -284,7 +284,11 @@ mod tests {
                 row.label,
                 row.help
             );
-            assert!(!row.help.contains("--"), "{}: a CLI flag in the help", row.label);
+            assert!(
+                !row.help.contains("--"),
+                "{}: a CLI flag in the help",
+                row.label
+            );
             labels.push(row.label);
         }
         labels.sort_unstable();

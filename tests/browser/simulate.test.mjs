@@ -36,8 +36,14 @@ test('a run shows force, current, override, feed, depth and wall-error charts, m
   // Every metric explains itself: its heading opens its glossary entry.
   const help = table.getByText(/^Time from the spindle start to the program's end/);
   assert.equal(await help.isVisible(), false);
-  await table.getByRole('rowheader', { name: /Cycle time/ }).getByText('Cycle time (s)').click();
+  const toggle = table.getByRole('button', { name: 'What Cycle time means' });
+  assert.equal(await toggle.getAttribute('aria-expanded'), 'false');
+  await toggle.click();
   await help.waitFor();
+  assert.equal(await toggle.getAttribute('aria-expanded'), 'true');
+  // And every setting: its "?" opens the help the command line's --help prints.
+  await page.getByRole('button', { name: 'What Seed means' }).click();
+  await page.getByText(/^seed of every noise source/).waitFor();
   // The savings fill in once the reference runs at fixed feed are done, in the background.
   for (const name of ['Saving vs programmed feed (%)', 'Saving vs safe fixed feed (%)']) {
     const row = table.getByRole('row').filter({ has: page.getByRole('rowheader', { name }) });

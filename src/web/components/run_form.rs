@@ -487,7 +487,7 @@ pub fn ControllerFields(
                     let error = Signal::derive(move || errors.with(|e| e.get(&param_key).cloned()));
                     let id = format!("{}{}", form.id_prefix, p.key);
                     view! {
-                        <NumberField id=id label=p.label.to_string() unit=p.unit value=text error=error />
+                        <NumberField id=id label=p.label.to_string() unit=p.unit value=text error=error help=p.help />
                     }
                 })
                 .collect_view()}

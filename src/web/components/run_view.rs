@@ -10,6 +10,7 @@ use crate::closed_loop::lab::RunResult;
 use crate::closed_loop::metrics::Metrics;
 use crate::closed_loop::summary::{best_marks, format_metric, not_best_note, METRIC_ROWS};
 use crate::web::components::chart::ChartCanvas;
+use crate::web::components::help::HelpToggle;
 
 /// A run with the name it is shown under.
 pub type NamedRun = (String, Arc<RunResult>);
@@ -256,10 +257,8 @@ pub fn MetricsTable(
                             view! {
                                 <tr>
                                     <th scope="row">
-                                        <details class="metric-help">
-                                            <summary>{row.heading()}</summary>
-                                            <p>{row.help}</p>
-                                        </details>
+                                        {row.heading()}
+                                        <HelpToggle subject=row.label.to_string() help=row.help />
                                     </th>
                                     {values
                                         .into_iter()
