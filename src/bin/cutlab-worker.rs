@@ -6,6 +6,7 @@
 //! |---|---|
 //! | `ready` | — (the module is loaded: requests posted before this would be lost) |
 //! | `progress` | `job`, `stage`, `fraction` (about ten times a second) |
+//! | `chunk` | `job`, `run`, `rows`, `terms`, and with a run's first chunk `calibration`: the trace rows added since the last chunk ([`TraceChunk`]), about every `CHUNK_EVERY_MS` (20 ms) once the closed loop runs |
 //! | `done` | `job`, `runs`: one `{ header, rows, terms }` per spec ([`RunParts`]; `rows` and `terms` are `Float64Array`s, transferred) |
 //! | `failed` | `job`, `message` (shown to a person as is) |
 //!
@@ -24,7 +25,7 @@ fn main() {
 
 #[cfg(target_arch = "wasm32")]
 mod worker {
-    use cutlab::closed_loop::transfer::{RunParts, RunRequest};
+    use cutlab::closed_loop::transfer::{RunParts, RunRequest, TraceChunk, TraceStream};
     use cutlab::work::Work;
     use js_sys::{Array, Float64Array, Object, Reflect};
     use wasm_bindgen::prelude::{Closure, JsCast, JsValue};
@@ -32,6 +33,11 @@ mod worker {
 
     /// How often progress is posted: a page shows it, and more would only cost messages.
     const PROGRESS_EVERY_MS: f64 = 100.0;
+
+    /// How often the trace so far is posted: the page draws the start of a cut from the first
+    /// chunk (sent as soon as the closed loop has traced anything), so a long run shows at once;
+    /// the page redraws at its own pace whatever arrives, and each chunk costs one small message.
+    pub const CHUNK_EVERY_MS: f64 = 20.0;
 
     /// Control periods advanced between looks at the clock.
     const BUDGET: usize = 200;
@@ -73,8 +79,16 @@ mod worker {
     fn run(scope: &DedicatedWorkerGlobalScope, job: f64, json: &str) -> Result<(), String> {
         let mut work = RunRequest::from_json(json)?.into_work();
         let mut posted_at_ms = f64::NEG_INFINITY;
+        let mut stream = TraceStream::default();
+        let mut streamed_at_ms = f64::NEG_INFINITY;
         while !work.advance(BUDGET).map_err(|e| e.to_string())? {
             let now_ms = js_sys::Date::now();
+            if now_ms - streamed_at_ms >= CHUNK_EVERY_MS {
+                if let Some(chunk) = stream.next_chunk(&work)? {
+                    streamed_at_ms = now_ms;
+                    post_chunk(scope, job, chunk);
+                }
+            }
             if now_ms - posted_at_ms >= PROGRESS_EVERY_MS {
                 posted_at_ms = now_ms;
                 let progress = work.progress();
@@ -118,6 +132,25 @@ mod worker {
         } else {
             Err("the worker could not send the finished run".into())
         }
+    }
+
+    /// Posts a piece of the trace, its numbers transferred rather than copied.
+    fn post_chunk(scope: &DedicatedWorkerGlobalScope, job: f64, chunk: TraceChunk) {
+        let rows = Float64Array::from(chunk.rows.as_slice());
+        let terms = Float64Array::from(chunk.terms.as_slice());
+        let transfer = Array::of2(&rows.buffer(), &terms.buffer());
+        let mut fields = vec![
+            ("kind", "chunk".into()),
+            ("job", job.into()),
+            ("run", (chunk.run as f64).into()),
+            ("rows", rows.into()),
+            ("terms", terms.into()),
+        ];
+        if let Some(calibration) = chunk.calibration_json {
+            fields.push(("calibration", calibration.into()));
+        }
+        // A chunk that cannot be sent only leaves the page to wait for the finished run.
+        let _ = post(scope, &fields, Some(&transfer));
     }
 
     fn object(fields: &[(&str, JsValue)]) -> JsValue {

@@ -4,7 +4,8 @@
 //! Each worker instantiates the core-only module (`src/bin/cutlab-worker.rs`, no Leptos, no
 //! pages) and runs one [`RunRequest`] at a time; jobs wait in one queue and each goes to the next
 //! free worker, so independent runs (a comparison's variants) compute at once on different
-//! cores. A job's progress and result reach the caller through its listener. The result is
+//! cores. A job's progress, the pieces of its trace as they are computed ([`JobEvent::Chunk`])
+//! and its result reach the caller through its listener. The result is
 //! rebuilt on the page from what the worker sends ([`RunParts`]), equal bit for bit to a run
 //! made here. Cancelling a running job terminates its worker at once and starts a fresh one; a
 //! worker that throws fails its job with the browser's message and is replaced, so a caller
@@ -25,7 +26,7 @@ use web_sys::{ErrorEvent, MessageEvent, Worker};
 
 use crate::closed_loop::definition::RunSpec;
 use crate::closed_loop::lab::{RunResult, TeachKey};
-use crate::closed_loop::transfer::{RunParts, RunRequest};
+use crate::closed_loop::transfer::{RunParts, RunRequest, TraceChunk};
 use crate::estimation::estimator::Calibration;
 use crate::work::Progress;
 
@@ -41,6 +42,8 @@ const WORKER_MODULE: &str = "cutlab-worker_bg.wasm";
 pub enum JobEvent {
     /// How far it has got.
     Progress(Progress),
+    /// The next piece of the trace of a run under way (the worker streams it as the run goes).
+    Chunk(TraceChunk),
     /// Its runs, in the order asked for.
     Done(Vec<Arc<RunResult>>),
     /// Why it could not be done (a worker that threw included).
@@ -309,6 +312,10 @@ fn on_message(index: usize, serial: u64, data: &JsValue) {
             let fraction = field("fraction").as_f64().unwrap_or(0.0);
             tell(id, JobEvent::Progress(Progress::new(stage, fraction)));
         }
+        ("chunk", Some((id, _))) if job == Some(id) => match received_chunk(&field) {
+            Ok(chunk) => tell(id, JobEvent::Chunk(chunk)),
+            Err(message) => finish(index, id, Err(message)),
+        },
         ("done", Some((id, specs))) if job == Some(id) => {
             let runs = Array::from(&field("runs"));
             finish(index, id, received_runs(&runs, specs));
@@ -319,6 +326,22 @@ fn on_message(index: usize, serial: u64, data: &JsValue) {
         }
         _ => {}
     }
+}
+
+/// The piece of a trace a worker sent, `field` reading the message's fields.
+fn received_chunk(field: &dyn Fn(&str) -> JsValue) -> Result<TraceChunk, String> {
+    let numbers = |name: &str| {
+        field(name)
+            .dyn_into::<Float64Array>()
+            .map(|a| a.to_vec())
+            .map_err(|_| format!("a piece of the worker's trace lacks its {name}"))
+    };
+    Ok(TraceChunk {
+        run: field("run").as_f64().unwrap_or(0.0) as usize,
+        calibration_json: field("calibration").as_string(),
+        rows: numbers("rows")?,
+        terms: numbers("terms")?,
+    })
 }
 
 /// The runs a worker sent, rebuilt for `specs`.
@@ -419,7 +442,7 @@ fn fail_waiting(message: &str) {
 /// Tells job `id`'s listener, outside the pool's borrow (a listener may submit or cancel); a
 /// final event drops the listener.
 fn tell(id: u64, event: JobEvent) {
-    let last = !matches!(event, JobEvent::Progress(_));
+    let last = !matches!(event, JobEvent::Progress(_) | JobEvent::Chunk(_));
     let Some(mut listener) = POOL.with(|pool| pool.borrow_mut().listeners.remove(&id)) else {
         return;
     };
