@@ -1,6 +1,7 @@
 // The computation workers (issue 28): Simulate's run and Compare's variants compute in Web Workers
 // built from the core alone, so the page's thread stays free; independent variants compute at once
-// on different workers; Cancel terminates the worker at once; a run made in a worker equals the
+// on different workers; a run's trace streams back in pieces and its chart draws the start of the
+// cut before the run is done; Cancel terminates the worker at once; a run made in a worker equals the
 // native CLI's, byte for byte in the exported trace.
 //
 // The pool publishes `data-workers` (its size) and `data-busy-workers` (the workers computing now)
@@ -55,6 +56,36 @@ test('a long run computes in a worker while the page thread stays free', async (
   const workers = page.workers().map((w) => w.url());
   assert.equal(workers.length, size);
   assert.ok(workers.every((u) => u.startsWith('blob:')), `workers: ${workers}`);
+  assert.deepEqual(problems, []);
+  await context.close();
+});
+
+test("a long run's chart draws the start of its trace while the worker still computes", async () => {
+  const { page, problems, context } = await openLab(browser, server.url, '#/simulate?preset=kim-circular-taper&controller=pi');
+  // (The first test holds the page's tasks under 50 ms through the same run, previews included.)
+  // Every change of the rows the charts draw (`data-trace-rows` on the charts), with whether a
+  // worker was still computing and whether the metrics were shown at that moment.
+  await page.evaluate(() => {
+    window.cutlabDrawn = [];
+    new MutationObserver(() => {
+      const charts = document.querySelector('.charts');
+      window.cutlabDrawn.push({
+        rows: Number(charts?.dataset.traceRows ?? 0),
+        computing: document.documentElement.dataset.busyWorkers !== '0',
+        metrics: document.querySelector('table.metrics') !== null,
+      });
+    }).observe(document.body, { subtree: true, attributes: true, attributeFilter: ['data-trace-rows'] });
+  });
+  const table = page.getByRole('table', { name: /Metrics of the run/ });
+  await table.getByRole('row', { name: /Cycle time/ }).getByRole('cell').first().waitFor({ timeout: RUN_TIMEOUT });
+  await waitForBusyWorkers(page, 0);
+  const finalRows = await page.locator('.charts').evaluate((c) => Number(c.dataset.traceRows));
+  const drawn = await page.evaluate(() => window.cutlabDrawn);
+  // Part of the trace was drawn while the worker computed and before any metrics showed: the
+  // streamed start of the cut, shorter than the finished run.
+  const partial = drawn.filter((d) => d.computing && !d.metrics && d.rows > 0);
+  assert.ok(partial.length > 0, `drawn: ${JSON.stringify(drawn)}`);
+  assert.ok(partial[0].rows < finalRows, `first drawn ${partial[0].rows} rows of ${finalRows}`);
   assert.deepEqual(problems, []);
   await context.close();
 });
