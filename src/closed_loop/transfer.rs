@@ -17,10 +17,69 @@ use super::error::LoopError;
 use super::feedback_loop::controller_for;
 use super::lab::{metrics_config, preset_plan, LabRuns, RunResult, TeachKey};
 use super::metrics::compute;
+use super::references::{ReferenceSearch, References};
 use super::settings::LoopSettings;
 use super::trace::{Trace, TraceRow};
 use crate::estimation::estimator::Calibration;
 use crate::safety::SafetyEvent;
+
+/// What a page asks a worker to do: one variant per kind of job, each with its own answer.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case")]
+pub enum JobRequest {
+    /// Closed-loop runs (Simulate's run, Compare's variants), streamed as [`TraceChunk`]s and
+    /// answered by one [`RunParts`] per run.
+    Runs(RunRequest),
+    /// The fixed-feed reference runs of a scenario's savings, answered by their [`References`]
+    /// ([`references_to_json`]).
+    References(Box<ReferenceRequest>),
+}
+
+impl JobRequest {
+    /// The request as JSON.
+    pub fn to_json(&self) -> Result<String, String> {
+        serde_json::to_string(self).map_err(|e| format!("the job could not be sent: {e}"))
+    }
+
+    /// A request read from JSON.
+    pub fn from_json(json: &str) -> Result<Self, String> {
+        serde_json::from_str(json).map_err(|e| format!("the worker received a bad request: {e}"))
+    }
+}
+
+/// The reference runs of a scenario (a spec at the fixed 100 % feed), on the calibration of its
+/// teach cut when the page knows it: the same search, and answer, as the page's own
+/// [`ReferenceSearch`].
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ReferenceRequest {
+    /// The scenario.
+    pub scenario: RunSpec,
+    /// The calibration of its teach cut, if known.
+    pub calibration: Option<Calibration>,
+}
+
+impl ReferenceRequest {
+    /// The search.
+    pub fn into_work(self) -> Result<ReferenceSearch, String> {
+        match self.calibration {
+            Some(c) => ReferenceSearch::calibrated(&self.scenario, c),
+            None => ReferenceSearch::new(&self.scenario),
+        }
+        .map_err(|e| e.to_string())
+    }
+}
+
+/// Found references as a worker sends them (a NaN, where no fixed feed keeps the force, travels
+/// as `null` and reads back as NaN; every other number reads back exactly).
+pub fn references_to_json(found: &References) -> Result<String, String> {
+    serde_json::to_string(found).map_err(|e| format!("the references could not be sent: {e}"))
+}
+
+/// References read from a worker's answer.
+pub fn references_from_json(json: &str) -> Result<References, String> {
+    serde_json::from_str(json)
+        .map_err(|e| format!("the worker's references could not be read: {e}"))
+}
 
 /// What a page asks a worker to run: closed-loop runs on their presets' simulations, with the
 /// teach cuts the page already knows.
@@ -48,16 +107,6 @@ impl RunRequest {
             specs,
             calibrations,
         }
-    }
-
-    /// The request as JSON.
-    pub fn to_json(&self) -> Result<String, String> {
-        serde_json::to_string(self).map_err(|e| format!("the run could not be sent: {e}"))
-    }
-
-    /// A request read from JSON.
-    pub fn from_json(json: &str) -> Result<Self, String> {
-        serde_json::from_str(json).map_err(|e| format!("the worker received a bad request: {e}"))
     }
 
     /// The work: [`LabRuns`] starting from the known calibrations (the same runs, and results,
@@ -433,10 +482,12 @@ mod tests {
         let spec = short_spec(ControllerKind::Pi);
         let first = simulate(&spec).unwrap();
         let known = vec![(TeachKey::of(&spec).unwrap(), first.calibration.clone())];
-        let json = RunRequest::new(vec![spec.clone()], &known)
+        let json = JobRequest::Runs(RunRequest::new(vec![spec.clone()], &known))
             .to_json()
             .unwrap();
-        let request = RunRequest::from_json(&json).unwrap();
+        let Ok(JobRequest::Runs(request)) = JobRequest::from_json(&json) else {
+            panic!("{json} read back as another job");
+        };
         assert_eq!(
             request.calibrations.len(),
             1,
@@ -447,7 +498,39 @@ mod tests {
             .run_to_end()
             .unwrap();
         assert_eq!(format!("{in_worker:?}"), format!("{on_page:?}"));
-        assert!(RunRequest::from_json("{\"specs\": 3}").is_err());
+        assert!(JobRequest::from_json("{\"kind\": \"runs\", \"specs\": 3}").is_err());
+    }
+
+    #[test]
+    fn references_found_in_a_worker_read_as_the_page_would_find_them() {
+        let spec = short_spec(ControllerKind::Threshold);
+        let scenario = crate::closed_loop::references::fixed_feed_spec(&spec, 100.0).unwrap();
+        let calibration = simulate(&spec).unwrap().calibration;
+        let on_page = ReferenceSearch::calibrated(&scenario, calibration.clone())
+            .unwrap()
+            .run_to_end()
+            .unwrap();
+        let json = JobRequest::References(Box::new(ReferenceRequest {
+            scenario,
+            calibration: Some(calibration),
+        }))
+        .to_json()
+        .unwrap();
+        let Ok(JobRequest::References(request)) = JobRequest::from_json(&json) else {
+            panic!("{json} read back as another job");
+        };
+        let found = request.into_work().unwrap().run_to_end().unwrap();
+        let received = references_from_json(&references_to_json(&found).unwrap()).unwrap();
+        assert_eq!(format!("{received:?}"), format!("{on_page:?}"));
+        assert!(received.programmed_cycle_time_s > 0.0);
+        // A search that found no safe fixed feed sends NaN as null and reads it back as NaN.
+        let none = References {
+            safe_fixed_override_pct: f64::NAN,
+            safe_fixed_cycle_time_s: f64::NAN,
+            ..received
+        };
+        let back = references_from_json(&references_to_json(&none).unwrap()).unwrap();
+        assert!(back.safe_fixed_override_pct.is_nan() && back.safe_fixed_cycle_time_s.is_nan());
     }
 
     #[test]

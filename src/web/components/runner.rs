@@ -23,9 +23,9 @@ use wasm_bindgen::prelude::{Closure, JsCast, JsValue};
 
 use crate::closed_loop::definition::RunSpec;
 use crate::closed_loop::lab::{RunResult, TeachKey};
-use crate::closed_loop::transfer::{StreamedRun, TraceChunk};
+use crate::closed_loop::transfer::{JobRequest, RunRequest, StreamedRun, TraceChunk};
 use crate::estimation::estimator::Calibration;
-use crate::web::components::pool::{self, JobEvent, JobId};
+use crate::web::components::pool::{self, Answer, JobEvent, JobId};
 use crate::work::{Progress, Work};
 
 /// Longest duration of one chunk of work: a chunk ends before a step that would take it past
@@ -187,6 +187,59 @@ impl<T: Clone + Send + Sync + 'static> Default for Runner<T> {
     }
 }
 
+/// What a job answered with another kind of answer than its request's (a bug) fails with.
+const ANOTHER_ANSWER: &str = "the computation worker answered another job than the one asked";
+
+impl<T: Clone + Send + Sync + 'static> Runner<T> {
+    /// Does `request` in the worker pool, replacing anything running, behind the same status,
+    /// progress bar and Cancel as a sliced job; `output` takes the answer (`None`: an answer of
+    /// another kind, a bug, fails the job). The output is published in a task of its own.
+    pub fn start_in_worker(&self, request: JobRequest, output: fn(Answer) -> Option<T>) {
+        let generation = self.generation.fetch_add(1, Ordering::SeqCst) + 1;
+        cancel_pool_jobs(&self.pool_jobs);
+        let _ = self.preview.try_set(None);
+        let status = self.status;
+        let _ = status.try_set(RunStatus::Running {
+            stage: "Waiting for a worker".into(),
+            fraction: 0.0,
+        });
+        let generations = self.generation.clone();
+        let current = move || generations.load(Ordering::SeqCst) == generation;
+        let mut progress_at_ms = f64::NEG_INFINITY;
+        let job = pool::submit(request, move |event| {
+            if !current() {
+                return;
+            }
+            match event {
+                JobEvent::Progress(Progress { stage, fraction }) => {
+                    if now_ms() - progress_at_ms >= PROGRESS_EVERY_MS {
+                        progress_at_ms = now_ms();
+                        let _ = status.try_set(RunStatus::Running { stage, fraction });
+                    }
+                }
+                JobEvent::Chunk(_) => {}
+                JobEvent::Done(answer) => {
+                    let next = output(answer)
+                        .map_or_else(|| RunStatus::Failed(ANOTHER_ANSWER.into()), RunStatus::Done);
+                    let current = current.clone();
+                    // The redraw the output starts runs in a task of its own.
+                    next_task(move || {
+                        if current() {
+                            let _ = status.try_set(next);
+                        }
+                    });
+                }
+                JobEvent::Failed(message) => {
+                    let _ = status.try_set(RunStatus::Failed(message));
+                }
+            }
+        });
+        if let Ok(mut pool_jobs) = self.pool_jobs.lock() {
+            *pool_jobs = vec![job];
+        }
+    }
+}
+
 impl Runner<Vec<Arc<RunResult>>> {
     /// Runs `specs` in the worker pool, replacing anything running: each spec a job of its own,
     /// so independent runs compute at once on different workers, each starting from the `known`
@@ -237,7 +290,8 @@ impl Runner<Vec<Arc<RunResult>>> {
             let current = move || generations.load(Ordering::SeqCst) == generation;
             let (streams, preview) = (streams.clone(), self.preview);
             let spec_streamed = spec.clone();
-            let job = pool::submit(vec![spec], &known, move |event| {
+            let request = JobRequest::Runs(RunRequest::new(vec![spec], &known));
+            let job = pool::submit(request, move |event| {
                 if !current() {
                     return;
                 }
@@ -272,7 +326,11 @@ impl Runner<Vec<Arc<RunResult>>> {
                             let _ = status.try_set(stage(&fractions.borrow()));
                         }
                     }
-                    JobEvent::Done(mut runs) => {
+                    JobEvent::Done(Answer::References(_)) => {
+                        runner.cancel();
+                        let _ = status.try_set(RunStatus::Failed(ANOTHER_ANSWER.into()));
+                    }
+                    JobEvent::Done(Answer::Runs(mut runs)) => {
                         results.borrow_mut()[index] = runs.pop();
                         fractions.borrow_mut()[index] = 1.0;
                         let all: Option<Vec<_>> = results.borrow().iter().cloned().collect();
