@@ -187,6 +187,27 @@ impl<T: Clone + Send + Sync + 'static> Default for Runner<T> {
     }
 }
 
+impl<T: Send + Sync + 'static> Runner<T> {
+    /// Starts a job the caller drives through the worker pool itself, replacing anything
+    /// running; the returned check says whether it is still this runner's job (a later start, a
+    /// cancel or leaving the page ends it). Its pool jobs, given to [`Runner::track`], are
+    /// cancelled with it.
+    pub fn begin_in_workers(&self) -> impl Fn() -> bool + Clone + 'static {
+        let generation = self.generation.fetch_add(1, Ordering::SeqCst) + 1;
+        cancel_pool_jobs(&self.pool_jobs);
+        let _ = self.preview.try_set(None);
+        let generations = self.generation.clone();
+        move || generations.load(Ordering::SeqCst) == generation
+    }
+
+    /// Cancels pool job `job` with the job under way.
+    pub fn track(&self, job: JobId) {
+        if let Ok(mut jobs) = self.pool_jobs.lock() {
+            jobs.push(job);
+        }
+    }
+}
+
 /// What a job answered with another kind of answer than its request's (a bug) fails with.
 const ANOTHER_ANSWER: &str = "the computation worker answered another job than the one asked";
 
