@@ -1,17 +1,17 @@
 //! Tune: teach-in (the chosen scenarios' simulated teach cuts, or a saved calibration file), a
 //! grid sweep or a Nelder–Mead search over a controller's parameters across scenarios, its runs
-//! in the computation workers, several at once (`in_workers.rs`, `tuning::TuningPlan`); the table, the heat map of a two-parameter sweep and
-//! the chart of the Pareto front fill in when it is done. Every field is a row of the tuning's
+//! in the computation workers, several at once (`tuning::TuningPlan`); the table, the heat map of
+//! a two-parameter sweep and the chart of the Pareto front fill in when it is done. Every field is a row of the tuning's
 //! table ([`crate::tuning::settings`]), as `cutlab tune`'s options are.
 //!
 //! | file | panel |
 //! |---|---|
 //! | `mod.rs` | the page: the run of a tuning from the form |
-//! | `in_workers.rs` | the tuning's runs in the computation workers |
 //! | `teach_in.rs` | the scenarios and the teach-in |
 //! | `params.rs` | the controller and the parameters tuned |
 //! | `method.rs` | search or sweep, and the objective's weights |
 //! | `results.rs` | the proposals, the best evaluation, the trade-off, the heat map, the evaluations |
+//! | [`in_workers`] | the tuning's runs in the computation workers, several at once |
 //! | [`params`] | the controller tuned and its parameters with their bounds |
 //! | [`method`] | how the parameters are tried: Nelder–Mead or a grid |
 //! | [`teach_in`] | the scenarios tuned, and the teach-in |
