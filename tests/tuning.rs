@@ -517,3 +517,64 @@ fn tuning_in_pieces_gives_the_tuners_result() {
         .unwrap();
     assert_eq!(swept.evaluations, sweep);
 }
+
+#[test]
+fn a_plan_told_runs_made_elsewhere_in_any_order_gives_the_tuning_works_result() {
+    use cutlab::closed_loop::lab::{LabRuns, TeachKey};
+    use cutlab::estimation::estimator::Calibration;
+    use cutlab::tuning::{TuningMode, TuningPlan, TuningWork};
+    use cutlab::work::Work;
+    let make = || {
+        problem(
+            ControllerKind::Pi,
+            &["kp=0.05:1.5"],
+            &[Preset::ManeeratDoc1, Preset::ManeeratDoc2],
+        )
+    };
+    // As the browser's workers make them: the first point's runs with their own teach cuts,
+    // every later run from the calibration of its scenario's teach cut.
+    let run = |spec: &RunSpec, known: &mut Vec<(TeachKey, Calibration)>| {
+        let result = LabRuns::with_calibrations(vec![spec.clone()], known.clone())
+            .run_to_end()
+            .unwrap()
+            .remove(0);
+        let key = TeachKey::of(spec).unwrap();
+        if !known.iter().any(|(k, _)| *k == key) {
+            known.push((key, result.calibration.clone()));
+        }
+        result.metrics.clone()
+    };
+    let search = NelderMead {
+        max_evaluations: 6,
+        ..NelderMead::default()
+    };
+    for mode in [TuningMode::Search(search), TuningMode::Sweep(3)] {
+        let expected = TuningWork::new(make(), mode).unwrap().run_to_end().unwrap();
+        let mut plan = TuningPlan::new(make(), mode).unwrap();
+        let mut known = Vec::new();
+        let mut out: Vec<(usize, usize, RunSpec)> = Vec::new();
+        let mut most_out = 0;
+        loop {
+            while let Some((point, specs)) = plan.ask().unwrap() {
+                out.extend(specs.into_iter().enumerate().map(|(i, s)| (point, i, s)));
+            }
+            most_out = most_out.max(out.len());
+            // The last asked first: runs come back in any order.
+            let Some((point, scenario, spec)) = out.pop() else {
+                break;
+            };
+            let metrics = run(&spec, &mut known);
+            plan.tell(point, scenario, metrics);
+        }
+        assert!(plan.is_done());
+        let (done, total) = plan.count();
+        assert_eq!(done, expected.evaluations.len());
+        assert!(done <= total);
+        assert_eq!(plan.finish().unwrap(), expected, "{mode:?}");
+        // A search has one point's runs out at a time (its two scenarios); a sweep all of them.
+        match mode {
+            TuningMode::Search(_) => assert_eq!(most_out, 2),
+            TuningMode::Sweep(_) => assert_eq!(most_out, 6),
+        }
+    }
+}

@@ -6,11 +6,13 @@
 //! |---|---|
 //! | `ready` | — (the module is loaded: requests posted before this would be lost) |
 //! | `progress` | `job`, `stage`, `fraction` (about ten times a second) |
-//! | `done` | `job`, `runs`: one `{ header, rows, terms }` per spec ([`RunParts`]; `rows` and `terms` are `Float64Array`s, transferred) |
+//! | `chunk` | `job`, `run`, `rows`, `terms`, and with a run's first chunk `calibration`: the trace rows added since the last chunk ([`TraceChunk`]), about every `CHUNK_EVERY_MS` (20 ms) once the closed loop runs |
+//! | `done` | `job`, and for runs `runs`: one `{ header, rows, terms }` per spec ([`RunParts`]; `rows` and `terms` are `Float64Array`s, transferred); for references `references`, as JSON |
 //! | `failed` | `job`, `message` (shown to a person as is) |
 //!
-//! A request is `{ job, request }`, `request` being a [`RunRequest`] as JSON. The run is done in
-//! one go: the page cancels it by terminating the worker.
+//! A request is `{ job, request }`, `request` being a [`JobRequest`] as JSON: closed-loop runs, or
+//! a scenario's fixed-feed references. The job is done in one go: the page cancels it by
+//! terminating the worker.
 
 #[cfg(target_arch = "wasm32")]
 fn main() {
@@ -24,7 +26,10 @@ fn main() {
 
 #[cfg(target_arch = "wasm32")]
 mod worker {
-    use cutlab::closed_loop::transfer::{RunParts, RunRequest};
+    use cutlab::closed_loop::transfer::{
+        references_to_json, JobRequest, ReferenceRequest, RunParts, RunRequest, TraceChunk,
+        TraceStream,
+    };
     use cutlab::work::Work;
     use js_sys::{Array, Float64Array, Object, Reflect};
     use wasm_bindgen::prelude::{Closure, JsCast, JsValue};
@@ -32,6 +37,11 @@ mod worker {
 
     /// How often progress is posted: a page shows it, and more would only cost messages.
     const PROGRESS_EVERY_MS: f64 = 100.0;
+
+    /// How often the trace so far is posted: the page draws the start of a cut from the first
+    /// chunk (sent as soon as the closed loop has traced anything), so a long run shows at once;
+    /// the page redraws at its own pace whatever arrives, and each chunk costs one small message.
+    pub const CHUNK_EVERY_MS: f64 = 20.0;
 
     /// Control periods advanced between looks at the clock.
     const BUDGET: usize = 200;
@@ -69,12 +79,26 @@ mod worker {
         let _ = post(&scope, &[("kind", "ready".into())], None);
     }
 
-    /// Runs `json`'s request, posting progress and, at the end, the runs.
+    /// Does `json`'s job, posting progress and, at the end, its answer.
     fn run(scope: &DedicatedWorkerGlobalScope, job: f64, json: &str) -> Result<(), String> {
-        let mut work = RunRequest::from_json(json)?.into_work();
+        match JobRequest::from_json(json)? {
+            JobRequest::Runs(request) => run_loops(scope, job, request),
+            JobRequest::References(request) => find_references(scope, job, *request),
+        }
+    }
+
+    /// Advances `work` to its end, posting its progress about every [`PROGRESS_EVERY_MS`] and
+    /// calling `between` after each piece (with the time).
+    fn advance_to_end<W: Work>(
+        scope: &DedicatedWorkerGlobalScope,
+        job: f64,
+        work: &mut W,
+        mut between: impl FnMut(&W, f64) -> Result<(), String>,
+    ) -> Result<W::Output, String> {
         let mut posted_at_ms = f64::NEG_INFINITY;
         while !work.advance(BUDGET).map_err(|e| e.to_string())? {
             let now_ms = js_sys::Date::now();
+            between(work, now_ms)?;
             if now_ms - posted_at_ms >= PROGRESS_EVERY_MS {
                 posted_at_ms = now_ms;
                 let progress = work.progress();
@@ -90,7 +114,47 @@ mod worker {
                 );
             }
         }
-        let runs = work.finish().map_err(|e| e.to_string())?;
+        work.finish().map_err(|e| e.to_string())
+    }
+
+    /// Finds a scenario's references and posts them.
+    fn find_references(
+        scope: &DedicatedWorkerGlobalScope,
+        job: f64,
+        request: ReferenceRequest,
+    ) -> Result<(), String> {
+        let mut work = request.into_work()?;
+        let found = advance_to_end(scope, job, &mut work, |_, _| Ok(()))?;
+        let fields = [
+            ("kind", "done".into()),
+            ("job", job.into()),
+            ("references", references_to_json(&found)?.into()),
+        ];
+        if post(scope, &fields, None) {
+            Ok(())
+        } else {
+            Err("the worker could not send the references".into())
+        }
+    }
+
+    /// Runs closed loops, streaming each one's trace as it goes, and posts the finished runs.
+    fn run_loops(
+        scope: &DedicatedWorkerGlobalScope,
+        job: f64,
+        request: RunRequest,
+    ) -> Result<(), String> {
+        let mut work = request.into_work();
+        let mut stream = TraceStream::default();
+        let mut streamed_at_ms = f64::NEG_INFINITY;
+        let runs = advance_to_end(scope, job, &mut work, |work, now_ms| {
+            if now_ms - streamed_at_ms >= CHUNK_EVERY_MS {
+                if let Some(chunk) = stream.next_chunk(work)? {
+                    streamed_at_ms = now_ms;
+                    post_chunk(scope, job, chunk);
+                }
+            }
+            Ok(())
+        })?;
         let sent = Array::new();
         let transfer = Array::new();
         for run in &runs {
@@ -118,6 +182,25 @@ mod worker {
         } else {
             Err("the worker could not send the finished run".into())
         }
+    }
+
+    /// Posts a piece of the trace, its numbers transferred rather than copied.
+    fn post_chunk(scope: &DedicatedWorkerGlobalScope, job: f64, chunk: TraceChunk) {
+        let rows = Float64Array::from(chunk.rows.as_slice());
+        let terms = Float64Array::from(chunk.terms.as_slice());
+        let transfer = Array::of2(&rows.buffer(), &terms.buffer());
+        let mut fields = vec![
+            ("kind", "chunk".into()),
+            ("job", job.into()),
+            ("run", (chunk.run as f64).into()),
+            ("rows", rows.into()),
+            ("terms", terms.into()),
+        ];
+        if let Some(calibration) = chunk.calibration_json {
+            fields.push(("calibration", calibration.into()));
+        }
+        // A chunk that cannot be sent only leaves the page to wait for the finished run.
+        let _ = post(scope, &fields, Some(&transfer));
     }
 
     fn object(fields: &[(&str, JsValue)]) -> JsValue {

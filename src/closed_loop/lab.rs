@@ -235,6 +235,16 @@ impl LabRun {
         }
     }
 
+    /// The trace so far and the calibration it runs on, once the closed loop has started
+    /// (`None` during the teach cut): what a computation worker streams to the page.
+    pub fn loop_so_far(&self) -> Option<(&Trace, &Calibration)> {
+        match &self.stage {
+            RunStage::Running { run, calibration } => Some((run.trace(), calibration)),
+            RunStage::Done(r) => Some((&r.trace, &r.calibration)),
+            _ => None,
+        }
+    }
+
     /// The run so far as a result: the trace up to now and its metrics, once the closed loop has
     /// started (`None` during the teach cut).
     pub fn partial_result(&self) -> Option<RunResult> {
@@ -493,6 +503,13 @@ impl LabRuns {
             runs.push(std::sync::Arc::new(run));
         }
         runs
+    }
+
+    /// The run under way, by its index in the specs, with [`LabRun::loop_so_far`]'s trace and
+    /// calibration once its closed loop has started.
+    pub fn under_way(&self) -> Option<(usize, &Trace, &Calibration)> {
+        let (trace, calibration) = self.current.as_ref()?.loop_so_far()?;
+        Some((self.results.len(), trace, calibration))
     }
 
     /// The teach cuts made or given so far, by key (empty on other machines than the preset's).

@@ -369,23 +369,7 @@ impl Tuner {
         if let Some(e) = failure.filter(|_| evaluations.is_empty()) {
             return Err(e);
         }
-        let best = evaluations
-            .iter()
-            .min_by(|a, b| a.cost.total_cmp(&b.cost))
-            .cloned()
-            .ok_or_else(|| TuningError::Setup("no evaluation succeeded".into()))?;
-        let pareto = pareto_front(
-            &evaluations
-                .iter()
-                .map(|e| (e.cycle_time_s, e.force_error_pct))
-                .collect::<Vec<_>>(),
-        );
-        Ok(Tuned {
-            best,
-            evaluations,
-            pareto,
-            converged: minimum.converged,
-        })
+        tuned(evaluations, minimum.converged)
     }
 }
 
@@ -556,6 +540,52 @@ enum Points {
     Search(nelder_mead::Search),
 }
 
+impl Points {
+    /// The points of `mode` for `problem`.
+    fn of(problem: &TuningProblem, mode: TuningMode) -> Result<Self, TuningError> {
+        Ok(match mode {
+            TuningMode::Sweep(steps) => Points::Grid {
+                points: grid_points(&problem.params, steps)?,
+                next: 0,
+            },
+            TuningMode::Search(search) => {
+                let bounds: Vec<(f64, f64)> = problem.params.iter().map(|r| (r.lo, r.hi)).collect();
+                Points::Search(search.search(&bounds, &start_point(problem)))
+            }
+        })
+    }
+
+    /// The next point to evaluate, telling a search the `last` evaluation's cost first; when a
+    /// search has none left, whether it converged goes to `converged`.
+    fn next(&mut self, last: Option<&Evaluation>, converged: &mut bool) -> Option<Vec<f64>> {
+        match self {
+            Points::Grid { points, next } => {
+                let point = points.get(*next).cloned();
+                *next += 1;
+                point
+            }
+            Points::Search(search) => {
+                if let Some(last) = last {
+                    search.tell(last.cost);
+                }
+                let point = search.ask();
+                if point.is_none() {
+                    *converged = search.minimum().converged;
+                }
+                point
+            }
+        }
+    }
+
+    /// Evaluations in all: the grid's points, or the search's budget.
+    fn total(&self) -> usize {
+        match self {
+            Points::Grid { points, .. } => points.len(),
+            Points::Search(search) => search.max_evaluations(),
+        }
+    }
+}
+
 enum WorkStage {
     Teaching(
         Box<crate::closed_loop::sample_loop::OnMachine<crate::closed_loop::teach_cut::TeachCut>>,
@@ -572,16 +602,7 @@ impl TuningWork {
     /// Checks the problem and starts the first teach cut.
     pub fn new(problem: TuningProblem, mode: TuningMode) -> Result<Self, TuningError> {
         check(&problem)?;
-        let points = match mode {
-            TuningMode::Sweep(steps) => Points::Grid {
-                points: grid_points(&problem.params, steps)?,
-                next: 0,
-            },
-            TuningMode::Search(search) => {
-                let bounds: Vec<(f64, f64)> = problem.params.iter().map(|r| (r.lo, r.hi)).collect();
-                Points::Search(search.search(&bounds, &start_point(&problem)))
-            }
-        };
+        let points = Points::of(&problem, mode)?;
         let first = start_teach_cut(&problem, 0)?;
         Ok(Self {
             problem,
@@ -600,23 +621,8 @@ impl TuningWork {
 
     /// The next point to evaluate, telling the search the last evaluation's cost first.
     fn next_point(&mut self) -> Option<Vec<f64>> {
-        match &mut self.points {
-            Points::Grid { points, next } => {
-                let point = points.get(*next).cloned();
-                *next += 1;
-                point
-            }
-            Points::Search(search) => {
-                if let Some(last) = self.evaluations.last() {
-                    search.tell(last.cost);
-                }
-                let point = search.ask();
-                if point.is_none() {
-                    self.converged = search.minimum().converged;
-                }
-                point
-            }
-        }
+        self.points
+            .next(self.evaluations.last(), &mut self.converged)
     }
 
     /// The run of `values` on scenario `index`, with its teach cut's calibration.
@@ -798,25 +804,119 @@ impl Work for TuningWork {
         if !matches!(self.stage, WorkStage::Done) {
             return Err(TuningError::Setup("the tuning has not finished".into()));
         }
-        let best = self
-            .evaluations
+        tuned(std::mem::take(&mut self.evaluations), self.converged)
+    }
+}
+
+/// The outcome of `evaluations` (in the order made): the best, the Pareto front.
+fn tuned(evaluations: Vec<Evaluation>, converged: bool) -> Result<Tuned, TuningError> {
+    let best = evaluations
+        .iter()
+        .min_by(|a, b| a.cost.total_cmp(&b.cost))
+        .cloned()
+        .ok_or_else(|| TuningError::Setup("no evaluation succeeded".into()))?;
+    let pareto = pareto_front(
+        &evaluations
             .iter()
-            .min_by(|a, b| a.cost.total_cmp(&b.cost))
-            .cloned()
-            .ok_or_else(|| TuningError::Setup("no evaluation succeeded".into()))?;
-        let pareto = pareto_front(
-            &self
-                .evaluations
-                .iter()
-                .map(|e| (e.cycle_time_s, e.force_error_pct))
-                .collect::<Vec<_>>(),
-        );
-        Ok(Tuned {
-            best,
-            evaluations: std::mem::take(&mut self.evaluations),
-            pareto,
-            converged: self.converged,
+            .map(|e| (e.cycle_time_s, e.force_error_pct))
+            .collect::<Vec<_>>(),
+    );
+    Ok(Tuned {
+        best,
+        evaluations,
+        pareto,
+        converged,
+    })
+}
+
+/// Tuning whose runs are made elsewhere — the browser's computation workers, several at once:
+/// it asks for each point's runs (one per scenario, each calibrated by its scenario's teach cut)
+/// and is told their metrics, in any order. Its result is [`TuningWork`]'s for the same runs.
+///
+/// A sweep's points can all be asked at once; a search asks its next point only once the last
+/// one's cost is known.
+pub struct TuningPlan {
+    problem: TuningProblem,
+    points: Points,
+    /// Each point asked: its values, and each scenario's metrics once told.
+    asked: Vec<(Vec<f64>, Vec<Option<Metrics>>)>,
+    /// The evaluations of the points whose runs have all been told, in the order asked.
+    evaluations: Vec<Option<Evaluation>>,
+    /// No point is left to ask.
+    exhausted: bool,
+    converged: bool,
+}
+
+impl TuningPlan {
+    /// Checks the problem; nothing is asked yet.
+    pub fn new(problem: TuningProblem, mode: TuningMode) -> Result<Self, TuningError> {
+        check(&problem)?;
+        let points = Points::of(&problem, mode)?;
+        Ok(Self {
+            problem,
+            points,
+            asked: Vec::new(),
+            evaluations: Vec::new(),
+            exhausted: false,
+            converged: false,
         })
+    }
+
+    /// The next point's runs, one spec per scenario (in the problem's order), with the point's
+    /// number for [`TuningPlan::tell`]; `None` when no point can be asked now (a search's last
+    /// point is still out, or none is left).
+    pub fn ask(&mut self) -> Result<Option<(usize, Vec<RunSpec>)>, TuningError> {
+        let waiting = self.evaluations.iter().any(Option::is_none);
+        if self.exhausted || (waiting && matches!(self.points, Points::Search(_))) {
+            return Ok(None);
+        }
+        let last = self.evaluations.last().and_then(Option::as_ref);
+        let Some(values) = self.points.next(last, &mut self.converged) else {
+            self.exhausted = true;
+            return Ok(None);
+        };
+        let specs = (0..self.problem.scenarios.len())
+            .map(|i| spec_with(&self.problem, i, &values))
+            .collect::<Result<Vec<_>, _>>()?;
+        self.asked
+            .push((values, vec![None; self.problem.scenarios.len()]));
+        self.evaluations.push(None);
+        Ok(Some((self.asked.len() - 1, specs)))
+    }
+
+    /// The metrics of point `point`'s run on scenario `scenario` (a number out of range, or a
+    /// run told twice, changes nothing).
+    pub fn tell(&mut self, point: usize, scenario: usize, metrics: Metrics) {
+        let Some((values, told)) = self.asked.get_mut(point) else {
+            return;
+        };
+        if let Some(slot @ None) = told.get_mut(scenario) {
+            *slot = Some(metrics);
+        }
+        if told.iter().all(Option::is_some) && self.evaluations[point].is_none() {
+            let metrics = told.iter_mut().filter_map(Option::take).collect();
+            self.evaluations[point] = Some(summarise(&self.problem, values.clone(), metrics));
+        }
+    }
+
+    /// Evaluations done and evaluations in all (the grid's points, or the search's budget).
+    pub fn count(&self) -> (usize, usize) {
+        let done = self.evaluations.iter().flatten().count();
+        (done, self.points.total())
+    }
+
+    /// Whether every point has been asked and told.
+    pub fn is_done(&self) -> bool {
+        self.exhausted && self.evaluations.iter().all(Option::is_some)
+    }
+
+    /// The outcome, once [`TuningPlan::is_done`].
+    pub fn finish(&mut self) -> Result<Tuned, TuningError> {
+        if !self.is_done() {
+            return Err(TuningError::Setup("the tuning has not finished".into()));
+        }
+        let evaluations = std::mem::take(&mut self.evaluations).into_iter().flatten();
+        tuned(evaluations.collect(), self.converged)
     }
 }
 

@@ -1,7 +1,8 @@
 // The Tune page: a teach-in from simulated teach cuts and from a saved calibration file, a
 // two-parameter sweep with its table, heat map and Pareto chart, a search whose best point opens
 // in Simulate, and a long search that shows progress, keeps the page responsive and can be
-// cancelled — all found by role and label, as a person would.
+// cancelled — all found by role and label, as a person would. A search's runs compute in the
+// computation workers, several at once, and find what the page found on its own thread.
 import { test, before, after } from 'node:test';
 import assert from 'node:assert/strict';
 import { readFile } from 'node:fs/promises';
@@ -141,6 +142,34 @@ test('a long search shows progress, keeps the page responsive, and can be cancel
   await page.getByText(/^Cancelled\./).waitFor();
   await progress.waitFor({ state: 'detached' });
   assert.equal(await page.getByRole('table', { name: 'Evaluations' }).count(), 0);
+  assert.deepEqual(problems, []);
+  await context.close();
+});
+
+test("a search's runs compute on two workers at once and find what the page found on its own thread", async () => {
+  const { page, problems, context } = await openLab(browser, server.url, '#/tune');
+  await page.getByRole('checkbox', { name: 'kim-step-doc' }).check();
+  await page.getByLabel('Evaluations at most').fill('60');
+  // The most workers computing at once while the search runs.
+  await page.evaluate(() => {
+    window.cutlabMostBusy = 0;
+    new MutationObserver(() => {
+      window.cutlabMostBusy = Math.max(window.cutlabMostBusy, Number(document.documentElement.dataset.busyWorkers ?? 0));
+    }).observe(document.documentElement, { attributes: true, attributeFilter: ['data-busy-workers'] });
+  });
+  await page.getByRole('button', { name: 'Run' }).click();
+  const status = page.getByRole('status').filter({ hasText: /Best of [0-9]+ evaluations/ });
+  await status.waitFor({ timeout: RUN_TIMEOUT });
+  // What the page showed for the same search (its default controller and parameters on
+  // maneerat-doc-1 and kim-step-doc) when it ran every evaluation sliced on its own thread
+  // (tuning::TuningWork, before issue 28 moved the runs to the workers).
+  assert.equal(
+    await status.innerText(),
+    'Best of 37 evaluations (converged): kp = 0.2083, ki_per_s = 2; objective 2.270, cycle 44.3 s, force error 4.6 %. Open the best in Simulate',
+  );
+  const cores = await page.evaluate(() => navigator.hardwareConcurrency);
+  const mostBusy = await page.evaluate(() => window.cutlabMostBusy);
+  assert.ok(mostBusy >= Math.min(cores, 2), `at most ${mostBusy} workers computed at once`);
   assert.deepEqual(problems, []);
   await context.close();
 });

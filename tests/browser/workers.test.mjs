@@ -1,6 +1,7 @@
 // The computation workers (issue 28): Simulate's run and Compare's variants compute in Web Workers
 // built from the core alone, so the page's thread stays free; independent variants compute at once
-// on different workers; Cancel terminates the worker at once; a run made in a worker equals the
+// on different workers; a run's trace streams back in pieces and its chart draws the start of the
+// cut before the run is done; the savings' reference runs compute in a worker too; Cancel terminates the worker at once; a run made in a worker equals the
 // native CLI's, byte for byte in the exported trace.
 //
 // The pool publishes `data-workers` (its size) and `data-busy-workers` (the workers computing now)
@@ -55,6 +56,36 @@ test('a long run computes in a worker while the page thread stays free', async (
   const workers = page.workers().map((w) => w.url());
   assert.equal(workers.length, size);
   assert.ok(workers.every((u) => u.startsWith('blob:')), `workers: ${workers}`);
+  assert.deepEqual(problems, []);
+  await context.close();
+});
+
+test("a long run's chart draws the start of its trace while the worker still computes", async () => {
+  const { page, problems, context } = await openLab(browser, server.url, '#/simulate?preset=kim-circular-taper&controller=pi');
+  // (The first test holds the page's tasks under 50 ms through the same run, previews included.)
+  // Every change of the rows the charts draw (`data-trace-rows` on the charts), with whether a
+  // worker was still computing and whether the metrics were shown at that moment.
+  await page.evaluate(() => {
+    window.cutlabDrawn = [];
+    new MutationObserver(() => {
+      const charts = document.querySelector('.charts');
+      window.cutlabDrawn.push({
+        rows: Number(charts?.dataset.traceRows ?? 0),
+        computing: document.documentElement.dataset.busyWorkers !== '0',
+        metrics: document.querySelector('table.metrics') !== null,
+      });
+    }).observe(document.body, { subtree: true, attributes: true, attributeFilter: ['data-trace-rows'] });
+  });
+  const table = page.getByRole('table', { name: /Metrics of the run/ });
+  await table.getByRole('row', { name: /Cycle time/ }).getByRole('cell').first().waitFor({ timeout: RUN_TIMEOUT });
+  await waitForBusyWorkers(page, 0);
+  const finalRows = await page.locator('.charts').evaluate((c) => Number(c.dataset.traceRows));
+  const drawn = await page.evaluate(() => window.cutlabDrawn);
+  // Part of the trace was drawn while the worker computed and before any metrics showed: the
+  // streamed start of the cut, shorter than the finished run.
+  const partial = drawn.filter((d) => d.computing && !d.metrics && d.rows > 0);
+  assert.ok(partial.length > 0, `drawn: ${JSON.stringify(drawn)}`);
+  assert.ok(partial[0].rows < finalRows, `first drawn ${partial[0].rows} rows of ${finalRows}`);
   assert.deepEqual(problems, []);
   await context.close();
 });
@@ -121,6 +152,42 @@ test("a run made in a worker exports the native CLI's trace, byte for byte", asy
   assert.ok(trace.split('\n').length > 100);
   assert.equal(trace, native, 'the worker-made trace differs from the CLI run of the same configuration');
   assert.match(metrics, /^metric,value\ncycle_time_s,\d/);
+  assert.deepEqual(problems, []);
+  await context.close();
+});
+
+test("the savings' reference runs compute in a worker and equal the native CLI's", async () => {
+  // maneerat-doc-2 ships no references: its savings need the fixed-feed search.
+  const { page, problems, context } = await openLab(browser, server.url, '#/simulate?preset=maneerat-doc-2&controller=pi');
+  // Whether the savings' search was ever under way (its progress bar shown) while the run's
+  // metrics were shown and a worker computed: after the run, only the search can be that work.
+  await page.evaluate(() => {
+    window.cutlabSearchInWorker = false;
+    new MutationObserver(() => {
+      if (document.getElementById('savings-progress') && document.querySelector('table.metrics')
+        && document.documentElement.dataset.busyWorkers === '1') window.cutlabSearchInWorker = true;
+    }).observe(document, { subtree: true, childList: true, attributes: true });
+  });
+  const table = page.getByRole('table', { name: /Metrics of the run/ });
+  const saving = (name) => table.getByRole('row').filter({ has: page.getByRole('rowheader', { name }) }).getByRole('cell').first();
+  await saving('Saving vs safe fixed feed (%)').filter({ hasText: /\d/ }).waitFor({ timeout: RUN_TIMEOUT });
+  await waitForBusyWorkers(page, 0);
+  assert.ok(await page.evaluate(() => window.cutlabSearchInWorker), 'the search never ran in a worker');
+  const download = async (name) => {
+    const [file] = await Promise.all([page.waitForEvent('download'), page.getByRole('button', { name }).click()]);
+    return readFile(await file.path(), 'utf8');
+  };
+  const config = await download('Configuration (JSON)');
+  const metrics = await download('Metrics (CSV)');
+  const dir = join(artifacts, 'workers');
+  await mkdir(dir, { recursive: true });
+  await writeFile(join(dir, 'savings-config.json'), config);
+  execFileSync(cutlab, ['sim', '--config', join(dir, 'savings-config.json'), '--json', join(dir, 'savings-native.json')]);
+  const native = JSON.parse(await readFile(join(dir, 'savings-native.json'), 'utf8')).metrics;
+  const fromPage = Object.fromEntries(metrics.trim().split('\n').slice(1).map((line) => line.split(',')));
+  for (const key of ['saving_vs_programmed_pct', 'saving_vs_safe_fixed_pct']) {
+    assert.equal(Number(fromPage[key]), native[key], `${key}: page ${fromPage[key]}, CLI ${native[key]}`);
+  }
   assert.deepEqual(problems, []);
   await context.close();
 });

@@ -1,10 +1,11 @@
-//! The computation workers: closed-loop runs computed off the page's thread, one Web Worker per
-//! core the browser reports.
+//! The computation workers: closed-loop runs and the savings' reference runs computed off the
+//! page's thread, one Web Worker per core the browser reports.
 //!
 //! Each worker instantiates the core-only module (`src/bin/cutlab-worker.rs`, no Leptos, no
-//! pages) and runs one [`RunRequest`] at a time; jobs wait in one queue and each goes to the next
+//! pages) and does one [`JobRequest`] at a time; jobs wait in one queue and each goes to the next
 //! free worker, so independent runs (a comparison's variants) compute at once on different
-//! cores. A job's progress and result reach the caller through its listener. The result is
+//! cores. A job's progress, the pieces of its trace as they are computed ([`JobEvent::Chunk`])
+//! and its result reach the caller through its listener. The result is
 //! rebuilt on the page from what the worker sends ([`RunParts`]), equal bit for bit to a run
 //! made here. Cancelling a running job terminates its worker at once and starts a fresh one; a
 //! worker that throws fails its job with the browser's message and is replaced, so a caller
@@ -24,9 +25,9 @@ use wasm_bindgen::prelude::{Closure, JsCast, JsValue};
 use web_sys::{ErrorEvent, MessageEvent, Worker};
 
 use crate::closed_loop::definition::RunSpec;
-use crate::closed_loop::lab::{RunResult, TeachKey};
-use crate::closed_loop::transfer::{RunParts, RunRequest};
-use crate::estimation::estimator::Calibration;
+use crate::closed_loop::lab::RunResult;
+use crate::closed_loop::references::References;
+use crate::closed_loop::transfer::{references_from_json, JobRequest, RunParts, TraceChunk};
 use crate::work::Progress;
 
 /// The most workers the pool starts, whatever the browser reports: each holds a module and its
@@ -41,10 +42,27 @@ const WORKER_MODULE: &str = "cutlab-worker_bg.wasm";
 pub enum JobEvent {
     /// How far it has got.
     Progress(Progress),
-    /// Its runs, in the order asked for.
-    Done(Vec<Arc<RunResult>>),
+    /// The next piece of the trace of a run under way (the worker streams it as the run goes).
+    Chunk(TraceChunk),
+    /// Its answer.
+    Done(Answer),
     /// Why it could not be done (a worker that threw included).
     Failed(String),
+}
+
+/// What a finished job gives, by the kind of its [`JobRequest`].
+pub enum Answer {
+    /// The runs, in the order asked for.
+    Runs(Vec<Arc<RunResult>>),
+    /// A scenario's references.
+    References(References),
+}
+
+/// What a job's answer is rebuilt from: for runs, their specs.
+#[derive(Clone)]
+enum Expecting {
+    Runs(Vec<RunSpec>),
+    References,
 }
 
 /// A job given to the pool.
@@ -56,7 +74,7 @@ type Listener = Box<dyn FnMut(JobEvent)>;
 /// A job waiting for a worker.
 struct Queued {
     id: u64,
-    specs: Vec<RunSpec>,
+    expecting: Expecting,
     request_json: String,
 }
 
@@ -67,8 +85,8 @@ struct Slot {
     serial: u64,
     /// The module has loaded: requests posted before this would be lost.
     ready: bool,
-    /// The job it computes, and that job's specs (the result is rebuilt from them).
-    running: Option<(u64, Vec<RunSpec>)>,
+    /// The job it computes, and what its answer is rebuilt from.
+    running: Option<(u64, Expecting)>,
     _on_message: Closure<dyn FnMut(MessageEvent)>,
     _on_error: Closure<dyn FnMut(ErrorEvent)>,
 }
@@ -100,27 +118,26 @@ pub fn pool_size() -> usize {
     }
 }
 
-/// Queues the runs of `specs` (starting from those of the `known` calibrations they would
-/// teach) as one job; `listener` hears its progress, then its result or why it failed, never
-/// in the task that submits it.
-pub fn submit(
-    specs: Vec<RunSpec>,
-    known: &[(TeachKey, Calibration)],
-    mut listener: impl FnMut(JobEvent) + 'static,
-) -> JobId {
+/// Queues `request` as one job; `listener` hears its progress (and a run's trace as it comes),
+/// then its answer or why it failed, never in the task that submits it.
+pub fn submit(request: JobRequest, mut listener: impl FnMut(JobEvent) + 'static) -> JobId {
     let id = POOL.with(|pool| {
         let mut pool = pool.borrow_mut();
         pool.next_id += 1;
         pool.next_id
     });
-    match RunRequest::new(specs.clone(), known).to_json() {
+    let expecting = match &request {
+        JobRequest::Runs(runs) => Expecting::Runs(runs.specs.clone()),
+        JobRequest::References(_) => Expecting::References,
+    };
+    match request.to_json() {
         Ok(request_json) => {
             POOL.with(|pool| {
                 let mut pool = pool.borrow_mut();
                 pool.listeners.insert(id, Box::new(listener));
                 pool.queue.push_back(Queued {
                     id,
-                    specs,
+                    expecting,
                     request_json,
                 });
             });
@@ -265,7 +282,7 @@ fn dispatch() {
             let _ = Reflect::set(&message, &"job".into(), &(job.id as f64).into());
             let _ = Reflect::set(&message, &"request".into(), &job.request_json.into());
             let sent = slot.worker.post_message(&message);
-            slot.running = Some((job.id, job.specs));
+            slot.running = Some((job.id, job.expecting));
             Some(sent.map_err(|e| (free, job.id, crate::web::js::describe(&e))))
         });
         match posted {
@@ -300,7 +317,7 @@ fn on_message(index: usize, serial: u64, data: &JsValue) {
         }
         slot.running
             .as_ref()
-            .map(|(id, specs)| (*id, specs.clone()))
+            .map(|(id, expecting)| (*id, expecting.clone()))
     });
     match (kind.as_str(), running) {
         ("ready", _) => dispatch(),
@@ -309,9 +326,21 @@ fn on_message(index: usize, serial: u64, data: &JsValue) {
             let fraction = field("fraction").as_f64().unwrap_or(0.0);
             tell(id, JobEvent::Progress(Progress::new(stage, fraction)));
         }
-        ("done", Some((id, specs))) if job == Some(id) => {
-            let runs = Array::from(&field("runs"));
-            finish(index, id, received_runs(&runs, specs));
+        ("chunk", Some((id, _))) if job == Some(id) => match received_chunk(&field) {
+            Ok(chunk) => tell(id, JobEvent::Chunk(chunk)),
+            Err(message) => finish(index, id, Err(message)),
+        },
+        ("done", Some((id, expecting))) if job == Some(id) => {
+            let answer = match expecting {
+                Expecting::Runs(specs) => {
+                    received_runs(&Array::from(&field("runs")), specs).map(Answer::Runs)
+                }
+                Expecting::References => {
+                    references_from_json(&field("references").as_string().unwrap_or_default())
+                        .map(Answer::References)
+                }
+            };
+            finish(index, id, answer);
         }
         ("failed", Some((id, _))) if job == Some(id) => {
             let message = field("message").as_string().unwrap_or_default();
@@ -319,6 +348,22 @@ fn on_message(index: usize, serial: u64, data: &JsValue) {
         }
         _ => {}
     }
+}
+
+/// The piece of a trace a worker sent, `field` reading the message's fields.
+fn received_chunk(field: &dyn Fn(&str) -> JsValue) -> Result<TraceChunk, String> {
+    let numbers = |name: &str| {
+        field(name)
+            .dyn_into::<Float64Array>()
+            .map(|a| a.to_vec())
+            .map_err(|_| format!("a piece of the worker's trace lacks its {name}"))
+    };
+    Ok(TraceChunk {
+        run: field("run").as_f64().unwrap_or(0.0) as usize,
+        calibration_json: field("calibration").as_string(),
+        rows: numbers("rows")?,
+        terms: numbers("terms")?,
+    })
 }
 
 /// The runs a worker sent, rebuilt for `specs`.
@@ -389,7 +434,7 @@ fn on_error(index: usize, serial: u64, message: &str) {
 }
 
 /// Job `id` on slot `index` is over: its listener hears the outcome and the slot takes the next.
-fn finish(index: usize, id: u64, outcome: Result<Vec<Arc<RunResult>>, String>) {
+fn finish(index: usize, id: u64, outcome: Result<Answer, String>) {
     POOL.with(|pool| {
         if let Some(Some(slot)) = pool.borrow_mut().slots.get_mut(index) {
             if slot.running.as_ref().is_some_and(|(job, _)| *job == id) {
@@ -419,7 +464,7 @@ fn fail_waiting(message: &str) {
 /// Tells job `id`'s listener, outside the pool's borrow (a listener may submit or cancel); a
 /// final event drops the listener.
 fn tell(id: u64, event: JobEvent) {
-    let last = !matches!(event, JobEvent::Progress(_));
+    let last = !matches!(event, JobEvent::Progress(_) | JobEvent::Chunk(_));
     let Some(mut listener) = POOL.with(|pool| pool.borrow_mut().listeners.remove(&id)) else {
         return;
     };

@@ -211,8 +211,19 @@ pub fn RunCharts(
             })
         })
     };
+    // The trace rows drawn (of the longest run), for a person's devtools and the browser tests:
+    // a run streamed from a worker shows a growing count before it is done.
+    let rows_drawn = move || {
+        runs.with(|r| {
+            r.iter()
+                .map(|(_, run)| run.trace.rows.len())
+                .max()
+                .unwrap_or(0)
+        })
+        .to_string()
+    };
     view! {
-        <div class="charts">
+        <div class="charts" data-trace-rows=rows_drawn>
             <ChartCanvas label="Cutting force" chart=chart(0) height_px=240 x_view=x_view />
             <ChartCanvas label="Motor current" chart=chart(1) height_px=190 x_view=x_view />
             <ChartCanvas label="Feed override" chart=chart(2) height_px=170 x_view=x_view />

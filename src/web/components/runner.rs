@@ -23,8 +23,9 @@ use wasm_bindgen::prelude::{Closure, JsCast, JsValue};
 
 use crate::closed_loop::definition::RunSpec;
 use crate::closed_loop::lab::{RunResult, TeachKey};
+use crate::closed_loop::transfer::{JobRequest, RunRequest, StreamedRun, TraceChunk};
 use crate::estimation::estimator::Calibration;
-use crate::web::components::pool::{self, JobEvent, JobId};
+use crate::web::components::pool::{self, Answer, JobEvent, JobId};
 use crate::work::{Progress, Work};
 
 /// Longest duration of one chunk of work: a chunk ends before a step that would take it past
@@ -32,12 +33,10 @@ use crate::work::{Progress, Work};
 /// between chunks the browser draws a frame (a few ms), so shorter chunks would cost the run time.
 pub const CHUNK_BUDGET_MS: f64 = 35.0;
 
-/// How often a job's output so far is shown while it runs (a previewing job: none today, since
-/// Simulate's and Compare's runs moved to the workers, whose streamed traces are issue 28's next
-/// step). A
-/// preview redraws every chart of the page, tens of milliseconds in all: each one would add that
-/// much to a short run, so a run done within half a second is drawn once, finished, and a longer
-/// one fills in twice a second.
+/// How often the output so far of a job is shown while it runs: the traces a worker streams
+/// ([`Runner::start_in_workers`]; the first piece is drawn at once, so the start of a long cut
+/// shows as soon as it is computed), or a sliced job's preview. A preview redraws every chart of
+/// the page, tens of milliseconds in all, so a run fills in twice a second.
 pub const PREVIEW_EVERY_MS: f64 = 500.0;
 
 /// How often a running job's progress (stage and fraction) is published. Each change of the
@@ -188,12 +187,90 @@ impl<T: Clone + Send + Sync + 'static> Default for Runner<T> {
     }
 }
 
+impl<T: Send + Sync + 'static> Runner<T> {
+    /// Starts a job the caller drives through the worker pool itself, replacing anything
+    /// running; the returned check says whether it is still this runner's job (a later start, a
+    /// cancel or leaving the page ends it). Its pool jobs, given to [`Runner::track`], are
+    /// cancelled with it.
+    pub fn begin_in_workers(&self) -> impl Fn() -> bool + Clone + 'static {
+        let generation = self.generation.fetch_add(1, Ordering::SeqCst) + 1;
+        cancel_pool_jobs(&self.pool_jobs);
+        let _ = self.preview.try_set(None);
+        let generations = self.generation.clone();
+        move || generations.load(Ordering::SeqCst) == generation
+    }
+
+    /// Cancels pool job `job` with the job under way.
+    pub fn track(&self, job: JobId) {
+        if let Ok(mut jobs) = self.pool_jobs.lock() {
+            jobs.push(job);
+        }
+    }
+}
+
+/// What a job answered with another kind of answer than its request's (a bug) fails with.
+const ANOTHER_ANSWER: &str = "the computation worker answered another job than the one asked";
+
+impl<T: Clone + Send + Sync + 'static> Runner<T> {
+    /// Does `request` in the worker pool, replacing anything running, behind the same status,
+    /// progress bar and Cancel as a sliced job; `output` takes the answer (`None`: an answer of
+    /// another kind, a bug, fails the job). The output is published in a task of its own.
+    pub fn start_in_worker(&self, request: JobRequest, output: fn(Answer) -> Option<T>) {
+        let generation = self.generation.fetch_add(1, Ordering::SeqCst) + 1;
+        cancel_pool_jobs(&self.pool_jobs);
+        let _ = self.preview.try_set(None);
+        let status = self.status;
+        let _ = status.try_set(RunStatus::Running {
+            stage: "Waiting for a worker".into(),
+            fraction: 0.0,
+        });
+        let generations = self.generation.clone();
+        let current = move || generations.load(Ordering::SeqCst) == generation;
+        let mut progress_at_ms = f64::NEG_INFINITY;
+        let job = pool::submit(request, move |event| {
+            if !current() {
+                return;
+            }
+            match event {
+                JobEvent::Progress(Progress { stage, fraction }) => {
+                    if now_ms() - progress_at_ms >= PROGRESS_EVERY_MS {
+                        progress_at_ms = now_ms();
+                        let _ = status.try_set(RunStatus::Running { stage, fraction });
+                    }
+                }
+                JobEvent::Chunk(_) => {}
+                JobEvent::Done(answer) => {
+                    let next = output(answer)
+                        .map_or_else(|| RunStatus::Failed(ANOTHER_ANSWER.into()), RunStatus::Done);
+                    let current = current.clone();
+                    // The redraw the output starts runs in a task of its own.
+                    next_task(move || {
+                        if current() {
+                            let _ = status.try_set(next);
+                        }
+                    });
+                }
+                JobEvent::Failed(message) => {
+                    let _ = status.try_set(RunStatus::Failed(message));
+                }
+            }
+        });
+        if let Ok(mut pool_jobs) = self.pool_jobs.lock() {
+            *pool_jobs = vec![job];
+        }
+    }
+}
+
 impl Runner<Vec<Arc<RunResult>>> {
     /// Runs `specs` in the worker pool, replacing anything running: each spec a job of its own,
     /// so independent runs compute at once on different workers, each starting from the `known`
     /// calibration of its teach cut if there is one. The status shows their mean progress; the
     /// output is the runs in `specs`' order, published in a task of its own once all are done
     /// (the first failure fails the whole and cancels the rest).
+    ///
+    /// While they compute, [`Runner::preview`] holds the runs so far as the workers stream them
+    /// (in `specs`' order, up to the first that has nothing yet): the first piece at once, then
+    /// every [`PREVIEW_EVERY_MS`], each in a task of its own; once all are done, the runs.
     pub fn start_in_workers(&self, specs: Vec<RunSpec>, known: Vec<(TeachKey, Calibration)>) {
         let generation = self.generation.fetch_add(1, Ordering::SeqCst) + 1;
         cancel_pool_jobs(&self.pool_jobs);
@@ -220,6 +297,11 @@ impl Runner<Vec<Arc<RunResult>>> {
         let fractions = std::rc::Rc::new(RefCell::new(vec![0.0; count]));
         let results = std::rc::Rc::new(RefCell::new(vec![None::<Arc<RunResult>>; count]));
         let progress_at_ms = std::rc::Rc::new(RefCell::new(f64::NEG_INFINITY));
+        let streams = Rc::new(RefCell::new(Streams {
+            runs: vec![None; count],
+            previewed_at_ms: f64::NEG_INFINITY,
+            preview_due: false,
+        }));
         let mut jobs = Vec::with_capacity(count);
         for (index, spec) in specs.into_iter().enumerate() {
             let (status, runner) = (self.status, self.clone());
@@ -227,11 +309,35 @@ impl Runner<Vec<Arc<RunResult>>> {
             let progress_at_ms = progress_at_ms.clone();
             let generations = self.generation.clone();
             let current = move || generations.load(Ordering::SeqCst) == generation;
-            let job = pool::submit(vec![spec], &known, move |event| {
+            let (streams, preview) = (streams.clone(), self.preview);
+            let spec_streamed = spec.clone();
+            let request = JobRequest::Runs(RunRequest::new(vec![spec], &known));
+            let job = pool::submit(request, move |event| {
                 if !current() {
                     return;
                 }
                 match event {
+                    JobEvent::Chunk(chunk) => {
+                        let outcome = streams.borrow_mut().receive(index, &spec_streamed, chunk);
+                        match outcome {
+                            Err(message) => {
+                                runner.cancel();
+                                let _ = status.try_set(RunStatus::Failed(message));
+                            }
+                            Ok(true) => {
+                                let (streams, results) = (streams.clone(), results.clone());
+                                let current = current.clone();
+                                // The redraw a preview starts runs in a task of its own.
+                                next_task(move || {
+                                    if current() {
+                                        let so_far = streams.borrow_mut().so_far(&results.borrow());
+                                        let _ = preview.try_set(Some(so_far));
+                                    }
+                                });
+                            }
+                            Ok(false) => {}
+                        }
+                    }
                     JobEvent::Progress(p) => {
                         fractions.borrow_mut()[index] = p.fraction;
                         // At most every PROGRESS_EVERY_MS, as for a sliced job.
@@ -241,7 +347,11 @@ impl Runner<Vec<Arc<RunResult>>> {
                             let _ = status.try_set(stage(&fractions.borrow()));
                         }
                     }
-                    JobEvent::Done(mut runs) => {
+                    JobEvent::Done(Answer::References(_)) => {
+                        runner.cancel();
+                        let _ = status.try_set(RunStatus::Failed(ANOTHER_ANSWER.into()));
+                    }
+                    JobEvent::Done(Answer::Runs(mut runs)) => {
                         results.borrow_mut()[index] = runs.pop();
                         fractions.borrow_mut()[index] = 1.0;
                         let all: Option<Vec<_>> = results.borrow().iter().cloned().collect();
@@ -251,6 +361,8 @@ impl Runner<Vec<Arc<RunResult>>> {
                                 // The redraw the output starts runs in a task of its own.
                                 next_task(move || {
                                     if current() {
+                                        // The finished runs replace what was streamed of them.
+                                        let _ = preview.try_set(Some(all.clone()));
                                         let _ = status.try_set(RunStatus::Done(all));
                                     }
                                 });
@@ -271,6 +383,49 @@ impl Runner<Vec<Arc<RunResult>>> {
         if let Ok(mut pool_jobs) = self.pool_jobs.lock() {
             *pool_jobs = jobs;
         }
+    }
+}
+
+/// What the workers of [`Runner::start_in_workers`] have streamed of their runs.
+struct Streams {
+    /// Each run's pieces so far, in the specs' order.
+    runs: Vec<Option<StreamedRun>>,
+    previewed_at_ms: f64,
+    /// A preview has been asked for and not yet made.
+    preview_due: bool,
+}
+
+impl Streams {
+    /// Adds `chunk` to run `index` (of `spec`); true if a preview is due now and none is
+    /// pending (the first piece at once, then every [`PREVIEW_EVERY_MS`]).
+    fn receive(&mut self, index: usize, spec: &RunSpec, chunk: TraceChunk) -> Result<bool, String> {
+        let Some(slot) = self.runs.get_mut(index) else {
+            return Ok(false);
+        };
+        match slot {
+            Some(run) => run.append(chunk)?,
+            None => *slot = Some(StreamedRun::start(spec.clone(), chunk)?),
+        }
+        let due = !self.preview_due && now_ms() - self.previewed_at_ms >= PREVIEW_EVERY_MS;
+        if due {
+            self.preview_due = true;
+        }
+        Ok(due)
+    }
+
+    /// The runs so far, in order up to the first with nothing yet: each finished one as
+    /// `finished` holds it, else what has been streamed of it.
+    fn so_far(&mut self, finished: &[Option<Arc<RunResult>>]) -> Vec<Arc<RunResult>> {
+        self.preview_due = false;
+        self.previewed_at_ms = now_ms();
+        self.runs
+            .iter()
+            .zip(finished)
+            .map_while(|(streamed, done)| {
+                done.clone()
+                    .or_else(|| streamed.as_ref().map(|s| Arc::new(s.so_far())))
+            })
+            .collect()
     }
 }
 

@@ -3,18 +3,20 @@
 //! under the limit), which take three to five runs (on the teach cut of the run that asked). They depend on the scenario, not on the
 //! controller, so they run in the background after a result is shown, once per scenario, and
 //! the answers of the last few scenarios are kept: retuning a controller never waits for them.
+//! The search runs in a computation worker ([`super::pool`]), beside the run's own.
 
 use std::sync::{Arc, OnceLock};
 
 use leptos::prelude::*;
 
 use crate::closed_loop::definition::RunSpec;
+use crate::closed_loop::lab::preset_plan;
 use crate::closed_loop::lab::{RunResult, TeachKey};
 use crate::closed_loop::precomputed::shipped_references;
-use crate::closed_loop::references::{
-    apply_references, fixed_feed_spec, ReferenceSearch, References, ScenarioKey,
-};
+use crate::closed_loop::references::{apply_references, fixed_feed_spec, References, ScenarioKey};
+use crate::closed_loop::transfer::{JobRequest, ReferenceRequest};
 use crate::estimation::estimator::Calibration;
+use crate::web::components::pool::Answer;
 use crate::web::components::recent;
 use crate::web::components::run_view::NamedRun;
 use crate::web::components::runner::{RunProgress, RunStatus, Runner};
@@ -112,18 +114,23 @@ impl Savings {
             (Ok(a), Ok(b)) => a == b,
             _ => false,
         };
-        let search = match calibration {
-            Some(c) if same_teach_cut => ReferenceSearch::calibrated(&scenario, c.clone()),
-            _ => ReferenceSearch::new(&scenario),
-        };
-        match search {
-            Ok(search) => {
-                self.started.set_value(Some(key));
-                self.runner.start(search);
-            }
-            // The run itself reports what is wrong with the spec.
-            Err(_) => self.runner.cancel(),
+        // The run itself reports what is wrong with the spec.
+        if preset_plan(&scenario).is_err() {
+            self.runner.cancel();
+            return;
         }
+        let request = ReferenceRequest {
+            scenario,
+            calibration: calibration.filter(|_| same_teach_cut).cloned(),
+        };
+        self.started.set_value(Some(key));
+        self.runner.start_in_worker(
+            JobRequest::References(Box::new(request)),
+            |answer| match answer {
+                Answer::References(found) => Some(found),
+                Answer::Runs(_) => None,
+            },
+        );
     }
 
     /// Stops a search for another scenario than `spec`'s, so it does not slow the new run.

@@ -1,7 +1,7 @@
 //! Tune: teach-in (the chosen scenarios' simulated teach cuts, or a saved calibration file), a
-//! grid sweep or a Nelder–Mead search over a controller's parameters across scenarios, sliced
-//! between frames (`tuning::TuningWork`); the table, the heat map of a two-parameter sweep and
-//! the chart of the Pareto front fill in when it is done. Every field is a row of the tuning's
+//! grid sweep or a Nelder–Mead search over a controller's parameters across scenarios, its runs
+//! in the computation workers, several at once (`tuning::TuningPlan`); the table, the heat map of
+//! a two-parameter sweep and the chart of the Pareto front fill in when it is done. Every field is a row of the tuning's
 //! table ([`crate::tuning::settings`]), as `cutlab tune`'s options are.
 //!
 //! | file | panel |
@@ -11,11 +11,13 @@
 //! | `params.rs` | the controller and the parameters tuned |
 //! | `method.rs` | search or sweep, and the objective's weights |
 //! | `results.rs` | the proposals, the best evaluation, the trade-off, the heat map, the evaluations |
+//! | [`in_workers`] | the tuning's runs in the computation workers, several at once |
 //! | [`params`] | the controller tuned and its parameters with their bounds |
 //! | [`method`] | how the parameters are tried: Nelder–Mead or a grid |
 //! | [`teach_in`] | the scenarios tuned, and the teach-in |
 //! | [`results`] | what a tuning and a teach-in found |
 
+mod in_workers;
 mod method;
 mod params;
 mod results;
@@ -24,15 +26,17 @@ mod teach_in;
 use leptos::prelude::*;
 
 use crate::closed_loop::definition::{preset_controller, RunSpec};
+use crate::closed_loop::lab::TeachKey;
 use crate::control::registry::ControllerKind;
 use crate::input::table::{self, Table};
 use crate::plant::Preset;
 use crate::tuning::nelder_mead::NelderMead;
 use crate::tuning::settings::{parse_objective, TuneSetting};
-use crate::tuning::{ParamRange, TeachIn, Tuned, TuningMode, TuningProblem, TuningWork};
+use crate::tuning::{ParamRange, TeachIn, Tuned, TuningMode, TuningPlan, TuningProblem};
 use crate::web::components::page::PageShell;
 use crate::web::components::runner::{RunProgress, Runner};
 use crate::web::components::table_form::TableForm;
+use in_workers::start_tuning;
 use method::{method_errors, MethodPanel};
 use params::{ParamRow, ParamsPanel};
 use results::{TeachInTable, TuningResults};
@@ -131,15 +135,22 @@ pub fn TunePage() -> impl IntoView {
             scenarios: presets.iter().map(|&p| RunSpec::new(p, k)).collect(),
             objective,
         };
-        match TuningWork::new(problem, tuning_mode) {
-            Ok(work) => {
+        let teach_keys = problem
+            .scenarios
+            .iter()
+            .filter_map(|s| TeachKey::of(s).ok())
+            .collect();
+        match TuningPlan::new(problem, tuning_mode) {
+            Ok(plan) => {
                 set_form_error.set(None);
                 let steps = match tuning_mode {
                     TuningMode::Sweep(n) => n,
                     TuningMode::Search(_) => 0,
                 };
                 asked.set(Some((params, steps, first, k)));
-                runner_for_start.start(work);
+                // Each run of an evaluation in a computation worker of its own, several at once.
+                let search = matches!(tuning_mode, TuningMode::Search(_));
+                start_tuning(&runner_for_start, plan, teach_keys, search);
             }
             Err(e) => set_form_error.set(Some(e.to_string())),
         }
