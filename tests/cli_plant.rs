@@ -278,7 +278,7 @@ fn learn_fits_paper_004s_network_on_a_presets_trial_cuts_and_refuses_what_it_can
         .unwrap()
         .unwrap();
     let from_force = learn(&cuts.measured, PowerLawReading::USED, cuts.material).unwrap();
-    assert_eq!(v["cuts_measured"].as_array().unwrap().len(), 10);
+    assert_eq!(v["cuts"].as_array().unwrap().len(), 10);
     let feed = v["from_force"]["learned"]
         .as_array()
         .unwrap()

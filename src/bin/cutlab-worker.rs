@@ -27,8 +27,8 @@ fn main() {
 #[cfg(target_arch = "wasm32")]
 mod worker {
     use cutlab::closed_loop::transfer::{
-        references_to_json, JobRequest, ReferenceRequest, RunParts, RunRequest, TraceChunk,
-        TraceStream,
+        learning_to_json, references_to_json, JobRequest, LearningRequest, ReferenceRequest,
+        RunParts, RunRequest, TraceChunk, TraceStream,
     };
     use cutlab::work::Work;
     use js_sys::{Array, Float64Array, Object, Reflect};
@@ -84,6 +84,27 @@ mod worker {
         match JobRequest::from_json(json)? {
             JobRequest::Runs(request) => run_loops(scope, job, request),
             JobRequest::References(request) => find_references(scope, job, *request),
+            JobRequest::Learning(request) => learn_network(scope, job, &request),
+        }
+    }
+
+    /// Learns paper 004's network on a preset's trial cuts and posts it (a few closed-loop
+    /// runs, so no progress between them).
+    fn learn_network(
+        scope: &DedicatedWorkerGlobalScope,
+        job: f64,
+        request: &LearningRequest,
+    ) -> Result<(), String> {
+        let learning = learning_to_json(&request.learn()?)?;
+        let fields = [
+            ("kind", "done".into()),
+            ("job", job.into()),
+            ("learning", learning.into()),
+        ];
+        if post(scope, &fields, None) {
+            Ok(())
+        } else {
+            Err("the worker could not send the learning".into())
         }
     }
 

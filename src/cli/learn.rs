@@ -13,7 +13,7 @@ use super::{write_json, CliError, Io};
 use crate::closed_loop::trial_cuts::{
     learn_on_preset, LearningError, PresetLearning, DEFAULT_TRIAL_FEEDS_PCT,
 };
-use crate::estimation::power_law_fit::{LearnError, TrialCut};
+use crate::estimation::power_law_fit::LearnError;
 use crate::input::{parse_number, readable};
 use crate::plant::Preset;
 
@@ -55,10 +55,7 @@ const FEED_RANGE_PCT: (f64, f64) = (10.0, 255.0);
 /// What `--json` prints.
 #[derive(Serialize)]
 struct LearnReport<'a> {
-    scenario: &'static str,
     feeds_pct: &'a [f64],
-    cuts_measured: &'a [TrialCut],
-    cuts_estimated: &'a [TrialCut],
     #[serde(flatten)]
     learning: &'a PresetLearning,
 }
@@ -87,20 +84,19 @@ pub fn run(args: LearnArgs, io: &mut Io<'_>) -> Result<(), CliError> {
         _ => CliError::new(e.to_string()),
     })?;
     let PresetLearning {
+        preset: _,
         cuts,
+        material,
         from_force,
         from_estimate,
         mechanistic,
     } = &learning;
-    let material = cuts.material;
+    let material = *material;
     if args.json {
         return write_json(
             io.stdout,
             &LearnReport {
-                scenario: preset.name(),
                 feeds_pct: &feeds_pct,
-                cuts_measured: &cuts.measured,
-                cuts_estimated: &cuts.estimated,
                 learning: &learning,
             },
         );
@@ -111,7 +107,7 @@ pub fn run(args: LearnArgs, io: &mut Io<'_>) -> Result<(), CliError> {
         "Paper 004's network learned on {}: {} trial cuts (each section of constant depth, at {} % \
          of the programmed feed), published weights: {}",
         preset.name(),
-        cuts.measured.len(),
+        cuts.len(),
         feeds_pct
             .iter()
             .map(|p| readable(*p))
@@ -171,16 +167,16 @@ pub fn run(args: LearnArgs, io: &mut Io<'_>) -> Result<(), CliError> {
         "\n{:>4} {:>8} {:>9} {:>8} {:>10} {:>10} {:>11} {:>11}",
         "cut", "a_e mm", "f mm", "a_p mm", "force N", "estimate N", "residual %", "est. res. %"
     );
-    for (k, (measured, estimated)) in cuts.measured.iter().zip(&cuts.estimated).enumerate() {
+    for (k, cut) in cuts.iter().enumerate() {
         let _ = writeln!(
             out,
             "{:>4} {:>8.2} {:>9.4} {:>8.2} {:>10.1} {:>10.1} {:>11.2} {:>11.2}",
             k + 1,
-            measured.inputs.radial_width_mm,
-            measured.inputs.feed_per_tooth_mm,
-            measured.inputs.axial_depth_mm,
-            measured.force_n,
-            estimated.force_n,
+            cut.radial_width_mm,
+            cut.feed_per_tooth_mm,
+            cut.axial_depth_mm,
+            cut.force_n,
+            cut.estimate_n,
             from_force.residuals_pct.get(k).copied().unwrap_or(f64::NAN),
             from_estimate
                 .residuals_pct

@@ -20,7 +20,9 @@ use super::metrics::compute;
 use super::references::{ReferenceSearch, References};
 use super::settings::LoopSettings;
 use super::trace::{Trace, TraceRow};
+use super::trial_cuts::{learn_on_preset, PresetLearning};
 use crate::estimation::estimator::Calibration;
+use crate::plant::Preset;
 use crate::safety::SafetyEvent;
 
 /// What a page asks a worker to do: one variant per kind of job, each with its own answer.
@@ -33,6 +35,36 @@ pub enum JobRequest {
     /// The fixed-feed reference runs of a scenario's savings, answered by their [`References`]
     /// ([`references_to_json`]).
     References(Box<ReferenceRequest>),
+    /// Paper 004's network learned on a preset's trial cuts, answered by its
+    /// [`PresetLearning`] ([`learning_to_json`]).
+    Learning(LearningRequest),
+}
+
+/// The trial cuts to learn paper 004's network on: a preset's program at fixed feeds
+/// ([`learn_on_preset`]).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct LearningRequest {
+    /// The preset whose program makes the cuts.
+    pub preset: Preset,
+    /// The feeds, percent of the programmed feed.
+    pub feeds_pct: Vec<f64>,
+}
+
+impl LearningRequest {
+    /// Learns the network, as `cutlab learn` does.
+    pub fn learn(&self) -> Result<PresetLearning, String> {
+        learn_on_preset(self.preset, &self.feeds_pct).map_err(|e| e.to_string())
+    }
+}
+
+/// A learning as JSON, for the worker's answer (every number in it is finite).
+pub fn learning_to_json(learning: &PresetLearning) -> Result<String, String> {
+    serde_json::to_string(learning).map_err(|e| format!("the learning could not be sent: {e}"))
+}
+
+/// A learning read from a worker's answer.
+pub fn learning_from_json(json: &str) -> Result<PresetLearning, String> {
+    serde_json::from_str(json).map_err(|e| format!("the worker's learning could not be read: {e}"))
 }
 
 impl JobRequest {
@@ -461,6 +493,24 @@ fn row_from(v: &[f64]) -> TraceRow {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_learning_crosses_to_the_page_unchanged() {
+        let request = LearningRequest {
+            preset: crate::plant::Preset::KimStepDoc,
+            feeds_pct: vec![80.0, 100.0],
+        };
+        let request_json = JobRequest::Learning(request.clone()).to_json().unwrap();
+        assert_eq!(
+            JobRequest::from_json(&request_json).unwrap(),
+            JobRequest::Learning(request.clone())
+        );
+        let learning = request.learn().unwrap();
+        assert_eq!(learning.cuts.len(), 10);
+        let back = learning_from_json(&learning_to_json(&learning).unwrap()).unwrap();
+        assert_eq!(back, learning);
+        assert!(learning_from_json("{\"preset\": 3}").is_err());
+    }
     use crate::closed_loop::lab::simulate;
     use crate::control::registry::ControllerKind;
     use crate::plant::Preset;

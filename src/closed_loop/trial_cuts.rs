@@ -126,13 +126,32 @@ pub fn trial_cuts(trace: &Trace, teeth: u32, diameter_mm: f64, force: TrialForce
     cuts
 }
 
+/// One trial cut as the learning shows it: its conditions and both forces.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct LearningCut {
+    /// a_e, mm.
+    pub radial_width_mm: f64,
+    /// f, mm per tooth.
+    pub feed_per_tooth_mm: f64,
+    /// a_p, mm.
+    pub axial_depth_mm: f64,
+    /// The force on the tool, N.
+    pub force_n: f64,
+    /// The lab's current-based estimate of it, N.
+    pub estimate_n: f64,
+}
+
 /// Paper 004's network learned on a preset's trial cuts, from the force and from the estimate,
-/// beside the mechanistic model's local exponents: what `cutlab learn` prints.
-#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+/// beside the mechanistic model's local exponents: what `cutlab learn` prints and the Machine
+/// page shows.
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct PresetLearning {
-    /// The trial cuts.
-    #[serde(skip)]
-    pub cuts: PresetTrialCuts,
+    /// The preset whose program made the cuts.
+    pub preset: Preset,
+    /// The trial cuts, in the order of the fits' residuals.
+    pub cuts: Vec<LearningCut>,
+    /// The published weights the learned ones are compared with.
+    pub material: PowerLawMaterial,
     /// Learned on the force on the tool.
     pub from_force: LearnedPowerLaw,
     /// Learned on the lab's current-based estimate.
@@ -198,7 +217,7 @@ pub fn learn_on_preset(preset: Preset, feeds_pct: &[f64]) -> Result<PresetLearni
         Some(cut) => from_force
             .learned
             .iter()
-            .map(|e| {
+            .filter_map(|e| {
                 let (lo, hi) = cuts
                     .measured
                     .iter()
@@ -209,13 +228,26 @@ pub fn learn_on_preset(preset: Preset, feeds_pct: &[f64]) -> Result<PresetLearni
                     .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| {
                         (lo.min(v), hi.max(v))
                     });
-                (e.input, lo, hi)
+                (lo <= hi).then_some((e.input, lo, hi))
             })
             .collect(),
         None => Vec::new(),
     };
     Ok(PresetLearning {
-        cuts,
+        preset,
+        cuts: cuts
+            .measured
+            .iter()
+            .zip(&cuts.estimated)
+            .map(|(m, e)| LearningCut {
+                radial_width_mm: m.inputs.radial_width_mm,
+                feed_per_tooth_mm: m.inputs.feed_per_tooth_mm,
+                axial_depth_mm: m.inputs.axial_depth_mm,
+                force_n: m.force_n,
+                estimate_n: e.force_n,
+            })
+            .collect(),
+        material,
         from_force,
         from_estimate,
         mechanistic,

@@ -44,7 +44,7 @@ pub struct TrialCut {
 }
 
 /// One exponent of the learned network.
-#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct LearnedExponent {
     /// The input it is the exponent of.
     pub input: PowerLawInput,
@@ -57,7 +57,7 @@ pub struct LearnedExponent {
 }
 
 /// The network learned from a set of trial cuts.
-#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct LearnedPowerLaw {
     /// How the published columns were read (which input each exponent belongs to).
     pub reading: PowerLawReading,

@@ -1,7 +1,8 @@
 // The Machine page: a preset's path, depth profile, forces and currents; the brake bench's line.
 import { test, before, after } from 'node:test';
 import assert from 'node:assert/strict';
-import { serveDist, launchBrowser, openLab, screenshot } from './harness.mjs';
+import { execFileSync } from 'node:child_process';
+import { serveDist, launchBrowser, openLab, screenshot, nativeCli } from './harness.mjs';
 
 let server;
 let browser;
@@ -50,6 +51,32 @@ test('the brake bench gives paper 000\'s linear RMS-current-versus-load line wit
   assert.equal(labels.length, Number(steps));
   assert.equal(new Set(labels).size, labels.length, `one series per load: ${labels}`);
   assert.ok(labels.includes('0.00 N·m'), `the unloaded step: ${labels}`);
+  assert.deepEqual(problems, []);
+  await context.close();
+});
+
+test('paper 004\'s network learned from trial cuts in a worker equals the native cutlab learn', async () => {
+  const { page, problems, context } = await openLab(browser, server.url, '#/plant?preset=kim-step-doc');
+  const panel = page.getByRole('region', { name: "Paper 004's network, learned on this machine" });
+  await panel.getByRole('button', { name: 'Learn from trial cuts' }).click();
+  const exponents = panel.getByRole('table', { name: /Learned exponents/ });
+  await exponents.waitFor({ timeout: 120_000 });
+  const native = JSON.parse(execFileSync(nativeCli(), ['learn', '--scenario', 'kim-step-doc', '--json']).toString());
+  const shown = (e) => `${e.exponent.toFixed(2)} ± ${e.uncertainty.toFixed(2)}`;
+  for (const [k, learned] of native.from_force.learned.entries()) {
+    const symbol = { 'feed-per-tooth': 'f', 'axial-depth': 'a_p', 'radial-width': 'a_e' }[learned.input];
+    const row = exponents.getByRole('row').filter({ has: page.getByRole('rowheader', { name: symbol, exact: true }) });
+    const cells = await row.getByRole('cell').allTextContents();
+    assert.equal(cells[0], shown(learned), symbol);
+    assert.equal(cells[1], shown(native.from_estimate.learned[k]), symbol);
+  }
+  const residuals = panel.getByRole('table', { name: 'Trial cuts and residuals' });
+  assert.equal(await residuals.getByRole('row').count(), native.cuts.length + 1);
+  // Trial cuts need a cutter: the brake bench has none.
+  await page.getByLabel('Preset').selectOption('wang-brake-bench');
+  await panel.getByText('Trial cuts need a cutter: choose a mill preset.').waitFor();
+  assert.equal(await panel.getByRole('button', { name: 'Learn from trial cuts' }).isDisabled(), true);
+  assert.equal(await exponents.count(), 0);
   assert.deepEqual(problems, []);
   await context.close();
 });

@@ -27,7 +27,10 @@ use web_sys::{ErrorEvent, MessageEvent, Worker};
 use crate::closed_loop::definition::RunSpec;
 use crate::closed_loop::lab::RunResult;
 use crate::closed_loop::references::References;
-use crate::closed_loop::transfer::{references_from_json, JobRequest, RunParts, TraceChunk};
+use crate::closed_loop::transfer::{
+    learning_from_json, references_from_json, JobRequest, RunParts, TraceChunk,
+};
+use crate::closed_loop::trial_cuts::PresetLearning;
 use crate::work::Progress;
 
 /// The most workers the pool starts, whatever the browser reports: each holds a module and its
@@ -56,6 +59,8 @@ pub enum Answer {
     Runs(Vec<Arc<RunResult>>),
     /// A scenario's references.
     References(References),
+    /// Paper 004's network learned on a preset's trial cuts.
+    Learning(Box<PresetLearning>),
 }
 
 /// What a job's answer is rebuilt from: for runs, their specs.
@@ -63,6 +68,7 @@ pub enum Answer {
 enum Expecting {
     Runs(Vec<RunSpec>),
     References,
+    Learning,
 }
 
 /// A job given to the pool.
@@ -129,6 +135,7 @@ pub fn submit(request: JobRequest, mut listener: impl FnMut(JobEvent) + 'static)
     let expecting = match &request {
         JobRequest::Runs(runs) => Expecting::Runs(runs.specs.clone()),
         JobRequest::References(_) => Expecting::References,
+        JobRequest::Learning(_) => Expecting::Learning,
     };
     match request.to_json() {
         Ok(request_json) => {
@@ -338,6 +345,10 @@ fn on_message(index: usize, serial: u64, data: &JsValue) {
                 Expecting::References => {
                     references_from_json(&field("references").as_string().unwrap_or_default())
                         .map(Answer::References)
+                }
+                Expecting::Learning => {
+                    learning_from_json(&field("learning").as_string().unwrap_or_default())
+                        .map(|l| Answer::Learning(Box::new(l)))
                 }
             };
             finish(index, id, answer);

@@ -347,7 +347,7 @@ impl Runner<Vec<Arc<RunResult>>> {
                             let _ = status.try_set(stage(&fractions.borrow()));
                         }
                     }
-                    JobEvent::Done(Answer::References(_)) => {
+                    JobEvent::Done(Answer::References(_) | Answer::Learning(_)) => {
                         runner.cancel();
                         let _ = status.try_set(RunStatus::Failed(ANOTHER_ANSWER.into()));
                     }

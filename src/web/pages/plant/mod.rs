@@ -1,6 +1,14 @@
 //! Plant: the simulated machine on its own — a preset's tool path and depth profile, and its
 //! forces, torque and motor currents at a fixed override; for paper 000's brake bench, the
-//! current spectrum at each load step and the RMS-current-versus-load line (Fig. 9 and 11).
+//! current spectrum at each load step and the RMS-current-versus-load line (Fig. 9 and 11); and
+//! paper 004's network learned on the machine's trial cuts.
+//!
+//! | file | what |
+//! |---|---|
+//! | `mod.rs` | the page: the preset, its open-loop run and charts |
+//! | [`learning`] | paper 004's network learned from trial cuts, with its residuals |
+
+mod learning;
 
 use std::ops::Range;
 use std::sync::Arc;
@@ -19,6 +27,8 @@ use crate::web::components::runner::{Debounce, RunProgress, RunStatus, Runner};
 use crate::web::components::table_form::{SettingField, TableForm};
 use crate::web::components::work_job::Shared;
 use crate::web::route::{query_params, replace_query, Page};
+
+use learning::LearningPanel;
 
 /// Wait after the last edit before re-running.
 const RERUN_DELAY: Duration = Duration::from_millis(300);
@@ -394,6 +404,7 @@ pub fn PlantPage() -> impl IntoView {
                     }}
                 </div>
             </div>
+            <LearningPanel preset=preset />
         </PageShell>
     }
 }
