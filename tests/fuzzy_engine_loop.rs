@@ -493,3 +493,18 @@ fn an_engine_from_fuzzylites_corpus_runs_as_the_controller() {
         .zip(&fixed.trace.rows)
         .any(|(a, b)| (a.override_pct - b.override_pct).abs() > 1.0));
 }
+
+/// The browser runs Simulate's and Compare's loops in computation workers; the engine travels
+/// inside the run's definition, so a worker runs the engine the page holds.
+#[test]
+fn a_run_with_an_imported_engine_reaches_a_computation_worker_whole() {
+    use cutlab::closed_loop::transfer::RunRequest;
+    let spec = engine_spec(Preset::KimStepDoc, SHIFTED);
+    let request = RunRequest::new(vec![spec.clone()], &[]);
+    let back = RunRequest::from_json(&request.to_json().unwrap()).unwrap();
+    assert_eq!(
+        back.specs[0].controller.engine_fll(),
+        spec.controller.engine_fll()
+    );
+    assert_eq!(back, request);
+}

@@ -76,7 +76,7 @@ test('FLL exports, a broken FLL is explained by line, and a run supplies a momen
   ]);
   const fll = await readFile(await download.path(), 'utf8');
   assert.match(fll, /RuleBlock: rules/);
-  const text = page.getByLabel('FLL text');
+  const text = page.getByLabel('Engine text (FLL or FIS)');
   await text.fill(fll.replace('term: PB Triangle 4 6 6', 'term: PB Zigzag 4 6 6'));
   await page.getByRole('button', { name: 'Import FLL' }).click();
   await page.getByText(/The FLL could not be read: line \d+: term PB: shape Zigzag is not one of fuzzylite's terms/).waitFor();
