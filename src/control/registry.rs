@@ -464,9 +464,14 @@ impl ControllerConfig {
             .parse(text)
             .map_err(|e| ParamError(format!("engine: {e}")))?;
         let fll_text = fll::write(&engine);
-        // The shape is the controller's to check; building it once here means every later build
-        // of this configuration succeeds.
-        FuzzyController::from_engine(engine, fuzzy_params(&self.values))
+        // What is kept is the FLL, so it is the FLL that must read back and build: then every
+        // later build of this configuration succeeds. The shape is the controller's to check.
+        let written = fll::parse(&fll_text).map_err(|e| {
+            ParamError(format!(
+                "engine: written as FLL, it does not read back: {e}"
+            ))
+        })?;
+        FuzzyController::from_engine(written, fuzzy_params(&self.values))
             .map_err(|e| ParamError(format!("engine: {e}")))?;
         self.engine_fll = Some(fll_text);
         Ok(())
