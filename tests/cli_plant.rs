@@ -258,3 +258,84 @@ fn force_refuses_absurd_cuts_and_overflow() {
         assert!(e.starts_with(expected), "{changes:?}: {e}");
     }
 }
+
+#[test]
+fn learn_fits_paper_004s_network_on_a_presets_trial_cuts_and_refuses_what_it_cannot() {
+    use cutlab::closed_loop::trial_cuts::preset_trial_cuts;
+    use cutlab::estimation::power_law_fit::learn;
+    use cutlab::plant::power_law::PowerLawReading;
+
+    let v = json(&[
+        "learn",
+        "--scenario",
+        "kim-step-doc",
+        "--feeds-pct",
+        "70,100",
+        "--json",
+    ]);
+    // The same cuts and fit as the library's, so the command adds nothing of its own.
+    let cuts = preset_trial_cuts(Preset::KimStepDoc, &[70.0, 100.0])
+        .unwrap()
+        .unwrap();
+    let from_force = learn(&cuts.measured, PowerLawReading::USED, cuts.material).unwrap();
+    assert_eq!(v["cuts_measured"].as_array().unwrap().len(), 10);
+    let feed = v["from_force"]["learned"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|e| e["input"] == "feed-per-tooth")
+        .unwrap();
+    let expected = from_force.learned[0].exponent;
+    assert!((feed["exponent"].as_f64().unwrap() - expected).abs() < 1e-12);
+    assert_eq!(
+        v["from_estimate"]["residuals_pct"]
+            .as_array()
+            .unwrap()
+            .len(),
+        10
+    );
+
+    let (text, out) = cutlab(&[
+        "learn",
+        "--scenario",
+        "kim-step-doc",
+        "--feeds-pct",
+        "80,100",
+    ]);
+    assert!(text.is_ok(), "{text:?}");
+    for words in [
+        "from the force",
+        "from the estimate",
+        "published",
+        "mechanistic",
+        "residual",
+    ] {
+        assert!(out.contains(words), "{words:?} in\n{out}");
+    }
+
+    for (args, message) in [
+        (
+            vec!["learn", "--scenario", "liu-current-step"],
+            "liu-current-step has no cutter",
+        ),
+        (
+            vec!["learn", "--scenario", "kim-step-doc", "--feeds-pct", "5"],
+            "--feeds-pct: 5 % is outside 10–255 %",
+        ),
+        (
+            vec!["learn", "--scenario", "kim-step-doc", "--feeds-pct", "80,x"],
+            "--feeds-pct:",
+        ),
+        (vec!["learn", "--scenario", "nowhere"], "unknown preset"),
+        (
+            // One depth at three feeds: four cuts are needed for the feed's exponent and the bias.
+            vec!["learn", "--scenario", "maneerat-doc-2"],
+            "give at least 4 (each feed of --feeds-pct cuts every depth of the program once",
+        ),
+        (vec!["learn"], "--scenario"),
+    ] {
+        let (result, _) = cutlab(&args);
+        let error = result.unwrap_err();
+        assert!(error.contains(message), "{args:?}: {error}");
+    }
+}

@@ -5,6 +5,9 @@
 //! Reads `src/` as text: every `crate::…`, `super::…` and (in a module file) child path outside
 //! comments, strings and the `#[cfg(test)]` tests at the bottom of a file is an edge from the
 //! file's module to the module the path names. Doc links and tests may point anywhere.
+//!
+//! And two different things never share a name: no type, enum or trait is declared in two
+//! modules of `src/` (tests apart), so a name read anywhere means one thing.
 // Test code: unwrapping and panicking on a broken expectation is the point.
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
 // Reads the source tree from the file system: native only.
@@ -430,4 +433,82 @@ fn every_module_directory_lists_its_files() {
         }
     }
     assert!(missing.is_empty(), "module tables:\n{}", missing.join("\n"));
+}
+
+/// The types, enums, traits and type aliases a file's code declares, with the line of each.
+/// Associated types (`type Output = …` in an `impl`, `type Setting: Table` in a trait) are not
+/// declarations of their own: a type alias counts only when public or at the file's top level.
+fn declared_types(code: &str) -> Vec<(String, usize)> {
+    let mut found = Vec::new();
+    for (number, line) in code.lines().enumerate() {
+        let trimmed = line.trim_start();
+        let indented = trimmed.len() != line.len();
+        let mut words = trimmed.split_whitespace().peekable();
+        let mut public = false;
+        while let Some(&word) = words.peek() {
+            if word.starts_with("pub") {
+                public = true;
+                words.next();
+            } else {
+                break;
+            }
+        }
+        let Some(keyword) = words.next() else {
+            continue;
+        };
+        let counts = match keyword {
+            "struct" | "enum" | "trait" | "union" => true,
+            "type" => public || !indented,
+            _ => false,
+        };
+        let Some(rest) = words.next() else { continue };
+        let declared: String = rest.chars().take_while(|&c| is_ident(c)).collect();
+        if counts && declared.starts_with(|c: char| c.is_ascii_uppercase()) {
+            found.push((declared, number + 1));
+        }
+    }
+    found
+}
+
+/// Each type name declared in more than one place, with the places.
+fn shared_type_names(known: &BTreeMap<Module, String>) -> Vec<String> {
+    let mut places: BTreeMap<String, Vec<String>> = BTreeMap::new();
+    for (module, text) in known {
+        for (declared, line) in declared_types(&code_of(text)) {
+            places
+                .entry(declared)
+                .or_default()
+                .push(format!("{}:{line}", name(module)));
+        }
+    }
+    places
+        .into_iter()
+        .filter(|(_, at)| at.len() > 1)
+        .map(|(declared, at)| format!("{declared}: {}", at.join(", ")))
+        .collect()
+}
+
+#[test]
+fn no_two_types_share_a_name() {
+    let shared = shared_type_names(&source());
+    assert!(
+        shared.is_empty(),
+        "type names declared twice (rename one, or make them one type):\n{}",
+        shared.join("\n")
+    );
+}
+
+#[test]
+fn the_name_checker_finds_a_shared_name() {
+    let mut known = BTreeMap::new();
+    known.insert(
+        vec!["a".to_string()],
+        "pub struct Fit;\nimpl Iterator for Fit {\n    type Item = u8;\n}\n".to_string(),
+    );
+    known.insert(
+        vec!["b".to_string()],
+        "pub(crate) enum Fit {}\ntrait T {\n    type Item;\n}\n#[cfg(test)]\nmod tests { struct T; }\n"
+            .to_string(),
+    );
+    assert_eq!(shared_type_names(&known), vec!["Fit: a:1, b:1".to_string()]);
 }

@@ -152,7 +152,7 @@ fn replaying_a_recorded_run_through_its_controller_gives_the_loops_decisions() {
         },
         calibration: Some(calibration.clone()),
         chip_load: settings.envelope.chip_load,
-        stiffness: settings.stiffness,
+        error_model: settings.error_model,
         ..ReplaySettings::default()
     };
     let replayed = replay(&log, &mapping, &replay_settings, &spec.controller);

@@ -7,7 +7,6 @@
 #[cfg(target_arch = "wasm32")]
 use wasm_bindgen_test::wasm_bindgen_test as test;
 
-use cutlab::closed_loop::trial_cuts::{trial_cuts, TrialForce};
 use cutlab::estimation::cut_forces::CutGeometry;
 use cutlab::estimation::power_law_fit::{
     learn, local_exponent, mechanistic_resultant_n, stepped_specimen, TrialCut,
@@ -85,45 +84,23 @@ fn trial_cuts_on_the_mechanistic_model_give_its_exponents_within_the_stated_unce
 
 #[test]
 fn learned_on_the_current_based_estimates_the_weights_move_by_little() {
-    use cutlab::closed_loop::definition::RunSpec;
-    use cutlab::closed_loop::lab::simulate;
-    use cutlab::closed_loop::settings::OperatingPoint;
-    use cutlab::control::registry::ControllerKind;
+    use cutlab::closed_loop::trial_cuts::{preset_trial_cuts, DEFAULT_TRIAL_FEEDS_PCT};
     use cutlab::plant::Preset;
 
-    let preset = Preset::KimStepDoc;
-    let scenario = preset.scenario().unwrap();
-    let (teeth, diameter_mm) = (scenario.cutter().teeth, scenario.cutter().diameter_mm);
-    let programmed =
-        OperatingPoint::of_preset(&RunSpec::new(preset, ControllerKind::Fixed)).feed_mm_min;
-    let mut truth = Vec::new();
-    let mut estimated = Vec::new();
-    for factor in [0.6, 0.8, 1.0] {
-        let mut spec = RunSpec::new(preset, ControllerKind::Fixed);
-        spec.plant.programmed_feed_mm_min = Some(programmed * factor);
-        let run = simulate(&spec).unwrap();
-        truth.extend(trial_cuts(
-            &run.trace,
-            teeth,
-            diameter_mm,
-            TrialForce::Measured,
-        ));
-        estimated.extend(trial_cuts(
-            &run.trace,
-            teeth,
-            diameter_mm,
-            TrialForce::Estimated,
-        ));
-    }
+    let cuts = preset_trial_cuts(Preset::KimStepDoc, &DEFAULT_TRIAL_FEEDS_PCT)
+        .unwrap()
+        .unwrap();
+    assert_eq!(cuts.material, PowerLawMaterial::CarbonSteel);
+    let (truth, estimated) = (&cuts.measured, &cuts.estimated);
     assert!(truth.len() >= 12, "{} sections", truth.len());
     let from_truth = learn(
-        &truth,
+        truth,
         PowerLawReading::Handbook,
         PowerLawMaterial::CarbonSteel,
     )
     .unwrap();
     let from_estimates = learn(
-        &estimated,
+        estimated,
         PowerLawReading::Handbook,
         PowerLawMaterial::CarbonSteel,
     )

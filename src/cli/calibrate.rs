@@ -216,7 +216,7 @@ struct JsonReport<'a> {
     #[serde(flatten)]
     report: &'a LogCalibration,
     /// What the log reader found wrong (damaged lines kept as gaps), by line and column.
-    log_problems: &'a [crate::log::Problem],
+    log_problems: &'a [crate::log::LineProblem],
 }
 
 /// Runs `cutlab calibrate`.

@@ -352,7 +352,7 @@ fn connect(args: &HostArgs, options: HostOptions) -> Result<Connection, CliError
 }
 
 /// The run's settings from the options, checked before anything is connected.
-struct Plan {
+struct HostPlan {
     kind: ControllerKind,
     target_n: Option<f64>,
     duration_s: Option<f64>,
@@ -360,7 +360,7 @@ struct Plan {
     options: HostOptions,
 }
 
-fn plan(args: &HostArgs) -> Result<Plan, CliError> {
+fn plan(args: &HostArgs) -> Result<HostPlan, CliError> {
     let kind: ControllerKind = required::<String>("controller", &args.controller)?
         .parse()
         .map_err(|e| CliError::new(format!("--controller: {e}")))?;
@@ -383,7 +383,7 @@ fn plan(args: &HostArgs) -> Result<Plan, CliError> {
         .as_deref()
         .map(super::read_calibration)
         .transpose()?;
-    Ok(Plan {
+    Ok(HostPlan {
         kind,
         target_n,
         duration_s,
@@ -410,7 +410,7 @@ fn controller_for(
 
 /// Connects, runs the teach cut and the loop, and makes the references: whatever happens, the
 /// outcome says what is known.
-fn host_run(args: &HostArgs, plan: Plan) -> Outcome {
+fn host_run(args: &HostArgs, plan: HostPlan) -> Outcome {
     let Connection { mut link, child } = match connect(args, plan.options) {
         Ok(c) => c,
         Err(e) => return Outcome::failed(e.0),

@@ -653,7 +653,7 @@ struct ReplayReport<'a> {
     notes: &'a [String],
     events: Vec<crate::log::replay::EventReport>,
     summary: &'a crate::log::replay::ReplaySummary,
-    log_problems: &'a [crate::log::Problem],
+    log_problems: &'a [crate::log::LineProblem],
 }
 
 fn replay(args: ReplayArgs, io: &mut Io<'_>) -> Result<(), CliError> {

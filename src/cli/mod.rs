@@ -12,6 +12,7 @@
 //! | [`controllers`], [`scenarios`] | `cutlab controllers` and `cutlab scenarios`: what the lab offers |
 //! | [`calibrate`] | `cutlab calibrate`: the current-to-force models from a log of control periods |
 //! | [`log`] | `cutlab log inspect`, `analyse`, `replay`: engineers' own logs |
+//! | [`learn`] | `cutlab learn`: paper 004's power-law network learned from trial cuts on a preset |
 //! | [`force`], [`filter`], [`spectrum`] | one cut's forces; Butterworth design and filtering; Welch spectra |
 //! | [`fuzzy`] | `cutlab fuzzy eval` and `export`: the fuzzy engine on FLL and FIS files |
 //! | [`device`], [`host`], [`protocol`] | the device emulator on stdin/stdout, the closed loop over the protocol, frames as JSON |
@@ -25,6 +26,7 @@ pub mod filter;
 pub mod force;
 pub mod fuzzy;
 pub mod host;
+pub mod learn;
 pub mod log;
 pub mod protocol;
 pub mod scenarios;
@@ -92,6 +94,9 @@ enum Command {
     /// Run the closed loop against a device over the feed-override protocol
     #[command(long_about = host::ABOUT)]
     Host(host::HostArgs),
+    /// Learn paper 004's power-law network from trial cuts on a preset's simulated machine
+    #[command(long_about = learn::ABOUT)]
+    Learn(learn::LearnArgs),
     /// Read a machine's CSV log as it is: its dialect, columns and problems
     #[command(long_about = log::ABOUT)]
     Log(log::LogArgs),
@@ -128,6 +133,7 @@ pub const COMMANDS: &[CommandInfo] = &[
     CommandInfo { name: "force" },
     CommandInfo { name: "fuzzy" },
     CommandInfo { name: "host" },
+    CommandInfo { name: "learn" },
     CommandInfo { name: "log" },
     CommandInfo { name: "protocol" },
     CommandInfo { name: "scenarios" },
@@ -215,6 +221,7 @@ pub fn run(args: &[String], io: &mut Io<'_>) -> Result<(), CliError> {
         Some(Command::Force(a)) => force::run(a, io),
         Some(Command::Fuzzy(a)) => fuzzy::run(a, io),
         Some(Command::Host(a)) => host::run(a, io),
+        Some(Command::Learn(a)) => learn::run(a, io),
         Some(Command::Log(a)) => log::run(a, io),
         Some(Command::Protocol(a)) => protocol::run(a, io),
         Some(Command::Scenarios(a)) => scenarios::run(a, io),

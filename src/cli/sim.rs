@@ -8,7 +8,9 @@ use super::args::required;
 use super::{write_json, CliError, Io};
 use crate::closed_loop::config::RunConfiguration;
 use crate::closed_loop::definition::RunSpec;
-use crate::closed_loop::definition::{parse_texts, preset_controller, RunSetting, SettingKind};
+use crate::closed_loop::definition::{
+    parse_texts, preset_controller, RunSetting, SettingError, SettingKind,
+};
 use crate::closed_loop::lab::{teach_cut_only, LabRun, RunResult, TeachKey};
 use crate::closed_loop::metrics::Metrics;
 use crate::closed_loop::paper_comparisons::PAPER_COMPARISONS;
@@ -259,10 +261,7 @@ fn spec(run: &RunOptions, controller: ControllerConfig) -> Result<RunSpec, CliEr
         // The first problem, in the order the options are listed, as one line.
         let message = errors
             .first()
-            .map_or_else(String::new, |e| match e.choices() {
-                Some(choices) => format!("{}; choices: {choices}", e.for_cli()),
-                None => e.for_cli(),
-            });
+            .map_or_else(String::new, SettingError::for_cli);
         CliError::new(message)
     })
 }
@@ -335,7 +334,7 @@ enum Job<'a> {
 }
 
 /// What a job gave, its error already in words.
-enum Outcome {
+enum JobOutcome {
     References(Result<References, String>),
     Run(Box<Result<RunResult, String>>),
 }
@@ -369,7 +368,7 @@ fn run_many(
     }
     jobs.extend(named.iter().map(|(name, spec)| Job::Run(name, spec)));
     let outcomes = crate::work::parallel_map(&jobs, |job| match job {
-        Job::References => Outcome::References(match &taught {
+        Job::References => JobOutcome::References(match &taught {
             Some(calibration) => ReferenceSearch::calibrated(base, calibration.clone())
                 .and_then(|search| search.run_to_end())
                 .map_err(|e| e.to_string()),
@@ -382,7 +381,7 @@ fn run_many(
                 (_, _, Ok(_)) => LabRun::new(spec),
                 (_, _, Err(e)) => Err(e),
             };
-            Outcome::Run(Box::new(run.and_then(|run| run.run_to_end()).map_err(
+            JobOutcome::Run(Box::new(run.and_then(|run| run.run_to_end()).map_err(
                 |e| {
                     if name.is_empty() {
                         e.to_string()
@@ -397,8 +396,8 @@ fn run_many(
     let mut results = Vec::with_capacity(named.len());
     for outcome in outcomes {
         match outcome {
-            Outcome::References(r) => refs = Some(r.map_err(CliError::new)?),
-            Outcome::Run(r) => results.push((*r).map_err(CliError::new)?),
+            JobOutcome::References(r) => refs = Some(r.map_err(CliError::new)?),
+            JobOutcome::Run(r) => results.push((*r).map_err(CliError::new)?),
         }
     }
     if let Some(r) = &refs {

@@ -132,12 +132,12 @@ impl OptionRows for MethodRows {
 }
 
 /// Progress lines on stderr (nothing with --quiet).
-struct Progress {
+struct ProgressLines {
     quiet: bool,
     params: Vec<String>,
 }
 
-impl Progress {
+impl ProgressLines {
     fn line(&self, text: &str) {
         if !self.quiet {
             // Progress is a courtesy: a closed stderr must not stop the work.
@@ -283,7 +283,7 @@ pub fn run(args: TuneArgs, io: &mut Io<'_>) -> Result<(), CliError> {
         })
         .collect();
     let names: Vec<&'static str> = presets.iter().map(|p| p.name()).collect();
-    let progress = Progress {
+    let progress = ProgressLines {
         quiet: args.quiet,
         params: params.iter().map(|p| p.key.clone()).collect(),
     };
@@ -420,7 +420,7 @@ fn run_teach_in(
         spec.seed = seed;
         spec
     };
-    let progress = Progress {
+    let progress = ProgressLines {
         quiet: args.quiet,
         params: Vec::new(),
     };
@@ -448,7 +448,7 @@ fn run_teach_in(
             struct LogReport<'a> {
                 #[serde(flatten)]
                 logged: &'a crate::tuning::teach_in::LoggedTeachIn,
-                log_problems: &'a [crate::log::Problem],
+                log_problems: &'a [crate::log::LineProblem],
             }
             return write_json(
                 io.stdout,

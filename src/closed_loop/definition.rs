@@ -639,6 +639,16 @@ impl RunSetting {
         }
     }
 
+    /// The names a setting that takes names accepts, comma separated, for messages.
+    pub fn choices(self) -> Option<String> {
+        let names: Vec<&str> = match self.spec().kind {
+            SettingKind::Feedback => Feedback::ALL.iter().map(|f| f.name()).collect(),
+            SettingKind::Material => Material::ALL.iter().map(|m| m.name()).collect(),
+            _ => return None,
+        };
+        Some(names.join(", "))
+    }
+
     /// Parses what a person typed for this setting on `preset`; blank text keeps the preset's
     /// value (`Ok(None)`).
     ///
@@ -666,39 +676,36 @@ impl RunSetting {
         if text.is_empty() {
             return Ok(None);
         }
-        let problem = |problem| SettingError {
+        let problem = |problem: table::Problem| SettingError {
             setting: self,
-            problem,
+            problem: problem.into(),
+        };
+        let unknown = |what| {
+            problem(table::Problem::Unknown {
+                what,
+                text: text.to_string(),
+                choices: self.choices().unwrap_or_default(),
+            })
         };
         let value = match self.spec().kind {
-            SettingKind::Number { .. } => {
-                SettingValue::Number(parse_number(text).map_err(|m| problem(Problem::Parse(m)))?)
-            }
-            SettingKind::Count { .. } => {
-                SettingValue::Count(parse_count(text).map_err(|m| problem(Problem::Parse(m)))?)
-            }
+            SettingKind::Number { .. } => SettingValue::Number(
+                parse_number(text).map_err(|m| problem(table::Problem::Parse(m)))?,
+            ),
+            SettingKind::Count { .. } => SettingValue::Count(
+                parse_count(text).map_err(|m| problem(table::Problem::Parse(m)))?,
+            ),
             SettingKind::Seed => {
-                SettingValue::Seed(parse_seed(text).map_err(|m| problem(Problem::Parse(m)))?)
+                SettingValue::Seed(parse_seed(text).map_err(|m| problem(table::Problem::Parse(m)))?)
             }
             SettingKind::Feedback => SettingValue::Feedback(
                 Feedback::ALL
                     .into_iter()
                     .find(|f| f.name() == text)
-                    .ok_or_else(|| {
-                        problem(Problem::Unknown {
-                            what: "feedback path",
-                            text: text.to_string(),
-                        })
-                    })?,
+                    .ok_or_else(|| unknown("feedback path"))?,
             ),
-            SettingKind::Material => {
-                SettingValue::Material(Material::from_name(text).ok_or_else(|| {
-                    problem(Problem::Unknown {
-                        what: "material",
-                        text: text.to_string(),
-                    })
-                })?)
-            }
+            SettingKind::Material => SettingValue::Material(
+                Material::from_name(text).ok_or_else(|| unknown("material"))?,
+            ),
         };
         self.check_on(value, machine_max_override_pct)?;
         Ok(Some(value))
@@ -729,7 +736,7 @@ impl RunSetting {
         let spec = self.spec();
         let problem =
             if matches!(self, RunSetting::MaxOverride | RunSetting::ArmingOverride) && v > max {
-                Problem::AboveMachine {
+                RunProblem::AboveMachine {
                     value: v,
                     max,
                     what: if self == RunSetting::MaxOverride {
@@ -739,17 +746,14 @@ impl RunSetting {
                     },
                 }
             } else {
-                let noun = if spec.unit.is_empty() { spec.label } else { "" };
+                // A unitless number is named by what it counts, the label's last word ("order").
+                let noun = match spec.unit {
+                    "" => spec.label.rsplit(' ').next().unwrap_or(spec.label),
+                    _ => "",
+                };
                 match table::Problem::outside(v, min, max, spec.unit, noun) {
-                    Some(table::Problem::NotPositive(v)) => Problem::NotPositive(v),
-                    Some(table::Problem::Negative(v)) => Problem::Negative(v),
-                    _ => Problem::OutOfRange {
-                        value: v,
-                        min,
-                        max,
-                        unit: spec.unit,
-                        noun,
-                    },
+                    Some(problem) => problem.into(),
+                    None => return Ok(()),
                 }
             };
         Err(SettingError {
@@ -898,7 +902,7 @@ pub fn parse_settings<T: AsRef<str>>(
             Ok(value) if setting.apply_to_settings(&mut settings, value) => {}
             Ok(_) => errors.push(SettingError {
                 setting: *setting,
-                problem: Problem::Requires("not a setting of a replay: it changes the machine"),
+                problem: RunProblem::other("not a setting of a replay: it changes the machine"),
             }),
             Err(e) => errors.push(e),
         }
@@ -1081,47 +1085,26 @@ pub fn check_band(
         };
         return Err(SettingError {
             setting,
-            problem: Problem::BandInverted { min, max },
+            problem: RunProblem::BandInverted { min, max },
         });
     }
     match settings.arming_override_pct {
         Some(value) if !(value >= min && value <= max) => Err(SettingError {
             setting: RunSetting::ArmingOverride,
-            problem: Problem::OutsideBand { value, min, max },
+            problem: RunProblem::OutsideBand { value, min, max },
         }),
         _ => Ok((min, max)),
     }
 }
 
-/// What is wrong with a value.
+/// What is wrong with a run setting: what any table's value can have wrong (in the words every
+/// table uses), or one of the run's own refusals, which depend on the machine or on another
+/// setting.
 #[derive(Debug, Clone, PartialEq)]
-pub enum Problem {
-    /// The text is not a value of the setting's kind; the message says why.
-    Parse(String),
-    /// Not one of the names the setting takes.
-    Unknown {
-        /// What the setting names ("material").
-        what: &'static str,
-        /// What was given.
-        text: String,
-    },
-    /// Zero or negative where only a positive value makes sense.
-    NotPositive(f64),
-    /// Negative where zero is the least.
-    Negative(f64),
-    /// Outside the accepted range.
-    OutOfRange {
-        /// The value given.
-        value: f64,
-        /// Smallest accepted.
-        min: f64,
-        /// Largest accepted.
-        max: f64,
-        /// Unit of all three.
-        unit: &'static str,
-        /// What the number counts, for unitless settings ("order 0 is outside 1–20").
-        noun: &'static str,
-    },
+pub enum RunProblem {
+    /// Not a value of the setting's kind, not one of its names, outside its range, or refused
+    /// for a reason the text gives.
+    Value(table::Problem),
     /// Above what the preset's machine applies.
     AboveMachine {
         /// The value given.
@@ -1131,8 +1114,6 @@ pub enum Problem {
         /// Which override ("highest override").
         what: &'static str,
     },
-    /// Needed and not given, or given where it cannot be used; the text says why.
-    Requires(&'static str),
     /// The smallest feed per tooth not below the largest.
     WindowInverted {
         /// The smallest, mm.
@@ -1165,48 +1146,42 @@ pub enum Problem {
     },
 }
 
-impl fmt::Display for Problem {
+impl RunProblem {
+    /// A refusal whose text says why (a setting given where it cannot be used).
+    pub fn other(why: &str) -> Self {
+        RunProblem::Value(table::Problem::Other(why.to_string()))
+    }
+}
+
+impl From<table::Problem> for RunProblem {
+    fn from(problem: table::Problem) -> Self {
+        RunProblem::Value(problem)
+    }
+}
+
+impl fmt::Display for RunProblem {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
-            Problem::Parse(message) => f.write_str(message),
-            Problem::Unknown { what, text } => write!(f, "unknown {what} {text:?}"),
-            Problem::NotPositive(v) => table::write_not_positive(f, *v),
-            Problem::Negative(v) => table::write_negative(f, *v),
-            Problem::OutOfRange {
-                value,
-                min,
-                max,
-                unit,
-                noun,
-            } => {
-                // The label's last word: "Current filter order" counts orders.
-                let noun = noun
-                    .split_whitespace()
-                    .last()
-                    .unwrap_or_default()
-                    .to_lowercase();
-                table::write_out_of_range(f, *value, *min, *max, unit, &noun)
-            }
-            Problem::AboveMachine { value, max, what } => write!(
+            RunProblem::Value(problem) => problem.fmt(f),
+            RunProblem::AboveMachine { value, max, what } => write!(
                 f,
                 "{what} {} % is more than this machine applies ({} %)",
                 readable(*value),
                 readable(*max)
             ),
-            Problem::Requires(why) => f.write_str(why),
-            Problem::WindowInverted { min, max } => write!(
+            RunProblem::WindowInverted { min, max } => write!(
                 f,
                 "the smallest feed per tooth {} mm is not below the largest, {} mm",
                 readable(*min),
                 readable(*max)
             ),
-            Problem::BandInverted { min, max } => write!(
+            RunProblem::BandInverted { min, max } => write!(
                 f,
                 "the lowest override {} % is above the highest, {} %",
                 readable(*min),
                 readable(*max)
             ),
-            Problem::PeriodInSamples {
+            RunProblem::PeriodInSamples {
                 period_s,
                 sample_period_s,
             } => write!(
@@ -1215,7 +1190,7 @@ impl fmt::Display for Problem {
                 readable(*period_s),
                 readable(*sample_period_s)
             ),
-            Problem::OutsideBand { value, min, max } => write!(
+            RunProblem::OutsideBand { value, min, max } => write!(
                 f,
                 "{} % is outside this run's override band {}–{} % (lowest and highest override)",
                 readable(*value),
@@ -1232,7 +1207,7 @@ pub struct SettingError {
     /// Which setting.
     pub setting: RunSetting,
     /// What is wrong with it.
-    pub problem: Problem,
+    pub problem: RunProblem,
 }
 
 impl SettingError {
@@ -1241,29 +1216,8 @@ impl SettingError {
         let option = self.setting.spec().cli_option;
         match self.problem {
             // The message names the quantity already.
-            Problem::AboveMachine { .. } => format!("{} (--{option})", self.problem),
+            RunProblem::AboveMachine { .. } => format!("{} (--{option})", self.problem),
             _ => format!("--{option}: {}", self.problem),
-        }
-    }
-
-    /// The choices of a setting that takes names, for messages.
-    pub fn choices(&self) -> Option<String> {
-        match self.setting.spec().kind {
-            SettingKind::Feedback => Some(
-                Feedback::ALL
-                    .iter()
-                    .map(|f| f.name())
-                    .collect::<Vec<_>>()
-                    .join(", "),
-            ),
-            SettingKind::Material => Some(
-                Material::ALL
-                    .iter()
-                    .map(|m| m.name())
-                    .collect::<Vec<_>>()
-                    .join(", "),
-            ),
-            _ => None,
         }
     }
 }
@@ -1272,7 +1226,7 @@ impl fmt::Display for SettingError {
     /// The message for a saved configuration, naming its JSON field.
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self.problem {
-            Problem::AboveMachine { .. } => write!(f, "{}", self.problem),
+            RunProblem::AboveMachine { .. } => write!(f, "{}", self.problem),
             _ => write!(f, "{}: {}", self.setting.spec().json_field, self.problem),
         }
     }
@@ -1389,7 +1343,7 @@ mod tests {
         let e = RunSetting::MaxOverride
             .parse(&(top + 1.0).to_string(), dial)
             .unwrap_err();
-        assert!(matches!(e.problem, Problem::AboveMachine { .. }), "{e}");
+        assert!(matches!(e.problem, RunProblem::AboveMachine { .. }), "{e}");
     }
 
     #[test]

@@ -20,7 +20,7 @@ use super::trace::{Trace, TraceRow};
 use crate::control::law::{ControlInput, Controller};
 use crate::control::registry::{ControllerConfig, RunContext};
 use crate::estimation::current_force::ForceEstimate;
-use crate::estimation::estimator::{Calibration, Estimator};
+use crate::estimation::estimator::{Calibration, Estimator, Feedback};
 use crate::machine::{Machine, OverrideCommand, SensorSample, SensorlessEstimate};
 use crate::plant::deflection::normal_force_n;
 use crate::safety::{SafetyEnvelope, SafetyEvent};
@@ -55,7 +55,33 @@ pub struct FeedbackLoop {
     previous_estimate_n: f64,
     /// Whether the controller was stepped at the last period.
     controller_in_charge: bool,
+    /// The tool-path offset the current-based compensation commands for this period, from the
+    /// last period's estimate, µm (NaN where the feedback path does not estimate the resultant).
+    current_compensation_um: f64,
     done: bool,
+}
+
+/// A period's force-induced wall error, µm, and what paper 004's compensator leaves of it when it
+/// offsets the tool path by the error it predicts. The offsets are not fed back into the cut:
+/// they are micrometres against millimetres of width of cut, a few percent of the engagement at
+/// most, so the loop's force is the uncompensated run's.
+struct SurfaceErrors {
+    /// The error without compensation (0 in air).
+    surface_um: f64,
+    /// After an offset predicted from the power law of what the CNC knows of this period's cut
+    /// (paper 004's sensorless compensation; fed forward, as the program is known ahead).
+    after_power_law_um: f64,
+    /// After an offset predicted from the last period's current-based estimate (one control
+    /// period late, as a measurement is).
+    after_current_um: f64,
+}
+
+impl SurfaceErrors {
+    const UNKNOWN: SurfaceErrors = SurfaceErrors {
+        surface_um: f64::NAN,
+        after_power_law_um: f64::NAN,
+        after_current_um: f64::NAN,
+    };
 }
 
 /// A force estimate above this fraction of the target, with the spindle at speed, before the
@@ -127,6 +153,7 @@ impl FeedbackLoop {
             settings,
             warned_cut_before_arming: false,
             previous_estimate_n: f64::NAN,
+            current_compensation_um: 0.0,
             controller_in_charge: false,
             done: false,
         })
@@ -170,6 +197,49 @@ impl FeedbackLoop {
                 time_s: period.end_time_s,
                 force_n,
             });
+        }
+    }
+
+    /// The period's force-induced wall error and what paper 004's compensator leaves of it
+    /// ([`SurfaceErrors`]); sets the offset the current-based compensation commands for the next
+    /// period.
+    fn surface_errors(
+        &mut self,
+        period: &PeriodSummary,
+        sensorless_n: f64,
+        estimate_n: f64,
+        armed: bool,
+    ) -> SurfaceErrors {
+        let Some(model) = self.settings.error_model else {
+            return SurfaceErrors::UNKNOWN;
+        };
+        let surface_um = if period.depth_mm > 0.0 {
+            model.stiffness.surface_error_um(normal_force_n(
+                period.force_mean_resultant_n,
+                period.feed_force_n,
+            ))
+        } else {
+            0.0
+        };
+        let current_offset_um = self.current_compensation_um;
+        // The next period's offset, from this one's estimate: only an estimate of the in-plane
+        // resultant says how hard the tool is pushed off the wall (the feed path estimates the
+        // feed force), and only once armed (before, the spindle's run-up current reads as force).
+        let resultant_estimated = matches!(
+            self.settings.feedback,
+            Feedback::SpindleCurrent | Feedback::Dynamometer
+        );
+        self.current_compensation_um = if !resultant_estimated {
+            f64::NAN
+        } else if armed && estimate_n.is_finite() {
+            model.predicted_error_um(estimate_n.max(0.0))
+        } else {
+            0.0
+        };
+        SurfaceErrors {
+            surface_um,
+            after_power_law_um: surface_um - model.predicted_error_um(sensorless_n),
+            after_current_um: surface_um - current_offset_um,
         }
     }
 
@@ -218,6 +288,7 @@ impl FeedbackLoop {
         for t in self.controller.terms() {
             self.trace.terms.push(t.value);
         }
+        let errors = self.surface_errors(&period, sensorless_n, estimate.force_n, armed);
         self.trace.rows.push(TraceRow {
             time_s: period.end_time_s,
             depth_mm: period.depth_mm,
@@ -240,14 +311,9 @@ impl FeedbackLoop {
             feed_current_u_max_a: period.feed_current_u_min_max_a.1,
             spindle_speed_rpm: period.spindle_speed_rpm,
             material_removal_mm3_s: period.material_removal_mm3_s,
-            surface_error_um: match self.settings.stiffness {
-                Some(k) if period.depth_mm > 0.0 => k.surface_error_um(normal_force_n(
-                    period.force_mean_resultant_n,
-                    period.feed_force_n,
-                )),
-                Some(_) if period.depth_mm == 0.0 => 0.0,
-                _ => f64::NAN,
-            },
+            surface_error_um: errors.surface_um,
+            compensated_error_power_law_um: errors.after_power_law_um,
+            compensated_error_current_um: errors.after_current_um,
             armed,
             sensor_fault: self.envelope.fault().is_some(),
             feed_hold: self.command.feed_hold,

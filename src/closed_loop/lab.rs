@@ -122,10 +122,10 @@ pub struct LabRun {
     nominal_duration_s: f64,
     /// True when the run was given a calibration and has no teach cut of its own.
     calibrated: bool,
-    stage: Stage,
+    stage: RunStage,
 }
 
-enum Stage {
+enum RunStage {
     Teaching {
         teach: Box<OnMachine<TeachCut>>,
         /// The closed loop's machine, when it is not the teach cut's.
@@ -164,7 +164,7 @@ impl LabRun {
         Ok(Self {
             nominal_duration_s: spec.preset.summary().nominal_duration_s.max(1.0),
             calibrated: false,
-            stage: Stage::Teaching {
+            stage: RunStage::Teaching {
                 teach: Box::new(OnMachine::teach_cut(teach_machine, &plan, teach_force)?),
                 run_machine,
             },
@@ -192,12 +192,12 @@ impl LabRun {
         let mut run = Self {
             nominal_duration_s: spec.preset.summary().nominal_duration_s.max(1.0),
             calibrated: true,
-            stage: Stage::Empty,
+            stage: RunStage::Empty,
             plan,
             spec: spec.clone(),
         };
         let closed_loop = run.start_loop(machine, &calibration)?;
-        run.stage = Stage::Running {
+        run.stage = RunStage::Running {
             run: Box::new(closed_loop),
             calibration,
         };
@@ -229,8 +229,8 @@ impl LabRun {
     /// The trace so far, once the closed loop has started.
     pub fn trace(&self) -> Option<&Trace> {
         match &self.stage {
-            Stage::Running { run, .. } => Some(run.trace()),
-            Stage::Done(r) => Some(&r.trace),
+            RunStage::Running { run, .. } => Some(run.trace()),
+            RunStage::Done(r) => Some(&r.trace),
             _ => None,
         }
     }
@@ -239,7 +239,7 @@ impl LabRun {
     /// started (`None` during the teach cut).
     pub fn partial_result(&self) -> Option<RunResult> {
         match &self.stage {
-            Stage::Running { run, calibration } => {
+            RunStage::Running { run, calibration } => {
                 let settings = run.settings().clone();
                 let trace = run.trace().clone();
                 let metrics = compute(&trace, &metrics_config(self.spec.preset, &settings));
@@ -251,7 +251,7 @@ impl LabRun {
                     metrics,
                 })
             }
-            Stage::Done(r) => Some((**r).clone()),
+            RunStage::Done(r) => Some((**r).clone()),
             _ => None,
         }
     }
@@ -259,7 +259,7 @@ impl LabRun {
     /// The result, once complete.
     pub fn into_result(self) -> Option<RunResult> {
         match self.stage {
-            Stage::Done(r) => Some(*r),
+            RunStage::Done(r) => Some(*r),
             _ => None,
         }
     }
@@ -271,8 +271,8 @@ impl Work for LabRun {
 
     /// Runs at most `periods` control periods of whichever stage is under way.
     fn advance(&mut self, periods: usize) -> Result<bool, LoopError> {
-        match std::mem::replace(&mut self.stage, Stage::Empty) {
-            Stage::Teaching {
+        match std::mem::replace(&mut self.stage, RunStage::Empty) {
+            RunStage::Teaching {
                 mut teach,
                 run_machine,
             } => {
@@ -281,16 +281,16 @@ impl Work for LabRun {
                     let (teach_machine, _) = teach.into_parts();
                     let machine = run_machine.unwrap_or(teach_machine);
                     let run = self.start_loop(machine, &calibration)?;
-                    self.stage = Stage::Running {
+                    self.stage = RunStage::Running {
                         run: Box::new(run),
                         calibration,
                     };
                 } else {
-                    self.stage = Stage::Teaching { teach, run_machine };
+                    self.stage = RunStage::Teaching { teach, run_machine };
                 }
                 Ok(false)
             }
-            Stage::Running {
+            RunStage::Running {
                 mut run,
                 calibration,
             } => {
@@ -298,7 +298,7 @@ impl Work for LabRun {
                     let settings = run.settings().clone();
                     let trace = run.into_trace();
                     let metrics = compute(&trace, &metrics_config(self.spec.preset, &settings));
-                    self.stage = Stage::Done(Box::new(RunResult {
+                    self.stage = RunStage::Done(Box::new(RunResult {
                         spec: self.spec.clone(),
                         settings,
                         calibration,
@@ -307,15 +307,15 @@ impl Work for LabRun {
                     }));
                     Ok(true)
                 } else {
-                    self.stage = Stage::Running { run, calibration };
+                    self.stage = RunStage::Running { run, calibration };
                     Ok(false)
                 }
             }
-            done @ Stage::Done(_) => {
+            done @ RunStage::Done(_) => {
                 self.stage = done;
                 Ok(true)
             }
-            Stage::Empty => Ok(true),
+            RunStage::Empty => Ok(true),
         }
     }
 
@@ -323,22 +323,22 @@ impl Work for LabRun {
     fn progress(&self) -> Progress {
         let fraction = |elapsed_s: f64| (elapsed_s / self.nominal_duration_s).clamp(0.0, 1.0);
         match &self.stage {
-            Stage::Teaching { teach, .. } => {
+            RunStage::Teaching { teach, .. } => {
                 Progress::new("teach cut", 0.5 * fraction(teach.elapsed_s()))
             }
-            Stage::Running { run, .. } if self.calibrated => {
+            RunStage::Running { run, .. } if self.calibrated => {
                 Progress::new("closed loop", fraction(run.elapsed_s()))
             }
-            Stage::Running { run, .. } => {
+            RunStage::Running { run, .. } => {
                 Progress::new("closed loop", 0.5 + 0.5 * fraction(run.elapsed_s()))
             }
-            Stage::Done(_) | Stage::Empty => Progress::new("done", 1.0),
+            RunStage::Done(_) | RunStage::Empty => Progress::new("done", 1.0),
         }
     }
 
     fn finish(&mut self) -> Result<RunResult, LoopError> {
-        match std::mem::replace(&mut self.stage, Stage::Empty) {
-            Stage::Done(result) => Ok(*result),
+        match std::mem::replace(&mut self.stage, RunStage::Empty) {
+            RunStage::Done(result) => Ok(*result),
             other => {
                 self.stage = other;
                 Err(LoopError::NotFinished)

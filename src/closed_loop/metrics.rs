@@ -93,6 +93,13 @@ pub struct Metrics {
     /// largest minus smallest, µm: what a CMM would see along the wall after the tool-radius
     /// offset took out its constant part. NaN where the tool's stiffness is not known.
     pub surface_error_range_um: f64,
+    /// The same range once paper 004's compensator offsets the tool path by the error the power
+    /// law predicts (sensorless), µm. NaN where the stiffness or the power law is not known.
+    pub compensated_range_power_law_um: f64,
+    /// The same range once the offset is predicted from the current-based estimate, one control
+    /// period late, µm. NaN where the stiffness is not known or the feedback path does not
+    /// estimate the in-plane resultant.
+    pub compensated_range_current_um: f64,
     /// Cycle-time saving against the programmed feed at 100 %, percent (positive = faster).
     /// `None` until reference runs are made, and always for a program whose cycle time does not
     /// depend on the feed ([`with_savings`]).
@@ -225,7 +232,9 @@ pub fn compute(trace: &Trace, config: &MetricsConfig) -> Metrics {
         override_total_variation_pct: total_variation,
         override_changes: changes,
         removed_volume_mm3: removed,
-        surface_error_range_um: surface_error_range_um(rows),
+        surface_error_range_um: wall_range_um(rows, |r| r.surface_error_um),
+        compensated_range_power_law_um: wall_range_um(rows, |r| r.compensated_error_power_law_um),
+        compensated_range_current_um: wall_range_um(rows, |r| r.compensated_error_current_um),
         mean_material_removal_mm3_s: if cycle_time_s > 0.0 {
             removed / cycle_time_s
         } else {
@@ -239,12 +248,13 @@ pub fn compute(trace: &Trace, config: &MetricsConfig) -> Metrics {
 /// The standard deviation of force ÷ target over the last [`FLUCTUATION_WINDOW_S`] of the
 /// controlled cut, percent (population form, as a steady signal's spread; NaN with fewer than two
 /// periods).
-/// Largest minus smallest surface error along the wall, NaN when none is known: over the periods
-/// in work at least the width of cut from each entry into and exit from the part. There the
-/// cutter is still engaging or already leaving and the wall it leaves is a ramp, the same for
-/// every controller; between them the error follows the force the controller holds. A constant
-/// error is taken out by the tool-radius offset; what no offset removes is this spread.
-fn surface_error_range_um(rows: &[TraceRow]) -> f64 {
+/// Largest minus smallest of a wall error (`error_um`: the surface error, or what compensation
+/// leaves of it) along the wall, NaN when none is known: over the periods in work at least the
+/// width of cut from each entry into and exit from the part. There the cutter is still engaging
+/// or already leaving and the wall it leaves is a ramp, the same for every controller; between
+/// them the error follows the force the controller holds. A constant error is taken out by the
+/// tool-radius offset; what no offset removes is this spread.
+fn wall_range_um(rows: &[TraceRow], error_um: impl Fn(&TraceRow) -> f64) -> f64 {
     let mut lo = f64::INFINITY;
     let mut hi = f64::NEG_INFINITY;
     let in_work = |r: &TraceRow| r.depth_mm > 0.0;
@@ -262,9 +272,10 @@ fn surface_error_range_um(rows: &[TraceRow]) -> f64 {
         for r in &rows[start..end] {
             let engaged = r.path_position_mm - first.path_position_mm >= first.width_mm
                 && last.path_position_mm - r.path_position_mm >= last.width_mm;
-            if engaged && r.surface_error_um.is_finite() {
-                lo = lo.min(r.surface_error_um);
-                hi = hi.max(r.surface_error_um);
+            let error = error_um(r);
+            if engaged && error.is_finite() {
+                lo = lo.min(error);
+                hi = hi.max(error);
             }
         }
         start = end;
@@ -358,7 +369,7 @@ pub fn metrics_csv(metrics: &Metrics) -> String {
 /// ```
 pub fn metrics_csv_columns(runs: &[(&str, &Metrics)]) -> String {
     let value = |v: Option<f64>| v.map_or(String::new(), |v| v.to_string());
-    let table: Vec<[(&str, Option<f64>); 23]> =
+    let table: Vec<[(&str, Option<f64>); 25]> =
         runs.iter().map(|(_, m)| metric_values(m)).collect();
     let mut out = String::from("metric");
     for (name, _) in runs {
@@ -381,7 +392,7 @@ pub fn metrics_csv_columns(runs: &[(&str, &Metrics)]) -> String {
 }
 
 /// Every metric as (CSV name, value), in the CSV's order.
-fn metric_values(metrics: &Metrics) -> [(&'static str, Option<f64>); 23] {
+fn metric_values(metrics: &Metrics) -> [(&'static str, Option<f64>); 25] {
     [
         ("cycle_time_s", Some(metrics.cycle_time_s)),
         ("completed", Some(f64::from(u8::from(metrics.completed)))),
@@ -429,6 +440,14 @@ fn metric_values(metrics: &Metrics) -> [(&'static str, Option<f64>); 23] {
         (
             "surface_error_range_um",
             Some(metrics.surface_error_range_um).filter(|v| v.is_finite()),
+        ),
+        (
+            "compensated_range_power_law_um",
+            Some(metrics.compensated_range_power_law_um).filter(|v| v.is_finite()),
+        ),
+        (
+            "compensated_range_current_um",
+            Some(metrics.compensated_range_current_um).filter(|v| v.is_finite()),
         ),
     ]
 }

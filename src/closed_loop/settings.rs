@@ -20,16 +20,14 @@
 //! complete: nothing here stands for "not known yet".
 
 use super::definition::{
-    check_band, machine_max_override_pct, Problem, RunSetting, RunSpec, SettingError,
+    check_band, machine_max_override_pct, RunProblem, RunSetting, RunSpec, SettingError,
     SettingsOverrides, PAPER_002_CONTROL_PERIOD_S, PAPER_002_OUTPUT_RANGE_PCT,
 };
 use super::error::LoopError;
 use crate::control::registry::ControllerConfig;
 use crate::estimation::estimator::{Calibration, Feedback};
 use crate::plant::cnc::OverrideMode;
-use crate::plant::deflection::{
-    ToolStiffness, DEFAULT_SPINDLE_STIFFNESS_N_MM, DEFAULT_STICK_OUT_DIAMETERS,
-};
+use crate::plant::deflection::ErrorModel;
 use crate::plant::presets::PlantKind;
 use crate::plant::Preset;
 use crate::safety::{
@@ -121,8 +119,9 @@ pub struct LoopSettings {
     /// Relative disagreement between the current-based and the power-law estimate above which a
     /// period is flagged.
     pub cross_check_tolerance: f64,
-    /// The tool and spindle as springs, if the tool is known: the trace's surface error.
-    pub stiffness: Option<ToolStiffness>,
+    /// The tool and spindle as springs and the force's normal share, if the tool is known: the
+    /// trace's surface error and what remains of it after compensation.
+    pub error_model: Option<ErrorModel>,
 }
 
 impl LoopSettings {
@@ -248,8 +247,8 @@ pub struct MachineContext {
     /// The cutter's chip-load window in the work material, if the machine's tool and material
     /// are known.
     pub chip_load: Option<ChipLoad>,
-    /// The tool and spindle as springs, if the machine's tool is known: the surface error.
-    pub stiffness: Option<ToolStiffness>,
+    /// The force-induced error's model, if the machine's tool is known.
+    pub error_model: Option<ErrorModel>,
 }
 
 /// The feedback path a preset measures force with by default: the brake bench has only a feed
@@ -318,7 +317,7 @@ impl MachineContext {
             feed_current: CurrentSignal::Phases,
             entry_hold_s: preset_entry_hold_s(spec),
             chip_load: preset_chip_load(spec),
-            stiffness: preset_stiffness(spec),
+            error_model: preset_error_model(spec),
         }
     }
 }
@@ -344,20 +343,13 @@ fn preset_entry_hold_s(spec: &RunSpec) -> f64 {
     }
 }
 
-/// The stiffness of `spec`'s cutter (its diameter edit included) at the default stick-out, on
-/// a mill; `None` on the plants without a tool (the bench, paper 001's process, paper 002's
-/// bond graph).
-fn preset_stiffness(spec: &RunSpec) -> Option<ToolStiffness> {
+/// The force-induced error's model of `spec`'s program (its edits included), on a mill; `None` on
+/// the plants without a tool (the bench, paper 001's process, paper 002's bond graph).
+fn preset_error_model(spec: &RunSpec) -> Option<ErrorModel> {
     if spec.preset.plant_kind() != PlantKind::Mill {
         return None;
     }
-    let cutter = spec.preset.scenario_spec()?.cutter;
-    let diameter_mm = spec.plant.tool_diameter_mm.unwrap_or(cutter.diameter_mm);
-    Some(ToolStiffness::carbide(
-        diameter_mm,
-        DEFAULT_STICK_OUT_DIAMETERS * diameter_mm,
-        DEFAULT_SPINDLE_STIFFNESS_N_MM,
-    ))
+    ErrorModel::of_program(&spec.preset.edited_scenario_spec(&spec.plant)?)
 }
 
 /// The chip-load window of `spec`'s cutter (its edits included) in the materials of its part: on
@@ -464,14 +456,14 @@ pub struct Plan {
     pub holds_in_air: bool,
     /// The feed-per-tooth window the override keeps inside.
     pub chip_load: Option<ChipLoad>,
-    /// The tool and spindle as springs, for the surface error.
-    pub stiffness: Option<ToolStiffness>,
+    /// The force-induced error's model, for the surface error and its compensation.
+    pub error_model: Option<ErrorModel>,
     /// What the resolution adapted to the machine (a low-pass skipped, the period rounded), for
     /// people.
     pub notes: Vec<String>,
 }
 
-fn refuse(setting: RunSetting, problem: Problem) -> LoopError {
+fn refuse(setting: RunSetting, problem: RunProblem) -> LoopError {
     LoopError::Setting(SettingError { setting, problem })
 }
 
@@ -575,7 +567,7 @@ pub fn plan(
         entry_hold_s,
         holds_in_air: adaptive,
         chip_load,
-        stiffness: context.stiffness,
+        error_model: context.error_model,
         notes,
     })
 }
@@ -600,7 +592,7 @@ fn chip_window(
         } else {
             RunSetting::MaxFeedPerTooth
         };
-        let problem = Problem::WindowInverted {
+        let problem = RunProblem::WindowInverted {
             min: window.min_mm,
             max: window.max_mm,
         };
@@ -632,7 +624,7 @@ fn control_period_s(
     });
     let samples = (period_s * rate_hz).round();
     if !(1.0..=MAX_SAMPLES_PER_PERIOD).contains(&samples) {
-        let problem = Problem::PeriodInSamples {
+        let problem = RunProblem::PeriodInSamples {
             period_s,
             sample_period_s: 1.0 / rate_hz,
         };
@@ -829,7 +821,7 @@ impl Plan {
             envelope,
             max_duration_s: self.max_duration_s,
             cross_check_tolerance: CROSS_CHECK_TOLERANCE,
-            stiffness: self.stiffness,
+            error_model: self.error_model,
         })
     }
 }

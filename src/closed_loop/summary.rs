@@ -21,6 +21,9 @@ pub struct MetricRow {
     pub label: &'static str,
     /// The unit, empty for counts.
     pub unit: &'static str,
+    /// What the row means, in a sentence or two for someone new to the field: the glossary
+    /// entry every front end shows beside it.
+    pub help: &'static str,
     pub better: Better,
     /// A yes/no row: 1 is shown as "yes", 0 as "no".
     pub yes_no: bool,
@@ -30,6 +33,11 @@ pub struct MetricRow {
 }
 
 impl MetricRow {
+    /// This row with its glossary entry.
+    const fn explained(self, help: &'static str) -> MetricRow {
+        MetricRow { help, ..self }
+    }
+
     /// How a front end shows `value` of this row: yes/no rows as words, others through
     /// `number`, a missing value as "—".
     pub fn show(&self, value: Option<f64>, number: impl Fn(f64) -> String) -> String {
@@ -59,6 +67,7 @@ const fn row(
     MetricRow {
         label,
         unit,
+        help: "",
         better,
         yes_no: false,
         value,
@@ -77,82 +86,94 @@ fn if_controlled(r: &RunResult, value: f64) -> Option<f64> {
 }
 
 /// The rows, in the order shown.
-pub const METRIC_ROWS: [MetricRow; 20] = [
+pub const METRIC_ROWS: [MetricRow; 22] = [
     row("Target force", "N", Better::Neither, |r| {
         Some(r.settings.target_force_n)
-    }),
+    }).explained("The force the controller holds, on the run's feedback path."),
     MetricRow {
         yes_no: true,
         ..row("Program finished", "", Better::Higher, |r| {
             Some(f64::from(u8::from(r.metrics.completed)))
-        })
+        }).explained("Whether the part program ran to its end; a run stopped by the overload alarm or the time limit did not, and its other results are not comparable.")
     },
     row("Cycle time", "s", Better::Lower, |r| {
         if_finished(r, Some(r.metrics.cycle_time_s))
-    }),
+    }).explained("Time from the spindle start to the program's end: what adaptive control shortens."),
     row("Saving vs programmed feed", "%", Better::Higher, |r| {
         if_finished(r, r.metrics.saving_vs_programmed_pct)
-    }),
+    }).explained("How much shorter the cycle is than the program at 100 % override. Negative where the target asks for less force than the programmed feed makes: the controller then slows the cut to hold it."),
     row("Saving vs safe fixed feed", "%", Better::Higher, |r| {
         if_finished(r, r.metrics.saving_vs_safe_fixed_pct)
-    }),
+    }).explained("How much shorter the cycle is than at the highest fixed override that keeps the peak force under the limit: the fair baseline for adaptive control."),
     row("Force IAE", "N·s", Better::Lower, |r| {
         if_controlled(r, r.metrics.force_iae_n_s)
-    }),
+    }).explained("Integral of |force − target| over the controlled cut: the whole force error, in newton-seconds."),
     row("Force RMS error", "N", Better::Lower, |r| {
         if_controlled(r, r.metrics.force_rms_error_n)
-    }),
+    }).explained("Root-mean-square of force − target over the controlled cut."),
     row("Mean |error|", "%", Better::Lower, |r| {
         if_controlled(r, r.metrics.force_mean_abs_error_pct)
-    }),
+    }).explained("Mean of |force − target| ÷ target over the controlled cut."),
     row("Peak force", "N", Better::Lower, |r| {
         Some(r.metrics.peak_force_n)
-    }),
+    }).explained("The highest true force of the run; compare it with the force limit."),
     row("Surface error range", "µm", Better::Lower, |r| {
         Some(r.metrics.surface_error_range_um).filter(|v| v.is_finite())
-    }),
+    }).explained("The wall's error from the tool and spindle bending under the force across the cut, largest minus smallest along the engaged wall (paper 004's cutting-force-induced error); its constant part is taken out by the tool-radius offset, this spread is not."),
+    row(
+        "Surface error range, compensated from the power law",
+        "µm",
+        Better::Lower,
+        |r| Some(r.metrics.compensated_range_power_law_um).filter(|v| v.is_finite()),
+    ).explained("What is left of that spread when the tool path is offset by the error the power law predicts from what the CNC knows of the cut (paper 004's sensorless compensation)."),
+    row(
+        "Surface error range, compensated from the current",
+        "µm",
+        Better::Lower,
+        |r| Some(r.metrics.compensated_range_current_um).filter(|v| v.is_finite()),
+    ).explained("What is left of it when the offset is predicted from the current-based force estimate of the control period before."),
     row("Time above limit", "s", Better::Lower, |r| {
         Some(r.metrics.time_above_limit_s)
-    }),
+    }).explained("Time the true force spent above the force limit, where tools break."),
     row(
         "Time outside the calibrated range",
         "s",
         Better::Lower,
         |r| if_controlled(r, r.metrics.time_outside_calibration_s),
-    ),
+    ).explained("Time the estimator's inputs lay outside the range its teach cut calibrated: there its force estimate is an extrapolation."),
     row(
         "Time the power-law check disagrees",
         "s",
         Better::Lower,
         |r| if_controlled(r, r.metrics.time_cross_check_disagrees_s),
-    ),
+    ).explained("Time the current-based estimate and the sensorless power-law estimate disagreed by more than their tolerance: paper 004's prediction of a failing current sensor."),
     row(
         "Max overshoot after a depth step",
         "%",
         Better::Lower,
         |r| (!r.metrics.steps.is_empty()).then_some(r.metrics.max_overshoot_pct),
-    ),
+    ).explained("The largest overshoot of the force above the target after a step in the depth of cut, percent of the target."),
     row("Max settling time", "s", Better::Lower, |r| {
         r.metrics.max_settling_time_s
-    }),
+    }).explained("The longest time after a depth step until the force stays within the settling band around the target."),
     row(
         "Force fluctuation, last 10 s",
         "% of target",
         Better::Lower,
         |r| if_controlled(r, r.metrics.late_force_fluctuation_pct),
-    ),
+    ).explained("Standard deviation of force ÷ target over the last 10 s of the controlled cut (paper 002's \"fluctuates less\")."),
     row("Depth steps never settled", "", Better::Lower, |r| {
         (!r.metrics.steps.is_empty()).then_some(r.metrics.steps_not_settled as f64)
-    }),
+    }).explained("Depth steps after which the force never stayed within the settling band."),
     row("Override changes", "", Better::Lower, |r| {
         Some(r.metrics.override_changes as f64)
-    }),
+    }).explained("How many times the commanded override changed: a calmer controller changes it less often."),
     row("Override total variation", "%", Better::Lower, |r| {
         Some(r.metrics.override_total_variation_pct)
-    }),
+    }).explained("The sum of the commanded override's changes: how hard the controller works the feed."),
     row("Mean removal rate", "mm³/s", Better::Higher, |r| {
         (r.metrics.removed_volume_mm3 > 0.0).then_some(r.metrics.mean_material_removal_mm3_s)
-    }),
+    }).explained("Material removed per second, over the whole cycle."),
 ];
 
 /// A metric as the browser's table shows it: whole numbers and values from 100 up without
@@ -252,6 +273,28 @@ pub fn not_best_note(runs: &[(&str, &RunResult)]) -> Option<String> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn every_metric_row_is_explained_in_a_sentence_and_named_once() {
+        let mut labels = Vec::new();
+        for row in &METRIC_ROWS {
+            assert!(
+                row.help.len() > 30 && row.help.ends_with(['.', ')', '"']),
+                "{}: {:?}",
+                row.label,
+                row.help
+            );
+            assert!(
+                !row.help.contains("--"),
+                "{}: a CLI flag in the help",
+                row.label
+            );
+            labels.push(row.label);
+        }
+        labels.sort_unstable();
+        labels.dedup();
+        assert_eq!(labels.len(), METRIC_ROWS.len());
+    }
 
     fn shown(v: f64) -> String {
         format!("{v:.0}")

@@ -64,6 +64,12 @@ pub struct TraceRow {
     /// force, µm ([`crate::plant::deflection`]; NaN where the tool's stiffness or the force is
     /// not known, 0 in air).
     pub surface_error_um: f64,
+    /// What is left of the surface error once paper 004's compensator offsets the tool path by
+    /// the error the power law predicts from what the CNC knows of the cut (sensorless), µm.
+    pub compensated_error_power_law_um: f64,
+    /// What is left of it once the offset is predicted from the current-based estimate of the
+    /// period before, µm (NaN where the feedback path does not estimate the in-plane resultant).
+    pub compensated_error_current_um: f64,
     /// Whether the estimator's inputs lay inside its calibrated range.
     pub estimate_in_range: bool,
     /// Whether the current-based and the sensorless (power-law) estimates disagree.
@@ -110,7 +116,7 @@ macro_rules! csv_columns {
 }
 
 /// The numeric columns [`write_csv`] writes, in order.
-pub const CSV_COLUMNS: [CsvColumn<f64>; 18] = csv_columns![f64;
+pub const CSV_COLUMNS: [CsvColumn<f64>; 20] = csv_columns![f64;
     time_s,
     depth_mm,
     width_mm,
@@ -129,6 +135,8 @@ pub const CSV_COLUMNS: [CsvColumn<f64>; 18] = csv_columns![f64;
     spindle_speed_rpm,
     material_removal_mm3_s,
     surface_error_um,
+    compensated_error_power_law_um,
+    compensated_error_current_um,
 ];
 
 /// The state flags [`write_csv`] writes after the values and terms, as 0/1.

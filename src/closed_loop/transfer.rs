@@ -90,7 +90,7 @@ struct Header {
 }
 
 /// Numbers per trace row in [`RunParts::rows`]: its 21 quantities and 5 flags (as 0 or 1).
-pub const ROW_VALUES: usize = 27;
+pub const ROW_VALUES: usize = 29;
 
 impl RunParts {
     /// The parts of `result` to send.
@@ -182,6 +182,8 @@ fn row_values(row: &TraceRow) -> [f64; ROW_VALUES] {
         spindle_speed_rpm,
         material_removal_mm3_s,
         surface_error_um,
+        compensated_error_power_law_um,
+        compensated_error_current_um,
         armed,
         sensor_fault,
         feed_hold,
@@ -212,6 +214,8 @@ fn row_values(row: &TraceRow) -> [f64; ROW_VALUES] {
         spindle_speed_rpm,
         material_removal_mm3_s,
         surface_error_um,
+        compensated_error_power_law_um,
+        compensated_error_current_um,
         flag(armed),
         flag(sensor_fault),
         flag(feed_hold),
@@ -247,11 +251,13 @@ fn row_from(v: &[f64]) -> TraceRow {
         spindle_speed_rpm: at(19),
         material_removal_mm3_s: at(20),
         surface_error_um: at(21),
-        armed: flag(22),
-        sensor_fault: flag(23),
-        feed_hold: flag(24),
-        estimate_in_range: flag(25),
-        cross_check_disagrees: flag(26),
+        compensated_error_power_law_um: at(22),
+        compensated_error_current_um: at(23),
+        armed: flag(24),
+        sensor_fault: flag(25),
+        feed_hold: flag(26),
+        estimate_in_range: flag(27),
+        cross_check_disagrees: flag(28),
     }
 }
 

@@ -1,10 +1,72 @@
 //! Trial cuts read from a run: the steady part of each depth section of a trace, with its
 //! conditions, the force the plant made and the force the lab estimated from the currents —
 //! what paper 004's network learns from ([`crate::estimation::power_law_fit`]).
+//!
+//! [`preset_trial_cuts`] makes them as a shop would on its own machine: the preset's program
+//! cut at a fixed feed, once per feed, each depth section a trial cut.
 
+use super::definition::RunSpec;
+use super::error::LoopError;
+use super::lab::simulate;
+use super::settings::OperatingPoint;
 use super::trace::{Trace, TraceRow};
-use crate::estimation::power_law_fit::TrialCut;
-use crate::plant::power_law::PowerLawInputs;
+use crate::control::registry::ControllerKind;
+use crate::estimation::cut_forces::CutGeometry;
+use crate::estimation::power_law_fit::{
+    learn, local_exponent, mechanistic_resultant_n, LearnError, LearnedPowerLaw, TrialCut,
+};
+use crate::plant::power_law::{PowerLawInput, PowerLawInputs, PowerLawMaterial, PowerLawReading};
+use crate::plant::simulator::power_law_material;
+use crate::plant::Preset;
+
+/// The feeds [`preset_trial_cuts`] cuts a program at when nobody says, percent of its programmed
+/// feed: three feeds per tooth, so the feed's exponent can be learned beside the depth's.
+pub const DEFAULT_TRIAL_FEEDS_PCT: [f64; 3] = [60.0, 80.0, 100.0];
+
+/// The trial cuts of a preset's program: each depth section's steady mean, at each feed.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PresetTrialCuts {
+    /// With the force on the tool (the simulation's truth, as a dynamometer would read it).
+    pub measured: Vec<TrialCut>,
+    /// With the lab's current-based estimate of the same cuts.
+    pub estimated: Vec<TrialCut>,
+    /// The published weights the learned ones are compared with: the part's first material's.
+    pub material: PowerLawMaterial,
+}
+
+/// Cuts `preset`'s program at a fixed feed of each of `feeds_pct` (percent of its programmed
+/// feed; the run definition's other settings the preset's) and reads the trial cuts of each run.
+/// `None` for a preset without a cutter (the bench, paper 001's process, paper 002's bond graph).
+pub fn preset_trial_cuts(
+    preset: Preset,
+    feeds_pct: &[f64],
+) -> Option<Result<PresetTrialCuts, LoopError>> {
+    let scenario = preset.scenario_spec()?;
+    let (teeth, diameter_mm) = (scenario.cutter.teeth, scenario.cutter.diameter_mm);
+    let material = power_law_material(scenario.materials.first()?.material);
+    let programmed =
+        OperatingPoint::of_preset(&RunSpec::new(preset, ControllerKind::Fixed)).feed_mm_min;
+    let mut cuts = PresetTrialCuts {
+        measured: Vec::new(),
+        estimated: Vec::new(),
+        material,
+    };
+    for pct in feeds_pct {
+        let mut spec = RunSpec::new(preset, ControllerKind::Fixed);
+        spec.plant.programmed_feed_mm_min = Some(programmed * pct / 100.0);
+        let run = match simulate(&spec) {
+            Ok(run) => run,
+            Err(e) => return Some(Err(e)),
+        };
+        for (force, out) in [
+            (TrialForce::Measured, &mut cuts.measured),
+            (TrialForce::Estimated, &mut cuts.estimated),
+        ] {
+            out.extend(trial_cuts(&run.trace, teeth, diameter_mm, force));
+        }
+    }
+    Some(Ok(cuts))
+}
 
 /// Which force a trial cut carries.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -62,6 +124,102 @@ pub fn trial_cuts(trace: &Trace, teeth: u32, diameter_mm: f64, force: TrialForce
         cuts.push(TrialCut { inputs, force_n });
     }
     cuts
+}
+
+/// Paper 004's network learned on a preset's trial cuts, from the force and from the estimate,
+/// beside the mechanistic model's local exponents: what `cutlab learn` prints.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct PresetLearning {
+    /// The trial cuts.
+    #[serde(skip)]
+    pub cuts: PresetTrialCuts,
+    /// Learned on the force on the tool.
+    pub from_force: LearnedPowerLaw,
+    /// Learned on the lab's current-based estimate.
+    pub from_estimate: LearnedPowerLaw,
+    /// For each learned input, the mechanistic model's local exponent (smallest, largest) over
+    /// the cuts: what a power law fitted near each cut would find.
+    pub mechanistic: Vec<(PowerLawInput, f64, f64)>,
+}
+
+/// Why a preset's network could not be learned.
+#[derive(Debug, Clone, PartialEq)]
+pub enum LearningError {
+    /// The preset has no cutter (the bench, paper 001's process, paper 002's bond graph).
+    NoCutter(Preset),
+    /// A trial run failed.
+    Run(LoopError),
+    /// The cuts do not determine the network; `from` says which force ("force", "estimate").
+    Learn {
+        /// Which force the network was learned on.
+        from: &'static str,
+        /// Why.
+        error: LearnError,
+    },
+}
+
+impl std::fmt::Display for LearningError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            LearningError::NoCutter(preset) => write!(
+                f,
+                "{} has no cutter to make trial cuts with; use a mill preset",
+                preset.name()
+            ),
+            LearningError::Run(e) => write!(f, "a trial run failed: {e}"),
+            LearningError::Learn { from, error } => write!(f, "learning from the {from}: {error}"),
+        }
+    }
+}
+
+impl std::error::Error for LearningError {}
+
+/// Learns paper 004's network on `preset`'s trial cuts at `feeds_pct` ([`preset_trial_cuts`]),
+/// in the reading the lab uses, against the published weights of the part's material.
+pub fn learn_on_preset(preset: Preset, feeds_pct: &[f64]) -> Result<PresetLearning, LearningError> {
+    let cuts = preset_trial_cuts(preset, feeds_pct)
+        .ok_or(LearningError::NoCutter(preset))?
+        .map_err(LearningError::Run)?;
+    let material = cuts.material;
+    let learned = |cuts: &[TrialCut], from: &'static str| {
+        learn(cuts, PowerLawReading::USED, material)
+            .map_err(|error| LearningError::Learn { from, error })
+    };
+    let from_force = learned(&cuts.measured, "force")?;
+    let from_estimate = learned(&cuts.estimated, "estimate")?;
+    let geometry = preset.scenario_spec().and_then(|spec| {
+        Some(CutGeometry {
+            coefficients: spec.materials.first()?.material.coefficients(),
+            cutter: spec.cutter,
+            mode: spec.mode,
+        })
+    });
+    let mechanistic = match &geometry {
+        Some(cut) => from_force
+            .learned
+            .iter()
+            .map(|e| {
+                let (lo, hi) = cuts
+                    .measured
+                    .iter()
+                    .map(|c| {
+                        local_exponent(|p| mechanistic_resultant_n(cut, p), &c.inputs, e.input)
+                    })
+                    .filter(|v| v.is_finite())
+                    .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| {
+                        (lo.min(v), hi.max(v))
+                    });
+                (e.input, lo, hi)
+            })
+            .collect(),
+        None => Vec::new(),
+    };
+    Ok(PresetLearning {
+        cuts,
+        from_force,
+        from_estimate,
+        mechanistic,
+    })
 }
 
 #[cfg(test)]

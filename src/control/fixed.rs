@@ -1,6 +1,6 @@
 //! Fixed feed: the baseline every comparison is made against.
 
-use super::law::{ControlInput, Controller, Term};
+use super::law::{ControlInput, Controller, LawTerm};
 
 /// Always asks for the same override, whatever the force.
 ///
@@ -15,7 +15,7 @@ use super::law::{ControlInput, Controller, Term};
 #[derive(Debug, Clone)]
 pub struct FixedFeed {
     override_pct: f64,
-    terms: [Term; 0],
+    terms: [LawTerm; 0],
 }
 
 impl FixedFeed {
@@ -33,7 +33,7 @@ impl Controller for FixedFeed {
         self.override_pct
     }
 
-    fn terms(&self) -> &[Term] {
+    fn terms(&self) -> &[LawTerm] {
         &self.terms
     }
 

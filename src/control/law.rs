@@ -36,7 +36,7 @@ pub struct ControlInput {
 
 /// One internal value of a controller, for plotting beside the force and override.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Term {
+pub struct LawTerm {
     /// Short name, e.g. `"P"`, `"I"`, `"β̂"`.
     pub name: &'static str,
     /// Unit of `value`, e.g. `"%"`, `"N"`, `""`.
@@ -45,7 +45,7 @@ pub struct Term {
     pub value: f64,
 }
 
-impl Term {
+impl LawTerm {
     /// A term with value 0, for pre-allocating a controller's term list.
     pub const fn new(name: &'static str, unit: &'static str) -> Self {
         Self {
@@ -65,7 +65,7 @@ pub trait Controller {
 
     /// The internal values after the latest `step` (P/I terms, adaptive estimates, …), in a fixed
     /// order and with fixed names for the whole run.
-    fn terms(&self) -> &[Term];
+    fn terms(&self) -> &[LawTerm];
 
     /// Per-rule firing strengths after the latest `step`, for rule-based controllers.
     fn rule_activations(&self) -> Option<&[f64]> {

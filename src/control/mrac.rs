@@ -29,7 +29,7 @@
 //! The force derivative comes from a first-order filtered differentiator with time constant
 //! `derivative_time_s`, because a raw difference of a noisy current estimate is mostly noise.
 
-use super::law::{ControlInput, Controller, Term};
+use super::law::{ControlInput, Controller, LawTerm};
 
 /// Parameters of [`ModelReferenceAdaptive`].
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -93,7 +93,7 @@ pub struct ModelReferenceAdaptive {
     m_hat: f64,
     alpha_hat: f64,
     beta_hat: f64,
-    terms: [Term; 4],
+    terms: [LawTerm; 4],
 }
 
 /// Bound on |m̂| and |α̂|: with a constant target they never move, and while the target ramps they
@@ -117,10 +117,10 @@ impl ModelReferenceAdaptive {
             alpha_hat: 0.0,
             beta_hat: params.initial_beta_pct,
             terms: [
-                Term::new("β̂", "%"),
-                Term::new("α̂", "%·s"),
-                Term::new("E", "1/s"),
-                Term::new("−K_d·E", "%"),
+                LawTerm::new("β̂", "%"),
+                LawTerm::new("α̂", "%·s"),
+                LawTerm::new("E", "1/s"),
+                LawTerm::new("−K_d·E", "%"),
             ],
         }
     }
@@ -163,7 +163,7 @@ impl Controller for ModelReferenceAdaptive {
             + damping
     }
 
-    fn terms(&self) -> &[Term] {
+    fn terms(&self) -> &[LawTerm] {
         &self.terms
     }
 

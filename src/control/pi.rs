@@ -13,7 +13,7 @@
 //! applied override comes from the machine itself ([`ControlInput::applied_override_pct`]), so
 //! the same code is correct whatever limits the envelope or the machine impose.
 
-use super::law::{relative_force_error, ControlInput, Controller, Term};
+use super::law::{relative_force_error, ControlInput, Controller, LawTerm};
 
 /// Parameters of [`PiController`].
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -47,7 +47,7 @@ pub struct PiController {
     params: PiParams,
     integral_pct: f64,
     last_request_pct: Option<f64>,
-    terms: [Term; 3],
+    terms: [LawTerm; 3],
 }
 
 impl PiController {
@@ -58,9 +58,9 @@ impl PiController {
             integral_pct: 0.0,
             last_request_pct: None,
             terms: [
-                Term::new("P", "%"),
-                Term::new("I", "%"),
-                Term::new("windup correction", "%"),
+                LawTerm::new("P", "%"),
+                LawTerm::new("I", "%"),
+                LawTerm::new("windup correction", "%"),
             ],
         }
     }
@@ -96,7 +96,7 @@ impl Controller for PiController {
         request
     }
 
-    fn terms(&self) -> &[Term] {
+    fn terms(&self) -> &[LawTerm] {
         &self.terms
     }
 

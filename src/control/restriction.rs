@@ -7,7 +7,7 @@
 //! position of the machine's override dial by default (10 %), because a step smaller than the
 //! dial's resolution would be quantised away and the loop would never move.
 
-use super::law::{ControlInput, Controller, Term};
+use super::law::{ControlInput, Controller, LawTerm};
 
 /// Parameters of [`CurrentRestriction`].
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -36,7 +36,7 @@ pub struct RestrictionParams {
 #[derive(Debug, Clone)]
 pub struct CurrentRestriction {
     params: RestrictionParams,
-    terms: [Term; 2],
+    terms: [LawTerm; 2],
 }
 
 impl CurrentRestriction {
@@ -45,7 +45,7 @@ impl CurrentRestriction {
     pub fn new(params: RestrictionParams) -> Self {
         Self {
             params,
-            terms: [Term::new("upper", "N"), Term::new("lower", "N")],
+            terms: [LawTerm::new("upper", "N"), LawTerm::new("lower", "N")],
         }
     }
 }
@@ -65,7 +65,7 @@ impl Controller for CurrentRestriction {
         }
     }
 
-    fn terms(&self) -> &[Term] {
+    fn terms(&self) -> &[LawTerm] {
         &self.terms
     }
 

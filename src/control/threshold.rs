@@ -11,7 +11,7 @@
 //! For a set time after the spindle starts, the current is ignored (3 s in the paper), because the
 //! spindle's starting current says nothing about the cut.
 
-use super::law::{ControlInput, Controller, Term};
+use super::law::{ControlInput, Controller, LawTerm};
 
 /// Parameters of [`ThresholdProportional`].
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -39,7 +39,7 @@ pub struct ThresholdParams {
 #[derive(Debug, Clone)]
 pub struct ThresholdProportional {
     params: ThresholdParams,
-    terms: [Term; 3],
+    terms: [LawTerm; 3],
 }
 
 impl ThresholdProportional {
@@ -48,9 +48,9 @@ impl ThresholdProportional {
         Self {
             params,
             terms: [
-                Term::new("max threshold", "N"),
-                Term::new("min threshold", "N"),
-                Term::new("Δ override", "%"),
+                LawTerm::new("max threshold", "N"),
+                LawTerm::new("min threshold", "N"),
+                LawTerm::new("Δ override", "%"),
             ],
         }
     }
@@ -79,7 +79,7 @@ impl Controller for ThresholdProportional {
         input.applied_override_pct + change_pct
     }
 
-    fn terms(&self) -> &[Term] {
+    fn terms(&self) -> &[LawTerm] {
         &self.terms
     }
 

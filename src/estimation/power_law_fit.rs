@@ -35,7 +35,7 @@ pub const UNCERTAINTY_STANDARD_ERRORS: f64 = 2.0;
 const CONSTANT_LOG_SPREAD: f64 = 1e-9;
 
 /// One trial cut: its conditions and the force measured on it.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
 pub struct TrialCut {
     /// The cutting conditions.
     pub inputs: PowerLawInputs,
@@ -44,7 +44,7 @@ pub struct TrialCut {
 }
 
 /// One exponent of the learned network.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
 pub struct LearnedExponent {
     /// The input it is the exponent of.
     pub input: PowerLawInput,
@@ -57,7 +57,7 @@ pub struct LearnedExponent {
 }
 
 /// The network learned from a set of trial cuts.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
 pub struct LearnedPowerLaw {
     /// How the published columns were read (which input each exponent belongs to).
     pub reading: PowerLawReading,

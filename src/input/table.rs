@@ -670,6 +670,10 @@ pub fn check_table<S: Table>() -> Result<(), String> {
     }
     for s in S::ROWS {
         let row = s.row();
+        // The help is the form's too: no option of the command line in it.
+        if row.help.contains("--") {
+            return Err(format!("{s:?}: its help names a command-line option"));
+        }
         if S::from_key(row.key) != Some(*s) {
             return Err(format!("{s:?}: its key finds another row"));
         }

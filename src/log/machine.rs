@@ -41,7 +41,7 @@ use crate::estimation::estimator::{Calibration, Estimator, Feedback};
 use crate::estimation::speed::{in_high_speed_range, FvSpeedModel, GEAR_CHANGE_RPM};
 use crate::machine::{DynamometerReading, Machine, MachineStep, OverrideCommand, PlantTruth};
 use crate::plant::cnc::OverrideMode;
-use crate::plant::deflection::ToolStiffness;
+use crate::plant::deflection::ErrorModel;
 use crate::safety::{ArmingTrigger, ChipLoad, EnvelopeConfig};
 
 /// A spindle at or below this speed is stopped.
@@ -387,7 +387,7 @@ pub struct LogOptions<'a> {
     /// The chip-load window of the tool, when known.
     pub chip_load: Option<ChipLoad>,
     /// The tool and spindle as springs, when known.
-    pub stiffness: Option<ToolStiffness>,
+    pub error_model: Option<ErrorModel>,
 }
 
 pub(super) fn setting(message: impl Into<String>) -> ReplayError {
@@ -539,7 +539,7 @@ pub fn log_setup(
         // chip-load window is the one given.
         entry_hold_s: DEFAULT_ENTRY_HOLD_S,
         chip_load: options.chip_load,
-        stiffness: options.stiffness,
+        error_model: options.error_model,
     };
     let machine = LogMachine::new(
         log.clone(),

@@ -93,7 +93,7 @@ pub enum Role {
 
 /// One problem, by line and (where it is one cell's) column.
 #[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct Problem {
+pub struct LineProblem {
     /// The line in the file (1-based).
     pub line: usize,
     /// The column's name, when the problem is one cell's.
@@ -295,7 +295,7 @@ pub struct Log {
     /// neither.
     pub sample_period_s: Option<f64>,
     /// What was wrong, by line and column.
-    pub problems: Vec<Problem>,
+    pub problems: Vec<LineProblem>,
     /// Problems beyond [`MAX_LISTED_PROBLEMS`], counted only.
     pub problems_not_listed: usize,
     /// The file line (from 1) each row starts on.
@@ -353,7 +353,7 @@ struct ColumnBuilder {
 #[derive(Debug, Default)]
 pub struct LogBuilder {
     reader: CsvReader,
-    sink: Sink,
+    sink: RecordSink,
 }
 
 /// One of the first records, held until the header is found.
@@ -384,7 +384,7 @@ impl Held {
 
 /// Everything but the reader, so the reader's callback can borrow it.
 #[derive(Debug, Default)]
-struct Sink {
+struct RecordSink {
     /// The first records, held until [`HEADER_LOOKAHEAD`] of them say which is the header.
     held: Vec<Held>,
     names: Vec<String>,
@@ -397,7 +397,7 @@ struct Sink {
     rows: usize,
     /// The line of each row, to report time problems by line.
     row_lines: Vec<u32>,
-    problems: Vec<Problem>,
+    problems: Vec<LineProblem>,
     problems_not_listed: usize,
     account: ReadAccount,
     /// The file's size, when the caller knows it: the columns reserve their room once.
@@ -413,7 +413,7 @@ impl LogBuilder {
     pub fn new() -> Self {
         Self {
             reader: CsvReader::new(),
-            sink: Sink::default(),
+            sink: RecordSink::default(),
         }
     }
 
@@ -485,10 +485,10 @@ impl LogBuilder {
     }
 }
 
-impl Sink {
+impl RecordSink {
     fn problem(&mut self, line: usize, column: Option<String>, message: String) {
         if self.problems.len() < MAX_LISTED_PROBLEMS {
-            self.problems.push(Problem {
+            self.problems.push(LineProblem {
                 line,
                 column,
                 message,

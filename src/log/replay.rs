@@ -28,7 +28,7 @@ use serde::Serialize;
 use super::machine::{current_as_force, log_setup, LogOptions, ReplayError};
 use super::mapping::Mapping;
 use super::Log;
-use crate::closed_loop::definition::{Problem, RunSetting, SettingError, SettingsOverrides};
+use crate::closed_loop::definition::{RunProblem, RunSetting, SettingError, SettingsOverrides};
 use crate::closed_loop::error::LoopError;
 use crate::closed_loop::feedback_loop::{ClosedLoop, FeedbackLoop};
 use crate::closed_loop::sample_loop::OnMachine;
@@ -37,7 +37,7 @@ use crate::closed_loop::trace::{csv_field, Trace, TraceRow};
 use crate::control::registry::ControllerConfig;
 use crate::estimation::estimator::{Calibration, Estimator, Feedback};
 use crate::plant::cnc::OverrideMode;
-use crate::plant::deflection::ToolStiffness;
+use crate::plant::deflection::ErrorModel;
 use crate::safety::{ChipLoad, SafetyEvent};
 use crate::work::{Progress, Work};
 
@@ -74,7 +74,7 @@ pub struct ReplaySettings {
     pub chip_load: Option<ChipLoad>,
     /// The tool and spindle as springs, when known: the replay's surface error (a log does not
     /// say which tool cut it).
-    pub stiffness: Option<ToolStiffness>,
+    pub error_model: Option<ErrorModel>,
 }
 
 impl ReplaySettings {
@@ -92,7 +92,7 @@ impl ReplaySettings {
             calibration,
             override_mode: self.override_mode,
             chip_load: self.chip_load,
-            stiffness: self.stiffness,
+            error_model: self.error_model,
         }
     }
 
@@ -132,7 +132,7 @@ struct Prepared {
 fn refuse(setting: RunSetting, why: &'static str) -> ReplayError {
     ReplayError::Loop(LoopError::Setting(SettingError {
         setting,
-        problem: Problem::Requires(why),
+        problem: RunProblem::other(why),
     }))
 }
 

@@ -433,7 +433,7 @@ impl BondGraphModel {
 }
 
 /// The cut behind paper 002's load: a milling cutter in a material at a radial width, whose
-/// depth the load schedule sets ([`LoadStep`]).
+/// depth the load schedule sets ([`DepthStep`]).
 ///
 /// Its mean chip forces are Altintas' closed form ([`mean_forces`]) with the material's shearing
 /// coefficients and no edge forces (which would add a force independent of the feed, and make
@@ -537,7 +537,7 @@ impl BondGraphCut {
 
 /// A step of the cutting load: the depth of cut from a time on.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-pub struct LoadStep {
+pub struct DepthStep {
     /// From this time on…
     pub time_s: f64,
     /// …the axial depth of cut is this.
@@ -554,7 +554,7 @@ pub struct BondGraphRun {
     /// Programmed feed. Paper 002: 1500 mm/min.
     pub programmed_feed_mm_min: f64,
     /// The load schedule, in time order; the first applies from t = 0 whatever its time.
-    pub load_steps: Vec<LoadStep>,
+    pub load_steps: Vec<DepthStep>,
     /// The control's exponential acceleration/deceleration of the cutting feed: the feed the
     /// x axis is driven at follows the commanded feed through a first-order lag of this time
     /// constant (0 follows it at once).
@@ -623,11 +623,11 @@ impl BondGraphRun {
             cut,
             programmed_feed_mm_min: PAPER_002_FEED_MM_MIN,
             load_steps: vec![
-                LoadStep {
+                DepthStep {
                     time_s: 0.0,
                     depth_mm,
                 },
-                LoadStep {
+                DepthStep {
                     time_s: Self::PAPER_002_LOAD_STEP_TIME_S,
                     depth_mm: depth_mm * (1.0 + load_step_pct / 100.0),
                 },

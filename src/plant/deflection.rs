@@ -13,10 +13,17 @@
 //! nominal diameter), L its stick-out and E its Young's modulus (carbide). The force is the mean
 //! normal force of a control period, so the error is the mean wall position over the period:
 //! what a CMM sees along the wall, without the tooth-passing ripple or the tool's dynamics.
+//!
+//! Paper 004's compensator turns a *predicted* force into the error it will cause through "a
+//! predetermined model" ([`ErrorModel`]): the same springs, and the share of the force normal to
+//! the wall that the mechanistic model gives for the program's cut ([`normal_share`]), since a
+//! force prediction (the power law, a current-based estimate) gives the force's size, not its
+//! direction.
 
 use serde::{Deserialize, Serialize};
 
-use super::mechanics::Cutter;
+use super::mechanics::{mean_forces, Cutter, Immersion, ToolForces};
+use super::scenario::ScenarioSpec;
 
 /// Young's modulus of cemented carbide (WC–Co, 6–10 % Co: 550–650 GPa), GPa.
 pub const CARBIDE_YOUNGS_MODULUS_GPA: f64 = 600.0;
@@ -91,6 +98,79 @@ pub fn normal_force_n(in_plane_resultant_n: f64, feed_force_n: f64) -> f64 {
         f64::NAN
     } else {
         square.max(0.0).sqrt()
+    }
+}
+
+/// The share of the mean in-plane force normal to the feed, |F̄_y| / |F̄|, 0–1 (NaN for no
+/// force): what turns a predicted force's size into the force that bends the tool off the wall.
+pub fn normal_share(forces: &ToolForces) -> f64 {
+    let resultant_n = forces.resultant_n();
+    if resultant_n > 0.0 {
+        forces.fy_n.abs() / resultant_n
+    } else {
+        f64::NAN
+    }
+}
+
+/// Paper 004's "predetermined model" of the cutting-force-induced error: the error a predicted
+/// in-plane force makes, through the tool's and spindle's springs and the normal share of the
+/// force at the program's cut.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct ErrorModel {
+    /// The springs between the force and the wall.
+    pub stiffness: ToolStiffness,
+    /// |F̄_y| / |F̄| of the mechanistic model at the program's first cut, 0–1.
+    pub normal_share: f64,
+}
+
+impl ErrorModel {
+    /// The model of `spec`'s program: its cutter at the default stick-out on the default
+    /// spindle, and the normal share of its first cut (the first width and depth of cut, the
+    /// first move's feed per tooth, the first region's material). The share depends on the
+    /// engagement, hardly on the depth or the chip: a program whose width changes along the
+    /// path (a taper) keeps the first cut's share, and its compensation the error of that.
+    /// `None` for a program without a cut.
+    ///
+    /// ```
+    /// use cutlab::plant::deflection::ErrorModel;
+    /// use cutlab::plant::Preset;
+    /// let model = ErrorModel::of_program(&Preset::KimStepDoc.scenario_spec().unwrap()).unwrap();
+    /// assert!(model.normal_share > 0.0 && model.normal_share < 1.0);
+    /// // 500 N predicted: the normal share of it bends the tool.
+    /// let expected = model.stiffness.surface_error_um(model.normal_share * 500.0);
+    /// assert_eq!(model.predicted_error_um(500.0), expected);
+    /// ```
+    pub fn of_program(spec: &ScenarioSpec) -> Option<Self> {
+        let cutter = &spec.cutter;
+        let first_positive = |points: &[(f64, f64)]| {
+            points
+                .iter()
+                .map(|&(_, v)| v)
+                .find(|v| *v > 0.0 && v.is_finite())
+        };
+        let depth_mm = first_positive(&spec.depth_mm)?;
+        let width_mm = first_positive(&spec.width_mm)?;
+        let first_move = spec.moves.first()?;
+        let feed_per_tooth_mm =
+            first_move.feed_mm_min / (first_move.spindle_rpm * f64::from(cutter.teeth));
+        let material = spec.materials.first()?.material;
+        let forces = mean_forces(
+            cutter,
+            &material.coefficients(),
+            &Immersion::new(spec.mode, width_mm, cutter.diameter_mm),
+            depth_mm,
+            feed_per_tooth_mm,
+        );
+        let normal_share = normal_share(&forces);
+        normal_share.is_finite().then(|| Self {
+            stiffness: ToolStiffness::of_cutter(cutter),
+            normal_share,
+        })
+    }
+
+    /// The error a predicted in-plane force of `force_n` makes, µm.
+    pub fn predicted_error_um(&self, force_n: f64) -> f64 {
+        self.stiffness.surface_error_um(self.normal_share * force_n)
     }
 }
 

@@ -309,7 +309,7 @@ pub struct FeedDriveOutput {
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct FeedDrive {
     config: FeedDriveConfig,
-    k: StepConstants,
+    k: FeedStepConstants,
     lag: SecondOrderLag,
     waveform: ThreePhaseWaveform,
     position_mm: f64,
@@ -321,7 +321,7 @@ pub struct FeedDrive {
 /// What a step multiplies by, worked out once from the configuration and Δt (divisions are the
 /// slowest arithmetic in a 10 kHz loop).
 #[derive(Debug, Clone, Copy, PartialEq)]
-struct StepConstants {
+struct FeedStepConstants {
     /// mm of travel per mm/min of velocity in one step, Δt/60.
     mm_per_mm_min: f64,
     /// mm/s² per mm/min of velocity change in one step, 1/(60·Δt).
@@ -344,7 +344,7 @@ struct StepConstants {
     electrical_rad_per_mm: f64,
 }
 
-impl StepConstants {
+impl FeedStepConstants {
     fn new(c: &FeedDriveConfig, dt_s: f64) -> Self {
         Self {
             mm_per_mm_min: dt_s / S_PER_MIN,
@@ -368,7 +368,7 @@ impl FeedDrive {
         positive("dt_s", dt_s)?;
         Ok(Self {
             config,
-            k: StepConstants::new(&config, dt_s),
+            k: FeedStepConstants::new(&config, dt_s),
             lag: SecondOrderLag::new(config.servo_bandwidth_hz, config.servo_damping_ratio, dt_s),
             waveform: config.waveform(),
             position_mm: 0.0,

@@ -911,11 +911,27 @@ impl Preset {
                 ),
             ));
         }
-        let (Some(cut), Some(mut spec)) = (self.mill_parameters(), self.scenario_spec()) else {
+        let (Some(cut), Some(spec)) = (self.mill_parameters(), self.edited_scenario_spec(edits))
+        else {
             return self.machine(seed);
         };
         let mut config = self.sim_config(seed);
         edits.check(cut, &config)?;
+        if let Some(noise) = edits.sensor_noise_a {
+            config.feed_sensor.hall.noise_a = noise;
+            config.spindle_sensor.hall.noise_a = noise;
+        }
+        Ok(PresetMachine::Mill(Box::new(Simulator::new(
+            Scenario::new(spec)?,
+            config,
+        )?)))
+    }
+
+    /// The mill program with `edits` made (material, speed, feed, depth, cutter), unchecked:
+    /// what [`Preset::seeded_machine`] cuts once the edits are checked. `None` on the plants
+    /// without a program.
+    pub fn edited_scenario_spec(self, edits: &PlantEdits) -> Option<ScenarioSpec> {
+        let mut spec = self.scenario_spec()?;
         if let Some(m) = edits.material {
             for region in &mut spec.materials {
                 region.material = m;
@@ -940,14 +956,7 @@ impl Preset {
         if let Some(z) = edits.teeth {
             spec.cutter.teeth = z;
         }
-        if let Some(noise) = edits.sensor_noise_a {
-            config.feed_sensor.hall.noise_a = noise;
-            config.spindle_sensor.hall.noise_a = noise;
-        }
-        Ok(PresetMachine::Mill(Box::new(Simulator::new(
-            Scenario::new(spec)?,
-            config,
-        )?)))
+        Some(spec)
     }
 
     /// The machines of one lab run: the teach cut's, seeded with `seed` plus

@@ -144,7 +144,7 @@ impl PlantSignals {
 
 /// One column of a trace: a name, its unit and how to read it.
 #[derive(Clone, Copy)]
-pub struct Column {
+pub struct TraceColumn {
     /// Column name.
     pub name: &'static str,
     /// Unit ("" for dimensionless or flags).
@@ -153,7 +153,7 @@ pub struct Column {
     pub get: fn(&PlantSignals) -> f64,
 }
 
-impl std::fmt::Debug for Column {
+impl std::fmt::Debug for TraceColumn {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         write!(f, "{} [{}]", self.name, self.unit)
     }
@@ -174,7 +174,7 @@ fn material_index(m: Option<Material>) -> f64 {
 
 macro_rules! col {
     ($name:literal, $unit:literal, |$s:ident| $e:expr) => {
-        Column {
+        TraceColumn {
             name: $name,
             unit: $unit,
             get: |$s: &PlantSignals| $e,
@@ -190,7 +190,7 @@ macro_rules! col {
 /// let c = COLUMNS.iter().find(|c| c.name == "feed").unwrap();
 /// assert_eq!(((c.get)(&s), c.unit), (150.0, "mm/min"));
 /// ```
-pub const COLUMNS: &[Column] = &[
+pub const COLUMNS: &[TraceColumn] = &[
     col!("time", "s", |s| s.time_s),
     col!("path_position", "mm", |s| s.truth.path_position_mm),
     col!("commanded_position", "mm", |s| s.commanded_position_mm),

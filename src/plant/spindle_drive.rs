@@ -323,7 +323,7 @@ pub struct SpindleDriveOutput {
 pub struct SpindleDrive {
     config: SpindleDriveConfig,
     dt_s: f64,
-    k: StepConstants,
+    k: SpindleStepConstants,
     lag: SecondOrderLag,
     waveform: ThreePhaseWaveform,
     /// Motor speed, rad/s (signed).
@@ -346,7 +346,7 @@ impl SpindleDrive {
         Ok(Self {
             config,
             dt_s,
-            k: StepConstants::new(&config, dt_s),
+            k: SpindleStepConstants::new(&config, dt_s),
             lag: SecondOrderLag::new(config.bandwidth_hz, config.damping_ratio, dt_s),
             waveform: ThreePhaseWaveform::new(config.harmonic_5th, config.harmonic_7th),
             motor_rad_s: 0.0,
@@ -463,7 +463,7 @@ impl SpindleDrive {
 /// What a step multiplies by, worked out once from the configuration and Δt (divisions are the
 /// slowest arithmetic in a 10 kHz loop).
 #[derive(Debug, Clone, Copy, PartialEq)]
-struct StepConstants {
+struct SpindleStepConstants {
     max_spindle_rpm: f64,
     /// Per gear, indexed by `SpindleGear as usize`.
     gears: [GearConstants; 2],
@@ -489,7 +489,7 @@ struct StepConstants {
     fv_volts_per_rpm: f64,
 }
 
-/// [`StepConstants`] of one gear with ratio r.
+/// [`SpindleStepConstants`] of one gear with ratio r.
 #[derive(Debug, Clone, Copy, PartialEq)]
 struct GearConstants {
     /// r·2π/60.
@@ -502,7 +502,7 @@ struct GearConstants {
     spindle_step_rad_per_motor_rad_s: f64,
 }
 
-impl StepConstants {
+impl SpindleStepConstants {
     fn new(c: &SpindleDriveConfig, dt_s: f64) -> Self {
         let gear = |g: SpindleGear| {
             let r = c.ratio(g);

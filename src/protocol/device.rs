@@ -217,7 +217,7 @@ pub struct DeviceStats {
 
 /// Sums of one block of plant samples.
 #[derive(Debug, Clone, Copy, Default)]
-struct Block {
+struct SampleSums {
     n: usize,
     spindle: [f64; 3],
     feed: [f64; 3],
@@ -1152,7 +1152,7 @@ impl DeviceEmulator {
         };
         let sensor_open = f.sensor_open_at_s.is_some_and(|at| t0 >= at);
         let window_n = ((PHASE_CHECK_WINDOW_S / self.plant_dt_s).round() as usize).max(1);
-        let mut block = Block::default();
+        let mut block = SampleSums::default();
         let mut over_current = false;
         let mut non_finite = false;
         let mut ended = false;

@@ -91,7 +91,7 @@ impl Table for DeviceSetting {
             D::Seed => Row::new("seed", "seed", "Seed", "")
                 .takes(Kind::Seed, Shown::Seed(1))
                 .noun("seed")
-                .help("seed of the machines (as cutlab sim --seed) and of the injected faults"),
+                .help("seed of the machines (the same seed as a simulated run's) and of the injected faults"),
             D::TimeScale => Row::new("time_scale", "time-scale", "Time scale", "× real time")
                 .takes(range(TIME_SCALE_RANGE), Shown::Number(1.0))
                 .noun("time scale")

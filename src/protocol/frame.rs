@@ -709,12 +709,12 @@ impl<'a> Writer<'a> {
 
 /// Reads little-endian fields; the caller has checked the length against the layout, and a
 /// read past the end gives zeros rather than a panic.
-struct Reader<'a> {
+struct FieldReader<'a> {
     bytes: &'a [u8],
     pos: usize,
 }
 
-impl Reader<'_> {
+impl FieldReader<'_> {
     fn array<const N: usize>(&mut self) -> [u8; N] {
         let mut a = [0u8; N];
         let end = self.pos.saturating_add(N);
@@ -884,7 +884,7 @@ impl Frame {
                 len: payload.len(),
             });
         }
-        let mut r = Reader {
+        let mut r = FieldReader {
             bytes: payload,
             pos: 1,
         };

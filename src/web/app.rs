@@ -42,6 +42,7 @@ pub fn App() -> impl IntoView {
         <main id="main">
             <Later>
             {move || match page.get() {
+                Page::Home => view! { <pages::home::HomePage /> }.into_any(),
                 Page::SignalChain => view! { <pages::signal_chain::SignalChainPage /> }.into_any(),
                 Page::Learn => view! { <pages::learn::LearnPage /> }.into_any(),
                 Page::Simulate => view! { <pages::simulate::SimulatePage /> }.into_any(),

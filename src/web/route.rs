@@ -6,6 +6,8 @@ use leptos::prelude::*;
 /// A section of the lab. Only sections that work are listed.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Page {
+    /// What the lab is for, the loop, where to start, the papers.
+    Home,
     /// Filter design and the signal chain.
     SignalChain,
     /// Run one closed loop on a preset.
@@ -28,7 +30,8 @@ pub enum Page {
 
 impl Page {
     /// Every page, in navigation order.
-    pub const ALL: [Page; 9] = [
+    pub const ALL: [Page; 10] = [
+        Page::Home,
         Page::Simulate,
         Page::Compare,
         Page::Tune,
@@ -41,11 +44,12 @@ impl Page {
     ];
 
     /// The page shown for an empty or unknown hash.
-    pub const HOME: Page = Page::Simulate;
+    pub const HOME: Page = Page::Home;
 
     /// The URL hash fragment after `#/`.
     pub fn slug(self) -> &'static str {
         match self {
+            Page::Home => "home",
             Page::SignalChain => "signal",
             Page::Simulate => "simulate",
             Page::Compare => "compare",
@@ -61,6 +65,7 @@ impl Page {
     /// The navigation label.
     pub fn label(self) -> &'static str {
         match self {
+            Page::Home => "Home",
             Page::SignalChain => "Signal chain",
             Page::Simulate => "Simulate",
             Page::Compare => "Compare",

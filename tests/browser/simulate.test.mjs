@@ -25,14 +25,25 @@ async function waitForResult(page) {
   return table;
 }
 
-test('a run shows force, current, override, feed and depth charts, metrics and events', async () => {
+test('a run shows force, current, override, feed, depth and wall-error charts, metrics and events', async () => {
   const { page, problems, context } = await openLab(browser, server.url, '#/simulate?preset=maneerat-doc-1&controller=pi');
   const table = await waitForResult(page);
-  for (const name of ['Cutting force', 'Motor current', 'Feed override', 'Feed rate', 'Depth of cut']) {
+  for (const name of ['Cutting force', 'Motor current', 'Feed override', 'Feed rate', 'Depth of cut', 'Wall error']) {
     await page.getByRole('img', { name }).waitFor();
   }
   const cycle = await table.getByRole('row', { name: /Cycle time/ }).textContent();
   assert.match(cycle, /\d/);
+  // Every metric explains itself: its heading opens its glossary entry.
+  const help = table.getByText(/^Time from the spindle start to the program's end/);
+  assert.equal(await help.isVisible(), false);
+  const toggle = table.getByRole('button', { name: 'What Cycle time means' });
+  assert.equal(await toggle.getAttribute('aria-expanded'), 'false');
+  await toggle.click();
+  await help.waitFor();
+  assert.equal(await toggle.getAttribute('aria-expanded'), 'true');
+  // And every setting: its "?" opens the help the command line's --help prints.
+  await page.getByRole('button', { name: 'What Seed means' }).click();
+  await page.getByText(/^seed of every noise source/).waitFor();
   // The savings fill in once the reference runs at fixed feed are done, in the background.
   for (const name of ['Saving vs programmed feed (%)', 'Saving vs safe fixed feed (%)']) {
     const row = table.getByRole('row').filter({ has: page.getByRole('rowheader', { name }) });
@@ -90,7 +101,7 @@ test('a chart zooms with the wheel and the keyboard, resets, and toggles series'
   await waitForRedraw(force, before);
   // Linked axes: every chart offers the reset now.
   const resets = page.getByRole('button', { name: 'Reset zoom' });
-  assert.equal(await resets.count(), 5);
+  assert.equal(await resets.count(), 6);
   // Dragging pans the zoomed view, and the linked charts pan with it.
   const depth = page.getByRole('img', { name: 'Depth of cut' });
   const depthBefore = await canvasPixels(depth);

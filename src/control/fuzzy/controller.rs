@@ -63,7 +63,7 @@
 use super::engine::{Defuzzifier, Engine};
 use super::rules::{paper_002_engine, RuleTable};
 use super::FuzzyError;
-use crate::control::law::{ControlInput, Controller, Term};
+use crate::control::law::{ControlInput, Controller, LawTerm};
 
 /// Scalings of [`FuzzyController`], relative to the target and the programmed feed.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -129,7 +129,7 @@ pub struct FuzzyController {
     universes: [Universe; 3],
     previous_error_n: Option<f64>,
     output: [f64; 1],
-    terms: [Term; 4],
+    terms: [LawTerm; 4],
     /// The last step was held (a non-finite force): nothing was inferred, nothing fired.
     held: bool,
 }
@@ -187,10 +187,10 @@ impl FuzzyController {
             previous_error_n: None,
             output: [0.0],
             terms: [
-                Term::new("E (scaled)", ""),
-                Term::new("EC (scaled)", ""),
-                Term::new("U", ""),
-                Term::new("Δ override", "%"),
+                LawTerm::new("E (scaled)", ""),
+                LawTerm::new("EC (scaled)", ""),
+                LawTerm::new("U", ""),
+                LawTerm::new("Δ override", "%"),
             ],
             held: false,
         })
@@ -250,7 +250,7 @@ impl Controller for FuzzyController {
         input.applied_override_pct + change_pct
     }
 
-    fn terms(&self) -> &[Term] {
+    fn terms(&self) -> &[LawTerm] {
         &self.terms
     }
 

@@ -104,7 +104,7 @@ struct VariableText {
     lock_range: bool,
 }
 
-enum Section {
+enum FisSection {
     System,
     Variable(usize),
     Rules,
@@ -132,7 +132,7 @@ pub fn parse(text: &str) -> Result<Engine, FuzzyError> {
     let mut methods: [Option<(usize, String)>; 5] = Default::default();
     let mut variables: Vec<VariableText> = Vec::new();
     let mut rule_lines: Vec<(usize, String)> = Vec::new();
-    let mut section: Option<Section> = None;
+    let mut section: Option<FisSection> = None;
     for (index, raw) in text.lines().enumerate() {
         let line_no = index + 1;
         let line = raw.split("//").next().unwrap_or_default();
@@ -142,8 +142,8 @@ pub fn parse(text: &str) -> Result<Engine, FuzzyError> {
         }
         if line.starts_with('[') {
             section = Some(match line {
-                "[System]" => Section::System,
-                "[Rules]" => Section::Rules,
+                "[System]" => FisSection::System,
+                "[Rules]" => FisSection::Rules,
                 _ if line.starts_with("[Input") || line.starts_with("[Output") => {
                     let output = line.starts_with("[Output");
                     variables.push(VariableText {
@@ -156,7 +156,7 @@ pub fn parse(text: &str) -> Result<Engine, FuzzyError> {
                         lock_previous: false,
                         lock_range: false,
                     });
-                    Section::Variable(variables.len() - 1)
+                    FisSection::Variable(variables.len() - 1)
                 }
                 other => return Err(error(line_no, format!("unknown section {other:?}"))),
             });
@@ -168,7 +168,7 @@ pub fn parse(text: &str) -> Result<Engine, FuzzyError> {
                 format!("{line:?} is outside any section ([System], [Input1], …)"),
             ));
         };
-        if let Section::Rules = current {
+        if let FisSection::Rules = current {
             rule_lines.push((line_no, line.to_string()));
             continue;
         }
@@ -181,7 +181,7 @@ pub fn parse(text: &str) -> Result<Engine, FuzzyError> {
         let key = key.trim();
         let value = value.trim().replace('\'', "");
         match current {
-            Section::System => {
+            FisSection::System => {
                 let slot = match key {
                     "Name" => {
                         name = value.trim().to_string();
@@ -197,7 +197,7 @@ pub fn parse(text: &str) -> Result<Engine, FuzzyError> {
                 };
                 methods[slot] = Some((line_no, value.trim().to_string()));
             }
-            Section::Variable(v) => {
+            FisSection::Variable(v) => {
                 let var = &mut variables[*v];
                 let flag = |value: &str| -> Result<bool, FuzzyError> {
                     Ok(number(line_no, value, key)? == 1.0)
@@ -221,7 +221,7 @@ pub fn parse(text: &str) -> Result<Engine, FuzzyError> {
                     other => return Err(error(line_no, format!("unknown variable key {other:?}"))),
                 }
             }
-            Section::Rules => {}
+            FisSection::Rules => {}
         }
     }
     let method = |slot: usize| methods[slot].clone().unwrap_or((0, String::new()));

@@ -186,13 +186,13 @@ fn tokens(text: &str) -> Result<Vec<Token>, String> {
 }
 
 /// A recursive-descent reader over the tokens; `depth` bounds the nesting.
-struct Reader<'a, F: Fn(&str) -> Option<Var>> {
+struct ExpressionReader<'a, F: Fn(&str) -> Option<Var>> {
     tokens: &'a [Token],
     at: usize,
     resolve: &'a F,
 }
 
-impl<F: Fn(&str) -> Option<Var>> Reader<'_, F> {
+impl<F: Fn(&str) -> Option<Var>> ExpressionReader<'_, F> {
     fn peek(&self) -> Option<&Token> {
         self.tokens.get(self.at)
     }
@@ -391,7 +391,7 @@ impl Formula {
                 resolve(name)
             }
         };
-        let mut reader = Reader {
+        let mut reader = ExpressionReader {
             tokens: &tokens,
             at: 0,
             resolve: &lookup,

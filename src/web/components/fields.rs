@@ -6,6 +6,8 @@
 
 use leptos::prelude::*;
 
+use crate::web::components::help::HelpToggle;
+
 pub use crate::input::parse_number;
 
 /// A labelled numeric input with its unit and an error slot.
@@ -31,6 +33,9 @@ pub fn NumberField(
     /// Hides the field (for options that do not apply) without losing its text.
     #[prop(into, optional)]
     hidden: Signal<bool>,
+    /// What the value is, opened by a "?" beside the label (empty: no "?").
+    #[prop(optional)]
+    help: &'static str,
 ) -> impl IntoView {
     let error_id = format!("{id}-error");
     let described = error_id.clone();
@@ -41,6 +46,7 @@ pub fn NumberField(
                 {move || label.get()}
                 {(!unit.is_empty()).then(|| view! { <span class="unit">" (" {unit} ")"</span> })}
             </label>
+            {(!help.is_empty()).then(|| view! { <HelpToggle subject=label help=help /> })}
             <input
                 id=input_id
                 type="text"
@@ -77,6 +83,9 @@ pub fn SelectField(
     /// Hides the field without losing its choice.
     #[prop(into, optional)]
     hidden: Signal<bool>,
+    /// What the choice is, opened by a "?" beside the label (empty: no "?").
+    #[prop(optional)]
+    help: &'static str,
 ) -> impl IntoView {
     let options = Signal::stored(
         options
@@ -84,7 +93,7 @@ pub fn SelectField(
             .map(|(v, text)| (v.to_string(), text.to_string()))
             .collect::<Vec<_>>(),
     );
-    view! { <ChoiceField id=id label=label options=options value=value error=error hidden=hidden /> }
+    view! { <ChoiceField id=id label=label options=options value=value error=error hidden=hidden help=help /> }
 }
 
 /// A labelled drop-down over choices that may change (a log's columns), keeping its value, with
@@ -107,6 +116,9 @@ pub fn ChoiceField(
     /// Hides the field without losing its choice.
     #[prop(into, optional)]
     hidden: Signal<bool>,
+    /// What the choice is, opened by a "?" beside the label (empty: no "?").
+    #[prop(optional)]
+    help: &'static str,
 ) -> impl IntoView {
     let error_id = format!("{id}-error");
     let described = error.map(|_| error_id.clone());
@@ -114,6 +126,7 @@ pub fn ChoiceField(
     view! {
         <div class="field" class:field-invalid=invalid hidden=move || hidden.get()>
             <label for=id.clone()>{label}</label>
+            {(!help.is_empty()).then(|| view! { <HelpToggle subject=label.to_string() help=help /> })}
             <select
                 id=id
                 on:change=move |ev| value.set(event_target_value(&ev))

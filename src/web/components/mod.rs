@@ -5,6 +5,7 @@
 //! | [`page`] | the one page shell |
 //! | [`table_form`] | one form for any table of the core's settings: the typed text of its rows and a field per row |
 //! | [`fields`] | labelled form fields that keep what was typed and say why it is not accepted |
+//! | [`help`] | a "?" that opens a term's explanation in place: metrics' glossary, settings' help |
 //! | [`run_form`] | the forms that define a run: the scenario (the run definition's table) and a controller with its parameters |
 //! | [`chart`] | a chart on a canvas a person can explore: zoom, pan, readout, legend |
 //! | [`heat_map`] | a heat map on a canvas, cells picked by click or keyboard |
@@ -21,6 +22,7 @@ pub mod chart;
 pub mod download;
 pub mod fields;
 pub mod heat_map;
+pub mod help;
 pub mod later;
 pub mod page;
 pub mod pool;

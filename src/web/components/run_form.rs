@@ -124,13 +124,7 @@ fn parse_scenario(preset: RwSignal<String>, settings: TableForm<RunSetting>) -> 
         }),
         Err(errors) => Err(errors
             .into_iter()
-            .map(|e| {
-                let message = match e.choices() {
-                    Some(choices) => format!("{}; choices: {choices}", e.problem),
-                    None => e.problem.to_string(),
-                };
-                (e.setting.spec().query_key, message)
-            })
+            .map(|e| (e.setting.spec().query_key, e.problem.to_string()))
             .collect()),
     }
 }
@@ -585,7 +579,7 @@ pub fn ControllerFields(
                     let error = Signal::derive(move || errors.with(|e| e.get(&param_key).cloned()));
                     let id = format!("{}{}", form.id_prefix, p.key);
                     view! {
-                        <NumberField id=id label=p.label.to_string() unit=p.unit value=text error=error />
+                        <NumberField id=id label=p.label.to_string() unit=p.unit value=text error=error help=p.help />
                     }
                 })
                 .collect_view()}

@@ -10,6 +10,7 @@ use crate::closed_loop::lab::RunResult;
 use crate::closed_loop::metrics::Metrics;
 use crate::closed_loop::summary::{best_marks, format_metric, not_best_note, METRIC_ROWS};
 use crate::web::components::chart::ChartCanvas;
+use crate::web::components::help::HelpToggle;
 
 /// A run with the name it is shown under.
 pub type NamedRun = (String, Arc<RunResult>);
@@ -29,14 +30,16 @@ fn time_chart(y_label: &str) -> LineChart {
     LineChart::new(Axis::linear("time (s)"), Axis::linear(y_label))
 }
 
-/// The charts of one or more runs: force, current, override, feed, depth. With one run every
-/// signal of it is drawn; with several, the main signal of each run is overlaid.
-pub fn run_charts(runs: &[NamedRun]) -> [LineChart; 5] {
+/// The charts of one or more runs: force, current, override, feed, depth and the wall's
+/// force-induced error. With one run every signal of it is drawn; with several, the main signal
+/// of each run is overlaid.
+pub fn run_charts(runs: &[NamedRun]) -> [LineChart; 6] {
     let mut force = time_chart("force (N)");
     let mut current = time_chart("current (A)");
     let mut override_pct = time_chart("feed override (%)");
     let mut feed = time_chart("feed (mm/min)");
     let mut depth = time_chart("depth of cut (mm)");
+    let mut wall = time_chart("wall error (µm)");
     let single = runs.len() == 1;
     for (k, (name, run)) in runs.iter().enumerate() {
         let color = PALETTE[k % PALETTE.len()];
@@ -133,6 +136,26 @@ pub fn run_charts(runs: &[NamedRun]) -> [LineChart; 5] {
             color,
             series_of(run, |r| r.feed_mm_min),
         ));
+        wall.series.push(Series::new(
+            label("uncompensated"),
+            color,
+            series_of(run, |r| r.surface_error_um),
+        ));
+        if single {
+            wall.series.push(Series::new(
+                "compensated from the power law",
+                PALETTE[4],
+                series_of(run, |r| r.compensated_error_power_law_um),
+            ));
+            wall.series.push(
+                Series::new(
+                    "compensated from the current",
+                    PALETTE[1],
+                    series_of(run, |r| r.compensated_error_current_um),
+                )
+                .dashed(),
+            );
+        }
         if single || k == 0 {
             depth.series.push(Series::new(
                 "axial depth",
@@ -157,7 +180,7 @@ pub fn run_charts(runs: &[NamedRun]) -> [LineChart; 5] {
                 .push(Series::new(name, colour, vec![(0.0, value), (end, value)]).dashed());
         }
     }
-    let mut charts = [force, current, override_pct, feed, depth];
+    let mut charts = [force, current, override_pct, feed, depth, wall];
     for c in &mut charts {
         c.fit();
         // One time axis for every chart, whichever run lasted longest.
@@ -168,7 +191,7 @@ pub fn run_charts(runs: &[NamedRun]) -> [LineChart; 5] {
     charts
 }
 
-/// The five linked charts of one or more runs.
+/// The linked charts of one or more runs; the wall's error only where the tool is known (a mill).
 #[component]
 pub fn RunCharts(
     /// The runs to draw.
@@ -178,6 +201,16 @@ pub fn RunCharts(
     let x_view = RwSignal::new(None::<Range<f64>>);
     let charts = Memo::new(move |_| runs.with(|r| run_charts(r)));
     let chart = move |i: usize| Signal::derive(move || charts.with(|c| c[i].clone()));
+    let wall_known = move || {
+        runs.with(|r| {
+            r.iter().any(|(_, run)| {
+                run.trace
+                    .rows
+                    .iter()
+                    .any(|row| row.surface_error_um.is_finite())
+            })
+        })
+    };
     view! {
         <div class="charts">
             <ChartCanvas label="Cutting force" chart=chart(0) height_px=240 x_view=x_view />
@@ -185,6 +218,9 @@ pub fn RunCharts(
             <ChartCanvas label="Feed override" chart=chart(2) height_px=170 x_view=x_view />
             <ChartCanvas label="Feed rate" chart=chart(3) height_px=170 x_view=x_view />
             <ChartCanvas label="Depth of cut" chart=chart(4) height_px=140 x_view=x_view />
+            <Show when=wall_known>
+                <ChartCanvas label="Wall error" chart=chart(5) height_px=170 x_view=x_view />
+            </Show>
         </div>
     }
 }
@@ -220,7 +256,10 @@ pub fn MetricsTable(
                             let marks = best_marks(row, &results, format_metric);
                             view! {
                                 <tr>
-                                    <th scope="row">{row.heading()}</th>
+                                    <th scope="row">
+                                        {row.heading()}
+                                        <HelpToggle subject=row.label.to_string() help=row.help />
+                                    </th>
                                     {values
                                         .into_iter()
                                         .zip(marks)

@@ -577,10 +577,10 @@ pub fn RunProgress<T: Clone + Send + Sync + 'static>(
     // browser lay out the form again) after every chunk.
     let shown = Memo::new(move |_| {
         status.with(|s| match s {
-            RunStatus::Running { .. } => Shown::Running,
-            RunStatus::Failed(message) => Shown::Failed(message.clone()),
-            RunStatus::Cancelled if !quiet_cancel => Shown::Cancelled,
-            _ => Shown::Nothing,
+            RunStatus::Running { .. } => ProgressStage::Running,
+            RunStatus::Failed(message) => ProgressStage::Failed(message.clone()),
+            RunStatus::Cancelled if !quiet_cancel => ProgressStage::Cancelled,
+            _ => ProgressStage::Nothing,
         })
     });
     let stage = Memo::new(move |_| {
@@ -597,7 +597,7 @@ pub fn RunProgress<T: Clone + Send + Sync + 'static>(
     };
     move || {
         match shown.get() {
-        Shown::Running => {
+        ProgressStage::Running => {
             let runner = runner.clone();
             view! {
                 <div class="run-progress" role="status">
@@ -608,22 +608,22 @@ pub fn RunProgress<T: Clone + Send + Sync + 'static>(
             }
             .into_any()
         }
-        Shown::Failed(message) => view! {
+        ProgressStage::Failed(message) => view! {
             <p class="run-error" role="alert">{format!("{failure}: {message}")}</p>
         }
         .into_any(),
-        Shown::Cancelled => view! {
+        ProgressStage::Cancelled => view! {
             <p class="hint" role="status">"Cancelled. Change a setting or press Run to start again."</p>
         }
         .into_any(),
-        Shown::Nothing => ().into_any(),
+        ProgressStage::Nothing => ().into_any(),
     }
     }
 }
 
 /// Which of its forms a [`RunProgress`] shows.
 #[derive(Clone, PartialEq)]
-enum Shown {
+enum ProgressStage {
     Running,
     Failed(String),
     Cancelled,

@@ -123,7 +123,7 @@ pub fn SettingField<S: Table + Send + Sync>(
     let error = Signal::derive(move || errors.with(|e| e.get(row.key).cloned()));
     match row.kind {
         Kind::Choice => view! {
-            <SelectField id=id label=row.label options=setting.choices() value=value error=error hidden=hidden />
+            <SelectField id=id label=row.label options=setting.choices() value=value error=error hidden=hidden help=row.help />
         }
         .into_any(),
         Kind::Number { .. } | Kind::Count { .. } | Kind::Seed => {
@@ -134,7 +134,7 @@ pub fn SettingField<S: Table + Send + Sync>(
             };
             let label = label.unwrap_or_else(|| Signal::stored(row.label.to_string()));
             view! {
-                <NumberField id=id label=label unit=row.unit value=value error=error step=step hidden=hidden />
+                <NumberField id=id label=label unit=row.unit value=value error=error step=step hidden=hidden help=row.help />
             }
             .into_any()
         }

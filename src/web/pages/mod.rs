@@ -3,6 +3,7 @@
 //!
 //! | file | what |
 //! |---|---|
+//! | [`home`] | what the lab is for, the loop as a picture, where to start, the papers |
 //! | [`simulate`] | one closed loop on a preset |
 //! | [`compare`] | two to four controllers on one scenario |
 //! | [`logs`] | engineers' own logs: read, analysed, calibrated from, replayed |
@@ -16,6 +17,7 @@
 pub mod compare;
 pub mod fuzzy;
 pub mod hardware;
+pub mod home;
 pub mod learn;
 pub mod logs;
 pub mod plant;

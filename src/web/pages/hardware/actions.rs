@@ -5,7 +5,7 @@
 
 use leptos::prelude::*;
 
-use super::Shared;
+use super::HardwareState;
 use crate::closed_loop::definition::RunSpec;
 use crate::hardware::commissioning::{
     commissioned, with_commissioned, CHECKS, COMMISSIONED_DEVICES_KEY,
@@ -43,8 +43,8 @@ fn remember_commissioned(device_id: &str) {
 
 /// The action buttons, the last action's message, and the confirmation dialog.
 #[component]
-pub fn ControlActions(shared: Shared) -> impl IntoView {
-    let Shared {
+pub fn ControlActions(shared: HardwareState) -> impl IntoView {
+    let HardwareState {
         station,
         ui,
         spec,

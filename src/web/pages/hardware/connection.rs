@@ -5,7 +5,7 @@
 use leptos::prelude::*;
 
 use super::ui::sink;
-use super::{reduce_only, Shared};
+use super::{reduce_only, HardwareState};
 use crate::hardware::serial_settings::{parse_serial, SerialSetting};
 use crate::input::table::{form_errors, Table};
 use crate::protocol::device::DeviceEmulator;
@@ -31,8 +31,8 @@ const VIRTUAL_SETTINGS: [DeviceSetting; 10] = [
 
 /// The Connection panel.
 #[component]
-pub fn ConnectionPanel(shared: Shared, no_serial: Option<&'static str>) -> impl IntoView {
-    let Shared {
+pub fn ConnectionPanel(shared: HardwareState, no_serial: Option<&'static str>) -> impl IntoView {
+    let HardwareState {
         station,
         ui,
         scenario,
@@ -115,8 +115,8 @@ pub fn ConnectionPanel(shared: Shared, no_serial: Option<&'static str>) -> impl 
 
 /// The virtual device's fieldset: its settings, its truth switch, start and unplug.
 #[component]
-fn VirtualDeviceFields(shared: Shared) -> impl IntoView {
-    let Shared {
+fn VirtualDeviceFields(shared: HardwareState) -> impl IntoView {
+    let HardwareState {
         station,
         ui,
         scenario,

@@ -5,7 +5,7 @@
 use leptos::prelude::*;
 
 use super::calibration::CalibrationFieldset;
-use super::Shared;
+use super::HardwareState;
 use crate::closed_loop::definition::RunSetting;
 use crate::hardware::host_settings::HostSetting;
 use crate::input::table::Table;
@@ -32,8 +32,8 @@ const SIGNAL_SETTINGS: [RunSetting; 4] = [
 
 /// The Control panel.
 #[component]
-pub fn ControlPanel(shared: Shared) -> impl IntoView {
-    let Shared {
+pub fn ControlPanel(shared: HardwareState) -> impl IntoView {
+    let HardwareState {
         scenario,
         controller,
         host,

@@ -71,7 +71,7 @@ const TICK: Duration = Duration::from_millis(100);
 
 /// What the panels share: the station and its signals, the run's forms, the link's state.
 #[derive(Clone, Copy)]
-struct Shared {
+struct HardwareState {
     station: StationRef,
     ui: Ui,
     scenario: ScenarioForm,
@@ -88,7 +88,7 @@ struct Shared {
     is_virtual: Memo<bool>,
 }
 
-impl Shared {
+impl HardwareState {
     fn new() -> Self {
         let query = query_params(&window().location().hash().unwrap_or_default());
         let scenario = ScenarioForm::new(&query);
@@ -256,8 +256,8 @@ fn keep_station(station: StationRef, ui: Ui) {
 /// The Hardware page.
 #[component]
 pub fn HardwarePage() -> impl IntoView {
-    let shared = Shared::new();
-    let Shared { station, ui, .. } = shared;
+    let shared = HardwareState::new();
+    let HardwareState { station, ui, .. } = shared;
     keep_station(station, ui);
     let no_serial = web_serial_unavailable();
     let x_view = RwSignal::new(None::<std::ops::Range<f64>>);

@@ -6,7 +6,7 @@ use std::sync::Arc;
 
 use leptos::prelude::*;
 
-use super::Shared;
+use super::LogsState;
 use crate::closed_loop::calibration_file::CalibrationFile;
 use crate::closed_loop::definition::SettingsOverrides;
 use crate::estimation::cut_settings::{parse_cut, CutSetting};
@@ -19,14 +19,14 @@ use crate::web::components::fields::SelectField;
 use crate::web::components::runner::{RunProgress, Runner};
 use crate::web::components::saved_calibrations::{save_calibration, stored_calibrations};
 use crate::web::components::table_form::{SettingField, TableForm};
-use crate::web::components::work_job::Shared as SharedWork;
+use crate::web::components::work_job::Shared;
 
 /// The calibrations saved in this browser, and what could not be read of them.
 pub type Stored = (Vec<CalibrationFile>, Vec<String>);
 
 /// The fit's feedback path, its run and the calibrations saved in this browser.
 #[derive(Clone, Copy)]
-pub struct Fit {
+pub struct FitForm {
     feedback_text: RwSignal<String>,
     /// Which current the fit (and a replay) measures the force from.
     pub feedback: Memo<Feedback>,
@@ -37,7 +37,7 @@ pub struct Fit {
     pub stored: RwSignal<Stored>,
 }
 
-impl Fit {
+impl FitForm {
     /// No fit yet, the spindle's current.
     pub fn new() -> Self {
         let feedback_text = RwSignal::new("spindle".to_string());
@@ -62,13 +62,13 @@ impl Fit {
 
 /// The calibration's fieldset.
 #[component]
-pub fn CalibrationPanel(shared: Shared, fit: Fit) -> impl IntoView {
+pub fn CalibrationPanel(shared: LogsState, fit: FitForm) -> impl IntoView {
     let force_from = RwSignal::new("measured".to_string());
     let cut = TableForm::<CutSetting>::new(&[]);
     let parsed_cut = Memo::new(move |_| parse_cut(&cut.texts()).map_err(|e| form_errors(&e)));
     let cut_errors = Signal::derive(move || parsed_cut.get().err().unwrap_or_default());
     let fit_error = RwSignal::new(None::<String>);
-    let Fit {
+    let FitForm {
         feedback_text,
         feedback,
         runner,
@@ -115,7 +115,7 @@ pub fn CalibrationPanel(shared: Shared, fit: Fit) -> impl IntoView {
             ..ReplaySettings::default()
         };
         match LogFitWork::new(&l.log, &l.mapping, &settings, &force) {
-            Ok(work) => runner_for_click.start(SharedWork(work)),
+            Ok(work) => runner_for_click.start(Shared(work)),
             Err(e) => fit_error.set(Some(e.to_string())),
         }
     };

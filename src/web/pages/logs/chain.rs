@@ -7,7 +7,7 @@ use std::time::Duration;
 use leptos::prelude::*;
 
 use super::charts::{channel_column, CURRENTS};
-use super::Shared;
+use super::LogsState;
 use crate::log::analysis::{ChainOutput, ChainRequest, ChainWork};
 use crate::log::mapping::Channel;
 use crate::log::settings::LogSetting;
@@ -15,7 +15,7 @@ use crate::log::ColumnKind;
 use crate::web::components::fields::ChoiceField;
 use crate::web::components::runner::{Debounce, RunProgress, Runner};
 use crate::web::components::table_form::SettingField;
-use crate::web::components::work_job::Shared as SharedWork;
+use crate::web::components::work_job::Shared;
 
 /// The chain's column, its grouping and its run.
 #[derive(Clone, Copy)]
@@ -32,7 +32,7 @@ pub struct Chain {
 
 impl Chain {
     /// The chain of `shared`'s active log, run whenever the log or a setting changes.
-    pub fn new(shared: Shared) -> Self {
+    pub fn new(shared: LogsState) -> Self {
         let column = RwSignal::new(String::new());
         let by = RwSignal::new(String::new());
         let runner = Runner::<Arc<ChainOutput>>::new();
@@ -77,7 +77,7 @@ impl Chain {
             debounce.request(move || match ChainWork::new(l.log.clone(), request) {
                 Ok(work) => {
                     error.set(None);
-                    runner.start(SharedWork(work));
+                    runner.start(Shared(work));
                 }
                 Err(e) => error.set(Some(e)),
             });
@@ -95,7 +95,7 @@ impl Chain {
 
 /// The signal chain's fieldset.
 #[component]
-pub fn ChainPanel(shared: Shared, chain: Chain) -> impl IntoView {
+pub fn ChainPanel(shared: LogsState, chain: Chain) -> impl IntoView {
     let column_options = Signal::derive(move || {
         shared.active.with(|l| {
             l.as_ref()

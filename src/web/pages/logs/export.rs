@@ -4,14 +4,14 @@ use leptos::prelude::*;
 
 use super::chain::Chain;
 use super::replay::Replay;
-use super::Shared;
+use super::LogsState;
 use crate::log::analysis::write_channels_csv;
 use crate::log::replay::{write_replay_csv, ReplayResult};
 use crate::web::components::download::download_written;
 
 /// The export's fieldset.
 #[component]
-pub fn ExportPanel(shared: Shared, chain: Chain, replay: Replay) -> impl IntoView {
+pub fn ExportPanel(shared: LogsState, chain: Chain, replay: Replay) -> impl IntoView {
     let export_error = RwSignal::new(None::<String>);
     let (chain_done, column) = (chain.done, chain.column);
     let export_channels = move |_| {

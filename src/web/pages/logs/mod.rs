@@ -55,7 +55,7 @@ use crate::log::settings::{parse_analysis, sample_period, AnalysisSettings, LogS
 use crate::web::components::later::Later;
 use crate::web::components::page::PageShell;
 use crate::web::components::table_form::{FieldErrors, TableForm};
-use calibration::{CalibrationPanel, Fit};
+use calibration::{CalibrationPanel, FitForm};
 use chain::{Chain, ChainPanel};
 use export::ExportPanel;
 use loader::{LoadedLog, Logs};
@@ -67,7 +67,7 @@ use results::LogResults;
 /// analysis settings (the sample period of a log without a time column, the chain's low-pass,
 /// RMS window and marker teeth), each parsed through its row.
 #[derive(Clone, Copy)]
-struct Shared {
+struct LogsState {
     logs: Logs,
     active: Memo<Option<LoadedLog>>,
     time_view: RwSignal<Option<Range<f64>>>,
@@ -78,7 +78,7 @@ struct Shared {
     errors: Memo<FieldErrors>,
 }
 
-impl Shared {
+impl LogsState {
     fn new() -> Self {
         let logs = Logs::new();
         let active = Memo::new(move |_| {
@@ -133,9 +133,9 @@ impl Shared {
 /// The Logs page.
 #[component]
 pub fn LogsPage() -> impl IntoView {
-    let shared = Shared::new();
+    let shared = LogsState::new();
     let chain = Chain::new(shared);
-    let fit = Fit::new();
+    let fit = FitForm::new();
     let replay = Replay::new();
     view! {
         <PageShell id="logs" title="Machine logs">

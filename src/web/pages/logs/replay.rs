@@ -6,8 +6,8 @@ use std::sync::Arc;
 
 use leptos::prelude::*;
 
-use super::calibration::Fit;
-use super::Shared;
+use super::calibration::FitForm;
+use super::LogsState;
 use crate::closed_loop::definition::{max_override_pct_of, RunSetting, SettingsOverrides};
 use crate::closed_loop::error::LoopError;
 use crate::control::registry::{ControllerConfig, ControllerKind};
@@ -48,7 +48,7 @@ fn target_setting(kind: &str) -> RunSetting {
 
 /// The replay's fieldset.
 #[component]
-pub fn ReplayPanel(shared: Shared, fit: Fit, replay: Replay) -> impl IntoView {
+pub fn ReplayPanel(shared: LogsState, fit: FitForm, replay: Replay) -> impl IntoView {
     let chosen: [RwSignal<bool>; ControllerKind::ALL.len()] = std::array::from_fn(|i| {
         RwSignal::new(matches!(
             ControllerKind::ALL[i],

@@ -4,7 +4,7 @@
 
 use leptos::prelude::*;
 
-use super::calibration::Fit;
+use super::calibration::FitForm;
 use super::chain::Chain;
 use super::charts::{
     channel_column, fit_chart, overlay_chart, points, replay_chart, spectrum_chart, CURRENTS,
@@ -12,7 +12,7 @@ use super::charts::{
 use super::replay::Replay;
 use super::reports::{ChainReport, ReplayReport};
 use super::summary::LogSummary;
-use super::Shared;
+use super::LogsState;
 use crate::charts::{Axis, LineChart, Series, PALETTE};
 use crate::log::analysis::row_times;
 use crate::log::mapping::Channel;
@@ -20,7 +20,7 @@ use crate::web::components::chart::ChartCanvas;
 
 /// The whole results column.
 #[component]
-pub fn LogResults(shared: Shared, chain: Chain, fit: Fit, replay: Replay) -> impl IntoView {
+pub fn LogResults(shared: LogsState, chain: Chain, fit: FitForm, replay: Replay) -> impl IntoView {
     let mapping_error = Memo::new(move |_| {
         shared.active.with(|l| {
             l.as_ref()
@@ -50,8 +50,8 @@ pub fn LogResults(shared: Shared, chain: Chain, fit: Fit, replay: Replay) -> imp
 /// Every open log's current and force, the chain on the chosen column and its spectrum, and the
 /// chain's statistics.
 #[component]
-fn LogCharts(shared: Shared, chain: Chain) -> impl IntoView {
-    let Shared {
+fn LogCharts(shared: LogsState, chain: Chain) -> impl IntoView {
+    let LogsState {
         logs,
         active,
         time_view,
@@ -129,7 +129,7 @@ fn LogCharts(shared: Shared, chain: Chain) -> impl IntoView {
 
 /// The replays' overrides and force estimates, and their numbers.
 #[component]
-fn ReplayCharts(shared: Shared, replay: Replay) -> impl IntoView {
+fn ReplayCharts(shared: LogsState, replay: Replay) -> impl IntoView {
     let (done, time_view) = (replay.done, shared.time_view);
     let replay_override = Signal::derive(move || {
         let results = done.get().unwrap_or_default();

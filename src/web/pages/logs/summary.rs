@@ -4,7 +4,7 @@
 use leptos::prelude::*;
 
 use super::loader::LoadedLog;
-use super::Shared;
+use super::LogsState;
 use crate::input::readable;
 use crate::log::mapping::Channel;
 use crate::log::settings::LogSetting;
@@ -14,7 +14,7 @@ use crate::web::components::table_form::SettingField;
 #[component]
 pub fn LogSummary(
     l: LoadedLog,
-    shared: Shared,
+    shared: LogsState,
     #[prop(into)] mapping_error: Signal<Option<String>>,
 ) -> impl IntoView {
     let logs = shared.logs;
