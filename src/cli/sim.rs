@@ -111,6 +111,61 @@ impl clap::Args for RunOptions {
     }
 }
 
+pub(crate) const FUZZY_ENGINE_HELP: &str =
+    "The engine the fuzzy-engine controller runs: an FLL or \
+     FIS file with two inputs (the first is E, the second EC) and one output (the override's \
+     change)";
+
+/// An engine file given with `--fuzzy-engine`: its path (for messages) and text.
+#[derive(Debug, Clone)]
+pub struct EngineFile {
+    path: String,
+    text: String,
+}
+
+impl EngineFile {
+    /// Reads `--fuzzy-engine FILE`, if given.
+    pub fn read(path: Option<&str>) -> Result<Option<Self>, CliError> {
+        path.map(|path| {
+            std::fs::read_to_string(path)
+                .map(|text| EngineFile {
+                    path: path.to_string(),
+                    text,
+                })
+                .map_err(|e| CliError::new(format!("--fuzzy-engine: cannot read {path:?}: {e}")))
+        })
+        .transpose()
+    }
+
+    /// Gives the engine to `config` if it is a `fuzzy-engine` controller; other controllers
+    /// run their own laws.
+    fn give_to(&self, config: &mut ControllerConfig) -> Result<(), CliError> {
+        if config.kind() != ControllerKind::FuzzyEngine {
+            return Ok(());
+        }
+        config
+            .set_engine(&self.text)
+            .map_err(|e| CliError::new(format!("--fuzzy-engine {}: {e}", self.path)))
+    }
+}
+
+/// `--fuzzy-engine` given where no controller runs it is a mistake worth a message.
+pub(crate) fn check_engine_used<'a>(
+    engine: &Option<EngineFile>,
+    mut kinds: impl Iterator<Item = &'a ControllerConfig>,
+) -> Result<(), CliError> {
+    match engine {
+        Some(file) if !kinds.any(|c| c.kind() == ControllerKind::FuzzyEngine) => {
+            Err(CliError::new(format!(
+                "--fuzzy-engine {}: no controller runs it; it is the engine of the {} controller",
+                file.path,
+                ControllerKind::FuzzyEngine
+            )))
+        }
+        _ => Ok(()),
+    }
+}
+
 const CONFIG_HELP: &str = "Run what a saved configuration (the browser's Configuration JSON \
      export) holds, instead of --scenario, --controller and the other run options";
 
@@ -127,6 +182,8 @@ pub struct SimArgs {
     /// Set a controller parameter (repeatable)
     #[arg(long, value_name = "KEY=VALUE", allow_hyphen_values = true)]
     set: Vec<String>,
+    #[arg(long = "fuzzy-engine", value_name = "FILE", help = FUZZY_ENGINE_HELP)]
+    fuzzy_engine: Option<String>,
     /// Write the trace as CSV (one row per control period)
     #[arg(long, value_name = "FILE")]
     csv: Option<String>,
@@ -152,6 +209,8 @@ pub struct CompareArgs {
     /// Controllers to compare; each NAME or NAME:key=value:key=value
     #[arg(long, value_name = "A,B,...")]
     controllers: Option<String>,
+    #[arg(long = "fuzzy-engine", value_name = "FILE", help = FUZZY_ENGINE_HELP)]
+    fuzzy_engine: Option<String>,
     /// Print the metrics as JSON instead of a table
     #[arg(long)]
     json: bool,
@@ -219,20 +278,30 @@ pub fn spec_from_args(args: &[String]) -> Result<RunSpec, CliError> {
         std::iter::once("sim").chain(args.iter().map(String::as_str)),
     )
     .map_err(|e| super::args::one_line(&e, args, &<Sim as clap::CommandFactory>::command()))?;
+    let engine = EngineFile::read(parsed.args.fuzzy_engine.as_deref())?;
     let controller = match parsed.args.controller.as_deref() {
-        Some(name) => controller_with_settings(name, preset_option(&parsed.args.run)?)?,
+        Some(name) => {
+            controller_with_settings(name, preset_option(&parsed.args.run)?, engine.as_ref())?
+        }
         None => ControllerConfig::new(ControllerKind::Fixed),
     };
     spec(&parsed.args.run, controller)
 }
 
 /// Parses `NAME` or `NAME:key=value:key=value`, starting from `preset`'s defaults (the paper's own
-/// parameters where it states them).
-pub fn controller_with_settings(text: &str, preset: Preset) -> Result<ControllerConfig, CliError> {
+/// parameters where it states them); a `fuzzy-engine` controller runs `engine` if given.
+pub fn controller_with_settings(
+    text: &str,
+    preset: Preset,
+    engine: Option<&EngineFile>,
+) -> Result<ControllerConfig, CliError> {
     let mut parts = text.split(':');
     let name = parts.next().unwrap_or_default();
     let kind: ControllerKind = name.parse().map_err(|e| CliError::new(format!("{e}")))?;
     let mut config = preset_controller(preset, kind);
+    if let Some(file) = engine {
+        file.give_to(&mut config)?;
+    }
     for assignment in parts {
         config
             .set_text(assignment)
@@ -399,6 +468,7 @@ pub fn run_sim(args: SimArgs, io: &mut Io<'_>) -> Result<(), CliError> {
         (args.controller.is_some())
             .then_some("controller")
             .or((!args.set.is_empty()).then_some("set"))
+            .or(args.fuzzy_engine.is_some().then_some("fuzzy-engine"))
     });
     let spec = match runs_from_config(&args.config, defining)? {
         Some(mut runs) if runs.len() == 1 => runs.remove(0),
@@ -409,10 +479,19 @@ pub fn run_sim(args: SimArgs, io: &mut Io<'_>) -> Result<(), CliError> {
             )))
         }
         None => {
-            let kind: ControllerKind = required::<String>("controller", &args.controller)?
-                .parse()
-                .map_err(|e| CliError::new(format!("--controller: {e}")))?;
+            let engine = EngineFile::read(args.fuzzy_engine.as_deref())?;
+            // An engine alone says which controller runs it.
+            let kind: ControllerKind = match (&args.controller, &engine) {
+                (None, Some(_)) => ControllerKind::FuzzyEngine,
+                _ => required::<String>("controller", &args.controller)?
+                    .parse()
+                    .map_err(|e| CliError::new(format!("--controller: {e}")))?,
+            };
             let mut controller = preset_controller(preset_option(&args.run)?, kind);
+            if let Some(file) = &engine {
+                file.give_to(&mut controller)?;
+            }
+            check_engine_used(&engine, std::iter::once(&controller))?;
             for assignment in &args.set {
                 controller
                     .set_text(assignment)
@@ -496,10 +575,12 @@ pub fn run_compare(args: CompareArgs, io: &mut Io<'_>) -> Result<(), CliError> {
     let defining = args
         .run
         .first_defining()
-        .or_else(|| args.controllers.is_some().then_some("controllers"));
+        .or_else(|| args.controllers.is_some().then_some("controllers"))
+        .or_else(|| args.fuzzy_engine.is_some().then_some("fuzzy-engine"));
     let (base, named) = match runs_from_config(&args.config, defining)? {
         Some(runs) => one_scenario(runs)?,
         None => {
+            let engine = EngineFile::read(args.fuzzy_engine.as_deref())?;
             let list: String = required("controllers", &args.controllers)?;
             let named = list
                 .split(',')
@@ -511,10 +592,11 @@ pub fn run_compare(args: CompareArgs, io: &mut Io<'_>) -> Result<(), CliError> {
                     ))),
                     s => Ok((
                         s.to_string(),
-                        controller_with_settings(s, preset_option(&args.run)?)?,
+                        controller_with_settings(s, preset_option(&args.run)?, engine.as_ref())?,
                     )),
                 })
                 .collect::<Result<Vec<_>, CliError>>()?;
+            check_engine_used(&engine, named.iter().map(|(_, c)| c))?;
             (
                 spec(&args.run, ControllerConfig::new(ControllerKind::Fixed))?,
                 named,

@@ -10,7 +10,7 @@ use serde::Serialize;
 
 use super::args::required;
 use super::calibrate::{problem_notes, read_log, LogCalibrationArgs};
-use super::sim::controller_with_settings;
+use super::sim::{check_engine_used, controller_with_settings, EngineFile, FUZZY_ENGINE_HELP};
 use super::table_args::{OptionRows, TableArgs};
 use super::{write_json, CliError, Io};
 use crate::closed_loop::definition::RunSpec;
@@ -65,6 +65,8 @@ pub struct TuneArgs {
     /// The controller to tune, with fixed parameters as NAME:key=value:…
     #[arg(long, value_name = "NAME")]
     controller: Option<String>,
+    #[arg(long = "fuzzy-engine", value_name = "FILE", help = FUZZY_ENGINE_HELP)]
+    fuzzy_engine: Option<String>,
     /// The presets to tune on (or to teach in), comma separated
     #[arg(long, value_name = "A,B,...")]
     scenarios: Option<String>,
@@ -223,14 +225,16 @@ pub fn run(args: TuneArgs, io: &mut Io<'_>) -> Result<(), CliError> {
         return Err(CliError::new("missing required option --scenarios"));
     };
     let controller_text: String = required("controller", &args.controller)?;
+    let engine = EngineFile::read(args.fuzzy_engine.as_deref())?;
     // Each scenario runs its own preset's paper values with the caller's settings on top.
     let controllers = presets
         .iter()
         .map(|&p| {
-            controller_with_settings(&controller_text, p)
+            controller_with_settings(&controller_text, p, engine.as_ref())
                 .map_err(|e| CliError::new(format!("--controller: {e}")))
         })
         .collect::<Result<Vec<_>, _>>()?;
+    check_engine_used(&engine, controllers.iter())?;
     let controller = controllers[0].clone();
     let params = args
         .params

@@ -987,12 +987,10 @@ pub fn preset_controller(preset: Preset, kind: ControllerKind) -> ControllerConf
 /// The controller parameters `preset`'s paper states, as (key, value).
 pub fn paper_parameters(preset: Preset, kind: ControllerKind) -> &'static [(&'static str, f64)] {
     match (preset.plant_kind(), kind) {
-        (PlantKind::BondGraph, ControllerKind::FuzzyExperience | ControllerKind::FuzzyDynamics) => {
-            &[
-                ("output_range_pct", PAPER_002_OUTPUT_RANGE_PCT),
-                ("change_time_base_s", PAPER_002_EC_TIME_BASE_S),
-            ]
-        }
+        (PlantKind::BondGraph, kind) if kind.is_fuzzy() => &[
+            ("output_range_pct", PAPER_002_OUTPUT_RANGE_PCT),
+            ("change_time_base_s", PAPER_002_EC_TIME_BASE_S),
+        ],
         _ => &[],
     }
 }

@@ -10,7 +10,8 @@ use serde::{Deserialize, Serialize};
 use super::fixed::FixedFeed;
 use super::fuzzy::controller::{FuzzyController, FuzzyParams};
 use super::fuzzy::engine::Defuzzifier;
-use super::fuzzy::rules::{RuleBase, RuleTable};
+use super::fuzzy::rules::{paper_002_engine, RuleBase, RuleTable};
+use super::fuzzy::{fll, Format};
 use super::law::Controller;
 use super::mrac::{ModelReferenceAdaptive, MracParams};
 use super::pi::{PiController, PiParams};
@@ -180,16 +181,20 @@ pub enum ControllerKind {
     FuzzyExperience,
     /// Paper 002's fuzzy controller with the dynamics-based rules of Table 4.
     FuzzyDynamics,
+    /// Paper 002's fuzzy law on an engine the engineer brings (FLL or FIS, two inputs and one
+    /// output); paper 002's dynamics table until one is imported.
+    FuzzyEngine,
 }
 
 impl ControllerKind {
     /// Every controller, in the order the lab lists them.
-    pub const ALL: [ControllerKind; 7] = [
+    pub const ALL: [ControllerKind; 8] = [
         ControllerKind::Fixed,
         ControllerKind::Restriction,
         ControllerKind::Threshold,
         ControllerKind::FuzzyExperience,
         ControllerKind::FuzzyDynamics,
+        ControllerKind::FuzzyEngine,
         ControllerKind::Pi,
         ControllerKind::Mrac,
     ];
@@ -204,6 +209,7 @@ impl ControllerKind {
             ControllerKind::Mrac => "mrac",
             ControllerKind::FuzzyExperience => "fuzzy-experience",
             ControllerKind::FuzzyDynamics => "fuzzy-dynamics",
+            ControllerKind::FuzzyEngine => "fuzzy-engine",
         }
     }
 
@@ -217,6 +223,7 @@ impl ControllerKind {
             ControllerKind::Mrac => "Lyapunov adaptive (MRAC)",
             ControllerKind::FuzzyExperience => "Fuzzy, experience rules",
             ControllerKind::FuzzyDynamics => "Fuzzy, dynamics rules",
+            ControllerKind::FuzzyEngine => "Fuzzy, imported engine",
         }
     }
 
@@ -232,6 +239,10 @@ impl ControllerKind {
                 "Liu, Wang, Wang (paper 002), §4; MacVicar-Whelan rule table"
             }
             ControllerKind::FuzzyDynamics => "Liu, Wang, Wang (paper 002), §4, Table 4 (repaired)",
+            ControllerKind::FuzzyEngine => {
+                "your FLL or FIS engine (first input E, second EC, one output U) under paper \
+                 002's law, §4; paper 002's dynamics table until you import one"
+            }
         }
     }
 
@@ -243,8 +254,20 @@ impl ControllerKind {
             ControllerKind::Threshold => ThresholdTuning::PARAMS,
             ControllerKind::Pi => PiTuning::PARAMS,
             ControllerKind::Mrac => MracTuning::PARAMS,
-            ControllerKind::FuzzyExperience | ControllerKind::FuzzyDynamics => FuzzyTuning::PARAMS,
+            ControllerKind::FuzzyExperience
+            | ControllerKind::FuzzyDynamics
+            | ControllerKind::FuzzyEngine => FuzzyTuning::PARAMS,
         }
+    }
+
+    /// Whether this is one of the fuzzy controllers (paper 002's law, [`FuzzyTuning`]).
+    pub fn is_fuzzy(self) -> bool {
+        matches!(
+            self,
+            ControllerKind::FuzzyExperience
+                | ControllerKind::FuzzyDynamics
+                | ControllerKind::FuzzyEngine
+        )
     }
 }
 
@@ -295,11 +318,14 @@ pub struct ControllerConfig {
     values: Vec<f64>,
     /// A user's rule table for the fuzzy controllers (the kind's built-in table when `None`).
     rule_table: Option<RuleTable>,
+    /// The engine of [`ControllerKind::FuzzyEngine`] as FLL, written by [`fll::write`] from an
+    /// engine of two inputs and one output that builds (`None` for every other kind).
+    engine_fll: Option<String>,
 }
 
 /// The serialised form: `{"kind": "pi", "params": {"kp": 0.3, ...}}`; missing parameters take
 /// their defaults, unknown or out-of-range ones are errors, and so is a field other than these
-/// three (a misspelt `"parms"` would otherwise run on the defaults). Whose defaults depends on
+/// four (a misspelt `"parms"` would otherwise run on the defaults). Whose defaults depends on
 /// the reader: a controller on its own takes its kind's ([`ControllerConfig::new`]), a run in a
 /// saved configuration its preset's (`closed_loop::definition::preset_controller`), through
 /// [`ControllerText::resolve`].
@@ -314,6 +340,9 @@ pub struct ControllerText {
     /// A user's rule table (fuzzy controllers).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub rule_table: Option<RuleTable>,
+    /// The engine of `fuzzy-engine`, as FLL or FIS text (written as FLL).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub engine: Option<String>,
 }
 
 impl ControllerText {
@@ -329,6 +358,9 @@ impl ControllerText {
         }
         if let Some(table) = self.rule_table {
             config.set_rule_table(table)?;
+        }
+        if let Some(engine) = self.engine {
+            config.set_engine(&engine)?;
         }
         Ok(config)
     }
@@ -354,8 +386,35 @@ impl From<ControllerConfig> for ControllerText {
                 .map(|(p, v)| (p.key.to_string(), *v))
                 .collect(),
             rule_table: config.rule_table,
+            engine: config.engine_fll,
         }
     }
+}
+
+/// How the lab's paper 002 controllers defuzzify U: eq 7's weighted average.
+pub const PAPER_002_DEFUZZIFIER: Defuzzifier = Defuzzifier::WeightedAverage;
+
+/// The fuzzy law's scalings from a fuzzy controller's values.
+fn fuzzy_params(values: &[f64]) -> FuzzyParams {
+    let t = FuzzyTuning::from_values(values);
+    FuzzyParams {
+        error_range_pct: t.error_range_pct,
+        change_range_pct: t.change_range_pct,
+        output_range_pct: t.output_range_pct,
+        change_time_base_s: t.change_time_base_s,
+        output_time_base_s: t.output_time_base_s,
+    }
+}
+
+/// The engine `fuzzy-engine` runs until one is imported: paper 002's dynamics table as the
+/// `fuzzy-dynamics` controller runs it, written as FLL (so it runs the same).
+pub fn default_engine_fll() -> &'static str {
+    static TEXT: std::sync::OnceLock<String> = std::sync::OnceLock::new();
+    TEXT.get_or_init(|| {
+        paper_002_engine(&RuleBase::Dynamics.table(), PAPER_002_DEFUZZIFIER)
+            .map(|engine| fll::write(&engine))
+            .unwrap_or_default()
+    })
 }
 
 /// What a controller needs to know about the run it is built for.
@@ -377,7 +436,100 @@ impl ControllerConfig {
             kind,
             values: kind.params().iter().map(|p| p.default).collect(),
             rule_table: None,
+            engine_fll: (kind == ControllerKind::FuzzyEngine)
+                .then(|| default_engine_fll().to_string()),
         }
+    }
+
+    /// Uses an engine (FLL or FIS text, told apart by content) as the `fuzzy-engine`
+    /// controller's: its first input is E, its second EC, its one output the override's change.
+    /// An engine that does not read, or is not of two inputs and one output, is an error with the
+    /// reader's message (its line).
+    ///
+    /// ```
+    /// use cutlab::control::registry::{ControllerConfig, ControllerKind};
+    /// let mut c = ControllerConfig::new(ControllerKind::FuzzyEngine);
+    /// let e = c.set_engine("Engine: x\nInputVariable: a\n  range: 0 1 2").unwrap_err();
+    /// assert!(e.to_string().starts_with("engine: line 3"), "{e}");
+    /// ```
+    pub fn set_engine(&mut self, text: &str) -> Result<(), ParamError> {
+        if self.kind != ControllerKind::FuzzyEngine {
+            return Err(ParamError(format!(
+                "controller \"{}\" runs its own rules; an imported engine runs as \"{}\"",
+                self.kind,
+                ControllerKind::FuzzyEngine
+            )));
+        }
+        let engine = Format::of("", text)
+            .parse(text)
+            .map_err(|e| ParamError(format!("engine: {e}")))?;
+        let fll_text = fll::write(&engine);
+        // What is kept is the FLL, so it is the FLL that must read back and build: then every
+        // later build of this configuration succeeds. The shape is the controller's to check.
+        let written = fll::parse(&fll_text).map_err(|e| {
+            ParamError(format!(
+                "engine: written as FLL, it does not read back: {e}"
+            ))
+        })?;
+        FuzzyController::from_engine(written, fuzzy_params(&self.values))
+            .map_err(|e| ParamError(format!("engine: {e}")))?;
+        self.engine_fll = Some(fll_text);
+        Ok(())
+    }
+
+    /// The engine of a `fuzzy-engine` controller, as FLL (`None` for every other kind).
+    pub fn engine_fll(&self) -> Option<&str> {
+        self.engine_fll.as_deref()
+    }
+
+    /// How a `fuzzy-engine` controller maps E, EC and the override's change onto its engine, in
+    /// words with this configuration's ranges (the form shows it; `None` for every other kind).
+    /// The mapping itself is [`FuzzyController`]'s.
+    ///
+    /// ```
+    /// use cutlab::control::registry::{ControllerConfig, ControllerKind};
+    /// let c = ControllerConfig::new(ControllerKind::FuzzyEngine);
+    /// assert_eq!(c.engine_mapping().unwrap(), "Engine \"paper002\": E = (F_target − F)/F_target \
+    ///     → first input \"E\" on [-6, 6], ±100 % at its edges; EC, the change of E per control \
+    ///     period → second input \"EC\" on [-6, 6], ±200 % at its edges; output \"U\" on [-6, 6] \
+    ///     → override change, ±20 % per control period at its edges, none at its centre 0.");
+    /// ```
+    pub fn engine_mapping(&self) -> Option<String> {
+        let engine = fll::parse(self.engine_fll.as_deref()?).ok()?;
+        let ([e, ec], [u]) = (engine.inputs(), engine.outputs()) else {
+            return None;
+        };
+        let t = FuzzyTuning::from_values(&self.values);
+        let n = crate::input::readable;
+        let per = |base_s: f64| {
+            if base_s > 0.0 {
+                format!("per {} s", n(base_s))
+            } else {
+                "per control period".to_string()
+            }
+        };
+        Some(format!(
+            "Engine \"{}\": E = (F_target − F)/F_target → first input \"{}\" on [{}, {}], ±{} % at \
+             its edges; EC, the change of E {} → second input \"{}\" on [{}, {}], ±{} % at its \
+             edges; output \"{}\" on [{}, {}] → override change, ±{} % {} at its edges, none at \
+             its centre {}.",
+            engine.name,
+            e.name,
+            n(e.min),
+            n(e.max),
+            n(t.error_range_pct),
+            per(t.change_time_base_s),
+            ec.name,
+            n(ec.min),
+            n(ec.max),
+            n(t.change_range_pct),
+            u.name,
+            n(u.min),
+            n(u.max),
+            n(t.output_range_pct),
+            per(t.output_time_base_s),
+            n(u.min + (u.max - u.min) / 2.0),
+        ))
     }
 
     /// Uses a user's 7×7 rule table (levels −3…3) for a fuzzy controller.
@@ -539,20 +691,17 @@ impl ControllerConfig {
                     RuleBase::Dynamics
                 };
                 let table = self.rule_table.unwrap_or_else(|| base.table());
-                let t = FuzzyTuning::from_values(values);
                 Box::new(
-                    FuzzyController::new(
-                        &table,
-                        FuzzyParams {
-                            error_range_pct: t.error_range_pct,
-                            change_range_pct: t.change_range_pct,
-                            output_range_pct: t.output_range_pct,
-                            change_time_base_s: t.change_time_base_s,
-                            output_time_base_s: t.output_time_base_s,
-                            defuzzifier: Defuzzifier::WeightedAverage,
-                        },
-                    )
-                    .map_err(|e| ParamError(e.to_string()))?,
+                    FuzzyController::new(&table, PAPER_002_DEFUZZIFIER, fuzzy_params(values))
+                        .map_err(|e| ParamError(e.to_string()))?,
+                )
+            }
+            ControllerKind::FuzzyEngine => {
+                let text = self.engine_fll().unwrap_or_else(|| default_engine_fll());
+                let engine = fll::parse(text).map_err(|e| ParamError(format!("engine: {e}")))?;
+                Box::new(
+                    FuzzyController::from_engine(engine, fuzzy_params(values))
+                        .map_err(|e| ParamError(format!("engine: {e}")))?,
                 )
             }
             ControllerKind::Mrac => {

@@ -76,7 +76,7 @@ test('FLL exports, a broken FLL is explained by line, and a run supplies a momen
   ]);
   const fll = await readFile(await download.path(), 'utf8');
   assert.match(fll, /RuleBlock: rules/);
-  const text = page.getByLabel('FLL text');
+  const text = page.getByLabel('Engine text (FLL or FIS)');
   await text.fill(fll.replace('term: PB Triangle 4 6 6', 'term: PB Zigzag 4 6 6'));
   await page.getByRole('button', { name: 'Import FLL' }).click();
   await page.getByText(/The FLL could not be read: line \d+: term PB: shape Zigzag is not one of fuzzylite's terms/).waitFor();
@@ -104,6 +104,75 @@ test('FLL exports, a broken FLL is explained by line, and a run supplies a momen
   await page.getByLabel(/Moment: \d+\.\d\d s/).waitFor();
   // The picked moment moves on the trace.
   await waitForRedraw(trace, drawn);
+  assert.deepEqual(problems, []);
+  await context.close();
+});
+
+// fuzzylite's example corpus, where Debian's fuzzylite package puts it: the files are LGPL/GPL,
+// so the test reads them there and never copies them into the repository. linear_tip_calculator
+// (Takagi–Sugeno) has two inputs and one output, and its tip rises with both inputs, as the feed
+// should with E (a light cut) and EC (a cut getting lighter). The corpus's one Mamdani engine of
+// that shape, investment_portfolio, lowers its output as its first input rises: as E it would
+// push the feed the wrong way.
+const CORPUS_ENGINE = '/usr/share/doc/fuzzylite/examples/takagi-sugeno/octave/linear_tip_calculator.fll';
+const RUN_TIMEOUT = 120_000;
+
+/** Waits until the chosen corpus file fills the engine's text field, then imports it. */
+async function importChosenFile(page) {
+  const text = await page.getByLabel('Engine text (FLL or FIS)').elementHandle();
+  await page.waitForFunction((field) => field.value.startsWith('Engine: linear_tip_calculator'), text);
+  await page.getByRole('button', { name: 'Import FLL or FIS' }).click();
+}
+
+test('an engine from fuzzylite\'s corpus is imported, shown whole, and runs in Simulate and beside paper 002\'s dynamics table in Compare', async () => {
+  const { page, problems, context } = await openLab(browser, server.url, '#/fuzzy', { width: 1440, height: 900 });
+  await page.getByLabel('FLL or FIS file to import').setInputFiles(CORPUS_ENGINE);
+  await importChosenFile(page);
+  // Its variables, terms and rules, as a list: it is no 7×7 table.
+  const rules = page.getByRole('list', { name: 'Rules', exact: true });
+  await rules.waitFor();
+  assert.equal(await rules.getByRole('listitem').count(), 4);
+  assert.match(await rules.getByRole('listitem').first().textContent(), /^if FoodQuality is Bad and Service is Bad then Tip is TenPercent$/);
+  const variables = await page.getByRole('list', { name: 'Variables and terms' }).textContent();
+  for (const text of ['input FoodQuality on [1, 10]', 'input Service on [1, 10]', 'output Tip (WeightedAverage) on [10, 20]', 'TwentyPercent Linear']) {
+    assert.ok(variables.includes(text), `${text} in ${variables}`);
+  }
+  await page.getByText(/Showing the imported engine "linear_tip_calculator"/).waitFor();
+  // Its surface over the two inputs.
+  await page.getByRole('img', { name: 'Control surface U(E, EC)' }).waitFor();
+
+  // In Simulate, as the loop's controller (computed in a worker, as every Simulate run is).
+  await page.getByRole('link', { name: 'Use in Simulate' }).click();
+  assert.equal(await page.getByLabel('Controller', { exact: true }).inputValue(), 'fuzzy-engine');
+  await page.getByText(/Engine "linear_tip_calculator": .* first input "FoodQuality" on \[1, 10\]/).waitFor();
+  const simulated = page.getByRole('table', { name: /Metrics of the run/ });
+  await simulated.getByRole('row', { name: /Cycle time/ }).getByRole('cell').first().waitFor({ timeout: RUN_TIMEOUT });
+  await page.getByRole('status').filter({ hasText: 'Running' }).waitFor({ state: 'detached', timeout: RUN_TIMEOUT });
+  assert.match(await simulated.getByRole('row', { name: /Cycle time/ }).textContent(), /\d/);
+  assert.match(page.url(), /engine=Engine\*_linear!_tip!_calculator~/);
+
+  // In Compare, beside paper 002's dynamics table: the table shows both with their metrics.
+  await page.goto(server.url + '#/fuzzy');
+  await page.getByRole('navigation', { name: 'Lab sections' }).waitFor();
+  await page.getByLabel('FLL or FIS file to import').setInputFiles(CORPUS_ENGINE);
+  await importChosenFile(page);
+  await page.getByRole('link', { name: 'Use in Compare' }).click();
+  const variantB = page.getByRole('group', { name: 'Variant B' });
+  assert.equal(await variantB.getByLabel('Controller', { exact: true }).inputValue(), 'fuzzy-engine');
+  await variantB.getByText(/second input "Service" on \[1, 10\]/).waitFor();
+  const table = page.getByRole('table', { name: /Metrics of the runs/ });
+  for (const name of ['A: fuzzy-dynamics', 'B: fuzzy-engine']) {
+    await table.getByRole('columnheader', { name }).waitFor({ timeout: RUN_TIMEOUT });
+  }
+  await page.getByRole('status').filter({ hasText: 'Running' }).waitFor({ state: 'detached', timeout: RUN_TIMEOUT });
+  const cycle = await table.getByRole('row', { name: /Cycle time/ }).getByRole('cell').allTextContents();
+  assert.equal(cycle.filter((t) => /\d/.test(t)).length, 2, `cycle times ${cycle.join(' | ')}`);
+  const error = await table.getByRole('row', { name: /Mean \|error\|/ }).first().getByRole('cell').allTextContents();
+  assert.equal(error.filter((t) => /\d/.test(t)).length, 2, `force errors ${error.join(' | ')}`);
+  // The two controllers are not the same law: their overrides differ.
+  assert.notEqual(error[0], error[1]);
+  assert.equal(await page.getByLabel('Preset', { exact: true }).inputValue(), 'liu-current-step');
+  await screenshot(page, 'compare-fuzzy-engine');
   assert.deepEqual(problems, []);
   await context.close();
 });

@@ -39,6 +39,26 @@
 //! and the programmed feed, so the paper's numbers are the defaults (100 %, 200 %, 100 %) on every
 //! preset. The feed a_f(i) the law increments is the one the machine applied, so the envelope's
 //! limits cannot wind it up.
+//!
+//! ## Any engine of two inputs and one output
+//!
+//! The controller runs any [`Engine`] with two inputs and one output ([`FuzzyController::from_engine`]:
+//! an FLL or FIS file brought by the engineer). Paper 002's engine is one such engine, with every
+//! universe [−6, 6]. The mapping is stated on the universes, by position: the engine's **first
+//! input is E, its second EC**, and its one output is U. With an input's universe [a, b], its
+//! centre m = a + (b − a)/2 and half-width h = (b − a)/2,
+//!
+//! ```text
+//! x_E  = sat_[a,b]( m + h · E  / (F_target · error_range_pct / 100) )
+//! x_EC = sat_[a,b]( m + h · EC / (F_target · change_range_pct / 100) )    (EC's own a, b)
+//! Δu   = (U − m_U) / h_U · output_range_pct · T/t_u                       (T/t_u = 1 per period)
+//! ```
+//!
+//! so an error of the whole error range reaches the edge of the first input's universe, and the
+//! output's edge is a change of the whole output range. On [−6, 6] this is k_e = 6 / (F_target ·
+//! error_range_pct / 100) and k_u = output_range_pct / 6 above, computed by the same expressions,
+//! so paper 002's tables run through this path give the same bits. An engine whose output is not
+//! a number (no rule fired and its default is NaN) holds the override for that period.
 
 use super::engine::{Defuzzifier, Engine};
 use super::rules::{paper_002_engine, RuleTable};
@@ -59,8 +79,32 @@ pub struct FuzzyParams {
     pub change_time_base_s: f64,
     /// k_u's time base t_u: 0 applies k_u per period (eq 1), t > 0 per t (1 s: a rate).
     pub output_time_base_s: f64,
-    /// How U is defuzzified.
-    pub defuzzifier: Defuzzifier,
+}
+
+/// A universe [min, max] as its centre and half-width, the mapping's terms.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Universe {
+    min: f64,
+    max: f64,
+    centre: f64,
+    half_width: f64,
+}
+
+impl Universe {
+    fn new(min: f64, max: f64) -> Self {
+        let half_width = (max - min) / 2.0;
+        Self {
+            min,
+            max,
+            centre: min + half_width,
+            half_width,
+        }
+    }
+
+    /// `value` relative to `range` (1 at the range) on this universe, saturated at its edges.
+    fn place(self, value: f64, range: f64) -> f64 {
+        (self.centre + self.half_width / range * value).clamp(self.min, self.max)
+    }
 }
 
 /// The incremental fuzzy controller of paper 002.
@@ -70,10 +114,9 @@ pub struct FuzzyParams {
 /// use cutlab::control::fuzzy::engine::Defuzzifier;
 /// use cutlab::control::fuzzy::rules::RuleBase;
 /// use cutlab::control::law::{Controller, ControlInput};
-/// let mut c = FuzzyController::new(&RuleBase::Dynamics.table(), FuzzyParams {
-///     error_range_pct: 100.0, change_range_pct: 200.0, output_range_pct: 100.0,
-///     change_time_base_s: 0.0, output_time_base_s: 0.0,
-///     defuzzifier: Defuzzifier::WeightedAverage }).unwrap();
+/// let mut c = FuzzyController::new(&RuleBase::Dynamics.table(), Defuzzifier::WeightedAverage,
+///     FuzzyParams { error_range_pct: 100.0, change_range_pct: 200.0, output_range_pct: 100.0,
+///     change_time_base_s: 0.0, output_time_base_s: 0.0 }).unwrap();
 /// let input = ControlInput { time_s: 10.0, dt_s: 0.05, force_n: 300.0, target_force_n: 300.0,
 ///     programmed_feed_mm_min: 1500.0, applied_override_pct: 100.0, time_since_start_s: 10.0 };
 /// assert_eq!(c.step(&input), 100.0); // on target: ZO, ZO → ZO
@@ -82,6 +125,8 @@ pub struct FuzzyParams {
 pub struct FuzzyController {
     engine: Engine,
     params: FuzzyParams,
+    /// The universes of E, EC and U.
+    universes: [Universe; 3],
     previous_error_n: Option<f64>,
     output: [f64; 1],
     terms: [LawTerm; 4],
@@ -90,11 +135,55 @@ pub struct FuzzyController {
 }
 
 impl FuzzyController {
-    /// The controller for a rule table.
-    pub fn new(table: &RuleTable, params: FuzzyParams) -> Result<Self, FuzzyError> {
+    /// Paper 002's controller for a rule table, defuzzified by `defuzzifier`.
+    pub fn new(
+        table: &RuleTable,
+        defuzzifier: Defuzzifier,
+        params: FuzzyParams,
+    ) -> Result<Self, FuzzyError> {
+        Self::from_engine(paper_002_engine(table, defuzzifier)?, params)
+    }
+
+    /// The controller for any engine of two inputs (E first, EC second) and one output U, mapped
+    /// onto their universes as the module documentation states; an engine of another shape is an
+    /// error that says what it has.
+    ///
+    /// ```
+    /// use cutlab::control::fuzzy::controller::{FuzzyController, FuzzyParams};
+    /// use cutlab::control::fuzzy::fll;
+    /// let tipper = fll::parse("Engine: tipper\nInputVariable: service\n  range: 0 10\n\
+    ///     term: good Triangle 0 5 10\nOutputVariable: tip\n  range: 0 30\n\
+    ///     term: average Triangle 0 15 30\n  defuzzifier: Centroid\n\
+    ///     RuleBlock: \n  rule: if service is good then tip is average").unwrap();
+    /// let params = FuzzyParams { error_range_pct: 100.0, change_range_pct: 200.0,
+    ///     output_range_pct: 20.0, change_time_base_s: 0.0, output_time_base_s: 0.0 };
+    /// let why = FuzzyController::from_engine(tipper, params).unwrap_err();
+    /// assert_eq!(why.to_string(), "engine \"tipper\" has 1 input and 1 output; the loop's \
+    ///     controller needs 2 inputs (E, then EC) and 1 output (the override's change)");
+    /// ```
+    pub fn from_engine(engine: Engine, params: FuzzyParams) -> Result<Self, FuzzyError> {
+        let (e, ec, u) = match (engine.inputs(), engine.outputs()) {
+            ([e, ec], [u]) => (
+                Universe::new(e.min, e.max),
+                Universe::new(ec.min, ec.max),
+                Universe::new(u.min, u.max),
+            ),
+            (inputs, outputs) => {
+                let count =
+                    |n: usize, what: &str| format!("{n} {what}{}", if n == 1 { "" } else { "s" });
+                return Err(FuzzyError::new(format!(
+                    "engine \"{}\" has {} and {}; the loop's controller needs 2 inputs (E, then \
+                     EC) and 1 output (the override's change)",
+                    engine.name,
+                    count(inputs.len(), "input"),
+                    count(outputs.len(), "output"),
+                )));
+            }
+        };
         Ok(Self {
-            engine: paper_002_engine(table, params.defuzzifier)?,
+            engine,
             params,
+            universes: [e, ec, u],
             previous_error_n: None,
             output: [0.0],
             terms: [
@@ -143,13 +232,17 @@ impl Controller for FuzzyController {
         };
         let change_n = (error_n - self.previous_error_n.unwrap_or(error_n)) * change_scale;
         self.previous_error_n = Some(error_n);
-        let ke = 6.0 / (input.target_force_n * p.error_range_pct / 100.0);
-        let kec = 6.0 / (input.target_force_n * p.change_range_pct / 100.0);
-        let e = (ke * error_n).clamp(-6.0, 6.0);
-        let ec = (kec * change_n).clamp(-6.0, 6.0);
+        let [e_universe, ec_universe, u_universe] = self.universes;
+        let e = e_universe.place(error_n, input.target_force_n * p.error_range_pct / 100.0);
+        let ec = ec_universe.place(change_n, input.target_force_n * p.change_range_pct / 100.0);
         self.engine.evaluate(&[e, ec], &mut self.output);
         let u = self.output[0];
-        let change_pct = u / 6.0 * p.output_range_pct * output_scale;
+        // An engine may answer NaN (no rule fired, default NaN): then nothing changes.
+        let change_pct = if u.is_finite() {
+            (u - u_universe.centre) / u_universe.half_width * p.output_range_pct * output_scale
+        } else {
+            0.0
+        };
         self.terms[0].value = e;
         self.terms[1].value = ec;
         self.terms[2].value = u;
@@ -200,7 +293,6 @@ mod tests {
             output_range_pct: output,
             change_time_base_s: 0.0,
             output_time_base_s: 0.0,
-            defuzzifier: Defuzzifier::WeightedAverage,
         }
     }
 
@@ -209,7 +301,12 @@ mod tests {
     }
 
     fn controller(p: FuzzyParams) -> FuzzyController {
-        FuzzyController::new(&RuleBase::Experience.table(), p).unwrap()
+        FuzzyController::new(
+            &RuleBase::Experience.table(),
+            Defuzzifier::WeightedAverage,
+            p,
+        )
+        .unwrap()
     }
 
     fn input(force_n: f64, applied_override_pct: f64) -> ControlInput {
@@ -447,11 +544,8 @@ mod tests {
                 .into_iter()
                 .filter(|d| *d != Defuzzifier::WeightedSum);
             for defuzzifier in bounded {
-                let p = FuzzyParams {
-                    defuzzifier,
-                    ..params(100.0, 200.0, 37.0)
-                };
-                let mut c = FuzzyController::new(&base.table(), p).unwrap();
+                let p = params(100.0, 200.0, 37.0);
+                let mut c = FuzzyController::new(&base.table(), defuzzifier, p).unwrap();
                 let mut largest: f64 = 0.0;
                 for k in 0..2000 {
                     let force = match k % 5 {
@@ -481,11 +575,8 @@ mod tests {
     fn the_exposed_terms_and_activations_are_the_values_the_law_used() {
         let mut rng = Rng::seed_from(5);
         for defuzzifier in Defuzzifier::ALL {
-            let p = FuzzyParams {
-                defuzzifier,
-                ..params(80.0, 150.0, 60.0)
-            };
-            let mut c = FuzzyController::new(&RuleBase::Dynamics.table(), p).unwrap();
+            let p = params(80.0, 150.0, 60.0);
+            let mut c = FuzzyController::new(&RuleBase::Dynamics.table(), defuzzifier, p).unwrap();
             let mut previous_error_n = None;
             for _ in 0..300 {
                 let target = 100.0 + 400.0 * rng.uniform();
@@ -519,6 +610,53 @@ mod tests {
                 assert_eq!(c.rule_activations(), Some(engine.activations()));
             }
         }
+    }
+
+    /// An engine on universes of its own: E on [0, 10], EC on [−1, 3], U on [0, 20]; one rule
+    /// that always fires, so U is the centre of its only term (weighted average).
+    fn shifted(u_term_centre: f64, default: &str) -> Engine {
+        crate::control::fuzzy::fll::parse(&format!(
+            "Engine: shifted\nInputVariable: load\n  range: 0 10\n  term: all Rectangle 0 10\n\
+             InputVariable: trend\n  range: -1 3\n  term: all Rectangle -1 3\n\
+             OutputVariable: feed\n  range: 0 20\n  defuzzifier: WeightedAverage\n\
+             default: {default}\n  term: here Triangle {} {u_term_centre} {}\n\
+             RuleBlock: \n  conjunction: Minimum\n  rule: if load is all and trend is all then feed is here\n",
+            u_term_centre - 1.0,
+            u_term_centre + 1.0
+        ))
+        .unwrap()
+    }
+
+    #[test]
+    fn e_and_ec_map_onto_the_first_and_second_inputs_universes_and_u_from_the_outputs() {
+        // E = +50 N on a 300 N target with an error range of 100 %: a sixth of the way from the
+        // centre 5 to the edge 10 of [0, 10]: 5 + 5 · 50/300. EC's universe [−1, 3] has centre 1
+        // and half-width 2: the first step's EC = 0 is 1.
+        let mut c = FuzzyController::from_engine(shifted(15.0, "0"), paper()).unwrap();
+        let request = c.step(&input(250.0, 100.0));
+        let [e, ec, u, delta] = terms(&c);
+        assert_close(e, 5.0 + 5.0 * 50.0 / 300.0, "E on [0, 10]");
+        assert_close(ec, 1.0, "EC at its centre");
+        // U = 15 on [0, 20] (centre 10, half-width 10) is half the output range: +50 %.
+        assert_close(u, 15.0, "U");
+        assert_close(delta, 50.0, "Δ");
+        assert_close(request, 150.0, "request");
+        // EC = 100 N − 50 N = 50 N against a change range of 200 % of 300 N: 1 + 2 · 50/600.
+        c.step(&input(300.0, 100.0));
+        assert_close(terms(&c)[1], 1.0 - 2.0 * 50.0 / 600.0, "EC on [−1, 3]");
+        // Beyond the ranges the inputs saturate at the universes' edges.
+        c.step(&input(-5000.0, 100.0));
+        assert_close(terms(&c)[0], 10.0, "E saturated");
+        assert_close(terms(&c)[1], 3.0, "EC saturated");
+        // An engine that answers NaN (its default, when no rule fires: here E's only term lies
+        // at the far end of its universe) holds the override.
+        let far = crate::control::fuzzy::fll::write(&shifted(15.0, "nan"))
+            .replace("Rectangle 0 10", "Rectangle 9 10");
+        let engine = crate::control::fuzzy::fll::parse(&far).unwrap();
+        let mut quiet = FuzzyController::from_engine(engine, paper()).unwrap();
+        assert_eq!(quiet.step(&input(300.0, 87.0)), 87.0);
+        assert!(terms(&quiet)[2].is_nan());
+        assert_eq!(terms(&quiet)[3], 0.0);
     }
 
     #[test]

@@ -9,6 +9,7 @@ use leptos::prelude::*;
 
 use crate::closed_loop::definition::SettingsOverrides;
 use crate::closed_loop::definition::{parse_texts, preset_controller, RunSetting, SettingGroup};
+use crate::control::fuzzy::fll;
 use crate::control::fuzzy::rules::RuleTable;
 use crate::control::registry::{ControllerConfig, ControllerKind};
 use crate::input::table::Table;
@@ -16,6 +17,7 @@ use crate::plant::presets::PlantEdits;
 use crate::plant::Preset;
 use crate::web::components::fields::{parse_number, NumberField, SelectField};
 use crate::web::components::table_form::{self, FieldErrors, TableForm};
+use crate::web::js::read_chosen_file;
 
 /// Text of the scenario fields: the preset, and every setting of the run definition
 /// ([`RunSetting::ALL`]), each parsed and checked by the core's table, so the form accepts exactly
@@ -229,6 +231,10 @@ pub struct ControllerForm {
     pub id_prefix: &'static str,
     /// A rule table from the Fuzzy rules page, used by the fuzzy controllers.
     pub rule_table: RwSignal<Option<RuleTable>>,
+    /// The `fuzzy-engine` controller's engine as FLL (its default, paper 002's dynamics table,
+    /// when `None`): imported here or carried from the Fuzzy rules page in the URL
+    /// ([`fll::to_url_text`]).
+    pub engine: RwSignal<Option<String>>,
     /// The preset whose defaults the untouched parameters show (a paper's own values on its
     /// preset, [`preset_controller`]).
     preset: RwSignal<Preset>,
@@ -264,6 +270,11 @@ pub fn decode_rule_table(text: &str) -> Option<RuleTable> {
         *cell = d;
     }
     Some(table)
+}
+
+/// Whether the controller named `kind` runs an imported engine.
+fn runs_engine(kind: &str) -> bool {
+    kind.parse::<ControllerKind>() == Ok(ControllerKind::FuzzyEngine)
 }
 
 /// Whether the controller named `kind` takes a rule table.
@@ -324,11 +335,14 @@ impl ControllerForm {
             }
         }
         let rule_table = get("rules").and_then(|t| decode_rule_table(&t));
+        // A damaged engine in a link is shown as the field's error by `parse`, not dropped.
+        let engine = get("engine").map(|t| fll::from_url_text(&t));
         Self {
             kind: RwSignal::new(kind),
             values: RwSignal::new(values),
             id_prefix,
             rule_table: RwSignal::new(rule_table),
+            engine: RwSignal::new(engine),
             preset: RwSignal::new(preset),
         }
     }
@@ -346,6 +360,7 @@ impl ControllerForm {
             }
         });
         self.rule_table.set(None);
+        self.engine.set(None);
     }
 
     /// Follows a change of preset: every parameter still at the old preset's default takes the
@@ -374,6 +389,9 @@ impl ControllerForm {
         let mut q = vec![(format!("{query_prefix}controller"), kind.clone())];
         if let Some(table) = self.rule_table.get().filter(|_| is_fuzzy(&kind)) {
             q.push((format!("{query_prefix}rules"), encode_rule_table(&table)));
+        }
+        if let Some(engine) = self.engine.get().filter(|_| runs_engine(&kind)) {
+            q.push((format!("{query_prefix}engine"), fll::to_url_text(&engine)));
         }
         if let Ok(k) = kind.parse::<ControllerKind>() {
             let preset = self.preset.get();
@@ -424,11 +442,84 @@ impl ControllerForm {
                 errors.insert("rules".to_string(), e.to_string());
             }
         }
+        if let Some(engine) = self.engine.get().filter(|_| runs_engine(&kind_text)) {
+            if let Err(e) = config.set_engine(&engine) {
+                errors.insert(ENGINE_KEY.to_string(), e.to_string());
+            }
+        }
         if errors.is_empty() {
             Ok(config)
         } else {
             Err(errors)
         }
+    }
+}
+
+/// The key of the engine's error among a controller form's errors.
+const ENGINE_KEY: &str = "engine";
+
+/// A `fuzzy-engine` controller's engine: how E, EC and U map onto it (the core's statement of
+/// the mapping) and the file input to import another.
+fn engine_fields(form: ControllerForm, errors: Memo<BTreeMap<String, String>>) -> impl IntoView {
+    let mapping = move || match form.parse() {
+        Ok(config) => config.engine_mapping().unwrap_or_default(),
+        Err(_) => String::new(),
+    };
+    let error = move || {
+        errors
+            .with(|e| e.get(ENGINE_KEY).cloned())
+            .map(|e| view! { <p class="run-error" role="alert">{e}</p> })
+    };
+    view! {
+        <p class="hint engine-mapping">{mapping}</p>
+        <EngineFile engine=form.engine id=format!("{}engine-file", form.id_prefix) />
+        {error}
+    }
+}
+
+/// A file input that imports an FLL or FIS engine into `engine` (as FLL), checked as the
+/// `fuzzy-engine` controller checks it: a bad file keeps the engine there was and says why.
+#[component]
+pub fn EngineFile(
+    /// The engine imported (`None`: paper 002's dynamics table).
+    engine: RwSignal<Option<String>>,
+    /// The file input's id.
+    id: String,
+) -> impl IntoView {
+    let (import_error, set_import_error) = signal(None::<String>);
+    let on_file = move |ev: leptos::ev::Event| {
+        read_chosen_file(&ev, move |name, text| {
+            let outcome = text.and_then(|text| {
+                let mut config = ControllerConfig::new(ControllerKind::FuzzyEngine);
+                config
+                    .set_engine(&text)
+                    .map_err(|e| format!("{name}: {e}"))?;
+                Ok(config.engine_fll().map(str::to_string))
+            });
+            match outcome {
+                Ok(imported) => {
+                    set_import_error.set(None);
+                    engine.set(imported);
+                }
+                Err(e) => set_import_error.set(Some(e)),
+            }
+        });
+    };
+    view! {
+        <div class="field">
+            <label for=id.clone()>"Engine file (FLL or FIS)"</label>
+            <input id=id type="file" accept=".fll,.fis,text/plain" on:change=on_file />
+        </div>
+        {move || import_error.get().map(|e| view! { <p class="run-error" role="alert">{e}</p> })}
+        {move || {
+            engine.get().is_some().then(|| view! {
+                <p class="hint">
+                    <button type="button" on:click=move |_| engine.set(None)>
+                        "Use paper 002's dynamics table as the engine"
+                    </button>
+                </p>
+            })
+        }}
     }
 }
 
@@ -450,6 +541,7 @@ pub fn ControllerFields(
         let custom_rules = form.rule_table.get().is_some() && is_fuzzy(&kind_text);
         view! {
             <p class="hint">{kind.source()}</p>
+            {(kind == ControllerKind::FuzzyEngine).then(|| engine_fields(form, errors))}
             {custom_rules
                 .then(|| {
                     view! {

@@ -8,15 +8,18 @@
 //! | `table.rs` | the rule table, the rule bases and the defuzzifier |
 //! | `viewer.rs` | the rules that fire at a chosen (E, EC) |
 //! | `moment.rs` | a simulated run with the table, and the moment picked on it |
-//! | `fll.rs` | FLL export and import |
+//! | `fll.rs` | FLL and FIS export and import |
+//! | `engine.rs` | any engine's variables, terms and rules, and the links that run it as the loop's controller |
 //! | `charts.rs` | the control surface, the run's inputs and the membership functions |
 //! | [`table`] | the 7×7 rule table, cell by cell, with the rule bases one click away |
 //! | [`charts`] | the control surface U(E, EC) and the run's E and EC |
 //! | [`viewer`] | the rule viewer: the output and the rules that fire for a chosen E and EC |
 //! | [`moment`] | a moment of a simulated run, chosen with a slider |
-//! | [`fll`] | FLL (fuzzylite) export and import |
+//! | [`fll`] | FLL (fuzzylite) and FIS (MATLAB) export and import
+//! | [`engine`] | the engine whole: variables, terms, rules; "Use in Simulate/Compare" |
 
 mod charts;
+mod engine;
 mod fll;
 mod moment;
 mod table;
@@ -34,6 +37,7 @@ use crate::web::components::page::PageShell;
 use crate::web::components::run_form::{decode_rule_table, encode_rule_table};
 use crate::web::route::{query_params, replace_query, Page};
 use charts::FuzzyCharts;
+use engine::EnginePanel;
 use fll::FllPanel;
 use moment::{RunMoment, RunMomentPanel};
 use table::RuleTablePanel;
@@ -58,6 +62,9 @@ struct Fuzzy {
     source: RwSignal<Source>,
     e_text: RwSignal<String>,
     ec_text: RwSignal<String>,
+    /// The engine studied, whatever its shape.
+    studied: Memo<Result<Arc<Engine>, String>>,
+    /// The engine studied if it has two inputs (the rule viewer's and the surface's).
     engine: Memo<Result<Arc<Engine>, String>>,
     viewer: Memo<Option<Firing>>,
 }
@@ -69,7 +76,7 @@ impl Fuzzy {
         let source = RwSignal::new(Source::Table);
         let e_text = RwSignal::new("2".to_string());
         let ec_text = RwSignal::new("-1".to_string());
-        let engine = Memo::new(move |_| -> Result<Arc<Engine>, String> {
+        let studied = Memo::new(move |_| -> Result<Arc<Engine>, String> {
             let d = Defuzzifier::from_name(&defuzzifier.get()).unwrap_or(Defuzzifier::Centroid);
             match source.get() {
                 Source::Table => paper_002_engine(&table.get(), d)
@@ -81,7 +88,9 @@ impl Fuzzy {
                     Ok(Arc::new(e))
                 }
             }
-            .and_then(|e| {
+        });
+        let engine = Memo::new(move |_| {
+            studied.get().and_then(|e| {
                 if e.inputs().len() == 2 && !e.outputs().is_empty() {
                     Ok(e)
                 } else {
@@ -114,6 +123,7 @@ impl Fuzzy {
             source,
             e_text,
             ec_text,
+            studied,
             engine,
             viewer,
         }
@@ -153,7 +163,8 @@ pub fn FuzzyPage() -> impl IntoView {
                 "Paper 002's controller sorts the force error E and its change EC into seven sets each "
                 "and looks up the feed change U in a 7×7 table. Edit the table cell by cell, see the "
                 "control surface change, and watch which rules fire for an (E, EC) you choose or for "
-                "a moment of a simulated run."
+                "a moment of a simulated run. Or import your own engine (fuzzylite's FLL or MATLAB's "
+                "FIS): any engine of two inputs and one output runs as the loop's controller."
             </p>
             <div class="layout-fuzzy">
                 <div class="panel">
@@ -166,6 +177,9 @@ pub fn FuzzyPage() -> impl IntoView {
                     </Later>
                     <Later>
                         <FllPanel fuzzy=fuzzy />
+                    </Later>
+                    <Later>
+                        <EnginePanel fuzzy=fuzzy />
                     </Later>
                 </div>
                 <div class="charts">

@@ -49,7 +49,7 @@ fn target_setting(kind: &str) -> RunSetting {
 /// The replay's fieldset.
 #[component]
 pub fn ReplayPanel(shared: LogsState, fit: FitForm, replay: Replay) -> impl IntoView {
-    let chosen: [RwSignal<bool>; 7] = std::array::from_fn(|i| {
+    let chosen: [RwSignal<bool>; ControllerKind::ALL.len()] = std::array::from_fn(|i| {
         RwSignal::new(matches!(
             ControllerKind::ALL[i],
             ControllerKind::Threshold | ControllerKind::Pi

@@ -27,7 +27,7 @@ use leptos::prelude::*;
 
 use crate::closed_loop::definition::{preset_controller, RunSpec};
 use crate::closed_loop::lab::TeachKey;
-use crate::control::registry::ControllerKind;
+use crate::control::registry::{ControllerConfig, ControllerKind};
 use crate::input::table::{self, Table};
 use crate::plant::Preset;
 use crate::tuning::nelder_mead::NelderMead;
@@ -36,6 +36,7 @@ use crate::tuning::{ParamRange, TeachIn, Tuned, TuningMode, TuningPlan, TuningPr
 use crate::web::components::page::PageShell;
 use crate::web::components::runner::{RunProgress, Runner};
 use crate::web::components::table_form::TableForm;
+use crate::web::route::query_params;
 use in_workers::start_tuning;
 use method::{method_errors, MethodPanel};
 use params::{ParamRow, ParamsPanel};
@@ -44,7 +45,7 @@ use teach_in::{Scenarios, ScenariosPanel, TeachInPanel};
 
 /// What the last finished tuning was asked: its ranges, a sweep's values per parameter (0 for a
 /// search), the first scenario and the controller, for the heat map and the links.
-type Asked = (Vec<ParamRange>, usize, Preset, ControllerKind);
+type Asked = (Vec<ParamRange>, usize, Preset, ControllerConfig);
 
 /// The Tune page.
 #[component]
@@ -57,6 +58,13 @@ pub fn TunePage() -> impl IntoView {
             .unwrap_or(ControllerKind::Pi)
     });
     let scenarios = Scenarios::new();
+    // An engine carried from the Fuzzy rules page (`engine=`, as Simulate's URL holds it).
+    let engine = RwSignal::new(
+        query_params(&window().location().hash().unwrap_or_default())
+            .into_iter()
+            .find(|(k, _)| k == "engine")
+            .map(|(_, v)| crate::control::fuzzy::fll::from_url_text(&v)),
+    );
     let rows = [ParamRow::new(kind, 0), ParamRow::new(kind, 1)];
     let second_on = RwSignal::new(true);
     Effect::new(move |previous: Option<ControllerKind>| {
@@ -129,12 +137,26 @@ pub fn TunePage() -> impl IntoView {
             )));
             return;
         };
-        let problem = TuningProblem {
+        let mut problem = TuningProblem {
             controller: preset_controller(first, k),
             params: params.clone(),
             scenarios: presets.iter().map(|&p| RunSpec::new(p, k)).collect(),
             objective,
         };
+        if let Some(text) = engine
+            .get_untracked()
+            .filter(|_| k == ControllerKind::FuzzyEngine)
+        {
+            let controllers = std::iter::once(&mut problem.controller)
+                .chain(problem.scenarios.iter_mut().map(|s| &mut s.controller));
+            for controller in controllers {
+                if let Err(e) = controller.set_engine(&text) {
+                    set_form_error.set(Some(e.to_string()));
+                    return;
+                }
+            }
+        }
+        let controller = problem.controller.clone();
         let teach_keys = problem
             .scenarios
             .iter()
@@ -147,7 +169,7 @@ pub fn TunePage() -> impl IntoView {
                     TuningMode::Sweep(n) => n,
                     TuningMode::Search(_) => 0,
                 };
-                asked.set(Some((params, steps, first, k)));
+                asked.set(Some((params, steps, first, controller)));
                 // Each run of an evaluation in a computation worker of its own, several at once.
                 let search = matches!(tuning_mode, TuningMode::Search(_));
                 start_tuning(&runner_for_start, plan, teach_keys, search);
@@ -168,7 +190,7 @@ pub fn TunePage() -> impl IntoView {
                 <form class="panel" aria-label="Tuning settings" on:submit=|ev| ev.prevent_default()>
                     <ScenariosPanel scenarios=scenarios />
                     <TeachInPanel scenarios=scenarios runner=teach_runner.clone() from_file=from_file form_error=set_form_error />
-                    <ParamsPanel kind_text=kind_text kind=kind rows=rows second_on=second_on />
+                    <ParamsPanel kind_text=kind_text kind=kind rows=rows second_on=second_on engine=engine />
                     <MethodPanel form=form mode=mode errors=errors />
                     <div class="button-row">
                         <button type="button" on:click=start>"Run"</button>

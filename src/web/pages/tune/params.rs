@@ -9,14 +9,16 @@ use crate::input::table::form_errors;
 use crate::tuning::settings::{parse_range, TuneSetting};
 use crate::tuning::ParamRange;
 use crate::web::components::fields::SelectField;
+use crate::web::components::run_form::EngineFile;
 use crate::web::components::table_form::{FieldErrors, SettingField, TableForm};
 
 /// The controllers worth tuning (a fixed feed has one value, found by the reference search).
-pub const TUNABLE: [ControllerKind; 6] = [
+pub const TUNABLE: [ControllerKind; 7] = [
     ControllerKind::Restriction,
     ControllerKind::Threshold,
     ControllerKind::FuzzyExperience,
     ControllerKind::FuzzyDynamics,
+    ControllerKind::FuzzyEngine,
     ControllerKind::Pi,
     ControllerKind::Mrac,
 ];
@@ -105,7 +107,24 @@ pub fn ParamsPanel(
     rows: [ParamRow; 2],
     /// Whether the second parameter is tuned.
     second_on: RwSignal<bool>,
+    /// The engine of a `fuzzy-engine` controller (`None`: paper 002's dynamics table).
+    engine: RwSignal<Option<String>>,
 ) -> impl IntoView {
+    let engine_fields = move || {
+        (kind.get() == ControllerKind::FuzzyEngine).then(|| {
+            let mapping = move || {
+                let mut c = ControllerConfig::new(ControllerKind::FuzzyEngine);
+                match engine.get() {
+                    Some(text) => c.set_engine(&text).ok().and_then(|_| c.engine_mapping()),
+                    None => c.engine_mapping(),
+                }
+            };
+            view! {
+                <p class="hint engine-mapping">{mapping}</p>
+                <EngineFile engine=engine id="tune-engine-file".to_string() />
+            }
+        })
+    };
     let param_options = Memo::new(move |_| {
         kind.get()
             .params()
@@ -122,6 +141,7 @@ pub fn ParamsPanel(
                 options=TUNABLE.iter().map(|k| (k.name(), k.label())).collect()
                 value=kind_text
             />
+            {engine_fields}
             {rows
                 .iter()
                 .enumerate()

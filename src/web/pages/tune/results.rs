@@ -7,14 +7,15 @@ use leptos::prelude::*;
 use super::Asked;
 use crate::charts::pareto::trade_off_chart;
 use crate::charts::{Axis, HeatMap, Scale};
-use crate::control::registry::ControllerKind;
+use crate::control::fuzzy::fll;
+use crate::control::registry::ControllerConfig;
 use crate::input::readable;
 use crate::plant::Preset;
 use crate::tuning::teach_in::TargetBasis;
 use crate::tuning::{ParamRange, TeachIn, Tuned};
 use crate::web::components::chart::ChartCanvas;
 use crate::web::components::heat_map::HeatMapCanvas;
-use crate::web::route::Page;
+use crate::web::route::{hash_with_query, Page};
 
 /// The heat map of a two-parameter sweep's objective (`None` for anything else).
 fn sweep_map(tuned: &Tuned, steps: usize, params: &[ParamRange]) -> Option<HeatMap> {
@@ -47,23 +48,28 @@ fn sweep_map(tuned: &Tuned, steps: usize, params: &[ParamRange]) -> Option<HeatM
     })
 }
 
-/// The Simulate link that runs `preset` with `kind` at `values`.
+/// The Simulate link that runs `preset` with `controller` (its kind, and its engine if it runs
+/// one) at `values`.
 fn simulate_href(
     preset: Preset,
-    kind: ControllerKind,
+    controller: &ControllerConfig,
     params: &[ParamRange],
     values: &[f64],
 ) -> String {
-    let mut href = format!(
-        "{}?preset={}&controller={}",
-        Page::Simulate.href(),
-        preset.name(),
-        kind.name()
-    );
+    let mut query = vec![
+        ("preset".to_string(), preset.name().to_string()),
+        (
+            "controller".to_string(),
+            controller.kind().name().to_string(),
+        ),
+    ];
     for (p, v) in params.iter().zip(values) {
-        href.push_str(&format!("&{}={}", p.key, readable(*v)));
+        query.push((p.key.clone(), readable(*v)));
     }
-    href
+    if let Some(engine) = controller.engine_fll() {
+        query.push(("engine".to_string(), fll::to_url_text(engine)));
+    }
+    hash_with_query(Page::Simulate, &query)
 }
 
 /// The chart of every evaluation's mean cycle time against its mean force error, the Pareto
@@ -179,7 +185,7 @@ pub fn TuningResults(
             let (tuned, (params, steps, preset, k)) = (tuned.get()?, asked.get()?);
             let best = tuned.best.clone();
             let map = sweep_map(&tuned, steps, &params);
-            let best_href = simulate_href(preset, k, &params, &best.values);
+            let best_href = simulate_href(preset, &k, &params, &best.values);
             let rows: Vec<_> = tuned.evaluations.iter().enumerate().map(|(i, e)| (i, e.clone(), tuned.pareto.contains(&i))).collect();
             let headers = params.iter().map(|p| view! { <th scope="col">{p.key.clone()}</th> }).collect_view();
             Some(view! {
@@ -209,10 +215,11 @@ pub fn TuningResults(
                     // Picking a cell opens the evaluation nearest to it in Simulate.
                     let points: Vec<Vec<f64>> = tuned.evaluations.iter().map(|e| e.values.clone()).collect();
                     let (params, spans) = (params.clone(), params.iter().map(|p| (p.hi - p.lo).max(f64::MIN_POSITIVE)).collect::<Vec<_>>());
+                    let k = k.clone();
                     let pick = Callback::new(move |(x, y): (f64, f64)| {
                         let distance = |v: &Vec<f64>| ((v[0] - x) / spans[0]).powi(2) + ((v[1] - y) / spans[1]).powi(2);
                         if let Some(v) = points.iter().min_by(|a, b| distance(a).total_cmp(&distance(b))) {
-                            let _ = window().location().set_href(&simulate_href(preset, k, &params, v));
+                            let _ = window().location().set_href(&simulate_href(preset, &k, &params, v));
                         }
                     });
                     view! {
@@ -242,7 +249,7 @@ pub fn TuningResults(
                                 <td>{format!("{:.2}", e.time_above_limit_s)}</td>
                                 <td>{format!("{:.0}", e.override_activity_pct)}</td>
                                 <td>{if front { "yes" } else { "" }}</td>
-                                <td><a href=simulate_href(preset, k, &params, &e.values)>{format!("Open {} in Simulate", i + 1)}</a></td>
+                                <td><a href=simulate_href(preset, &k, &params, &e.values)>{format!("Open {} in Simulate", i + 1)}</a></td>
                             </tr>
                         }).collect_view()}
                     </tbody>
