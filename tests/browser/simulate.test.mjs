@@ -35,7 +35,7 @@ test('a run shows force, current, override, feed, depth and wall-error charts, m
   assert.match(cycle, /\d/);
   // Every metric explains itself: its heading opens its glossary entry.
   const help = table.getByText(/^Time from the spindle start to the program's end/);
-  assert.equal(await help.isVisible(), false);
+  assert.equal(await help.count(), 0);
   const toggle = table.getByRole('button', { name: 'What Cycle time means' });
   assert.equal(await toggle.getAttribute('aria-expanded'), 'false');
   await toggle.click();

@@ -26,6 +26,7 @@ pub fn HelpToggle(
             <span aria-hidden="true">"?"</span>
             <span class="visually-hidden">{move || format!("What {} means", subject.get())}</span>
         </button>
-        <p class="help-text" hidden=move || !open.get()>{help}</p>
+        // In the page only while open: closed, it is nobody's text to find.
+        {move || open.get().then(|| view! { <p class="help-text">{help}</p> })}
     }
 }
