@@ -49,6 +49,8 @@ test('a run shows force, current, override, feed, depth and wall-error charts, m
     const row = table.getByRole('row').filter({ has: page.getByRole('rowheader', { name }) });
     await row.filter({ hasText: /\d\s*$/ }).waitFor({ timeout: RUN_TIMEOUT });
   }
+  // The table drawn again with the savings keeps the explanation a person opened.
+  assert.equal(await help.isVisible(), true);
   await page.getByRole('heading', { name: 'Event log' }).waitFor();
   await page.getByText(/armed: the controller now sets the override/).waitFor();
   await screenshot(page, 'simulate');

@@ -12,8 +12,12 @@ pub fn HelpToggle(
     subject: Signal<String>,
     /// The explanation.
     help: &'static str,
+    /// Whether it is open, where the owner keeps that across a redraw of the toggle (a table
+    /// drawn again when a late result arrives); by default the toggle's own.
+    #[prop(optional)]
+    open: Option<RwSignal<bool>>,
 ) -> impl IntoView {
-    let open = RwSignal::new(false);
+    let open = open.unwrap_or_else(|| RwSignal::new(false));
     view! {
         // Named by its content, not an aria-label: a label naming the subject would make the
         // button one more element "labelled" by the field's label.

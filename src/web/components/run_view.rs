@@ -243,6 +243,9 @@ pub fn MetricsTable(
     #[prop(into)]
     runs: Signal<Vec<NamedRun>>,
 ) -> impl IntoView {
+    // Which rows' explanations are open, kept while the table is drawn again (the savings
+    // arrive after the run, a comparison's runs one by one).
+    let help_open: Vec<RwSignal<bool>> = METRIC_ROWS.iter().map(|_| RwSignal::new(false)).collect();
     move || {
         let runs = runs.get();
         if runs.is_empty() {
@@ -261,7 +264,8 @@ pub fn MetricsTable(
                 <tbody>
                     {METRIC_ROWS
                         .iter()
-                        .map(|row| {
+                        .zip(help_open.clone())
+                        .map(|(row, open)| {
                             let values: Vec<Option<f64>> = runs.iter().map(|(_, r)| (row.value)(r)).collect();
                             let results: Vec<&RunResult> = runs.iter().map(|(_, r)| r.as_ref()).collect();
                             let marks = best_marks(row, &results, format_metric);
@@ -269,7 +273,7 @@ pub fn MetricsTable(
                                 <tr>
                                     <th scope="row">
                                         {row.heading()}
-                                        <HelpToggle subject=row.label.to_string() help=row.help />
+                                        <HelpToggle subject=row.label.to_string() help=row.help open=open />
                                     </th>
                                     {values
                                         .into_iter()
