@@ -421,27 +421,27 @@ fn host_run(args: &HostArgs, plan: HostPlan) -> Outcome {
     let device = DeviceSummary::of(link.capabilities());
     let program = device.program.clone();
     let preset_name = args.scenario.clone().unwrap_or(program.clone());
-    let Some(preset) = Preset::from_name(&preset_name) else {
-        let (stats, events) = (link.session().stats(), link.session().events().to_vec());
-        drop(link);
-        drop(child);
-        let error = match &args.scenario {
-            Some(name) => format!(
-                "--scenario: unknown preset {name:?}; presets: {}",
-                Preset::names()
-            ),
-            None => format!(
-                "the device runs {program:?}, which is not a preset: name the preset whose \
+    let preset = match Preset::named(&preset_name) {
+        Ok(preset) => preset,
+        Err(unknown) => {
+            let (stats, events) = (link.session().stats(), link.session().events().to_vec());
+            drop(link);
+            drop(child);
+            let error = match &args.scenario {
+                Some(_) => format!("--scenario: {unknown}"),
+                None => format!(
+                    "the device runs {program:?}, which is not a preset: name the preset whose \
                  settings to use with --scenario ({})",
-                Preset::names()
-            ),
-        };
-        return Outcome {
-            device: Some(device),
-            stats: Some(stats),
-            events,
-            ..Outcome::failed(error)
-        };
+                    Preset::names()
+                ),
+            };
+            return Outcome {
+                device: Some(device),
+                stats: Some(stats),
+                events,
+                ..Outcome::failed(error)
+            };
+        }
     };
     let controller = match controller_for(preset, plan.kind, &args.set) {
         Ok(c) => c,

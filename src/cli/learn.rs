@@ -64,12 +64,7 @@ struct LearnReport<'a> {
 pub fn run(args: LearnArgs, io: &mut Io<'_>) -> Result<(), CliError> {
     reject_extra(&args.extra, "")?;
     let name: String = required("scenario", &args.scenario)?;
-    let preset = Preset::from_name(&name).ok_or_else(|| {
-        CliError::new(format!(
-            "--scenario: unknown preset {name:?}; presets: {}",
-            Preset::names()
-        ))
-    })?;
+    let preset = Preset::named(&name).map_err(|e| CliError::new(format!("--scenario: {e}")))?;
     let feeds_pct = match &args.feeds_pct {
         Some(text) => feeds(text)?,
         None => DEFAULT_TRIAL_FEEDS_PCT.to_vec(),

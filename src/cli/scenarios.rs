@@ -80,16 +80,7 @@ struct RunSummary {
 }
 
 fn preset_named(name: &str) -> Result<Preset, CliError> {
-    Preset::from_name(name).ok_or_else(|| {
-        CliError::new(format!(
-            "--run: unknown preset {name:?}; presets: {}",
-            Preset::ALL
-                .iter()
-                .map(|p| p.name())
-                .collect::<Vec<_>>()
-                .join(", ")
-        ))
-    })
+    Preset::named(name).map_err(|e| CliError::new(format!("--run: {e}")))
 }
 
 /// Runs `cutlab scenarios`.

@@ -242,16 +242,7 @@ fn runs_from_config(
 
 fn preset_option(run: &RunOptions) -> Result<Preset, CliError> {
     let name: String = required("scenario", &run.scenario)?;
-    Preset::from_name(&name).ok_or_else(|| {
-        CliError::new(format!(
-            "--scenario: unknown preset {name:?}; presets: {}",
-            Preset::ALL
-                .iter()
-                .map(|p| p.name())
-                .collect::<Vec<_>>()
-                .join(", ")
-        ))
-    })
+    Preset::named(&name).map_err(|e| CliError::new(format!("--scenario: {e}")))
 }
 
 /// The run spec from the shared options, for a given controller: every setting parsed and

@@ -190,13 +190,7 @@ fn presets(args: &TuneArgs) -> Result<Option<Vec<Preset>>, CliError> {
     let presets = text
         .split(',')
         .map(|name| {
-            Preset::from_name(name).ok_or_else(|| {
-                CliError::new(format!(
-                    "--scenarios: unknown preset {:?}; presets: {}",
-                    name.trim(),
-                    Preset::names()
-                ))
-            })
+            Preset::named(name.trim()).map_err(|e| CliError::new(format!("--scenarios: {e}")))
         })
         .collect::<Result<Vec<_>, _>>()?;
     Ok(Some(presets))

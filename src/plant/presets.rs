@@ -612,12 +612,18 @@ impl TryFrom<String> for Preset {
     type Error = String;
 
     fn try_from(name: String) -> Result<Self, Self::Error> {
-        Preset::from_name(&name)
-            .ok_or_else(|| format!("unknown preset {name:?}; presets: {}", Preset::names()))
+        Preset::named(&name)
     }
 }
 
 impl Preset {
+    /// The preset called `name`, or the one message every front end gives for a name that is
+    /// none (the CLI puts its flag in front).
+    pub fn named(name: &str) -> Result<Preset, String> {
+        Preset::from_name(name)
+            .ok_or_else(|| format!("unknown preset {name:?}; presets: {}", Preset::names()))
+    }
+
     /// Every preset.
     pub const ALL: [Preset; 9] = [
         Preset::KimStepDoc,
