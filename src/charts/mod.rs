@@ -98,6 +98,29 @@ impl Series {
         self.stroke = stroke;
         self
     }
+
+    /// The same series as the faint trace of an earlier run beside the current one: its colour
+    /// faded toward the white of the plot ([`BEFORE_FADE`]), dashed, and labelled "before: …" in
+    /// the legend, so the current run stays the one that reads first.
+    pub fn before(mut self) -> Self {
+        self.label = format!("before: {}", self.label);
+        self.color = self.color.faded(BEFORE_FADE);
+        self.stroke = Stroke::Dashed;
+        self
+    }
+}
+
+/// How far an earlier run's trace is faded toward white (0: its own colour, 1: white): light
+/// enough to sit behind the current run, dark enough to follow on a white plot.
+pub const BEFORE_FADE: f64 = 0.55;
+
+impl Rgb {
+    /// This colour mixed with white, `fraction` of the way (0: unchanged, 1: white).
+    pub fn faded(self, fraction: f64) -> Rgb {
+        let f = fraction.clamp(0.0, 1.0);
+        let mix = |c: u8| (f64::from(c) + (255.0 - f64::from(c)) * f).round() as u8;
+        Rgb(mix(self.0), mix(self.1), mix(self.2))
+    }
 }
 
 /// Linear or logarithmic axis.
@@ -705,6 +728,26 @@ mod tests {
             (3, 2),
             "{svg}"
         );
+    }
+
+    #[test]
+    fn an_earlier_run_is_drawn_faint_dashed_and_labelled_before() {
+        let mut chart = sine_chart();
+        let now = chart.series[0].clone();
+        let earlier = now.clone().before();
+        assert_eq!(earlier.label, format!("before: {}", now.label));
+        assert_eq!(earlier.stroke, Stroke::Dashed);
+        // Lighter in every channel than the current run's colour, not white.
+        let (a, b) = (now.color, earlier.color);
+        assert!(
+            b.0 >= a.0 && b.1 >= a.1 && b.2 >= a.2 && b != a,
+            "{b:?} vs {a:?}"
+        );
+        assert_ne!(b, Rgb(255, 255, 255));
+        chart.series.push(earlier);
+        let (svg, _) = render(&chart);
+        let hex = format!("#{:02X}{:02X}{:02X}", b.0, b.1, b.2);
+        assert!(svg.contains(&hex), "the faint colour {hex} is not drawn");
     }
 
     #[test]

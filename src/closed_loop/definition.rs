@@ -216,6 +216,18 @@ impl SettingValue {
             _ => None,
         }
     }
+
+    /// The text [`RunSetting::parse`] reads back as this value, exactly (a form loading a saved
+    /// configuration shows it).
+    pub fn text(self) -> String {
+        match self {
+            SettingValue::Number(v) => v.to_string(),
+            SettingValue::Count(n) => n.to_string(),
+            SettingValue::Seed(seed) => seed.to_string(),
+            SettingValue::Feedback(f) => f.name().to_string(),
+            SettingValue::Material(m) => m.name().to_string(),
+        }
+    }
 }
 
 /// Every setting of a run.
@@ -1278,6 +1290,8 @@ mod tests {
                 }
                 s.apply(&mut spec, Some(parsed));
                 assert_eq!(s.value_in(&spec), Some(parsed), "{s:?}");
+                // Its text reads back as the same value (a form loading a configuration).
+                assert_eq!(s.parse(&parsed.text(), p), Ok(Some(parsed)), "{s:?}");
                 assert_eq!(check_spec(&spec), Ok(()));
                 s.apply(&mut spec, None);
                 assert!(s.value_in(&spec).is_none() || s == RunSetting::Seed);

@@ -1,9 +1,11 @@
 //! The metrics table both front ends show: which metrics, in which order, with their units, which
-//! way is better, and which runs have the best value of a row ([`best_marks`]: never a run that
-//! spent a share of its cycle above the force limit, which the table says with
-//! [`not_best_note`]).
+//! way is better, how far apart two values must be to differ ([`Tolerance`]), why a value is
+//! missing ([`MetricRow::why_missing`]), and which runs have the best value of a row
+//! ([`best_marks`]: only beyond the row's tolerance, never a run that spent a share of its cycle
+//! above the force limit, which the table says with [`not_best_note`]).
 
 use super::lab::RunResult;
+use crate::plant::presets::ProgramLength;
 
 /// Which way is better for a metric.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -12,6 +14,90 @@ pub enum Better {
     Higher,
     /// A setting shown for reference (the target), not a result to rank.
     Neither,
+}
+
+/// How far apart two values of a metric must be before one is better than the other: beyond
+/// the scatter a change of seed alone gives (726 against 727 override changes is the same calm).
+/// Two values differ when they are further apart than `relative` of the larger magnitude and
+/// than `absolute` (in the row's unit).
+///
+/// Each row's tolerance ([`METRIC_ROWS`]) is at least the spread seeds 1–5 gave with `cutlab sim
+/// --seed` on kim-step-doc (pi), maneerat-doc-1 (threshold), liu-current-step (fuzzy-dynamics)
+/// and kim-material-taper (mrac), 2026-11-26: e.g. override changes 124–130 (4.6 %), override
+/// total variation 16.9–18.1 % (6.6 %), force fluctuation 2.7–5.6 points of the target, force
+/// IAE 21.1–26.4 N·s, time above the limit 1.1–1.3 s; cycle time, peak force, overshoot and
+/// removal rate did not move.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Tolerance {
+    /// Fraction of the larger value's magnitude.
+    pub relative: f64,
+    /// In the row's unit: what differences near zero must exceed.
+    pub absolute: f64,
+}
+
+impl Tolerance {
+    /// The tolerance most rows take: 2 % of the value.
+    pub const DEFAULT: Tolerance = Tolerance {
+        relative: 0.02,
+        absolute: 0.0,
+    };
+
+    /// Whether `a` and `b` are further apart than this tolerance.
+    ///
+    /// ```
+    /// use cutlab::closed_loop::summary::Tolerance;
+    /// let t = Tolerance { relative: 0.05, absolute: 0.0 };
+    /// assert!(!t.separates(726.0, 727.0));
+    /// assert!(t.separates(88.0, 574.0));
+    /// ```
+    pub fn separates(self, a: f64, b: f64) -> bool {
+        let margin = (self.relative * a.abs().max(b.abs())).max(self.absolute);
+        (a - b).abs() > margin
+    }
+
+    /// The rule in words, for a row's help: "A ★ only where it beats another run by more than
+    /// 5 % (and 0.05 s)."
+    pub fn rule(self, unit: &str) -> String {
+        let unit = match unit {
+            "" => String::new(),
+            "%" | "% of target" => " points".to_string(),
+            u => format!(" {u}"),
+        };
+        let absolute = crate::input::readable(self.absolute);
+        let by = match (self.relative > 0.0, self.absolute > 0.0) {
+            (true, true) => format!(
+                "{} % of the value and by more than {absolute}{unit}",
+                crate::input::readable(self.relative * 100.0)
+            ),
+            (true, false) => format!(
+                "{} % of the value",
+                crate::input::readable(self.relative * 100.0)
+            ),
+            _ => format!("{absolute}{unit}"),
+        };
+        format!(
+            "A ★ only where the best value beats another run's by more than {by}; values within that of the best share its ★ (closer values are one result within the metric's noise)."
+        )
+    }
+}
+
+/// Why a row may have no value for a run, so the table can say it beside the "—".
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Missing {
+    /// Always has a value.
+    Never,
+    /// Only for a run that finished its program.
+    Unfinished,
+    /// A saving: needs a finished run, a program of a set path, and the reference runs.
+    Saving,
+    /// Only where the controller held a cut.
+    Uncontrolled,
+    /// Only for a program with depth steps (and, for settling, a step that settled).
+    Steps,
+    /// Only where the wall's error is modelled (the tool's stiffness and force law known).
+    Wall,
+    /// Only where material was removed.
+    Removal,
 }
 
 /// One row of the metrics table.
@@ -30,12 +116,62 @@ pub struct MetricRow {
     /// The row's value for a run; `None` where it does not exist (no reference runs yet, no step
     /// that settled).
     pub value: fn(&RunResult) -> Option<f64>,
+    /// How far apart two values must be before one is marked better ([`best_marks`]).
+    pub tolerance: Tolerance,
+    /// Why [`MetricRow::value`] may be `None` ([`MetricRow::why_missing`]).
+    pub missing: Missing,
 }
 
 impl MetricRow {
     /// This row with its glossary entry.
     const fn explained(self, help: &'static str) -> MetricRow {
         MetricRow { help, ..self }
+    }
+
+    /// This row with another tolerance than [`Tolerance::DEFAULT`].
+    const fn within(self, relative: f64, absolute: f64) -> MetricRow {
+        MetricRow {
+            tolerance: Tolerance { relative, absolute },
+            ..self
+        }
+    }
+
+    /// This row with the reason its value can be missing.
+    const fn missing(self, missing: Missing) -> MetricRow {
+        MetricRow { missing, ..self }
+    }
+
+    /// Why this row shows "—" for `run`, in a few words a person reads on hover.
+    pub fn why_missing(&self, run: &RunResult) -> &'static str {
+        let m = &run.metrics;
+        let unfinished = "the program did not finish: a run stopped early is not comparable";
+        match self.missing {
+            Missing::Unfinished | Missing::Saving if !m.completed => unfinished,
+            Missing::Saving if run.spec.preset.program_length() == ProgramLength::Time => {
+                "this program runs for a set time, so no run of it can be shorter"
+            }
+            Missing::Saving => {
+                "no reference run yet: the fixed-feed runs it is measured against are not done"
+            }
+            Missing::Uncontrolled if m.controlled_cutting_time_s <= 0.0 => {
+                "not controlled: the controller held no cut"
+            }
+            Missing::Uncontrolled => "the controlled cut is too short to measure it",
+            Missing::Steps if m.steps.is_empty() => "no depth step in this program",
+            Missing::Steps => "the force never settled after a depth step",
+            Missing::Wall => "not modelled: this preset's tool stiffness or force law is not known",
+            Missing::Removal => "no material was removed",
+            Missing::Never | Missing::Unfinished => "not measured in this run",
+        }
+    }
+
+    /// The row's help with its rule for the best mark (none for a row that ranks nothing).
+    pub fn help_with_rule(&self) -> String {
+        match self.better {
+            _ if self.yes_no => self.help.to_string(),
+            Better::Neither => self.help.to_string(),
+            _ => format!("{} {}", self.help, self.tolerance.rule(self.unit)),
+        }
     }
 
     /// How a front end shows `value` of this row: yes/no rows as words, others through
@@ -71,6 +207,8 @@ const fn row(
         better,
         yes_no: false,
         value,
+        tolerance: Tolerance::DEFAULT,
+        missing: Missing::Never,
     }
 }
 
@@ -95,85 +233,105 @@ pub const METRIC_ROWS: [MetricRow; 22] = [
         ..row("Program finished", "", Better::Higher, |r| {
             Some(f64::from(u8::from(r.metrics.completed)))
         }).explained("Whether the part program ran to its end; a run stopped by the overload alarm or the time limit did not, and its other results are not comparable.")
+        .within(0.0, 0.5)
     },
     row("Cycle time", "s", Better::Lower, |r| {
         if_finished(r, Some(r.metrics.cycle_time_s))
-    }).explained("Time from the spindle start to the program's end: what adaptive control shortens."),
+    }).explained("Time from the spindle start to the program's end: what adaptive control shortens.")
+    .within(0.01, 0.0).missing(Missing::Unfinished),
     row("Saving vs programmed feed", "%", Better::Higher, |r| {
         if_finished(r, r.metrics.saving_vs_programmed_pct)
-    }).explained("How much shorter the cycle is than the program at 100 % override. Negative where the target asks for less force than the programmed feed makes: the controller then slows the cut to hold it."),
+    }).explained("How much shorter the cycle is than the program at 100 % override. Negative where the target asks for less force than the programmed feed makes: the controller then slows the cut to hold it.")
+    .within(0.0, 1.0).missing(Missing::Saving),
     row("Saving vs safe fixed feed", "%", Better::Higher, |r| {
         if_finished(r, r.metrics.saving_vs_safe_fixed_pct)
-    }).explained("How much shorter the cycle is than at the highest fixed override that keeps the peak force under the limit: the fair baseline for adaptive control."),
+    }).explained("How much shorter the cycle is than at the highest fixed override that keeps the peak force under the limit: the fair baseline for adaptive control.")
+    .within(0.0, 1.0).missing(Missing::Saving),
     row("Force IAE", "N·s", Better::Lower, |r| {
         if_controlled(r, r.metrics.force_iae_n_s)
-    }).explained("Integral of |force − target| over the controlled cut: the whole force error, in newton-seconds."),
+    }).explained("Integral of |force − target| over the controlled cut: the whole force error, in newton-seconds.")
+    .within(0.05, 10.0).missing(Missing::Uncontrolled),
     row("Force RMS error", "N", Better::Lower, |r| {
         if_controlled(r, r.metrics.force_rms_error_n)
-    }).explained("Root-mean-square of force − target over the controlled cut."),
+    }).explained("Root-mean-square of force − target over the controlled cut.")
+    .within(0.05, 2.0).missing(Missing::Uncontrolled),
     row("Mean |error|", "%", Better::Lower, |r| {
         if_controlled(r, r.metrics.force_mean_abs_error_pct)
-    }).explained("Mean of |force − target| ÷ target over the controlled cut."),
+    }).explained("Mean of |force − target| ÷ target over the controlled cut.")
+    .within(0.05, 0.5).missing(Missing::Uncontrolled),
     row("Peak force", "N", Better::Lower, |r| {
         Some(r.metrics.peak_force_n)
     }).explained("The highest true force of the run; compare it with the force limit."),
     row("Surface error range", "µm", Better::Lower, |r| {
         Some(r.metrics.surface_error_range_um).filter(|v| v.is_finite())
-    }).explained("The wall's error from the tool and spindle bending under the force across the cut, largest minus smallest along the engaged wall (paper 004's cutting-force-induced error); its constant part is taken out by the tool-radius offset, this spread is not."),
+    }).explained("The wall's error from the tool and spindle bending under the force across the cut, largest minus smallest along the engaged wall (paper 004's cutting-force-induced error); its constant part is taken out by the tool-radius offset, this spread is not.")
+    .within(0.05, 0.5).missing(Missing::Wall),
     row(
         "Surface error range, compensated from the power law",
         "µm",
         Better::Lower,
         |r| Some(r.metrics.compensated_range_power_law_um).filter(|v| v.is_finite()),
-    ).explained("What is left of that spread when the tool path is offset by the error the power law predicts from what the CNC knows of the cut (paper 004's sensorless compensation)."),
+    ).explained("What is left of that spread when the tool path is offset by the error the power law predicts from what the CNC knows of the cut (paper 004's sensorless compensation).")
+    .within(0.05, 0.5).missing(Missing::Wall),
     row(
         "Surface error range, compensated from the current",
         "µm",
         Better::Lower,
         |r| Some(r.metrics.compensated_range_current_um).filter(|v| v.is_finite()),
-    ).explained("What is left of it when the offset is predicted from the current-based force estimate of the control period before."),
+    ).explained("What is left of it when the offset is predicted from the current-based force estimate of the control period before.")
+    .within(0.05, 0.5).missing(Missing::Wall),
     row("Time above limit", "s", Better::Lower, |r| {
         Some(r.metrics.time_above_limit_s)
-    }).explained("Time the true force spent above the force limit, where tools break."),
+    }).explained("Time the true force spent above the force limit, where tools break.")
+    .within(0.2, 0.1),
     row(
         "Time outside the calibrated range",
         "s",
         Better::Lower,
         |r| if_controlled(r, r.metrics.time_outside_calibration_s),
-    ).explained("Time the estimator's inputs lay outside the range its teach cut calibrated: there its force estimate is an extrapolation."),
+    ).explained("Time the estimator's inputs lay outside the range its teach cut calibrated: there its force estimate is an extrapolation.")
+    .within(0.2, 0.15).missing(Missing::Uncontrolled),
     row(
         "Time the power-law check disagrees",
         "s",
         Better::Lower,
         |r| if_controlled(r, r.metrics.time_cross_check_disagrees_s),
-    ).explained("Time the current-based estimate and the sensorless power-law estimate disagreed by more than their tolerance: paper 004's prediction of a failing current sensor."),
+    ).explained("Time the current-based estimate and the sensorless power-law estimate disagreed by more than their tolerance: paper 004's prediction of a failing current sensor.")
+    .within(0.2, 0.15).missing(Missing::Uncontrolled),
     row(
         "Max overshoot after a depth step",
         "%",
         Better::Lower,
         |r| (!r.metrics.steps.is_empty()).then_some(r.metrics.max_overshoot_pct),
-    ).explained("The largest overshoot of the force above the target after a step in the depth of cut, percent of the target."),
+    ).explained("The largest overshoot of the force above the target after a step in the depth of cut, percent of the target.")
+    .within(0.0, 1.0).missing(Missing::Steps),
     row("Max settling time", "s", Better::Lower, |r| {
         r.metrics.max_settling_time_s
-    }).explained("The longest time after a depth step until the force stays within the settling band around the target."),
+    }).explained("The longest time after a depth step until the force stays within the settling band around the target.")
+    .within(0.05, 0.05).missing(Missing::Steps),
     row(
         "Force fluctuation, last 10 s",
         "% of target",
         Better::Lower,
         |r| if_controlled(r, r.metrics.late_force_fluctuation_pct),
-    ).explained("Standard deviation of force ÷ target over the last 10 s of the controlled cut (paper 002's \"fluctuates less\")."),
+    ).explained("Standard deviation of force ÷ target over the last 10 s of the controlled cut (paper 002's \"fluctuates less\").")
+    .within(0.1, 3.0).missing(Missing::Uncontrolled),
     row("Depth steps never settled", "", Better::Lower, |r| {
         (!r.metrics.steps.is_empty()).then_some(r.metrics.steps_not_settled as f64)
-    }).explained("Depth steps after which the force never stayed within the settling band."),
+    }).explained("Depth steps after which the force never stayed within the settling band.")
+    .within(0.0, 0.5).missing(Missing::Steps),
     row("Override changes", "", Better::Lower, |r| {
         Some(r.metrics.override_changes as f64)
-    }).explained("How many times the commanded override changed: a calmer controller changes it less often."),
+    }).explained("How many times the commanded override changed: a calmer controller changes it less often.")
+    .within(0.06, 0.0),
     row("Override total variation", "%", Better::Lower, |r| {
         Some(r.metrics.override_total_variation_pct)
-    }).explained("The sum of the commanded override's changes: how hard the controller works the feed."),
+    }).explained("The sum of the commanded override's changes: how hard the controller works the feed.")
+    .within(0.08, 0.0),
     row("Mean removal rate", "mm³/s", Better::Higher, |r| {
         (r.metrics.removed_volume_mm3 > 0.0).then_some(r.metrics.mean_material_removal_mm3_s)
-    }).explained("Material removed per second, over the whole cycle."),
+    }).explained("Material removed per second, over the whole cycle.")
+    .within(0.01, 0.0).missing(Missing::Removal),
 ];
 
 /// A metric as the browser's table shows it: whole numbers and values from 100 up without
@@ -194,18 +352,27 @@ pub fn format_metric(v: f64) -> String {
     }
 }
 
-/// Which of `values` are the best, judged as they are shown (`shown` formats a value): values
-/// that print alike are marked alike, so a reader never sees two equal numbers of which only one
-/// is "best". Nothing is marked with fewer than two runs, for [`Better::Neither`], where no
-/// value is finite, or where every value ties (nothing is better than anything).
+/// Which of `values` are the best, judged beyond `tolerance` and as they are shown (`shown`
+/// formats a value): the best value is marked with every value within the tolerance of it or
+/// printing alike (a reader never sees two equal numbers of which only one is "best"), and only
+/// where some other value lies beyond the tolerance. Nothing is marked with fewer than two runs,
+/// for [`Better::Neither`], where no value is finite, or where every value ties within the
+/// tolerance (nothing is better than anything).
 ///
 /// ```
-/// use cutlab::closed_loop::summary::{best, Better};
+/// use cutlab::closed_loop::summary::{best, Better, Tolerance};
 /// let shown = |v: f64| format!("{v:.1}");
-/// let marks = best(&[Some(2.04), Some(2.0), None, Some(3.0)], Better::Lower, shown);
+/// let marks = best(&[Some(2.04), Some(2.0), None, Some(3.0)], Better::Lower, Tolerance::DEFAULT, shown);
 /// assert_eq!(marks, [true, true, false, false]);
+/// let calm = Tolerance { relative: 0.05, absolute: 0.0 };
+/// assert_eq!(best(&[Some(726.0), Some(727.0)], Better::Lower, calm, shown), [false, false]);
 /// ```
-pub fn best(values: &[Option<f64>], better: Better, shown: impl Fn(f64) -> String) -> Vec<bool> {
+pub fn best(
+    values: &[Option<f64>],
+    better: Better,
+    tolerance: Tolerance,
+    shown: impl Fn(f64) -> String,
+) -> Vec<bool> {
     let finite = || values.iter().flatten().copied().filter(|v| v.is_finite());
     let extreme = match better {
         _ if values.len() < 2 => None,
@@ -213,12 +380,13 @@ pub fn best(values: &[Option<f64>], better: Better, shown: impl Fn(f64) -> Strin
         Better::Lower => finite().reduce(f64::min),
         Better::Higher => finite().reduce(f64::max),
     };
-    let Some(extreme) = extreme.map(&shown) else {
+    let Some(extreme) = extreme else {
         return vec![false; values.len()];
     };
+    let alike = |v: f64| shown(v) == shown(extreme) || !tolerance.separates(v, extreme);
     let marks: Vec<bool> = values
         .iter()
-        .map(|v| v.is_some_and(|v| v.is_finite() && shown(v) == extreme))
+        .map(|v| v.is_some_and(|v| v.is_finite() && alike(v)))
         .collect();
     if marks.iter().filter(|m| **m).count() == finite().count() {
         return vec![false; values.len()];
@@ -250,7 +418,7 @@ pub fn best_marks(
         .iter()
         .map(|r| (row.value)(r).filter(|_| judges_the_limit || may_be_best(r)))
         .collect();
-    best(&values, row.better, shown)
+    best(&values, row.better, row.tolerance, shown)
 }
 
 /// The sentence a table shows under its marks when a run was left out of them, naming each with
@@ -268,6 +436,43 @@ pub fn not_best_note(runs: &[(&str, &RunResult)]) -> Option<String> {
             left_out.join(", ")
         )
     })
+}
+
+/// Why a negative "Saving vs programmed feed" is what it is, in words, for each run that has one
+/// (named when there are several): the controller cut slower than the program at 100 % feed,
+/// and where its mean override under control stayed below 100 % it did so on purpose: the target
+/// is below the force the programmed feed gives, so it slows the cut to hold the target.
+pub fn negative_saving_notes(runs: &[(&str, &RunResult)]) -> Vec<String> {
+    runs.iter()
+        .filter_map(|(name, run)| {
+            let saving = run.metrics.saving_vs_programmed_pct.filter(|s| *s < 0.0)?;
+            let armed: Vec<f64> = run
+                .trace
+                .rows
+                .iter()
+                .filter(|r| r.armed && r.override_pct.is_finite())
+                .map(|r| r.override_pct)
+                .collect();
+            let mean_override_pct = armed.iter().sum::<f64>() / armed.len().max(1) as f64;
+            let who = if runs.len() > 1 {
+                format!("{name}: ")
+            } else {
+                String::new()
+            };
+            let slower = format!(
+                "{who}the cycle is {} % longer than the program at 100 % feed",
+                crate::input::readable((-saving * 10.0).round() / 10.0)
+            );
+            Some(if !armed.is_empty() && mean_override_pct < 100.0 {
+                format!(
+                    "{slower}: the target ({:.0} N) is below the force the programmed feed gives, so the controller slows the cut to hold it (mean override {mean_override_pct:.0} % while controlling)."
+                    , run.settings.target_force_n
+                )
+            } else {
+                format!("{slower}.")
+            })
+        })
+        .collect()
 }
 
 #[cfg(test)]
@@ -303,16 +508,33 @@ mod tests {
     #[test]
     fn the_best_follows_the_direction_of_the_row() {
         let values = [Some(3.0), Some(1.0), Some(2.0)];
-        assert_eq!(best(&values, Better::Lower, shown), [false, true, false]);
-        assert_eq!(best(&values, Better::Higher, shown), [true, false, false]);
-        assert_eq!(best(&values, Better::Neither, shown), [false, false, false]);
+        assert_eq!(
+            best(&values, Better::Lower, Tolerance::DEFAULT, shown),
+            [false, true, false]
+        );
+        assert_eq!(
+            best(&values, Better::Higher, Tolerance::DEFAULT, shown),
+            [true, false, false]
+        );
+        assert_eq!(
+            best(&values, Better::Neither, Tolerance::DEFAULT, shown),
+            [false, false, false]
+        );
     }
 
     #[test]
     fn one_run_or_no_finite_value_marks_nothing() {
-        assert_eq!(best(&[Some(1.0)], Better::Lower, shown), [false]);
         assert_eq!(
-            best(&[None, Some(f64::NAN)], Better::Lower, shown),
+            best(&[Some(1.0)], Better::Lower, Tolerance::DEFAULT, shown),
+            [false]
+        );
+        assert_eq!(
+            best(
+                &[None, Some(f64::NAN)],
+                Better::Lower,
+                Tolerance::DEFAULT,
+                shown
+            ),
             [false, false]
         );
     }
@@ -320,9 +542,17 @@ mod tests {
     #[test]
     fn a_row_where_every_run_ties_marks_nothing() {
         let values = [Some(0.0), Some(0.0), None];
-        assert_eq!(best(&values, Better::Lower, shown), [false, false, false]);
         assert_eq!(
-            best(&[Some(0.2), Some(0.4)], Better::Lower, shown),
+            best(&values, Better::Lower, Tolerance::DEFAULT, shown),
+            [false, false, false]
+        );
+        assert_eq!(
+            best(
+                &[Some(0.2), Some(0.4)],
+                Better::Lower,
+                Tolerance::DEFAULT,
+                shown
+            ),
             [false, false]
         );
     }
@@ -330,10 +560,78 @@ mod tests {
     #[test]
     fn values_that_print_alike_are_marked_alike() {
         let marks = best(
-            &[Some(631.4), Some(630.9), Some(640.0)],
+            &[Some(631.4), Some(630.9), Some(700.0)],
             Better::Lower,
+            Tolerance::DEFAULT,
             shown,
         );
         assert_eq!(marks, [true, true, false]);
+    }
+
+    #[test]
+    fn a_difference_within_the_rows_noise_earns_no_star() {
+        let changes = METRIC_ROWS
+            .iter()
+            .find(|r| r.label == "Override changes")
+            .copied()
+            .unwrap();
+        let marks = |a: f64, b: f64| {
+            best(
+                &[Some(a), Some(b)],
+                changes.better,
+                changes.tolerance,
+                shown,
+            )
+        };
+        assert_eq!(marks(726.0, 727.0), [false, false]);
+        assert_eq!(marks(88.0, 574.0), [true, false]);
+        // And the help of every ranked row states its rule.
+        for row in METRIC_ROWS
+            .iter()
+            .filter(|r| r.better != Better::Neither && !r.yes_no)
+        {
+            assert!(row.help_with_rule().contains("★"), "{}", row.label);
+        }
+    }
+
+    #[test]
+    fn a_missing_value_says_why_and_a_negative_saving_is_explained() {
+        use crate::closed_loop::definition::RunSpec;
+        use crate::closed_loop::lab::simulate;
+        use crate::control::registry::ControllerKind;
+        use crate::plant::Preset;
+        let row = |label: &str| {
+            METRIC_ROWS
+                .iter()
+                .find(|r| r.label == label)
+                .copied()
+                .unwrap()
+        };
+        let mut fixed = simulate(&RunSpec::new(Preset::KimStepDoc, ControllerKind::Fixed)).unwrap();
+        // A run whose controller never held a cut (it never armed).
+        fixed.metrics.controlled_cutting_time_s = 0.0;
+        let iae = row("Force IAE");
+        assert_eq!((iae.value)(&fixed), None);
+        assert!(
+            iae.why_missing(&fixed).starts_with("not controlled"),
+            "{}",
+            iae.why_missing(&fixed)
+        );
+        let saving = row("Saving vs programmed feed");
+        assert_eq!((saving.value)(&fixed), None);
+        assert!(saving.why_missing(&fixed).starts_with("no reference run"));
+
+        let mut held =
+            simulate(&RunSpec::new(Preset::KimStepDoc, ControllerKind::Threshold)).unwrap();
+        assert!(negative_saving_notes(&[("threshold", &held)]).is_empty());
+        held.metrics.saving_vs_programmed_pct = Some(-32.42);
+        let notes = negative_saving_notes(&[("threshold", &held)]);
+        assert_eq!(notes.len(), 1);
+        assert!(notes[0].contains("32.4 % longer"), "{}", notes[0]);
+        assert!(
+            notes[0].contains("below the force the programmed feed gives"),
+            "{}",
+            notes[0]
+        );
     }
 }

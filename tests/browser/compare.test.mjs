@@ -103,6 +103,35 @@ test('a comparison exports traces, metrics and its configuration, and its link r
   assert.equal(withoutSavings(metricsAgain.text), withoutSavings(metrics.text));
   assert.deepEqual(again.problems, []);
   await again.context.close();
+
+  // The saved file, opened on a fresh page: a damaged one is refused with its line and changes
+  // nothing; the file itself reproduces the comparison.
+  const fresh = await openLab(browser, server.url, '#/compare');
+  const open = fresh.page.getByLabel('Open configuration…');
+  const damaged = JSON.stringify(config, null, 2).replace('"kp": 0.5', '"kp": "half"');
+  await open.setInputFiles({ name: 'damaged.json', mimeType: 'application/json', buffer: Buffer.from(damaged) });
+  const refusal = fresh.page.getByRole('alert').filter({ hasText: 'damaged.json' });
+  await refusal.waitFor();
+  assert.match(await refusal.textContent(), /line \d+/);
+  assert.equal(await fresh.page.getByLabel('Preset', { exact: true }).inputValue(), 'kim-step-doc');
+  await open.setInputFiles({ name: 'cutlab-config.json', mimeType: 'application/json', buffer: Buffer.from(JSON.stringify(config)) });
+  const loaded = fresh.page.getByRole('table', { name: /Metrics of the runs/ });
+  await fresh.page.getByText('Opened cutlab-config.json (2 runs).').waitFor();
+  assert.equal(await fresh.page.getByLabel('Preset', { exact: true }).inputValue(), 'maneerat-doc-1');
+  await loaded.getByRole('columnheader', { name: 'B: pi' }).waitFor({ timeout: RUN_TIMEOUT });
+  await loaded.getByRole('columnheader', { name: 'A: fixed' }).waitFor();
+  await fresh.page.getByRole('status').filter({ hasText: 'Running' }).waitFor({ state: 'detached', timeout: RUN_TIMEOUT });
+  const metricsLoaded = await downloadText(fresh.page, 'Metrics (CSV)');
+  assert.equal(withoutSavings(metricsLoaded.text), withoutSavings(metrics.text));
+  // A field that no longer validates marks the comparison shown as stale.
+  const kp = fresh.page.getByRole('group', { name: 'Variant B' }).getByLabel('K_p (% per %)');
+  await kp.fill('-5');
+  const banner = fresh.page.getByRole('status').filter({ hasText: 'These results are from the last valid settings' });
+  await banner.waitFor();
+  await kp.fill('0.5');
+  await banner.waitFor({ state: 'detached' });
+  assert.deepEqual(fresh.problems, []);
+  await fresh.context.close();
   assert.deepEqual(problems, []);
   await context.close();
 });
@@ -127,13 +156,18 @@ test("the fuzzy rule bases' comparison starts from the paper's own settings", as
   // experience rules keep cycling (no settling time), the dynamics rules settle.
   const settlingOf = async () => {
     const row = table.getByRole('row').filter({ has: page.getByRole('rowheader', { name: 'Max settling time (s)' }) });
-    return (await row.getByRole('cell').allTextContents()).map((t) => t.replace(/[*★]/g, '').trim());
+    // A "—" says why to a screen reader (hidden text) and on hover (its title).
+    const reasons = await row.locator('[title]').evaluateAll((cells) => cells.map((c) => c.title));
+    assert.ok(reasons.every((r) => r.length > 10), `reasons ${reasons.join(' | ')}`);
+    return (await row.getByRole('cell').allTextContents()).map((t) => t.replace(/none: .*$/, '').replace(/[*★]/g, '').trim());
   };
   const finding = page.getByRole('status').filter({ hasText: 'Measured:' });
   // A regular expression, case-sensitive: the string ' Reproduced.' also matches "Not reproduced.".
   await finding.filter({ hasText: /Reproduced\./ }).waitFor({ timeout: RUN_TIMEOUT });
   const [experience, dynamics] = await settlingOf();
   assert.equal(experience, '—');
+  const settling = table.getByRole('row').filter({ has: page.getByRole('rowheader', { name: 'Max settling time (s)' }) });
+  assert.equal(await settling.getByRole('cell').first().locator('[title]').getAttribute('title'), 'the force never settled after a depth step');
   assert.match(await finding.textContent(), new RegExp(`in ${dynamics} s against never`));
   // Its twin samples every 0.2 s; the claim holds there too, measured from its own runs.
   const first = await finding.textContent();

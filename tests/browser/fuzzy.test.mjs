@@ -40,6 +40,27 @@ test('editing a rule cell changes the control surface and the link', async () =>
   await context.close();
 });
 
+test('"Open in Compare" runs the edited table beside paper 002\'s own', async () => {
+  const { page, problems, context } = await openLab(browser, server.url, '#/fuzzy', { width: 1440, height: 900 });
+  await page.getByRole('button', { name: 'Dynamics-based (paper 002, Table 4)' }).click();
+  const cell = page.getByLabel('Output when E is PB and EC is PB');
+  await cell.selectOption('NB');
+  await page.getByRole('link', { name: 'Open in Compare' }).click();
+  await page.getByRole('heading', { level: 1, name: /Compare/ }).waitFor();
+  assert.match(page.url(), /b\.rules=\d{48}0/);
+  const variantA = page.getByRole('group', { name: 'Variant A' });
+  const variantB = page.getByRole('group', { name: 'Variant B' });
+  for (const variant of [variantA, variantB]) {
+    assert.equal(await variant.getByLabel('Controller', { exact: true }).inputValue(), 'fuzzy-dynamics');
+  }
+  await variantB.getByText('Using the rule table edited on the Fuzzy rules page.').waitFor();
+  assert.equal(await variantA.getByText('Using the rule table edited on the Fuzzy rules page.').count(), 0);
+  const table = page.getByRole('table', { name: /Metrics of the runs/ });
+  await table.getByRole('columnheader', { name: 'B: fuzzy-dynamics' }).waitFor({ timeout: 120_000 });
+  assert.deepEqual(problems, []);
+  await context.close();
+});
+
 test('the rule viewer lists the rules that fire for a chosen point', async () => {
   const { page, problems, context } = await openLab(browser, server.url, '#/fuzzy');
   await page.getByRole('button', { name: 'Dynamics-based (paper 002, Table 4)' }).click();
@@ -99,6 +120,11 @@ test('FLL exports, a broken FLL is explained by line, and a run supplies a momen
   await slider.waitFor({ timeout: 60_000 });
   const trace = page.getByRole('img', { name: 'E and EC of the run' });
   await trace.waitFor();
+  // The force the table held, in newtons, against the target: not only E and EC scaled.
+  await page.getByRole('img', { name: 'Force of the run' }).waitFor();
+  for (const name of ['true force', 'target']) {
+    await page.getByRole('button', { name, exact: true }).waitFor();
+  }
   const drawn = await canvasPixels(trace);
   await slider.fill('150');
   await page.getByLabel(/Moment: \d+\.\d\d s/).waitFor();

@@ -92,6 +92,74 @@ test('changing a controller parameter re-runs and redraws, and the URL keeps the
   await context.close();
 });
 
+test('an edit keeps the run before it beside the new one, and an invalid field marks the results stale', async () => {
+  const { page, problems, context } = await openLab(browser, server.url, '#/simulate?preset=maneerat-doc-1&controller=pi');
+  const table = await waitForResult(page);
+  const variationRow = () => table.getByRole('row').filter({ has: page.getByRole('rowheader', { name: /^Override total variation/ }) });
+  const first = (await variationRow().getByRole('cell').first().textContent()).replace(/[★\s]/g, '');
+  assert.match(first, /^\d/);
+  assert.equal(await table.getByRole('columnheader', { name: 'Before' }).count(), 0);
+  // K_p = 2 makes the loop work the feed much harder: the run before stays beside the new one.
+  await page.getByLabel('K_p (% per %)').fill('2');
+  const beforeColumn = table.getByRole('columnheader', { name: 'Before' });
+  await beforeColumn.waitFor({ timeout: RUN_TIMEOUT });
+  await page.getByRole('status').filter({ hasText: 'Running' }).waitFor({ state: 'detached', timeout: RUN_TIMEOUT });
+  const [now, earlier] = (await variationRow().getByRole('cell').allTextContents()).map((t) => t.replace(/[★\s]/g, ''));
+  assert.equal(earlier, first, 'the Before column holds the earlier run\'s value');
+  assert.notEqual(now, first, 'the current column holds the new run\'s value');
+  // And on the charts, as a faint trace labelled in the legend.
+  await page.getByRole('button', { name: 'before: true force' }).waitFor();
+  // A field that no longer validates marks what is shown as stale, announced, until it is fixed.
+  const banner = page.getByRole('status').filter({ hasText: 'These results are from the last valid settings' });
+  assert.equal(await banner.count(), 0);
+  await page.getByLabel('K_p (% per %)').fill('abc');
+  await banner.waitFor();
+  assert.equal(await page.locator('.results.stale').count(), 1);
+  await page.getByLabel('K_p (% per %)').fill('-5');
+  await banner.waitFor();
+  await page.getByLabel('K_p (% per %)').fill('2');
+  await banner.waitFor({ state: 'detached' });
+  assert.equal(await page.locator('.results.stale').count(), 0);
+  // Another preset is another experiment: the run before is not kept across it.
+  await page.getByLabel('Preset', { exact: true }).selectOption('maneerat-doc-4');
+  await beforeColumn.waitFor({ state: 'detached' });
+  assert.deepEqual(problems, []);
+  await context.close();
+});
+
+test('"Open in Compare" carries the run definition with the edited K_p beside the defaults', async () => {
+  const { page, problems, context } = await openLab(browser, server.url, '#/simulate?preset=maneerat-doc-1&controller=pi&seed=4', { width: 1440, height: 900 });
+  await waitForResult(page);
+  await page.getByLabel('K_p (% per %)').fill('1.7');
+  await page.getByLabel('Current filter order').fill('6');
+  await page.getByRole('link', { name: 'Open in Compare' }).click();
+  await page.getByRole('heading', { level: 1, name: /Compare/ }).waitFor();
+  const variantA = page.getByRole('group', { name: 'Variant A' });
+  const variantB = page.getByRole('group', { name: 'Variant B' });
+  assert.equal(await variantB.getByLabel('Controller', { exact: true }).inputValue(), 'pi');
+  assert.equal(await variantB.getByLabel('K_p (% per %)').inputValue(), '1.7');
+  assert.equal(await variantA.getByLabel('Controller', { exact: true }).inputValue(), 'pi');
+  assert.notEqual(await variantA.getByLabel('K_p (% per %)').inputValue(), '1.7');
+  // The scenario, seed and signal chain come along.
+  assert.equal(await page.getByLabel('Preset', { exact: true }).inputValue(), 'maneerat-doc-1');
+  assert.equal(await page.getByLabel('Seed').inputValue(), '4');
+  assert.equal(await page.getByLabel('Current filter order').inputValue(), '6');
+  const table = page.getByRole('table', { name: /Metrics of the runs/ });
+  await table.getByRole('columnheader', { name: 'B: pi' }).waitFor({ timeout: RUN_TIMEOUT });
+  assert.deepEqual(problems, []);
+  await context.close();
+});
+
+test('the default run explains its negative saving in words', async () => {
+  const { page, problems, context } = await openLab(browser, server.url, '#/simulate');
+  const table = await waitForResult(page);
+  const saving = table.getByRole('row').filter({ has: page.getByRole('rowheader', { name: 'Saving vs programmed feed (%)' }) });
+  await saving.filter({ hasText: /-\d/ }).waitFor({ timeout: RUN_TIMEOUT });
+  await page.getByText(/longer than the program at 100 % feed: the target \(\d+ N\) is below the force the programmed feed gives, so the controller slows the cut/).waitFor();
+  assert.deepEqual(problems, []);
+  await context.close();
+});
+
 test('a chart zooms with the wheel and the keyboard, resets, and toggles series', async () => {
   const { page, problems, context } = await openLab(browser, server.url, '#/simulate?preset=maneerat-doc-1&controller=threshold');
   await waitForResult(page);
@@ -162,6 +230,21 @@ test('the trace exports as CSV and the configuration as JSON', async () => {
   assert.equal(json.runs[0].controller.kind, 'fixed');
   assert.equal(json.runs[0].seed, 1);
   assert.match(json.link, /#\/simulate\?preset=maneerat-doc-1/);
+  // "Open configuration…" on a fresh page shows the same run, with the same metrics.
+  const fresh = await openLab(browser, server.url, '#/simulate');
+  await fresh.page.getByLabel('Open configuration…').setInputFiles(await config.path());
+  await fresh.page.getByText(/^Opened .* \(1 run\)\.$/).waitFor();
+  assert.equal(await fresh.page.getByLabel('Preset', { exact: true }).inputValue(), 'maneerat-doc-1');
+  assert.equal(await fresh.page.getByLabel('Controller', { exact: true }).inputValue(), 'fixed');
+  await waitForResult(fresh.page);
+  const [again] = await Promise.all([
+    fresh.page.waitForEvent('download'),
+    fresh.page.getByRole('button', { name: 'Metrics (CSV)' }).click(),
+  ]);
+  const withoutSavings = (csv) => csv.split('\n').filter((line) => !line.startsWith('saving_')).join('\n');
+  assert.equal(withoutSavings(await readFile(await again.path(), 'utf8')), withoutSavings(metricsText));
+  assert.deepEqual(fresh.problems, []);
+  await fresh.context.close();
   const [png] = await Promise.all([
     page.waitForEvent('download'),
     page.getByRole('button', { name: 'Save Cutting force as PNG' }).click(),

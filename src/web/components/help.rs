@@ -11,7 +11,8 @@ pub fn HelpToggle(
     #[prop(into)]
     subject: Signal<String>,
     /// The explanation.
-    help: &'static str,
+    #[prop(into)]
+    help: String,
     /// Whether it is open, where the owner keeps that across a redraw of the toggle (a table
     /// drawn again when a late result arrives); by default the toggle's own.
     #[prop(optional)]
@@ -31,6 +32,6 @@ pub fn HelpToggle(
             <span class="visually-hidden">{move || format!("What {} means", subject.get())}</span>
         </button>
         // In the page only while open: closed, it is nobody's text to find.
-        {move || open.get().then(|| view! { <p class="help-text">{help}</p> })}
+        {move || open.get().then(|| view! { <p class="help-text">{help.clone()}</p> })}
     }
 }

@@ -7,8 +7,10 @@ use std::collections::BTreeMap;
 
 use leptos::prelude::*;
 
-use crate::closed_loop::definition::SettingsOverrides;
-use crate::closed_loop::definition::{parse_texts, preset_controller, RunSetting, SettingGroup};
+use crate::closed_loop::config::RunConfiguration;
+use crate::closed_loop::definition::{
+    parse_texts, preset_controller, RunSetting, RunSpec, SettingGroup, SettingsOverrides,
+};
 use crate::control::fuzzy::fll;
 use crate::control::fuzzy::rules::RuleTable;
 use crate::control::registry::{ControllerConfig, ControllerKind};
@@ -75,6 +77,18 @@ impl ScenarioForm {
     pub fn reset_to(&self, preset: Preset) {
         self.settings.reset();
         self.preset.set(preset.name().to_string());
+    }
+
+    /// Shows `spec`'s preset and settings: each setting the spec changes as the text that reads
+    /// back as its value, every other at its default (blank: the preset's).
+    pub fn load(&self, spec: &RunSpec) {
+        self.preset.set(spec.preset.name().to_string());
+        for setting in RunSetting::ALL {
+            let text = setting
+                .value_in(spec)
+                .map_or_else(|| setting.row().default_text(), |v| v.text());
+            self.text(setting).set(text);
+        }
     }
 
     /// The query pairs that reproduce this form; the seed always, so a shared link keeps it
@@ -363,6 +377,22 @@ impl ControllerForm {
         self.engine.set(None);
     }
 
+    /// Shows `config` on `preset`: its controller, every parameter's value, its rule table and
+    /// engine. The preset is followed first, so the page's following of the preset changes
+    /// none of the values loaded.
+    pub fn load(&self, config: &ControllerConfig, preset: Preset) {
+        self.follow_preset(preset);
+        let kind = config.kind().name().to_string();
+        self.values.update(|values| {
+            for (param, value) in config.values() {
+                values.insert((kind.clone(), param.key.to_string()), value.to_string());
+            }
+        });
+        self.kind.set(kind);
+        self.rule_table.set(config.rule_table().copied());
+        self.engine.set(config.engine_fll().map(str::to_string));
+    }
+
     /// Follows a change of preset: every parameter still at the old preset's default takes the
     /// new one's (paper 002's k_u on its preset); what the user typed stays.
     pub fn follow_preset(&self, preset: Preset) {
@@ -519,6 +549,50 @@ pub fn EngineFile(
                     </button>
                 </p>
             })
+        }}
+    }
+}
+
+/// "Open configuration…": a file input that reads what "Configuration (JSON)" saves, through
+/// the reader `cutlab sim --config` uses, and hands it to `load` (which shows it in the page's
+/// forms, or says why it cannot). A file that cannot be read or loaded changes nothing and its
+/// message names the file and the line or field.
+#[component]
+pub fn ConfigurationFile(
+    /// The file input's id.
+    id: &'static str,
+    /// Shows the configuration, or says why not (before changing anything).
+    load: Callback<RunConfiguration, Result<(), String>>,
+) -> impl IntoView {
+    let (message, set_message) = signal(None::<Result<String, String>>);
+    let on_file = move |ev: leptos::ev::Event| {
+        read_chosen_file(&ev, move |name, text| {
+            let outcome = text
+                .and_then(|text| RunConfiguration::from_json(&text).map_err(|e| e.to_string()))
+                .and_then(|config| {
+                    let runs = config.runs.len();
+                    load.run(config)?;
+                    Ok(format!(
+                        "Opened {name} ({runs} run{}).",
+                        if runs == 1 { "" } else { "s" }
+                    ))
+                })
+                .map_err(|e| format!("{name}: {e} (nothing on the page was changed)"));
+            set_message.set(Some(outcome));
+        });
+    };
+    view! {
+        <div class="field">
+            <label for=id>"Open configuration…"</label>
+            <input id=id type="file" accept=".json,application/json" on:change=on_file />
+        </div>
+        {move || {
+            message
+                .get()
+                .map(|m| match m {
+                    Ok(done) => view! { <p class="hint" role="status">{done}</p> }.into_any(),
+                    Err(e) => view! { <p class="run-error" role="alert">{e}</p> }.into_any(),
+                })
         }}
     }
 }

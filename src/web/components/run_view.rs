@@ -8,7 +8,9 @@ use leptos::prelude::*;
 use crate::charts::{Axis, LineChart, Series, PALETTE};
 use crate::closed_loop::lab::RunResult;
 use crate::closed_loop::metrics::Metrics;
-use crate::closed_loop::summary::{best_marks, format_metric, not_best_note, METRIC_ROWS};
+use crate::closed_loop::summary::{
+    best_marks, format_metric, negative_saving_notes, not_best_note, MetricRow, METRIC_ROWS,
+};
 use crate::web::components::chart::ChartCanvas;
 use crate::web::components::help::HelpToggle;
 
@@ -32,8 +34,9 @@ fn time_chart(y_label: &str) -> LineChart {
 
 /// The charts of one or more runs: force, current, override, feed, depth and the wall's
 /// force-induced error. With one run every signal of it is drawn; with several, the main signal
-/// of each run is overlaid.
-pub fn run_charts(runs: &[NamedRun]) -> [LineChart; 6] {
+/// of each run is overlaid. `before`, an earlier run of the same scenario, is drawn faint behind
+/// a single run's main signals ([`Series::before`]), so an edit's effect shows at a glance.
+pub fn run_charts(runs: &[NamedRun], before: Option<&RunResult>) -> [LineChart; 6] {
     let mut force = time_chart("force (N)");
     let mut current = time_chart("current (A)");
     let mut override_pct = time_chart("feed override (%)");
@@ -166,7 +169,9 @@ pub fn run_charts(runs: &[NamedRun]) -> [LineChart; 6] {
     }
     let end = runs
         .iter()
-        .filter_map(|(_, r)| r.trace.rows.last().map(|row| row.time_s))
+        .map(|(_, r)| r.as_ref())
+        .chain(before.filter(|_| single))
+        .filter_map(|r| r.trace.rows.last().map(|row| row.time_s))
         .fold(0.0, f64::max);
     if let Some((_, first)) = runs.first() {
         // Black for the target, vermilion for the limit: told apart without reading the legend.
@@ -178,6 +183,34 @@ pub fn run_charts(runs: &[NamedRun]) -> [LineChart; 6] {
             force
                 .series
                 .push(Series::new(name, colour, vec![(0.0, value), (end, value)]).dashed());
+        }
+    }
+    if let (true, Some(earlier)) = (single, before) {
+        // One faint line per chart, after the current run's series, so a series hidden in a
+        // legend (by index) stays the one hidden when the earlier run comes and goes.
+        let faint = [
+            (&mut force, "true force", series_of(earlier, |r| r.force_n)),
+            (
+                &mut current,
+                "spindle RMS",
+                series_of(earlier, |r| r.spindle_current_rms_a),
+            ),
+            (
+                &mut override_pct,
+                "commanded",
+                series_of(earlier, |r| r.override_pct),
+            ),
+            (&mut feed, "actual", series_of(earlier, |r| r.feed_mm_min)),
+            (
+                &mut wall,
+                "uncompensated",
+                series_of(earlier, |r| r.surface_error_um),
+            ),
+        ];
+        for (chart, what, points) in faint {
+            chart
+                .series
+                .push(Series::new(what, PALETTE[0], points).before());
         }
     }
     let mut charts = [force, current, override_pct, feed, depth, wall];
@@ -197,9 +230,15 @@ pub fn RunCharts(
     /// The runs to draw.
     #[prop(into)]
     runs: Signal<Vec<NamedRun>>,
+    /// An earlier run drawn faint behind a single run (Simulate's run before the last edit).
+    #[prop(optional, into)]
+    before: MaybeProp<Arc<RunResult>>,
 ) -> impl IntoView {
     let x_view = RwSignal::new(None::<Range<f64>>);
-    let charts = Memo::new(move |_| runs.with(|r| run_charts(r)));
+    let charts = Memo::new(move |_| {
+        let earlier = before.get();
+        runs.with(|r| run_charts(r, earlier.as_deref()))
+    });
     let chart = move |i: usize| Signal::derive(move || charts.with(|c| c[i].clone()));
     let wall_known = move || {
         runs.with(|r| {
@@ -236,12 +275,34 @@ pub fn RunCharts(
     }
 }
 
-/// The metrics of the runs as a table; with several runs the best value of each row is marked.
+/// A cell's value, or a "—" that says why on hover and to a screen reader.
+fn metric_cell(row: &MetricRow, run: &RunResult) -> impl IntoView {
+    let shown = row.show((row.value)(run), format_metric);
+    if shown == "—" {
+        let why = row.why_missing(run);
+        view! {
+            <span class="missing" title=why>
+                <span aria-hidden="true">"—"</span>
+                <span class="visually-hidden">{format!("none: {why}")}</span>
+            </span>
+        }
+        .into_any()
+    } else {
+        shown.into_any()
+    }
+}
+
+/// The metrics of the runs as a table; with several runs the best value of each row is marked
+/// (only beyond the row's tolerance, which its help states). With one run and `before`, the
+/// earlier run's values stand in a "Before" column beside it.
 #[component]
 pub fn MetricsTable(
     /// The runs.
     #[prop(into)]
     runs: Signal<Vec<NamedRun>>,
+    /// An earlier run shown beside a single run (Simulate's run before the last edit).
+    #[prop(optional, into)]
+    before: MaybeProp<Arc<RunResult>>,
 ) -> impl IntoView {
     // Which rows' explanations are open, kept while the table is drawn again (the savings
     // arrive after the run, a comparison's runs one by one).
@@ -252,13 +313,20 @@ pub fn MetricsTable(
             return None;
         }
         let several = runs.len() > 1;
+        let earlier = before.get().filter(|_| !several);
+        let named: Vec<(&str, &RunResult)> =
+            runs.iter().map(|(n, r)| (n.as_str(), r.as_ref())).collect();
         Some(view! {
             <table class="metrics">
-                <caption>"Metrics of the run" {several.then_some("s (best marked ★)")}</caption>
+                <caption>
+                    "Metrics of the run"
+                    {several.then_some("s (★: best beyond the row's noise; see a row's ?)")}
+                </caption>
                 <thead>
                     <tr>
                         <th scope="col">"Metric"</th>
                         {runs.iter().map(|(n, _)| view! { <th scope="col">{n.clone()}</th> }).collect_view()}
+                        {earlier.is_some().then(|| view! { <th scope="col" class="before">"Before"</th> })}
                     </tr>
                 </thead>
                 <tbody>
@@ -266,38 +334,66 @@ pub fn MetricsTable(
                         .iter()
                         .zip(help_open.clone())
                         .map(|(row, open)| {
-                            let values: Vec<Option<f64>> = runs.iter().map(|(_, r)| (row.value)(r)).collect();
                             let results: Vec<&RunResult> = runs.iter().map(|(_, r)| r.as_ref()).collect();
                             let marks = best_marks(row, &results, format_metric);
                             view! {
                                 <tr>
                                     <th scope="row">
                                         {row.heading()}
-                                        <HelpToggle subject=row.label.to_string() help=row.help open=open />
+                                        <HelpToggle subject=row.label.to_string() help=row.help_with_rule() open=open />
                                     </th>
-                                    {values
-                                        .into_iter()
+                                    {results
+                                        .iter()
                                         .zip(marks)
-                                        .map(|(v, is_best)| {
+                                        .map(|(run, is_best)| {
                                             view! {
                                                 <td class:best=is_best>
-                                                    {row.show(v, format_metric)}
+                                                    {metric_cell(row, run)}
                                                     {is_best.then(|| view! { <span class="best-mark" aria-label="best">" ★"</span> })}
                                                 </td>
                                             }
                                         })
                                         .collect_view()}
+                                    {earlier.clone().map(|e| view! { <td class="before">{metric_cell(row, &e)}</td> })}
                                 </tr>
                             }
                         })
                         .collect_view()}
                 </tbody>
             </table>
-            {not_best_note(
-                &runs.iter().map(|(n, r)| (n.as_str(), r.as_ref())).collect::<Vec<_>>(),
-            )
-            .map(|note| view! { <p class="note">{note}</p> })}
+            {not_best_note(&named).map(|note| view! { <p class="note">{note}</p> })}
+            {negative_saving_notes(&named)
+                .into_iter()
+                .map(|note| view! { <p class="note saving-note">{note}</p> })
+                .collect_view()}
         })
+    }
+}
+
+/// Marks results computed from settings that no longer validate: a banner says so (announced,
+/// `aria-live`), and the page dims the results it wraps with the `stale` class.
+#[component]
+pub fn StaleNotice(
+    /// Whether the results shown are from settings the form no longer holds.
+    #[prop(into)]
+    stale: Signal<bool>,
+) -> impl IntoView {
+    // The live region is always in the page, so the banner arriving in it is announced.
+    view! {
+        <div class="stale-status" role="status" aria-live="polite">
+            {move || {
+                stale
+                    .get()
+                    .then(|| {
+                        view! {
+                            <p class="stale-banner">
+                                "These results are from the last valid settings: a field above no "
+                                "longer validates. Fix it to run again."
+                            </p>
+                        }
+                    })
+            }}
+        </div>
     }
 }
 

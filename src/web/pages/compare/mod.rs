@@ -16,15 +16,17 @@ use std::time::Duration;
 
 use leptos::prelude::*;
 
+use crate::closed_loop::config::RunConfiguration;
 use crate::closed_loop::definition::RunSpec;
 use crate::closed_loop::lab::RunResult;
 use crate::control::registry::ControllerKind;
 use crate::web::components::later::{effect_after_mount, Later};
 use crate::web::components::page::PageShell;
 use crate::web::components::run_form::{
-    ControllerFields, ControllerForm, MachineAndSignalFields, ScenarioFields, ScenarioForm,
+    ConfigurationFile, ControllerFields, ControllerForm, MachineAndSignalFields, ScenarioFields,
+    ScenarioForm,
 };
-use crate::web::components::run_view::{MetricsTable, NamedRun, RunCharts};
+use crate::web::components::run_view::{MetricsTable, NamedRun, RunCharts, StaleNotice};
 use crate::web::components::runner::{Debounce, RunProgress, RunStatus, Runner};
 use crate::web::components::savings::Savings;
 use crate::web::components::teach_cuts::KeptCalibrations;
@@ -156,6 +158,40 @@ pub fn ComparePage() -> impl IntoView {
         _ => runs.get(),
     });
 
+    // Results from settings the forms no longer hold (a field that does not validate).
+    let stale = Signal::derive(move || specs.with(Option::is_none) && !results.with(Vec::is_empty));
+    // A saved configuration into the forms: its runs are the variants, on its first run's
+    // scenario; checked whole before any field changes.
+    let load_configuration = Callback::new(move |config: RunConfiguration| {
+        let runs = &config.runs;
+        let Some(first) = runs.first() else {
+            return Err("the file holds no run".to_string());
+        };
+        if runs.len() > forms.len() {
+            return Err(format!(
+                "it holds {} runs; Compare shows at most {}",
+                runs.len(),
+                forms.len()
+            ));
+        }
+        let same_scenario = |r: &RunSpec| {
+            (r.preset, r.seed, r.settings, r.plant)
+                == (first.preset, first.seed, first.settings, first.plant)
+        };
+        if let Some(i) = runs.iter().position(|r| !same_scenario(r)) {
+            return Err(format!(
+                "run {} has another scenario than run 1; Compare runs every variant on one",
+                i + 1
+            ));
+        }
+        scenario.load(first);
+        for (form, run) in forms.iter().zip(runs) {
+            form.load(&run.controller, first.preset);
+        }
+        count.set(runs.len().clamp(2, forms.len()));
+        Ok(())
+    });
+
     view! {
         <PageShell id="compare" title="Compare controllers">
             <p class="lede">
@@ -190,9 +226,11 @@ pub fn ComparePage() -> impl IntoView {
                     </div>
                     <RunProgress runner=runner.clone() />
                     <ExportPanel runs=runs specs=specs />
+                    <ConfigurationFile id="cmp-config-file" load=load_configuration />
                     </Later>
                 </form>
-                <div class="results">
+                <div class="results" class:stale=stale>
+                    <StaleNotice stale=stale />
                     <Later>
                     <RunCharts runs=drawn />
                     {savings.progress()}

@@ -8,6 +8,7 @@ use crate::charts::{Axis, HeatMap, LineChart, Series, PALETTE};
 use crate::control::fuzzy::engine::Engine;
 use crate::web::components::chart::ChartCanvas;
 use crate::web::components::heat_map::HeatMapCanvas;
+use crate::web::components::run_view::run_charts;
 
 /// Grid points per axis of the control surface.
 const SURFACE_POINTS: usize = 61;
@@ -128,6 +129,19 @@ pub fn FuzzyCharts(fuzzy: Fuzzy, run: RunMoment) -> impl IntoView {
         });
         chart
     });
+    // The force the table held, against the target and the limit: the same chart Simulate
+    // draws, so E and EC (scaled) read beside what they mean in newtons.
+    let force_chart = Memo::new(move |_| {
+        result.with(|r| {
+            r.as_ref().map_or_else(
+                || LineChart::new(Axis::linear("time (s)"), Axis::linear("force (N)")),
+                |r| {
+                    let [force, ..] = run_charts(&[("this table".to_string(), r.clone())], None);
+                    force
+                },
+            )
+        })
+    });
     let moment_chart = Signal::derive(move || {
         let mut chart = trace_chart.get();
         let time = result.with(|r| {
@@ -157,7 +171,10 @@ pub fn FuzzyCharts(fuzzy: Fuzzy, run: RunMoment) -> impl IntoView {
         {move || {
             result
                 .with(|r| r.is_some())
-                .then(|| view! { <ChartCanvas label="E and EC of the run" chart=moment_chart height_px=180 /> })
+                .then(|| view! {
+                    <ChartCanvas label="Force of the run" chart=force_chart height_px=200 />
+                    <ChartCanvas label="E and EC of the run" chart=moment_chart height_px=180 />
+                })
         }}
         <ChartCanvas label="Membership functions of E" chart=chart_of(Some(0)) height_px=180 />
         <ChartCanvas label="Membership functions of EC" chart=chart_of(Some(1)) height_px=180 />

@@ -5,10 +5,13 @@ use leptos::prelude::*;
 
 use super::{Fuzzy, Source};
 use crate::control::fuzzy::engine::Defuzzifier;
-use crate::control::fuzzy::rules::{RuleBase, LEVEL_NAMES};
+use crate::control::fuzzy::rules::{RuleBase, RuleTable, LEVEL_NAMES};
+use crate::control::registry::ControllerKind;
+use crate::plant::Preset;
 use crate::web::components::fields::SelectField;
 use crate::web::components::later::Later;
 use crate::web::components::run_form::encode_rule_table;
+use crate::web::route::{hash_with_query, Page};
 
 /// One cell of the table: a select of the seven levels, marked while its rule fires.
 fn cell(fuzzy: Fuzzy, e: usize, ec: usize) -> impl IntoView {
@@ -61,6 +64,22 @@ fn cell(fuzzy: Fuzzy, e: usize, ec: usize) -> impl IntoView {
             </select>
         </td>
     }
+}
+
+/// Compare with `table` as variant B beside paper 002's own dynamics table (variant A), on
+/// paper 002's preset, in the URL form Compare's controller forms read.
+fn compare_href(table: &RuleTable) -> String {
+    let fuzzy_dynamics = ControllerKind::FuzzyDynamics.name().to_string();
+    hash_with_query(
+        Page::Compare,
+        &[
+            ("preset".into(), Preset::LiuCurrentStep.name().into()),
+            ("variants".into(), "2".into()),
+            ("a.controller".into(), fuzzy_dynamics.clone()),
+            ("b.controller".into(), fuzzy_dynamics),
+            ("b.rules".into(), encode_rule_table(table)),
+        ],
+    )
 }
 
 /// The rule table's fieldset.
@@ -138,6 +157,9 @@ pub fn RuleTablePanel(fuzzy: Fuzzy) -> impl IntoView {
                     "#/simulate?preset=liu-current-step&controller=fuzzy-dynamics&rules={}",
                     encode_rule_table(&table.get())
                 )>"Simulate with this table"</a>
+                " · "
+                <a href=move || compare_href(&table.get())>"Open in Compare"</a>
+                " (beside paper 002's own table)"
             </p>
         </fieldset>
     }
