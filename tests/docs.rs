@@ -51,9 +51,9 @@ use cutlab::closed_loop::references::{
     apply_references, ReferenceSearch, REFERENCE_RESOLUTION_PCT,
 };
 use cutlab::closed_loop::settings::{
-    air_cut_force_n, CROSS_CHECK_TOLERANCE, DEFAULT_CONTROL_PERIOD_S, DEFAULT_FEED_LOWPASS_HZ,
-    DEFAULT_LOWPASS_ORDER, DEFAULT_SPINDLE_LOWPASS_HZ, FORCE_LIMIT_FACTOR, MAX_AIR_CUT_FRACTION,
-    MIN_CONTROL_PERIOD_S, OVERLOAD_FACTOR,
+    air_cut_force_n, DEFAULT_CONTROL_PERIOD_S, DEFAULT_FEED_LOWPASS_HZ, DEFAULT_LOWPASS_ORDER,
+    DEFAULT_SPINDLE_LOWPASS_HZ, FORCE_LIMIT_FACTOR, MAX_AIR_CUT_FRACTION, MIN_CONTROL_PERIOD_S,
+    OVERLOAD_FACTOR, SENSOR_FAILURE_TOLERANCE,
 };
 use cutlab::closed_loop::teach_cut::{TEACH_OVERRIDES_PCT, TEACH_STEP_S};
 use cutlab::control::registry::{ControllerConfig, ControllerKind};
@@ -1072,7 +1072,7 @@ fn settings(facts: &mut Facts, m: &Matrix) {
     facts.set("metrics.settling_band_pct", short(metrics_band, 1));
     facts.set(
         "cross_check.tolerance_pct",
-        fixed(100.0 * CROSS_CHECK_TOLERANCE, 0),
+        fixed(100.0 * SENSOR_FAILURE_TOLERANCE, 0),
     );
     facts.set(
         "cross_check.exponent_uncertainty",
@@ -1320,7 +1320,7 @@ fn paper_004(facts: &mut Facts, m: &Matrix) {
     let run = m.result(Preset::KimCircularTaper, ControllerKind::Threshold);
     facts.set(
         "paper_004.circle.flagged_s",
-        fixed(run.metrics.time_cross_check_disagrees_s, 2),
+        fixed(run.metrics.time_sensor_failure_predicted_s, 2),
     );
     facts.set(
         "paper_004.circle.cut_s",
@@ -1329,7 +1329,7 @@ fn paper_004(facts: &mut Facts, m: &Matrix) {
     facts.set(
         "paper_004.circle.flagged_pct",
         fixed(
-            100.0 * run.metrics.time_cross_check_disagrees_s
+            100.0 * run.metrics.time_sensor_failure_predicted_s
                 / run.metrics.controlled_cutting_time_s,
             2,
         ),
@@ -1342,10 +1342,10 @@ fn paper_004(facts: &mut Facts, m: &Matrix) {
         if r.armed && r.depth_mm > 0.0 && r.width_mm > 0.0 && r.force_n.is_finite() {
             let dt = r.time_s - w[0].time_s;
             cut_s += dt;
-            if cutlab::closed_loop::feedback_loop::disagrees(
+            if cutlab::closed_loop::feedback_loop::estimates_disagree(
                 r.force_est_n,
                 r.force_power_law_n,
-                run.settings.cross_check_tolerance,
+                run.settings.sensor_failure_tolerance,
                 r.target_force_n,
             ) {
                 flagged_s += dt;
@@ -2013,9 +2013,9 @@ fn paper_004_learning(facts: &mut Facts) {
 /// Paper 004's cutting-force-induced error: the tool's stiffness and the surface error's range
 /// along the wall for the fixed feed and the feedback laws.
 fn paper_004_surface_error(facts: &mut Facts, m: &Matrix) {
-    use cutlab::plant::deflection::ToolStiffness;
+    use cutlab::plant::deflection::{ToolMount, ToolStiffness};
     let kim = Preset::KimStepDoc.scenario().unwrap();
-    let k = ToolStiffness::of_cutter(kim.cutter());
+    let k = ToolStiffness::of_cutter(kim.cutter(), ToolMount::default());
     facts.set("paper_004.cfie.kim_tool_n_um", fixed(k.tool_n_mm / 1e3, 1));
     facts.set(
         "paper_004.cfie.kim_combined_n_um",
