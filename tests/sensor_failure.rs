@@ -11,17 +11,18 @@
 #[cfg(target_arch = "wasm32")]
 use wasm_bindgen_test::wasm_bindgen_test as test;
 
+#[path = "common/faults.rs"]
+mod faults;
+
 use cutlab::closed_loop::definition::RunSpec;
-use cutlab::closed_loop::lab::{LabRun, RunMachines, RunResult};
-use cutlab::closed_loop::teach_cut::TeachForce;
+use cutlab::closed_loop::lab::RunResult;
 use cutlab::control::registry::ControllerKind;
-use cutlab::machine::{
-    DynamometerReading, Machine, MachineStep, OverrideCommand, SensorlessEstimate,
-};
-use cutlab::plant::scenario::Scenario;
-use cutlab::plant::simulator::Simulator;
+use cutlab::machine::Machine;
 use cutlab::plant::Preset;
-use cutlab::work::Work;
+use faults::{
+    prediction_delay_s, published_run_machine, run_on, DriftingSpindleSensor, FAULTY_GAIN,
+    FAULT_AT_S,
+};
 
 /// The controllers a shop would run the check under: fixed feed, paper 003's threshold law and
 /// the PI law (the ones that need no rule base or engine).
@@ -30,65 +31,6 @@ const CONTROLLERS: [ControllerKind; 3] = [
     ControllerKind::Threshold,
     ControllerKind::Pi,
 ];
-
-/// When the injected fault starts, s of machine time: in kim-step-doc's first depth section,
-/// after the loop has armed.
-const FAULT_AT_S: f64 = 20.0;
-
-/// The spindle Hall sensors' gain after the fault: 40 % low (a drifting burden resistor or a
-/// failing transducer), which no plausibility check of the envelope sees.
-const FAULTY_GAIN: f64 = 0.6;
-
-/// A machine whose spindle current sensors read `gain` of the current from `from_s` on.
-struct DriftingSpindleSensor {
-    machine: Box<dyn Machine>,
-    from_s: f64,
-    gain: f64,
-}
-
-impl Machine for DriftingSpindleSensor {
-    fn sample_rate_hz(&self) -> f64 {
-        self.machine.sample_rate_hz()
-    }
-
-    fn step(&mut self, command: OverrideCommand) -> MachineStep {
-        let mut step = self.machine.step(command);
-        if step.sensors.time_s >= self.from_s {
-            for phase in &mut step.sensors.spindle_phase_currents_a {
-                *phase *= self.gain;
-            }
-        }
-        step
-    }
-
-    fn finished(&self) -> bool {
-        self.machine.finished()
-    }
-
-    fn sensorless_force(&self) -> Option<SensorlessEstimate> {
-        self.machine.sensorless_force()
-    }
-
-    fn dynamometer_force_n(&self) -> Option<DynamometerReading> {
-        self.machine.dynamometer_force_n()
-    }
-}
-
-/// `spec` run with its closed loop on the machine `wrap` makes of the preset's run machine (the
-/// teach cut on the preset's own).
-fn run_on(spec: &RunSpec, wrap: impl FnOnce(Box<dyn Machine>) -> Box<dyn Machine>) -> RunResult {
-    let RunMachines::Separate { teach, run } = RunMachines::for_preset(spec).unwrap() else {
-        panic!("a simulated preset has separate teach and run machines");
-    };
-    let machines = RunMachines::Separate {
-        teach,
-        run: wrap(run),
-    };
-    LabRun::on_machines(spec, machines, TeachForce::SimulationTruth)
-        .unwrap()
-        .run_to_end()
-        .unwrap()
-}
 
 /// Controlled cutting time with a sensor failure predicted, and its share of the controlled cut.
 fn predicted(result: &RunResult) -> (f64, f64) {
@@ -163,11 +105,8 @@ fn a_spindle_sensor_losing_gain_mid_cut_is_predicted_within_a_second() {
             "{}: predicted before the fault",
             controller.name()
         );
-        let first = rows
-            .iter()
-            .find(|r| r.time_s >= FAULT_AT_S && r.sensor_failure_predicted)
+        let delay_s = prediction_delay_s(&result)
             .unwrap_or_else(|| panic!("{}: the fault was never predicted", controller.name()));
-        let delay_s = first.time_s - FAULT_AT_S;
         eprintln!(
             "{}: the sensor's gain drop predicted after {delay_s:.2} s; failure predicted for {:.1} s \
              of the cut after it",
@@ -195,13 +134,6 @@ fn a_spindle_sensor_losing_gain_mid_cut_is_predicted_within_a_second() {
             cut_after.len()
         );
     }
-}
-
-/// The run machine kim-step-doc's `spec` would run on, estimating with paper 004's published
-/// weights (calibrated on the program's nominal cut) instead of the learned network.
-fn published_run_machine(spec: &RunSpec) -> Box<dyn Machine> {
-    let scenario = Scenario::new(spec.preset.scenario_spec().unwrap()).unwrap();
-    Box::new(Simulator::new(scenario, spec.preset.sim_config(spec.seed)).unwrap())
 }
 
 #[test]
