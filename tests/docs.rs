@@ -2111,13 +2111,17 @@ fn paper_004_surface_error(facts: &mut Facts, m: &Matrix) {
     {
         use cutlab::plant::deflection::{
             DEFAULT_SPINDLE_STIFFNESS_N_MM, DEFAULT_STICK_OUT_DIAMETERS, MAX_STICK_OUT_DIAMETERS,
-            SPINDLE_STIFFNESS_RANGE_N_UM, STICK_OUT_RANGE_MM,
+            SPINDLE_STIFFNESS_RANGE_N_UM, STICK_OUT_RANGE_MM, YOUNGS_MODULUS_RANGE_GPA,
         };
         let range = |(lo, hi): (f64, f64)| format!("{}–{}", short(lo, 1), short(hi, 1));
         facts.set("deflection.stick_out_range_mm", range(STICK_OUT_RANGE_MM));
         facts.set(
             "deflection.spindle_range_n_um",
             range(SPINDLE_STIFFNESS_RANGE_N_UM),
+        );
+        facts.set(
+            "deflection.modulus_range_gpa",
+            range(YOUNGS_MODULUS_RANGE_GPA),
         );
         facts.set(
             "deflection.max_stick_out_diameters",

@@ -9,7 +9,7 @@
 #[cfg(target_arch = "wasm32")]
 use wasm_bindgen_test::wasm_bindgen_test as test;
 
-use cutlab::closed_loop::definition::RunSpec;
+use cutlab::closed_loop::definition::{RunSetting, RunSpec};
 use cutlab::closed_loop::lab::simulate;
 use cutlab::control::registry::ControllerKind;
 use cutlab::estimation::estimator::Feedback;
@@ -102,26 +102,21 @@ fn the_normal_share_is_the_forces_part_across_the_feed() {
     assert!(normal_share(&ToolForces::default()).is_nan());
 }
 
+/// kim-step-doc's surface-error range at fixed feed with the mount's `setting` typed as `text`,
+/// µm (through the run table's parse, as a form or a flag gives it).
+fn error_range_with(setting: RunSetting, text: &str) -> f64 {
+    let preset = Preset::KimStepDoc;
+    let mut spec = RunSpec::new(preset, ControllerKind::Fixed);
+    setting.apply(&mut spec, setting.parse(text, preset).unwrap());
+    simulate(&spec).unwrap().metrics.surface_error_range_um
+}
+
 /// The tool's stick-out is a run setting: a longer tool bends more under the same forces, so the
 /// wall's error range over the part grows, and by the cantilever's L³ — the spindle's part, the
 /// same at every stick-out, cancels in the differences.
 #[test]
 fn a_longer_stick_out_widens_the_error_range_by_the_cantilevers_cube() {
-    use cutlab::closed_loop::definition::RunSetting;
-    let preset = Preset::KimStepDoc;
-    let lengths_mm = [40.0, 60.0, 80.0];
-    let ranges_um: Vec<f64> = lengths_mm
-        .iter()
-        .map(|&l| {
-            let mut spec = RunSpec::new(preset, ControllerKind::Fixed);
-            let value = RunSetting::ToolStickOut
-                .parse(&l.to_string(), preset)
-                .unwrap();
-            RunSetting::ToolStickOut.apply(&mut spec, value);
-            assert_eq!(spec.plant.tool_stick_out_mm, Some(l));
-            simulate(&spec).unwrap().metrics.surface_error_range_um
-        })
-        .collect();
+    let ranges_um = ["40", "60", "80"].map(|l| error_range_with(RunSetting::ToolStickOut, l));
     assert!(
         ranges_um.windows(2).all(|w| w[1] > w[0]),
         "{ranges_um:?} µm"
@@ -139,21 +134,23 @@ fn a_longer_stick_out_widens_the_error_range_by_the_cantilevers_cube() {
 }
 
 #[test]
+fn a_high_speed_steel_tool_bends_further_than_a_carbide_one() {
+    let range = |e| error_range_with(RunSetting::ToolModulus, e);
+    assert!(range("210") > range("600"));
+    let e = RunSetting::ToolModulus
+        .parse("50", Preset::KimStepDoc)
+        .unwrap_err();
+    assert_eq!(e.problem.to_string(), "50 GPa is outside 150–700 GPa");
+}
+
+#[test]
 fn a_stiffer_spindle_narrows_the_error_range() {
-    use cutlab::closed_loop::definition::RunSetting;
-    let preset = Preset::KimStepDoc;
-    let range = |k: &str| {
-        let mut spec = RunSpec::new(preset, ControllerKind::Fixed);
-        let value = RunSetting::SpindleStiffness.parse(k, preset).unwrap();
-        RunSetting::SpindleStiffness.apply(&mut spec, value);
-        simulate(&spec).unwrap().metrics.surface_error_range_um
-    };
+    let range = |k| error_range_with(RunSetting::SpindleStiffness, k);
     assert!(range("200") < range("20"));
 }
 
 #[test]
 fn bad_stick_outs_and_spindle_stiffnesses_are_refused_with_the_tables_message() {
-    use cutlab::closed_loop::definition::RunSetting;
     let preset = Preset::KimStepDoc;
     let e = RunSetting::ToolStickOut.parse("1000", preset).unwrap_err();
     assert_eq!(e.problem.to_string(), "1000 mm is outside 2–400 mm");

@@ -354,6 +354,7 @@ fn preset_error_model(spec: &RunSpec) -> Option<ErrorModel> {
     let mount = ToolMount {
         stick_out_mm: spec.plant.tool_stick_out_mm,
         spindle_stiffness_n_um: spec.plant.spindle_stiffness_n_um,
+        youngs_modulus_gpa: spec.plant.tool_youngs_modulus_gpa,
     };
     ErrorModel::of_program(&spec.preset.edited_scenario_spec(&spec.plant)?, mount)
 }

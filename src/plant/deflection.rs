@@ -52,8 +52,13 @@ pub const MAX_STICK_OUT_DIAMETERS: f64 = 10.0;
 /// heavy boring spindle.
 pub const SPINDLE_STIFFNESS_RANGE_N_UM: (f64, f64) = (5.0, 500.0);
 
-/// How a cutter sits in the machine: its stick-out from the holder and the spindle's stiffness
-/// at the nose, each `None` for the default ([`DEFAULT_STICK_OUT_DIAMETERS`] diameters,
+/// The tool materials' Young's moduli a run accepts, GPa: from high-speed steel (≈ 210) through
+/// ceramics (300–400) to cemented carbide (550–650).
+pub const YOUNGS_MODULUS_RANGE_GPA: (f64, f64) = (150.0, 700.0);
+
+/// How a cutter sits in the machine: its stick-out from the holder, its material's Young's
+/// modulus and the spindle's stiffness at the nose, each `None` for the default
+/// ([`DEFAULT_STICK_OUT_DIAMETERS`] diameters, [`CARBIDE_YOUNGS_MODULUS_GPA`],
 /// [`DEFAULT_SPINDLE_STIFFNESS_N_MM`]).
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct ToolMount {
@@ -61,6 +66,8 @@ pub struct ToolMount {
     pub stick_out_mm: Option<f64>,
     /// Radial stiffness at the spindle nose, N/µm.
     pub spindle_stiffness_n_um: Option<f64>,
+    /// Young's modulus of the tool's material, GPa.
+    pub youngs_modulus_gpa: Option<f64>,
 }
 
 /// The tool and spindle as springs between the force and the wall.
@@ -85,35 +92,62 @@ impl ToolStiffness {
     /// assert!((k.surface_error_um(500.0) - 28.6).abs() < 0.1);
     /// ```
     pub fn carbide(diameter_mm: f64, stick_out_mm: f64, spindle_n_mm: f64) -> Self {
+        Self::cantilever(
+            diameter_mm,
+            stick_out_mm,
+            CARBIDE_YOUNGS_MODULUS_GPA,
+            spindle_n_mm,
+        )
+    }
+
+    /// A tool of `diameter_mm` and Young's modulus `youngs_modulus_gpa` sticking out
+    /// `stick_out_mm`, on a spindle of `spindle_n_mm`.
+    ///
+    /// ```
+    /// use cutlab::plant::deflection::ToolStiffness;
+    /// // High-speed steel (210 GPa) against carbide (600 GPa): the tool bends 600/210 times as far.
+    /// let hss = ToolStiffness::cantilever(10.0, 40.0, 210.0, f64::INFINITY);
+    /// let carbide = ToolStiffness::carbide(10.0, 40.0, f64::INFINITY);
+    /// assert!((hss.surface_error_um(100.0) / carbide.surface_error_um(100.0) - 600.0 / 210.0).abs() < 1e-9);
+    /// ```
+    pub fn cantilever(
+        diameter_mm: f64,
+        stick_out_mm: f64,
+        youngs_modulus_gpa: f64,
+        spindle_n_mm: f64,
+    ) -> Self {
         let equivalent_mm = FLUTED_DIAMETER_RATIO * diameter_mm;
         let second_moment_mm4 = std::f64::consts::PI * equivalent_mm.powi(4) / 64.0;
-        let youngs_n_mm2 = CARBIDE_YOUNGS_MODULUS_GPA * 1e3;
+        let youngs_n_mm2 = youngs_modulus_gpa * 1e3;
         Self {
             tool_n_mm: 3.0 * youngs_n_mm2 * second_moment_mm4 / stick_out_mm.powi(3),
             spindle_n_mm,
         }
     }
 
-    /// The stiffness of carbide `cutter` mounted as `mount` says (the defaults where it says
-    /// nothing).
+    /// The stiffness of `cutter` mounted as `mount` says (a carbide tool, and the defaults, where
+    /// it says nothing).
     ///
     /// ```
     /// use cutlab::plant::deflection::{ToolMount, ToolStiffness, DEFAULT_SPINDLE_STIFFNESS_N_MM};
     /// use cutlab::plant::mechanics::Cutter;
     /// let cutter = Cutter { diameter_mm: 10.0, teeth: 4, helix_deg: 30.0, runout_mm: 0.0,
     ///                      runout_angle_deg: 0.0 };
-    /// let mount = ToolMount { stick_out_mm: Some(35.0), spindle_stiffness_n_um: None };
+    /// let mount = ToolMount { stick_out_mm: Some(35.0), ..ToolMount::default() };
     /// let k = ToolStiffness::of_cutter(&cutter, mount);
     /// assert_eq!(k, ToolStiffness::carbide(10.0, 35.0, DEFAULT_SPINDLE_STIFFNESS_N_MM));
     /// // A Ø10 mm carbide end mill 35 mm out on a 50 N/µm spindle: 300 N bend it ≈ 42 µm.
     /// assert!((k.surface_error_um(300.0) - 41.5).abs() < 1.0);
     /// ```
     pub fn of_cutter(cutter: &Cutter, mount: ToolMount) -> Self {
-        Self::carbide(
+        Self::cantilever(
             cutter.diameter_mm,
             mount
                 .stick_out_mm
                 .unwrap_or(DEFAULT_STICK_OUT_DIAMETERS * cutter.diameter_mm),
+            mount
+                .youngs_modulus_gpa
+                .unwrap_or(CARBIDE_YOUNGS_MODULUS_GPA),
             mount
                 .spindle_stiffness_n_um
                 .map_or(DEFAULT_SPINDLE_STIFFNESS_N_MM, |k| 1e3 * k),

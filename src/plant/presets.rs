@@ -27,6 +27,7 @@ use super::bond_graph::{BondGraphMachine, BondGraphRun, PAPER_002_REFERENCE_CURR
 use super::cnc::{CncConfig, DialTable, OverrideMode};
 use super::deflection::{
     MAX_STICK_OUT_DIAMETERS, SPINDLE_STIFFNESS_RANGE_N_UM, STICK_OUT_RANGE_MM,
+    YOUNGS_MODULUS_RANGE_GPA,
 };
 use super::dynamometer::{DynamometerConfig, WithDynamometer};
 use super::materials::Material;
@@ -1220,6 +1221,7 @@ impl Preset {
 /// | `sensor_noise_a` | 0 … 5 A | beyond the feed channel's full scale (±4.8 A) noise only saturates it |
 /// | `tool_stick_out_mm` | 2 … 400 mm, at least the deepest cut, at most 10 tool diameters | a stub tool to a long-reach one; the flutes must reach the cut, and a longer tool chatters before its static deflection matters |
 /// | `spindle_stiffness_n_um` | 5 … 500 N/µm | a light high-speed spindle to a heavy boring spindle |
+/// | `tool_youngs_modulus_gpa` | 150 … 700 GPa | high-speed steel to cemented carbide |
 /// | `load_step_pct` | −90 … +150 % (liu-current-step only) | from a tenth of the depth to 2.5 times it: up to the paper's full-scale E of 25 A above I_ref and beyond, on a 10 mm insert edge |
 ///
 /// A tool diameter that makes the preset's own deepest cut deeper than 4 diameters is refused
@@ -1257,12 +1259,15 @@ pub struct PlantEdits {
     /// The spindle's radial stiffness at its nose, N/µm (the force-induced error's other spring).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub spindle_stiffness_n_um: Option<f64>,
+    /// The Young's modulus of the tool's material, GPa (the cantilever's stiffness).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub tool_youngs_modulus_gpa: Option<f64>,
 }
 
 impl PlantEdits {
-    /// The edits that change what the machine does: all but the tool's stick-out and the
-    /// spindle's stiffness, which change only the force-induced error's model (the simulated
-    /// force and currents are a rigid tool's).
+    /// The edits that change what the machine does: all but the tool's stick-out and material
+    /// and the spindle's stiffness, which change only the force-induced error's model (the
+    /// simulated force and currents are a rigid tool's).
     ///
     /// ```
     /// use cutlab::plant::presets::PlantEdits;
@@ -1273,6 +1278,7 @@ impl PlantEdits {
         Self {
             tool_stick_out_mm: None,
             spindle_stiffness_n_um: None,
+            tool_youngs_modulus_gpa: None,
             ..self
         }
     }
@@ -1360,6 +1366,13 @@ impl PlantEdits {
             ],
             "N/µm",
             "a light high-speed spindle to a heavy boring spindle",
+        )?;
+        within(
+            "tool_youngs_modulus_gpa",
+            self.tool_youngs_modulus_gpa,
+            [YOUNGS_MODULUS_RANGE_GPA.0, YOUNGS_MODULUS_RANGE_GPA.1],
+            "GPa",
+            "high-speed steel to cemented carbide",
         )?;
         within(
             "tool_stick_out_mm",
@@ -1736,6 +1749,7 @@ mod tests {
             // 10 diameters of the Ø100 mm tool would be 1000 mm: the table's end binds.
             tool_stick_out_mm: Some(400.0),
             spindle_stiffness_n_um: Some(500.0),
+            tool_youngs_modulus_gpa: Some(700.0),
         };
         assert_eq!(check(edge), Ok(()));
         assert!(p.machine_with(1, &edge).is_ok());
