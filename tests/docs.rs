@@ -33,6 +33,9 @@
 #![cfg(not(target_arch = "wasm32"))]
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
 
+#[path = "common/faults.rs"]
+mod faults;
+
 use std::collections::BTreeMap;
 use std::path::PathBuf;
 use std::time::Instant;
@@ -51,9 +54,9 @@ use cutlab::closed_loop::references::{
     apply_references, ReferenceSearch, REFERENCE_RESOLUTION_PCT,
 };
 use cutlab::closed_loop::settings::{
-    air_cut_force_n, CROSS_CHECK_TOLERANCE, DEFAULT_CONTROL_PERIOD_S, DEFAULT_FEED_LOWPASS_HZ,
-    DEFAULT_LOWPASS_ORDER, DEFAULT_SPINDLE_LOWPASS_HZ, FORCE_LIMIT_FACTOR, MAX_AIR_CUT_FRACTION,
-    MIN_CONTROL_PERIOD_S, OVERLOAD_FACTOR,
+    air_cut_force_n, DEFAULT_CONTROL_PERIOD_S, DEFAULT_FEED_LOWPASS_HZ, DEFAULT_LOWPASS_ORDER,
+    DEFAULT_SPINDLE_LOWPASS_HZ, FORCE_LIMIT_FACTOR, MAX_AIR_CUT_FRACTION, MIN_CONTROL_PERIOD_S,
+    OVERLOAD_FACTOR, SENSOR_FAILURE_TOLERANCE,
 };
 use cutlab::closed_loop::teach_cut::{TEACH_OVERRIDES_PCT, TEACH_STEP_S};
 use cutlab::control::registry::{ControllerConfig, ControllerKind};
@@ -1072,7 +1075,7 @@ fn settings(facts: &mut Facts, m: &Matrix) {
     facts.set("metrics.settling_band_pct", short(metrics_band, 1));
     facts.set(
         "cross_check.tolerance_pct",
-        fixed(100.0 * CROSS_CHECK_TOLERANCE, 0),
+        fixed(100.0 * SENSOR_FAILURE_TOLERANCE, 0),
     );
     facts.set(
         "cross_check.exponent_uncertainty",
@@ -1320,7 +1323,7 @@ fn paper_004(facts: &mut Facts, m: &Matrix) {
     let run = m.result(Preset::KimCircularTaper, ControllerKind::Threshold);
     facts.set(
         "paper_004.circle.flagged_s",
-        fixed(run.metrics.time_cross_check_disagrees_s, 2),
+        fixed(run.metrics.time_sensor_failure_predicted_s, 2),
     );
     facts.set(
         "paper_004.circle.cut_s",
@@ -1329,7 +1332,7 @@ fn paper_004(facts: &mut Facts, m: &Matrix) {
     facts.set(
         "paper_004.circle.flagged_pct",
         fixed(
-            100.0 * run.metrics.time_cross_check_disagrees_s
+            100.0 * run.metrics.time_sensor_failure_predicted_s
                 / run.metrics.controlled_cutting_time_s,
             2,
         ),
@@ -1342,10 +1345,10 @@ fn paper_004(facts: &mut Facts, m: &Matrix) {
         if r.armed && r.depth_mm > 0.0 && r.width_mm > 0.0 && r.force_n.is_finite() {
             let dt = r.time_s - w[0].time_s;
             cut_s += dt;
-            if cutlab::closed_loop::feedback_loop::disagrees(
+            if cutlab::closed_loop::feedback_loop::estimates_disagree(
                 r.force_est_n,
                 r.force_power_law_n,
-                run.settings.cross_check_tolerance,
+                run.settings.sensor_failure_tolerance,
                 r.target_force_n,
             ) {
                 flagged_s += dt;
@@ -1355,6 +1358,93 @@ fn paper_004(facts: &mut Facts, m: &Matrix) {
     facts.set(
         "paper_004.circle.flagged_without_uncertainty_pct",
         fixed(100.0 * flagged_s / cut_s, 0),
+    );
+    paper_004_sensor_failure(facts, m);
+}
+
+/// Paper 004's sensor failure prediction on kim-step-doc with its learned network: healthy runs
+/// under every controller of the table, a spindle sensor losing gain mid-cut under the three
+/// laws tests/sensor_failure.rs asserts on, and the published weights in the network's place.
+fn paper_004_sensor_failure(facts: &mut Facts, m: &Matrix) {
+    use cutlab::closed_loop::feedback_loop::SENSOR_FAILURE_PERSISTENCE_S;
+    use faults::{
+        prediction_delay_s, published_run_machine, run_on, DriftingSpindleSensor, FAULTY_GAIN,
+        FAULT_AT_S,
+    };
+    let network = cutlab::plant::sensorless::shipped_network(Preset::KimStepDoc).unwrap();
+    facts.set(
+        "paper_004.sensor_failure.persistence_s",
+        short(SENSOR_FAILURE_PERSISTENCE_S, 2),
+    );
+    facts.set(
+        "paper_004.sensor_failure.residual_band_pct",
+        fixed(
+            100.0
+                * cutlab::plant::sensorless::UNCERTAINTY_STANDARD_ERRORS
+                * network.residual_rms_log,
+            1,
+        ),
+    );
+    facts.set(
+        "paper_004.sensor_failure.healthy_s",
+        span(
+            TABLE_CONTROLLERS.iter().map(|k| {
+                m.metrics(Preset::KimStepDoc, *k)
+                    .time_sensor_failure_predicted_s
+            }),
+            2,
+        ),
+    );
+    facts.set("paper_004.sensor_failure.fault_at_s", short(FAULT_AT_S, 1));
+    facts.set(
+        "paper_004.sensor_failure.gain_drop_pct",
+        fixed(100.0 * (1.0 - FAULTY_GAIN), 0),
+    );
+    let laws = [
+        ControllerKind::Fixed,
+        ControllerKind::Threshold,
+        ControllerKind::Pi,
+    ];
+    let drifting = |machine, gain| -> Box<dyn cutlab::machine::Machine> {
+        Box::new(DriftingSpindleSensor {
+            machine,
+            from_s: FAULT_AT_S,
+            gain,
+        })
+    };
+    let (mut delays, mut learned_healthy, mut published_healthy) = (vec![], vec![], vec![]);
+    let (mut learned_drift, mut published_drift) = (vec![], vec![]);
+    for law in laws {
+        let spec = RunSpec::new(Preset::KimStepDoc, law);
+        let faulty = run_on(&spec, |machine| drifting(machine, FAULTY_GAIN));
+        delays.push(prediction_delay_s(&faulty).unwrap());
+        let predicted = |r: RunResult| r.metrics.time_sensor_failure_predicted_s;
+        learned_healthy.push(
+            m.metrics(Preset::KimStepDoc, law)
+                .time_sensor_failure_predicted_s,
+        );
+        published_healthy.push(predicted(run_on(&spec, |_| published_run_machine(&spec))));
+        learned_drift.push(predicted(run_on(&spec, |machine| drifting(machine, 0.9))));
+        published_drift.push(predicted(run_on(&spec, |_| {
+            drifting(published_run_machine(&spec), 0.9)
+        })));
+    }
+    facts.set("paper_004.sensor_failure.delay_s", span(delays, 2));
+    facts.set(
+        "paper_004.sensor_failure.false_alarms_s",
+        format!(
+            "{} s with the learned network, {} s with the published weights",
+            span(learned_healthy, 2),
+            span(published_healthy, 2)
+        ),
+    );
+    facts.set(
+        "paper_004.sensor_failure.drift_10_pct",
+        format!(
+            "{} s with the learned network, {} s with the published weights",
+            span(learned_drift, 1),
+            span(published_drift, 1)
+        ),
     );
 }
 
@@ -2013,10 +2103,44 @@ fn paper_004_learning(facts: &mut Facts) {
 /// Paper 004's cutting-force-induced error: the tool's stiffness and the surface error's range
 /// along the wall for the fixed feed and the feedback laws.
 fn paper_004_surface_error(facts: &mut Facts, m: &Matrix) {
-    use cutlab::plant::deflection::ToolStiffness;
+    use cutlab::plant::deflection::{ToolMount, ToolStiffness};
     let kim = Preset::KimStepDoc.scenario().unwrap();
-    let k = ToolStiffness::of_cutter(kim.cutter());
+    let k = ToolStiffness::of_cutter(kim.cutter(), ToolMount::default());
     facts.set("paper_004.cfie.kim_tool_n_um", fixed(k.tool_n_mm / 1e3, 1));
+    // The mount's settings (docs/plant.md): their ranges, defaults, and a Ø10 mm tool 35 mm out.
+    {
+        use cutlab::plant::deflection::{
+            DEFAULT_SPINDLE_STIFFNESS_N_MM, DEFAULT_STICK_OUT_DIAMETERS, MAX_STICK_OUT_DIAMETERS,
+            SPINDLE_STIFFNESS_RANGE_N_UM, STICK_OUT_RANGE_MM, YOUNGS_MODULUS_RANGE_GPA,
+        };
+        let range = |(lo, hi): (f64, f64)| format!("{}–{}", short(lo, 1), short(hi, 1));
+        facts.set("deflection.stick_out_range_mm", range(STICK_OUT_RANGE_MM));
+        facts.set(
+            "deflection.spindle_range_n_um",
+            range(SPINDLE_STIFFNESS_RANGE_N_UM),
+        );
+        facts.set(
+            "deflection.modulus_range_gpa",
+            range(YOUNGS_MODULUS_RANGE_GPA),
+        );
+        facts.set(
+            "deflection.max_stick_out_diameters",
+            short(MAX_STICK_OUT_DIAMETERS, 1),
+        );
+        facts.set(
+            "deflection.default_stick_out_diameters",
+            short(DEFAULT_STICK_OUT_DIAMETERS, 1),
+        );
+        facts.set(
+            "deflection.default_spindle_n_um",
+            short(DEFAULT_SPINDLE_STIFFNESS_N_MM / 1e3, 1),
+        );
+        let ten_mm = ToolStiffness::carbide(10.0, 35.0, DEFAULT_SPINDLE_STIFFNESS_N_MM);
+        facts.set(
+            "deflection.d10_l35_300n_um",
+            fixed(ten_mm.surface_error_um(300.0), 0),
+        );
+    }
     facts.set(
         "paper_004.cfie.kim_combined_n_um",
         fixed(k.combined_n_mm() / 1e3, 1),

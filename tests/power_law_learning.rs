@@ -125,3 +125,23 @@ fn learned_on_the_current_based_estimates_the_weights_move_by_little() {
         from_truth.bias_n
     );
 }
+
+/// The networks the plant ships for its sensorless estimate are what the mill presets learn
+/// today from their current-based estimates (`cutlab learn --shipped-networks`, run by
+/// scripts/sample-data, writes them again when the plant, the chain or the learning changes),
+/// and kim-step-doc, whose program steps its depth, has one.
+#[cfg(not(target_arch = "wasm32"))]
+#[test]
+fn the_shipped_networks_are_what_the_presets_learn_today() {
+    use cutlab::closed_loop::trial_cuts::preset_networks;
+    use cutlab::plant::sensorless::shipped_networks;
+    use cutlab::plant::Preset;
+
+    let learned = preset_networks().unwrap();
+    assert_eq!(
+        shipped_networks(),
+        learned,
+        "www/data/sensorless-networks.json is stale: run scripts/sample-data"
+    );
+    assert!(learned.iter().any(|(p, _)| *p == Preset::KimStepDoc));
+}

@@ -11,7 +11,7 @@ use serde::Serialize;
 use super::args::{reject_extra, required};
 use super::{write_json, CliError, Io};
 use crate::closed_loop::trial_cuts::{
-    learn_on_preset, LearningError, PresetLearning, DEFAULT_TRIAL_FEEDS_PCT,
+    learn_on_preset, preset_networks, LearningError, PresetLearning, DEFAULT_TRIAL_FEEDS_PCT,
 };
 use crate::estimation::power_law_fit::LearnError;
 use crate::input::{parse_number, readable};
@@ -43,6 +43,12 @@ pub struct LearnArgs {
     feeds_pct: Option<String>,
     #[arg(long = "json", help = "print the cuts and both fits as JSON")]
     json: bool,
+    #[arg(
+        long = "shipped-networks",
+        help = "learn every mill preset's network from its default trial cuts and print the \
+                networks the lab ships for its sensorless estimate (www/data/sensorless-networks.json)"
+    )]
+    shipped_networks: bool,
     /// Stray words: refused.
     #[arg(hide = true)]
     extra: Vec<String>,
@@ -63,6 +69,16 @@ struct LearnReport<'a> {
 /// Runs `cutlab learn`.
 pub fn run(args: LearnArgs, io: &mut Io<'_>) -> Result<(), CliError> {
     reject_extra(&args.extra, "")?;
+    if args.shipped_networks {
+        if args.scenario.is_some() || args.feeds_pct.is_some() {
+            return Err(CliError::new(
+                "--shipped-networks learns every mill preset at the default feeds: leave out \
+                 --scenario and --feeds-pct",
+            ));
+        }
+        let networks = preset_networks().map_err(|e| CliError::new(e.to_string()))?;
+        return write_json(io.stdout, &networks);
+    }
     let name: String = required("scenario", &args.scenario)?;
     let preset = Preset::named(&name).map_err(|e| CliError::new(format!("--scenario: {e}")))?;
     let feeds_pct = match &args.feeds_pct {

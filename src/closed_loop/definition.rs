@@ -22,6 +22,9 @@ use crate::estimation::estimator::Feedback;
 use crate::input::{parse_count, parse_number, parse_seed, readable, table};
 use crate::plant::bond_graph::PAPER_002_FEED_MM_MIN;
 use crate::plant::cnc::{OverrideMode, MAX_OVERRIDE_PCT};
+use crate::plant::deflection::{
+    SPINDLE_STIFFNESS_RANGE_N_UM, STICK_OUT_RANGE_MM, YOUNGS_MODULUS_RANGE_GPA,
+};
 use crate::plant::materials::Material;
 use crate::plant::mechanics::{DIAMETER_RANGE_MM, MAX_TEETH};
 use crate::plant::presets::{PlantEdits, PlantKind};
@@ -279,6 +282,12 @@ pub enum RunSetting {
     ToolDiameter,
     /// Number of teeth.
     Teeth,
+    /// The tool's stick-out from its holder.
+    ToolStickOut,
+    /// The spindle's radial stiffness at its nose.
+    SpindleStiffness,
+    /// The Young's modulus of the tool's material.
+    ToolModulus,
     /// Hall-sensor noise.
     SensorNoise,
 }
@@ -310,7 +319,7 @@ const fn number(min: f64, max: f64) -> SettingKind {
 
 impl RunSetting {
     /// Every setting, in the order the form shows them.
-    pub const ALL: [RunSetting; 24] = [
+    pub const ALL: [RunSetting; 27] = [
         RunSetting::Seed,
         RunSetting::TargetForce,
         RunSetting::TargetCurrent,
@@ -330,6 +339,9 @@ impl RunSetting {
         RunSetting::DepthScale,
         RunSetting::ToolDiameter,
         RunSetting::Teeth,
+        RunSetting::ToolStickOut,
+        RunSetting::SpindleStiffness,
+        RunSetting::ToolModulus,
         RunSetting::SensorNoise,
         RunSetting::ControlPeriod,
         RunSetting::FilterOrder,
@@ -590,6 +602,40 @@ impl RunSetting {
                 Machine,
                 "number of teeth of the cutter (mill presets)",
             ),
+            RunSetting::ToolStickOut => (
+                "tool_stick_out_mm",
+                "stick_out",
+                "stick-out-mm",
+                "Tool stick-out",
+                "mm",
+                number(STICK_OUT_RANGE_MM.0, STICK_OUT_RANGE_MM.1),
+                Machine,
+                "how far the tool sticks out of its holder, the cantilever the force bends into the \
+                 wall's error (mill presets; blank: 3 tool diameters; at least the deepest cut, at \
+                 most 10 diameters)",
+            ),
+            RunSetting::SpindleStiffness => (
+                "spindle_stiffness_n_um",
+                "spindle_k",
+                "spindle-stiffness-n-um",
+                "Spindle stiffness",
+                "N/µm",
+                number(SPINDLE_STIFFNESS_RANGE_N_UM.0, SPINDLE_STIFFNESS_RANGE_N_UM.1),
+                Machine,
+                "radial stiffness at the spindle nose, in series with the tool's (mill presets; \
+                 blank: 50 N/µm, a mid-size BT40 spindle)",
+            ),
+            RunSetting::ToolModulus => (
+                "tool_youngs_modulus_gpa",
+                "tool_e",
+                "tool-modulus-gpa",
+                "Tool Young's modulus",
+                "GPa",
+                number(YOUNGS_MODULUS_RANGE_GPA.0, YOUNGS_MODULUS_RANGE_GPA.1),
+                Machine,
+                "Young's modulus of the tool's material, the cantilever's stiffness (mill presets; \
+                 blank: 600 GPa, cemented carbide; high-speed steel about 210)",
+            ),
             RunSetting::SensorNoise => (
                 "sensor_noise_a",
                 "noise",
@@ -802,6 +848,9 @@ impl RunSetting {
             RunSetting::DepthScale => number(p.depth_scale),
             RunSetting::ToolDiameter => number(p.tool_diameter_mm),
             RunSetting::Teeth => p.teeth.map(|z| SettingValue::Count(z as usize)),
+            RunSetting::ToolStickOut => number(p.tool_stick_out_mm),
+            RunSetting::SpindleStiffness => number(p.spindle_stiffness_n_um),
+            RunSetting::ToolModulus => number(p.tool_youngs_modulus_gpa),
             RunSetting::SensorNoise => number(p.sensor_noise_a),
             RunSetting::LoadStep => number(p.load_step_pct),
         }
@@ -838,6 +887,9 @@ impl RunSetting {
             RunSetting::DepthScale => p.depth_scale = number.filter(|k| *k != 1.0),
             RunSetting::ToolDiameter => p.tool_diameter_mm = number,
             RunSetting::Teeth => p.teeth = count.map(|n| n as u32),
+            RunSetting::ToolStickOut => p.tool_stick_out_mm = number,
+            RunSetting::SpindleStiffness => p.spindle_stiffness_n_um = number,
+            RunSetting::ToolModulus => p.tool_youngs_modulus_gpa = number,
             RunSetting::SensorNoise => p.sensor_noise_a = number,
             RunSetting::LoadStep => p.load_step_pct = number,
             // Settings rows: applied above.
@@ -883,6 +935,9 @@ impl RunSetting {
             | RunSetting::DepthScale
             | RunSetting::ToolDiameter
             | RunSetting::Teeth
+            | RunSetting::ToolStickOut
+            | RunSetting::SpindleStiffness
+            | RunSetting::ToolModulus
             | RunSetting::SensorNoise
             | RunSetting::LoadStep => return false,
         }

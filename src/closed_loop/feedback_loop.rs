@@ -55,6 +55,8 @@ pub struct FeedbackLoop {
     previous_estimate_n: f64,
     /// Whether the controller was stepped at the last period.
     controller_in_charge: bool,
+    /// How long the estimates have disagreed: paper 004's sensor failure prediction.
+    failure_watch: FailureWatch,
     /// The tool-path offset the current-based compensation commands for this period, from the
     /// last period's estimate, µm (NaN where the feedback path does not estimate the resultant).
     current_compensation_um: f64,
@@ -82,6 +84,36 @@ impl SurfaceErrors {
         after_power_law_um: f64::NAN,
         after_current_um: f64::NAN,
     };
+}
+
+/// How long the current-based and the sensorless estimates must disagree before a sensor failure
+/// is predicted, s. At a step of the cut the sensorless estimate, which reads the program,
+/// changes at once, while the current-based one follows the spindle's current through its lag
+/// (< 5 Hz) and the signal chain's filters: a period or two apart at each depth step of
+/// kim-step-doc (tests/sensor_failure.rs). A sensor that has failed stays apart.
+pub const SENSOR_FAILURE_PERSISTENCE_S: f64 = 0.25;
+
+/// Paper 004's sensor failure prediction over time: a failure is predicted once the estimates
+/// have disagreed ([`estimates_disagree`]) for [`SENSOR_FAILURE_PERSISTENCE_S`], and for as
+/// long as they go on disagreeing.
+#[derive(Debug, Clone, Copy, Default)]
+struct FailureWatch {
+    /// When the current disagreement began (the start of its first period).
+    since_s: Option<f64>,
+}
+
+impl FailureWatch {
+    /// Whether the period of `dt_s` ending at `end_s`, whose estimates `disagree` or not,
+    /// predicts a sensor failure.
+    fn predicts(&mut self, disagree: bool, end_s: f64, dt_s: f64) -> bool {
+        if !disagree {
+            self.since_s = None;
+            return false;
+        }
+        let since_s = *self.since_s.get_or_insert(end_s - dt_s);
+        // A hair under the persistence: sums of periods are not exact.
+        end_s - since_s >= SENSOR_FAILURE_PERSISTENCE_S - 1e-9
+    }
 }
 
 /// A force estimate above this fraction of the target, with the spindle at speed, before the
@@ -155,6 +187,7 @@ impl FeedbackLoop {
             previous_estimate_n: f64::NAN,
             current_compensation_um: 0.0,
             controller_in_charge: false,
+            failure_watch: FailureWatch::default(),
             done: false,
         })
     }
@@ -289,6 +322,17 @@ impl FeedbackLoop {
             self.trace.terms.push(t.value);
         }
         let errors = self.surface_errors(&period, sensorless_n, estimate.force_n, armed);
+        // Only once armed: before, the spindle's run-up current reads as a force.
+        let disagree = armed
+            && estimates_disagree(
+                estimate.force_n,
+                sensorless_n,
+                self.settings.sensor_failure_tolerance + sensorless.relative_uncertainty,
+                self.settings.target_force_n,
+            );
+        let sensor_failure_predicted =
+            self.failure_watch
+                .predicts(disagree, period.end_time_s, dt_s);
         self.trace.rows.push(TraceRow {
             time_s: period.end_time_s,
             depth_mm: period.depth_mm,
@@ -318,12 +362,7 @@ impl FeedbackLoop {
             sensor_fault: self.envelope.fault().is_some(),
             feed_hold: self.command.feed_hold,
             estimate_in_range: estimate.in_range,
-            cross_check_disagrees: disagrees(
-                estimate.force_n,
-                sensorless_n,
-                self.settings.cross_check_tolerance + sensorless.relative_uncertainty,
-                self.settings.target_force_n,
-            ),
+            sensor_failure_predicted,
         });
         let held_at_rest = self.command.feed_hold && period.feed_mm_min.abs() < 1e-9;
         if held_at_rest || period.end_time_s >= self.settings.max_duration_s {
@@ -427,16 +466,24 @@ const NO_SENSORLESS_ESTIMATE: SensorlessEstimate = SensorlessEstimate {
     relative_uncertainty: 0.0,
 };
 
-/// Whether two estimates differ by more than `tolerance` of the larger of them and a quarter of
-/// the target (so two near-zero estimates in air never disagree); no verdict (false) without
-/// two finite estimates. The cross-check's rule, for a period of the trace.
+/// Paper 004's sensor failure prediction for a period: whether the current-based estimate and
+/// the sensorless one (the network learned on the machine's trial cuts, from what the CNC knows
+/// of the cut: [`crate::plant::sensorless`]) differ by more than `tolerance` of the larger of
+/// them and a quarter of the target (so two near-zero estimates in air never disagree); no
+/// verdict (false) without two finite estimates. The loop's tolerance is
+/// [`super::settings::SENSOR_FAILURE_TOLERANCE`] widened by the network's uncertainty at the cut.
 ///
 /// ```
-/// use cutlab::closed_loop::feedback_loop::disagrees;
-/// assert!(!disagrees(100.0, 130.0, 0.3, 100.0));
-/// assert!(disagrees(100.0, 150.0, 0.3, 100.0));
+/// use cutlab::closed_loop::feedback_loop::estimates_disagree;
+/// assert!(!estimates_disagree(100.0, 130.0, 0.3, 100.0));
+/// assert!(estimates_disagree(100.0, 150.0, 0.3, 100.0));
 /// ```
-pub fn disagrees(current_based_n: f64, sensorless_n: f64, tolerance: f64, target_n: f64) -> bool {
+pub fn estimates_disagree(
+    current_based_n: f64,
+    sensorless_n: f64,
+    tolerance: f64,
+    target_n: f64,
+) -> bool {
     if !(current_based_n.is_finite() && sensorless_n.is_finite()) {
         return false;
     }
@@ -476,16 +523,44 @@ mod tests {
     use super::*;
 
     #[test]
-    fn the_cross_check_widens_with_the_power_laws_uncertainty_but_still_sees_a_real_gap() {
+    fn the_prediction_widens_with_the_networks_uncertainty_but_still_sees_a_real_gap() {
         // ±30 % at the calibration cut.
-        assert!(!disagrees(100.0, 130.0, 0.3, 100.0));
-        assert!(disagrees(100.0, 150.0, 0.3, 100.0));
+        assert!(!estimates_disagree(100.0, 130.0, 0.3, 100.0));
+        assert!(estimates_disagree(100.0, 150.0, 0.3, 100.0));
         // Half the calibrated feed per tooth adds 0.25·ln 2 ≈ 0.17: 50 % apart is then within it.
         let tolerance = 0.3 + 0.25 * 2f64.ln();
-        assert!(!disagrees(100.0, 150.0, tolerance, 100.0));
+        assert!(!estimates_disagree(100.0, 150.0, tolerance, 100.0));
         // A force two and a half times the estimate is still a disagreement.
-        assert!(disagrees(100.0, 250.0, tolerance, 100.0));
-        // No power-law estimate, no verdict.
-        assert!(!disagrees(100.0, f64::NAN, tolerance, 100.0));
+        assert!(estimates_disagree(100.0, 250.0, tolerance, 100.0));
+        // No sensorless estimate, no verdict.
+        assert!(!estimates_disagree(100.0, f64::NAN, tolerance, 100.0));
+    }
+
+    #[test]
+    fn a_failure_is_predicted_only_once_the_estimates_have_disagreed_for_the_persistence() {
+        let dt_s = 0.06;
+        let mut watch = FailureWatch::default();
+        // A depth step: two periods apart, then together again.
+        let step = [true, true, false];
+        let mut t = 0.0;
+        for disagree in step {
+            t += dt_s;
+            assert!(!watch.predicts(disagree, t, dt_s));
+        }
+        // A failed sensor: apart from now on, predicted from the period that completes 0.25 s.
+        let mut predicted_at = None;
+        for _ in 0..10 {
+            t += dt_s;
+            if watch.predicts(true, t, dt_s) && predicted_at.is_none() {
+                predicted_at = Some(t);
+            }
+        }
+        let apart_from = 3.0 * dt_s;
+        let delay = predicted_at.unwrap() - apart_from;
+        assert!(
+            (SENSOR_FAILURE_PERSISTENCE_S..SENSOR_FAILURE_PERSISTENCE_S + dt_s).contains(&delay)
+        );
+        // Together again: no longer predicted.
+        assert!(!watch.predicts(false, t + dt_s, dt_s));
     }
 }

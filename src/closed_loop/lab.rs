@@ -430,7 +430,8 @@ impl TeachKey {
         Ok(Self {
             preset: spec.preset,
             seed: spec.seed,
-            plant: spec.plant,
+            // A teach cut's machine: the tool's mount changes only the error's model.
+            plant: spec.plant.of_the_machine(),
             chain: plan.chain,
             max_duration_s: plan.max_duration_s,
         })

@@ -64,9 +64,9 @@ pub struct Metrics {
     /// Controlled cutting time with the current or speed outside the range the estimator was
     /// calibrated over: its force estimate is an extrapolation there.
     pub time_outside_calibration_s: f64,
-    /// Controlled cutting time where the current-based estimate and paper 004's power law
-    /// disagree by more than the cross-check tolerance.
-    pub time_cross_check_disagrees_s: f64,
+    /// Controlled cutting time where paper 004's sensor failure prediction flags the current
+    /// sensor: its estimate and the sensorless network's differ beyond their tolerance.
+    pub time_sensor_failure_predicted_s: f64,
     /// Largest overshoot over all depth steps, percent of target.
     pub max_overshoot_pct: f64,
     /// Longest settling time over the depth steps that settled; `None` if none did.
@@ -168,7 +168,7 @@ pub fn compute(trace: &Trace, config: &MetricsConfig) -> Metrics {
             if !r.estimate_in_range {
                 outside_s += dt;
             }
-            if r.cross_check_disagrees {
+            if r.sensor_failure_predicted {
                 disagree_s += dt;
             }
             iae += error.abs() * dt;
@@ -222,7 +222,7 @@ pub fn compute(trace: &Trace, config: &MetricsConfig) -> Metrics {
         peak_force_n,
         time_above_limit_s: above_s,
         time_outside_calibration_s: outside_s,
-        time_cross_check_disagrees_s: disagree_s,
+        time_sensor_failure_predicted_s: disagree_s,
         max_overshoot_pct,
         max_settling_time_s,
         steps_not_settled,
@@ -413,8 +413,8 @@ fn metric_values(metrics: &Metrics) -> [(&'static str, Option<f64>); 25] {
             Some(metrics.time_outside_calibration_s),
         ),
         (
-            "time_cross_check_disagrees_s",
-            Some(metrics.time_cross_check_disagrees_s),
+            "time_sensor_failure_predicted_s",
+            Some(metrics.time_sensor_failure_predicted_s),
         ),
         ("max_overshoot_pct", Some(metrics.max_overshoot_pct)),
         ("max_settling_time_s", metrics.max_settling_time_s),

@@ -27,7 +27,7 @@ use super::error::LoopError;
 use crate::control::registry::ControllerConfig;
 use crate::estimation::estimator::{Calibration, Feedback};
 use crate::plant::cnc::OverrideMode;
-use crate::plant::deflection::ErrorModel;
+use crate::plant::deflection::{ErrorModel, ToolMount};
 use crate::plant::presets::PlantKind;
 use crate::plant::Preset;
 use crate::safety::{
@@ -54,9 +54,11 @@ pub const OVERLOAD_FACTOR: f64 = 3.0;
 /// override: the force limit 20 % above it then lies just under the load the programmer
 /// accepted (teach-in proposes the same).
 pub const DEFAULT_TARGET_FRACTION: f64 = 0.8;
-/// Relative disagreement between the current-based and the power-law estimate above which a
-/// period is flagged.
-pub const CROSS_CHECK_TOLERANCE: f64 = 0.3;
+/// Relative disagreement between the current-based and the sensorless estimate, beyond the
+/// sensorless network's own uncertainty, above which a period predicts a sensor failure (paper
+/// 004): a current-based estimate is within 5–15 % of the force where it was calibrated, so 30 %
+/// is a sensor that no longer reads as it did.
+pub const SENSOR_FAILURE_TOLERANCE: f64 = 0.3;
 /// Above the air estimate by this factor, an estimated force is a cut.
 const AIR_MARGIN: f64 = 1.5;
 /// The air-cut threshold never rises above this fraction of the target: a model that reads a
@@ -116,9 +118,9 @@ pub struct LoopSettings {
     pub envelope: EnvelopeConfig,
     /// The run stops here if the program has not ended.
     pub max_duration_s: f64,
-    /// Relative disagreement between the current-based and the power-law estimate above which a
-    /// period is flagged.
-    pub cross_check_tolerance: f64,
+    /// Relative disagreement between the current-based and the sensorless estimate above which a
+    /// period predicts a sensor failure ([`SENSOR_FAILURE_TOLERANCE`]).
+    pub sensor_failure_tolerance: f64,
     /// The tool and spindle as springs and the force's normal share, if the tool is known: the
     /// trace's surface error and what remains of it after compensation.
     pub error_model: Option<ErrorModel>,
@@ -349,7 +351,12 @@ fn preset_error_model(spec: &RunSpec) -> Option<ErrorModel> {
     if spec.preset.plant_kind() != PlantKind::Mill {
         return None;
     }
-    ErrorModel::of_program(&spec.preset.edited_scenario_spec(&spec.plant)?)
+    let mount = ToolMount {
+        stick_out_mm: spec.plant.tool_stick_out_mm,
+        spindle_stiffness_n_um: spec.plant.spindle_stiffness_n_um,
+        youngs_modulus_gpa: spec.plant.tool_youngs_modulus_gpa,
+    };
+    ErrorModel::of_program(&spec.preset.edited_scenario_spec(&spec.plant)?, mount)
 }
 
 /// The chip-load window of `spec`'s cutter (its edits included) in the materials of its part: on
@@ -820,7 +827,7 @@ impl Plan {
             force_limit_n: FORCE_LIMIT_FACTOR * target_force_n,
             envelope,
             max_duration_s: self.max_duration_s,
-            cross_check_tolerance: CROSS_CHECK_TOLERANCE,
+            sensor_failure_tolerance: SENSOR_FAILURE_TOLERANCE,
             error_model: self.error_model,
         })
     }

@@ -292,11 +292,11 @@ pub const METRIC_ROWS: [MetricRow; 22] = [
     ).explained("Time the estimator's inputs lay outside the range its teach cut calibrated: there its force estimate is an extrapolation.")
     .within(0.2, 0.15).missing(Missing::Uncontrolled),
     row(
-        "Time the power-law check disagrees",
+        "Time a sensor failure is predicted",
         "s",
         Better::Lower,
-        |r| if_controlled(r, r.metrics.time_cross_check_disagrees_s),
-    ).explained("Time the current-based estimate and the sensorless power-law estimate disagreed by more than their tolerance: paper 004's prediction of a failing current sensor.")
+        |r| if_controlled(r, r.metrics.time_sensor_failure_predicted_s),
+    ).explained("Paper 004's sensor failure prediction: controlled cutting time in which the current-based force estimate left the sensorless one (the force network learned on the preset's trial cuts, fed with what the CNC program knows of the cut) by more than the sensor-failure tolerance plus the network's own uncertainty there. A healthy sensor keeps this near zero; a drifting or failing current sensor makes it grow.")
     .within(0.2, 0.15).missing(Missing::Uncontrolled),
     row(
         "Max overshoot after a depth step",

@@ -34,7 +34,8 @@ pub struct TraceRow {
     pub force_n: f64,
     /// The regulated force quantity as estimated from current.
     pub force_est_n: f64,
-    /// The paper-004 power-law estimate, a sensorless cross-check.
+    /// Paper 004's sensorless estimate: the network learned on the preset's trial cuts (or,
+    /// without one, the published power law), from what the CNC knows of the cut.
     pub force_power_law_n: f64,
     /// Target force.
     pub target_force_n: f64,
@@ -72,8 +73,9 @@ pub struct TraceRow {
     pub compensated_error_current_um: f64,
     /// Whether the estimator's inputs lay inside its calibrated range.
     pub estimate_in_range: bool,
-    /// Whether the current-based and the sensorless (power-law) estimates disagree.
-    pub cross_check_disagrees: bool,
+    /// Whether paper 004's sensor failure prediction flags the period: the current-based and
+    /// the sensorless estimates disagree beyond their tolerance.
+    pub sensor_failure_predicted: bool,
 }
 
 /// A whole run.
@@ -145,7 +147,7 @@ pub const CSV_FLAG_COLUMNS: [CsvColumn<bool>; 5] = csv_columns![bool;
     sensor_fault,
     feed_hold,
     estimate_in_range,
-    cross_check_disagrees,
+    sensor_failure_predicted,
 ];
 
 fn csv_values(r: &TraceRow) -> impl Iterator<Item = String> + '_ {

@@ -417,7 +417,7 @@ fn row_values(row: &TraceRow) -> [f64; ROW_VALUES] {
         sensor_fault,
         feed_hold,
         estimate_in_range,
-        cross_check_disagrees,
+        sensor_failure_predicted,
     } = *row;
     let flag = |b: bool| if b { 1.0 } else { 0.0 };
     [
@@ -449,7 +449,7 @@ fn row_values(row: &TraceRow) -> [f64; ROW_VALUES] {
         flag(sensor_fault),
         flag(feed_hold),
         flag(estimate_in_range),
-        flag(cross_check_disagrees),
+        flag(sensor_failure_predicted),
     ]
 }
 
@@ -486,7 +486,7 @@ fn row_from(v: &[f64]) -> TraceRow {
         sensor_fault: flag(25),
         feed_hold: flag(26),
         estimate_in_range: flag(27),
-        cross_check_disagrees: flag(28),
+        sensor_failure_predicted: flag(28),
     }
 }
 
@@ -682,7 +682,7 @@ mod tests {
             force_min_n: -0.0,
             spindle_speed_rpm: f64::INFINITY,
             armed: true,
-            cross_check_disagrees: true,
+            sensor_failure_predicted: true,
             ..TraceRow::default()
         };
         let back = row_from(&row_values(&row));

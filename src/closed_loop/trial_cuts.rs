@@ -16,6 +16,8 @@ use crate::estimation::power_law_fit::{
     learn, local_exponent, mechanistic_resultant_n, LearnError, LearnedPowerLaw, TrialCut,
 };
 use crate::plant::power_law::{PowerLawInput, PowerLawInputs, PowerLawMaterial, PowerLawReading};
+use crate::plant::presets::PlantKind;
+use crate::plant::sensorless::SensorlessNetwork;
 use crate::plant::simulator::power_law_material;
 use crate::plant::Preset;
 
@@ -252,6 +254,30 @@ pub fn learn_on_preset(preset: Preset, feeds_pct: &[f64]) -> Result<PresetLearni
         from_estimate,
         mechanistic,
     })
+}
+
+/// The network each mill preset learns on its trial cuts at [`DEFAULT_TRIAL_FEEDS_PCT`] from
+/// the lab's current-based estimates ([`PresetLearning::from_estimate`]): what the plant ships
+/// for its sensorless estimate ([`crate::plant::sensorless::shipped_network`]). From the
+/// estimate, as paper 004 trains its network on the existing current-based monitor's values
+/// and as a shop without a dynamometer can: the network then predicts what a healthy sensor
+/// reads, its calibration's bias included, and a sensor that leaves it is failing. A preset
+/// whose program cannot teach a network (one depth of cut: the depth's exponent cannot be told
+/// from the bias) is left out.
+pub fn preset_networks() -> Result<Vec<(Preset, SensorlessNetwork)>, LearningError> {
+    let mut networks = Vec::new();
+    // Only the simulated mill estimates its force from what the CNC knows.
+    let mills = Preset::ALL
+        .into_iter()
+        .filter(|p| p.plant_kind() == PlantKind::Mill);
+    for preset in mills {
+        match learn_on_preset(preset, &DEFAULT_TRIAL_FEEDS_PCT) {
+            Ok(learning) => networks.push((preset, learning.from_estimate.network)),
+            Err(LearningError::NoCutter(_) | LearningError::Learn { .. }) => {}
+            Err(e) => return Err(e),
+        }
+    }
+    Ok(networks)
 }
 
 #[cfg(test)]

@@ -17,19 +17,21 @@
 //! gives; paper 004's three component rows differ by less than 0.01 in every exponent, so the
 //! resultant's published exponent is their mean ([`published_resultant_exponent`]).
 //!
-//! The learned model then predicts the force from what the CNC knows — the sensorless estimate
-//! the cross-check compares the current-based one with.
+//! The learned model then predicts the force from what the CNC knows: [`LearnedPowerLaw::network`]
+//! is the plant's sensorless estimate ([`crate::plant::sensorless`]), which paper 004's sensor
+//! failure prediction compares the current-based estimate with.
 
 use std::fmt;
 
 use super::cut_forces::CutGeometry;
 use crate::math;
 use crate::math::least_squares::{fit, FitError};
-use crate::plant::power_law::{PowerLawInput, PowerLawInputs, PowerLawMaterial, PowerLawReading};
+use crate::plant::power_law::{
+    PowerLawInput, PowerLawInputs, PowerLawMaterial, PowerLawReading, EXPONENT_UNCERTAINTY,
+};
+use crate::plant::sensorless::{NetworkInput, SensorlessNetwork};
 
-/// How many standard errors a learned exponent's stated uncertainty spans (≈ 95 % for the ten
-/// or more degrees of freedom a useful set of trial cuts has).
-pub const UNCERTAINTY_STANDARD_ERRORS: f64 = 2.0;
+pub use crate::plant::sensorless::UNCERTAINTY_STANDARD_ERRORS;
 
 /// A relative spread below this (on the log scale) counts as "does not vary": the input is held.
 const CONSTANT_LOG_SPREAD: f64 = 1e-9;
@@ -71,6 +73,9 @@ pub struct LearnedPowerLaw {
     pub residuals_pct: Vec<f64>,
     /// Root-mean-square of the residuals on the log scale (≈ relative error).
     pub residual_rms_log: f64,
+    /// The network as the plant evaluates it for its sensorless estimate: every exponent, learned
+    /// or held, with its uncertainty and the trial cuts' centre.
+    pub network: SensorlessNetwork,
 }
 
 /// Why a network could not be learned.
@@ -222,7 +227,7 @@ pub fn learn(
             .map(|(i, r)| (i.symbol(), r.as_slice())),
     );
     let solved = fit(&design, &target).map_err(LearnError::Collinear)?;
-    let learned = varying
+    let learned: Vec<LearnedExponent> = varying
         .iter()
         .enumerate()
         .map(|(k, &input)| LearnedExponent {
@@ -232,13 +237,36 @@ pub fn learn(
             published: published_resultant_exponent(material, reading, input),
         })
         .collect();
+    // The trial cuts' geometric centre in each input: where the network's band is narrowest.
+    let centre =
+        |input: PowerLawInput| math::exp(logs(input).iter().sum::<f64>() / cuts.len() as f64);
+    let network_inputs = learned
+        .iter()
+        .map(|e| (e.input, e.exponent, e.uncertainty))
+        .chain(
+            held.iter()
+                .map(|&(input, w)| (input, w, EXPONENT_UNCERTAINTY)),
+        )
+        .map(|(input, exponent, uncertainty)| NetworkInput {
+            input,
+            exponent,
+            uncertainty,
+            centre: centre(input),
+        })
+        .collect();
+    let bias_n = math::exp(solved.coefficients[0]);
     let mut law = LearnedPowerLaw {
         reading,
-        bias_n: math::exp(solved.coefficients[0]),
+        bias_n,
         learned,
         held,
         residuals_pct: Vec::new(),
         residual_rms_log: 0.0,
+        network: SensorlessNetwork {
+            bias_n,
+            inputs: network_inputs,
+            residual_rms_log: 0.0,
+        },
     };
     let log_residuals: Vec<f64> = cuts
         .iter()
@@ -246,6 +274,7 @@ pub fn learn(
         .collect();
     law.residual_rms_log =
         (log_residuals.iter().map(|r| r * r).sum::<f64>() / cuts.len() as f64).sqrt();
+    law.network.residual_rms_log = law.residual_rms_log;
     law.residuals_pct = log_residuals
         .iter()
         .map(|r| 100.0 * (math::exp(*r) - 1.0))
@@ -257,23 +286,7 @@ impl LearnedPowerLaw {
     /// The force the network predicts for `inputs`, N (0 when an input it reads is not positive:
     /// no cut).
     pub fn force_n(&self, inputs: &PowerLawInputs) -> f64 {
-        let exponents = self
-            .learned
-            .iter()
-            .map(|e| (e.input, e.exponent))
-            .chain(self.held.iter().copied());
-        let mut force_n = self.bias_n;
-        for (input, w) in exponents {
-            let v = inputs.value(input);
-            if v.is_nan() {
-                return f64::NAN;
-            }
-            if v <= 0.0 {
-                return 0.0;
-            }
-            force_n *= math::pow(v, w);
-        }
-        force_n
+        self.network.force_n(inputs)
     }
 
     /// The learned exponent of `input`, if it varied over the cuts.

@@ -39,6 +39,37 @@ pub const DEFAULT_STICK_OUT_DIAMETERS: f64 = 3.0;
 /// BT40 spindle about 50), N/mm.
 pub const DEFAULT_SPINDLE_STIFFNESS_N_MM: f64 = 50_000.0;
 
+/// The stick-outs a run accepts, mm: from a stub tool barely out of a shrink-fit holder to a
+/// long-reach holder's tool (a run also needs the flutes to reach the deepest cut, and at most
+/// [`MAX_STICK_OUT_DIAMETERS`] diameters out).
+pub const STICK_OUT_RANGE_MM: (f64, f64) = (2.0, 400.0);
+
+/// The longest stick-out accepted, in tool diameters: beyond about ten a slender tool chatters
+/// long before its static deflection matters.
+pub const MAX_STICK_OUT_DIAMETERS: f64 = 10.0;
+
+/// The spindle stiffnesses a run accepts at the nose, N/µm: from a light high-speed spindle to a
+/// heavy boring spindle.
+pub const SPINDLE_STIFFNESS_RANGE_N_UM: (f64, f64) = (5.0, 500.0);
+
+/// The tool materials' Young's moduli a run accepts, GPa: from high-speed steel (≈ 210) through
+/// ceramics (300–400) to cemented carbide (550–650).
+pub const YOUNGS_MODULUS_RANGE_GPA: (f64, f64) = (150.0, 700.0);
+
+/// How a cutter sits in the machine: its stick-out from the holder, its material's Young's
+/// modulus and the spindle's stiffness at the nose, each `None` for the default
+/// ([`DEFAULT_STICK_OUT_DIAMETERS`] diameters, [`CARBIDE_YOUNGS_MODULUS_GPA`],
+/// [`DEFAULT_SPINDLE_STIFFNESS_N_MM`]).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct ToolMount {
+    /// Stick-out from the holder, mm.
+    pub stick_out_mm: Option<f64>,
+    /// Radial stiffness at the spindle nose, N/µm.
+    pub spindle_stiffness_n_um: Option<f64>,
+    /// Young's modulus of the tool's material, GPa.
+    pub youngs_modulus_gpa: Option<f64>,
+}
+
 /// The tool and spindle as springs between the force and the wall.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct ToolStiffness {
@@ -61,21 +92,65 @@ impl ToolStiffness {
     /// assert!((k.surface_error_um(500.0) - 28.6).abs() < 0.1);
     /// ```
     pub fn carbide(diameter_mm: f64, stick_out_mm: f64, spindle_n_mm: f64) -> Self {
+        Self::cantilever(
+            diameter_mm,
+            stick_out_mm,
+            CARBIDE_YOUNGS_MODULUS_GPA,
+            spindle_n_mm,
+        )
+    }
+
+    /// A tool of `diameter_mm` and Young's modulus `youngs_modulus_gpa` sticking out
+    /// `stick_out_mm`, on a spindle of `spindle_n_mm`.
+    ///
+    /// ```
+    /// use cutlab::plant::deflection::ToolStiffness;
+    /// // High-speed steel (210 GPa) against carbide (600 GPa): the tool bends 600/210 times as far.
+    /// let hss = ToolStiffness::cantilever(10.0, 40.0, 210.0, f64::INFINITY);
+    /// let carbide = ToolStiffness::carbide(10.0, 40.0, f64::INFINITY);
+    /// assert!((hss.surface_error_um(100.0) / carbide.surface_error_um(100.0) - 600.0 / 210.0).abs() < 1e-9);
+    /// ```
+    pub fn cantilever(
+        diameter_mm: f64,
+        stick_out_mm: f64,
+        youngs_modulus_gpa: f64,
+        spindle_n_mm: f64,
+    ) -> Self {
         let equivalent_mm = FLUTED_DIAMETER_RATIO * diameter_mm;
         let second_moment_mm4 = std::f64::consts::PI * equivalent_mm.powi(4) / 64.0;
-        let youngs_n_mm2 = CARBIDE_YOUNGS_MODULUS_GPA * 1e3;
+        let youngs_n_mm2 = youngs_modulus_gpa * 1e3;
         Self {
             tool_n_mm: 3.0 * youngs_n_mm2 * second_moment_mm4 / stick_out_mm.powi(3),
             spindle_n_mm,
         }
     }
 
-    /// The stiffness of `cutter` at the default stick-out on the default spindle.
-    pub fn of_cutter(cutter: &Cutter) -> Self {
-        Self::carbide(
+    /// The stiffness of `cutter` mounted as `mount` says (a carbide tool, and the defaults, where
+    /// it says nothing).
+    ///
+    /// ```
+    /// use cutlab::plant::deflection::{ToolMount, ToolStiffness, DEFAULT_SPINDLE_STIFFNESS_N_MM};
+    /// use cutlab::plant::mechanics::Cutter;
+    /// let cutter = Cutter { diameter_mm: 10.0, teeth: 4, helix_deg: 30.0, runout_mm: 0.0,
+    ///                      runout_angle_deg: 0.0 };
+    /// let mount = ToolMount { stick_out_mm: Some(35.0), ..ToolMount::default() };
+    /// let k = ToolStiffness::of_cutter(&cutter, mount);
+    /// assert_eq!(k, ToolStiffness::carbide(10.0, 35.0, DEFAULT_SPINDLE_STIFFNESS_N_MM));
+    /// // A Ø10 mm carbide end mill 35 mm out on a 50 N/µm spindle: 300 N bend it ≈ 42 µm.
+    /// assert!((k.surface_error_um(300.0) - 41.5).abs() < 1.0);
+    /// ```
+    pub fn of_cutter(cutter: &Cutter, mount: ToolMount) -> Self {
+        Self::cantilever(
             cutter.diameter_mm,
-            DEFAULT_STICK_OUT_DIAMETERS * cutter.diameter_mm,
-            DEFAULT_SPINDLE_STIFFNESS_N_MM,
+            mount
+                .stick_out_mm
+                .unwrap_or(DEFAULT_STICK_OUT_DIAMETERS * cutter.diameter_mm),
+            mount
+                .youngs_modulus_gpa
+                .unwrap_or(CARBIDE_YOUNGS_MODULUS_GPA),
+            mount
+                .spindle_stiffness_n_um
+                .map_or(DEFAULT_SPINDLE_STIFFNESS_N_MM, |k| 1e3 * k),
         )
     }
 
@@ -124,23 +199,23 @@ pub struct ErrorModel {
 }
 
 impl ErrorModel {
-    /// The model of `spec`'s program: its cutter at the default stick-out on the default
-    /// spindle, and the normal share of its first cut (the first width and depth of cut, the
+    /// The model of `spec`'s program: its cutter mounted as `mount` says, and the normal share of its first cut (the first width and depth of cut, the
     /// first move's feed per tooth, the first region's material). The share depends on the
     /// engagement, hardly on the depth or the chip: a program whose width changes along the
     /// path (a taper) keeps the first cut's share, and its compensation the error of that.
     /// `None` for a program without a cut.
     ///
     /// ```
-    /// use cutlab::plant::deflection::ErrorModel;
+    /// use cutlab::plant::deflection::{ErrorModel, ToolMount};
     /// use cutlab::plant::Preset;
-    /// let model = ErrorModel::of_program(&Preset::KimStepDoc.scenario_spec().unwrap()).unwrap();
+    /// let spec = Preset::KimStepDoc.scenario_spec().unwrap();
+    /// let model = ErrorModel::of_program(&spec, ToolMount::default()).unwrap();
     /// assert!(model.normal_share > 0.0 && model.normal_share < 1.0);
     /// // 500 N predicted: the normal share of it bends the tool.
     /// let expected = model.stiffness.surface_error_um(model.normal_share * 500.0);
     /// assert_eq!(model.predicted_error_um(500.0), expected);
     /// ```
-    pub fn of_program(spec: &ScenarioSpec) -> Option<Self> {
+    pub fn of_program(spec: &ScenarioSpec, mount: ToolMount) -> Option<Self> {
         let cutter = &spec.cutter;
         let first_positive = |points: &[(f64, f64)]| {
             points
@@ -163,7 +238,7 @@ impl ErrorModel {
         );
         let normal_share = normal_share(&forces);
         normal_share.is_finite().then(|| Self {
-            stiffness: ToolStiffness::of_cutter(cutter),
+            stiffness: ToolStiffness::of_cutter(cutter, mount),
             normal_share,
         })
     }

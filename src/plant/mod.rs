@@ -31,8 +31,8 @@
 //! [`second_order::SecondOrderMachine`] (paper 001's m·F̈ + (mc+d)·Ḟ + dc·F = k·f_r) and
 //! [`bond_graph::BondGraphMachine`] (paper 002's eq 5, on a machining centre cutting a stated
 //! cut; Table 1 as printed is [`bond_graph::BondGraphParams::default`]). [`bench::BrakeBench`] is
-//! paper 000's magnetic-particle brake bench. [`power_law`] is paper 004's empirical model, a
-//! sensorless cross-check rather than a plant.
+//! paper 000's magnetic-particle brake bench. [`power_law`] is paper 004's empirical model and
+//! [`sensorless`] the network a preset learns in its form: a sensorless estimate, not a plant.
 //!
 //! ## Modules
 //!
@@ -41,6 +41,7 @@
 //! | [`materials`] | work materials and their mechanistic cutting coefficients, with sources |
 //! | [`mechanics`] | cutter, immersion, instantaneous and mean milling forces, paper 003's Martelotti relations |
 //! | [`power_law`] | paper 004's power-law force model with its published weights |
+//! | [`sensorless`] | paper 004's sensorless estimate: the force network learned on the preset's trial cuts, shipped per preset |
 //! | [`deflection`] | the cutting-force-induced error: tool and spindle deflecting under the normal force (paper 004's CFIE) |
 //! | [`feed_drive`] | ball screw, guides, table and PMSM of one feed axis (paper 000) |
 //! | [`spindle_drive`] | induction spindle motor, gearbox and F/V converter (paper 003) |
@@ -85,6 +86,7 @@ pub mod presets;
 pub mod recording;
 pub mod scenario;
 pub mod second_order;
+pub mod sensorless;
 pub mod sensors;
 pub mod signals;
 pub mod simulator;

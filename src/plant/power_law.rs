@@ -47,8 +47,10 @@ use crate::math;
 
 /// How far each published exponent may be from this machine's, tool's and material's: Kienzle's
 /// feed exponent 1 − m_c ranges about 0.6–0.9 between materials and tools (the paper's 0.75 sits
-/// in the middle, the mechanistic model's chip-thickness law is 1), so ±0.25. The cross-check
-/// widens its tolerance by the uncertainty this gives ([`PowerLawModel::relative_uncertainty`]).
+/// in the middle, the mechanistic model's chip-thickness law is 1), so ±0.25. The sensor failure
+/// prediction widens its tolerance by the uncertainty this gives
+/// ([`PowerLawModel::relative_uncertainty`]); a learned network holds an input that did not vary
+/// over its trial cuts at the published exponent, ± this ([`super::sensorless`]).
 pub const EXPONENT_UNCERTAINTY: f64 = 0.25;
 
 /// The materials paper 004 publishes weights for.
@@ -191,7 +193,7 @@ impl PowerLawReading {
         PowerLawReading::Handbook,
     ];
 
-    /// The reading the sensorless cross-check uses: the one that matches the physics (force
+    /// The reading the published sensorless estimate uses: the one that matches the physics (force
     /// falling with the diameter at a given width, rising with the teeth) and, with the published
     /// biases in mm, lands within [`Self::AGREEMENT_FACTOR`] of the mechanistic mean force on
     /// every mill preset's cut.

@@ -25,6 +25,10 @@ use serde::{Deserialize, Serialize};
 use super::bench::{BrakeBench, BrakeBenchConfig};
 use super::bond_graph::{BondGraphMachine, BondGraphRun, PAPER_002_REFERENCE_CURRENT_A};
 use super::cnc::{CncConfig, DialTable, OverrideMode};
+use super::deflection::{
+    MAX_STICK_OUT_DIAMETERS, SPINDLE_STIFFNESS_RANGE_N_UM, STICK_OUT_RANGE_MM,
+    YOUNGS_MODULUS_RANGE_GPA,
+};
 use super::dynamometer::{DynamometerConfig, WithDynamometer};
 use super::materials::Material;
 use super::mechanics::{mean_forces, Cutter, Immersion, MillingMode, MAX_TEETH};
@@ -775,7 +779,26 @@ impl Preset {
                 ),
             )
         })?;
-        Simulator::new(Scenario::new(spec)?, self.sim_config(seed))
+        let simulator = Simulator::new(Scenario::new(spec)?, self.sim_config(seed))?;
+        Ok(self.with_learned_network(simulator, &PlantEdits::default()))
+    }
+
+    /// `simulator` (this preset's program, with `edits`) estimating its sensorless force with the
+    /// network the preset learned on its trial cuts ([`super::sensorless::shipped_network`]),
+    /// when it has one and the edits keep the part's material: a network learned on one
+    /// material knows nothing of another, and a run on another material estimates with paper
+    /// 004's published weights, calibrated. Speed, feed, depth and the tool are inputs the
+    /// network reads (the diameter and the teeth with the published exponents it holds).
+    fn with_learned_network(self, simulator: Simulator, edits: &PlantEdits) -> Simulator {
+        let same_material = match (edits.material, self.scenario_spec()) {
+            (None, _) => true,
+            (Some(m), Some(spec)) => spec.materials.iter().all(|r| r.material == m),
+            (Some(_), None) => false,
+        };
+        match super::sensorless::shipped_network(self).filter(|_| same_material) {
+            Some(network) => simulator.with_sensorless_network(network),
+            None => simulator,
+        }
     }
 
     /// The brake bench's settings (wang-brake-bench only).
@@ -927,10 +950,10 @@ impl Preset {
             config.feed_sensor.hall.noise_a = noise;
             config.spindle_sensor.hall.noise_a = noise;
         }
-        Ok(PresetMachine::Mill(Box::new(Simulator::new(
-            Scenario::new(spec)?,
-            config,
-        )?)))
+        let simulator = Simulator::new(Scenario::new(spec)?, config)?;
+        Ok(PresetMachine::Mill(Box::new(
+            self.with_learned_network(simulator, edits),
+        )))
     }
 
     /// The mill program with `edits` made (material, speed, feed, depth, cutter), unchecked:
@@ -1202,6 +1225,9 @@ impl Preset {
 /// | `teeth` | 1 … 16 | what the force model holds |
 /// | `depth_scale` | 0.01 … the factor that makes the deepest cut 4 tool diameters | a long-series end mill's flute length (standard ones: 2–3 diameters) |
 /// | `sensor_noise_a` | 0 … 5 A | beyond the feed channel's full scale (±4.8 A) noise only saturates it |
+/// | `tool_stick_out_mm` | 2 … 400 mm, at least the deepest cut, at most 10 tool diameters | a stub tool to a long-reach one; the flutes must reach the cut, and a longer tool chatters before its static deflection matters |
+/// | `spindle_stiffness_n_um` | 5 … 500 N/µm | a light high-speed spindle to a heavy boring spindle |
+/// | `tool_youngs_modulus_gpa` | 150 … 700 GPa | high-speed steel to cemented carbide |
 /// | `load_step_pct` | −90 … +150 % (liu-current-step only) | from a tenth of the depth to 2.5 times it: up to the paper's full-scale E of 25 A above I_ref and beyond, on a 10 mm insert edge |
 ///
 /// A tool diameter that makes the preset's own deepest cut deeper than 4 diameters is refused
@@ -1233,9 +1259,36 @@ pub struct PlantEdits {
     /// Size of paper 002's load step, percent of the depth of cut (liu-current-step only).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub load_step_pct: Option<f64>,
+    /// The tool's stick-out from its holder, mm (the force-induced error's cantilever).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub tool_stick_out_mm: Option<f64>,
+    /// The spindle's radial stiffness at its nose, N/µm (the force-induced error's other spring).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub spindle_stiffness_n_um: Option<f64>,
+    /// The Young's modulus of the tool's material, GPa (the cantilever's stiffness).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub tool_youngs_modulus_gpa: Option<f64>,
 }
 
 impl PlantEdits {
+    /// The edits that change what the machine does: all but the tool's stick-out and material
+    /// and the spindle's stiffness, which change only the force-induced error's model (the
+    /// simulated force and currents are a rigid tool's).
+    ///
+    /// ```
+    /// use cutlab::plant::presets::PlantEdits;
+    /// let edits = PlantEdits { tool_stick_out_mm: Some(60.0), teeth: Some(3), ..PlantEdits::default() };
+    /// assert_eq!(edits.of_the_machine(), PlantEdits { teeth: Some(3), ..PlantEdits::default() });
+    /// ```
+    pub fn of_the_machine(self) -> Self {
+        Self {
+            tool_stick_out_mm: None,
+            spindle_stiffness_n_um: None,
+            tool_youngs_modulus_gpa: None,
+            ..self
+        }
+    }
+
     /// The lowest spindle speed accepted; the highest is the spindle drive's top speed.
     pub const MIN_SPINDLE_RPM: f64 = 10.0;
     /// The programmed feeds accepted, [lowest, highest].
@@ -1310,6 +1363,41 @@ impl PlantEdits {
         let depth_why = "the deepest cut at most 4 tool diameters";
         let deepest_mm = cut.depth_mm.iter().map(|&(_, d)| d).fold(0.0, f64::max);
         let diameter_mm = self.tool_diameter_mm.unwrap_or(cut.cutter.diameter_mm);
+        within(
+            "spindle_stiffness_n_um",
+            self.spindle_stiffness_n_um,
+            [
+                SPINDLE_STIFFNESS_RANGE_N_UM.0,
+                SPINDLE_STIFFNESS_RANGE_N_UM.1,
+            ],
+            "N/µm",
+            "a light high-speed spindle to a heavy boring spindle",
+        )?;
+        within(
+            "tool_youngs_modulus_gpa",
+            self.tool_youngs_modulus_gpa,
+            [YOUNGS_MODULUS_RANGE_GPA.0, YOUNGS_MODULUS_RANGE_GPA.1],
+            "GPa",
+            "high-speed steel to cemented carbide",
+        )?;
+        within(
+            "tool_stick_out_mm",
+            self.tool_stick_out_mm,
+            [STICK_OUT_RANGE_MM.0, STICK_OUT_RANGE_MM.1],
+            "mm",
+            "a stub tool to a long-reach one",
+        )?;
+        let deepest_cut_mm = deepest_mm * self.depth_scale.unwrap_or(1.0);
+        within(
+            "tool_stick_out_mm",
+            self.tool_stick_out_mm,
+            [
+                deepest_cut_mm.max(STICK_OUT_RANGE_MM.0),
+                (MAX_STICK_OUT_DIAMETERS * diameter_mm).min(STICK_OUT_RANGE_MM.1),
+            ],
+            "mm",
+            "the flutes reaching the deepest cut, at most 10 tool diameters out",
+        )?;
         let deepest_allowed_mm = Self::MAX_DEPTH_PER_DIAMETER * diameter_mm;
         match self.depth_scale {
             Some(k) => within(
@@ -1664,6 +1752,10 @@ mod tests {
             sensor_noise_a: Some(5.0),
             material: Some(Material::Aluminium),
             load_step_pct: None,
+            // 10 diameters of the Ø100 mm tool would be 1000 mm: the table's end binds.
+            tool_stick_out_mm: Some(400.0),
+            spindle_stiffness_n_um: Some(500.0),
+            tool_youngs_modulus_gpa: Some(700.0),
         };
         assert_eq!(check(edge), Ok(()));
         assert!(p.machine_with(1, &edge).is_ok());

@@ -34,6 +34,7 @@ use super::power_law::{
     CachedPowerLaw, PowerLawInputs, PowerLawMaterial, PowerLawModel, PowerLawReading,
 };
 use super::scenario::Scenario;
+use super::sensorless::SensorlessNetwork;
 use super::sensors::{CurrentSensor, CurrentSensorConfig};
 use super::signals::{AxisSignals, PlantSignals};
 use super::spindle_drive::{SpindleDrive, SpindleDriveConfig};
@@ -247,8 +248,12 @@ pub struct Simulator {
     control: Control,
     force_model: MillingForceModel,
     region_coefficients: Vec<CuttingCoefficients>,
-    /// Each material region's power law and the cut it was calibrated on.
+    /// Each material region's power law and the cut it was calibrated on: the sensorless
+    /// estimate of a machine without a learned network.
     region_power_law: Vec<CachedPowerLaw>,
+    /// The network learned on this machine's trial cuts ([`super::sensorless`]): when there is
+    /// one, the sensorless estimate is its prediction.
+    sensorless_network: Option<SensorlessNetwork>,
     spindle: SpindleDrive,
     axes: [FeedDrive; 2],
     feed_sensor: CurrentSensor,
@@ -303,6 +308,7 @@ impl Simulator {
             force_model,
             region_coefficients,
             region_power_law,
+            sensorless_network: None,
             spindle: SpindleDrive::new(config.spindle_drive, dt_s)
                 .map_err(|e| e.within("spindle_drive"))?,
             axes: [axis, axis],
@@ -334,6 +340,13 @@ impl Simulator {
         };
         sim.reset();
         Ok(sim)
+    }
+
+    /// The same machine estimating its sensorless force with `network`, learned on its trial
+    /// cuts, instead of paper 004's published weights.
+    pub fn with_sensorless_network(mut self, network: SensorlessNetwork) -> Self {
+        self.sensorless_network = Some(network);
+        self
     }
 
     /// The scenario being cut.
@@ -477,7 +490,7 @@ impl Simulator {
         let feed_read = self.feed_sensor.read(measured.phase_currents_a);
         let spindle_read = self.spindle_sensor.read(spindle.phase_currents_a);
 
-        // Paper 004's estimate from what the CNC knows, once per interpolation period.
+        // Paper 004's sensorless estimate from what the CNC knows, once per interpolation period.
         if ipo_tick {
             (self.power_law_force_n, self.power_law_uncertainty) = match region {
                 Some(r) if cutting => {
@@ -489,7 +502,13 @@ impl Simulator {
                         teeth_engaged: self.immersion.teeth_engaged(cutter.teeth),
                         cutter_teeth: f64::from(cutter.teeth),
                     };
-                    self.region_power_law[r].evaluate(&now)
+                    match &self.sensorless_network {
+                        Some(network) => {
+                            let estimate = network.estimate(&now);
+                            (estimate.force_n, estimate.relative_uncertainty)
+                        }
+                        None => self.region_power_law[r].evaluate(&now),
+                    }
                 }
                 _ => (0.0, 0.0),
             };

@@ -101,7 +101,7 @@ const PAPERS: [Paper; 5] = [
         authors: "Xiaolong Shen, Meilin Li, Nanlin Yu",
         title: "Research of Absolute Sensorless Cutting Force Induced Error Compensation System",
         origin: "Hunan Industry Polytechnic and Hunan Urban Construction College, China",
-        takes: "the power-law force model learned as a network, the sensorless cross-check, \
+        takes: "the power-law force model learned as a network, its sensor failure prediction, \
                 the cutting-force-induced error and its compensation",
     },
 ];
