@@ -110,7 +110,7 @@ pub enum Wanted {
 
 /// One condition of a step.
 #[derive(Debug, Clone, PartialEq)]
-pub struct Condition {
+pub struct StepCondition {
     /// What is measured.
     pub subject: Subject,
     /// On which run (0 for A, or the Simulate page's only run).
@@ -121,7 +121,7 @@ pub struct Condition {
 
 /// What a step's check was evaluated on.
 #[derive(Debug, Clone, Copy)]
-pub enum Work<'a> {
+pub enum Evidence<'a> {
     /// The finished runs of a Simulate (one) or Compare (A first) page.
     Runs(&'a [&'a RunResult]),
     /// The Signal chain page's filter.
@@ -135,7 +135,7 @@ pub enum Work<'a> {
 
 /// A condition evaluated.
 #[derive(Debug, Clone, PartialEq)]
-pub struct Outcome {
+pub struct ConditionOutcome {
     /// The condition, in words: "Mean |error| of A below 5 %".
     pub wants: String,
     /// Whether it is met.
@@ -217,7 +217,7 @@ fn with_unit(value: f64, unit: &str) -> String {
     }
 }
 
-impl Condition {
+impl StepCondition {
     /// Whether this condition can be evaluated on `page`'s work; a message saying why not.
     pub fn fits(&self, page: LabPage) -> Result<(), String> {
         let on_runs = matches!(
@@ -320,15 +320,15 @@ impl Condition {
     }
 
     /// Evaluates the condition on `work`.
-    pub fn evaluate(&self, work: Work<'_>) -> Outcome {
-        let variants = matches!(work, Work::Runs(runs) if runs.len() > 1)
+    pub fn evaluate(&self, work: Evidence<'_>) -> ConditionOutcome {
+        let variants = matches!(work, Evidence::Runs(runs) if runs.len() > 1)
             || matches!(self.wanted, Wanted::Variant(..))
             || self.variant > 0;
         let unit = self.unit();
         let measure = |variant: usize| -> Option<f64> {
             match work {
-                Work::Runs(runs) => runs.get(variant).and_then(|r| self.measure_run(r)),
-                Work::Design { spec, sos } => self.measure_design(spec, sos),
+                Evidence::Runs(runs) => runs.get(variant).and_then(|r| self.measure_run(r)),
+                Evidence::Design { spec, sos } => self.measure_design(spec, sos),
             }
         };
         let value = measure(self.variant).filter(|v| v.is_finite());
@@ -368,7 +368,7 @@ impl Condition {
                 )
             }
         };
-        Outcome {
+        ConditionOutcome {
             wants,
             met,
             measured,
@@ -383,7 +383,7 @@ impl Condition {
 /// `than`, another variant).
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
-pub struct ConditionText {
+pub struct StepConditionText {
     #[serde(default)]
     metric: Option<String>,
     #[serde(default)]
@@ -413,10 +413,10 @@ fn variant_index(name: &str) -> Option<usize> {
         .position(|v| v.eq_ignore_ascii_case(name))
 }
 
-impl ConditionText {
+impl StepConditionText {
     /// The condition this text states, checked against the metrics, settings and controllers
     /// that exist; the field at fault otherwise.
-    pub fn resolve(&self) -> Result<Condition, FieldProblem> {
+    pub fn resolve(&self) -> Result<StepCondition, FieldProblem> {
         let subjects = [
             self.metric.is_some(),
             self.setting.is_some(),
@@ -480,7 +480,7 @@ impl ConditionText {
                     "a controller condition takes no is, value or than".into(),
                 ));
             }
-            return Ok(Condition {
+            return Ok(StepCondition {
                 subject: Subject::Controller(kind),
                 variant,
                 wanted: Wanted::Holds,
@@ -522,7 +522,7 @@ impl ConditionText {
                 ))
             }
         };
-        Ok(Condition {
+        Ok(StepCondition {
             subject,
             variant,
             wanted,
@@ -534,8 +534,8 @@ impl ConditionText {
 mod tests {
     use super::*;
 
-    fn condition(json: &str) -> Result<Condition, FieldProblem> {
-        serde_json::from_str::<ConditionText>(json)
+    fn condition(json: &str) -> Result<StepCondition, FieldProblem> {
+        serde_json::from_str::<StepConditionText>(json)
             .map_err(|e| ("json", e.to_string()))?
             .resolve()
     }
@@ -607,7 +607,7 @@ mod tests {
         };
         let sos = crate::signal::butterworth::butter(&spec).unwrap();
         let order = condition(r#"{"setting": "order", "is": "at_most", "value": 4}"#).unwrap();
-        let out = order.evaluate(Work::Design {
+        let out = order.evaluate(Evidence::Design {
             spec: &spec,
             sos: &sos,
         });
@@ -617,7 +617,7 @@ mod tests {
         let gain =
             condition(r#"{"signal": "gain_db", "at_hz": 500, "is": "below", "value": -100}"#)
                 .unwrap();
-        let out = gain.evaluate(Work::Design {
+        let out = gain.evaluate(Evidence::Design {
             spec: &spec,
             sos: &sos,
         });
@@ -634,7 +634,7 @@ mod tests {
     #[test]
     fn numbers_are_shown_to_four_figures() {
         assert_eq!(shown(3.214_59), "3.215");
-        assert_eq!(shown(1234.5), "1235");
+        assert_eq!(shown(1234.6), "1235");
         assert_eq!(shown(0.05), "0.05");
         assert_eq!(shown(0.0), "0");
     }

@@ -3,7 +3,7 @@
 //! A lesson is a JSON file in `www/lessons/`: an id, a title, what it teaches, the paper it comes
 //! from, and steps. A step opens a page of the lab with a run definition — the link the lab
 //! itself writes ([`setup::Setup`]) — asks a question or sets a task, offers hints one at a time,
-//! and states its check: a multiple-choice answer, or conditions ([`check::Condition`]) on the
+//! and states its check: a multiple-choice answer, or conditions ([`check::StepCondition`]) on the
 //! finished runs' metrics and definitions, on a Compare run's variants, or on the Signal chain
 //! page's filter. A step with conditions carries a reference solution, another link, which
 //! `cutlab lesson check` and the tests run to show the check can be met, while the step's own
@@ -31,7 +31,7 @@ use std::fmt;
 
 use serde::Deserialize;
 
-use check::{Condition, ConditionText};
+use check::{StepCondition, StepConditionText};
 use locate::{line_of, path_text, PathPart};
 use setup::Setup;
 
@@ -50,12 +50,12 @@ pub struct Lesson {
     /// The paper it walks ("000"–"004").
     pub paper: String,
     /// The steps, in order.
-    pub steps: Vec<Step>,
+    pub steps: Vec<LessonStep>,
 }
 
 /// One step of a lesson.
 #[derive(Debug, Clone, PartialEq)]
-pub struct Step {
+pub struct LessonStep {
     /// A short heading.
     pub title: String,
     /// The page and run definition the step opens.
@@ -83,7 +83,7 @@ pub enum StepCheck {
     /// Conditions on the student's work, all to be met.
     Conditions {
         /// The conditions.
-        conditions: Vec<Condition>,
+        conditions: Vec<StepCondition>,
         /// The reference solution: a setup that meets them.
         solution: Setup,
     },
@@ -151,7 +151,7 @@ struct CheckText {
     #[serde(default)]
     answer: Option<usize>,
     #[serde(default)]
-    conditions: Option<Vec<ConditionText>>,
+    conditions: Option<Vec<StepConditionText>>,
 }
 
 /// The path to a field of step `step`.
@@ -311,7 +311,7 @@ impl Lesson {
                     ))
                 }
             };
-            steps.push(Step {
+            steps.push(LessonStep {
                 title: step.title,
                 setup,
                 task: step.task,

@@ -3,7 +3,7 @@
 //! `cutlab lesson check` and the tests use to show that a step's reference solution meets its
 //! check and its starting point does not.
 
-use super::check::{Outcome, Work};
+use super::check::{ConditionOutcome, Evidence};
 use super::setup::{Defined, Setup};
 use super::{Lesson, StepCheck};
 use crate::closed_loop::lab::{simulate, RunResult};
@@ -18,7 +18,7 @@ pub struct StepOutcome {
     /// The step, from 0.
     pub step: usize,
     /// Each condition's outcome, in order.
-    pub outcomes: Vec<Outcome>,
+    pub outcomes: Vec<ConditionOutcome>,
 }
 
 impl StepOutcome {
@@ -56,13 +56,13 @@ impl Checker {
                 let runs: Vec<&RunResult> = runs.iter().collect();
                 conditions
                     .iter()
-                    .map(|c| c.evaluate(Work::Runs(&runs)))
+                    .map(|c| c.evaluate(Evidence::Runs(&runs)))
                     .collect()
             }
             Defined::Design(spec, sos) => conditions
                 .iter()
                 .map(|c| {
-                    c.evaluate(Work::Design {
+                    c.evaluate(Evidence::Design {
                         spec: &spec,
                         sos: &sos,
                     })

@@ -23,24 +23,24 @@ pub struct LessonProgress {
 /// Every lesson's progress.
 #[derive(Debug, Clone, Default, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(default)]
-pub struct Progress {
+pub struct StudentProgress {
     /// The lesson open beside the lab.
     pub open: Option<String>,
     /// By lesson id.
     pub lessons: BTreeMap<String, LessonProgress>,
 }
 
-impl Progress {
+impl StudentProgress {
     /// Reads the stored text; nothing or damaged text is no progress.
     ///
     /// ```
-    /// use cutlab::lessons::progress::Progress;
-    /// let mut p = Progress::default();
+    /// use cutlab::lessons::progress::StudentProgress;
+    /// let mut p = StudentProgress::default();
     /// p.mark_done("threshold-gap", 1);
-    /// assert_eq!(Progress::from_json(&p.to_json()), p);
-    /// assert_eq!(Progress::from_json("{damaged"), Progress::default());
+    /// assert_eq!(StudentProgress::from_json(&p.to_json()), p);
+    /// assert_eq!(StudentProgress::from_json("{damaged"), StudentProgress::default());
     /// ```
-    pub fn from_json(text: &str) -> Progress {
+    pub fn from_json(text: &str) -> StudentProgress {
         serde_json::from_str(text).unwrap_or_default()
     }
 
@@ -80,7 +80,7 @@ mod tests {
 
     #[test]
     fn a_step_done_twice_counts_once_and_steps_stay_in_order() {
-        let mut p = Progress::default();
+        let mut p = StudentProgress::default();
         p.mark_done("a", 2);
         p.mark_done("a", 0);
         p.mark_done("a", 2);
