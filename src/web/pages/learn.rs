@@ -247,7 +247,9 @@ pub fn LearnPage() -> impl IntoView {
         <PageShell id="learn" title="Learn: cutting force from motor current" class="learn">
             <p class="lede">
                 "Four short steps from the cutter to the controller. Each ends with a link that opens "
-                "the lab where you can try it."
+                "the lab where you can try it. The "
+                <a href=Page::Lessons.href()>"lessons"</a>
+                " then set you tasks on the lab and check your runs."
             </p>
             <nav aria-label="Lessons" class="lesson-index">
                 <ol>
