@@ -44,6 +44,7 @@
 //! | [`closed_loop`] | the one loop that wires them, fed by pushed samples: the run definition, teach cut, signal chain, trace, metrics and the table of them, and the lab runs the CLI and the browser share |
 //! | [`tuning`] | sweeps and Nelder–Mead over a controller's parameters across scenarios, on the loop above, and the teach-in proposal from a simulated, logged or saved teach cut |
 //! | [`hardware`] | a machine (or the emulator) driven from the lab as it runs: link state, both watchdogs, arming, the same loop fed by pushed samples, recordings as CSV chunks, `cutlab host`'s run over a native link, the commissioning checks |
+//! | [`lessons`] | guided experiments: a lesson file's steps, each a page and run definition of the lab with a check on the runs' metrics, a Compare run's variants or a filter, evaluated with the measured values |
 //! | [`input`] | numbers typed into forms, parsed with messages for the field |
 //! | [`rng`] | the seeded random source every simulation draws from |
 //! | [`math`] | transcendental functions that give the same bits natively and in wasm |
@@ -64,6 +65,7 @@ pub mod control;
 pub mod estimation;
 pub mod hardware;
 pub mod input;
+pub mod lessons;
 pub mod log;
 pub mod machine;
 pub mod math;

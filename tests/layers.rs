@@ -30,7 +30,7 @@ const LAYERS: &[&[&str]] = &[
     &["protocol"],
     &["closed_loop"],
     &["log"],
-    &["tuning", "hardware"],
+    &["tuning", "hardware", "lessons"],
     &["charts"],
     &["cli", "web"],
 ];

@@ -13,6 +13,7 @@
 //! | [`calibrate`] | `cutlab calibrate`: the current-to-force models from a log of control periods |
 //! | [`log`] | `cutlab log inspect`, `analyse`, `replay`: engineers' own logs |
 //! | [`learn`] | `cutlab learn`: paper 004's power-law network learned from trial cuts on a preset |
+//! | [`lesson`] | `cutlab lesson check`: lesson files' schema, references, reference solutions and starting points |
 //! | [`force`], [`filter`], [`spectrum`] | one cut's forces; Butterworth design and filtering; Welch spectra |
 //! | [`fuzzy`] | `cutlab fuzzy eval` and `export`: the fuzzy engine on FLL and FIS files |
 //! | [`device`], [`host`], [`protocol`] | the device emulator on stdin/stdout, the closed loop over the protocol, frames as JSON |
@@ -27,6 +28,7 @@ pub mod force;
 pub mod fuzzy;
 pub mod host;
 pub mod learn;
+pub mod lesson;
 pub mod log;
 pub mod protocol;
 pub mod scenarios;
@@ -97,6 +99,9 @@ enum Command {
     /// Learn paper 004's power-law network from trial cuts on a preset's simulated machine
     #[command(long_about = learn::ABOUT)]
     Learn(learn::LearnArgs),
+    /// Check lesson files: schema, references, reference solutions (pass), starting points (fail)
+    #[command(long_about = lesson::ABOUT)]
+    Lesson(lesson::LessonArgs),
     /// Read a machine's CSV log as it is: its dialect, columns and problems
     #[command(long_about = log::ABOUT)]
     Log(log::LogArgs),
@@ -134,6 +139,7 @@ pub const COMMANDS: &[CommandInfo] = &[
     CommandInfo { name: "fuzzy" },
     CommandInfo { name: "host" },
     CommandInfo { name: "learn" },
+    CommandInfo { name: "lesson" },
     CommandInfo { name: "log" },
     CommandInfo { name: "protocol" },
     CommandInfo { name: "scenarios" },
@@ -222,6 +228,7 @@ pub fn run(args: &[String], io: &mut Io<'_>) -> Result<(), CliError> {
         Some(Command::Fuzzy(a)) => fuzzy::run(a, io),
         Some(Command::Host(a)) => host::run(a, io),
         Some(Command::Learn(a)) => learn::run(a, io),
+        Some(Command::Lesson(a)) => lesson::run(a, io),
         Some(Command::Log(a)) => log::run(a, io),
         Some(Command::Protocol(a)) => protocol::run(a, io),
         Some(Command::Scenarios(a)) => scenarios::run(a, io),

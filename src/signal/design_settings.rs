@@ -227,6 +227,42 @@ pub const PAPER_FILTERS: [FilterPreset; 3] = [
     },
 ];
 
+/// The text of each setting a Signal chain link's query gives (`preset=wang-10th-5hz&order=4`):
+/// the named paper filter's values, then each setting's own key over them. An unknown preset and
+/// a kind that is not a filter kind are left out (a form's select could not show them); numbers
+/// are kept as written, so [`parse_design`] says what is wrong with them. Settings the query
+/// leaves out are absent: [`parse_design`] takes their defaults.
+///
+/// ```
+/// use cutlab::signal::design_settings::{parse_design, query_texts};
+/// let query = [("preset".to_string(), "kim-feed-50hz".to_string()),
+///              ("order".to_string(), "4".to_string())];
+/// let (spec, _) = parse_design(&query_texts(&query)).unwrap();
+/// assert_eq!(spec.order, 4);
+/// ```
+pub fn query_texts(query: &[(String, String)]) -> Vec<(FilterSetting, String)> {
+    let value = |key: &str| query.iter().find(|(k, _)| k == key).map(|(_, v)| v);
+    let mut texts: Vec<(FilterSetting, String)> = value("preset")
+        .and_then(|name| PAPER_FILTERS.iter().find(|p| p.name == name))
+        .map(|p| p.texts().to_vec())
+        .unwrap_or_default();
+    for (key, text) in query {
+        let text = match FilterSetting::from_key(key) {
+            Some(FilterSetting::Kind) => match text.parse::<FilterKind>() {
+                Ok(kind) => kind.name().to_string(),
+                Err(_) => continue,
+            },
+            Some(_) => text.clone(),
+            None => continue,
+        };
+        if let Some(setting) = FilterSetting::from_key(key) {
+            texts.retain(|(s, _)| *s != setting);
+            texts.push((setting, text));
+        }
+    }
+    texts
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -52,9 +52,11 @@ pub fn App() -> impl IntoView {
                 Page::Tune => view! { <pages::tune::TunePage /> }.into_any(),
                 Page::Hardware => view! { <pages::hardware::HardwarePage /> }.into_any(),
                 Page::Logs => view! { <pages::logs::LogsPage /> }.into_any(),
+                Page::Lessons => view! { <pages::lessons::LessonsPage /> }.into_any(),
             }}
             </Later>
         </main>
+        <pages::lessons::panel::LessonPanel />
         <footer class="site-footer">
             <p>
                 "cutlab "{env!("CARGO_PKG_VERSION")}

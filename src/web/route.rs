@@ -26,11 +26,13 @@ pub enum Page {
     Logs,
     /// The guided path through the ideas.
     Learn,
+    /// Guided experiments with checks, and a lesson opened by its link (`#/lessons/ID`).
+    Lessons,
 }
 
 impl Page {
     /// Every page, in navigation order.
-    pub const ALL: [Page; 10] = [
+    pub const ALL: [Page; 11] = [
         Page::Home,
         Page::Simulate,
         Page::Compare,
@@ -41,6 +43,7 @@ impl Page {
         Page::Plant,
         Page::SignalChain,
         Page::Learn,
+        Page::Lessons,
     ];
 
     /// The page shown for an empty or unknown hash.
@@ -59,6 +62,7 @@ impl Page {
             Page::Hardware => "hardware",
             Page::Logs => "logs",
             Page::Learn => "learn",
+            Page::Lessons => "lessons",
         }
     }
 
@@ -75,6 +79,7 @@ impl Page {
             Page::Hardware => "Hardware",
             Page::Logs => "Logs",
             Page::Learn => "Learn",
+            Page::Lessons => "Lessons",
         }
     }
 

@@ -363,6 +363,8 @@ impl Runner<Vec<Arc<RunResult>>> {
                                     if current() {
                                         // The finished runs replace what was streamed of them.
                                         let _ = preview.try_set(Some(all.clone()));
+                                        // An open lesson checks every finished run.
+                                        crate::web::pages::lessons::feed::publish(&all);
                                         let _ = status.try_set(RunStatus::Done(all));
                                     }
                                 });

@@ -158,7 +158,9 @@ pub fn HomePage() -> impl IntoView {
                     <li>
                         <a href=Page::Learn.href()>"Learn the ideas"</a>
                         " — current as a force sensor, filtering, calibration and the controllers, \
-                         step by step with the papers' equations."
+                         step by step with the papers' equations; then "
+                        <a href=Page::Lessons.href()>"take a guided lesson"</a>
+                        ", whose tasks on the lab are checked as your runs finish."
                     </li>
                     <li>
                         <a href="#/simulate?preset=kim-step-doc">"Simulate a paper's experiment"</a>

@@ -12,7 +12,7 @@ use crate::web::components::run_form::encode_rule_table;
 use crate::web::route::{hash_with_query, Page};
 
 /// One step of the guided path.
-struct Lesson {
+struct PathStep {
     id: &'static str,
     title: &'static str,
     paragraphs: &'static [&'static str],
@@ -42,8 +42,8 @@ impl TryIt {
     }
 }
 
-const LESSONS: &[Lesson] = &[
-    Lesson {
+const LESSONS: &[PathStep] = &[
+    PathStep {
         id: "why-current",
         title: "1. Why measure force through motor current",
         paragraphs: &[
@@ -71,7 +71,7 @@ const LESSONS: &[Lesson] = &[
             TryIt::Hash("#/plant?preset=wang-brake-bench"),
         )],
     },
-    Lesson {
+    PathStep {
         id: "signal-chain",
         title: "2. From phase currents to a force: the signal chain",
         paragraphs: &[
@@ -100,7 +100,7 @@ const LESSONS: &[Lesson] = &[
             ),
         ],
     },
-    Lesson {
+    PathStep {
         id: "cutting-force",
         title: "3. What the cutter feels",
         paragraphs: &[
@@ -128,7 +128,7 @@ const LESSONS: &[Lesson] = &[
             TryIt::Hash("#/plant?preset=kim-step-doc"),
         )],
     },
-    Lesson {
+    PathStep {
         id: "controllers",
         title: "4. Closing the loop",
         paragraphs: &[
@@ -247,7 +247,9 @@ pub fn LearnPage() -> impl IntoView {
         <PageShell id="learn" title="Learn: cutting force from motor current" class="learn">
             <p class="lede">
                 "Four short steps from the cutter to the controller. Each ends with a link that opens "
-                "the lab where you can try it."
+                "the lab where you can try it. The "
+                <a href=Page::Lessons.href()>"lessons"</a>
+                " then set you tasks on the lab and check your runs."
             </p>
             <nav aria-label="Lessons" class="lesson-index">
                 <ol>

@@ -13,12 +13,14 @@
 //! | [`tune`] | teach-in, sweeps and searches |
 //! | [`hardware`] | a real machine over WebSerial, or the virtual device |
 //! | [`learn`] | the ideas in four steps, with the papers' equations |
+//! | [`lessons`] | guided experiments with checks, and the lesson panel beside the lab |
 
 pub mod compare;
 pub mod fuzzy;
 pub mod hardware;
 pub mod home;
 pub mod learn;
+pub mod lessons;
 pub mod logs;
 pub mod plant;
 pub mod signal_chain;

@@ -13,7 +13,9 @@ use crate::charts::{Axis, LineChart, Scale, Series, PALETTE};
 use crate::input::table::{form_errors, Table};
 use crate::plant::recording::{BenchRecording, PhaseRecording};
 use crate::signal::butterworth::{ButterworthSpec, FilterKind};
-use crate::signal::design_settings::{parse_design, FilterPreset, FilterSetting, PAPER_FILTERS};
+use crate::signal::design_settings::{
+    parse_design, query_texts, FilterPreset, FilterSetting, PAPER_FILTERS,
+};
 use crate::signal::filter::SosFilterBank;
 use crate::signal::rms::three_phase_rms;
 use crate::signal::sos::Sos;
@@ -35,25 +37,12 @@ fn chosen_preset(texts: &[(FilterSetting, String)]) -> Option<&'static FilterPre
     })
 }
 
-/// The form a URL query describes: the defaults, then the named preset, then each field's own
-/// key. An unknown preset and a kind that is not a filter kind are ignored (the select could not
-/// show it); numbers are kept as typed, so their field explains what is wrong.
+/// The form a URL query describes: the defaults, then what the query gives
+/// ([`query_texts`], which lessons read too).
 fn form_from_query(query: &[(String, String)]) -> TableForm<FilterSetting> {
     let form = TableForm::new(&[]);
-    let value = |key: &str| query.iter().find(|(k, _)| k == key).map(|(_, v)| v);
-    if let Some(preset) = value("preset").and_then(|n| PAPER_FILTERS.iter().find(|p| p.name == n)) {
-        fill(form, preset);
-    }
-    for (key, text) in query {
-        match FilterSetting::from_key(key) {
-            Some(FilterSetting::Kind) => {
-                if let Ok(kind) = text.parse::<FilterKind>() {
-                    form.text(FilterSetting::Kind).set(kind.name().to_string());
-                }
-            }
-            Some(setting) => form.text(setting).set(text.clone()),
-            None => {}
-        }
+    for (setting, text) in query_texts(query) {
+        form.text(setting).set(text);
     }
     form
 }

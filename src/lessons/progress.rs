@@ -1,0 +1,92 @@
+//! A student's progress through the lessons, as the browser keeps it (`localStorage`) and
+//! exports it: for each lesson, the step open and the steps done; and the lesson open beside the
+//! lab, if any. Read leniently: what is damaged or unknown is dropped, never an error, since
+//! nothing a student can do with a damaged record is worth stopping the lab for.
+
+use std::collections::BTreeMap;
+
+use serde::{Deserialize, Serialize};
+
+/// The key the browser keeps the progress under.
+pub const STORAGE_KEY: &str = "cutlab.lessons";
+
+/// One lesson's progress.
+#[derive(Debug, Clone, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct LessonProgress {
+    /// The step open, from 0.
+    pub step: usize,
+    /// The steps done, from 0, ascending.
+    pub done: Vec<usize>,
+}
+
+/// Every lesson's progress.
+#[derive(Debug, Clone, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct StudentProgress {
+    /// The lesson open beside the lab.
+    pub open: Option<String>,
+    /// By lesson id.
+    pub lessons: BTreeMap<String, LessonProgress>,
+}
+
+impl StudentProgress {
+    /// Reads the stored text; nothing or damaged text is no progress.
+    ///
+    /// ```
+    /// use cutlab::lessons::progress::StudentProgress;
+    /// let mut p = StudentProgress::default();
+    /// p.mark_done("threshold-gap", 1);
+    /// assert_eq!(StudentProgress::from_json(&p.to_json()), p);
+    /// assert_eq!(StudentProgress::from_json("{damaged"), StudentProgress::default());
+    /// ```
+    pub fn from_json(text: &str) -> StudentProgress {
+        serde_json::from_str(text).unwrap_or_default()
+    }
+
+    /// The text to store or export.
+    pub fn to_json(&self) -> String {
+        serde_json::to_string_pretty(self).unwrap_or_default()
+    }
+
+    /// The progress of `lesson`.
+    pub fn of(&self, lesson: &str) -> LessonProgress {
+        self.lessons.get(lesson).cloned().unwrap_or_default()
+    }
+
+    /// Marks step `step` of `lesson` done.
+    pub fn mark_done(&mut self, lesson: &str, step: usize) {
+        let entry = self.lessons.entry(lesson.to_string()).or_default();
+        if let Err(at) = entry.done.binary_search(&step) {
+            entry.done.insert(at, step);
+        }
+    }
+
+    /// Opens step `step` of `lesson`.
+    pub fn open_step(&mut self, lesson: &str, step: usize) {
+        self.open = Some(lesson.to_string());
+        self.lessons.entry(lesson.to_string()).or_default().step = step;
+    }
+
+    /// How many of `steps` steps of `lesson` are done.
+    pub fn done_count(&self, lesson: &str, steps: usize) -> usize {
+        self.of(lesson).done.iter().filter(|s| **s < steps).count()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_step_done_twice_counts_once_and_steps_stay_in_order() {
+        let mut p = StudentProgress::default();
+        p.mark_done("a", 2);
+        p.mark_done("a", 0);
+        p.mark_done("a", 2);
+        assert_eq!(p.of("a").done, [0, 2]);
+        assert_eq!(p.done_count("a", 2), 1);
+        p.open_step("a", 1);
+        assert_eq!((p.open.as_deref(), p.of("a").step), (Some("a"), 1));
+    }
+}

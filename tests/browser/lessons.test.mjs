@@ -1,0 +1,93 @@
+// Lessons: a lesson opened by its link puts its panel beside the real lab page; a student answers
+// a question, then does a step on the Simulate page (edits a field by its label, the page runs)
+// and sees the check turn from unmet to met with the measured value; the progress survives a
+// reload and shows on the Lessons page.
+import { test, before, after } from 'node:test';
+import assert from 'node:assert/strict';
+import { serveDist, launchBrowser, openLab, screenshot } from './harness.mjs';
+
+let server;
+let browser;
+before(async () => {
+  server = await serveDist();
+  browser = await launchBrowser();
+});
+after(async () => {
+  await browser?.close();
+  await server?.close();
+});
+
+const RUN_TIMEOUT = 90_000;
+const TITLE = 'The entry into a cut, and the safety envelope';
+
+test('a lesson opened by its link checks a run as it finishes and keeps the progress', async () => {
+  const { page, problems, context } = await openLab(browser, server.url, '#/lessons/entry-and-envelope');
+  // The link opens the step's own page, with the lesson beside it.
+  const panel = page.getByRole('complementary', { name: TITLE });
+  await panel.waitFor();
+  await page.getByRole('heading', { level: 1, name: /Simulate/ }).waitFor();
+  assert.match(page.url(), /#\/simulate\?preset=maneerat-doc-2&/);
+  await panel.getByRole('heading', { name: /^Step 1 of 2/ }).waitFor();
+
+  // Hints open one at a time.
+  const hint = panel.getByRole('button', { name: /^Show a hint/ });
+  await hint.click();
+  assert.equal(await panel.getByRole('listitem').count(), 1);
+  assert.equal(await hint.textContent(), 'Show a hint (1 of 2 shown)');
+
+  // A wrong answer is said to be wrong; the right one marks the step done.
+  await panel.getByLabel(/^Nothing: it only logs/).check();
+  await panel.getByRole('button', { name: 'Check my answer' }).click();
+  await panel.getByText(/^Not this one/).waitFor();
+  await panel.getByLabel(/^Clamp it between/).check();
+  await panel.getByRole('button', { name: 'Check my answer' }).click();
+  await panel.getByText('Right.').waitFor();
+  await panel.getByRole('status').filter({ hasText: /^Step done\./ }).waitFor();
+
+  // Step 2 sets up its own run: the tool enters each cut at 150 %.
+  await panel.getByRole('button', { name: 'Next step' }).click();
+  await panel.getByRole('heading', { name: /^Step 2 of 2: Enter gently/ }).waitFor();
+  await page.waitForURL(/entry_override=150/);
+  const checks = panel.getByRole('list', { name: 'Check of your run' });
+  const aboveLimit = checks.getByRole('listitem').filter({ hasText: 'time above limit at most 0 s' });
+  await aboveLimit.filter({ hasText: /^Not met: / }).waitFor({ timeout: RUN_TIMEOUT });
+  assert.match(await aboveLimit.textContent(), /— measured [1-9][\d.]* s$/);
+  assert.equal(await panel.getByRole('status').count(), 0);
+
+  // The student lowers the entry override by its label; the page runs again and the check turns.
+  const entry = page.getByRole('textbox', { name: /^Entry override/ });
+  assert.equal(await entry.inputValue(), '150');
+  await entry.fill('60');
+  await aboveLimit.filter({ hasText: /^Met: / }).waitFor({ timeout: RUN_TIMEOUT });
+  assert.match(await aboveLimit.textContent(), /^Met: time above limit at most 0 s — measured 0 s$/);
+  await panel.getByRole('status').filter({ hasText: /^Step done\./ }).waitFor();
+  await screenshot(page, 'lessons-panel');
+
+  // A reload finds the lesson open at the same step, done, and the Lessons page counts it.
+  await page.reload();
+  const reloaded = page.getByRole('complementary', { name: TITLE });
+  await reloaded.getByRole('heading', { name: /^Step 2 of 2/ }).waitFor();
+  await reloaded.getByRole('status').filter({ hasText: /^Step done\./ }).waitFor();
+  await page.getByRole('navigation', { name: 'Lab sections' }).getByRole('link', { name: 'Lessons' }).click();
+  const card = page.getByRole('listitem').filter({ has: page.getByRole('heading', { name: TITLE }) });
+  await card.getByText('2 of 2 steps done').waitFor();
+  assert.equal(await card.getByRole('progressbar').getAttribute('value'), '2');
+  // Closing the lesson takes the panel away.
+  await reloaded.getByRole('button', { name: 'Close the lesson' }).click();
+  await reloaded.waitFor({ state: 'detached' });
+  assert.deepEqual(problems, []);
+  await context.close();
+});
+
+test('an unknown lesson is said so, and every control of the list is named', async () => {
+  const { page, problems, context } = await openLab(browser, server.url, '#/lessons/no-such-lesson');
+  await page.getByRole('alert').filter({ hasText: /no lesson named .no-such-lesson./ }).waitFor();
+  const links = page.getByRole('main').getByRole('listitem').getByRole('link');
+  assert.equal(await links.count(), 10);
+  for (const bar of await page.getByRole('progressbar').all()) {
+    assert.match(await bar.getAttribute('aria-label'), /^Progress in /);
+  }
+  await page.getByRole('button', { name: 'Download progress (JSON)' }).waitFor();
+  assert.deepEqual(problems, []);
+  await context.close();
+});
