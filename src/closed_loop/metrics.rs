@@ -391,8 +391,9 @@ pub fn metrics_csv_columns(runs: &[(&str, &Metrics)]) -> String {
     out
 }
 
-/// Every metric as (CSV name, value), in the CSV's order.
-fn metric_values(metrics: &Metrics) -> [(&'static str, Option<f64>); 25] {
+/// Every metric as (CSV name, value), in the CSV's order: the stable names lessons and the
+/// CSV share.
+pub fn metric_values(metrics: &Metrics) -> [(&'static str, Option<f64>); 25] {
     [
         ("cycle_time_s", Some(metrics.cycle_time_s)),
         ("completed", Some(f64::from(u8::from(metrics.completed)))),

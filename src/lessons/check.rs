@@ -10,7 +10,7 @@ use serde::Deserialize;
 use super::setup::{LabPage, VARIANT_NAMES};
 use crate::closed_loop::definition::{RunSetting, SettingValue};
 use crate::closed_loop::lab::RunResult;
-use crate::closed_loop::metrics::{compute, metrics_csv, Metrics, MetricsConfig};
+use crate::closed_loop::metrics::{compute, metric_values, Metrics, MetricsConfig};
 use crate::closed_loop::trace::Trace;
 use crate::control::registry::ControllerKind;
 use crate::input::table::Table;
@@ -150,7 +150,7 @@ pub struct ConditionOutcome {
 }
 
 /// The stable names of the metrics a condition can name: the metrics CSV's names
-/// ([`metrics_csv`]), units in the names.
+/// ([`metric_values`]), units in the names.
 pub fn metric_names() -> Vec<String> {
     named_metrics(&compute(&Trace::default(), &MetricsConfig::default()))
         .into_iter()
@@ -158,14 +158,12 @@ pub fn metric_names() -> Vec<String> {
         .collect()
 }
 
-/// Every metric of `metrics` by its stable name, read from [`metrics_csv`] (which writes each
-/// value so it reads back to the same bits): the one list of names and values.
+/// Every metric of `metrics` by its stable name ([`metric_values`], the list the metrics CSV
+/// writes).
 fn named_metrics(metrics: &Metrics) -> Vec<(String, Option<f64>)> {
-    metrics_csv(metrics)
-        .lines()
-        .skip(1)
-        .filter_map(|line| line.split_once(','))
-        .map(|(name, value)| (name.to_string(), value.parse::<f64>().ok()))
+    metric_values(metrics)
+        .into_iter()
+        .map(|(name, value)| (name.to_string(), value))
         .collect()
 }
 
