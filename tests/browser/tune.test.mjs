@@ -163,10 +163,12 @@ test("a search's runs compute on two workers at once and find what the page foun
   await status.waitFor({ timeout: RUN_TIMEOUT });
   // What the page showed for the same search (its default controller and parameters on
   // maneerat-doc-1 and kim-step-doc) when it ran every evaluation sliced on its own thread
-  // (tuning::TuningWork, before issue 28 moved the runs to the workers).
+  // (tuning::TuningWork, before issue 28 moved the runs to the workers: "kp = 0.2083,
+  // ki_per_s = 2; objective 2.270, cycle 44.3 s, force error 4.6 %"), labelled and to three
+  // significant digits since issue 30.
   assert.equal(
     await status.innerText(),
-    'Best of 37 evaluations (converged): kp = 0.2083, ki_per_s = 2; objective 2.270, cycle 44.3 s, force error 4.6 %. Open the best in Simulate',
+    'Best of 37 evaluations (converged): K_p = 0.208 % per %, K_i = 2 % per %·s; objective 2.27, cycle 44.3 s, force error 4.59 %. Open the best in Simulate',
   );
   const cores = await page.evaluate(() => navigator.hardwareConcurrency);
   const mostBusy = await page.evaluate(() => window.cutlabMostBusy);

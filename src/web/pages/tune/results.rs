@@ -177,10 +177,10 @@ pub fn TeachInTable(
     }
 }
 
-/// Where a teach-in came from, a scenario by its title beside its id.
+/// Where a teach-in came from (a scenario's id, a calibration file), with the scenario's title.
 fn scenario_title(t: &TeachIn) -> String {
     match t.preset.and_then(Preset::from_name) {
-        Some(p) => format!("{} ({})", p.label(), t.source),
+        Some(p) => format!("{} ({})", t.source, p.label()),
         None => t.source.clone(),
     }
 }
