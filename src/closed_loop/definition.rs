@@ -795,70 +795,6 @@ impl RunSetting {
         }
     }
 
-    /// What a run resolves for this setting where its field is left blank, as a person would type
-    /// it — the form's placeholder: the plan's value (the preset's, adapted to the machine), or for
-    /// a machine edit the preset's cut. `None` where the run decides later (a target taken from
-    /// the teach cut), the setting has no value on this preset, or a blank means nothing.
-    ///
-    /// ```
-    /// use cutlab::closed_loop::definition::{RunSetting, RunSpec};
-    /// use cutlab::closed_loop::lab::preset_plan;
-    /// use cutlab::control::registry::ControllerKind;
-    /// use cutlab::plant::Preset;
-    /// let spec = RunSpec::new(Preset::KimStepDoc, ControllerKind::Threshold);
-    /// let plan = preset_plan(&spec).unwrap();
-    /// assert_eq!(RunSetting::MaxOverride.planned_text(&plan, &spec).as_deref(), Some("255"));
-    /// assert_eq!(RunSetting::Teeth.planned_text(&plan, &spec).as_deref(), Some("2"));
-    /// assert_eq!(RunSetting::Seed.planned_text(&plan, &spec), None);
-    /// ```
-    pub fn planned_text(
-        self,
-        plan: &crate::closed_loop::settings::Plan,
-        spec: &RunSpec,
-    ) -> Option<String> {
-        use crate::closed_loop::settings::TargetRule;
-        let cut = || spec.preset.edited_scenario_spec(&spec.plant);
-        let number = match self {
-            RunSetting::Seed
-            | RunSetting::LoadStep
-            | RunSetting::DepthScale
-            | RunSetting::SensorNoise => None,
-            RunSetting::TargetCurrent => match plan.target {
-                TargetRule::Current(a) => Some(a),
-                _ => None,
-            },
-            RunSetting::TargetForce => match plan.target {
-                TargetRule::Force(n) | TargetRule::Resultant(n) => Some(n),
-                TargetRule::Current(_) | TargetRule::FromTeachCut => None,
-            },
-            RunSetting::Feedback => return Some(plan.chain.feedback.name().to_string()),
-            RunSetting::Material => {
-                let cut = cut()?;
-                let [region] = cut.materials.as_slice() else {
-                    return None;
-                };
-                return Some(region.material.name().to_string());
-            }
-            RunSetting::Teeth => return cut().map(|c| c.cutter.teeth.to_string()),
-            RunSetting::FilterOrder => return Some(plan.chain.lowpass_order.to_string()),
-            RunSetting::MaxOverride => Some(plan.limits.max_override_pct),
-            RunSetting::MinOverride => Some(plan.limits.min_override_pct),
-            RunSetting::MaxRate => Some(plan.limits.max_rate_pct_per_s),
-            RunSetting::ArmingOverride => Some(plan.limits.arming_override_pct),
-            RunSetting::EntryOverride => Some(plan.entry_override_pct),
-            RunSetting::EntryHoldTime => Some(plan.entry_hold_s),
-            RunSetting::MinFeedPerTooth => plan.chip_load.map(|c| c.min_mm),
-            RunSetting::MaxFeedPerTooth => plan.chip_load.map(|c| c.max_mm),
-            RunSetting::ControlPeriod => Some(plan.chain.control_period_s),
-            RunSetting::SpindleCutoff => Some(plan.chain.spindle_lowpass_hz),
-            RunSetting::FeedCutoff => Some(plan.chain.feed_lowpass_hz),
-            RunSetting::SpindleSpeed => Some(plan.operating_point.spindle_rpm),
-            RunSetting::ProgrammedFeed => Some(plan.operating_point.feed_mm_min),
-            RunSetting::ToolDiameter => cut().map(|c| c.cutter.diameter_mm),
-        };
-        number.filter(|v| v.is_finite()).map(readable)
-    }
-
     /// Puts a checked value into `spec` (`None` restores the preset's value).
     ///
     /// # Panics
@@ -1301,40 +1237,6 @@ impl std::error::Error for SettingError {}
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn a_blank_field_on_a_mill_preset_shows_what_the_run_uses() {
-        let spec = RunSpec::new(Preset::KimStepDoc, ControllerKind::Threshold);
-        let plan = crate::closed_loop::lab::preset_plan(&spec).unwrap();
-        let decided_elsewhere = [
-            RunSetting::Seed,
-            RunSetting::LoadStep,
-            RunSetting::DepthScale,
-            RunSetting::SensorNoise,
-            RunSetting::TargetCurrent,
-        ];
-        for setting in RunSetting::ALL {
-            let text = setting.planned_text(&plan, &spec);
-            assert_eq!(
-                text.is_none(),
-                decided_elsewhere.contains(&setting),
-                "{setting:?}: {text:?}"
-            );
-            if let Some(text) = text {
-                assert!(
-                    setting.parse(&text, spec.preset).is_ok(),
-                    "{setting:?}: {text} is refused"
-                );
-            }
-        }
-        assert_eq!(
-            RunSetting::SpindleSpeed
-                .planned_text(&plan, &spec)
-                .as_deref(),
-            Some("1000")
-        );
-    }
-    use crate::control::registry::ControllerKind;
 
     fn preset(name: &str) -> Preset {
         Preset::from_name(name).unwrap()

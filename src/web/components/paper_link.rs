@@ -40,10 +40,11 @@ fn pieces(text: &str) -> Vec<Piece<'_>> {
 fn find_mention(text: &str) -> Option<usize> {
     text.match_indices("aper ").find_map(|(i, _)| {
         let start = i.checked_sub(1)?;
-        let head = &text[start..i];
+        // `get`: the byte before may be inside a wider character ("×aper").
+        let head = text.get(start..i)?;
         let digits = text.get(i + "aper ".len()..i + "aper ".len() + 3)?;
-        let known =
-            digits.starts_with("00") && digits[2..].parse::<u32>().is_ok_and(|n| n < PAPER_COUNT);
+        let known = digits.bytes().all(|b| b.is_ascii_digit())
+            && digits.parse::<u32>().is_ok_and(|n| n < PAPER_COUNT);
         let word_ends = text[i + "aper ".len() + 3..]
             .chars()
             .next()

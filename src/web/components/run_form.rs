@@ -111,8 +111,8 @@ impl ScenarioForm {
 }
 
 /// What each blank field of a scenario form resolves to on `preset_name`, from the run's plan
-/// ([`RunSetting::planned_text`]) for the settings as parsed (the preset's alone while a field is
-/// wrong).
+/// ([`crate::closed_loop::settings::Plan::planned_text`]) for the settings as parsed (the
+/// preset's alone while a field is wrong).
 fn planned_texts(preset_name: &str, choice: Option<ScenarioChoice>) -> Placeholders {
     let Some(preset) = Preset::from_name(preset_name) else {
         return Placeholders::new();
@@ -129,7 +129,7 @@ fn planned_texts(preset_name: &str, choice: Option<ScenarioChoice>) -> Placehold
     };
     RunSetting::ALL
         .into_iter()
-        .filter_map(|s| Some((s.spec().query_key, s.planned_text(&plan, &spec)?)))
+        .filter_map(|s| Some((s.spec().query_key, plan.planned_text(s, &spec)?)))
         .collect()
 }
 
