@@ -79,6 +79,49 @@ fn parse_whole<T: std::str::FromStr>(text: &str, range: &str) -> Result<T, Strin
         .map_err(|_| format!("\"{cleaned}\" is not a whole number{range}"))
 }
 
+/// `v` to three significant digits, as a table or a result line shows a measured or computed
+/// value (its meaning, not the float's noise): 0.439, 1.38, 116, 12300; an exponent below 0.001
+/// or from a million up.
+///
+/// ```
+/// use cutlab::input::three_significant;
+/// assert_eq!(three_significant(0.4389), "0.439");
+/// assert_eq!(three_significant(1.379), "1.38");
+/// assert_eq!(three_significant(115.7403), "116");
+/// assert_eq!(three_significant(12_345.0), "12300");
+/// assert_eq!(three_significant(10.0), "10");
+/// assert_eq!(three_significant(-0.06917), "-0.0692");
+/// assert_eq!(three_significant(0.0), "0");
+/// assert_eq!(three_significant(2.5e-5), "2.5e-5");
+/// assert_eq!(three_significant(f64::NAN), "NaN");
+/// ```
+pub fn three_significant(v: f64) -> String {
+    if v == 0.0 || !v.is_finite() {
+        return readable(v);
+    }
+    let magnitude = v.abs();
+    if !(1e-3..1e6).contains(&magnitude) {
+        let text = format!("{v:.2e}");
+        return match text.split_once('e') {
+            Some((mantissa, exponent)) => format!(
+                "{}e{exponent}",
+                mantissa.trim_end_matches('0').trim_end_matches('.')
+            ),
+            None => text,
+        };
+    }
+    // Digits before the point, less one: 0 for 1.38, 2 for 116, -1 for 0.439.
+    let order = magnitude.log10().floor() as i32;
+    if order >= 2 {
+        let unit = 10f64.powi(order - 2);
+        format!("{:.0}", (v / unit).round() * unit)
+    } else {
+        let decimals = (2 - order) as usize;
+        let text = format!("{v:.decimals$}");
+        text.trim_end_matches('0').trim_end_matches('.').to_string()
+    }
+}
+
 /// `v` as a person reads it in a message: plain digits with at most four decimals, or an exponent
 /// with at most five significant digits when very large or small — 1e300, not a 301-digit
 /// integer; 1e-300, not "0.0000"; 3.4028e38, not 3.4028234663852886e38. Every number a message

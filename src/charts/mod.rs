@@ -38,7 +38,8 @@ impl Rgb {
     }
 }
 
-/// A palette that stays distinguishable for colour-blind readers (Okabe & Ito, 2008).
+/// A palette that stays distinguishable for colour-blind readers (Okabe & Ito, 2008), its yellow
+/// darkened so a line in it reads on white.
 pub const PALETTE: [Rgb; 8] = [
     Rgb(0, 114, 178),
     Rgb(230, 159, 0),
@@ -46,7 +47,8 @@ pub const PALETTE: [Rgb; 8] = [
     Rgb(204, 121, 167),
     Rgb(86, 180, 233),
     Rgb(213, 94, 0),
-    Rgb(240, 228, 66),
+    // Okabe–Ito's yellow darkened to an olive (3.8:1 on white): the original vanishes on white.
+    Rgb(150, 130, 0),
     Rgb(0, 0, 0),
 ];
 
@@ -353,6 +355,28 @@ pub fn tick_label(v: &f64) -> String {
     }
 }
 
+impl Axis {
+    /// The label of a tick at `v` on this axis: [`tick_label`], except that on a linear axis a
+    /// tick within a billionth of the shown span of zero reads "0" — plotters steps its ticks in
+    /// floating point, so the tick at zero of a range such as −0.3..0.5 arrives as −5.6e-17.
+    ///
+    /// ```
+    /// use cutlab::charts::Axis;
+    /// let mut y = Axis::linear("y (mm)");
+    /// y.range = -0.3..0.5;
+    /// assert_eq!(y.tick_label(-5.551115123125783e-17), "0");
+    /// assert_eq!(y.tick_label(0.1), "0.1");
+    /// ```
+    pub fn tick_label(&self, v: f64) -> String {
+        let span = (self.range.end - self.range.start).abs();
+        if self.scale == Scale::Linear && span.is_finite() && v.abs() <= span * 1e-9 {
+            "0".to_string()
+        } else {
+            tick_label(&v)
+        }
+    }
+}
+
 /// Visual settings that depend on the output device.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ChartStyle {
@@ -476,8 +500,8 @@ where
         .bold_line_style(RGBColor(214, 220, 228))
         .x_labels(8)
         .y_labels(6)
-        .x_label_formatter(&tick_label)
-        .y_label_formatter(&tick_label)
+        .x_label_formatter(&|v| x_axis.tick_label(*v))
+        .y_label_formatter(&|v| y_axis.tick_label(*v))
         .draw()?;
 
     let width = style.px(1.6);
@@ -576,8 +600,8 @@ pub fn draw_heat_map<DB: DrawingBackend>(
         .y_desc(y.label.as_str())
         .label_style(small_font)
         .axis_desc_style(font)
-        .x_label_formatter(&tick_label)
-        .y_label_formatter(&tick_label)
+        .x_label_formatter(&|v| x.tick_label(*v))
+        .y_label_formatter(&|v| y.tick_label(*v))
         .draw()?;
     let (nx, ny) = (map.nx.max(1), map.ny.max(1));
     let dx = (x.range.end - x.range.start) / nx as f64;
@@ -814,5 +838,48 @@ mod tests {
         .collect();
         assert_eq!(runs.len(), 2);
         assert_eq!(runs[0], &[(1.0, 1.0), (10.0, 2.0)]);
+    }
+
+    #[test]
+    fn a_tick_at_zero_reads_0_not_a_rounding_residue() {
+        // Ranges whose zero tick plotters reaches by adding steps in floating point.
+        for (start, end) in [(-0.3, 0.5), (-0.7, 0.35), (-0.03, 0.06), (-3.3, 1.1)] {
+            let mut chart = sine_chart();
+            chart.x.range = 0.5..2.0;
+            chart.y.range = start..end;
+            let (svg, _) = render(&chart);
+            assert!(
+                !svg.contains("e-1"),
+                "a residue tick on {start}..{end}: {svg}"
+            );
+            assert!(
+                svg.contains(">\n0\n</text>"),
+                "no tick reads 0 on {start}..{end}: {svg}"
+            );
+        }
+    }
+
+    /// WCAG's contrast ratio of a colour against white.
+    fn contrast_on_white(c: Rgb) -> f64 {
+        let channel = |v: u8| {
+            let v = f64::from(v) / 255.0;
+            if v <= 0.039_28 {
+                v / 12.92
+            } else {
+                ((v + 0.055) / 1.055).powf(2.4)
+            }
+        };
+        let luminance = 0.2126 * channel(c.0) + 0.7152 * channel(c.1) + 0.0722 * channel(c.2);
+        1.05 / (luminance + 0.05)
+    }
+
+    #[test]
+    fn no_palette_colour_is_pale_on_white() {
+        // Okabe–Ito's yellow (240, 228, 66) is 1.3:1 on white and vanished as a fuzzy set's line;
+        // its orange and sky blue, the palest kept, are 2.3:1.
+        for colour in PALETTE {
+            let ratio = contrast_on_white(colour);
+            assert!(ratio >= 2.2, "{colour:?} is {ratio:.2}:1 on white");
+        }
     }
 }

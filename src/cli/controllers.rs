@@ -52,8 +52,11 @@ pub fn run(args: ControllersArgs, io: &mut Io<'_>) -> Result<(), CliError> {
             };
             writeln!(
                 io.stdout,
-                "    {:<26} default {}{unit}, range {}..={}: {}",
-                p.key, p.default, p.min, p.max, p.help
+                "    {:<26} default {}{unit}, range {}: {}",
+                p.key,
+                p.default,
+                crate::input::table::range_text(p.min, p.max, p.unit),
+                p.help
             )?;
         }
         writeln!(io.stdout)?;

@@ -218,10 +218,9 @@ fn feeds(text: &str) -> Result<Vec<f64>, CliError> {
                 Ok(v)
             } else {
                 Err(CliError::new(format!(
-                    "--feeds-pct: {} % is outside {}–{} %",
+                    "--feeds-pct: {} % is outside {}",
                     readable(v),
-                    readable(lo),
-                    readable(hi)
+                    crate::input::table::range_text(lo, hi, "%")
                 )))
             }
         })

@@ -1304,7 +1304,6 @@ impl std::error::Error for SettingError {}
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::control::registry::ControllerKind;
 
     fn preset(name: &str) -> Preset {
         Preset::from_name(name).unwrap()

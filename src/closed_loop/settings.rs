@@ -27,7 +27,7 @@ use super::error::LoopError;
 use crate::control::registry::ControllerConfig;
 use crate::estimation::estimator::{Calibration, Feedback};
 use crate::plant::cnc::OverrideMode;
-use crate::plant::deflection::{ErrorModel, ToolMount};
+use crate::plant::deflection::ErrorModel;
 use crate::plant::presets::PlantKind;
 use crate::plant::Preset;
 use crate::safety::{
@@ -351,12 +351,10 @@ fn preset_error_model(spec: &RunSpec) -> Option<ErrorModel> {
     if spec.preset.plant_kind() != PlantKind::Mill {
         return None;
     }
-    let mount = ToolMount {
-        stick_out_mm: spec.plant.tool_stick_out_mm,
-        spindle_stiffness_n_um: spec.plant.spindle_stiffness_n_um,
-        youngs_modulus_gpa: spec.plant.tool_youngs_modulus_gpa,
-    };
-    ErrorModel::of_program(&spec.preset.edited_scenario_spec(&spec.plant)?, mount)
+    ErrorModel::of_program(
+        &spec.preset.edited_scenario_spec(&spec.plant)?,
+        spec.plant.tool_mount(),
+    )
 }
 
 /// The chip-load window of `spec`'s cutter (its edits included) in the materials of its part: on
@@ -755,6 +753,77 @@ pub fn air_cut_force_n(target_force_n: f64, air_force_estimate_n: f64) -> f64 {
 }
 
 impl Plan {
+    /// What a run resolves for `setting` where its field is left blank, as a person would type
+    /// it — the form's placeholder: the plan's value (the preset's, adapted to the machine), or for
+    /// a machine edit the preset's cut. `None` where the run decides later (a target taken from
+    /// the teach cut), the setting has no value on this preset, or a blank means nothing.
+    ///
+    /// ```
+    /// use cutlab::closed_loop::definition::{RunSetting, RunSpec};
+    /// use cutlab::closed_loop::lab::preset_plan;
+    /// use cutlab::control::registry::ControllerKind;
+    /// use cutlab::plant::Preset;
+    /// let spec = RunSpec::new(Preset::KimStepDoc, ControllerKind::Threshold);
+    /// let plan = preset_plan(&spec).unwrap();
+    /// assert_eq!(plan.planned_text(RunSetting::MaxOverride, &spec).as_deref(), Some("255"));
+    /// assert_eq!(plan.planned_text(RunSetting::Teeth, &spec).as_deref(), Some("2"));
+    /// assert_eq!(plan.planned_text(RunSetting::Seed, &spec), None);
+    /// ```
+    pub fn planned_text(&self, setting: RunSetting, spec: &RunSpec) -> Option<String> {
+        let plan = self;
+        let cut = || spec.preset.edited_scenario_spec(&spec.plant);
+        let number = match setting {
+            RunSetting::Seed
+            | RunSetting::LoadStep
+            | RunSetting::DepthScale
+            | RunSetting::SensorNoise => None,
+            RunSetting::TargetCurrent => match plan.target {
+                TargetRule::Current(a) => Some(a),
+                _ => None,
+            },
+            RunSetting::TargetForce => match plan.target {
+                TargetRule::Force(n) | TargetRule::Resultant(n) => Some(n),
+                TargetRule::Current(_) | TargetRule::FromTeachCut => None,
+            },
+            RunSetting::Feedback => return Some(plan.chain.feedback.name().to_string()),
+            RunSetting::Material => {
+                let cut = cut()?;
+                let [region] = cut.materials.as_slice() else {
+                    return None;
+                };
+                return Some(region.material.name().to_string());
+            }
+            RunSetting::Teeth => return cut().map(|c| c.cutter.teeth.to_string()),
+            RunSetting::FilterOrder => return Some(plan.chain.lowpass_order.to_string()),
+            RunSetting::MaxOverride => Some(plan.limits.max_override_pct),
+            RunSetting::MinOverride => Some(plan.limits.min_override_pct),
+            RunSetting::MaxRate => Some(plan.limits.max_rate_pct_per_s),
+            RunSetting::ArmingOverride => Some(plan.limits.arming_override_pct),
+            RunSetting::EntryOverride => Some(plan.entry_override_pct),
+            RunSetting::EntryHoldTime => Some(plan.entry_hold_s),
+            RunSetting::MinFeedPerTooth => plan.chip_load.map(|c| c.min_mm),
+            RunSetting::MaxFeedPerTooth => plan.chip_load.map(|c| c.max_mm),
+            RunSetting::ControlPeriod => Some(plan.chain.control_period_s),
+            RunSetting::SpindleCutoff => Some(plan.chain.spindle_lowpass_hz),
+            RunSetting::FeedCutoff => Some(plan.chain.feed_lowpass_hz),
+            RunSetting::SpindleSpeed => Some(plan.operating_point.spindle_rpm),
+            RunSetting::ProgrammedFeed => Some(plan.operating_point.feed_mm_min),
+            RunSetting::ToolDiameter => cut().map(|c| c.cutter.diameter_mm),
+            RunSetting::ToolStickOut => cut().map(|c| {
+                spec.plant
+                    .tool_mount()
+                    .stick_out_or_default_mm(c.cutter.diameter_mm)
+            }),
+            RunSetting::ToolModulus => {
+                cut().map(|_| spec.plant.tool_mount().youngs_modulus_or_default_gpa())
+            }
+            RunSetting::SpindleStiffness => {
+                cut().map(|_| spec.plant.tool_mount().spindle_stiffness_or_default_n_um())
+            }
+        };
+        number.filter(|v| v.is_finite()).map(crate::input::readable)
+    }
+
     /// The target, N, once `calibration` is known.
     pub fn target_force_n(&self, calibration: &Calibration) -> Result<f64, LoopError> {
         let at = self.operating_point;
@@ -837,6 +906,38 @@ impl Plan {
 mod tests {
     use super::*;
     use crate::control::registry::ControllerKind;
+
+    #[test]
+    fn a_blank_field_on_a_mill_preset_shows_what_the_run_uses() {
+        let spec = RunSpec::new(Preset::KimStepDoc, ControllerKind::Threshold);
+        let plan = crate::closed_loop::lab::preset_plan(&spec).unwrap();
+        let decided_elsewhere = [
+            RunSetting::Seed,
+            RunSetting::LoadStep,
+            RunSetting::DepthScale,
+            RunSetting::SensorNoise,
+            RunSetting::TargetCurrent,
+        ];
+        for setting in RunSetting::ALL {
+            let text = plan.planned_text(setting, &spec);
+            assert_eq!(
+                text.is_none(),
+                decided_elsewhere.contains(&setting),
+                "{setting:?}: {text:?}"
+            );
+            if let Some(text) = text {
+                assert!(
+                    setting.parse(&text, spec.preset).is_ok(),
+                    "{setting:?}: {text} is refused"
+                );
+            }
+        }
+        assert_eq!(
+            plan.planned_text(RunSetting::SpindleSpeed, &spec)
+                .as_deref(),
+            Some("1000")
+        );
+    }
 
     fn context_and_spec(preset: Preset) -> (MachineContext, RunSpec) {
         let spec = RunSpec::new(preset, ControllerKind::Pi);

@@ -595,11 +595,9 @@ impl ControllerConfig {
         let spec = params[index];
         if !(value.is_finite() && value >= spec.min && value <= spec.max) {
             return Err(ParamError(format!(
-                "{key} = {} is outside {}..={} {}",
+                "{key} = {} is outside {}",
                 crate::input::readable(value),
-                spec.min,
-                spec.max,
-                spec.unit
+                crate::input::table::range_text(spec.min, spec.max, spec.unit)
             )));
         }
         self.values[index] = value;

@@ -332,6 +332,24 @@ pub fn write_negative(f: &mut fmt::Formatter<'_>, value: f64) -> fmt::Result {
     write!(f, "must be zero or positive, got {}", readable(value))
 }
 
+/// A range as a person reads it, in the form, the command line's help and every message:
+/// "0.001–2 s", "1–20" (no unit), never Rust's `0.001..=2`.
+///
+/// ```
+/// use cutlab::input::table::range_text;
+/// assert_eq!(range_text(0.001, 2.0, "s"), "0.001–2 s");
+/// assert_eq!(range_text(0.0, 10.0, "% per %"), "0–10 % per %");
+/// assert_eq!(range_text(1.0, 20.0, ""), "1–20");
+/// ```
+pub fn range_text(min: f64, max: f64, unit: &str) -> String {
+    let (min, max) = (readable(min), readable(max));
+    if unit.is_empty() {
+        format!("{min}–{max}")
+    } else {
+        format!("{min}–{max} {unit}")
+    }
+}
+
 /// "5 s is outside 0.001–2 s", or, for a value named by what it counts, "order 0 is outside
 /// 1–20" (its unit, if any, is the form's label's): the words of [`Problem::OutOfRange`].
 pub fn write_out_of_range(
@@ -342,11 +360,15 @@ pub fn write_out_of_range(
     unit: &str,
     noun: &str,
 ) -> fmt::Result {
-    let (value, min, max) = (readable(value), readable(min), readable(max));
+    let value = readable(value);
     match (noun, unit) {
-        ("", "") => write!(f, "value {value} is outside {min}–{max}"),
-        ("", unit) => write!(f, "{value} {unit} is outside {min}–{max} {unit}"),
-        (noun, _) => write!(f, "{noun} {value} is outside {min}–{max}"),
+        ("", "") => write!(f, "value {value} is outside {}", range_text(min, max, "")),
+        ("", unit) => write!(
+            f,
+            "{value} {unit} is outside {}",
+            range_text(min, max, unit)
+        ),
+        (noun, _) => write!(f, "{noun} {value} is outside {}", range_text(min, max, "")),
     }
 }
 

@@ -70,6 +70,26 @@ pub struct ToolMount {
     pub youngs_modulus_gpa: Option<f64>,
 }
 
+impl ToolMount {
+    /// The stick-out in use for a tool of `diameter_mm`, mm (the default where none is given).
+    pub fn stick_out_or_default_mm(&self, diameter_mm: f64) -> f64 {
+        self.stick_out_mm
+            .unwrap_or(DEFAULT_STICK_OUT_DIAMETERS * diameter_mm)
+    }
+
+    /// The tool material's Young's modulus in use, GPa.
+    pub fn youngs_modulus_or_default_gpa(&self) -> f64 {
+        self.youngs_modulus_gpa
+            .unwrap_or(CARBIDE_YOUNGS_MODULUS_GPA)
+    }
+
+    /// The spindle's stiffness in use at its nose, N/µm.
+    pub fn spindle_stiffness_or_default_n_um(&self) -> f64 {
+        self.spindle_stiffness_n_um
+            .unwrap_or(DEFAULT_SPINDLE_STIFFNESS_N_MM / 1e3)
+    }
+}
+
 /// The tool and spindle as springs between the force and the wall.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct ToolStiffness {
@@ -142,15 +162,9 @@ impl ToolStiffness {
     pub fn of_cutter(cutter: &Cutter, mount: ToolMount) -> Self {
         Self::cantilever(
             cutter.diameter_mm,
-            mount
-                .stick_out_mm
-                .unwrap_or(DEFAULT_STICK_OUT_DIAMETERS * cutter.diameter_mm),
-            mount
-                .youngs_modulus_gpa
-                .unwrap_or(CARBIDE_YOUNGS_MODULUS_GPA),
-            mount
-                .spindle_stiffness_n_um
-                .map_or(DEFAULT_SPINDLE_STIFFNESS_N_MM, |k| 1e3 * k),
+            mount.stick_out_or_default_mm(cutter.diameter_mm),
+            mount.youngs_modulus_or_default_gpa(),
+            1e3 * mount.spindle_stiffness_or_default_n_um(),
         )
     }
 

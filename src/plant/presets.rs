@@ -1289,6 +1289,16 @@ impl PlantEdits {
         }
     }
 
+    /// How the tool sits in the machine, as these edits state it (the force-induced error's
+    /// springs; `None` fields take the defaults).
+    pub fn tool_mount(&self) -> super::deflection::ToolMount {
+        super::deflection::ToolMount {
+            stick_out_mm: self.tool_stick_out_mm,
+            spindle_stiffness_n_um: self.spindle_stiffness_n_um,
+            youngs_modulus_gpa: self.tool_youngs_modulus_gpa,
+        }
+    }
+
     /// The lowest spindle speed accepted; the highest is the spindle drive's top speed.
     pub const MIN_SPINDLE_RPM: f64 = 10.0;
     /// The programmed feeds accepted, [lowest, highest].

@@ -1,6 +1,7 @@
 //! The shell of the lab: header, navigation and the current page.
 
 use leptos::prelude::*;
+use wasm_bindgen::JsCast;
 
 use super::components::chart::ChartHelp;
 use super::components::later::Later;
@@ -11,7 +12,19 @@ use super::route::{use_current_page, Page};
 #[component]
 pub fn App() -> impl IntoView {
     let page = use_current_page();
+    // The hash holds the page and its settings, so the skip link moves focus itself rather than
+    // following `#main` (which would leave the page for Home).
+    let skip_to_content = move |ev: leptos::ev::MouseEvent| {
+        ev.prevent_default();
+        if let Some(main) = document()
+            .get_element_by_id("main")
+            .and_then(|e| e.dyn_into::<web_sys::HtmlElement>().ok())
+        {
+            let _ = main.focus();
+        }
+    };
     view! {
+        <a class="skip-link" href="#main" on:click=skip_to_content>"Skip to content"</a>
         <header class="site-header">
             <div class="brand">
                 <img src="favicon.svg" alt="" width="28" height="28" />
@@ -38,8 +51,8 @@ pub fn App() -> impl IntoView {
                 </ul>
             </nav>
         </header>
-        <ChartHelp />
-        <main id="main">
+        <main id="main" tabindex="-1">
+            <ChartHelp />
             <Later>
             {move || match page.get() {
                 Page::Home => view! { <pages::home::HomePage /> }.into_any(),

@@ -124,3 +124,31 @@ export function nativeCli() {
   }
   return cutlab;
 }
+
+/**
+ * Runs axe-core (scripts/node's pinned copy) on the page as it is now; resolves to its
+ * violations, each as one line: rule, impact, help and the first few offending elements.
+ */
+export async function axeViolations(page) {
+  if (!(await page.evaluate(() => Boolean(window.axe)))) {
+    await page.addScriptTag({ path: require.resolve('axe-core/axe.min.js') });
+  }
+  const violations = await page.evaluate(async () => {
+    const result = await window.axe.run(document);
+    return result.violations.map((v) => ({
+      id: v.id,
+      impact: v.impact,
+      help: v.help,
+      targets: v.nodes.slice(0, 5).map((n) => n.target.join(' ')),
+    }));
+  });
+  return violations.map((v) => `${v.id} (${v.impact}): ${v.help} — ${v.targets.join(', ')}`);
+}
+
+/** How wide the document is against the viewport, in CSS px: { scrollWidth, viewportWidth }. */
+export async function documentWidth(page) {
+  return page.evaluate(() => ({
+    scrollWidth: document.scrollingElement.scrollWidth,
+    viewportWidth: window.innerWidth,
+  }));
+}

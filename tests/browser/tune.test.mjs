@@ -105,12 +105,13 @@ test('a sweep of two parameters fills a table, a heat map and a Pareto chart, an
   const text = await status.innerText();
   const evaluations = Number(text.match(/Best of ([0-9]+) evaluations/)[1]);
   assert.ok(evaluations >= 1 && evaluations <= 5, text);
-  const kp = text.match(/kp = ([0-9.e-]+);/)[1];
+  // The best is labelled and rounded to three significant digits; the link carries it whole.
+  const kp = text.match(/K_p = ([0-9.e-]+) % per %;/)[1];
   await page.getByRole('link', { name: 'Open the best in Simulate' }).click();
   // Simulate shows the best point in its own form, read by its label as a person would.
   const gain = page.getByLabel('K_p (% per %)');
   await gain.waitFor();
-  assert.equal(await gain.inputValue(), kp);
+  assert.equal(Number(Number(await gain.inputValue()).toPrecision(3)), Number(kp));
   assert.equal(await page.getByLabel('Controller', { exact: true }).inputValue(), 'pi');
 
   // A bad bound is a message beside the form, not a crash.
@@ -162,10 +163,12 @@ test("a search's runs compute on two workers at once and find what the page foun
   await status.waitFor({ timeout: RUN_TIMEOUT });
   // What the page showed for the same search (its default controller and parameters on
   // maneerat-doc-1 and kim-step-doc) when it ran every evaluation sliced on its own thread
-  // (tuning::TuningWork, before issue 28 moved the runs to the workers).
+  // (tuning::TuningWork, before issue 28 moved the runs to the workers: "kp = 0.2083,
+  // ki_per_s = 2; objective 2.270, cycle 44.3 s, force error 4.6 %"), labelled and to three
+  // significant digits since issue 30.
   assert.equal(
     await status.innerText(),
-    'Best of 37 evaluations (converged): kp = 0.2083, ki_per_s = 2; objective 2.270, cycle 44.3 s, force error 4.6 %. Open the best in Simulate',
+    'Best of 37 evaluations (converged): K_p = 0.208 % per %, K_i = 2 % per %·s; objective 2.27, cycle 44.3 s, force error 4.59 %. Open the best in Simulate',
   );
   const cores = await page.evaluate(() => navigator.hardwareConcurrency);
   const mostBusy = await page.evaluate(() => window.cutlabMostBusy);

@@ -36,6 +36,9 @@ pub fn NumberField(
     /// What the value is, opened by a "?" beside the label (empty: no "?").
     #[prop(optional)]
     help: &'static str,
+    /// What a blank field means, shown in it while it is blank (the value the run uses).
+    #[prop(into, optional)]
+    placeholder: Signal<Option<String>>,
 ) -> impl IntoView {
     let error_id = format!("{id}-error");
     let described = error_id.clone();
@@ -44,7 +47,11 @@ pub fn NumberField(
         <div class="field" class:field-invalid=move || error.get().is_some() hidden=move || hidden.get()>
             <label for=id>
                 {move || label.get()}
-                {(!unit.is_empty()).then(|| view! { <span class="unit">" (" {unit} ")"</span> })}
+                {move || {
+                    label
+                        .with(|l| shows_unit(l, unit))
+                        .then(|| view! { <span class="unit">" (" {unit} ")"</span> })
+                }}
             </label>
             {(!help.is_empty()).then(|| view! { <HelpToggle subject=label help=help /> })}
             <input
@@ -53,6 +60,7 @@ pub fn NumberField(
                 inputmode="decimal"
                 autocomplete="off"
                 step=step
+                placeholder=move || placeholder.get()
                 prop:value=move || value.get()
                 on:input=move |ev| value.set(event_target_value(&ev))
                 aria-invalid=move || if error.get().is_some() { "true" } else { "false" }
@@ -63,6 +71,17 @@ pub fn NumberField(
             </p>
         </div>
     }
+}
+
+/// Whether a field labelled `label` needs its `unit` after the label: not when there is none, nor
+/// when the label already names it ("Teeth" counts teeth, "Depth of cut ×" is a factor), so a
+/// unit is written once.
+fn shows_unit(label: &str, unit: &str) -> bool {
+    let unit = unit.trim();
+    !unit.is_empty()
+        && !label
+            .split(|c: char| c.is_whitespace() || c == '(' || c == ')')
+            .any(|word| word.eq_ignore_ascii_case(unit))
 }
 
 /// A labelled drop-down over a registry of choices.
@@ -148,5 +167,21 @@ pub fn ChoiceField(
                 <p class="field-error" id=error_id aria-live="polite">{move || error.get().unwrap_or_default()}</p>
             })}
         </div>
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::shows_unit;
+
+    #[test]
+    fn a_unit_the_label_already_names_is_not_repeated() {
+        assert!(!shows_unit("Teeth", "teeth"));
+        assert!(!shows_unit("Depth of cut ×", "×"));
+        assert!(!shows_unit("Seed", ""));
+        assert!(shows_unit("Spindle speed", "rpm"));
+        assert!(shows_unit("K_p", "% per %"));
+        // A word that only contains the unit is not the unit.
+        assert!(shows_unit("Smallest feed per tooth", "mm"));
     }
 }

@@ -6,6 +6,7 @@
 //! | [`table_form`] | one form for any table of the core's settings: the typed text of its rows and a field per row |
 //! | [`fields`] | labelled form fields that keep what was typed and say why it is not accepted |
 //! | [`help`] | a "?" that opens a term's explanation in place: metrics' glossary, settings' help |
+//! | [`paper_link`] | "paper 00x" in any text as a link to the home page's reference list |
 //! | [`run_form`] | the forms that define a run: the scenario (the run definition's table) and a controller with its parameters |
 //! | [`chart`] | a chart on a canvas a person can explore: zoom, pan, readout, legend |
 //! | [`heat_map`] | a heat map on a canvas, cells picked by click or keyboard |
@@ -25,6 +26,7 @@ pub mod heat_map;
 pub mod help;
 pub mod later;
 pub mod page;
+pub mod paper_link;
 pub mod pool;
 pub mod recent;
 pub mod run_form;

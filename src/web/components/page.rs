@@ -28,3 +28,18 @@ pub fn PageShell(
         </section>
     }
 }
+
+/// A wide table's own scrolling box: on a narrow screen the table scrolls inside it instead of
+/// widening the page, and the box takes the keyboard focus so the arrow keys scroll it too.
+#[component]
+pub fn TableScroll(
+    /// What the box holds, for a screen reader ("Statistics per segment").
+    label: String,
+    children: Children,
+) -> impl IntoView {
+    view! {
+        <div class="table-scroll" tabindex="0" role="region" aria-label=format!("{label}, scrollable")>
+            {children()}
+        </div>
+    }
+}

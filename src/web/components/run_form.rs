@@ -11,6 +11,7 @@ use crate::closed_loop::config::RunConfiguration;
 use crate::closed_loop::definition::{
     parse_texts, preset_controller, RunSetting, RunSpec, SettingGroup, SettingsOverrides,
 };
+use crate::closed_loop::lab::preset_plan;
 use crate::control::fuzzy::fll;
 use crate::control::fuzzy::rules::RuleTable;
 use crate::control::registry::{ControllerConfig, ControllerKind};
@@ -18,7 +19,8 @@ use crate::input::table::Table;
 use crate::plant::presets::PlantEdits;
 use crate::plant::Preset;
 use crate::web::components::fields::{parse_number, NumberField, SelectField};
-use crate::web::components::table_form::{self, FieldErrors, TableForm};
+use crate::web::components::paper_link::WithPaperLinks;
+use crate::web::components::table_form::{self, FieldErrors, Placeholders, TableForm};
 use crate::web::js::read_chosen_file;
 
 /// Text of the scenario fields: the preset, and every setting of the run definition
@@ -33,6 +35,8 @@ pub struct ScenarioForm {
     /// The fields parsed, once per change for every reader (the page's run and each fieldset's
     /// messages), instead of once per reader.
     parsed: Memo<ParsedScenario>,
+    /// What each blank field resolves to on the chosen preset: the run's plan, as text.
+    planned: Memo<Placeholders>,
 }
 
 /// A parsed scenario form: the choice, or the message of each field that did not parse.
@@ -60,10 +64,12 @@ impl ScenarioForm {
         let typed = |key: &str| query.iter().find(|(k, _)| k == key).map(|(_, v)| v.clone());
         let preset = RwSignal::new(typed("preset").unwrap_or_else(|| DEFAULT_PRESET.to_string()));
         let settings = TableForm::new(query);
+        let parsed = Memo::new(move |_| parse_scenario(preset, settings));
         Self {
             preset,
             settings,
-            parsed: Memo::new(move |_| parse_scenario(preset, settings)),
+            parsed,
+            planned: Memo::new(move |_| planned_texts(&preset.get(), parsed.get().ok())),
         }
     }
 
@@ -116,6 +122,29 @@ impl ScenarioForm {
     }
 }
 
+/// What each blank field of a scenario form resolves to on `preset_name`, from the run's plan
+/// ([`crate::closed_loop::settings::Plan::planned_text`]) for the settings as parsed (the
+/// preset's alone while a field is wrong).
+fn planned_texts(preset_name: &str, choice: Option<ScenarioChoice>) -> Placeholders {
+    let Some(preset) = Preset::from_name(preset_name) else {
+        return Placeholders::new();
+    };
+    // A closed loop: the target and the envelope as an adaptive controller sees them.
+    let mut spec = RunSpec::new(preset, ControllerKind::Pi);
+    if let Some(choice) = choice.filter(|c| c.preset == preset) {
+        spec.seed = choice.seed;
+        spec.settings = choice.settings;
+        spec.plant = choice.plant;
+    }
+    let Ok(plan) = preset_plan(&spec) else {
+        return Placeholders::new();
+    };
+    RunSetting::ALL
+        .into_iter()
+        .filter_map(|s| Some((s.spec().query_key, plan.planned_text(s, &spec)?)))
+        .collect()
+}
+
 /// Parses a scenario form's fields (see [`ScenarioForm::parse`]).
 fn parse_scenario(preset: RwSignal<String>, settings: TableForm<RunSetting>) -> ParsedScenario {
     let Some(preset) = Preset::from_name(&preset.get()) else {
@@ -145,7 +174,15 @@ fn parse_scenario(preset: RwSignal<String>, settings: TableForm<RunSetting>) -> 
 
 /// The fields of `settings`, in order.
 fn setting_fields(form: ScenarioForm, settings: impl Iterator<Item = RunSetting>) -> impl IntoView {
-    view! { <table_form::SettingFields form=form.settings settings=settings.collect() errors=form.errors() /> }
+    let planned = form.planned;
+    view! {
+        <table_form::SettingFields
+            form=form.settings
+            settings=settings.collect()
+            errors=form.errors()
+            placeholders=Signal::derive(move || planned.get())
+        />
+    }
 }
 
 /// The fields of one group of settings.
@@ -164,7 +201,8 @@ pub fn ScenarioFields(form: ScenarioForm) -> impl IntoView {
     let summary = move || {
         Preset::from_name(&form.preset.get()).map(|p| {
             let s = p.summary();
-            let mut parts = vec![p.source().to_string()];
+            // The full title first: a narrow select cuts it.
+            let mut parts = vec![p.label().to_string(), p.source().to_string()];
             if let Some(t) = s.tool {
                 parts.push(t);
             }
@@ -192,7 +230,7 @@ pub fn ScenarioFields(form: ScenarioForm) -> impl IntoView {
                 options=Preset::ALL.iter().map(|p| (p.name(), p.label())).collect()
                 value=form.preset
             />
-            <p class="hint">{summary}</p>
+            <p class="hint">{move || summary().map(|text| view! { <WithPaperLinks text=text /> })}</p>
             {group_fields(form, SettingGroup::Scenario)}
         </fieldset>
     }

@@ -98,7 +98,7 @@ pub fn run_charts(runs: &[NamedRun], before: Option<&RunResult>) -> [LineChart; 
             ));
             current.series.push(Series::new(
                 "feed i_u min (raw)",
-                PALETTE[3],
+                PALETTE[6],
                 series_of(run, |r| r.feed_current_u_min_a),
             ));
             override_pct.series.push(

@@ -13,6 +13,9 @@ use crate::web::components::fields::{NumberField, SelectField};
 /// The messages of a form's fields, by row key.
 pub type FieldErrors = BTreeMap<&'static str, String>;
 
+/// What each blank field of a form resolves to, as text, by row key (its placeholder).
+pub type Placeholders = BTreeMap<&'static str, String>;
+
 /// The typed text of a table's rows, one signal per row; a fresh form shows each row's default.
 pub struct TableForm<S: 'static> {
     texts: StoredValue<Vec<(S, RwSignal<String>)>>,
@@ -116,8 +119,12 @@ pub fn SettingField<S: Table + Send + Sync>(
     /// Hides the field (its text is kept).
     #[prop(into, optional)]
     hidden: Signal<bool>,
+    /// What blank fields resolve to, by row key (none: no placeholder).
+    #[prop(into, optional)]
+    placeholders: Signal<Placeholders>,
 ) -> impl IntoView {
     let row = setting.row();
+    let placeholder = Signal::derive(move || placeholders.with(|p| p.get(row.key).cloned()));
     let id = field_id(id_prefix, setting);
     let value = form.text(setting);
     let error = Signal::derive(move || errors.with(|e| e.get(row.key).cloned()));
@@ -134,7 +141,7 @@ pub fn SettingField<S: Table + Send + Sync>(
             };
             let label = label.unwrap_or_else(|| Signal::stored(row.label.to_string()));
             view! {
-                <NumberField id=id label=label unit=row.unit value=value error=error step=step hidden=hidden help=row.help />
+                <NumberField id=id label=label unit=row.unit value=value error=error step=step hidden=hidden help=row.help placeholder=placeholder />
             }
             .into_any()
         }
@@ -154,11 +161,14 @@ pub fn SettingFields<S: Table + Send + Sync>(
     /// Prefix of the fields' ids.
     #[prop(default = "")]
     id_prefix: &'static str,
+    /// What blank fields resolve to, by row key.
+    #[prop(into, optional)]
+    placeholders: Signal<Placeholders>,
 ) -> impl IntoView {
     settings
         .into_iter()
         .map(|setting| {
-            view! { <SettingField form=form setting=setting errors=errors id_prefix=id_prefix /> }
+            view! { <SettingField form=form setting=setting errors=errors id_prefix=id_prefix placeholders=placeholders /> }
         })
         .collect_view()
 }

@@ -4,7 +4,7 @@
 use leptos::prelude::*;
 
 use crate::web::components::page::PageShell;
-use crate::web::route::Page;
+use crate::web::route::{sub_path, Page};
 
 /// One block of the loop: what it is, what it does, and the page (with its query) showing it.
 struct LoopBlock {
@@ -106,9 +106,21 @@ const PAPERS: [Paper; 5] = [
     },
 ];
 
+/// Scrolls to the entry the hash's sub-path names (`#/home/paper-003`: every "paper 00x" in the
+/// lab links there, [`crate::web::components::paper_link`]).
+fn show_linked_entry() {
+    let hash = window().location().hash().unwrap_or_default();
+    if let Some(entry) = sub_path(&hash).and_then(|id| document().get_element_by_id(id)) {
+        entry.scroll_into_view();
+    }
+}
+
 /// The home page.
 #[component]
 pub fn HomePage() -> impl IntoView {
+    Effect::new(move |_| show_linked_entry());
+    let handle = window_event_listener(leptos::ev::hashchange, move |_| show_linked_entry());
+    on_cleanup(move || handle.remove());
     let loop_blocks = LOOP
         .iter()
         .map(|block| {

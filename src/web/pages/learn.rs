@@ -8,6 +8,7 @@ use leptos::prelude::*;
 
 use crate::control::fuzzy::rules::RuleBase;
 use crate::web::components::page::PageShell;
+use crate::web::components::paper_link::WithPaperLinks;
 use crate::web::components::run_form::encode_rule_table;
 use crate::web::route::{hash_with_query, Page};
 
@@ -87,7 +88,7 @@ const LESSONS: &[PathStep] = &[
         ],
         equations: &[(
             "Three-phase RMS current (paper 003, eq 7)",
-            r#"<math display="block"><msub><mi>I</mi><mi>rms</mi></msub><mo>=</mo><msqrt><mfrac><mrow><msubsup><mi>I</mi><mi>u</mi><mn>2</mn></msubsup><mo>+</mo><msubsup><mi>I</mi><mi>v</mi><mn>2</mn></msubsup><mo>+</mo><msubsup><mi>I</mi><mi>w</mi><mn>2</mn></msubsup></mrow><mn>3</mn></mfrac></msqrt></math>"#,
+            r#"<math display="block"><msub><mi>I</mi><mi>rms</mi></msub><mo>=</mo><msqrt><mrow><mo>(</mo><msubsup><mi>I</mi><mi>u</mi><mn>2</mn></msubsup><mo>+</mo><msubsup><mi>I</mi><mi>v</mi><mn>2</mn></msubsup><mo>+</mo><msubsup><mi>I</mi><mi>w</mi><mn>2</mn></msubsup><mo>)</mo><mo>/</mo><mn>3</mn></mrow></msqrt></math>"#,
         )],
         try_it: &[
             (
@@ -265,15 +266,15 @@ pub fn LearnPage() -> impl IntoView {
                     view! {
                         <article class="lesson" id=l.id aria-labelledby=format!("{}-title", l.id)>
                             <h2 id=format!("{}-title", l.id)>{l.title}</h2>
-                            {l.paragraphs.iter().map(|p| view! { <p>{*p}</p> }).collect_view()}
+                            {l.paragraphs.iter().map(|p| view! { <p><WithPaperLinks text=*p /></p> }).collect_view()}
                             {l
                                 .equations
                                 .iter()
                                 .map(|(caption, mathml)| {
                                     view! {
-                                        <figure class="equation">
+                                        <figure class="equation" tabindex="0">
                                             <div inner_html=*mathml></div>
-                                            <figcaption>{*caption}</figcaption>
+                                            <figcaption><WithPaperLinks text=*caption /></figcaption>
                                         </figure>
                                     }
                                 })

@@ -23,6 +23,7 @@ use crate::signal::spectrum::{amplitude_spectrum, find_peaks, Window};
 use crate::web::components::chart::ChartCanvas;
 use crate::web::components::later::{effect_after_mount, Later};
 use crate::web::components::page::PageShell;
+use crate::web::components::paper_link::WithPaperLinks;
 use crate::web::components::runner::{next_task, RunProgress, RunStatus, Runner};
 use crate::web::components::table_form::{FieldErrors, SettingField, TableForm};
 use crate::web::components::work_job::Shared;
@@ -391,10 +392,10 @@ fn BenchFiltered(design: Memo<Design>) -> impl IntoView {
     view! {
         <h2>"The filter on a motor current"</h2>
         <p class="lede">
-            "Four seconds of the feed motor's phase currents on paper 000's brake bench (a "
-            "magnetic-particle brake loads the servo; 600 mm/min), through the filter designed "
-            "above. The three-phase RMS of a balanced set is steady — the amplitude over √2 — "
-            "and the spectrum shows the 4 Hz supply frequency that paper 000 found rising with load."
+            <WithPaperLinks text="Four seconds of the feed motor's phase currents on paper 000's brake \
+                bench (a magnetic-particle brake loads the servo; 600 mm/min), through the filter \
+                designed above. The three-phase RMS of a balanced set is steady — the amplitude over \
+                √2 — and the spectrum shows the 4 Hz supply frequency that paper 000 found rising with load." />
         </p>
         <RunProgress runner=bench.clone() id="bench-progress" />
         <p class="hint" aria-live="polite">{peak_text}</p>

@@ -111,7 +111,7 @@ impl HardwareState {
             })
         });
         let ui = Ui::new();
-        let host = TableForm::<HostSetting>::new(&[]);
+        let host = TableForm::<HostSetting>::new(&query);
         let parsed = Memo::new(move |_| parse_host(&host.texts()));
         Self {
             station: StoredValue::new_local(Station::default()),
@@ -153,6 +153,7 @@ impl HardwareState {
             ui,
             state,
             options_error,
+            host: host_form,
             ..
         } = self;
         Effect::new(move |_| {
@@ -161,8 +162,10 @@ impl HardwareState {
             }
         });
         Effect::new(move |_| {
+            // The settings, never the port: a link names no one's serial device.
             let mut q = scenario.query();
             q.extend(controller.query(""));
+            q.extend(host_form.query());
             replace_query(Page::Hardware, &q);
         });
         Effect::new(move |_| {

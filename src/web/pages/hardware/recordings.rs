@@ -6,6 +6,7 @@ use wasm_bindgen::JsCast;
 
 use super::ui::{StationRef, Ui};
 use crate::hardware::recording::RecordingMeta;
+use crate::web::components::page::TableScroll;
 use crate::web::hardware::station::Station;
 use crate::web::js::describe;
 
@@ -165,6 +166,7 @@ pub fn Recordings(ui: Ui, station: StationRef) -> impl IntoView {
                 }
                 let active = ui.active_recording.get();
                 view! {
+                    <TableScroll label="Stored recordings".to_string()>
                     <table class="metrics recordings-table">
                         <caption>"Stored recordings"</caption>
                         <thead>
@@ -204,6 +206,7 @@ pub fn Recordings(ui: Ui, station: StationRef) -> impl IntoView {
                             }).collect_view()}
                         </tbody>
                     </table>
+                    </TableScroll>
                 }
                 .into_any()
             }}

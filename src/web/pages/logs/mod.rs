@@ -55,11 +55,12 @@ use crate::log::settings::{parse_analysis, sample_period, AnalysisSettings, LogS
 use crate::web::components::later::Later;
 use crate::web::components::page::PageShell;
 use crate::web::components::table_form::{FieldErrors, TableForm};
+use crate::web::route::{query_params, replace_query, Page};
 use calibration::{CalibrationPanel, FitForm};
 use chain::{Chain, ChainPanel};
 use export::ExportPanel;
 use loader::{LoadedLog, Logs};
-use open::{OpenLogsPanel, OpenPanel};
+use open::{load_sample, OpenLogsPanel, OpenPanel, SAMPLES};
 use replay::{Replay, ReplayPanel};
 use results::LogResults;
 
@@ -79,14 +80,15 @@ struct LogsState {
 }
 
 impl LogsState {
-    fn new() -> Self {
+    /// The state, its settings from a shared link's `query`.
+    fn new(query: &[(String, String)]) -> Self {
         let logs = Logs::new();
         let active = Memo::new(move |_| {
             let id = logs.active.get();
             logs.logs
                 .with(|l| l.iter().find(|x| Some(x.id) == id).cloned())
         });
-        let settings = TableForm::<LogSetting>::new(&[]);
+        let settings = TableForm::<LogSetting>::new(query);
         let text = move |s: LogSetting| settings.text(s).get();
         let period = Memo::new(move |_| sample_period(Some(&text(LogSetting::SamplePeriod))));
         // The chain's own rows: the period and the marker's teeth do not stop it.
@@ -133,7 +135,30 @@ impl LogsState {
 /// The Logs page.
 #[component]
 pub fn LogsPage() -> impl IntoView {
-    let shared = LogsState::new();
+    let query = query_params(&window().location().hash().unwrap_or_default());
+    let shared = LogsState::new(&query);
+    // A sample log and the analysis settings live in the address bar, so a reload or a shared
+    // link restores them (a person's own file cannot: it is on their disk, not the server).
+    let sample_in_link = query
+        .iter()
+        .find(|(k, _)| k == "sample")
+        .and_then(|(_, v)| SAMPLES.iter().find(|(file, _)| file == v))
+        .map(|(file, _)| *file);
+    if let Some(file) = sample_in_link {
+        load_sample(shared.logs, file);
+    }
+    Effect::new(move |_| {
+        let mut pairs = Vec::new();
+        if let Some(file) = shared.active.with(|a| {
+            a.as_ref()
+                .and_then(|l| SAMPLES.iter().find(|(file, _)| *file == l.name))
+                .map(|(file, _)| *file)
+        }) {
+            pairs.push(("sample".to_string(), file.to_string()));
+        }
+        pairs.extend(shared.settings.query());
+        replace_query(Page::Logs, &pairs);
+    });
     let chain = Chain::new(shared);
     let fit = FitForm::new();
     let replay = Replay::new();

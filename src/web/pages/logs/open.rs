@@ -7,7 +7,7 @@ use wasm_bindgen::JsCast;
 use super::loader::{fetch_blob, files_of, LoadStatus, Logs};
 
 /// The synthetic sample logs in www/data, one click away.
-const SAMPLES: [(&str, &str); 2] = [
+pub const SAMPLES: [(&str, &str); 2] = [
     (
         "synthetic-kim-step-doc-export.csv",
         "Synthetic CNC export: 60 ms RMS currents, semicolons, decimal commas",
@@ -17,6 +17,19 @@ const SAMPLES: [(&str, &str); 2] = [
         "Synthetic 1 kHz DAQ: spindle phase currents and a dynamometer",
     ),
 ];
+
+/// Opens the sample log `file` (one of [`SAMPLES`]) from the server.
+pub fn load_sample(logs: Logs, file: &'static str) {
+    let url = format!("data/{file}");
+    leptos::task::spawn_local(async move {
+        match fetch_blob(&url).await {
+            Ok(blob) => logs.load(vec![(file.to_string(), blob)]),
+            Err(e) => {
+                let _ = logs.status.try_set(LoadStatus::Failed(e));
+            }
+        }
+    });
+}
 
 /// The Open a log panel.
 #[component]
@@ -37,17 +50,7 @@ pub fn OpenPanel(logs: Logs) -> impl IntoView {
         let files = ev.data_transfer().and_then(|d| d.files());
         logs.load(files_of(files));
     };
-    let load_sample = move |file: &'static str| {
-        let url = format!("data/{file}");
-        leptos::task::spawn_local(async move {
-            match fetch_blob(&url).await {
-                Ok(blob) => logs.load(vec![(file.to_string(), blob)]),
-                Err(e) => {
-                    let _ = logs.status.try_set(LoadStatus::Failed(e));
-                }
-            }
-        });
-    };
+    let load_sample = move |file: &'static str| load_sample(logs, file);
     let status = logs.status;
     view! {
         <fieldset>

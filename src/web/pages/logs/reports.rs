@@ -5,21 +5,23 @@ use std::sync::Arc;
 
 use leptos::prelude::*;
 
-use crate::input::readable;
+use crate::input::three_significant;
 use crate::log::analysis::ChainOutput;
 use crate::log::replay::{events, ReplayResult};
+use crate::web::components::page::TableScroll;
 
 /// Statistics per label and the chain's notes and peaks.
 #[component]
 pub fn ChainReport(out: Arc<ChainOutput>, column: String) -> impl IntoView {
     let a = &out.analysis;
-    let number = |v: Option<f64>| v.map_or("—".to_string(), readable);
+    let number = |v: Option<f64>| v.map_or("—".to_string(), three_significant);
     let mut rows = vec![("All rows".to_string(), a.whole)];
     rows.extend(a.by_label.iter().map(|l| (l.label.clone(), l.stats)));
     view! {
         <section aria-labelledby="chain-report-title">
             <h2 id="chain-report-title">{format!("Statistics of {column}")}</h2>
             <ul class="hint">{a.notes.iter().map(|n| view! { <li>{n.clone()}</li> }).collect_view()}</ul>
+            <TableScroll label=format!("Statistics of {column} per label segment")>
             <table class="metrics">
                 <caption>"Per label segment (after the low-pass, if any)"</caption>
                 <thead>
@@ -50,13 +52,14 @@ pub fn ChainReport(out: Arc<ChainOutput>, column: String) -> impl IntoView {
                         .collect_view()}
                 </tbody>
             </table>
+            </TableScroll>
             <p class="hint" role="status">
                 {if a.peaks.is_empty() {
                     "No spectral peaks.".to_string()
                 } else {
                     format!(
                         "Spectral peaks: {}.",
-                        a.peaks.iter().map(|p| format!("{} Hz", readable(p.freq_hz))).collect::<Vec<_>>().join(", ")
+                        a.peaks.iter().map(|p| format!("{} Hz", three_significant(p.freq_hz))).collect::<Vec<_>>().join(", ")
                     )
                 }}
             </p>
@@ -67,7 +70,7 @@ pub fn ChainReport(out: Arc<ChainOutput>, column: String) -> impl IntoView {
 /// Each replay's numbers and events.
 #[component]
 pub fn ReplayReport(results: Vec<Arc<ReplayResult>>) -> impl IntoView {
-    let number = |v: Option<f64>| v.map_or("—".to_string(), readable);
+    let number = |v: Option<f64>| v.map_or("—".to_string(), three_significant);
     let metric_rows: Vec<(&'static str, Vec<String>)> = vec![
         (
             "Armed at (s)",
@@ -134,10 +137,12 @@ pub fn ReplayReport(results: Vec<Arc<ReplayResult>>) -> impl IntoView {
         ),
     ];
     let notes = results.first().map(|r| r.notes.clone()).unwrap_or_default();
+    let event_logs = results.clone();
     view! {
         <section aria-labelledby="replay-report-title">
             <h2 id="replay-report-title">"Replayed controllers"</h2>
             <ul class="hint">{notes.into_iter().map(|n| view! { <li>{n}</li> }).collect_view()}</ul>
+            <TableScroll label="Replayed controllers".to_string()>
             <table class="metrics">
                 <caption>"What each controller would have done on this log"</caption>
                 <thead>
@@ -158,7 +163,8 @@ pub fn ReplayReport(results: Vec<Arc<ReplayResult>>) -> impl IntoView {
                         .collect_view()}
                 </tbody>
             </table>
-            {results
+            </TableScroll>
+            {event_logs
                 .iter()
                 .map(|r| {
                     let list = events(&r.trace);

@@ -8,6 +8,7 @@ use super::LogsState;
 use crate::input::readable;
 use crate::log::mapping::Channel;
 use crate::log::settings::LogSetting;
+use crate::web::components::page::TableScroll;
 use crate::web::components::table_form::SettingField;
 
 /// What the reader found in the active log, and its column mapping.
@@ -77,6 +78,7 @@ pub fn LogSummary(
             {needs_period.then(|| view! {
                 <SettingField form=shared.settings setting=LogSetting::SamplePeriod errors=shared.errors id_prefix="log-" />
             })}
+            <TableScroll label="Columns and what they carry".to_string()>
             <table class="metrics">
                 <caption>"Columns and what they carry (the mapping replay and calibration read)"</caption>
                 <thead>
@@ -127,6 +129,7 @@ pub fn LogSummary(
                         .collect_view()}
                 </tbody>
             </table>
+            </TableScroll>
             {move || mapping_error.get().map(|e| view! { <p class="run-error" role="alert">{e}</p> })}
         </section>
     }

@@ -10,6 +10,8 @@ use crate::closed_loop::transfer::{JobRequest, LearningRequest};
 use crate::closed_loop::trial_cuts::{PresetLearning, DEFAULT_TRIAL_FEEDS_PCT};
 use crate::plant::presets::PlantKind;
 use crate::plant::Preset;
+use crate::web::components::page::TableScroll;
+use crate::web::components::paper_link::WithPaperLinks;
 use crate::web::components::pool::Answer;
 use crate::web::components::runner::{RunProgress, Runner};
 
@@ -106,7 +108,7 @@ fn residuals_table(learning: &PresetLearning) -> impl IntoView {
         })
         .collect_view();
     view! {
-        <div class="table-scroll" tabindex="0" role="region" aria-label="Trial cuts and residuals, scrollable">
+        <TableScroll label="Trial cuts and residuals".to_string()>
             <table class="metrics">
                 <caption>"Trial cuts and residuals"</caption>
                 <thead>
@@ -123,7 +125,7 @@ fn residuals_table(learning: &PresetLearning) -> impl IntoView {
                 </thead>
                 <tbody>{rows}</tbody>
             </table>
-        </div>
+        </TableScroll>
     }
 }
 
@@ -161,12 +163,12 @@ pub fn LearningPanel(
         <section class="panel" aria-labelledby="learning-title">
             <h2 id="learning-title">"Paper 004's network, learned on this machine"</h2>
             <p class="hint">
-                {format!(
+                <WithPaperLinks text=format!(
                     "The preset's program is cut at {feeds} % of its programmed feed; each section of \
                      constant depth is a trial cut. The power law's log-space weights are fitted by least \
                      squares (what paper 004's linear network reaches when trained to convergence), once on \
                      the force on the tool and once on the lab's estimate from the motor current."
-                )}
+                ) />
             </p>
             <button type="button" on:click=learn disabled=move || mill().is_none()>
                 "Learn from trial cuts"

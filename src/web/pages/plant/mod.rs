@@ -23,6 +23,7 @@ use crate::plant::Preset;
 use crate::web::components::chart::ChartCanvas;
 use crate::web::components::fields::SelectField;
 use crate::web::components::page::PageShell;
+use crate::web::components::paper_link::WithPaperLinks;
 use crate::web::components::runner::{Debounce, RunProgress, RunStatus, Runner};
 use crate::web::components::table_form::{SettingField, TableForm};
 use crate::web::components::work_job::Shared;
@@ -123,17 +124,17 @@ fn recording_charts(rec: &OpenLoopRecording) -> Vec<(&'static str, LineChart)> {
                 ),
                 Series::new(
                     "feed i_u min",
-                    PALETTE[0],
+                    PALETTE[4],
                     time_series(r, |b| b.feed_iu_min_a),
                 ),
                 Series::new(
                     "spindle i_u max",
-                    PALETTE[1],
+                    PALETTE[5],
                     time_series(r, |b| b.spindle_iu_max_a),
                 ),
                 Series::new(
                     "spindle i_u min",
-                    PALETTE[1],
+                    PALETTE[3],
                     time_series(r, |b| b.spindle_iu_min_a),
                 ),
             ],
@@ -350,9 +351,9 @@ pub fn PlantPage() -> impl IntoView {
     view! {
         <PageShell id="plant" title="The simulated machine">
             <p class="lede">
-                "Each preset is one of the papers' experiments run on the simulated FANUC mill (or, for "
-                "paper 000, its brake bench). Here it runs open-loop at a fixed feed override, so you see "
-                "what the plant does before any controller touches it."
+                <WithPaperLinks text="Each preset is one of the papers' experiments run on the simulated \
+                    FANUC mill (or, for paper 000, its brake bench). Here it runs open-loop at a fixed \
+                    feed override, so you see what the plant does before any controller touches it." />
             </p>
             <div class="layout-two">
                 <form class="panel" aria-label="Plant settings" on:submit=|ev| ev.prevent_default()>

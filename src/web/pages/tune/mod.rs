@@ -27,6 +27,7 @@ use leptos::prelude::*;
 
 use crate::closed_loop::definition::{preset_controller, RunSpec};
 use crate::closed_loop::lab::TeachKey;
+use crate::control::fuzzy::fll;
 use crate::control::registry::{ControllerConfig, ControllerKind};
 use crate::input::table::{self, Table};
 use crate::plant::Preset;
@@ -36,10 +37,10 @@ use crate::tuning::{ParamRange, TeachIn, Tuned, TuningMode, TuningPlan, TuningPr
 use crate::web::components::page::PageShell;
 use crate::web::components::runner::{RunProgress, Runner};
 use crate::web::components::table_form::TableForm;
-use crate::web::route::query_params;
+use crate::web::route::{query_params, replace_query, Page};
 use in_workers::start_tuning;
 use method::{method_errors, MethodPanel};
-use params::{ParamRow, ParamsPanel};
+use params::{ParamRow, ParamsPanel, TUNABLE};
 use results::{TeachInTable, TuningResults};
 use teach_in::{Scenarios, ScenariosPanel, TeachInPanel};
 
@@ -50,7 +51,17 @@ type Asked = (Vec<ParamRange>, usize, Preset, ControllerConfig);
 /// The Tune page.
 #[component]
 pub fn TunePage() -> impl IntoView {
-    let kind_text = RwSignal::new(ControllerKind::Pi.name().to_string());
+    // What a shared link or a reload says (the page writes it back below).
+    let query = query_params(&window().location().hash().unwrap_or_default());
+    let typed = |key: &str| query.iter().find(|(k, _)| k == key).map(|(_, v)| v.clone());
+    let kind_text = RwSignal::new(
+        typed("controller")
+            .filter(|k| {
+                k.parse::<ControllerKind>()
+                    .is_ok_and(|k| TUNABLE.contains(&k))
+            })
+            .unwrap_or_else(|| ControllerKind::Pi.name().to_string()),
+    );
     let kind = Memo::new(move |_| {
         kind_text
             .get()
@@ -58,15 +69,16 @@ pub fn TunePage() -> impl IntoView {
             .unwrap_or(ControllerKind::Pi)
     });
     let scenarios = Scenarios::new();
+    if let Some(names) = typed("scenarios") {
+        scenarios.restore(&names);
+    }
     // An engine carried from the Fuzzy rules page (`engine=`, as Simulate's URL holds it).
-    let engine = RwSignal::new(
-        query_params(&window().location().hash().unwrap_or_default())
-            .into_iter()
-            .find(|(k, _)| k == "engine")
-            .map(|(_, v)| crate::control::fuzzy::fll::from_url_text(&v)),
-    );
+    let engine = RwSignal::new(typed("engine").map(|v| fll::from_url_text(&v)));
     let rows = [ParamRow::new(kind, 0), ParamRow::new(kind, 1)];
-    let second_on = RwSignal::new(true);
+    for (i, row) in rows.iter().enumerate() {
+        row.restore(kind.get_untracked(), i, &query);
+    }
+    let second_on = RwSignal::new(typed("second").as_deref() != Some("0"));
     Effect::new(move |previous: Option<ControllerKind>| {
         let k = kind.get();
         if previous.is_some_and(|p| p != k) {
@@ -76,8 +88,32 @@ pub fn TunePage() -> impl IntoView {
         }
         k
     });
-    let mode = RwSignal::new("search".to_string());
-    let form = TableForm::<TuneSetting>::new(&[]);
+    let mode = RwSignal::new(
+        typed("method")
+            .filter(|m| m == "sweep")
+            .unwrap_or_else(|| "search".to_string()),
+    );
+    let form = TableForm::<TuneSetting>::new(&query);
+    // Everything settable in the address bar, so a reload or a shared link restores it.
+    Effect::new(move |_| {
+        let chosen: Vec<&str> = scenarios.chosen().iter().map(|p| p.name()).collect();
+        let mut pairs = vec![
+            ("controller".to_string(), kind_text.get()),
+            ("scenarios".to_string(), chosen.join(",")),
+        ];
+        for (i, row) in rows.iter().enumerate() {
+            pairs.extend(row.query(i));
+        }
+        if !second_on.get() {
+            pairs.push(("second".to_string(), "0".to_string()));
+        }
+        pairs.push(("method".to_string(), mode.get()));
+        pairs.extend(form.query());
+        if let Some(text) = engine.get() {
+            pairs.push(("engine".to_string(), fll::to_url_text(&text)));
+        }
+        replace_query(Page::Tune, &pairs);
+    });
     let errors = Memo::new(move |_| method_errors(form));
 
     let runner = Runner::<Tuned>::new();

@@ -93,6 +93,38 @@ impl ParamRow {
     }
 
     /// The range asked for, or the message of each bound (tracked).
+    /// Takes the row's key and bounds from a shared link's `p1`, `p1.from`, `p1.to` (row `index`
+    /// 0), where the key is one of `kind`'s parameters.
+    pub fn restore(&self, kind: ControllerKind, index: usize, query: &[(String, String)]) {
+        let name = format!("p{}", index + 1);
+        let typed = |key: &str| query.iter().find(|(k, _)| k == key).map(|(_, v)| v.clone());
+        let Some(key) = typed(&name).filter(|k| kind.params().iter().any(|p| p.key == k)) else {
+            return;
+        };
+        self.choose(kind, key);
+        for (setting, side) in [(TuneSetting::From, "from"), (TuneSetting::To, "to")] {
+            if let Some(text) = typed(&format!("{name}.{side}")) {
+                self.bounds.text(setting).set(text);
+            }
+        }
+    }
+
+    /// The row as a link's query pairs (see [`ParamRow::restore`]); tracked.
+    pub fn query(&self, index: usize) -> Vec<(String, String)> {
+        let name = format!("p{}", index + 1);
+        vec![
+            (name.clone(), self.key.get()),
+            (
+                format!("{name}.from"),
+                self.bounds.text(TuneSetting::From).get(),
+            ),
+            (
+                format!("{name}.to"),
+                self.bounds.text(TuneSetting::To).get(),
+            ),
+        ]
+    }
+
     pub fn parse(&self) -> Result<ParamRange, FieldErrors> {
         self.parsed.get()
     }

@@ -9,12 +9,13 @@ use crate::charts::pareto::trade_off_chart;
 use crate::charts::{Axis, HeatMap, Scale};
 use crate::control::fuzzy::fll;
 use crate::control::registry::ControllerConfig;
-use crate::input::readable;
+use crate::input::{readable, three_significant};
 use crate::plant::Preset;
 use crate::tuning::teach_in::TargetBasis;
 use crate::tuning::{ParamRange, TeachIn, Tuned};
 use crate::web::components::chart::ChartCanvas;
 use crate::web::components::heat_map::HeatMapCanvas;
+use crate::web::components::page::TableScroll;
 use crate::web::route::{hash_with_query, Page};
 
 /// The heat map of a two-parameter sweep's objective (`None` for anything else).
@@ -128,6 +129,7 @@ pub fn TeachInTable(
                 .chain(from_file.get())
                 .collect();
             (!list.is_empty()).then(|| view! {
+            <TableScroll label="Teach-in".to_string()>
             <table aria-label="Teach-in">
                 <caption>
                     "Proposed from what each teach cut measured; the paper's own target "
@@ -156,7 +158,7 @@ pub fn TeachInTable(
                         });
                         view! {
                             <tr>
-                                <th scope="row">{t.source.clone()}</th>
+                                <th scope="row">{scenario_title(&t)}</th>
                                 <td>{format!("{:.0}", t.learned.force_at_full_override_n)}</td>
                                 <td>{format!("{:.0}", p.target_n)}</td>
                                 <td>{basis_text(p.basis)}</td>
@@ -169,8 +171,39 @@ pub fn TeachInTable(
                     }).collect_view()}
                 </tbody>
             </table>
+            </TableScroll>
             })
         }}
+    }
+}
+
+/// Where a teach-in came from (a scenario's id, a calibration file), with the scenario's title.
+fn scenario_title(t: &TeachIn) -> String {
+    match t.preset.and_then(Preset::from_name) {
+        Some(p) => format!("{} ({})", t.source, p.label()),
+        None => t.source.clone(),
+    }
+}
+
+/// A tuned parameter as a person reads it: "K_p = 0.439 % per %" (its label, three significant
+/// digits, its unit); the key where the controller has no such parameter.
+fn param_text(controller: &ControllerConfig, key: &str, value: f64) -> String {
+    let spec = controller.kind().params().iter().find(|p| p.key == key);
+    let (label, unit) = spec.map_or((key, ""), |p| (p.label, p.unit));
+    let value = three_significant(value);
+    if unit.is_empty() {
+        format!("{label} = {value}")
+    } else {
+        format!("{label} = {value} {unit}")
+    }
+}
+
+/// A tuned parameter's column heading: "K_p (% per %)".
+fn param_heading(controller: &ControllerConfig, key: &str) -> String {
+    match controller.kind().params().iter().find(|p| p.key == key) {
+        Some(p) if !p.unit.is_empty() => format!("{} ({})", p.label, p.unit),
+        Some(p) => p.label.to_string(),
+        None => key.to_string(),
     }
 }
 
@@ -187,20 +220,22 @@ pub fn TuningResults(
             let map = sweep_map(&tuned, steps, &params);
             let best_href = simulate_href(preset, &k, &params, &best.values);
             let rows: Vec<_> = tuned.evaluations.iter().enumerate().map(|(i, e)| (i, e.clone(), tuned.pareto.contains(&i))).collect();
-            let headers = params.iter().map(|p| view! { <th scope="col">{p.key.clone()}</th> }).collect_view();
+            let headers = params.iter().map(|p| view! { <th scope="col">{param_heading(&k, &p.key)}</th> }).collect_view();
             Some(view! {
                 <p role="status">
                     {format!(
-                        "Best of {} evaluations{}: {}; objective {:.3}, cycle {:.1} s, force error {:.1} %. ",
+                        "Best of {} evaluations{}: {}; objective {}, cycle {} s, force error {} %. ",
                         tuned.evaluations.len(),
                         if tuned.converged { " (converged)" } else { "" },
                         params
                             .iter()
                             .zip(&best.values)
-                            .map(|(p, v)| format!("{} = {}", p.key, readable(*v)))
+                            .map(|(p, v)| param_text(&k, &p.key, *v))
                             .collect::<Vec<_>>()
                             .join(", "),
-                        best.cost, best.cycle_time_s, best.force_error_pct
+                        three_significant(best.cost),
+                        three_significant(best.cycle_time_s),
+                        three_significant(best.force_error_pct)
                     )}
                     <a href=best_href>"Open the best in Simulate"</a>
                 </p>
@@ -227,6 +262,7 @@ pub fn TuningResults(
                         <HeatMapCanvas label="Objective over the two parameters" map=Signal::derive(move || m.clone()) on_pick=pick />
                     }
                 })}
+                <TableScroll label="Evaluations".to_string()>
                 <table aria-label="Evaluations">
                     <caption>"Means over the chosen scenarios."</caption>
                     <thead><tr>
@@ -242,18 +278,19 @@ pub fn TuningResults(
                     <tbody>
                         {rows.into_iter().map(|(i, e, front)| view! {
                             <tr>
-                                {e.values.iter().map(|v| view! { <td>{readable(*v)}</td> }).collect_view()}
-                                <td>{format!("{:.3}", e.cost)}</td>
-                                <td>{format!("{:.1}", e.cycle_time_s)}</td>
-                                <td>{format!("{:.1}", e.force_error_pct)}</td>
-                                <td>{format!("{:.2}", e.time_above_limit_s)}</td>
-                                <td>{format!("{:.0}", e.override_activity_pct)}</td>
+                                {e.values.iter().map(|v| view! { <td>{three_significant(*v)}</td> }).collect_view()}
+                                <td>{three_significant(e.cost)}</td>
+                                <td>{three_significant(e.cycle_time_s)}</td>
+                                <td>{three_significant(e.force_error_pct)}</td>
+                                <td>{three_significant(e.time_above_limit_s)}</td>
+                                <td>{three_significant(e.override_activity_pct)}</td>
                                 <td>{if front { "yes" } else { "" }}</td>
                                 <td><a href=simulate_href(preset, &k, &params, &e.values)>{format!("Open {} in Simulate", i + 1)}</a></td>
                             </tr>
                         }).collect_view()}
                     </tbody>
                 </table>
+                </TableScroll>
             })
         }}
     }

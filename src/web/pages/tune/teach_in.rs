@@ -9,6 +9,7 @@ use crate::control::registry::ControllerKind;
 use crate::plant::Preset;
 use crate::tuning::teach_in::teach_in_calibration;
 use crate::tuning::{TeachIn, TeachInWork};
+use crate::web::components::help::HelpToggle;
 use crate::web::components::runner::Runner;
 use crate::web::js::read_chosen_file;
 
@@ -25,6 +26,23 @@ impl Scenarios {
                 .map(|&p| (p, RwSignal::new(p == Preset::ManeeratDoc1)))
                 .collect(),
         ))
+    }
+
+    /// Chooses exactly the presets a shared link names (`kim-step-doc,maneerat-doc-1`); unknown
+    /// names are passed over, and a list naming none changes nothing.
+    pub fn restore(&self, names: &str) {
+        let wanted: Vec<Preset> = names
+            .split(',')
+            .filter_map(|n| Preset::from_name(n.trim()))
+            .collect();
+        if wanted.is_empty() {
+            return;
+        }
+        self.0.with_value(|c| {
+            for (p, on) in c {
+                on.set(wanted.contains(p));
+            }
+        });
     }
 
     /// The chosen presets (tracked).
@@ -58,7 +76,8 @@ pub fn ScenariosPanel(scenarios: Scenarios) -> impl IntoView {
                                 prop:checked=move || on.get()
                                 on:change=move |ev| on.set(event_target_checked(&ev))
                             />
-                            <label for=id>{p.name()}</label>
+                            <label for=id>{format!("{} ({})", p.label(), p.name())}</label>
+                            <HelpToggle subject=p.label().to_string() help=p.source() />
                         </div>
                     }
                 })
