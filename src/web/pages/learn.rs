@@ -59,11 +59,14 @@ const LESSONS: &[PathStep] = &[
         ],
         equations: &[
             (
-                "Feed-drive torque balance (paper 000, eq 3)",
+                "Feed-drive torque balance (paper 000, eq 3): T_m is the motor torque, L₀ the \
+                 ball screw's lead, η the screw's efficiency (η₀ its preload's), F₀ the guides' \
+                 friction, F_p0 the screw's preload and F_c the cutting force along the axis",
                 r#"<math display="block"><msub><mi>T</mi><mi>m</mi></msub><mo>=</mo><mfrac><msub><mi>L</mi><mn>0</mn></msub><mrow><mn>2</mn><mi>π</mi><mi>η</mi></mrow></mfrac><mrow><mo>[</mo><msub><mi>F</mi><mn>0</mn></msub><mo>+</mo><msub><mi>F</mi><mrow><mi>p</mi><mn>0</mn></mrow></msub><mo>(</mo><mn>1</mn><mo>−</mo><msubsup><mi>η</mi><mn>0</mn><mn>2</mn></msubsup><mo>)</mo><mo>+</mo><msub><mi>F</mi><mi>c</mi></msub><mo>]</mo></mrow></math>"#,
             ),
             (
-                "PMSM torque with i_d = 0 (paper 000, eq 8)",
+                "PMSM torque with i_d = 0 (paper 000, eq 8): p is the motor's pole pairs, λ_m the \
+                 magnets' flux linkage and i_q the torque-producing (q-axis) current",
                 r#"<math display="block"><msub><mi>T</mi><mi>m</mi></msub><mo>=</mo><mfrac><mn>3</mn><mn>2</mn></mfrac><mi>p</mi><msub><mi>λ</mi><mi>m</mi></msub><msub><mi>i</mi><mi>q</mi></msub></math>"#,
             ),
         ],
@@ -87,7 +90,8 @@ const LESSONS: &[PathStep] = &[
              map it to the peak cutting force with a straight line calibrated in a teach cut.",
         ],
         equations: &[(
-            "Three-phase RMS current (paper 003, eq 7)",
+            "Three-phase RMS current (paper 003, eq 7): I_u, I_v and I_w are the filtered \
+             currents of the motor's three phases at one instant",
             r#"<math display="block"><msub><mi>I</mi><mi>rms</mi></msub><mo>=</mo><msqrt><mrow><mo>(</mo><msubsup><mi>I</mi><mi>u</mi><mn>2</mn></msubsup><mo>+</mo><msubsup><mi>I</mi><mi>v</mi><mn>2</mn></msubsup><mo>+</mo><msubsup><mi>I</mi><mi>w</mi><mn>2</mn></msubsup><mo>)</mo><mo>/</mo><mn>3</mn></mrow></msqrt></math>"#,
         )],
         try_it: &[
@@ -116,11 +120,15 @@ const LESSONS: &[PathStep] = &[
         ],
         equations: &[
             (
-                "Martelotti's chip-thickness force model (paper 003, eq 1–3)",
+                "Martelotti's chip-thickness force model (paper 003, eq 1–3): F_T and F_R are one \
+                 tooth's tangential and radial forces, K_T the material's specific cutting \
+                 pressure, a the depth of cut, S_f the feed per tooth, φ the tooth's angle, r the \
+                 radial-to-tangential ratio, R the cutter's radius and T_c the cutting torque",
                 r#"<math display="block"><msub><mi>F</mi><mi>T</mi></msub><mo>=</mo><msub><mi>K</mi><mi>T</mi></msub><mi>a</mi><msub><mi>S</mi><mi>f</mi></msub><mi>sin</mi><mi>φ</mi><mo>,</mo><mspace width="1em"/><msub><mi>F</mi><mi>R</mi></msub><mo>=</mo><mi>r</mi><msub><mi>F</mi><mi>T</mi></msub><mo>,</mo><mspace width="1em"/><msub><mi>T</mi><mi>c</mi></msub><mo>=</mo><mi>R</mi><msub><mi>F</mi><mi>T</mi></msub></math>"#,
             ),
             (
-                "Peak force from peak torque (paper 003, eq 6)",
+                "Peak force from peak torque (paper 003, eq 6): the largest resultant force \
+                 F_c,max follows from the largest cutting torque T_c,max, with r and R as above",
                 r#"<math display="block"><msub><mi>F</mi><mrow><mi>c</mi><mo>,</mo><mi>max</mi></mrow></msub><mo>=</mo><mfrac><msqrt><mrow><mn>1</mn><mo>+</mo><msup><mi>r</mi><mn>2</mn></msup></mrow></msqrt><mi>R</mi></mfrac><msub><mi>T</mi><mrow><mi>c</mi><mo>,</mo><mi>max</mi></mrow></msub></math>"#,
             ),
         ],
@@ -190,7 +198,11 @@ const LESSONS: &[PathStep] = &[
                 r#"<math display="block"><mtable columnalign="left"><mtr><mtd><mi>e</mi><mo>(</mo><mi>i</mi><mo>)</mo><mo>=</mo><mfrac><mrow><msub><mi>F</mi><mi>t</mi></msub><mo>−</mo><mi>F</mi><mo>(</mo><mi>i</mi><mo>)</mo></mrow><msub><mi>F</mi><mi>t</mi></msub></mfrac><mo>,</mo><mspace width="1em"/><msub><mi>u</mi><mi>req</mi></msub><mo>(</mo><mi>i</mi><mo>)</mo><mo>=</mo><msub><mi>u</mi><mn>0</mn></msub><mo>+</mo><msub><mi>K</mi><mi>p</mi></msub><mo>·</mo><mn>100</mn><mo>·</mo><mi>e</mi><mo>(</mo><mi>i</mi><mo>)</mo><mo>+</mo><mi>I</mi><mo>(</mo><mi>i</mi><mo>)</mo><mo>,</mo></mtd></mtr><mtr><mtd><mi>I</mi><mo>(</mo><mi>i</mi><mo>)</mo><mo>=</mo><mi>I</mi><mo>(</mo><mi>i</mi><mo>−</mo><mn>1</mn><mo>)</mo><mo>+</mo><mi>T</mi><mrow><mo>[</mo><msub><mi>K</mi><mi>i</mi></msub><mo>·</mo><mn>100</mn><mo>·</mo><mi>e</mi><mo>(</mo><mi>i</mi><mo>)</mo><mo>+</mo><mfrac><mrow><msub><mi>u</mi><mi>a</mi></msub><mo>(</mo><mi>i</mi><mo>)</mo><mo>−</mo><msub><mi>u</mi><mi>req</mi></msub><mo>(</mo><mi>i</mi><mo>−</mo><mn>1</mn><mo>)</mo></mrow><msub><mi>T</mi><mi>t</mi></msub></mfrac><mo>]</mo></mrow></mtd></mtr></mtable></math>"#,
             ),
             (
-                "Sliding variable and adaptive law (paper 001, eq 5)",
+                "Sliding variable and adaptive law (paper 001, eq 5): F̃ is the force error, λ \
+                 how fast the sliding variable E asks it to decay, f_r the commanded feed, F_d the \
+                 target force, K_d the PD gain, β̂ the estimate of the process's steady-state \
+                 coefficient β = d·c (how much feed a force takes), learned as the cut goes, and \
+                 γ₃ its learning rate",
                 r#"<math display="block"><mi>E</mi><mo>=</mo><mfrac><mrow><mi>d</mi><mover><mi>F</mi><mo>~</mo></mover></mrow><mrow><mi>d</mi><mi>t</mi></mrow></mfrac><mo>+</mo><mi>λ</mi><mover><mi>F</mi><mo>~</mo></mover><mo>,</mo><mspace width="1em"/><msub><mi>f</mi><mi>r</mi></msub><mo>=</mo><mover><mi>β</mi><mo>^</mo></mover><msub><mi>F</mi><mi>d</mi></msub><mo>−</mo><msub><mi>K</mi><mi>d</mi></msub><mi>E</mi><mo>,</mo><mspace width="1em"/><mover><mover><mi>β</mi><mo>^</mo></mover><mo>˙</mo></mover><mo>=</mo><mo>−</mo><msub><mi>γ</mi><mn>3</mn></msub><msub><mi>F</mi><mi>d</mi></msub><mi>E</mi></math>"#,
             ),
         ],
