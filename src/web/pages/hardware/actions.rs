@@ -174,7 +174,7 @@ pub fn ControlActions(shared: HardwareState) -> impl IntoView {
                     <p class="hint">"Disarm or Escape returns the override to the safe value at once."</p>
                     {c.uncommissioned.clone().map(|id| view! {
                         <fieldset class="commissioning">
-                            <legend>{format!("First arming of {id}: the commissioning checks (docs/hardware.md §10)")}</legend>
+                            <legend>{format!("First arming of {id}: the commissioning checks (the hardware guide, §10)")}</legend>
                             {CHECKS.iter().enumerate().map(|(i, check)| view! {
                                 <label class="check">
                                     <input

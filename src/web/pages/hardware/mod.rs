@@ -203,8 +203,8 @@ fn reduce_only(scenario: ScenarioForm, ui: Ui) {
         max.set(format!("{REDUCE_ONLY_MAX_OVERRIDE_PCT}"));
         ui.message.set(Some(format!(
             "A real port: reduce-only limits, the highest override set to \
-             {REDUCE_ONLY_MAX_OVERRIDE_PCT} % (raise it only after the commissioning checks, \
-             docs/hardware.md §10)."
+             {REDUCE_ONLY_MAX_OVERRIDE_PCT} % (raise it only after the commissioning checks in \
+             the hardware guide, §10)."
         )));
     }
 }
@@ -268,13 +268,11 @@ pub fn HardwarePage() -> impl IntoView {
     view! {
         <PageShell id="hardware" title="Hardware: a machine over the serial line" class="hardware">
             <p class="lede">
-                "Connect the bridge on a real machine (Hall sensors in, feed override out; "
-                <code>"docs/hardware.md"</code>
-                " says how to build and wire one) over WebSerial, or start the virtual device: the "
-                "simulated machine running in "
-                "this page behind the same protocol bytes, with the same fault switches as "
-                <code>"cutlab device"</code>
-                ". The teach cut and the closed loop are the ones Simulate runs; everything "
+                "Connect the bridge on a real machine (Hall sensors in, feed override out; the "
+                "project's hardware guide says how to build and wire one) over WebSerial, or start "
+                "the virtual device: the simulated machine running in this page behind the same "
+                "protocol bytes, with the same fault switches as the command line's device "
+                "emulator. The teach cut and the closed loop are the ones Simulate runs; everything "
                 "received is recorded as it streams."
             </p>
             {no_serial.map(|why| view! { <NoSerial why=why /> })}

@@ -133,7 +133,7 @@ pub fn Recordings(ui: Ui, station: StationRef) -> impl IntoView {
             <p class="hint">
                 "Every sample received, written to this browser's storage (IndexedDB) every half "
                 "second while it streams: a reload or a crash loses at most that. CSV for the Logs "
-                "page and " <code>"cutlab log inspect"</code> "."
+                "page and the command line's log inspector."
             </p>
             {move || ui.store_error.get().map(|e| view! { <p class="run-error" role="alert">{e}</p> })}
             {move || {
