@@ -28,7 +28,7 @@ async function waitForResult(page) {
 test('a run shows force, current, override, feed, depth and wall-error charts, metrics and events', async () => {
   const { page, problems, context } = await openLab(browser, server.url, '#/simulate?preset=maneerat-doc-1&controller=pi');
   const table = await waitForResult(page);
-  for (const name of ['Cutting force', 'Motor current', 'Feed override', 'Feed rate', 'Depth of cut', 'Wall error']) {
+  for (const name of ['Cutting force', 'Spindle current', 'Feed-axis current', 'Feed override', 'Feed rate', 'Depth of cut', 'Wall error']) {
     await page.getByRole('img', { name }).waitFor();
   }
   const cycle = await table.getByRole('row', { name: /Cycle time/ }).textContent();
@@ -171,7 +171,7 @@ test('a chart zooms with the wheel and the keyboard, resets, and toggles series'
   await waitForRedraw(force, before);
   // Linked axes: every chart offers the reset now.
   const resets = page.getByRole('button', { name: 'Reset zoom' });
-  assert.equal(await resets.count(), 6);
+  assert.equal(await resets.count(), 7);
   // Dragging pans the zoomed view, and the linked charts pan with it.
   const depth = page.getByRole('img', { name: 'Depth of cut' });
   const depthBefore = await canvasPixels(depth);

@@ -32,13 +32,16 @@ fn time_chart(y_label: &str) -> LineChart {
     LineChart::new(Axis::linear("time (s)"), Axis::linear(y_label))
 }
 
-/// The charts of one or more runs: force, current, override, feed, depth and the wall's
-/// force-induced error. With one run every signal of it is drawn; with several, the main signal
-/// of each run is overlaid. `before`, an earlier run of the same scenario, is drawn faint behind
+/// The charts of one or more runs: force, spindle current, feed-axis current, override, feed,
+/// depth and the wall's force-induced error. With one run every signal of it is drawn; with
+/// several, the main signal of each run is overlaid (the feed axis's current, a single run's
+/// detail, is drawn for one run only). The feed axis's current (about 1 A) has a chart of its own:
+/// beside the spindle's tens of amperes it would be a flat line. `before`, an earlier run of the same scenario, is drawn faint behind
 /// a single run's main signals ([`Series::before`]), so an edit's effect shows at a glance.
-pub fn run_charts(runs: &[NamedRun], before: Option<&RunResult>) -> [LineChart; 6] {
+pub fn run_charts(runs: &[NamedRun], before: Option<&RunResult>) -> [LineChart; 7] {
     let mut force = time_chart("force (N)");
-    let mut current = time_chart("current (A)");
+    let mut current = time_chart("spindle current (A)");
+    let mut feed_current = time_chart("feed-axis current (A)");
     let mut override_pct = time_chart("feed override (%)");
     let mut feed = time_chart("feed (mm/min)");
     let mut depth = time_chart("depth of cut (mm)");
@@ -86,17 +89,17 @@ pub fn run_charts(runs: &[NamedRun], before: Option<&RunResult>) -> [LineChart; 
                 PALETTE[0],
                 series_of(run, |r| r.spindle_current_rms_a),
             ));
-            current.series.push(Series::new(
+            feed_current.series.push(Series::new(
                 "feed RMS",
                 PALETTE[2],
                 series_of(run, |r| r.feed_current_rms_a),
             ));
-            current.series.push(Series::new(
+            feed_current.series.push(Series::new(
                 "feed i_u max (raw)",
                 PALETTE[3],
                 series_of(run, |r| r.feed_current_u_max_a),
             ));
-            current.series.push(Series::new(
+            feed_current.series.push(Series::new(
                 "feed i_u min (raw)",
                 PALETTE[6],
                 series_of(run, |r| r.feed_current_u_min_a),
@@ -213,7 +216,15 @@ pub fn run_charts(runs: &[NamedRun], before: Option<&RunResult>) -> [LineChart; 
                 .push(Series::new(what, PALETTE[0], points).before());
         }
     }
-    let mut charts = [force, current, override_pct, feed, depth, wall];
+    let mut charts = [
+        force,
+        current,
+        feed_current,
+        override_pct,
+        feed,
+        depth,
+        wall,
+    ];
     for c in &mut charts {
         c.fit();
         // One time axis for every chart, whichever run lasted longest.
@@ -240,6 +251,7 @@ pub fn RunCharts(
         runs.with(|r| run_charts(r, earlier.as_deref()))
     });
     let chart = move |i: usize| Signal::derive(move || charts.with(|c| c[i].clone()));
+    let single = move || runs.with(|r| r.len() == 1);
     let wall_known = move || {
         runs.with(|r| {
             r.iter().any(|(_, run)| {
@@ -264,12 +276,15 @@ pub fn RunCharts(
     view! {
         <div class="charts" data-trace-rows=rows_drawn>
             <ChartCanvas label="Cutting force" chart=chart(0) height_px=240 x_view=x_view />
-            <ChartCanvas label="Motor current" chart=chart(1) height_px=190 x_view=x_view />
-            <ChartCanvas label="Feed override" chart=chart(2) height_px=170 x_view=x_view />
-            <ChartCanvas label="Feed rate" chart=chart(3) height_px=170 x_view=x_view />
-            <ChartCanvas label="Depth of cut" chart=chart(4) height_px=140 x_view=x_view />
+            <ChartCanvas label="Spindle current" chart=chart(1) height_px=170 x_view=x_view />
+            <Show when=single>
+                <ChartCanvas label="Feed-axis current" chart=chart(2) height_px=150 x_view=x_view />
+            </Show>
+            <ChartCanvas label="Feed override" chart=chart(3) height_px=170 x_view=x_view />
+            <ChartCanvas label="Feed rate" chart=chart(4) height_px=170 x_view=x_view />
+            <ChartCanvas label="Depth of cut" chart=chart(5) height_px=140 x_view=x_view />
             <Show when=wall_known>
-                <ChartCanvas label="Wall error" chart=chart(5) height_px=170 x_view=x_view />
+                <ChartCanvas label="Wall error" chart=chart(6) height_px=170 x_view=x_view />
             </Show>
         </div>
     }
