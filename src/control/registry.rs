@@ -238,7 +238,7 @@ impl ControllerKind {
             ControllerKind::FuzzyExperience => {
                 "Liu, Wang, Wang (paper 002), §4; MacVicar-Whelan rule table"
             }
-            ControllerKind::FuzzyDynamics => "Liu, Wang, Wang (paper 002), §4, Table 4 (repaired)",
+            ControllerKind::FuzzyDynamics => "Liu, Wang, Wang (paper 002), §4, Table 4, repaired where the printed table is damaged",
             ControllerKind::FuzzyEngine => {
                 "your FLL or FIS engine (first input E, second EC, one output U) under paper \
                  002's law, §4; paper 002's dynamics table until you import one"

@@ -26,6 +26,34 @@ use super::FuzzyError;
 /// The seven linguistic levels, NB = −3 … PB = +3.
 pub const LEVEL_NAMES: [&str; 7] = ["NB", "NM", "NS", "ZO", "PS", "PM", "PB"];
 
+/// What each of [`LEVEL_NAMES`] stands for, in words.
+pub const LEVEL_MEANINGS: [&str; 7] = [
+    "negative big",
+    "negative medium",
+    "negative small",
+    "zero",
+    "positive small",
+    "positive medium",
+    "positive big",
+];
+
+/// The levels written out, for a reader who has not met the abbreviations:
+/// "NB negative big, NM negative medium, …, PB positive big".
+///
+/// ```
+/// let legend = cutlab::control::fuzzy::rules::level_legend();
+/// assert!(legend.starts_with("NB negative big, NM negative medium"));
+/// assert!(legend.ends_with("PB positive big"));
+/// ```
+pub fn level_legend() -> String {
+    LEVEL_NAMES
+        .iter()
+        .zip(LEVEL_MEANINGS)
+        .map(|(name, meaning)| format!("{name} {meaning}"))
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
 /// A 7×7 table: `table[e][ec]` is the output level (−3…3) for E level `e − 3` and EC level
 /// `ec − 3`.
 pub type RuleTable = [[i8; 7]; 7];

@@ -120,6 +120,7 @@ pub fn RuleTablePanel(fuzzy: Fuzzy) -> impl IntoView {
                 }
                 .into_any(),
                 Source::Table => view! {
+                    <p class="hint">{format!("Levels: {}.", crate::control::fuzzy::rules::level_legend())}</p>
                     <div class="rule-table-wrap">
                     <table class="rule-table" aria-label="Rule table: output U for each E (rows) and EC (columns)">
                         <thead>
