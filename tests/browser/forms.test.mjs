@@ -25,6 +25,12 @@ test('Simulate: blank fields show the preset\'s values, units once, the full tit
     assert.equal(await field.inputValue(), '', `${label} is blank`);
     assert.equal(await field.getAttribute('placeholder'), value, `${label}'s placeholder`);
   }
+  // A drop-down left at the preset's choice names the choice it stands for.
+  const material = form.getByRole('combobox', { name: 'Work material' });
+  assert.equal(await material.inputValue(), '');
+  assert.equal(await material.locator('option:checked').textContent(), "The preset's: SM45C / AISI 1045 steel");
+  const feedback = form.getByRole('combobox', { name: 'Force measured from' });
+  assert.equal(await feedback.locator('option:checked').textContent(), "The preset's: Spindle current (paper 003)");
   const labels = await form.locator('label').allTextContents();
   assert.ok(labels.includes('Teeth'), `labels: ${labels.join(' | ')}`);
   for (const text of labels) assert.doesNotMatch(text, /\(teeth\)|× \(×\)/, text);

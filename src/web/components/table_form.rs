@@ -8,7 +8,7 @@ use std::collections::BTreeMap;
 use leptos::prelude::*;
 
 use crate::input::table::{Kind, Table};
-use crate::web::components::fields::{NumberField, SelectField};
+use crate::web::components::fields::{ChoiceField, NumberField};
 
 /// The messages of a form's fields, by row key.
 pub type FieldErrors = BTreeMap<&'static str, String>;
@@ -129,10 +129,30 @@ pub fn SettingField<S: Table + Send + Sync>(
     let value = form.text(setting);
     let error = Signal::derive(move || errors.with(|e| e.get(row.key).cloned()));
     match row.kind {
-        Kind::Choice => view! {
-            <SelectField id=id label=row.label options=setting.choices() value=value error=error hidden=hidden help=row.help />
+        Kind::Choice => {
+            // The blank option ("The preset's") names the choice it stands for, as a text
+            // field's placeholder shows the value a blank field runs with.
+            let choices = setting.choices();
+            let options = Signal::derive(move || {
+                let in_use = placeholder.get().and_then(|value| {
+                    choices
+                        .iter()
+                        .find(|(v, _)| !v.is_empty() && *v == value)
+                        .map(|(_, text)| *text)
+                });
+                choices
+                    .iter()
+                    .map(|&(v, text)| match in_use {
+                        Some(used) if v.is_empty() => (String::new(), format!("{text}: {used}")),
+                        _ => (v.to_string(), text.to_string()),
+                    })
+                    .collect::<Vec<_>>()
+            });
+            view! {
+                <ChoiceField id=id label=row.label options=options value=value error=Some(error) hidden=hidden help=row.help />
+            }
+            .into_any()
         }
-        .into_any(),
         Kind::Number { .. } | Kind::Count { .. } | Kind::Seed => {
             let step = if matches!(row.kind, Kind::Number { .. }) {
                 "any"
