@@ -5,6 +5,7 @@
 //! above the force limit, which the table says with [`not_best_note`]).
 
 use super::lab::RunResult;
+use crate::input::three_significant;
 use crate::plant::presets::ProgramLength;
 
 /// Which way is better for a metric.
@@ -334,21 +335,27 @@ pub const METRIC_ROWS: [MetricRow; 22] = [
     .within(0.01, 0.0).missing(Missing::Removal),
 ];
 
-/// A metric as the browser's table shows it: whole numbers and values from 100 up without
-/// decimals, others with two. The papers' findings quote figures in the same form, so a reader
-/// finds them in the table.
+/// A metric as the browser's table shows it: a whole number (a count, an exact time) as it is,
+/// anything else to three significant digits, its meaning (issue 30: "76.04 s" reads as "76 s",
+/// and a 0.1 s difference in a 76 s cycle is not one a person acts on). The exports (CSV, JSON)
+/// keep every digit for a user who wants more. The papers' findings quote figures in the same
+/// form, so a reader finds them in the table.
 ///
 /// ```
 /// use cutlab::closed_loop::summary::format_metric;
 /// assert_eq!(format_metric(5.0), "5");
-/// assert_eq!(format_metric(16.54), "16.54");
+/// assert_eq!(format_metric(1234.0), "1234");
+/// assert_eq!(format_metric(16.54), "16.5");
 /// assert_eq!(format_metric(844.6), "845");
+/// assert_eq!(format_metric(2482.49), "2480");
+/// assert_eq!(format_metric(-32.42), "-32.4");
+/// assert_eq!(format_metric(0.66), "0.66");
 /// ```
 pub fn format_metric(v: f64) -> String {
-    if v.fract() == 0.0 || v.abs() >= 100.0 {
+    if v.fract() == 0.0 && v.abs() < 1e6 {
         format!("{v:.0}")
     } else {
-        format!("{v:.2}")
+        three_significant(v)
     }
 }
 

@@ -87,6 +87,19 @@ test('a sweep of two parameters fills a table, a heat map and a Pareto chart, an
     await page.getByRole('button', { name: series, exact: true }).waitFor();
   }
   await screenshot(page, 'tune-sweep');
+  // A field that no longer validates marks the tuning shown as stale, announced, until fixed.
+  const banner = page.getByRole('status').filter({ hasText: 'These results are from the last valid settings' });
+  assert.equal(await banner.count(), 0);
+  await page.getByLabel('Values per parameter').fill('abc');
+  await banner.waitFor();
+  assert.equal(await page.locator('.results.stale').count(), 1);
+  await page.getByLabel('Values per parameter').fill('2');
+  await banner.waitFor({ state: 'detached' });
+  const from = await page.getByLabel('Parameter 1 from').inputValue();
+  await page.getByLabel('Parameter 1 from').fill('-');
+  await banner.waitFor();
+  await page.getByLabel('Parameter 1 from').fill(from);
+  await banner.waitFor({ state: 'detached' });
   // Every evaluation opens in Simulate, and so does a cell picked on the map (keyboard here).
   assert.equal(await table.getByRole('link', { name: /^Open [1-4] in Simulate$/ }).count(), 4);
   await page.getByRole('img', { name: /Objective over the two parameters/ }).press('Enter');

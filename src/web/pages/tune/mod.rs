@@ -35,6 +35,7 @@ use crate::tuning::nelder_mead::NelderMead;
 use crate::tuning::settings::{parse_objective, TuneSetting};
 use crate::tuning::{ParamRange, TeachIn, Tuned, TuningMode, TuningPlan, TuningProblem};
 use crate::web::components::page::PageShell;
+use crate::web::components::run_view::StaleNotice;
 use crate::web::components::runner::{RunProgress, Runner};
 use crate::web::components::table_form::TableForm;
 use crate::web::route::{query_params, replace_query, Page};
@@ -115,6 +116,12 @@ pub fn TunePage() -> impl IntoView {
         replace_query(Page::Tune, &pairs);
     });
     let errors = Memo::new(move |_| method_errors(form));
+    // A field that no longer validates leaves the results shown from settings the form does not
+    // hold: they are marked stale (as Simulate's and Compare's are) until the next run.
+    let fields_invalid = Memo::new(move |_| {
+        let count = if second_on.get() { 2 } else { 1 };
+        !errors.get().is_empty() || rows[..count].iter().any(|row| row.parse().is_err())
+    });
 
     let runner = Runner::<Tuned>::new();
     let teach_runner = Runner::<Vec<TeachIn>>::new();
@@ -214,6 +221,9 @@ pub fn TunePage() -> impl IntoView {
         }
     };
 
+    let tuned = runner.finished();
+    let stale = Signal::derive(move || fields_invalid.get() && tuned.with(Option::is_some));
+
     view! {
         <PageShell id="tune" title="Tune a controller">
             <p class="lede">
@@ -233,11 +243,14 @@ pub fn TunePage() -> impl IntoView {
                     </div>
                     {move || form_error.get().map(|e| view! { <p class="run-error" role="alert">{e}</p> })}
                 </form>
-                <div class="results">
+                <div class="results" class:stale=stale>
                     <RunProgress runner=teach_runner.clone() id="teach-progress" failure="The teach-in could not be made" />
                     <TeachInTable taught=teach_runner.finished() from_file=from_file />
                     <RunProgress runner=runner.clone() id="tune-progress" failure="The tuning could not be made" />
-                    <TuningResults tuned=runner.finished() asked=asked />
+                    <StaleNotice stale=stale />
+                    <div class="tuning-results">
+                        <TuningResults tuned=tuned asked=asked />
+                    </div>
                 </div>
             </div>
         </PageShell>
