@@ -100,7 +100,7 @@ pub fn run(args: LearnArgs, io: &mut Io<'_>) -> Result<(), CliError> {
         material,
         from_force,
         from_estimate,
-        mechanistic,
+        mechanistic: _,
     } = &learning;
     let material = *material;
     if args.json {
@@ -133,28 +133,13 @@ pub fn run(args: LearnArgs, io: &mut Io<'_>) -> Result<(), CliError> {
     );
     for (learned_force, learned_estimate) in from_force.learned.iter().zip(&from_estimate.learned) {
         let input = learned_force.input;
-        let local = mechanistic
-            .iter()
-            .find(|(i, _, _)| *i == input)
-            .map(|&(_, lo, hi)| {
-                if (hi - lo).abs() < 0.005 {
-                    format!("{lo:.2}")
-                } else {
-                    format!("{lo:.2}–{hi:.2}")
-                }
-            });
+        let local = learning.mechanistic_text(input);
         let _ = writeln!(
             out,
             "{:<6} {:>16} {:>18} {:>10.2} {:>14}",
             input.symbol(),
-            format!(
-                "{:.2} ± {:.2}",
-                learned_force.exponent, learned_force.uncertainty
-            ),
-            format!(
-                "{:.2} ± {:.2}",
-                learned_estimate.exponent, learned_estimate.uncertainty
-            ),
+            learned_force.with_uncertainty(),
+            learned_estimate.with_uncertainty(),
             learned_force.published,
             local.unwrap_or_default()
         );

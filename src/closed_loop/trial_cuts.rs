@@ -163,6 +163,24 @@ pub struct PresetLearning {
     pub mechanistic: Vec<(PowerLawInput, f64, f64)>,
 }
 
+impl PresetLearning {
+    /// The mechanistic model's local exponent for `input` over the cuts, as `cutlab learn` and
+    /// the Machine page write it: one value where it hardly varies ("0.78"), else its range
+    /// ("0.71–0.86"); `None` for an input the network did not learn.
+    pub fn mechanistic_text(&self, input: PowerLawInput) -> Option<String> {
+        self.mechanistic
+            .iter()
+            .find(|(i, _, _)| *i == input)
+            .map(|&(_, lo, hi)| {
+                if (hi - lo).abs() < 0.005 {
+                    format!("{lo:.2}")
+                } else {
+                    format!("{lo:.2}–{hi:.2}")
+                }
+            })
+    }
+}
+
 /// Why a preset's network could not be learned.
 #[derive(Debug, Clone, PartialEq)]
 pub enum LearningError {

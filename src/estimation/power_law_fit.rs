@@ -58,6 +58,14 @@ pub struct LearnedExponent {
     pub published: f64,
 }
 
+impl LearnedExponent {
+    /// The exponent and its uncertainty as `cutlab learn` and the Machine page write them:
+    /// "0.78 ± 0.04".
+    pub fn with_uncertainty(&self) -> String {
+        format!("{:.2} ± {:.2}", self.exponent, self.uncertainty)
+    }
+}
+
 /// The network learned from a set of trial cuts.
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct LearnedPowerLaw {

@@ -15,11 +15,6 @@ use crate::web::components::paper_link::WithPaperLinks;
 use crate::web::components::pool::Answer;
 use crate::web::components::runner::{RunProgress, Runner};
 
-/// An exponent with its uncertainty, as the tables show it.
-fn exponent(value: f64, uncertainty: f64) -> String {
-    format!("{value:.2} ± {uncertainty:.2}")
-}
-
 /// The learned exponents beside the published and the mechanistic model's.
 fn exponents_table(learning: &PresetLearning) -> impl IntoView {
     let rows = learning
@@ -29,21 +24,13 @@ fn exponents_table(learning: &PresetLearning) -> impl IntoView {
         .zip(&learning.from_estimate.learned)
         .map(|(force, estimate)| {
             let mechanistic = learning
-                .mechanistic
-                .iter()
-                .find(|(input, _, _)| *input == force.input)
-                .map_or("—".to_string(), |&(_, lo, hi)| {
-                    if (hi - lo).abs() < 0.005 {
-                        format!("{lo:.2}")
-                    } else {
-                        format!("{lo:.2}–{hi:.2}")
-                    }
-                });
+                .mechanistic_text(force.input)
+                .unwrap_or_else(|| "—".to_string());
             view! {
                 <tr>
                     <th scope="row">{force.input.symbol()}</th>
-                    <td>{exponent(force.exponent, force.uncertainty)}</td>
-                    <td>{exponent(estimate.exponent, estimate.uncertainty)}</td>
+                    <td>{force.with_uncertainty()}</td>
+                    <td>{estimate.with_uncertainty()}</td>
                     <td>{format!("{:.2}", force.published)}</td>
                     <td>{mechanistic}</td>
                 </tr>
