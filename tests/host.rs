@@ -758,6 +758,61 @@ fn the_binary_runs_the_host_against_the_binary_device() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
+/// An engine file runs on the machine as in `cutlab sim`: `--fuzzy-engine` gives the
+/// fuzzy-engine controller its engine over the link, and is refused where no controller runs it.
+#[cfg(feature = "cli")]
+#[test]
+fn the_host_runs_an_imported_fuzzy_engine() {
+    let _one = ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner());
+    let exe = env!("CARGO_BIN_EXE_cutlab");
+    let dir = scratch("engine");
+    let engine_path = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/www/data/paper-002-experience.fll"
+    );
+    let engine_text = std::fs::read_to_string(engine_path).unwrap();
+    let device =
+        format!("{exe} device --stdio --scenario maneerat-doc-1 --time-scale 20 --watchdog-s 5");
+    let (out, report) = cutlab_host(
+        &dir,
+        &[
+            "--device-cmd",
+            &device,
+            "--controller",
+            "fuzzy-engine",
+            "--fuzzy-engine",
+            engine_path,
+            "--no-references",
+        ],
+    );
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{stderr}");
+    let report = report.unwrap();
+    assert_eq!(report["metrics"]["completed"], true, "{report}");
+    assert_eq!(report["controller"]["kind"], "fuzzy-engine", "{report}");
+    assert_eq!(
+        report["controller"]["engine"].as_str(),
+        Some(engine_text.as_str()),
+        "the report names the engine that ran"
+    );
+    // Given to a controller that does not run it, it is refused before anything connects.
+    let (out, _) = cutlab_host(
+        &dir,
+        &[
+            "--device-cmd",
+            &device,
+            "--controller",
+            "pi",
+            "--fuzzy-engine",
+            engine_path,
+        ],
+    );
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success());
+    assert!(stderr.contains("no controller runs it"), "{stderr}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
 /// A device command that answers Hello with `caps` (from a file, through `cutlab protocol
 /// encode`) and then says nothing more for a second.
 #[cfg(feature = "cli")]

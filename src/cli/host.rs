@@ -15,7 +15,9 @@ use std::time::{Duration, Instant};
 use serde::Serialize;
 
 use super::args::{required, value};
-use super::sim::{fail_on_controller_faults, metrics_table, EventLine, SimReport};
+use super::sim::{
+    check_engine_used, fail_on_controller_faults, metrics_table, EngineFile, EventLine, SimReport,
+};
 use super::{write_json, CliError, Io};
 use crate::closed_loop::calibration_file::CalibrationFile;
 use crate::closed_loop::definition::preset_controller;
@@ -65,6 +67,8 @@ pub struct HostArgs {
     /// Set a controller parameter (repeatable)
     #[arg(long, value_name = "KEY=VALUE", allow_hyphen_values = true)]
     set: Vec<String>,
+    #[arg(long = "fuzzy-engine", value_name = "FILE", help = super::sim::FUZZY_ENGINE_HELP)]
+    fuzzy_engine: Option<String>,
     /// The preset whose settings the run takes (default: the program the device names)
     #[arg(long, value_name = "NAME")]
     scenario: Option<String>,
@@ -354,6 +358,8 @@ fn connect(args: &HostArgs, options: HostOptions) -> Result<Connection, CliError
 /// The run's settings from the options, checked before anything is connected.
 struct HostPlan {
     kind: ControllerKind,
+    /// The engine a `fuzzy-engine` controller runs (`--fuzzy-engine`).
+    engine: Option<EngineFile>,
     target_n: Option<f64>,
     duration_s: Option<f64>,
     calibration: Option<CalibrationFile>,
@@ -364,8 +370,10 @@ fn plan(args: &HostArgs) -> Result<HostPlan, CliError> {
     let kind: ControllerKind = required::<String>("controller", &args.controller)?
         .parse()
         .map_err(|e| CliError::new(format!("--controller: {e}")))?;
+    let engine = EngineFile::read(args.fuzzy_engine.as_deref())?;
     // Checked now, applied once the preset (and its paper's parameters) is known.
-    controller_for(Preset::ALL[0], kind, &args.set)?;
+    let controller = controller_for(Preset::ALL[0], kind, &args.set, engine.as_ref())?;
+    check_engine_used(&engine, std::iter::once(&controller))?;
     let target_n: Option<f64> = value("target-n", &args.target_n)?;
     let duration_s: Option<f64> = value("duration-s", &args.duration_s)?;
     let link_timeout_s = link_timeout(args)?;
@@ -385,6 +393,7 @@ fn plan(args: &HostArgs) -> Result<HostPlan, CliError> {
         .transpose()?;
     Ok(HostPlan {
         kind,
+        engine,
         target_n,
         duration_s,
         calibration,
@@ -393,13 +402,18 @@ fn plan(args: &HostArgs) -> Result<HostPlan, CliError> {
 }
 
 /// `preset`'s controller of `kind` (the paper's parameters where it states them, as `cutlab sim`
-/// takes them) with the `--set` assignments.
+/// takes them) running `engine` if it is the fuzzy-engine controller, with the `--set`
+/// assignments.
 fn controller_for(
     preset: Preset,
     kind: ControllerKind,
     assignments: &[String],
+    engine: Option<&EngineFile>,
 ) -> Result<ControllerConfig, CliError> {
     let mut controller = preset_controller(preset, kind);
+    if let Some(engine) = engine {
+        engine.give_to(&mut controller)?;
+    }
     for assignment in assignments {
         controller
             .set_text(assignment)
@@ -443,7 +457,7 @@ fn host_run(args: &HostArgs, plan: HostPlan) -> Outcome {
             };
         }
     };
-    let controller = match controller_for(preset, plan.kind, &args.set) {
+    let controller = match controller_for(preset, plan.kind, &args.set, plan.engine.as_ref()) {
         Ok(c) => c,
         Err(e) => {
             drop(link);

@@ -139,7 +139,7 @@ impl EngineFile {
 
     /// Gives the engine to `config` if it is a `fuzzy-engine` controller; other controllers
     /// run their own laws.
-    fn give_to(&self, config: &mut ControllerConfig) -> Result<(), CliError> {
+    pub(crate) fn give_to(&self, config: &mut ControllerConfig) -> Result<(), CliError> {
         if config.kind() != ControllerKind::FuzzyEngine {
             return Ok(());
         }
