@@ -7,11 +7,12 @@
 //! | `ready` | — (the module is loaded: requests posted before this would be lost) |
 //! | `progress` | `job`, `stage`, `fraction` (about ten times a second) |
 //! | `chunk` | `job`, `run`, `rows`, `terms`, and with a run's first chunk `calibration`: the trace rows added since the last chunk ([`TraceChunk`]), about every `CHUNK_EVERY_MS` (20 ms) once the closed loop runs |
-//! | `done` | `job`, and for runs `runs`: one `{ header, rows, terms }` per spec ([`RunParts`]; `rows` and `terms` are `Float64Array`s, transferred); for references `references`, as JSON |
+//! | `done` | `job`, and for runs `runs`: one `{ header, rows, terms }` per spec ([`RunParts`]; `rows` and `terms` are `Float64Array`s, transferred); for references `references`, as JSON; for a bench or open-loop recording or teach cuts `json` and `arrays`, a list of `Float64Array`s, transferred (`cutlab::closed_loop::recording_jobs::Packed`) |
 //! | `failed` | `job`, `message` (shown to a person as is) |
 //!
-//! A request is `{ job, request }`, `request` being a [`JobRequest`] as JSON: closed-loop runs, or
-//! a scenario's fixed-feed references. The job is done in one go: the page cancels it by
+//! A request is `{ job, request }`, `request` being a [`JobRequest`] as JSON: closed-loop runs, a
+//! scenario's fixed-feed references, paper 004's learning, paper 000's bench recording (Signal
+//! chain), a preset's open-loop recording (Machine) or a teach-in's teach cuts (Tune). The job is done in one go: the page cancels it by
 //! terminating the worker.
 
 #[cfg(target_arch = "wasm32")]
@@ -26,6 +27,9 @@ fn main() {
 
 #[cfg(target_arch = "wasm32")]
 mod worker {
+    use cutlab::closed_loop::recording_jobs::{
+        pack_calibrations, pack_open_loop_recording, pack_phase_recording, Packed,
+    };
     use cutlab::closed_loop::transfer::{
         learning_to_json, references_to_json, JobRequest, LearningRequest, ReferenceRequest,
         RunParts, RunRequest, TraceChunk, TraceStream,
@@ -85,6 +89,17 @@ mod worker {
             JobRequest::Runs(request) => run_loops(scope, job, request),
             JobRequest::References(request) => find_references(scope, job, *request),
             JobRequest::Learning(request) => learn_network(scope, job, &request),
+            JobRequest::Bench(request) => {
+                let work = request.into_work()?;
+                answer_packed(scope, job, work, |r| pack_phase_recording(&r))
+            }
+            JobRequest::OpenLoop(request) => {
+                let work = request.into_work()?;
+                answer_packed(scope, job, work, |r| pack_open_loop_recording(&r))
+            }
+            JobRequest::TeachCuts(request) => {
+                answer_packed(scope, job, request.into_work(), |c| pack_calibrations(&c))
+            }
         }
     }
 
@@ -136,6 +151,35 @@ mod worker {
             }
         }
         work.finish().map_err(|e| e.to_string())
+    }
+
+    /// Does `work` (a recording, or teach cuts) posting its progress, and posts its output
+    /// `pack`ed: the lists of numbers transferred, not copied.
+    fn answer_packed<W: Work>(
+        scope: &DedicatedWorkerGlobalScope,
+        job: f64,
+        mut work: W,
+        pack: impl FnOnce(W::Output) -> Result<Packed, String>,
+    ) -> Result<(), String> {
+        let packed = pack(advance_to_end(scope, job, &mut work, |_, _| Ok(()))?)?;
+        let arrays = Array::new();
+        let transfer = Array::new();
+        for numbers in &packed.arrays {
+            let array = Float64Array::from(numbers.as_slice());
+            transfer.push(&array.buffer());
+            arrays.push(&array);
+        }
+        let fields = [
+            ("kind", "done".into()),
+            ("job", job.into()),
+            ("json", packed.json.into()),
+            ("arrays", arrays.into()),
+        ];
+        if post(scope, &fields, Some(&transfer)) {
+            Ok(())
+        } else {
+            Err("the worker could not send its answer".into())
+        }
     }
 
     /// Finds a scenario's references and posts them.

@@ -16,6 +16,7 @@
 //! | [`metrics`] | what a trace is judged by |
 //! | [`lab`] | runs on the papers' presets: teach cut then loop, in pieces; several runs in turn |
 //! | [`trial_cuts`] | trial cuts read from a run's depth sections, for paper 004's network |
+//! | [`recording_jobs`] | the other jobs a computation worker does: bench and open-loop recordings, packed as raw numbers, and a teach-in's teach cuts |
 //! | [`transfer`] | runs sent to a computation worker and back, bit for bit (the browser's worker pool) |
 //! | [`references`] | the fixed-feed reference runs the savings are measured against |
 //! | [`summary`] | the metrics as a table, and the best of several runs |
@@ -35,6 +36,7 @@ pub mod lab;
 pub mod metrics;
 pub mod paper_comparisons;
 pub mod precomputed;
+pub mod recording_jobs;
 pub mod references;
 pub mod run_table;
 pub mod sample_loop;

@@ -17,6 +17,7 @@ use super::error::LoopError;
 use super::feedback_loop::controller_for;
 use super::lab::{metrics_config, preset_plan, LabRuns, RunResult, TeachKey};
 use super::metrics::compute;
+use super::recording_jobs::{BenchRequest, OpenLoopRequest, TeachCutsRequest};
 use super::references::{ReferenceSearch, References};
 use super::settings::LoopSettings;
 use super::trace::{Trace, TraceRow};
@@ -38,6 +39,15 @@ pub enum JobRequest {
     /// Paper 004's network learned on a preset's trial cuts, answered by its
     /// [`PresetLearning`] ([`learning_to_json`]).
     Learning(LearningRequest),
+    /// Paper 000's bench recording (the Signal chain page), answered by its
+    /// [`crate::plant::recording::PhaseRecording`] packed ([`super::recording_jobs`]).
+    Bench(BenchRequest),
+    /// An open-loop recording of a preset's machine (the Machine page), answered by its
+    /// [`crate::plant::recording::OpenLoopRecording`] packed ([`super::recording_jobs`]).
+    OpenLoop(OpenLoopRequest),
+    /// The teach cuts of Tune's teach-in, answered by their calibrations
+    /// ([`super::recording_jobs`]).
+    TeachCuts(TeachCutsRequest),
 }
 
 /// The trial cuts to learn paper 004's network on: a preset's program at fixed feeds

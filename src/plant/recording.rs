@@ -15,7 +15,7 @@
 //! Both give the same output whatever budgets they are advanced by (a test checks it): a budget
 //! only says where the work may pause. Each takes the plant's samples as its units.
 
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 use std::fmt;
 
 use super::cnc::MAX_OVERRIDE_PCT;
@@ -83,7 +83,7 @@ pub struct LoadStep {
 }
 
 /// One brake-bench load step, summarised once it has ended.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct StepSummary {
     /// Brake torque during the step.
     pub brake_torque_nm: f64,

@@ -33,7 +33,7 @@ use crate::math;
 pub const TIME_STEP_TOLERANCE: f64 = 0.01;
 
 /// A tapering window for spectra (periodic form, as for FFT analysis).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
 pub enum Window {
     /// No taper: the sharpest peaks, the most leakage and up to 36 % amplitude error between bins.
     Rectangular,

@@ -41,7 +41,7 @@ use crate::estimation::estimator::Calibration;
 use crate::work::{parallel_map_reporting as parallel_map, Work};
 use nelder_mead::NelderMead;
 pub use objective::Objective;
-pub use teach_in::{teach_in, TeachIn, TeachInWork};
+pub use teach_in::{simulated_teach_in, teach_in, TeachIn};
 
 /// One parameter to tune and its bounds.
 #[derive(Debug, Clone, PartialEq, Serialize)]

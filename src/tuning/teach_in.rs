@@ -34,14 +34,11 @@ use super::TuningError;
 use crate::closed_loop::calibration_file::CalibrationFile;
 use crate::closed_loop::definition::RunSpec;
 use crate::closed_loop::lab::settled_settings;
-use crate::closed_loop::sample_loop::OnMachine;
 use crate::closed_loop::settings::{OperatingPoint, DEFAULT_TARGET_FRACTION};
-use crate::closed_loop::teach_cut::TeachCut;
 use crate::estimation::current_force::{FeedCurrentModel, Range, SpindleCurrentModel};
 use crate::estimation::cut_forces::CutGeometry;
 use crate::estimation::estimator::{Calibration, Estimator, Feedback};
 use crate::log::period_log::{calibrate_log, LogTable};
-use crate::work::{Progress, Work};
 
 /// The narrowest threshold gap a teach-in proposes, % of target.
 pub const MIN_PROPOSED_GAP_PCT: f64 = 5.0;
@@ -343,10 +340,20 @@ pub fn teach_in(spec: &RunSpec) -> Result<TeachIn, TuningError> {
             preset: spec.preset.name(),
             error,
         })?;
+    simulated_teach_in(spec, &calibration)
+}
+
+/// The teach-in of `spec` whose simulated teach cut gave `calibration`: what [`teach_in`]
+/// proposes, for a teach cut made elsewhere (the browser's computation workers make them,
+/// `closed_loop::recording_jobs::TeachCuts`).
+pub fn simulated_teach_in(
+    spec: &RunSpec,
+    calibration: &Calibration,
+) -> Result<TeachIn, TuningError> {
     teach_in_of(
         simulated_source(spec),
         Some(spec),
-        &calibration,
+        calibration,
         operating_point(spec),
     )
 }
@@ -502,75 +509,6 @@ pub fn teach_in_log(
         },
         notes,
     })
-}
-
-/// The simulated teach-ins of several scenarios done a piece at a time (for the browser).
-pub struct TeachInWork {
-    specs: Vec<RunSpec>,
-    current: Option<Box<OnMachine<TeachCut>>>,
-    taught: Vec<TeachIn>,
-}
-
-impl TeachInWork {
-    /// The teach-ins of `specs`, in order.
-    pub fn new(specs: Vec<RunSpec>) -> Self {
-        Self {
-            specs,
-            current: None,
-            taught: Vec::new(),
-        }
-    }
-}
-
-impl Work for TeachInWork {
-    type Output = Vec<TeachIn>;
-    type Error = TuningError;
-
-    fn advance(&mut self, periods: usize) -> Result<bool, TuningError> {
-        let Some(spec) = self.specs.get(self.taught.len()) else {
-            return Ok(true);
-        };
-        let failed = |error| TuningError::Run {
-            preset: spec.preset.name(),
-            error,
-        };
-        let teach = match &mut self.current {
-            Some(teach) => teach,
-            None => self.current.insert(Box::new(
-                crate::closed_loop::lab::teach_cut_work(spec).map_err(failed)?,
-            )),
-        };
-        if teach.advance(periods).map_err(failed)? {
-            let calibration = teach.finish().map_err(failed)?;
-            self.current = None;
-            self.taught.push(teach_in_of(
-                simulated_source(spec),
-                Some(spec),
-                &calibration,
-                operating_point(spec),
-            )?);
-        }
-        Ok(self.taught.len() >= self.specs.len())
-    }
-
-    fn progress(&self) -> Progress {
-        let total = self.specs.len().max(1);
-        let part = self.current.as_ref().map_or(0.0, |t| t.progress().fraction);
-        Progress::new(
-            format!(
-                "Teach cut {} of {total}",
-                (self.taught.len() + 1).min(total)
-            ),
-            (self.taught.len() as f64 + part) / total as f64,
-        )
-    }
-
-    fn finish(&mut self) -> Result<Vec<TeachIn>, TuningError> {
-        if self.taught.len() < self.specs.len() {
-            return Err(TuningError::Setup("the teach-in has not finished".into()));
-        }
-        Ok(std::mem::take(&mut self.taught))
-    }
 }
 
 #[cfg(test)]

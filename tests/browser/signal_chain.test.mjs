@@ -129,7 +129,7 @@ test('a link with invalid values shows them beside their fields and nothing brea
   await context.close();
 });
 
-test('the signal chain simulates the bench current in pieces, without freezing the page', async () => {
+test('the signal chain simulates the bench current in a worker, without freezing the page', async () => {
   const { page, problems, context } = await openLab(browser, server.url, '#/signal');
   // Long tasks (main-thread work over 50 ms), measured by the browser from the moment the page
   // is up, while it simulates 13 s of the brake bench and analyses it.

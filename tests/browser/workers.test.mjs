@@ -1,8 +1,10 @@
 // The computation workers (issue 28): Simulate's run and Compare's variants compute in Web Workers
 // built from the core alone, so the page's thread stays free; independent variants compute at once
 // on different workers; a run's trace streams back in pieces and its chart draws the start of the
-// cut before the run is done; the savings' reference runs compute in a worker too; Cancel terminates the worker at once; a run made in a worker equals the
-// native CLI's, byte for byte in the exported trace.
+// cut before the run is done; the savings' reference runs compute in a worker too; Cancel
+// terminates the worker at once; a run made in a worker equals the native CLI's, byte for byte in
+// the exported trace. The Signal chain page's bench recording, the Machine page's open-loop
+// recording, the Fuzzy rules page's run and Tune's teach cuts compute in a worker too.
 //
 // The pool publishes `data-workers` (its size) and `data-busy-workers` (the workers computing now)
 // on <html>; the tests wait on those and on what the page shows, never on time.
@@ -219,6 +221,85 @@ test('a worker that throws fails its run with the reason, is replaced, and the n
   await table.getByRole('row', { name: /Cycle time/ }).getByRole('cell').first().waitFor({ timeout: RUN_TIMEOUT });
   await page.getByRole('alert').filter({ hasText: /worker bug/ }).waitFor({ state: 'detached' });
   assert.ok(served >= 2, `${served} worker scripts served`);
+  assert.deepEqual(problems, []);
+  await context.close();
+});
+
+/**
+ * From now on, records the most workers computing at once (`window.cutlabMostBusy`), from every
+ * change of `data-busy-workers` (its value before and after, so a job that starts and ends
+ * between two callbacks still counts).
+ */
+async function recordBusyWorkers(page) {
+  await page.evaluate(() => {
+    window.cutlabMostBusy = 0;
+    new MutationObserver((records) => {
+      for (const r of records) {
+        const now = Number(r.target.getAttribute('data-busy-workers') ?? 0);
+        window.cutlabMostBusy = Math.max(window.cutlabMostBusy, Number(r.oldValue ?? 0), now);
+      }
+    }).observe(document.documentElement, { attributes: true, attributeOldValue: true, attributeFilter: ['data-busy-workers'] });
+  });
+}
+
+/** Goes to `hash` within the app (the page is not reloaded, so a recorder set up before stays). */
+async function goTo(page, hash) {
+  await page.evaluate((h) => { window.location.hash = h; }, hash);
+}
+
+/** Asserts a worker computed since `recordBusyWorkers`, and that none computes any more. */
+async function assertComputedInWorker(page, what) {
+  await waitForBusyWorkers(page, 0);
+  const most = await page.evaluate(() => window.cutlabMostBusy);
+  assert.ok(most >= 1, `${what}: no worker computed (most busy at once: ${most})`);
+  assert.ok(page.workers().length >= 1, `${what}: the pool started no worker`);
+}
+
+test("the Signal chain page's bench recording computes in a worker and its spectrum still shows", async () => {
+  // From the home page, which computes nothing, so any worker seen after is the bench's.
+  const { page, problems, context } = await openLab(browser, server.url, '#/');
+  await recordBusyWorkers(page);
+  await goTo(page, '#/signal');
+  await page.getByText(/Strongest peak of the raw current: 4\.\d\d Hz, \d\.\d{3} A\./).waitFor({ timeout: RUN_TIMEOUT });
+  await page.getByRole('img', { name: 'Amplitude spectrum of i_u' }).waitFor();
+  await assertComputedInWorker(page, 'the bench recording');
+  assert.deepEqual(problems, []);
+  await context.close();
+});
+
+test("the Machine page's recording computes in a worker and its charts still show", async () => {
+  const { page, problems, context } = await openLab(browser, server.url, '#/');
+  await recordBusyWorkers(page);
+  await goTo(page, '#/plant?preset=wang-brake-bench');
+  await page.getByRole('img', { name: 'RMS current against brake torque' }).waitFor({ timeout: RUN_TIMEOUT });
+  assert.match(await page.getByRole('status').filter({ hasText: 'RMS current =' }).textContent(), /over 21 load steps/);
+  await assertComputedInWorker(page, "the machine's recording");
+  // A new override records again, in a worker again.
+  await page.evaluate(() => { window.cutlabMostBusy = 0; });
+  await page.getByLabel('Feed override (%)').fill('80');
+  await page.waitForFunction(() => window.cutlabMostBusy >= 1, null, { timeout: RUN_TIMEOUT });
+  await page.getByRole('img', { name: 'RMS current against brake torque' }).waitFor({ timeout: RUN_TIMEOUT });
+  await assertComputedInWorker(page, "the machine's second recording");
+  assert.deepEqual(problems, []);
+  await context.close();
+});
+
+test("the Fuzzy rules page's run computes in a worker and its moment slider still shows", async () => {
+  const { page, problems, context } = await openLab(browser, server.url, '#/fuzzy');
+  await recordBusyWorkers(page);
+  await page.getByRole('button', { name: 'Run with this table' }).click();
+  await page.getByLabel(/Moment: \d+\.\d\d s/).waitFor({ timeout: RUN_TIMEOUT });
+  await assertComputedInWorker(page, 'the fuzzy run');
+  assert.deepEqual(problems, []);
+  await context.close();
+});
+
+test("Tune's teach cuts compute in a worker and the teach-in table still shows", async () => {
+  const { page, problems, context } = await openLab(browser, server.url, '#/tune');
+  await recordBusyWorkers(page);
+  await page.getByRole('button', { name: 'Teach-in' }).click();
+  await page.getByRole('table', { name: 'Teach-in' }).getByRole('row', { name: /maneerat-doc-1/ }).waitFor({ timeout: RUN_TIMEOUT });
+  await assertComputedInWorker(page, 'the teach cuts');
   assert.deepEqual(problems, []);
   await context.close();
 });

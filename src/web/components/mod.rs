@@ -14,8 +14,8 @@
 //! | [`savings`] | the savings rows of the metrics tables |
 //! | [`teach_cuts`], [`recent`] | the last teach cuts' calibrations and other recent answers, by key |
 //! | [`saved_calibrations`] | the calibrations saved in this browser |
-//! | [`runner`], [`work_job`] | long computations in slices of a task, and the job a page shares |
-//! | [`pool`] | the computation workers: closed-loop runs off the page's thread, one worker per core |
+//! | [`runner`], [`work_job`] | a job's status, progress and Cancel, in the workers or (the Logs page's) in slices of a task, and the job a page shares |
+//! | [`pool`] | the computation workers: runs, references, recordings and teach cuts off the page's thread, one worker per core |
 //! | [`later`] | a page mounted in pieces, and its own work after its mount (the reason, once) |
 //! | [`download`] | saving what the lab made as a file |
 

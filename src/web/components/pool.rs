@@ -1,15 +1,19 @@
-//! The computation workers: closed-loop runs and the savings' reference runs computed off the
-//! page's thread, one Web Worker per core the browser reports.
+//! The computation workers: the lab's long computations off the page's thread — closed-loop
+//! runs, the savings' reference runs, Tune's evaluations and teach cuts, paper 004's learning,
+//! the Signal chain page's bench recording and the Machine page's open-loop recording — one Web
+//! Worker per core the browser reports. (The Logs page's computations are still sliced on the
+//! page's thread by [`super::runner`].)
 //!
 //! Each worker instantiates the core-only module (`src/bin/cutlab-worker.rs`, no Leptos, no
 //! pages) and does one [`JobRequest`] at a time; jobs wait in one queue and each goes to the next
 //! free worker, so independent runs (a comparison's variants) compute at once on different
 //! cores. A job's progress, the pieces of its trace as they are computed ([`JobEvent::Chunk`])
-//! and its result reach the caller through its listener. The result is
-//! rebuilt on the page from what the worker sends ([`RunParts`]), equal bit for bit to a run
-//! made here. Cancelling a running job terminates its worker at once and starts a fresh one; a
-//! worker that throws fails its job with the browser's message and is replaced, so a caller
-//! never waits for an answer that will not come.
+//! and its result reach the caller through its listener. The result is rebuilt on the page from
+//! what the worker sends ([`RunParts`]; a recording's long lists of numbers as [`Packed`]
+//! `Float64Array`s, transferred), equal bit for bit to a computation made here. Cancelling a
+//! running job terminates its worker at once and starts a fresh one; a worker that throws fails
+//! its job with the browser's message and is replaced, so a caller never waits for an answer
+//! that will not come.
 //!
 //! The page's `<html>` element carries `data-busy-workers` (the workers computing now) and
 //! `data-workers` (the pool's size), for a person's devtools and the browser tests.
@@ -26,11 +30,16 @@ use web_sys::{ErrorEvent, MessageEvent, Worker};
 
 use crate::closed_loop::definition::RunSpec;
 use crate::closed_loop::lab::RunResult;
+use crate::closed_loop::recording_jobs::{
+    unpack_calibrations, unpack_open_loop_recording, unpack_phase_recording, Packed,
+};
 use crate::closed_loop::references::References;
 use crate::closed_loop::transfer::{
     learning_from_json, references_from_json, JobRequest, RunParts, TraceChunk,
 };
 use crate::closed_loop::trial_cuts::PresetLearning;
+use crate::plant::recording::{OpenLoopRecording, PhaseRecording};
+use crate::tuning::{simulated_teach_in, TeachIn};
 use crate::work::Progress;
 
 /// The most workers the pool starts, whatever the browser reports: each holds a module and its
@@ -61,6 +70,12 @@ pub enum Answer {
     References(References),
     /// Paper 004's network learned on a preset's trial cuts.
     Learning(Box<PresetLearning>),
+    /// Paper 000's bench recording.
+    BenchRecording(Arc<PhaseRecording>),
+    /// An open-loop recording of a preset's machine.
+    OpenLoopRecording(Arc<OpenLoopRecording>),
+    /// A teach-in's proposals, one per scenario, derived here from the worker's teach cuts.
+    TeachIns(Vec<TeachIn>),
 }
 
 /// What a job's answer is rebuilt from: for runs, their specs.
@@ -69,6 +84,40 @@ enum Expecting {
     Runs(Vec<RunSpec>),
     References,
     Learning,
+    /// A packed answer ([`Packed`]) of one of these kinds.
+    Packed(PackedKind),
+}
+
+/// What a packed answer is rebuilt into.
+#[derive(Clone)]
+enum PackedKind {
+    BenchRecording,
+    OpenLoopRecording,
+    /// The teach-ins of these scenarios.
+    TeachIns(Vec<RunSpec>),
+}
+
+impl PackedKind {
+    /// The answer `packed` holds.
+    fn answer(self, packed: Packed) -> Result<Answer, String> {
+        Ok(match self {
+            Self::BenchRecording => {
+                Answer::BenchRecording(Arc::new(unpack_phase_recording(packed)?))
+            }
+            Self::OpenLoopRecording => {
+                Answer::OpenLoopRecording(Arc::new(unpack_open_loop_recording(packed)?))
+            }
+            Self::TeachIns(specs) => {
+                let calibrations = unpack_calibrations(packed, specs.len())?;
+                let teach_ins = specs
+                    .iter()
+                    .zip(&calibrations)
+                    .map(|(spec, c)| simulated_teach_in(spec, c).map_err(|e| e.to_string()))
+                    .collect::<Result<_, _>>()?;
+                Answer::TeachIns(teach_ins)
+            }
+        })
+    }
 }
 
 /// A job given to the pool.
@@ -136,6 +185,11 @@ pub fn submit(request: JobRequest, mut listener: impl FnMut(JobEvent) + 'static)
         JobRequest::Runs(runs) => Expecting::Runs(runs.specs.clone()),
         JobRequest::References(_) => Expecting::References,
         JobRequest::Learning(_) => Expecting::Learning,
+        JobRequest::Bench(_) => Expecting::Packed(PackedKind::BenchRecording),
+        JobRequest::OpenLoop(_) => Expecting::Packed(PackedKind::OpenLoopRecording),
+        JobRequest::TeachCuts(request) => {
+            Expecting::Packed(PackedKind::TeachIns(request.specs.clone()))
+        }
     };
     match request.to_json() {
         Ok(request_json) => {
@@ -350,6 +404,9 @@ fn on_message(index: usize, serial: u64, data: &JsValue) {
                     learning_from_json(&field("learning").as_string().unwrap_or_default())
                         .map(|l| Answer::Learning(Box::new(l)))
                 }
+                Expecting::Packed(kind) => {
+                    received_packed(&field).and_then(|packed| kind.answer(packed))
+                }
             };
             finish(index, id, answer);
         }
@@ -374,6 +431,25 @@ fn received_chunk(field: &dyn Fn(&str) -> JsValue) -> Result<TraceChunk, String>
         calibration_json: field("calibration").as_string(),
         rows: numbers("rows")?,
         terms: numbers("terms")?,
+    })
+}
+
+/// A packed answer a worker sent, `field` reading the message's fields: `json`, and `arrays`
+/// of `Float64Array`s.
+fn received_packed(field: &dyn Fn(&str) -> JsValue) -> Result<Packed, String> {
+    let arrays = field("arrays")
+        .dyn_into::<Array>()
+        .map_err(|_| "the worker's answer lacks its numbers".to_string())?
+        .iter()
+        .map(|a| {
+            a.dyn_into::<Float64Array>()
+                .map(|a| a.to_vec())
+                .map_err(|_| "the worker's answer holds a list that is not numbers".to_string())
+        })
+        .collect::<Result<_, _>>()?;
+    Ok(Packed {
+        json: field("json").as_string().unwrap_or_default(),
+        arrays,
     })
 }
 

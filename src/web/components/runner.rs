@@ -8,8 +8,10 @@
 //! generation stops, so a stale job never overwrites a fresh result, and a job whose page was left
 //! ends quietly.
 //!
-//! Closed-loop runs need not share the page's thread at all: [`Runner::start_in_workers`] hands
-//! them to the worker pool ([`super::pool`]) behind the same status, progress bar and Cancel.
+//! Most jobs do not share the page's thread at all: [`Runner::start_in_workers`] (closed-loop
+//! runs) and [`Runner::start_in_worker`] (any other [`JobRequest`]: references, learning,
+//! recordings, teach cuts) hand them to the worker pool ([`super::pool`]) behind the same
+//! status, progress bar and Cancel. Only the Logs page's computations are still sliced here.
 
 use std::cell::RefCell;
 use std::collections::VecDeque;
@@ -347,10 +349,6 @@ impl Runner<Vec<Arc<RunResult>>> {
                             let _ = status.try_set(stage(&fractions.borrow()));
                         }
                     }
-                    JobEvent::Done(Answer::References(_) | Answer::Learning(_)) => {
-                        runner.cancel();
-                        let _ = status.try_set(RunStatus::Failed(ANOTHER_ANSWER.into()));
-                    }
                     JobEvent::Done(Answer::Runs(mut runs)) => {
                         results.borrow_mut()[index] = runs.pop();
                         fractions.borrow_mut()[index] = 1.0;
@@ -373,6 +371,10 @@ impl Runner<Vec<Arc<RunResult>>> {
                                 let _ = status.try_set(stage(&fractions.borrow()));
                             }
                         }
+                    }
+                    JobEvent::Done(_) => {
+                        runner.cancel();
+                        let _ = status.try_set(RunStatus::Failed(ANOTHER_ANSWER.into()));
                     }
                     JobEvent::Failed(message) => {
                         runner.cancel();

@@ -10,8 +10,10 @@ use std::sync::Arc;
 use leptos::prelude::*;
 
 use crate::charts::{Axis, LineChart, Scale, Series, PALETTE};
+use crate::closed_loop::recording_jobs::BenchRequest;
+use crate::closed_loop::transfer::JobRequest;
 use crate::input::table::{form_errors, Table};
-use crate::plant::recording::{BenchRecording, PhaseRecording};
+use crate::plant::recording::PhaseRecording;
 use crate::signal::butterworth::{ButterworthSpec, FilterKind};
 use crate::signal::design_settings::{
     parse_design, query_texts, FilterPreset, FilterSetting, PAPER_FILTERS,
@@ -24,9 +26,9 @@ use crate::web::components::chart::ChartCanvas;
 use crate::web::components::later::{effect_after_mount, Later};
 use crate::web::components::page::PageShell;
 use crate::web::components::paper_link::WithPaperLinks;
-use crate::web::components::runner::{next_task, RunProgress, RunStatus, Runner};
+use crate::web::components::pool::Answer;
+use crate::web::components::runner::{RunProgress, Runner};
 use crate::web::components::table_form::{FieldErrors, SettingField, TableForm};
-use crate::web::components::work_job::Shared;
 use crate::web::route::{query_params, replace_query, Page};
 
 /// The paper filter whose values the form holds, exactly as its button fills them in.
@@ -355,21 +357,19 @@ fn ResponseCharts(design: Memo<Design>) -> impl IntoView {
     }
 }
 
-/// Paper 000's bench current through the design: the recording is made once, in pieces, from the
-/// task after the page's (its machine and first compiles are not the mount's work); the filter
-/// is re-applied whenever the design changes.
+/// Paper 000's bench current through the design: the recording is made once, in a computation
+/// worker (the page's thread stays free while the bench's 13 s at 10 kHz compute); the filter
+/// is re-applied on the page whenever the design changes.
 #[component]
 fn BenchFiltered(design: Memo<Design>) -> impl IntoView {
     let bench = Runner::<Arc<PhaseRecording>>::new();
-    let bench_to_start = bench.clone();
-    next_task(move || match BenchRecording::loaded_step(1) {
-        Ok(recording) => bench_to_start.start(Shared(recording)),
-        Err(e) => {
-            let _ = bench_to_start
-                .status
-                .try_set(RunStatus::Failed(e.to_string()));
-        }
-    });
+    bench.start_in_worker(
+        JobRequest::Bench(BenchRequest::loaded_step(1)),
+        |answer| match answer {
+            Answer::BenchRecording(recording) => Some(recording),
+            _ => None,
+        },
+    );
     let recording = bench.finished();
     let currents = Memo::new(
         move |previous: Option<&Option<(LineChart, LineChart, LineChart, String)>>| match design

@@ -1,5 +1,6 @@
-//! A moment of a simulated run with the table: the run, and a slider whose moment's E and EC the
-//! viewer shows.
+//! A moment of a simulated run with the table: the run (computed in a worker of the pool,
+//! [`crate::web::components::pool`], so the page stays free while it runs), and a slider whose
+//! moment's E and EC the viewer shows.
 
 use std::sync::Arc;
 
@@ -7,7 +8,7 @@ use leptos::prelude::*;
 
 use super::Fuzzy;
 use crate::closed_loop::definition::{preset_controller, RunSpec};
-use crate::closed_loop::lab::{LabRuns, RunResult};
+use crate::closed_loop::lab::RunResult;
 use crate::control::registry::ControllerKind;
 use crate::plant::Preset;
 use crate::web::components::fields::SelectField;
@@ -77,13 +78,14 @@ pub fn RunMomentPanel(fuzzy: Fuzzy, run: RunMoment) -> impl IntoView {
         {
             return;
         }
-        runner_for_button.start(LabRuns::new(vec![RunSpec {
+        let spec = RunSpec {
             preset,
             controller,
             seed: 1,
             settings: Default::default(),
             plant: Default::default(),
-        }]));
+        };
+        runner_for_button.start_in_workers(vec![spec], Vec::new());
     };
     view! {
         <fieldset>

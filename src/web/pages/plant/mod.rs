@@ -5,7 +5,7 @@
 //!
 //! | file | what |
 //! |---|---|
-//! | `mod.rs` | the page: the preset, its open-loop run and charts |
+//! | `mod.rs` | the page: the preset, its open-loop run (recorded in a computation worker, [`crate::web::components::pool`]) and charts |
 //! | [`learning`] | paper 004's network learned from trial cuts, with its residuals |
 
 mod learning;
@@ -17,6 +17,8 @@ use std::time::Duration;
 use leptos::prelude::*;
 
 use crate::charts::{Axis, LineChart, Rgb, Series, PALETTE};
+use crate::closed_loop::recording_jobs::OpenLoopRequest;
+use crate::closed_loop::transfer::JobRequest;
 use crate::input::table::{self, form_errors};
 use crate::plant::recording::{BlockRow, OpenLoopRecording, OpenLoopRun, OpenLoopSetting};
 use crate::plant::Preset;
@@ -24,9 +26,9 @@ use crate::web::components::chart::ChartCanvas;
 use crate::web::components::fields::SelectField;
 use crate::web::components::page::PageShell;
 use crate::web::components::paper_link::WithPaperLinks;
-use crate::web::components::runner::{Debounce, RunProgress, RunStatus, Runner};
+use crate::web::components::pool::Answer;
+use crate::web::components::runner::{Debounce, RunProgress, Runner};
 use crate::web::components::table_form::{SettingField, TableForm};
-use crate::web::components::work_job::Shared;
 use crate::web::route::{query_params, replace_query, Page};
 
 use learning::LearningPanel;
@@ -303,13 +305,19 @@ pub fn PlantPage() -> impl IntoView {
             return;
         };
         let runner = runner_for_effect.clone();
+        // In a computation worker: the page's thread stays free while the machine runs.
         debounce.request(move || {
-            match OpenLoopRun::new(p, 1, pct, BLOCK_SAMPLES, OpenLoopRun::time_limit_s(p)) {
-                Ok(run) => runner.start(Shared(run)),
-                Err(e) => {
-                    let _ = runner.status.try_set(RunStatus::Failed(e.to_string()));
-                }
-            }
+            let request = OpenLoopRequest {
+                preset: p,
+                seed: 1,
+                override_pct: pct,
+                block_samples: BLOCK_SAMPLES,
+                max_duration_s: OpenLoopRun::time_limit_s(p),
+            };
+            runner.start_in_worker(JobRequest::OpenLoop(request), |answer| match answer {
+                Answer::OpenLoopRecording(recording) => Some(recording),
+                _ => None,
+            });
         });
     });
     let recording = runner.finished();

@@ -1,15 +1,19 @@
-//! The scenarios tuned, and the teach-in: a teach cut on each, or a calibration saved after a
-//! teach cut on the machine (the first chosen scenario is its program).
+//! The scenarios tuned, and the teach-in: a teach cut on each (made in a computation worker,
+//! [`crate::web::components::pool`]), or a calibration saved after a teach cut on the machine
+//! (the first chosen scenario is its program).
 
 use leptos::prelude::*;
 
 use crate::closed_loop::calibration_file::CalibrationFile;
 use crate::closed_loop::definition::RunSpec;
+use crate::closed_loop::recording_jobs::TeachCutsRequest;
+use crate::closed_loop::transfer::JobRequest;
 use crate::control::registry::ControllerKind;
 use crate::plant::Preset;
 use crate::tuning::teach_in::teach_in_calibration;
-use crate::tuning::{TeachIn, TeachInWork};
+use crate::tuning::TeachIn;
 use crate::web::components::help::HelpToggle;
+use crate::web::components::pool::Answer;
 use crate::web::components::runner::Runner;
 use crate::web::js::read_chosen_file;
 
@@ -103,12 +107,18 @@ pub fn TeachInPanel(
             return;
         }
         form_error.set(None);
-        runner.start(TeachInWork::new(
-            presets
-                .iter()
-                .map(|&p| RunSpec::new(p, ControllerKind::Threshold))
-                .collect(),
-        ));
+        let specs = presets
+            .iter()
+            .map(|&p| RunSpec::new(p, ControllerKind::Threshold))
+            .collect();
+        // The teach cuts in a computation worker; the proposals are derived here from them.
+        runner.start_in_worker(
+            JobRequest::TeachCuts(TeachCutsRequest { specs }),
+            |answer| match answer {
+                Answer::TeachIns(taught) => Some(taught),
+                _ => None,
+            },
+        );
     };
     let (file_error, set_file_error) = signal(None::<String>);
     let on_calibration_file = move |ev: leptos::ev::Event| {
