@@ -105,11 +105,11 @@ fn within(a: f64, b: f64, rel: f64) -> bool {
 /// not (docs/protocol.md §8, "What the protocol costs"): the program's metrics — removed volume
 /// within 0.5 %, and peak force (the depth step's, met at the override before it), cycle time and
 /// mean removal rate within 5 % (a busy test machine delays the host, and every delay is latency
-/// in the loop: a load average of 11 moved the peak by 3 %) — and a force held near its target: mean |error| within 1.3 × the
-/// simulation's. The force error is not compared closely: the threshold controller's limit cycle
-/// locks in differently after any small perturbation (the 1 kHz chain alone, or another seed of
-/// the simulation), which moves its force IAE by up to ±28 % (the lockstep tests below hold the
-/// rest to 1–2 %).
+/// in the loop: a load average of 11 moved the peak by 3 %) — and a force held near its target:
+/// mean |error| within 1.3 × the simulation's. The force error is not compared closely: the
+/// threshold controller's limit cycle locks in differently after any small perturbation (the
+/// 1 kHz chain alone, or another seed of the simulation), which moves its force IAE by up to
+/// ±28 % (the lockstep tests below hold the rest to 1–2 %).
 fn assert_like_sim(sim: &RunResult, run: &LinkRun) {
     let link = run.result.as_ref().unwrap();
     let (s, l) = (&sim.metrics, &link.metrics);
