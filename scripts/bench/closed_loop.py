@@ -15,7 +15,7 @@
 Each case runs --rounds times, alternating, and keeps its best round. Prints a Markdown table and
 one JSON line (for scripts/bench/run).
 
-    python3 scripts/bench/closed_loop.py [--rounds 3] [--no-wasm]
+    python3 scripts/bench/closed_loop.py [--rounds 3] [--no-wasm] [--no-build]
 """
 import argparse
 import json
@@ -131,10 +131,14 @@ def main() -> None:
     parser = argparse.ArgumentParser()
     parser.add_argument("--rounds", type=int, default=3)
     parser.add_argument("--no-wasm", action="store_true", help="skip the wasm case")
+    parser.add_argument("--no-build", action="store_true",
+                        help="time the builds already made (target/release/cutlab, target/bench-wasm)")
     args = parser.parse_args()
-    subprocess.run(["cargo", "build", "--release", "--features", "cli", "-q"], cwd=ROOT, check=True)
-    if not args.no_wasm:
-        build_wasm()
+    if not args.no_build:
+        subprocess.run(["cargo", "build", "--release", "--features", "cli", "-q"], cwd=ROOT,
+                       check=True)
+        if not args.no_wasm:
+            build_wasm()
     sim_best = compare_best = anchor_best = wasm_best = None
     sim_cpu_best = wasm_cpu_best = float("inf")
     simulated = None
