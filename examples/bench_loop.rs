@@ -20,6 +20,9 @@ use cutlab::closed_loop::lab::simulate;
 use cutlab::control::registry::ControllerKind;
 use cutlab::plant::Preset;
 
+#[path = "common/trace_digest.rs"]
+mod trace_digest;
+
 fn main() {
     let mut args = std::env::args().skip(1);
     let mut repeats = 3usize;
@@ -36,6 +39,7 @@ fn main() {
     let mut best_s = f64::INFINITY;
     let mut best_cpu_s = f64::INFINITY;
     let mut simulated_s = f64::NAN;
+    let mut digest = String::new();
     for _ in 0..repeats.max(1) {
         let start = Instant::now();
         let cpu_start = thread_cpu_s();
@@ -44,6 +48,7 @@ fn main() {
                 best_s = best_s.min(start.elapsed().as_secs_f64());
                 best_cpu_s = best_cpu_s.min(thread_cpu_s() - cpu_start);
                 simulated_s = result.metrics.cycle_time_s + result.calibration.duration_s;
+                digest = trace_digest::trace_digest(&result);
             }
             Err(e) => {
                 eprintln!("bench_loop: {e}");
@@ -52,7 +57,7 @@ fn main() {
         }
     }
     println!(
-        "{{\"simulated_s\": {simulated_s}, \"wall_s\": {best_s}, \"cpu_s\": {}}}",
+        "{{\"simulated_s\": {simulated_s}, \"wall_s\": {best_s}, \"cpu_s\": {}, \"digest\": \"{digest}\"}}",
         if best_cpu_s.is_finite() {
             best_cpu_s.to_string()
         } else {

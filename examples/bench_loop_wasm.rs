@@ -12,6 +12,10 @@
 //! Natively the example is empty (it exists for the wasm build).
 
 #[cfg(target_arch = "wasm32")]
+#[path = "common/trace_digest.rs"]
+mod trace_digest;
+
+#[cfg(target_arch = "wasm32")]
 mod wasm {
     use wasm_bindgen::prelude::wasm_bindgen;
 
@@ -31,5 +35,16 @@ mod wasm {
         .map_or(f64::NAN, |r| {
             r.metrics.cycle_time_s + r.calibration.duration_s
         })
+    }
+
+    /// The same run's trace digest (`examples/common/trace_digest.rs`), to compare with the
+    /// native `bench_loop`'s: a faster wasm build must compute the same run bit for bit.
+    #[wasm_bindgen]
+    pub fn trace_digest_kim_step_doc_fuzzy_dynamics() -> String {
+        simulate(&RunSpec::new(
+            Preset::KimStepDoc,
+            ControllerKind::FuzzyDynamics,
+        ))
+        .map_or_else(|e| e.to_string(), |r| super::trace_digest::trace_digest(&r))
     }
 }

@@ -3,7 +3,7 @@
 //
 //   node scripts/bench/wasm_loop.mjs <dir with bench_loop_wasm.js> [repeats]
 //
-// Prints the best repeat as one JSON line: {"simulated_s": …, "wall_s": …, "cpu_s": …} (CPU
+// Prints the best repeat as one JSON line: {"simulated_s": …, "wall_s": …, "cpu_s": …, "digest": …} (CPU
 // time of the process during the run: on a shared machine, the wall time less the waiting).
 import { createRequire } from "node:module";
 import path from "node:path";
@@ -32,4 +32,6 @@ if (!Number.isFinite(simulated)) {
   console.error("wasm_loop: the run failed");
   process.exit(1);
 }
-console.log(JSON.stringify({ simulated_s: simulated, wall_s: best, cpu_s: bestCpu }));
+// The run's trace digest, to compare with the native examples/bench_loop's (bit for bit).
+const digest = bench.trace_digest_kim_step_doc_fuzzy_dynamics?.() ?? null;
+console.log(JSON.stringify({ simulated_s: simulated, wall_s: best, cpu_s: bestCpu, digest }));
