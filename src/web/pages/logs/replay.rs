@@ -35,10 +35,16 @@ pub struct Replay {
 }
 
 impl Replay {
-    /// No replay yet; the form as `link` sets it.
+    /// No replay yet; the form as `link` sets it. Each finished set of replays goes to the
+    /// lesson panel.
     pub fn new(link: &LogsLink) -> Self {
         let runner = Runner::<Vec<Arc<ReplayResult>>>::new();
         let done = runner.finished();
+        Effect::new(move |_| {
+            if let Some(replays) = done.get() {
+                crate::web::pages::lessons::feed::publish_replays(&replays);
+            }
+        });
         Self {
             runner: StoredValue::new(runner),
             done,
