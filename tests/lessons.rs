@@ -76,7 +76,7 @@ fn every_reference_solution_meets_its_check_and_no_starting_point_does() {
             checked += 1;
         }
     }
-    assert!(checked >= 9, "only {checked} steps with conditions");
+    assert!(checked >= 10, "only {checked} steps with conditions");
 }
 
 /// The error the library gives for fixture `name`, as `file:line: field: message`.
@@ -105,6 +105,19 @@ fn a_malformed_lesson_is_refused_with_its_file_line_and_field() {
              \"force_error_percent\" is not a metric; metrics: "
         ),
         "{metric}"
+    );
+    let replay = refusal("unknown-replay-value.json");
+    assert!(
+        replay.starts_with(
+            "tests/data/lessons/unknown-replay-value.json:14: steps[0].check.conditions[1].replay: \
+             \"override_steps\" is not a value of a replay; values: periods, end_time_s, "
+        ),
+        "{replay}"
+    );
+    assert_eq!(
+        refusal("replay-without-controller.json"),
+        "tests/data/lessons/replay-without-controller.json:13: steps[0].check.conditions[0].of: a \
+         replay condition names the controller replayed: of (threshold, pi, …)"
     );
     let setting = refusal("unknown-setting.json");
     assert_eq!(
@@ -146,6 +159,39 @@ fn lesson_check_names_each_problem_and_fails_and_passes_a_good_lesson() {
     assert!(result.is_ok(), "{result:?}\n{out}");
     assert!(
         out.contains("step 2: the solution meets the check"),
+        "{out}"
+    );
+    // A replay's check is run natively on the sample log, through the Logs page's replays.
+    let (result, out) = common::cutlab_text(&["lesson", "check", "www/lessons/own-log.json"], "");
+    assert!(result.is_ok(), "{result:?}\n{out}");
+    // The counts docs/lessons.md and the step's explanation quote are the tool's.
+    assert!(
+        out.contains(
+            "step 4: the solution meets the check (override changes of the PI with anti-windup \
+             replay below that of the Threshold-proportional replay: 27 vs 29 for the \
+             Threshold-proportional replay)"
+        ),
+        "{out}"
+    );
+    let own_log = shipped()
+        .into_iter()
+        .map(|l| l.unwrap())
+        .find(|l| l.id == "own-log")
+        .unwrap();
+    assert!(own_log.steps[3]
+        .explain
+        .contains("(27 against 29 on the sample export"));
+    let (result, out) = common::cutlab_text(
+        &[
+            "lesson",
+            "check",
+            "tests/data/lessons/unknown-replay-value.json",
+        ],
+        "",
+    );
+    assert!(result.is_err(), "{out}");
+    assert!(
+        out.contains("unknown-replay-value.json:14: steps[0].check.conditions[1].replay: "),
         "{out}"
     );
 }

@@ -194,15 +194,7 @@ pub fn compute(trace: &Trace, config: &MetricsConfig) -> Metrics {
 
     let late_force_fluctuation_pct = late_fluctuation_pct(rows);
 
-    let mut total_variation = 0.0;
-    let mut changes = 0;
-    for pair in rows.windows(2) {
-        let change = pair[1].override_pct - pair[0].override_pct;
-        if change.is_finite() && change != 0.0 {
-            total_variation += change.abs();
-            changes += 1;
-        }
-    }
+    let (total_variation, changes) = override_moves(rows);
 
     Metrics {
         cycle_time_s,
@@ -389,6 +381,22 @@ pub fn metrics_csv_columns(runs: &[(&str, &Metrics)]) -> String {
         out.push('\n');
     }
     out
+}
+
+/// How much the commanded override moves over `rows`: its total variation, %, and the number of
+/// periods it changed in (the metrics' `override_total_variation_pct` and `override_changes`,
+/// and a replay's).
+pub fn override_moves(rows: &[TraceRow]) -> (f64, usize) {
+    let mut total_variation = 0.0;
+    let mut changes = 0;
+    for pair in rows.windows(2) {
+        let change = pair[1].override_pct - pair[0].override_pct;
+        if change.is_finite() && change != 0.0 {
+            total_variation += change.abs();
+            changes += 1;
+        }
+    }
+    (total_variation, changes)
 }
 
 /// Every metric as (CSV name, value), in the CSV's order: the stable names lessons and the

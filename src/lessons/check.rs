@@ -1,6 +1,8 @@
 //! A step's conditions and their evaluation on what the student did: the finished runs of a
 //! Simulate or Compare page (their metrics by the stable names of the metrics CSV, and their run
-//! definition), or a Signal chain page's filter (its settings and its gain at a frequency).
+//! definition), a Signal chain page's filter (its settings and its gain at a frequency), or the
+//! Logs page's finished replays (each controller's summary by the stable names of
+//! [`replay_values`]).
 //!
 //! A condition's evaluation says whether it is met and what was measured, with the unit, so the
 //! lesson panel and `cutlab lesson check` show "Mean |error| 3.2 % (needs below 5 %)".
@@ -14,6 +16,7 @@ use crate::closed_loop::metrics::{compute, metric_values, Metrics, MetricsConfig
 use crate::closed_loop::trace::Trace;
 use crate::control::registry::ControllerKind;
 use crate::input::table::Table;
+use crate::log::replay::{replay_value_names, replay_values, ReplayResult};
 use crate::signal::butterworth::{ButterworthSpec, Cutoff};
 use crate::signal::design_settings::FilterSetting;
 use crate::signal::sos::Sos;
@@ -77,6 +80,14 @@ pub enum Subject {
         /// The frequency, Hz.
         at_hz: f64,
     },
+    /// A value of a Logs page replay's summary, by its stable name ([`replay_values`]), on the
+    /// replay of controller `of`.
+    Replay {
+        /// The value's name (`override_changes`).
+        name: &'static str,
+        /// The controller whose replay it is measured on.
+        of: ControllerKind,
+    },
 }
 
 /// The name of [`Subject::GainDb`] in a lesson file.
@@ -106,6 +117,8 @@ pub enum Wanted {
     Variant(Op, usize),
     /// Only that the subject holds (a controller).
     Holds,
+    /// The same value of another controller's replay.
+    Replay(Op, ControllerKind),
 }
 
 /// One condition of a step.
@@ -131,6 +144,8 @@ pub enum Evidence<'a> {
         /// The design's sections.
         sos: &'a Sos,
     },
+    /// The Logs page's finished replays, one per controller.
+    Replays(&'a [&'a ReplayResult]),
 }
 
 /// A condition evaluated.
@@ -230,10 +245,10 @@ impl StepCondition {
             LabPage::Compare => VARIANT_NAMES.len(),
             _ => 0,
         };
-        let fits = if on_runs {
-            page.runs()
-        } else {
-            page == LabPage::SignalChain
+        let fits = match self.subject {
+            Subject::Replay { .. } => page == LabPage::Logs,
+            _ if on_runs => page.runs(),
+            _ => page == LabPage::SignalChain,
         };
         if !fits {
             return Err(format!(
@@ -265,6 +280,9 @@ impl StepCondition {
             Subject::Controller(kind) => format!("controller{on} is {}", kind.label()),
             Subject::Design(s) => s.row().label.to_string(),
             Subject::GainDb { at_hz } => format!("gain at {} Hz", shown(*at_hz)),
+            Subject::Replay { name, of } => {
+                format!("{} of the {} replay", metric_words(name), of.label())
+            }
         }
     }
 
@@ -272,6 +290,7 @@ impl StepCondition {
     fn unit(&self) -> &'static str {
         match &self.subject {
             Subject::Metric(name) => metric_unit(name),
+            Subject::Replay { name, .. } => metric_unit(name),
             Subject::Setting(s) => s.spec().unit,
             Subject::Design(s) => s.row().unit,
             Subject::GainDb { .. } => "dB",
@@ -296,8 +315,20 @@ impl StepCondition {
             Subject::Controller(kind) => {
                 Some(f64::from(u8::from(run.spec.controller.kind() == *kind)))
             }
-            Subject::Design(_) | Subject::GainDb { .. } => None,
+            Subject::Design(_) | Subject::GainDb { .. } | Subject::Replay { .. } => None,
         }
+    }
+
+    /// The measured value on the replay of `of`, among `replays`.
+    fn measure_replay(&self, replays: &[&ReplayResult], of: ControllerKind) -> Option<f64> {
+        let Subject::Replay { name, .. } = &self.subject else {
+            return None;
+        };
+        let replay = replays.iter().find(|r| r.controller.kind() == of)?;
+        replay_values(&replay.summary)
+            .into_iter()
+            .find(|(n, _)| n == name)
+            .and_then(|(_, v)| v)
     }
 
     /// The measured value on a design.
@@ -327,6 +358,16 @@ impl StepCondition {
             match work {
                 Evidence::Runs(runs) => runs.get(variant).and_then(|r| self.measure_run(r)),
                 Evidence::Design { spec, sos } => self.measure_design(spec, sos),
+                Evidence::Replays(replays) => match self.subject {
+                    Subject::Replay { of, .. } => self.measure_replay(replays, of),
+                    _ => None,
+                },
+            }
+        };
+        let measure_replay = |of: ControllerKind| -> Option<f64> {
+            match work {
+                Evidence::Replays(replays) => self.measure_replay(replays, of),
+                _ => None,
             }
         };
         let value = measure(self.variant).filter(|v| v.is_finite());
@@ -346,6 +387,27 @@ impl StepCondition {
                 value.is_some_and(|v| op.holds(v, wanted)),
                 value.map_or("not measured".to_string(), |v| with_unit(v, unit)),
             ),
+            Wanted::Replay(op, other) => {
+                let other_value = measure_replay(other).filter(|v| v.is_finite());
+                let measured = match (value, other_value) {
+                    (Some(v), Some(o)) => format!(
+                        "{} vs {} for the {} replay",
+                        with_unit(v, unit),
+                        with_unit(o, unit),
+                        other.label()
+                    ),
+                    _ => "not measured".to_string(),
+                };
+                (
+                    format!(
+                        "{subject} {} that of the {} replay",
+                        op.words(),
+                        other.label()
+                    ),
+                    matches!((value, other_value), (Some(v), Some(o)) if op.holds(v, o)),
+                    measured,
+                )
+            }
             Wanted::Variant(op, other) => {
                 let other_value = measure(other).filter(|v| v.is_finite());
                 let other_name = VARIANT_NAMES.get(other).unwrap_or(&"?");
@@ -376,9 +438,9 @@ impl StepCondition {
     }
 }
 
-/// A condition as a lesson file writes it: one subject (`metric`, `setting`, `controller` or
-/// `signal`), the variant it is on, and what it must be (`is` with a `value`, or `is` with
-/// `than`, another variant).
+/// A condition as a lesson file writes it: one subject (`metric`, `setting`, `controller`,
+/// `signal` or `replay`), the variant it is on (a replay: `of`, its controller), and what it
+/// must be (`is` with a `value`, or `is` with `than`, another variant or replayed controller).
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct StepConditionText {
@@ -390,6 +452,10 @@ pub struct StepConditionText {
     controller: Option<String>,
     #[serde(default)]
     signal: Option<String>,
+    #[serde(default)]
+    replay: Option<String>,
+    #[serde(default)]
+    of: Option<String>,
     #[serde(default)]
     at_hz: Option<f64>,
     #[serde(default)]
@@ -420,12 +486,20 @@ impl StepConditionText {
             self.setting.is_some(),
             self.controller.is_some(),
             self.signal.is_some(),
+            self.replay.is_some(),
         ];
         if subjects.iter().filter(|s| **s).count() != 1 {
             return Err((
                 "metric",
-                "a condition names exactly one of metric, setting, controller or signal".into(),
+                "a condition names exactly one of metric, setting, controller, signal or replay"
+                    .into(),
             ));
+        }
+        if let Some(name) = &self.replay {
+            return self.resolve_replay(name);
+        }
+        if self.of.is_some() {
+            return Err(("of", "of belongs to a replay condition".into()));
         }
         let variant = match &self.variant {
             None => 0,
@@ -500,29 +574,78 @@ impl StepConditionText {
         if self.at_hz.is_some() && self.signal.is_none() {
             return Err(("at_hz", "at_hz belongs to a signal condition".into()));
         }
+        let wanted = self.wanted("another variant", |op, other| {
+            variant_index(other).map(|v| Wanted::Variant(op, v)).ok_or((
+                "than",
+                format!("\"{other}\" is not a variant; variants: A, B, C, D"),
+            ))
+        })?;
+        Ok(StepCondition {
+            subject,
+            variant,
+            wanted,
+        })
+    }
+
+    /// What the condition must be: `is` with a `value`, or `is` with `than` (`others`, as
+    /// `other` reads it).
+    fn wanted(
+        &self,
+        others: &str,
+        other: impl FnOnce(Op, &str) -> Result<Wanted, FieldProblem>,
+    ) -> Result<Wanted, FieldProblem> {
         let op = self.is.ok_or((
             "is",
             "say how it compares: below, above, at_most, at_least or equals".into(),
         ))?;
-        let wanted = match (self.value, &self.than) {
-            (Some(value), None) if value.is_finite() => Wanted::Value(op, value),
-            (None, Some(other)) => Wanted::Variant(
-                op,
-                variant_index(other).ok_or((
-                    "than",
-                    format!("\"{other}\" is not a variant; variants: A, B, C, D"),
-                ))?,
-            ),
-            _ => {
-                return Err((
-                    "value",
-                    "give a value to compare with, or than: another variant (not both)".into(),
-                ))
-            }
+        match (self.value, &self.than) {
+            (Some(value), None) if value.is_finite() => Ok(Wanted::Value(op, value)),
+            (None, Some(name)) => other(op, name),
+            _ => Err((
+                "value",
+                format!("give a value to compare with, or than: {others} (not both)"),
+            )),
+        }
+    }
+
+    /// A condition on a replay's value `name`.
+    fn resolve_replay(&self, name: &str) -> Result<StepCondition, FieldProblem> {
+        let names = replay_value_names();
+        let name = names.iter().copied().find(|n| *n == name).ok_or_else(|| {
+            (
+                "replay",
+                format!(
+                    "\"{name}\" is not a value of a replay; values: {}",
+                    names.join(", ")
+                ),
+            )
+        })?;
+        let controller = |field: &'static str, text: &str| {
+            text.parse::<ControllerKind>()
+                .map_err(|e| (field, e.to_string()))
         };
+        let of = controller(
+            "of",
+            self.of.as_deref().ok_or((
+                "of",
+                "a replay condition names the controller replayed: of (threshold, pi, …)".into(),
+            ))?,
+        )?;
+        if self.variant.is_some() {
+            return Err((
+                "variant",
+                "a replay is picked by its controller (of), not by a variant".into(),
+            ));
+        }
+        if self.at_hz.is_some() {
+            return Err(("at_hz", "at_hz belongs to a signal condition".into()));
+        }
+        let wanted = self.wanted("another controller's replay", |op, other| {
+            Ok(Wanted::Replay(op, controller("than", other)?))
+        })?;
         Ok(StepCondition {
-            subject,
-            variant,
+            subject: Subject::Replay { name, of },
+            variant: 0,
             wanted,
         })
     }

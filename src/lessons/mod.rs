@@ -4,8 +4,8 @@
 //! from, and steps. A step opens a page of the lab with a run definition — the link the lab
 //! itself writes ([`setup::Setup`]) — asks a question or sets a task, offers hints one at a time,
 //! and states its check: a multiple-choice answer, or conditions ([`check::StepCondition`]) on the
-//! finished runs' metrics and definitions, on a Compare run's variants, or on the Signal chain
-//! page's filter. A step with conditions carries a reference solution, another link, which
+//! finished runs' metrics and definitions, on a Compare run's variants, on the Signal chain
+//! page's filter, or on the Logs page's replays. A step with conditions carries a reference solution, another link, which
 //! `cutlab lesson check` and the tests run to show the check can be met, while the step's own
 //! starting point must not meet it.
 //!
@@ -13,7 +13,7 @@
 //! |---|---|
 //! | [`setup`] | the page and run definition a step sets up, read by the lab's own parsers |
 //! | [`check`] | conditions, and their evaluation on the runs or the filter |
-//! | [`native`] | doing a step's work without a browser: the runs its setup defines |
+//! | [`native`] | doing a step's work without a browser: the runs its setup defines, its filter, its replays |
 //! | [`locate`] | the line of a field in a lesson's text, for messages |
 //! | [`progress`] | a student's progress, as the browser keeps and exports it |
 //! | [`shipped`] | the lessons in `www/lessons/`, built into the lab |

@@ -1,5 +1,5 @@
 //! A step's work done without a browser: the runs its setup defines, simulated to the end
-//! ([`simulate`]), or the filter it designs. What
+//! ([`simulate`]), the filter it designs, or the replays its Logs link starts on a sample log. What
 //! `cutlab lesson check` and the tests use to show that a step's reference solution meets its
 //! check and its starting point does not.
 
@@ -7,6 +7,26 @@ use super::check::{ConditionOutcome, Evidence};
 use super::setup::{Defined, Setup};
 use super::{Lesson, StepCheck};
 use crate::closed_loop::lab::{simulate, RunResult};
+use crate::log::link::LogsLink;
+use crate::log::replay::ReplayResult;
+use crate::work::Work;
+
+use std::sync::Arc;
+
+/// The replays a Logs link's form starts on its sample log, read from `www/data` (built in),
+/// through the page's own [`crate::log::replay::ReplayRuns`].
+fn replay(link: &LogsLink) -> Result<Vec<Arc<ReplayResult>>, String> {
+    let file = link
+        .sample
+        .ok_or("a replay is checked on a sample log: give the link a sample")?;
+    let bytes = crate::log::link::sample_bytes(file)
+        .ok_or_else(|| format!("{file}: not built into this program"))?;
+    let log =
+        crate::log::load(bytes, link.sample_period_s()).map_err(|e| format!("{file}: {e}"))?;
+    link.replay_runs(Arc::new(log))?
+        .run_to_end()
+        .map_err(|e| format!("{file}: {e}"))
+}
 
 /// Checks steps on the simulated lab.
 #[derive(Default)]
@@ -68,6 +88,14 @@ impl Checker {
                     })
                 })
                 .collect(),
+            Defined::Logs(link) => {
+                let replays = replay(&link)?;
+                let replays: Vec<&ReplayResult> = replays.iter().map(Arc::as_ref).collect();
+                conditions
+                    .iter()
+                    .map(|c| c.evaluate(Evidence::Replays(&replays)))
+                    .collect()
+            }
             Defined::Nothing => {
                 return Err(format!(
                     "the {} page has no work a condition can check",

@@ -2,12 +2,14 @@
 //! links write them (`#/simulate?preset=kim-step-doc&controller=pi&kp=0.3`), and the runs that
 //! query defines. The query is read through the run definition's table ([`parse_texts`], keys
 //! from [`RunSetting::from_query_key`]) and the controller registry's parameters, and a Signal
-//! chain query through the filter design's ([`query_texts`], [`parse_design`]): the same parsers
-//! the lab's forms use, so a lesson cannot set up something the lab would read differently.
+//! chain query through the filter design's ([`query_texts`], [`parse_design`]), a Logs query
+//! through the Logs page's own ([`LogsLink::parse`]): the same parsers the lab's pages use, so a
+//! lesson cannot set up something the lab would read differently.
 
 use crate::closed_loop::definition::{parse_texts, preset_controller, RunSetting, RunSpec};
 use crate::control::registry::{ControllerConfig, ControllerKind};
 use crate::input::parse_number;
+use crate::log::link::LogsLink;
 use crate::plant::Preset;
 use crate::signal::butterworth::ButterworthSpec;
 use crate::signal::design_settings::{parse_design, query_texts};
@@ -85,6 +87,9 @@ pub enum Defined {
     Runs(Vec<RunSpec>),
     /// A Signal chain page's filter.
     Design(ButterworthSpec, Sos),
+    /// The Logs page's state: its sample log, mapping and replay form, as the page reads its
+    /// own address bar.
+    Logs(Box<LogsLink>),
     /// A page whose state a lesson does not check (answers are multiple choice there).
     Nothing,
 }
@@ -175,7 +180,15 @@ impl Setup {
                             .join("; ")
                     })
             }
-            LabPage::Fuzzy | LabPage::Tune | LabPage::Logs | LabPage::Plant => Ok(Defined::Nothing),
+            LabPage::Logs => {
+                let (link, problems) = LogsLink::parse(&self.query);
+                if problems.is_empty() {
+                    Ok(Defined::Logs(Box::new(link)))
+                } else {
+                    Err(problems.join("; "))
+                }
+            }
+            LabPage::Fuzzy | LabPage::Tune | LabPage::Plant => Ok(Defined::Nothing),
         }
     }
 
@@ -366,6 +379,22 @@ mod tests {
         };
         assert_eq!(spec.order, 4);
         assert!(define("#/signal?order=0").is_err());
+    }
+
+    #[test]
+    fn a_logs_link_is_read_by_the_logs_pages_parser() {
+        let Ok(Defined::Logs(link)) = define(
+            "#/logs?sample=synthetic-kim-step-doc-export.csv&replay=threshold%2Cpi&target_a=10.4",
+        ) else {
+            panic!("not a logs link");
+        };
+        assert_eq!(
+            link.replayed,
+            [ControllerKind::Threshold, ControllerKind::Pi]
+        );
+        assert_eq!(link.target_text, "10.4");
+        let e = define("#/logs?sample=mine.csv").unwrap_err();
+        assert!(e.starts_with("sample: "), "{e}");
     }
 
     #[test]

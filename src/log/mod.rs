@@ -31,10 +31,12 @@
 //! | [`calibration`] | calibration from a recorded log: the teach cut over the log |
 //! | [`period_log`] | calibration from a log whose rows are control periods (`cutlab calibrate`, logged teach-in) |
 //! | [`settings`] | the settings of a log's analysis as one table (Logs page fields, CLI options) |
+//! | [`link`] | the Logs page's state in its URL (sample, mapping, analysed column, replay form), read by the page and by lessons |
 
 pub mod analysis;
 pub mod calibration;
 pub mod csv;
+pub mod link;
 pub mod machine;
 pub mod mapping;
 pub mod period_log;

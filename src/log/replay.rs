@@ -31,6 +31,7 @@ use super::Log;
 use crate::closed_loop::definition::{RunProblem, RunSetting, SettingError, SettingsOverrides};
 use crate::closed_loop::error::LoopError;
 use crate::closed_loop::feedback_loop::{ClosedLoop, FeedbackLoop};
+use crate::closed_loop::metrics::override_moves;
 use crate::closed_loop::sample_loop::OnMachine;
 use crate::closed_loop::settings::{plan, LoopSettings, TargetRule};
 use crate::closed_loop::trace::{csv_field, Trace, TraceRow};
@@ -421,7 +422,7 @@ impl EnvelopeState {
 }
 
 /// A replay's numbers in brief.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, Default, PartialEq, Serialize)]
 pub struct ReplaySummary {
     /// Control periods replayed.
     pub periods: usize,
@@ -437,6 +438,10 @@ pub struct ReplaySummary {
     pub override_max_pct: Option<f64>,
     /// Mean override the machine applied (the log's), over the same periods.
     pub logged_override_mean_pct: Option<f64>,
+    /// Control periods the commanded override changed in (as a run's `override_changes`).
+    pub override_changes: usize,
+    /// The commanded override's total variation, % (as a run's).
+    pub override_total_variation_pct: f64,
     /// Periods whose request the envelope clamped or rate-limited.
     pub periods_limited: usize,
     /// Time under a sensor fault.
@@ -479,6 +484,7 @@ impl ReplaySummary {
             (None, None, None)
         };
         let (_, force_mean_n, _) = stat(|r| r.force_n);
+        let (override_total_variation_pct, override_changes) = override_moves(&trace.rows);
         Self {
             periods: trace.rows.len(),
             end_time_s: trace.rows.last().map_or(0.0, |r| r.time_s),
@@ -490,6 +496,8 @@ impl ReplaySummary {
             override_mean_pct,
             override_max_pct,
             logged_override_mean_pct,
+            override_changes,
+            override_total_variation_pct,
             periods_limited: trace
                 .rows
                 .iter()
@@ -511,6 +519,40 @@ impl ReplaySummary {
             force_mean_n,
         }
     }
+}
+
+/// A replay's summary by stable names, units in the names — what a lesson's condition on a
+/// replay names (`{"replay": "override_changes", …}`); `None` where the replay has no such value
+/// (never armed, no calibration, no measured force).
+pub fn replay_values(summary: &ReplaySummary) -> [(&'static str, Option<f64>); 16] {
+    [
+        ("periods", Some(summary.periods as f64)),
+        ("end_time_s", Some(summary.end_time_s)),
+        ("armed_at_s", summary.armed_at_s),
+        ("override_min_pct", summary.override_min_pct),
+        ("override_mean_pct", summary.override_mean_pct),
+        ("override_max_pct", summary.override_max_pct),
+        ("logged_override_mean_pct", summary.logged_override_mean_pct),
+        ("override_changes", Some(summary.override_changes as f64)),
+        (
+            "override_total_variation_pct",
+            Some(summary.override_total_variation_pct),
+        ),
+        ("periods_limited", Some(summary.periods_limited as f64)),
+        ("sensor_fault_s", Some(summary.sensor_fault_s)),
+        ("sensor_faults", Some(summary.sensor_faults as f64)),
+        ("overload_at_s", summary.overload_at_s),
+        ("force_est_mean_n", summary.force_est_mean_n),
+        ("force_est_max_n", summary.force_est_max_n),
+        ("force_mean_n", summary.force_mean_n),
+    ]
+}
+
+/// The stable names of [`replay_values`].
+pub fn replay_value_names() -> Vec<&'static str> {
+    replay_values(&ReplaySummary::default())
+        .map(|(name, _)| name)
+        .to_vec()
 }
 
 /// One controller replayed on a log.

@@ -1,7 +1,8 @@
 // Lessons: a lesson opened by its link puts its panel beside the real lab page; a student answers
 // a question, then does a step on the Simulate page (edits a field by its label, the page runs)
 // and sees the check turn from unmet to met with the measured value; the progress survives a
-// reload and shows on the Lessons page.
+// reload and shows on the Lessons page; on the Logs page a replay the student starts is checked
+// the same way.
 import { test, before, after } from 'node:test';
 import assert from 'node:assert/strict';
 import { serveDist, launchBrowser, openLab, screenshot } from './harness.mjs';
@@ -75,6 +76,39 @@ test('a lesson opened by its link checks a run as it finishes and keeps the prog
   // Closing the lesson takes the panel away.
   await reloaded.getByRole('button', { name: 'Close the lesson' }).click();
   await reloaded.waitFor({ state: 'detached' });
+  assert.deepEqual(problems, []);
+  await context.close();
+});
+
+test('the own-log lesson checks a replay the student starts on the sample export', async () => {
+  const { page, problems, context } = await openLab(browser, server.url, '#/lessons/own-log', { width: 1440, height: 1000 });
+  const panel = page.getByRole('complementary', { name: 'Your own machine\'s log' });
+  await panel.getByRole('heading', { name: /^Step 1 of 4/ }).waitFor();
+  for (let step = 2; step <= 4; step += 1) {
+    await panel.getByRole('button', { name: 'Next step' }).click();
+    await panel.getByRole('heading', { name: new RegExp(`^Step ${step} of 4`) }).waitFor();
+  }
+  // The step's link opens the sample export with the threshold loop's replay set up.
+  await page.waitForURL(/#\/logs\?sample=synthetic-kim-step-doc-export\.csv/);
+  await page.getByRole('status').filter({ hasText: 'Loaded synthetic-kim-step-doc-export.csv' }).waitFor({ timeout: RUN_TIMEOUT });
+  await panel.getByText(/^Each replay you finish on the .* page is checked here\.$/).waitFor();
+  assert.equal(await page.getByLabel('Replay Threshold-proportional').isChecked(), true);
+  assert.equal(await page.getByLabel('Replay PI with anti-windup').isChecked(), false);
+  assert.equal(await page.getByLabel(/^Target value/).inputValue(), '10.4');
+
+  // The threshold loop alone: the PI's replay is not measured, so the check is not met.
+  await page.getByRole('button', { name: 'Replay', exact: true }).click();
+  const checks = panel.getByRole('list', { name: 'Check of your run' });
+  const changes = checks.getByRole('listitem').filter({ hasText: 'override changes of the PI with anti-windup replay' });
+  await changes.filter({ hasText: /^Not met: .* — measured not measured$/ }).waitFor({ timeout: RUN_TIMEOUT });
+
+  // The student ticks the PI controller by its label and replays: the check turns, with the counts.
+  await page.getByLabel('Replay PI with anti-windup').check();
+  await page.getByRole('button', { name: 'Replay', exact: true }).click();
+  await changes.filter({ hasText: /^Met: / }).waitFor({ timeout: RUN_TIMEOUT });
+  assert.match(await changes.textContent(),
+    /^Met: override changes of the PI with anti-windup replay below that of the Threshold-proportional replay — measured \d+ vs \d+ for the Threshold-proportional replay$/);
+  await panel.getByRole('status').filter({ hasText: /^Step done\./ }).waitFor();
   assert.deepEqual(problems, []);
   await context.close();
 });

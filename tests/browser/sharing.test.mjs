@@ -1,5 +1,6 @@
 // Tune, Logs and Hardware keep what is settable in the URL: a reload (or the link, shared)
-// restores it — never a person's own file or serial port.
+// restores it — never a person's own file or serial port (a Logs link's column mapping waits for
+// the next log opened instead).
 import { test, before, after } from 'node:test';
 import assert from 'node:assert/strict';
 import { serveDist, launchBrowser, openLab } from './harness.mjs';
@@ -59,6 +60,58 @@ test('Logs: a reload opens the same sample log with the same analysis settings',
   await reload(page);
   await loaded.waitFor({ timeout: LONG });
   assert.equal(await page.getByLabel('Low-pass order').inputValue(), '6');
+  assert.deepEqual(problems, []);
+  await context.close();
+});
+
+test('Logs: a reload restores the column mapping, the analysed column and the replay form', async () => {
+  const { page, problems, context } = await openLab(browser, server.url, '#/logs');
+  await page.getByRole('button', { name: /^Synthetic CNC export/ }).click();
+  const loaded = page.getByRole('status').filter({ hasText: 'Loaded synthetic-kim-step-doc-export.csv' });
+  await loaded.waitFor({ timeout: LONG });
+  // The measured force is taken out of the mapping; the feed drive's current is analysed.
+  const force = page.getByLabel('Kraft [N]', { exact: true });
+  assert.equal(await force.inputValue(), 'force');
+  await force.selectOption('');
+  await page.getByLabel('Column', { exact: true }).selectOption('X_Strom [A]');
+  // The replay: MRAC instead of the threshold loop, on paper 003's machine, at 10.4 A.
+  await page.getByLabel('Replay Threshold-proportional').uncheck();
+  await page.getByLabel('Replay Lyapunov adaptive (MRAC)').check();
+  await page.getByLabel("Machine's override input").selectOption('whole-percent');
+  await page.getByLabel(/^Target value/).fill('10.4');
+  await page.waitForFunction(() => location.hash.includes('target_a=10.4')
+    && location.hash.includes('machine=whole-percent') && location.hash.includes('column='));
+  const hash = await page.evaluate(() => location.hash);
+  assert.match(hash, /map\.spindle-current=/);
+  assert.doesNotMatch(decodeURIComponent(hash), /map\.force=/);
+  assert.match(hash, /replay=pi%2Cmrac|replay=pi,mrac/);
+
+  await reload(page);
+  await loaded.waitFor({ timeout: LONG });
+  assert.equal(await page.getByLabel('Kraft [N]', { exact: true }).inputValue(), '');
+  assert.equal(await page.getByLabel('S_Strom [A]', { exact: true }).inputValue(), 'spindle-current');
+  assert.equal(await page.getByLabel('Column', { exact: true }).inputValue(), 'X_Strom [A]');
+  assert.equal(await page.getByLabel('Replay Threshold-proportional').isChecked(), false);
+  assert.equal(await page.getByLabel('Replay PI with anti-windup').isChecked(), true);
+  assert.equal(await page.getByLabel('Replay Lyapunov adaptive (MRAC)').isChecked(), true);
+  assert.equal(await page.getByLabel("Machine's override input").inputValue(), 'whole-percent');
+  assert.equal(await page.getByLabel(/^Target value/).inputValue(), '10.4');
+  assert.equal(await page.evaluate(() => location.hash), hash);
+  assert.deepEqual(problems, []);
+  await context.close();
+});
+
+test('Logs: a link that maps columns without a sample says it waits for the next log', async () => {
+  const { page, problems, context } = await openLab(browser, server.url,
+    '#/logs?map.spindle-current=X_Strom%20%5BA%5D&map.time=Zeit%20%5Bs%5D');
+  const note = page.getByRole('note').filter({ hasText: /maps 2 columns to channels/ });
+  await note.waitFor();
+  await page.getByRole('button', { name: /^Synthetic CNC export/ }).click();
+  await page.getByRole('status').filter({ hasText: 'Loaded synthetic-kim-step-doc-export.csv' }).waitFor({ timeout: LONG });
+  // The export has those columns: the link's mapping is its mapping, and the note is gone.
+  assert.equal(await page.getByLabel('X_Strom [A]', { exact: true }).inputValue(), 'spindle-current');
+  assert.equal(await page.getByLabel('S_Strom [A]', { exact: true }).inputValue(), '');
+  assert.equal(await note.count(), 0);
   assert.deepEqual(problems, []);
   await context.close();
 });

@@ -1,12 +1,14 @@
 //! The runs the lab's pages finish, for the lesson panel to check: the computation workers'
-//! runner publishes each finished set of runs here ([`publish`]) with the page they ran on and a
-//! serial number, so the panel checks only runs newer than the step it opened.
+//! runner publishes each finished set of runs here ([`publish`]), and the Logs page each
+//! finished set of replays ([`publish_replays`]), with the page they ran on and a serial number,
+//! so the panel checks only work newer than the step it opened.
 
 use std::sync::Arc;
 
 use leptos::prelude::*;
 
 use crate::closed_loop::lab::RunResult;
+use crate::log::replay::ReplayResult;
 
 /// A set of runs a page finished.
 #[derive(Debug, Clone)]
@@ -17,6 +19,8 @@ pub struct FinishedRuns {
     pub page: String,
     /// The runs, in the page's order (variant A first).
     pub runs: Vec<Arc<RunResult>>,
+    /// The Logs page's replays, one per controller (empty for runs).
+    pub replays: Vec<Arc<ReplayResult>>,
 }
 
 thread_local! {
@@ -35,6 +39,15 @@ pub fn last_serial() -> u64 {
 
 /// Publishes `runs`, just finished on the page the URL shows.
 pub fn publish(runs: &[Arc<RunResult>]) {
+    publish_work(runs.to_vec(), Vec::new());
+}
+
+/// Publishes `replays`, just finished on the Logs page.
+pub fn publish_replays(replays: &[Arc<ReplayResult>]) {
+    publish_work(Vec::new(), replays.to_vec());
+}
+
+fn publish_work(runs: Vec<Arc<RunResult>>, replays: Vec<Arc<ReplayResult>>) {
     let hash = window().location().hash().unwrap_or_default();
     let page = hash
         .trim_start_matches('#')
@@ -48,7 +61,8 @@ pub fn publish(runs: &[Arc<RunResult>]) {
         f.set(Some(FinishedRuns {
             serial,
             page,
-            runs: runs.to_vec(),
+            runs,
+            replays,
         }))
     });
 }

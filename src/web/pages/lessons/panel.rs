@@ -1,6 +1,7 @@
 //! The lesson beside the lab: the open step's task, its hints one at a time, and its check —
-//! a multiple-choice answer checked here, the runs the lab's page finishes (each condition met
-//! or not, with the measured value), or the Signal chain page's filter, checked on request.
+//! a multiple-choice answer checked here, the runs the lab's page finishes or the Logs page's
+//! replays (each condition met or not, with the measured value), or the Signal chain page's
+//! filter, checked on request.
 //! A step whose check is met is saved as done.
 
 use std::sync::Arc;
@@ -13,6 +14,7 @@ use crate::lessons::check::{ConditionOutcome, Evidence};
 use crate::lessons::setup::{Defined, LabPage, Setup};
 use crate::lessons::shipped::shipped_lesson;
 use crate::lessons::{Lesson, StepCheck};
+use crate::log::replay::ReplayResult;
 
 /// The open lesson's panel, or nothing when no lesson is open.
 #[component]
@@ -78,9 +80,10 @@ fn StepView(lesson: Arc<Lesson>, index: usize) -> impl IntoView {
         move || store::update(|p| p.mark_done(&id, index))
     };
 
-    // Runs the page finishes after the step opened are checked as they arrive.
+    // Runs (or the Logs page's replays) the page finishes after the step opened are checked as
+    // they arrive.
     if let StepCheck::Conditions { conditions, .. } = &step.check {
-        if step.setup.page.runs() {
+        if step.setup.page.runs() || step.setup.page == LabPage::Logs {
             let opened_after = feed::last_serial();
             let finished = feed::finished();
             let conditions = conditions.clone();
@@ -92,10 +95,14 @@ fn StepView(lesson: Arc<Lesson>, index: usize) -> impl IntoView {
                     return;
                 }
                 let refs: Vec<&RunResult> = runs.runs.iter().map(Arc::as_ref).collect();
-                let outcomes: Vec<ConditionOutcome> = conditions
-                    .iter()
-                    .map(|c| c.evaluate(Evidence::Runs(&refs)))
-                    .collect();
+                let replays: Vec<&ReplayResult> = runs.replays.iter().map(Arc::as_ref).collect();
+                let evidence = if slug == LabPage::Logs.slug() {
+                    Evidence::Replays(&replays)
+                } else {
+                    Evidence::Runs(&refs)
+                };
+                let outcomes: Vec<ConditionOutcome> =
+                    conditions.iter().map(|c| c.evaluate(evidence)).collect();
                 if outcomes.iter().all(|o| o.met) {
                     mark_done();
                 }
@@ -178,7 +185,10 @@ fn StepView(lesson: Arc<Lesson>, index: usize) -> impl IntoView {
             view! { <button type="button" on:click=check>"Check my filter"</button> }.into_any()
         }
         StepCheck::Conditions { .. } => view! {
-            <p class="hint">"Each run you finish on the " {page_name(step.setup.page)} " page is checked here."</p>
+            <p class="hint">
+                {if step.setup.page == LabPage::Logs { "Each replay" } else { "Each run" }}
+                " you finish on the " {page_name(step.setup.page)} " page is checked here."
+            </p>
         }
         .into_any(),
     };

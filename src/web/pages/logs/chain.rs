@@ -7,8 +7,10 @@ use std::time::Duration;
 use leptos::prelude::*;
 
 use super::charts::{channel_column, CURRENTS};
+use super::loader::LoadedLog;
 use super::LogsState;
 use crate::log::analysis::{ChainOutput, ChainRequest, ChainWork};
+use crate::log::link::LogsLink;
 use crate::log::mapping::Channel;
 use crate::log::settings::LogSetting;
 use crate::log::ColumnKind;
@@ -31,10 +33,14 @@ pub struct Chain {
 }
 
 impl Chain {
-    /// The chain of `shared`'s active log, run whenever the log or a setting changes.
-    pub fn new(shared: LogsState) -> Self {
-        let column = RwSignal::new(String::new());
-        let by = RwSignal::new(String::new());
+    /// The chain of `shared`'s active log, run whenever the log or a setting changes; its column
+    /// and grouping first those of a shared `link`, if the log has them.
+    pub fn new(shared: LogsState, link: &LogsLink) -> Self {
+        let column = RwSignal::new(link.column.clone().unwrap_or_default());
+        let by = RwSignal::new(link.by.clone().unwrap_or_default());
+        // A link's "no grouping" (`by=`) holds for the first log; after it, an empty choice
+        // picks the new log's label as before.
+        let by_chosen = StoredValue::new(link.by.is_some());
         let runner = Runner::<Arc<ChainOutput>>::new();
         let error = RwSignal::new(None::<String>);
         // A new log: analyse its current (or first numeric) column, grouped by its label.
@@ -43,19 +49,13 @@ impl Chain {
                 let Some(l) = l else { return };
                 let present = |name: &str| l.log.columns.iter().any(|c| c.name == name);
                 if !present(&column.get_untracked()) {
-                    let pick = channel_column(l, &CURRENTS)
-                        .or_else(|| l.log.columns.iter().find(|c| c.kind == ColumnKind::Number))
-                        .map(|c| c.name.clone())
-                        .unwrap_or_default();
-                    column.set(pick);
+                    column.set(picked_column(l));
                 }
-                if !present(&by.get_untracked()) {
-                    by.set(
-                        l.mapping
-                            .columns_of(Channel::Label)
-                            .first()
-                            .map_or(String::new(), |s| s.to_string()),
-                    );
+                let by_now = by.get_untracked();
+                let keep_none = by_now.is_empty() && by_chosen.get_value();
+                by_chosen.set_value(false);
+                if !keep_none && !present(&by_now) {
+                    by.set(picked_by(l));
                 }
             })
         });
@@ -91,6 +91,22 @@ impl Chain {
             error,
         }
     }
+}
+
+/// The column a log is analysed by unless one is chosen: its current (or first numeric) column.
+pub fn picked_column(l: &LoadedLog) -> String {
+    channel_column(l, &CURRENTS)
+        .or_else(|| l.log.columns.iter().find(|c| c.kind == ColumnKind::Number))
+        .map(|c| c.name.clone())
+        .unwrap_or_default()
+}
+
+/// The label column the statistics are grouped by unless one is chosen: the mapped label.
+pub fn picked_by(l: &LoadedLog) -> String {
+    l.mapping
+        .columns_of(Channel::Label)
+        .first()
+        .map_or(String::new(), |s| s.to_string())
 }
 
 /// The signal chain's fieldset.

@@ -8,6 +8,7 @@ use std::sync::Arc;
 use leptos::prelude::*;
 use wasm_bindgen::JsCast;
 
+use crate::log::link::LogsLink;
 use crate::log::mapping::{Channel, Mapping};
 use crate::log::{Log, LogBuilder};
 
@@ -134,6 +135,9 @@ pub struct Logs {
     next_id: StoredValue<u32>,
     /// Mappings by file name: a file loaded again keeps the one the person made.
     remembered: StoredValue<HashMap<String, Mapping>>,
+    /// The shared link the page opened with, until the next log is opened: its sample and its
+    /// mapping (applied to that log if it has the columns the link names).
+    pub from_link: RwSignal<Option<LogsLink>>,
 }
 
 impl Logs {
@@ -145,6 +149,7 @@ impl Logs {
             generation: StoredValue::new(0),
             next_id: StoredValue::new(1),
             remembered: StoredValue::new(HashMap::new()),
+            from_link: RwSignal::new(None),
         }
     }
 
@@ -187,11 +192,19 @@ impl Logs {
     }
 
     fn add(self, name: String, bytes: u64, load_s: f64, log: Log) {
-        let mapping = self
-            .remembered
-            .try_with_value(|m| m.get(&name).cloned())
+        let from_link = self
+            .from_link
+            .try_get_untracked()
             .flatten()
-            .filter(|m| m.resolve(&log).is_ok())
+            .and_then(|link| link.mapping_for(&log));
+        let _ = self.from_link.try_set(None);
+        let mapping = from_link
+            .or_else(|| {
+                self.remembered
+                    .try_with_value(|m| m.get(&name).cloned())
+                    .flatten()
+                    .filter(|m| m.resolve(&log).is_ok())
+            })
             .unwrap_or_else(|| Mapping::guess(&log));
         let id = self.next_id.get_value();
         self.next_id.set_value(id + 1);

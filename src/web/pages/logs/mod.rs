@@ -16,7 +16,7 @@
 //!
 //! | file | panel |
 //! |---|---|
-//! | `mod.rs` | the page, and what its panels share: the open logs, the active one, the time axis, the analysis settings |
+//! | `mod.rs` | the page, and what its panels share: the open logs, the active one, the time axis, the analysis settings; the page's state in its URL ([`crate::log::link`]) |
 //! | `loader.rs` | opening a file, a drop or a sample, in chunks |
 //! | `open.rs` | the Open a log and Open logs panels |
 //! | `chain.rs` | the signal chain on a column |
@@ -51,16 +51,17 @@ use std::ops::Range;
 use leptos::prelude::*;
 
 use crate::input::table::{self, form_errors, RowError};
+use crate::log::link::{sample_named, LogsLink};
 use crate::log::settings::{parse_analysis, sample_period, AnalysisSettings, LogSetting};
 use crate::web::components::later::Later;
 use crate::web::components::page::PageShell;
 use crate::web::components::table_form::{FieldErrors, TableForm};
 use crate::web::route::{query_params, replace_query, Page};
 use calibration::{CalibrationPanel, FitForm};
-use chain::{Chain, ChainPanel};
+use chain::{picked_by, picked_column, Chain, ChainPanel};
 use export::ExportPanel;
 use loader::{LoadedLog, Logs};
-use open::{load_sample, OpenLogsPanel, OpenPanel, SAMPLES};
+use open::{load_sample, OpenLogsPanel, OpenPanel};
 use replay::{Replay, ReplayPanel};
 use results::LogResults;
 
@@ -137,31 +138,51 @@ impl LogsState {
 pub fn LogsPage() -> impl IntoView {
     let query = query_params(&window().location().hash().unwrap_or_default());
     let shared = LogsState::new(&query);
-    // A sample log and the analysis settings live in the address bar, so a reload or a shared
-    // link restores them (a person's own file cannot: it is on their disk, not the server).
-    let sample_in_link = query
-        .iter()
-        .find(|(k, _)| k == "sample")
-        .and_then(|(_, v)| SAMPLES.iter().find(|(file, _)| file == v))
-        .map(|(file, _)| *file);
-    if let Some(file) = sample_in_link {
+    // The whole analysis and replay form live in the address bar ([`LogsLink`]), so a reload or
+    // a shared link restores them. A person's own file cannot (it is on their disk, not the
+    // server): a link's mapping waits for the next log opened, and applies if it has those
+    // columns.
+    let (link, _) = LogsLink::parse(&query);
+    let chain = Chain::new(shared, &link);
+    let fit = FitForm::new();
+    let replay = Replay::new(&link);
+    if let Some(file) = link.sample {
         load_sample(shared.logs, file);
     }
+    shared.logs.from_link.set(Some(link));
     Effect::new(move |_| {
-        let mut pairs = Vec::new();
-        if let Some(file) = shared.active.with(|a| {
-            a.as_ref()
-                .and_then(|l| SAMPLES.iter().find(|(file, _)| *file == l.name))
-                .map(|(file, _)| *file)
-        }) {
-            pairs.push(("sample".to_string(), file.to_string()));
-        }
+        // Until a log opens, the link as it came; then the active log's sample, mapping and
+        // analysed column (each left out where it is the page's own pick).
+        let state = shared.logs.from_link.with(|waiting| {
+            shared.active.with(|active| match (active, waiting) {
+                (Some(l), _) => LogsLink {
+                    sample: sample_named(&l.name),
+                    mapping: LogsLink::mapping_of(&l.log, &l.mapping),
+                    column: Some(chain.column.get()).filter(|c| *c != picked_column(l)),
+                    by: Some(chain.by.get()).filter(|b| *b != picked_by(l)),
+                    ..LogsLink::default()
+                },
+                (None, Some(waiting)) => LogsLink {
+                    sample: waiting.sample,
+                    mapping: waiting.mapping.clone(),
+                    column: waiting.column.clone(),
+                    by: waiting.by.clone(),
+                    ..LogsLink::default()
+                },
+                (None, None) => LogsLink::default(),
+            })
+        });
+        let mut pairs = replay.form_link(state).query();
         pairs.extend(shared.settings.query());
         replace_query(Page::Logs, &pairs);
     });
-    let chain = Chain::new(shared);
-    let fit = FitForm::new();
-    let replay = Replay::new();
+    let waiting_mapping = move || {
+        shared.logs.from_link.with(|l| {
+            l.as_ref()
+                .filter(|l| l.sample.is_none() && !l.mapping.is_empty())
+                .map(|l| l.mapping.len())
+        })
+    };
     view! {
         <PageShell id="logs" title="Machine logs">
             <p class="lede">
@@ -172,6 +193,11 @@ pub fn LogsPage() -> impl IntoView {
                 "have commanded and when the safety envelope would have acted. Replay is open-loop: the "
                 "log cannot react to a command."
             </p>
+            {move || waiting_mapping().map(|n| view! {
+                <p class="hint" role="note">
+                    {format!("This link maps {n} columns to channels: the mapping applies to the next log you open whose columns have those names.")}
+                </p>
+            })}
             <div class="layout-two">
                 <form class="panel" aria-label="Logs" on:submit=|ev| ev.prevent_default()>
                     <OpenPanel logs=shared.logs />

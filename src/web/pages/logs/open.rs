@@ -6,17 +6,7 @@ use wasm_bindgen::JsCast;
 
 use super::loader::{fetch_blob, files_of, LoadStatus, Logs};
 
-/// The synthetic sample logs in www/data, one click away.
-pub const SAMPLES: [(&str, &str); 2] = [
-    (
-        "synthetic-kim-step-doc-export.csv",
-        "Synthetic CNC export: 60 ms RMS currents, semicolons, decimal commas",
-    ),
-    (
-        "synthetic-maneerat-doc-2-daq.csv",
-        "Synthetic 1 kHz DAQ: spindle phase currents and a dynamometer",
-    ),
-];
+use crate::log::link::SAMPLES;
 
 /// Opens the sample log `file` (one of [`SAMPLES`]) from the server.
 pub fn load_sample(logs: Logs, file: &'static str) {

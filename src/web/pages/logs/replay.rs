@@ -8,59 +8,89 @@ use leptos::prelude::*;
 
 use super::calibration::FitForm;
 use super::LogsState;
-use crate::closed_loop::definition::{max_override_pct_of, RunSetting, SettingsOverrides};
+use crate::closed_loop::definition::{max_override_pct_of, RunSetting};
 use crate::closed_loop::error::LoopError;
-use crate::control::registry::{ControllerConfig, ControllerKind};
+use crate::control::registry::ControllerKind;
 use crate::estimation::estimator::Calibration;
+use crate::log::link::{machine_label, machine_named, machines, LogsLink, TargetKind};
 use crate::log::machine::ReplayError;
-use crate::log::replay::{ReplayResult, ReplayRun, ReplayRuns, ReplaySettings};
+use crate::log::replay::{ReplayResult, ReplayRun, ReplayRuns};
 use crate::web::components::fields::{ChoiceField, NumberField, SelectField};
 use crate::web::components::runner::{RunProgress, Runner};
 
-/// The replays' run.
+/// The replays' form and run.
 #[derive(Clone, Copy)]
 pub struct Replay {
     runner: StoredValue<Runner<Vec<Arc<ReplayResult>>>>,
     /// The last replays.
     pub done: ReadSignal<Option<Vec<Arc<ReplayResult>>>>,
+    /// Whether each of [`ControllerKind::ALL`] is replayed.
+    chosen: [RwSignal<bool>; ControllerKind::ALL.len()],
+    /// The target's kind ([`TargetKind::name`]).
+    target_kind: RwSignal<String>,
+    /// The target as typed.
+    target_text: RwSignal<String>,
+    /// The machine's override input ([`crate::plant::cnc::OverrideMode::name`]).
+    machine: RwSignal<String>,
 }
 
 impl Replay {
-    /// No replay yet.
-    pub fn new() -> Self {
+    /// No replay yet; the form as `link` sets it. Each finished set of replays goes to the
+    /// lesson panel.
+    pub fn new(link: &LogsLink) -> Self {
         let runner = Runner::<Vec<Arc<ReplayResult>>>::new();
         let done = runner.finished();
+        Effect::new(move |_| {
+            if let Some(replays) = done.get() {
+                crate::web::pages::lessons::feed::publish_replays(&replays);
+            }
+        });
         Self {
             runner: StoredValue::new(runner),
             done,
+            chosen: std::array::from_fn(|i| {
+                RwSignal::new(link.replayed.contains(&ControllerKind::ALL[i]))
+            }),
+            target_kind: RwSignal::new(link.target_kind.name().to_string()),
+            target_text: RwSignal::new(link.target_text.clone()),
+            machine: RwSignal::new(link.machine.name().to_string()),
         }
     }
-}
 
-/// The target's row: a current or a force.
-fn target_setting(kind: &str) -> RunSetting {
-    if kind == "force" {
-        RunSetting::TargetForce
-    } else {
-        RunSetting::TargetCurrent
+    /// The form as a link writes it (tracked): `link` with this form's controllers, target and
+    /// machine.
+    pub fn form_link(self, link: LogsLink) -> LogsLink {
+        LogsLink {
+            replayed: ControllerKind::ALL
+                .iter()
+                .zip(self.chosen)
+                .filter(|(_, on)| on.get())
+                .map(|(k, _)| *k)
+                .collect(),
+            machine: machine_named(&self.machine.get()).unwrap_or_default(),
+            target_kind: TargetKind::from_name(&self.target_kind.get()),
+            target_text: self.target_text.get(),
+            ..link
+        }
     }
 }
 
 /// The replay's fieldset.
 #[component]
 pub fn ReplayPanel(shared: LogsState, fit: FitForm, replay: Replay) -> impl IntoView {
-    let chosen: [RwSignal<bool>; ControllerKind::ALL.len()] = std::array::from_fn(|i| {
-        RwSignal::new(matches!(
-            ControllerKind::ALL[i],
-            ControllerKind::Threshold | ControllerKind::Pi
-        ))
-    });
-    let target_kind = RwSignal::new("current".to_string());
-    let target_text = RwSignal::new(String::new());
+    let (chosen, target_kind, target_text, machine) = (
+        replay.chosen,
+        replay.target_kind,
+        replay.target_text,
+        replay.machine,
+    );
     // A log's machine is FANUC's dial unless told.
-    let max_override_pct = max_override_pct_of(&ReplaySettings::default().override_mode);
     let target = Memo::new(move |_| {
-        target_setting(&target_kind.get()).parse_on(&target_text.get(), max_override_pct)
+        let max_override_pct =
+            max_override_pct_of(&machine_named(&machine.get()).unwrap_or_default());
+        TargetKind::from_name(&target_kind.get())
+            .setting()
+            .parse_on(&target_text.get(), max_override_pct)
     });
     // What the replay itself refused about the target, until the target changes.
     let refused_target = RwSignal::new(None::<String>);
@@ -103,29 +133,26 @@ pub fn ReplayPanel(shared: LogsState, fit: FitForm, replay: Replay) -> impl Into
             replay_error.set(Some("open a log first".into()));
             return;
         };
-        let controllers: Vec<ControllerConfig> = ControllerKind::ALL
-            .iter()
-            .zip(chosen)
-            .filter(|(_, on)| on.get_untracked())
-            .map(|(k, _)| ControllerConfig::new(*k))
-            .collect();
+        let form = untrack(|| replay.form_link(LogsLink::default()));
+        let controllers = form.controllers();
         if controllers.is_empty() {
             replay_error.set(Some("choose at least one controller".into()));
             return;
         }
-        let Ok(value) = target.get_untracked() else {
+        if target.get_untracked().is_err() {
             return;
-        };
-        let mut run = SettingsOverrides {
-            feedback: Some(fit.feedback.get_untracked()),
-            ..SettingsOverrides::default()
-        };
-        target_setting(&target_kind.get_untracked()).apply_to_settings(&mut run, value);
-        let settings = ReplaySettings {
-            run,
-            sample_period_s: shared.period_s_untracked(),
-            calibration: chosen_calibration(),
-            ..ReplaySettings::default()
+        }
+        // The settings a lesson's link replays with natively, built by the same code.
+        let settings = match form.replay_settings(
+            fit.feedback.get_untracked(),
+            chosen_calibration(),
+            shared.period_s_untracked(),
+        ) {
+            Ok(settings) => settings,
+            Err(e) => {
+                refused_target.set(Some(e));
+                return;
+            }
         };
         // Check what the first replay needs before starting, so the message lands beside the
         // control it is about.
@@ -167,8 +194,10 @@ pub fn ReplayPanel(shared: LogsState, fit: FitForm, replay: Replay) -> impl Into
                     }
                 })
                 .collect_view()}
+            <SelectField id="replay-machine" label="Machine's override input"
+                options=machines().iter().map(|m| (m.name(), machine_label(m))).collect() value=machine />
             <SelectField id="replay-target-kind" label="Target is a"
-                options=vec![("current", "Current (A)"), ("force", "Force (N)")] value=target_kind />
+                options=TargetKind::ALL.iter().map(|k| (k.name(), k.label())).collect() value=target_kind />
             <NumberField id="replay-target" label="Target value (empty: 80 % of the calibrated force at full override)" value=target_text
                 error=target_error />
             <ChoiceField id="replay-calibration" label="Calibration for the replay" options=calibration_options value=use_calibration />
