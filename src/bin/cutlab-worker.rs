@@ -7,11 +7,12 @@
 //! | `ready` | — (the module is loaded: requests posted before this would be lost) |
 //! | `progress` | `job`, `stage`, `fraction` (about ten times a second) |
 //! | `chunk` | `job`, `run`, `rows`, `terms`, and with a run's first chunk `calibration`: the trace rows added since the last chunk ([`TraceChunk`]), about every `CHUNK_EVERY_MS` (20 ms) once the closed loop runs |
-//! | `done` | `job`, and for runs `runs`: one `{ header, rows, terms }` per spec ([`RunParts`]; `rows` and `terms` are `Float64Array`s, transferred); for references `references`, as JSON |
+//! | `done` | `job`, and for runs `runs`: one `{ header, rows, terms }` per spec ([`RunParts`]; `rows` and `terms` are `Float64Array`s, transferred); for references `references`, as JSON; for replays `replays`: one `{ header, rows, terms }` per controller ([`ReplayParts`], the same way) |
 //! | `failed` | `job`, `message` (shown to a person as is) |
 //!
-//! A request is `{ job, request }`, `request` being a [`JobRequest`] as JSON: closed-loop runs, or
-//! a scenario's fixed-feed references. The job is done in one go: the page cancels it by
+//! A request is `{ job, request }`, `request` being a [`JobRequest`] as JSON: closed-loop runs,
+//! a scenario's fixed-feed references, or replays on a log, whose request carries `numbers` too:
+//! one `Float64Array` per column of the log it sends ([`ReplayRequest`]). The job is done in one go: the page cancels it by
 //! terminating the worker.
 
 #[cfg(target_arch = "wasm32")]
@@ -28,7 +29,7 @@ fn main() {
 mod worker {
     use cutlab::closed_loop::transfer::{
         learning_to_json, references_to_json, JobRequest, LearningRequest, ReferenceRequest,
-        RunParts, RunRequest, TraceChunk, TraceStream,
+        ReplayParts, ReplayRequest, RunParts, RunRequest, TraceChunk, TraceStream,
     };
     use cutlab::work::Work;
     use js_sys::{Array, Float64Array, Object, Reflect};
@@ -59,7 +60,7 @@ mod worker {
                 .ok()
                 .and_then(|r| r.as_string())
                 .ok_or_else(|| "the worker received a request without a run".to_string())
-                .and_then(|json| run(&replies, job, &json));
+                .and_then(|json| run(&replies, job, &json, &data));
             if let Err(message) = outcome {
                 // A failure that cannot be posted either leaves the page to its onerror.
                 let _ = post(
@@ -79,12 +80,65 @@ mod worker {
         let _ = post(&scope, &[("kind", "ready".into())], None);
     }
 
-    /// Does `json`'s job, posting progress and, at the end, its answer.
-    fn run(scope: &DedicatedWorkerGlobalScope, job: f64, json: &str) -> Result<(), String> {
+    /// Does `json`'s job (`data` being the whole message), posting progress and, at the end,
+    /// its answer.
+    fn run(
+        scope: &DedicatedWorkerGlobalScope,
+        job: f64,
+        json: &str,
+        data: &JsValue,
+    ) -> Result<(), String> {
         match JobRequest::from_json(json)? {
             JobRequest::Runs(request) => run_loops(scope, job, request),
             JobRequest::References(request) => find_references(scope, job, *request),
             JobRequest::Learning(request) => learn_network(scope, job, &request),
+            JobRequest::Replays(request) => replay_on_log(scope, job, *request, data),
+        }
+    }
+
+    /// Replays controllers on the log whose numbers came with the request, and posts their
+    /// traces.
+    fn replay_on_log(
+        scope: &DedicatedWorkerGlobalScope,
+        job: f64,
+        request: ReplayRequest,
+        data: &JsValue,
+    ) -> Result<(), String> {
+        let numbers = Reflect::get(data, &"numbers".into())
+            .ok()
+            .filter(Array::is_array)
+            .map(|a| Array::from(&a))
+            .ok_or("the worker received a replay without the log's numbers")?
+            .iter()
+            .map(|column| {
+                column
+                    .dyn_into::<Float64Array>()
+                    .map(|a| a.to_vec())
+                    .map_err(|_| "a column of the log's numbers is not an array of numbers")
+            })
+            .collect::<Result<Vec<_>, _>>()?;
+        let mut work = request.into_work(numbers)?;
+        let replays = advance_to_end(scope, job, &mut work, |_, _| Ok(()))?;
+        let sent = Array::new();
+        let transfer = Array::new();
+        for replay in &replays {
+            let parts = ReplayParts::of(replay)?;
+            sent.push(&trace_parts(
+                parts.header_json,
+                &parts.rows,
+                &parts.terms,
+                &transfer,
+            ));
+        }
+        let fields = [
+            ("kind", "done".into()),
+            ("job", job.into()),
+            ("replays", sent.into()),
+        ];
+        if post(scope, &fields, Some(&transfer)) {
+            Ok(())
+        } else {
+            Err("the worker could not send the replays".into())
         }
     }
 
@@ -180,15 +234,12 @@ mod worker {
         let transfer = Array::new();
         for run in &runs {
             let parts = RunParts::of(run)?;
-            let rows = Float64Array::from(parts.rows.as_slice());
-            let terms = Float64Array::from(parts.terms.as_slice());
-            transfer.push(&rows.buffer());
-            transfer.push(&terms.buffer());
-            sent.push(&object(&[
-                ("header", parts.header_json.into()),
-                ("rows", rows.into()),
-                ("terms", terms.into()),
-            ]));
+            sent.push(&trace_parts(
+                parts.header_json,
+                &parts.rows,
+                &parts.terms,
+                &transfer,
+            ));
         }
         if post(
             scope,
@@ -222,6 +273,20 @@ mod worker {
         }
         // A chunk that cannot be sent only leaves the page to wait for the finished run.
         let _ = post(scope, &fields, Some(&transfer));
+    }
+
+    /// A finished trace as sent, `{ header, rows, terms }`, its numbers' buffers added to
+    /// `transfer` (moved to the page rather than copied).
+    fn trace_parts(header_json: String, rows: &[f64], terms: &[f64], transfer: &Array) -> JsValue {
+        let rows = Float64Array::from(rows);
+        let terms = Float64Array::from(terms);
+        transfer.push(&rows.buffer());
+        transfer.push(&terms.buffer());
+        object(&[
+            ("header", header_json.into()),
+            ("rows", rows.into()),
+            ("terms", terms.into()),
+        ])
     }
 
     fn object(fields: &[(&str, JsValue)]) -> JsValue {

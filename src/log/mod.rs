@@ -41,7 +41,7 @@ pub mod period_log;
 pub mod replay;
 pub mod settings;
 
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 use crate::input::{excerpt, readable};
 use csv::{parse_number, Cell, CsvReader, Dialect, RecordView};
@@ -56,7 +56,7 @@ pub const MAX_LISTED_PROBLEMS: usize = 200;
 const HEADER_LOOKAHEAD: usize = 20;
 
 /// What a column holds.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum ColumnKind {
     /// Numbers.

@@ -28,7 +28,7 @@ use crate::closed_loop::definition::RunSpec;
 use crate::closed_loop::lab::RunResult;
 use crate::closed_loop::references::References;
 use crate::closed_loop::transfer::{
-    learning_from_json, references_from_json, JobRequest, RunParts, TraceChunk,
+    learning_from_json, references_from_json, JobRequest, ReplayParts, RunParts, TraceChunk,
 };
 use crate::closed_loop::trial_cuts::PresetLearning;
 use crate::work::Progress;
@@ -61,6 +61,9 @@ pub enum Answer {
     References(References),
     /// Paper 004's network learned on a preset's trial cuts.
     Learning(Box<PresetLearning>),
+    /// Replays' traces, in the order of the request's controllers (the page rebuilds each with
+    /// the replay it prepares, [`ReplayParts::into_result`]).
+    Replays(Vec<ReplayParts>),
 }
 
 /// What a job's answer is rebuilt from: for runs, their specs.
@@ -69,6 +72,7 @@ enum Expecting {
     Runs(Vec<RunSpec>),
     References,
     Learning,
+    Replays,
 }
 
 /// A job given to the pool.
@@ -82,6 +86,8 @@ struct Queued {
     id: u64,
     expecting: Expecting,
     request_json: String,
+    /// Numbers sent beside the JSON (`Float64Array`s, moved to the worker with the request).
+    numbers: Array,
 }
 
 /// One worker and what it is doing.
@@ -126,7 +132,18 @@ pub fn pool_size() -> usize {
 
 /// Queues `request` as one job; `listener` hears its progress (and a run's trace as it comes),
 /// then its answer or why it failed, never in the task that submits it.
-pub fn submit(request: JobRequest, mut listener: impl FnMut(JobEvent) + 'static) -> JobId {
+pub fn submit(request: JobRequest, listener: impl FnMut(JobEvent) + 'static) -> JobId {
+    submit_with_numbers(request, &[], listener)
+}
+
+/// Queues `request` as [`submit`] does, with `numbers` sent beside its JSON (a replay's log
+/// columns, [`crate::closed_loop::transfer::ReplayRequest::new`]): each copied once, into an
+/// array moved to the worker with the request.
+pub fn submit_with_numbers(
+    request: JobRequest,
+    numbers: &[&[f64]],
+    mut listener: impl FnMut(JobEvent) + 'static,
+) -> JobId {
     let id = POOL.with(|pool| {
         let mut pool = pool.borrow_mut();
         pool.next_id += 1;
@@ -136,9 +153,14 @@ pub fn submit(request: JobRequest, mut listener: impl FnMut(JobEvent) + 'static)
         JobRequest::Runs(runs) => Expecting::Runs(runs.specs.clone()),
         JobRequest::References(_) => Expecting::References,
         JobRequest::Learning(_) => Expecting::Learning,
+        JobRequest::Replays(_) => Expecting::Replays,
     };
     match request.to_json() {
         Ok(request_json) => {
+            let sent = Array::new();
+            for column in numbers {
+                sent.push(&Float64Array::from(*column));
+            }
             POOL.with(|pool| {
                 let mut pool = pool.borrow_mut();
                 pool.listeners.insert(id, Box::new(listener));
@@ -146,6 +168,7 @@ pub fn submit(request: JobRequest, mut listener: impl FnMut(JobEvent) + 'static)
                     id,
                     expecting,
                     request_json,
+                    numbers: sent,
                 });
             });
             start_workers();
@@ -288,7 +311,16 @@ fn dispatch() {
             let message = js_sys::Object::new();
             let _ = Reflect::set(&message, &"job".into(), &(job.id as f64).into());
             let _ = Reflect::set(&message, &"request".into(), &job.request_json.into());
-            let sent = slot.worker.post_message(&message);
+            let sent = if job.numbers.length() == 0 {
+                slot.worker.post_message(&message)
+            } else {
+                let moved = Array::new();
+                for numbers in job.numbers.iter() {
+                    moved.push(&numbers.unchecked_into::<Float64Array>().buffer());
+                }
+                let _ = Reflect::set(&message, &"numbers".into(), &job.numbers);
+                slot.worker.post_message_with_transfer(&message, &moved)
+            };
             slot.running = Some((job.id, job.expecting));
             Some(sent.map_err(|e| (free, job.id, crate::web::js::describe(&e))))
         });
@@ -350,6 +382,9 @@ fn on_message(index: usize, serial: u64, data: &JsValue) {
                     learning_from_json(&field("learning").as_string().unwrap_or_default())
                         .map(|l| Answer::Learning(Box::new(l)))
                 }
+                Expecting::Replays => {
+                    received_replays(&Array::from(&field("replays"))).map(Answer::Replays)
+                }
             };
             finish(index, id, answer);
         }
@@ -363,12 +398,7 @@ fn on_message(index: usize, serial: u64, data: &JsValue) {
 
 /// The piece of a trace a worker sent, `field` reading the message's fields.
 fn received_chunk(field: &dyn Fn(&str) -> JsValue) -> Result<TraceChunk, String> {
-    let numbers = |name: &str| {
-        field(name)
-            .dyn_into::<Float64Array>()
-            .map(|a| a.to_vec())
-            .map_err(|_| format!("a piece of the worker's trace lacks its {name}"))
-    };
+    let numbers = |name: &str| numbers_in(field(name), "a piece of the worker's trace", name);
     Ok(TraceChunk {
         run: field("run").as_f64().unwrap_or(0.0) as usize,
         calibration_json: field("calibration").as_string(),
@@ -390,12 +420,7 @@ fn received_runs(runs: &Array, specs: Vec<RunSpec>) -> Result<Vec<Arc<RunResult>
         .zip(specs)
         .map(|(run, spec)| {
             let field = |name: &str| Reflect::get(&run, &name.into()).unwrap_or(JsValue::UNDEFINED);
-            let numbers = |name: &str| {
-                field(name)
-                    .dyn_into::<Float64Array>()
-                    .map(|a| a.to_vec())
-                    .map_err(|_| format!("the worker's run lacks its {name}"))
-            };
+            let numbers = |name: &str| numbers_in(field(name), "the worker's run", name);
             RunParts {
                 header_json: field("header").as_string().unwrap_or_default(),
                 rows: numbers("rows")?,
@@ -403,6 +428,31 @@ fn received_runs(runs: &Array, specs: Vec<RunSpec>) -> Result<Vec<Arc<RunResult>
             }
             .into_result(spec)
             .map(Arc::new)
+        })
+        .collect()
+}
+
+/// The numbers of `value` (a `Float64Array`), or why not: `whose` lacks its `name`.
+fn numbers_in(value: JsValue, whose: &str, name: &str) -> Result<Vec<f64>, String> {
+    value
+        .dyn_into::<Float64Array>()
+        .map(|a| a.to_vec())
+        .map_err(|_| format!("{whose} lacks its {name}"))
+}
+
+/// The replays' traces a worker sent.
+fn received_replays(replays: &Array) -> Result<Vec<ReplayParts>, String> {
+    replays
+        .iter()
+        .map(|replay| {
+            let field =
+                |name: &str| Reflect::get(&replay, &name.into()).unwrap_or(JsValue::UNDEFINED);
+            let numbers = |name: &str| numbers_in(field(name), "the worker's replay", name);
+            Ok(ReplayParts {
+                header_json: field("header").as_string().unwrap_or_default(),
+                rows: numbers("rows")?,
+                terms: numbers("terms")?,
+            })
         })
         .collect()
 }

@@ -209,7 +209,7 @@ impl<T: Send + Sync + 'static> Runner<T> {
 }
 
 /// What a job answered with another kind of answer than its request's (a bug) fails with.
-const ANOTHER_ANSWER: &str = "the computation worker answered another job than the one asked";
+pub const ANOTHER_ANSWER: &str = "the computation worker answered another job than the one asked";
 
 impl<T: Clone + Send + Sync + 'static> Runner<T> {
     /// Does `request` in the worker pool, replacing anything running, behind the same status,
@@ -347,10 +347,6 @@ impl Runner<Vec<Arc<RunResult>>> {
                             let _ = status.try_set(stage(&fractions.borrow()));
                         }
                     }
-                    JobEvent::Done(Answer::References(_) | Answer::Learning(_)) => {
-                        runner.cancel();
-                        let _ = status.try_set(RunStatus::Failed(ANOTHER_ANSWER.into()));
-                    }
                     JobEvent::Done(Answer::Runs(mut runs)) => {
                         results.borrow_mut()[index] = runs.pop();
                         fractions.borrow_mut()[index] = 1.0;
@@ -373,6 +369,10 @@ impl Runner<Vec<Arc<RunResult>>> {
                                 let _ = status.try_set(stage(&fractions.borrow()));
                             }
                         }
+                    }
+                    JobEvent::Done(_) => {
+                        runner.cancel();
+                        let _ = status.try_set(RunStatus::Failed(ANOTHER_ANSWER.into()));
                     }
                     JobEvent::Failed(message) => {
                         runner.cancel();

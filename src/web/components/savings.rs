@@ -128,7 +128,7 @@ impl Savings {
             JobRequest::References(Box::new(request)),
             |answer| match answer {
                 Answer::References(found) => Some(found),
-                Answer::Runs(_) | Answer::Learning(_) => None,
+                _ => None,
             },
         );
     }

@@ -1,26 +1,28 @@
 //! Controllers replayed on the active log: the override each would have commanded and what the
-//! envelope would have done, through the loop every run uses; the target is the run definition's
-//! row (as `cutlab log replay --target-n/--target-a`), checked as typed.
+//! envelope would have done, through the loop every run uses, computed in the workers
+//! ([`super::in_workers`]); the target is the run definition's row (as
+//! `cutlab log replay --target-n/--target-a`), checked as typed.
 
 use std::sync::Arc;
 
 use leptos::prelude::*;
 
 use super::calibration::FitForm;
+use super::in_workers::{start_replays, ReplayRunner};
 use super::LogsState;
 use crate::closed_loop::definition::{max_override_pct_of, RunSetting, SettingsOverrides};
 use crate::closed_loop::error::LoopError;
 use crate::control::registry::{ControllerConfig, ControllerKind};
 use crate::estimation::estimator::Calibration;
 use crate::log::machine::ReplayError;
-use crate::log::replay::{ReplayResult, ReplayRun, ReplayRuns, ReplaySettings};
+use crate::log::replay::{ReplayResult, ReplayRun, ReplaySettings};
 use crate::web::components::fields::{ChoiceField, NumberField, SelectField};
-use crate::web::components::runner::{RunProgress, Runner};
+use crate::web::components::runner::RunProgress;
 
 /// The replays' run.
 #[derive(Clone, Copy)]
 pub struct Replay {
-    runner: StoredValue<Runner<Vec<Arc<ReplayResult>>>>,
+    runner: StoredValue<ReplayRunner>,
     /// The last replays.
     pub done: ReadSignal<Option<Vec<Arc<ReplayResult>>>>,
 }
@@ -28,7 +30,7 @@ pub struct Replay {
 impl Replay {
     /// No replay yet.
     pub fn new() -> Self {
-        let runner = Runner::<Vec<Arc<ReplayResult>>>::new();
+        let runner = ReplayRunner::new();
         let done = runner.finished();
         Self {
             runner: StoredValue::new(runner),
@@ -143,12 +145,13 @@ pub fn ReplayPanel(shared: LogsState, fit: FitForm, replay: Replay) -> impl Into
             }
             return;
         }
-        runner.start(ReplayRuns::new(
+        start_replays(
+            &runner,
             l.log.clone(),
             l.mapping.clone(),
             settings,
             controllers,
-        ));
+        );
     };
     view! {
         <fieldset>

@@ -154,7 +154,7 @@ pub fn LearningPanel(
                 }),
                 |answer| match answer {
                     Answer::Learning(learning) => Some(Arc::new(*learning)),
-                    Answer::Runs(_) | Answer::References(_) => None,
+                    _ => None,
                 },
             );
         }
