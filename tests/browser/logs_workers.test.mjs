@@ -1,7 +1,8 @@
 // The Logs page's replays compute in the workers (issue 28): each controller's replay is a job of
 // its own, sent with the log's mapped columns, and its results show on the page; on a big log two
 // controllers replay at once on two workers; Cancel during a replay terminates its workers, keeps
-// the log, and the next replay succeeds.
+// the log, and the next replay succeeds; a worker that throws fails the replay with the reason, the
+// log stays, and the next replay succeeds.
 //
 // The pool publishes `data-busy-workers` (the workers computing now) on <html>; nothing else on
 // the Logs page computes in a worker, so a busy worker there is a replay. The tests wait on that
@@ -11,7 +12,7 @@ import assert from 'node:assert/strict';
 import { writeFile, mkdtemp, rm } from 'node:fs/promises';
 import { tmpdir } from 'node:os';
 import { join } from 'node:path';
-import { serveDist, launchBrowser, openLab, root } from './harness.mjs';
+import { serveDist, launchBrowser, openLab, openLabWithThrowingWorker, root } from './harness.mjs';
 
 const DAQ = 'synthetic-maneerat-doc-2-daq.csv';
 const TIMEOUT = 120_000;
@@ -72,10 +73,11 @@ test('a replay computes in a worker and its results show', async () => {
 
 test('on a big log two controllers replay at once; Cancel keeps the log and the next replay succeeds', async () => {
   const { page, problems, context } = await openLab(browser, server.url, '#/logs');
-  // 180 s of a 10 kHz log (1.8 million rows, about 50 MB): a spindle current at 3000 rpm.
+  // 360 s of a 10 kHz log (3.6 million rows, about 75 MB): a spindle current at 3000 rpm, long
+  // enough that its replays (about a second each here) are still computing when Cancel is pressed.
   const dir = await mkdtemp(join(tmpdir(), 'cutlab-logs-workers-'));
   const file = join(dir, 'long.csv');
-  const rows = 1_800_000;
+  const rows = 3_600_000;
   const lines = ['time [s],S_I [A],S_speed [rpm]'];
   for (let i = 0; i < rows; i++) {
     lines.push(`${(i / 1e4).toFixed(4)},${(10 + 4 * Math.sin(i / 5000) + 0.5 * Math.sin(i / 7)).toFixed(4)},3000`);
@@ -104,6 +106,24 @@ test('on a big log two controllers replay at once; Cancel keeps the log and the 
   await table.getByRole('columnheader', { name: 'PI with anti-windup' }).waitFor({ timeout: TIMEOUT });
   await table.getByRole('columnheader', { name: 'Threshold-proportional' }).waitFor();
   await waitForBusyWorkers(page, 0);
+  assert.deepEqual(problems, []);
+  await context.close();
+});
+
+test('a worker that throws fails the replay beside its button, the log stays, and the next replay succeeds', async () => {
+  // The first worker to start throws on its first request (a bug in the worker).
+  const { page, problems, context, served } = await openLabWithThrowingWorker(browser, server.url, '#/logs');
+  await page.getByLabel('Open log files').setInputFiles(join(root, 'www', 'data', DAQ));
+  await page.getByRole('status').filter({ hasText: `Loaded ${DAQ}: 12000 rows × 9 columns` }).waitFor({ timeout: TIMEOUT });
+  await replay(page, 40);
+  await page.getByRole('alert').filter({ hasText: /^The replay failed: the computation worker stopped: .*worker bug for the test/ }).waitFor({ timeout: TIMEOUT });
+  await waitForBusyWorkers(page, 0);
+  assert.equal(await page.getByLabel(`Analyse ${DAQ}`).count(), 1);
+  // Fresh workers took the thrower's place: the next replay completes.
+  await replay(page, 41);
+  await replayTable(page).getByRole('columnheader', { name: 'PI with anti-windup' }).waitFor({ timeout: TIMEOUT });
+  await page.getByRole('alert').filter({ hasText: /worker bug/ }).waitFor({ state: 'detached' });
+  assert.ok(served() >= 2, `${served()} worker scripts served`);
   assert.deepEqual(problems, []);
   await context.close();
 });
