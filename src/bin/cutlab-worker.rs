@@ -11,9 +11,10 @@
 //! | `failed` | `job`, `message` (shown to a person as is) |
 //!
 //! A request is `{ job, request }`, `request` being a [`JobRequest`] as JSON: closed-loop runs,
-//! a scenario's fixed-feed references, or replays on a log, whose request carries `numbers` too:
-//! one `Float64Array` per column of the log it sends ([`ReplayRequest`]). The job is done in one go: the page cancels it by
-//! terminating the worker.
+//! a scenario's fixed-feed references or a learning; or `{ job, replay, numbers }`, `replay`
+//! being a [`ReplayRequest`] as JSON (controllers replayed on a log, a layer above the loop's
+//! protocol) and `numbers` one `Float64Array` per column of the log it sends. The job is done in
+//! one go: the page cancels it by terminating the worker.
 
 #[cfg(target_arch = "wasm32")]
 fn main() {
@@ -29,8 +30,9 @@ fn main() {
 mod worker {
     use cutlab::closed_loop::transfer::{
         learning_to_json, references_to_json, JobRequest, LearningRequest, ReferenceRequest,
-        ReplayParts, ReplayRequest, RunParts, RunRequest, TraceChunk, TraceStream,
+        RunParts, RunRequest, TraceChunk, TraceStream,
     };
+    use cutlab::log::transfer::{ReplayParts, ReplayRequest};
     use cutlab::work::Work;
     use js_sys::{Array, Float64Array, Object, Reflect};
     use wasm_bindgen::prelude::{Closure, JsCast, JsValue};
@@ -56,11 +58,18 @@ mod worker {
                 .ok()
                 .and_then(|j| j.as_f64())
                 .unwrap_or(-1.0);
-            let outcome = Reflect::get(&data, &"request".into())
+            let replay = Reflect::get(&data, &"replay".into())
                 .ok()
-                .and_then(|r| r.as_string())
-                .ok_or_else(|| "the worker received a request without a run".to_string())
-                .and_then(|json| run(&replies, job, &json, &data));
+                .and_then(|r| r.as_string());
+            let outcome = match replay {
+                Some(json) => ReplayRequest::from_json(&json)
+                    .and_then(|request| replay_on_log(&replies, job, request, &data)),
+                None => Reflect::get(&data, &"request".into())
+                    .ok()
+                    .and_then(|r| r.as_string())
+                    .ok_or_else(|| "the worker received a request without a run".to_string())
+                    .and_then(|json| run(&replies, job, &json)),
+            };
             if let Err(message) = outcome {
                 // A failure that cannot be posted either leaves the page to its onerror.
                 let _ = post(
@@ -80,24 +89,17 @@ mod worker {
         let _ = post(&scope, &[("kind", "ready".into())], None);
     }
 
-    /// Does `json`'s job (`data` being the whole message), posting progress and, at the end,
-    /// its answer.
-    fn run(
-        scope: &DedicatedWorkerGlobalScope,
-        job: f64,
-        json: &str,
-        data: &JsValue,
-    ) -> Result<(), String> {
+    /// Does `json`'s job, posting progress and, at the end, its answer.
+    fn run(scope: &DedicatedWorkerGlobalScope, job: f64, json: &str) -> Result<(), String> {
         match JobRequest::from_json(json)? {
             JobRequest::Runs(request) => run_loops(scope, job, request),
             JobRequest::References(request) => find_references(scope, job, *request),
             JobRequest::Learning(request) => learn_network(scope, job, &request),
-            JobRequest::Replays(request) => replay_on_log(scope, job, *request, data),
         }
     }
 
-    /// Replays controllers on the log whose numbers came with the request, and posts their
-    /// traces.
+    /// Replays controllers on the log whose numbers came with the request (`data`, the whole
+    /// message), and posts their traces.
     fn replay_on_log(
         scope: &DedicatedWorkerGlobalScope,
         job: f64,

@@ -31,6 +31,7 @@
 //! | [`calibration`] | calibration from a recorded log: the teach cut over the log |
 //! | [`period_log`] | calibration from a log whose rows are control periods (`cutlab calibrate`, logged teach-in) |
 //! | [`settings`] | the settings of a log's analysis as one table (Logs page fields, CLI options) |
+//! | [`transfer`] | the Logs page's replays sent to a computation worker and back |
 
 pub mod analysis;
 pub mod calibration;
@@ -40,6 +41,7 @@ pub mod mapping;
 pub mod period_log;
 pub mod replay;
 pub mod settings;
+pub mod transfer;
 
 use serde::{Deserialize, Serialize};
 

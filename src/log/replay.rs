@@ -53,7 +53,7 @@ pub enum Target {
 
 /// What a replay (or a calibration from a log) is made with, besides the log and its mapping.
 /// As JSON it is what the Logs page sends a worker with a replay
-/// ([`crate::closed_loop::transfer::ReplayRequest`]).
+/// ([`crate::log::transfer::ReplayRequest`]).
 #[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct ReplaySettings {
@@ -269,7 +269,7 @@ impl ReplayRun {
 
     /// The result of this replay, not run here, had its loop traced `trace`: a worker's replay
     /// of the same controller on the same log and settings (the Logs page's,
-    /// [`crate::closed_loop::transfer::ReplayParts`]).
+    /// [`crate::log::transfer::ReplayParts`]).
     ///
     /// # Errors
     /// A replay already run here has no loop left to read its settings from.

@@ -28,9 +28,10 @@ use crate::closed_loop::definition::RunSpec;
 use crate::closed_loop::lab::RunResult;
 use crate::closed_loop::references::References;
 use crate::closed_loop::transfer::{
-    learning_from_json, references_from_json, JobRequest, ReplayParts, RunParts, TraceChunk,
+    learning_from_json, references_from_json, JobRequest, RunParts, TraceChunk,
 };
 use crate::closed_loop::trial_cuts::PresetLearning;
+use crate::log::transfer::{ReplayParts, ReplayRequest};
 use crate::work::Progress;
 
 /// The most workers the pool starts, whatever the browser reports: each holds a module and its
@@ -86,6 +87,9 @@ struct Queued {
     id: u64,
     expecting: Expecting,
     request_json: String,
+    /// The message's field the JSON goes in: `request` for a [`JobRequest`], `replay` for a
+    /// [`ReplayRequest`].
+    field: &'static str,
     /// Numbers sent beside the JSON (`Float64Array`s, moved to the worker with the request).
     numbers: Array,
 }
@@ -133,14 +137,36 @@ pub fn pool_size() -> usize {
 /// Queues `request` as one job; `listener` hears its progress (and a run's trace as it comes),
 /// then its answer or why it failed, never in the task that submits it.
 pub fn submit(request: JobRequest, listener: impl FnMut(JobEvent) + 'static) -> JobId {
-    submit_with_numbers(request, &[], listener)
+    let expecting = match &request {
+        JobRequest::Runs(runs) => Expecting::Runs(runs.specs.clone()),
+        JobRequest::References(_) => Expecting::References,
+        JobRequest::Learning(_) => Expecting::Learning,
+    };
+    enqueue("request", request.to_json(), expecting, &[], listener)
 }
 
-/// Queues `request` as [`submit`] does, with `numbers` sent beside its JSON (a replay's log
-/// columns, [`crate::closed_loop::transfer::ReplayRequest::new`]): each copied once, into an
-/// array moved to the worker with the request.
-pub fn submit_with_numbers(
-    request: JobRequest,
+/// Queues a replay on a log as one job, as [`submit`] does, with `numbers` (the log's columns,
+/// [`ReplayRequest::new`]) sent beside its JSON: each copied once, into an array moved to the
+/// worker with the request. It is answered by [`Answer::Replays`].
+pub fn submit_replay(
+    request: &ReplayRequest,
+    numbers: &[&[f64]],
+    listener: impl FnMut(JobEvent) + 'static,
+) -> JobId {
+    enqueue(
+        "replay",
+        request.to_json(),
+        Expecting::Replays,
+        numbers,
+        listener,
+    )
+}
+
+/// Queues a job whose JSON goes in the message's `field`.
+fn enqueue(
+    field: &'static str,
+    json: Result<String, String>,
+    expecting: Expecting,
     numbers: &[&[f64]],
     mut listener: impl FnMut(JobEvent) + 'static,
 ) -> JobId {
@@ -149,13 +175,7 @@ pub fn submit_with_numbers(
         pool.next_id += 1;
         pool.next_id
     });
-    let expecting = match &request {
-        JobRequest::Runs(runs) => Expecting::Runs(runs.specs.clone()),
-        JobRequest::References(_) => Expecting::References,
-        JobRequest::Learning(_) => Expecting::Learning,
-        JobRequest::Replays(_) => Expecting::Replays,
-    };
-    match request.to_json() {
+    match json {
         Ok(request_json) => {
             let sent = Array::new();
             for column in numbers {
@@ -168,6 +188,7 @@ pub fn submit_with_numbers(
                     id,
                     expecting,
                     request_json,
+                    field,
                     numbers: sent,
                 });
             });
@@ -310,7 +331,7 @@ fn dispatch() {
             let slot = pool.slots.get_mut(free)?.as_mut()?;
             let message = js_sys::Object::new();
             let _ = Reflect::set(&message, &"job".into(), &(job.id as f64).into());
-            let _ = Reflect::set(&message, &"request".into(), &job.request_json.into());
+            let _ = Reflect::set(&message, &job.field.into(), &job.request_json.into());
             let sent = if job.numbers.length() == 0 {
                 slot.worker.post_message(&message)
             } else {

@@ -22,10 +22,10 @@ use std::sync::Arc;
 
 use leptos::prelude::Set;
 
-use crate::closed_loop::transfer::{JobRequest, ReplayParts, ReplayRequest};
 use crate::control::registry::ControllerConfig;
 use crate::log::mapping::Mapping;
 use crate::log::replay::{ReplayResult, ReplayRun, ReplaySettings};
+use crate::log::transfer::{ReplayParts, ReplayRequest};
 use crate::log::Log;
 use crate::web::components::pool::{self, Answer, JobEvent};
 use crate::web::components::runner::{
@@ -111,65 +111,61 @@ pub fn start_replays(
         let (request, numbers) =
             ReplayRequest::new(&log, mapping.clone(), settings.clone(), vec![controller]);
         let (runner_in, replays, current) = (runner.clone(), replays.clone(), current.clone());
-        let job = pool::submit_with_numbers(
-            JobRequest::Replays(Box::new(request)),
-            &numbers,
-            move |event| {
-                if !current() {
-                    return;
-                }
-                let status = runner_in.status;
-                match event {
-                    JobEvent::Progress(p) => {
-                        let mut r = replays.borrow_mut();
-                        r.fractions[index] = p.fraction;
-                        let now_ms = js_sys::Date::now();
-                        if now_ms - r.progress_at_ms >= PROGRESS_EVERY_MS {
-                            r.progress_at_ms = now_ms;
-                            let _ = status.try_set(r.running());
-                        }
+        let job = pool::submit_replay(&request, &numbers, move |event| {
+            if !current() {
+                return;
+            }
+            let status = runner_in.status;
+            match event {
+                JobEvent::Progress(p) => {
+                    let mut r = replays.borrow_mut();
+                    r.fractions[index] = p.fraction;
+                    let now_ms = js_sys::Date::now();
+                    if now_ms - r.progress_at_ms >= PROGRESS_EVERY_MS {
+                        r.progress_at_ms = now_ms;
+                        let _ = status.try_set(r.running());
                     }
-                    JobEvent::Chunk(_) => {}
-                    JobEvent::Done(Answer::Replays(mut parts)) if parts.len() == 1 => {
-                        {
-                            let mut r = replays.borrow_mut();
-                            r.answered[index] = parts.pop();
-                            r.fractions[index] = 1.0;
-                        }
-                        let all_in = replays.borrow().answered.iter().all(Option::is_some);
-                        if !all_in {
-                            let _ = status.try_set(replays.borrow().running());
+                }
+                JobEvent::Chunk(_) => {}
+                JobEvent::Done(Answer::Replays(mut parts)) if parts.len() == 1 => {
+                    {
+                        let mut r = replays.borrow_mut();
+                        r.answered[index] = parts.pop();
+                        r.fractions[index] = 1.0;
+                    }
+                    let all_in = replays.borrow().answered.iter().all(Option::is_some);
+                    if !all_in {
+                        let _ = status.try_set(replays.borrow().running());
+                        return;
+                    }
+                    let (replays, current) = (replays.clone(), current.clone());
+                    // The rebuild and the redraw it starts run in a task of their own.
+                    next_task(move || {
+                        if !current() {
                             return;
                         }
-                        let (replays, current) = (replays.clone(), current.clone());
-                        // The rebuild and the redraw it starts run in a task of their own.
-                        next_task(move || {
-                            if !current() {
-                                return;
+                        let outcome = replays.borrow_mut().results();
+                        match outcome {
+                            Some(Ok(results)) => {
+                                let _ = status.try_set(RunStatus::Done(results));
                             }
-                            let outcome = replays.borrow_mut().results();
-                            match outcome {
-                                Some(Ok(results)) => {
-                                    let _ = status.try_set(RunStatus::Done(results));
-                                }
-                                Some(Err(message)) => {
-                                    let _ = status.try_set(RunStatus::Failed(message));
-                                }
-                                None => {}
+                            Some(Err(message)) => {
+                                let _ = status.try_set(RunStatus::Failed(message));
                             }
-                        });
-                    }
-                    JobEvent::Done(_) => {
-                        runner_in.cancel();
-                        let _ = status.try_set(RunStatus::Failed(ANOTHER_ANSWER.into()));
-                    }
-                    JobEvent::Failed(message) => {
-                        runner_in.cancel();
-                        let _ = status.try_set(RunStatus::Failed(message));
-                    }
+                            None => {}
+                        }
+                    });
                 }
-            },
-        );
+                JobEvent::Done(_) => {
+                    runner_in.cancel();
+                    let _ = status.try_set(RunStatus::Failed(ANOTHER_ANSWER.into()));
+                }
+                JobEvent::Failed(message) => {
+                    runner_in.cancel();
+                    let _ = status.try_set(RunStatus::Failed(message));
+                }
+            }
+        });
         runner.track(job);
     }
 }
