@@ -146,7 +146,7 @@ pub struct EnvelopeConfig {
 /// above `max_mm` the chip overloads the edge. The override that keeps a period's feed per tooth
 /// inside follows from the programmed feed and spindle speed:
 /// `f_z = programmed feed × override / (teeth × rpm)`.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct ChipLoad {
     /// Teeth of the cutter.
     pub teeth: u32,

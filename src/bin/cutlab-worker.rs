@@ -7,13 +7,15 @@
 //! | `ready` | — (the module is loaded: requests posted before this would be lost) |
 //! | `progress` | `job`, `stage`, `fraction` (about ten times a second) |
 //! | `chunk` | `job`, `run`, `rows`, `terms`, and with a run's first chunk `calibration`: the trace rows added since the last chunk ([`TraceChunk`]), about every `CHUNK_EVERY_MS` (20 ms) once the closed loop runs |
-//! | `done` | `job`, and for runs `runs`: one `{ header, rows, terms }` per spec ([`RunParts`]; `rows` and `terms` are `Float64Array`s, transferred); for references `references`, as JSON; for a bench or open-loop recording or teach cuts `json` and `arrays`, a list of `Float64Array`s, transferred (`cutlab::closed_loop::recording_jobs::Packed`) |
+//! | `done` | `job`, and for runs `runs`: one `{ header, rows, terms }` per spec ([`RunParts`]; `rows` and `terms` are `Float64Array`s, transferred); for references `references`, as JSON; for a bench or open-loop recording or teach cuts `json` and `arrays`, a list of `Float64Array`s, transferred (`cutlab::closed_loop::recording_jobs::Packed`); for replays `replays`: one `{ header, rows, terms }` per controller ([`ReplayParts`], the same way) |
 //! | `failed` | `job`, `message` (shown to a person as is) |
 //!
 //! A request is `{ job, request }`, `request` being a [`JobRequest`] as JSON: closed-loop runs, a
 //! scenario's fixed-feed references, paper 004's learning, paper 000's bench recording (Signal
-//! chain), a preset's open-loop recording (Machine) or a teach-in's teach cuts (Tune). The job is done in one go: the page cancels it by
-//! terminating the worker.
+//! chain), a preset's open-loop recording (Machine) or a teach-in's teach cuts (Tune); or
+//! `{ job, replay, numbers }`, `replay` being a [`ReplayRequest`] as JSON (controllers replayed on
+//! a log, a layer above the loop's protocol) and `numbers` one `Float64Array` per column of the
+//! log it sends. The job is done in one go: the page cancels it by terminating the worker.
 
 #[cfg(target_arch = "wasm32")]
 fn main() {
@@ -34,6 +36,7 @@ mod worker {
         learning_to_json, references_to_json, JobRequest, LearningRequest, ReferenceRequest,
         RunParts, RunRequest, TraceChunk, TraceStream,
     };
+    use cutlab::log::transfer::{ReplayParts, ReplayRequest};
     use cutlab::work::Work;
     use js_sys::{Array, Float64Array, Object, Reflect};
     use wasm_bindgen::prelude::{Closure, JsCast, JsValue};
@@ -59,11 +62,18 @@ mod worker {
                 .ok()
                 .and_then(|j| j.as_f64())
                 .unwrap_or(-1.0);
-            let outcome = Reflect::get(&data, &"request".into())
+            let replay = Reflect::get(&data, &"replay".into())
                 .ok()
-                .and_then(|r| r.as_string())
-                .ok_or_else(|| "the worker received a request without a run".to_string())
-                .and_then(|json| run(&replies, job, &json));
+                .and_then(|r| r.as_string());
+            let outcome = match replay {
+                Some(json) => ReplayRequest::from_json(&json)
+                    .and_then(|request| replay_on_log(&replies, job, request, &data)),
+                None => Reflect::get(&data, &"request".into())
+                    .ok()
+                    .and_then(|r| r.as_string())
+                    .ok_or_else(|| "the worker received a request without a run".to_string())
+                    .and_then(|json| run(&replies, job, &json)),
+            };
             if let Err(message) = outcome {
                 // A failure that cannot be posted either leaves the page to its onerror.
                 let _ = post(
@@ -100,6 +110,52 @@ mod worker {
             JobRequest::TeachCuts(request) => {
                 answer_packed(scope, job, request.into_work(), |c| pack_calibrations(&c))
             }
+        }
+    }
+
+    /// Replays controllers on the log whose numbers came with the request (`data`, the whole
+    /// message), and posts their traces.
+    fn replay_on_log(
+        scope: &DedicatedWorkerGlobalScope,
+        job: f64,
+        request: ReplayRequest,
+        data: &JsValue,
+    ) -> Result<(), String> {
+        let numbers = Reflect::get(data, &"numbers".into())
+            .ok()
+            .filter(Array::is_array)
+            .map(|a| Array::from(&a))
+            .ok_or("the worker received a replay without the log's numbers")?
+            .iter()
+            .map(|column| {
+                column
+                    .dyn_into::<Float64Array>()
+                    .map(|a| a.to_vec())
+                    .map_err(|_| "a column of the log's numbers is not an array of numbers")
+            })
+            .collect::<Result<Vec<_>, _>>()?;
+        let mut work = request.into_work(numbers)?;
+        let replays = advance_to_end(scope, job, &mut work, |_, _| Ok(()))?;
+        let sent = Array::new();
+        let transfer = Array::new();
+        for replay in &replays {
+            let parts = ReplayParts::of(replay)?;
+            sent.push(&trace_parts(
+                parts.header_json,
+                &parts.rows,
+                &parts.terms,
+                &transfer,
+            ));
+        }
+        let fields = [
+            ("kind", "done".into()),
+            ("job", job.into()),
+            ("replays", sent.into()),
+        ];
+        if post(scope, &fields, Some(&transfer)) {
+            Ok(())
+        } else {
+            Err("the worker could not send the replays".into())
         }
     }
 
@@ -224,15 +280,12 @@ mod worker {
         let transfer = Array::new();
         for run in &runs {
             let parts = RunParts::of(run)?;
-            let rows = Float64Array::from(parts.rows.as_slice());
-            let terms = Float64Array::from(parts.terms.as_slice());
-            transfer.push(&rows.buffer());
-            transfer.push(&terms.buffer());
-            sent.push(&object(&[
-                ("header", parts.header_json.into()),
-                ("rows", rows.into()),
-                ("terms", terms.into()),
-            ]));
+            sent.push(&trace_parts(
+                parts.header_json,
+                &parts.rows,
+                &parts.terms,
+                &transfer,
+            ));
         }
         if post(
             scope,
@@ -266,6 +319,20 @@ mod worker {
         }
         // A chunk that cannot be sent only leaves the page to wait for the finished run.
         let _ = post(scope, &fields, Some(&transfer));
+    }
+
+    /// A finished trace as sent, `{ header, rows, terms }`, its numbers' buffers added to
+    /// `transfer` (moved to the page rather than copied).
+    fn trace_parts(header_json: String, rows: &[f64], terms: &[f64], transfer: &Array) -> JsValue {
+        let rows = Float64Array::from(rows);
+        let terms = Float64Array::from(terms);
+        transfer.push(&rows.buffer());
+        transfer.push(&terms.buffer());
+        object(&[
+            ("header", header_json.into()),
+            ("rows", rows.into()),
+            ("terms", terms.into()),
+        ])
     }
 
     fn object(fields: &[(&str, JsValue)]) -> JsValue {

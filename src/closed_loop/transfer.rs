@@ -195,13 +195,9 @@ impl RunParts {
         };
         let header_json = serde_json::to_string(&header)
             .map_err(|e| format!("the run's result could not be sent: {e}"))?;
-        let mut rows = Vec::with_capacity(result.trace.rows.len() * ROW_VALUES);
-        for row in &result.trace.rows {
-            rows.extend_from_slice(&row_values(row));
-        }
         Ok(Self {
             header_json,
-            rows,
+            rows: flat_rows(&result.trace.rows),
             terms: result.trace.terms.clone(),
         })
     }
@@ -211,15 +207,10 @@ impl RunParts {
     pub fn into_result(self, spec: RunSpec) -> Result<RunResult, String> {
         let header: Header = serde_json::from_str(&self.header_json)
             .map_err(|e| format!("the worker's result could not be read: {e}"))?;
-        if !self.rows.len().is_multiple_of(ROW_VALUES) {
-            return Err(format!(
-                "the worker's trace holds {} numbers, not a whole number of rows of {ROW_VALUES}",
-                self.rows.len()
-            ));
-        }
+        let rows = rows_from_flat(&self.rows, "trace")?;
         let (settings, term_names) = settled(&spec, &header.calibration)?;
         let trace = Trace {
-            rows: self.rows.chunks_exact(ROW_VALUES).map(row_from).collect(),
+            rows,
             events: header.events,
             term_names,
             terms: self.terms,
@@ -302,10 +293,7 @@ impl TraceStream {
         if new_rows.is_empty() {
             return Ok(None);
         }
-        let mut rows = Vec::with_capacity(new_rows.len() * ROW_VALUES);
-        for row in new_rows {
-            rows.extend_from_slice(&row_values(row));
-        }
+        let rows = flat_rows(new_rows);
         self.sent = Some((run, trace.rows.len(), trace.terms.len()));
         Ok(Some(TraceChunk {
             run,
@@ -393,6 +381,28 @@ impl StreamedRun {
             metrics,
         }
     }
+}
+
+/// Rows' numbers, [`ROW_VALUES`] per row, in [`row_from`]'s order (a trace as it travels; the
+/// Logs page's replays too, [`crate::log::transfer`]).
+pub fn flat_rows(rows: &[TraceRow]) -> Vec<f64> {
+    let mut flat = Vec::with_capacity(rows.len() * ROW_VALUES);
+    for row in rows {
+        flat.extend_from_slice(&row_values(row));
+    }
+    flat
+}
+
+/// The rows whose numbers a worker sent for its `what` ([`flat_rows`]'s), refused unless they
+/// are a whole number of rows.
+pub fn rows_from_flat(flat: &[f64], what: &str) -> Result<Vec<TraceRow>, String> {
+    if !flat.len().is_multiple_of(ROW_VALUES) {
+        return Err(format!(
+            "the worker's {what} holds {} numbers, not a whole number of rows of {ROW_VALUES}",
+            flat.len()
+        ));
+    }
+    Ok(flat.chunks_exact(ROW_VALUES).map(row_from).collect())
 }
 
 /// A row's numbers, in [`row_from`]'s order.

@@ -32,6 +32,7 @@
 //! | [`period_log`] | calibration from a log whose rows are control periods (`cutlab calibrate`, logged teach-in) |
 //! | [`settings`] | the settings of a log's analysis as one table (Logs page fields, CLI options) |
 //! | [`link`] | the Logs page's state in its URL (sample, mapping, analysed column, replay form), read by the page and by lessons |
+//! | [`transfer`] | the Logs page's replays sent to a computation worker and back |
 
 pub mod analysis;
 pub mod calibration;
@@ -42,8 +43,9 @@ pub mod mapping;
 pub mod period_log;
 pub mod replay;
 pub mod settings;
+pub mod transfer;
 
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 use crate::input::{excerpt, readable};
 use csv::{parse_number, Cell, CsvReader, Dialect, RecordView};
@@ -58,7 +60,7 @@ pub const MAX_LISTED_PROBLEMS: usize = 200;
 const HEADER_LOOKAHEAD: usize = 20;
 
 /// What a column holds.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum ColumnKind {
     /// Numbers.

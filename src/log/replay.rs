@@ -23,7 +23,7 @@
 
 use std::sync::Arc;
 
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 use super::machine::{current_as_force, log_setup, LogOptions, ReplayError};
 use super::mapping::Mapping;
@@ -53,7 +53,10 @@ pub enum Target {
 }
 
 /// What a replay (or a calibration from a log) is made with, besides the log and its mapping.
-#[derive(Debug, Clone, PartialEq, Default)]
+/// As JSON it is what the Logs page sends a worker with a replay
+/// ([`crate::log::transfer::ReplayRequest`]).
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
 pub struct ReplaySettings {
     /// The override input of the machine the log was recorded on (a log does not say: FANUC's
     /// dial by default), which decides the positions the envelope commands and its highest.
@@ -255,6 +258,47 @@ impl ReplayRun {
     }
 }
 
+impl ReplayRun {
+    /// The names and units of the replayed controller's terms, as in [`Trace::term_names`]
+    /// (empty once the replay is finished).
+    pub fn term_names(&self) -> Vec<(&'static str, &'static str)> {
+        self.run
+            .as_ref()
+            .map(|r| r.trace().term_names.clone())
+            .unwrap_or_default()
+    }
+
+    /// The result of this replay, not run here, had its loop traced `trace`: a worker's replay
+    /// of the same controller on the same log and settings (the Logs page's,
+    /// [`crate::log::transfer::ReplayParts`]).
+    ///
+    /// # Errors
+    /// A replay already run here has no loop left to read its settings from.
+    pub fn with_trace(self, trace: Trace) -> Result<ReplayResult, ReplayError> {
+        let settings = self
+            .run
+            .as_ref()
+            .map(|r| r.settings().clone())
+            .ok_or(ReplayError::Loop(LoopError::NotFinished))?;
+        Ok(self.result_with(settings, trace))
+    }
+
+    fn result_with(&self, settings: LoopSettings, trace: Trace) -> ReplayResult {
+        let summary = ReplaySummary::of(&trace, &settings, self.calibrated);
+        ReplayResult {
+            name: self.name.clone(),
+            controller: self.controller.clone(),
+            settings,
+            target: self.target,
+            calibrated: self.calibrated,
+            notes: self.notes.clone(),
+            rows: self.rows,
+            summary,
+            trace,
+        }
+    }
+}
+
 impl Work for ReplayRun {
     type Output = ReplayResult;
     type Error = ReplayError;
@@ -271,18 +315,7 @@ impl Work for ReplayRun {
                 .take()
                 .map(ClosedLoop::into_trace)
                 .unwrap_or_default();
-            let summary = ReplaySummary::of(&trace, &settings, self.calibrated);
-            self.done = Some(ReplayResult {
-                name: self.name.clone(),
-                controller: self.controller.clone(),
-                settings,
-                target: self.target,
-                calibrated: self.calibrated,
-                notes: self.notes.clone(),
-                rows: self.rows,
-                summary,
-                trace,
-            });
+            self.done = Some(self.result_with(settings, trace));
             return Ok(true);
         }
         Ok(false)

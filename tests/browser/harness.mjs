@@ -93,6 +93,36 @@ export async function openLab(browser, baseUrl, hash = '', viewport = { width: 1
   return { page, problems, context };
 }
 
+/** What the stand-in for a worker with a bug throws. */
+export const WORKER_BUG = 'worker bug for the test';
+
+/**
+ * Opens the lab at `hash` in a fresh page whose first computation worker is a stand-in that
+ * reports ready and throws on its first request (a bug in the worker); the workers after it load
+ * the real module. Returns { page, problems, context, served }: `problems` as [openLab]'s but for
+ * the stand-in's own error, `served()` how many worker scripts were served.
+ */
+export async function openLabWithThrowingWorker(browser, baseUrl, hash) {
+  const context = await browser.newContext({ viewport: { width: 1280, height: 720 } });
+  let served = 0;
+  await context.route(/cutlab-worker\.js$/, (route) => {
+    served += 1;
+    if (served > 1) return route.continue();
+    return route.fulfill({
+      contentType: 'text/javascript',
+      body: `var wasm_bindgen = function () { self.onmessage = function () { throw new Error('${WORKER_BUG}'); }; self.postMessage({ kind: 'ready' }); };`,
+    });
+  });
+  const page = await context.newPage();
+  const problems = [];
+  page.on('console', (msg) => {
+    if (msg.type() === 'error' && !msg.text().includes(WORKER_BUG)) problems.push(msg.text());
+  });
+  page.on('pageerror', (err) => problems.push(err.message));
+  await page.goto(baseUrl + hash);
+  return { page, problems, context, served: () => served };
+}
+
 /** The canvas's pixels as a data URL, to detect a redraw. */
 export async function canvasPixels(locator) {
   return locator.evaluate((canvas) => canvas.toDataURL());

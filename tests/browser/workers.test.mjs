@@ -15,7 +15,7 @@ import assert from 'node:assert/strict';
 import { execFileSync } from 'node:child_process';
 import { readFile, writeFile, mkdir } from 'node:fs/promises';
 import { join } from 'node:path';
-import { serveDist, launchBrowser, openLab, artifacts, watchLongTasks, nativeCli } from './harness.mjs';
+import { serveDist, launchBrowser, openLab, openLabWithThrowingWorker, artifacts, watchLongTasks, nativeCli } from './harness.mjs';
 
 let cutlab;
 const RUN_TIMEOUT = 60_000;
@@ -195,32 +195,15 @@ test("the savings' reference runs compute in a worker and equal the native CLI's
 });
 
 test('a worker that throws fails its run with the reason, is replaced, and the next run succeeds', async () => {
-  const context = await browser.newContext({ viewport: { width: 1280, height: 720 } });
-  // The first worker to start loads a stand-in that reports ready and throws on its first
-  // request (a bug in the worker); the ones after it load the real module.
-  let served = 0;
-  await context.route(/cutlab-worker\.js$/, (route) => {
-    served += 1;
-    if (served > 1) return route.continue();
-    return route.fulfill({
-      contentType: 'text/javascript',
-      body: "var wasm_bindgen = function () { self.onmessage = function () { throw new Error('worker bug for the test'); }; self.postMessage({ kind: 'ready' }); };",
-    });
-  });
-  const page = await context.newPage();
-  const problems = [];
-  page.on('console', (msg) => {
-    if (msg.type() === 'error' && !msg.text().includes('worker bug for the test')) problems.push(msg.text());
-  });
-  page.on('pageerror', (err) => problems.push(err.message));
-  await page.goto(server.url + '#/simulate?preset=maneerat-doc-1&controller=pi');
+  // The first worker to start throws on its first request (a bug in the worker).
+  const { page, problems, context, served } = await openLabWithThrowingWorker(browser, server.url, '#/simulate?preset=maneerat-doc-1&controller=pi');
   await page.getByRole('alert').filter({ hasText: /the computation worker stopped: .*worker bug for the test/ }).waitFor({ timeout: RUN_TIMEOUT });
   // A fresh worker took the thrower's place: the next run completes.
   await page.getByLabel('Seed').fill('2');
   const table = page.getByRole('table', { name: /Metrics of the run/ });
   await table.getByRole('row', { name: /Cycle time/ }).getByRole('cell').first().waitFor({ timeout: RUN_TIMEOUT });
   await page.getByRole('alert').filter({ hasText: /worker bug/ }).waitFor({ state: 'detached' });
-  assert.ok(served >= 2, `${served} worker scripts served`);
+  assert.ok(served() >= 2, `${served()} worker scripts served`);
   assert.deepEqual(problems, []);
   await context.close();
 });

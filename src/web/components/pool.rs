@@ -38,6 +38,7 @@ use crate::closed_loop::transfer::{
     learning_from_json, references_from_json, JobRequest, RunParts, TraceChunk,
 };
 use crate::closed_loop::trial_cuts::PresetLearning;
+use crate::log::transfer::{ReplayParts, ReplayRequest};
 use crate::plant::recording::{OpenLoopRecording, PhaseRecording};
 use crate::tuning::{simulated_teach_in, TeachIn};
 use crate::work::Progress;
@@ -76,6 +77,9 @@ pub enum Answer {
     OpenLoopRecording(Arc<OpenLoopRecording>),
     /// A teach-in's proposals, one per scenario, derived here from the worker's teach cuts.
     TeachIns(Vec<TeachIn>),
+    /// Replays' traces, in the order of the request's controllers (the page rebuilds each with
+    /// the replay it prepares, [`ReplayParts::into_result`]).
+    Replays(Vec<ReplayParts>),
 }
 
 /// What a job's answer is rebuilt from: for runs, their specs.
@@ -84,6 +88,7 @@ enum Expecting {
     Runs(Vec<RunSpec>),
     References,
     Learning,
+    Replays,
     /// A packed answer ([`Packed`]) of one of these kinds.
     Packed(PackedKind),
 }
@@ -131,6 +136,11 @@ struct Queued {
     id: u64,
     expecting: Expecting,
     request_json: String,
+    /// The message's field the JSON goes in: `request` for a [`JobRequest`], `replay` for a
+    /// [`ReplayRequest`].
+    field: &'static str,
+    /// Numbers sent beside the JSON (`Float64Array`s, moved to the worker with the request).
+    numbers: Array,
 }
 
 /// One worker and what it is doing.
@@ -175,12 +185,7 @@ pub fn pool_size() -> usize {
 
 /// Queues `request` as one job; `listener` hears its progress (and a run's trace as it comes),
 /// then its answer or why it failed, never in the task that submits it.
-pub fn submit(request: JobRequest, mut listener: impl FnMut(JobEvent) + 'static) -> JobId {
-    let id = POOL.with(|pool| {
-        let mut pool = pool.borrow_mut();
-        pool.next_id += 1;
-        pool.next_id
-    });
+pub fn submit(request: JobRequest, listener: impl FnMut(JobEvent) + 'static) -> JobId {
     let expecting = match &request {
         JobRequest::Runs(runs) => Expecting::Runs(runs.specs.clone()),
         JobRequest::References(_) => Expecting::References,
@@ -191,8 +196,45 @@ pub fn submit(request: JobRequest, mut listener: impl FnMut(JobEvent) + 'static)
             Expecting::Packed(PackedKind::TeachIns(request.specs.clone()))
         }
     };
-    match request.to_json() {
+    enqueue("request", request.to_json(), expecting, &[], listener)
+}
+
+/// Queues a replay on a log as one job, as [`submit`] does, with `numbers` (the log's columns,
+/// [`ReplayRequest::new`]) sent beside its JSON: each copied once, into an array moved to the
+/// worker with the request. It is answered by [`Answer::Replays`].
+pub fn submit_replay(
+    request: &ReplayRequest,
+    numbers: &[&[f64]],
+    listener: impl FnMut(JobEvent) + 'static,
+) -> JobId {
+    enqueue(
+        "replay",
+        request.to_json(),
+        Expecting::Replays,
+        numbers,
+        listener,
+    )
+}
+
+/// Queues a job whose JSON goes in the message's `field`.
+fn enqueue(
+    field: &'static str,
+    json: Result<String, String>,
+    expecting: Expecting,
+    numbers: &[&[f64]],
+    mut listener: impl FnMut(JobEvent) + 'static,
+) -> JobId {
+    let id = POOL.with(|pool| {
+        let mut pool = pool.borrow_mut();
+        pool.next_id += 1;
+        pool.next_id
+    });
+    match json {
         Ok(request_json) => {
+            let sent = Array::new();
+            for column in numbers {
+                sent.push(&Float64Array::from(*column));
+            }
             POOL.with(|pool| {
                 let mut pool = pool.borrow_mut();
                 pool.listeners.insert(id, Box::new(listener));
@@ -200,6 +242,8 @@ pub fn submit(request: JobRequest, mut listener: impl FnMut(JobEvent) + 'static)
                     id,
                     expecting,
                     request_json,
+                    field,
+                    numbers: sent,
                 });
             });
             start_workers();
@@ -341,8 +385,17 @@ fn dispatch() {
             let slot = pool.slots.get_mut(free)?.as_mut()?;
             let message = js_sys::Object::new();
             let _ = Reflect::set(&message, &"job".into(), &(job.id as f64).into());
-            let _ = Reflect::set(&message, &"request".into(), &job.request_json.into());
-            let sent = slot.worker.post_message(&message);
+            let _ = Reflect::set(&message, &job.field.into(), &job.request_json.into());
+            let sent = if job.numbers.length() == 0 {
+                slot.worker.post_message(&message)
+            } else {
+                let moved = Array::new();
+                for numbers in job.numbers.iter() {
+                    moved.push(&numbers.unchecked_into::<Float64Array>().buffer());
+                }
+                let _ = Reflect::set(&message, &"numbers".into(), &job.numbers);
+                slot.worker.post_message_with_transfer(&message, &moved)
+            };
             slot.running = Some((job.id, job.expecting));
             Some(sent.map_err(|e| (free, job.id, crate::web::js::describe(&e))))
         });
@@ -407,6 +460,9 @@ fn on_message(index: usize, serial: u64, data: &JsValue) {
                 Expecting::Packed(kind) => {
                     received_packed(&field).and_then(|packed| kind.answer(packed))
                 }
+                Expecting::Replays => {
+                    received_replays(&Array::from(&field("replays"))).map(Answer::Replays)
+                }
             };
             finish(index, id, answer);
         }
@@ -420,12 +476,7 @@ fn on_message(index: usize, serial: u64, data: &JsValue) {
 
 /// The piece of a trace a worker sent, `field` reading the message's fields.
 fn received_chunk(field: &dyn Fn(&str) -> JsValue) -> Result<TraceChunk, String> {
-    let numbers = |name: &str| {
-        field(name)
-            .dyn_into::<Float64Array>()
-            .map(|a| a.to_vec())
-            .map_err(|_| format!("a piece of the worker's trace lacks its {name}"))
-    };
+    let numbers = |name: &str| numbers_in(field(name), "a piece of the worker's trace", name);
     Ok(TraceChunk {
         run: field("run").as_f64().unwrap_or(0.0) as usize,
         calibration_json: field("calibration").as_string(),
@@ -466,12 +517,7 @@ fn received_runs(runs: &Array, specs: Vec<RunSpec>) -> Result<Vec<Arc<RunResult>
         .zip(specs)
         .map(|(run, spec)| {
             let field = |name: &str| Reflect::get(&run, &name.into()).unwrap_or(JsValue::UNDEFINED);
-            let numbers = |name: &str| {
-                field(name)
-                    .dyn_into::<Float64Array>()
-                    .map(|a| a.to_vec())
-                    .map_err(|_| format!("the worker's run lacks its {name}"))
-            };
+            let numbers = |name: &str| numbers_in(field(name), "the worker's run", name);
             RunParts {
                 header_json: field("header").as_string().unwrap_or_default(),
                 rows: numbers("rows")?,
@@ -479,6 +525,31 @@ fn received_runs(runs: &Array, specs: Vec<RunSpec>) -> Result<Vec<Arc<RunResult>
             }
             .into_result(spec)
             .map(Arc::new)
+        })
+        .collect()
+}
+
+/// The numbers of `value` (a `Float64Array`), or why not: `whose` lacks its `name`.
+fn numbers_in(value: JsValue, whose: &str, name: &str) -> Result<Vec<f64>, String> {
+    value
+        .dyn_into::<Float64Array>()
+        .map(|a| a.to_vec())
+        .map_err(|_| format!("{whose} lacks its {name}"))
+}
+
+/// The replays' traces a worker sent.
+fn received_replays(replays: &Array) -> Result<Vec<ReplayParts>, String> {
+    replays
+        .iter()
+        .map(|replay| {
+            let field =
+                |name: &str| Reflect::get(&replay, &name.into()).unwrap_or(JsValue::UNDEFINED);
+            let numbers = |name: &str| numbers_in(field(name), "the worker's replay", name);
+            Ok(ReplayParts {
+                header_json: field("header").as_string().unwrap_or_default(),
+                rows: numbers("rows")?,
+                terms: numbers("terms")?,
+            })
         })
         .collect()
 }

@@ -211,7 +211,7 @@ impl<T: Send + Sync + 'static> Runner<T> {
 }
 
 /// What a job answered with another kind of answer than its request's (a bug) fails with.
-const ANOTHER_ANSWER: &str = "the computation worker answered another job than the one asked";
+pub const ANOTHER_ANSWER: &str = "the computation worker answered another job than the one asked";
 
 impl<T: Clone + Send + Sync + 'static> Runner<T> {
     /// Does `request` in the worker pool, replacing anything running, behind the same status,

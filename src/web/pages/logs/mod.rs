@@ -5,11 +5,12 @@
 //!   ─► Log + guessed Mapping (editable, kept per file name)
 //!   ─► signal chain on a column (ChainWork): zero-phase low-pass, moving RMS, spectrum, statistics
 //!   ─► calibration (LogFitWork) ─► saved in localStorage (calibration_store::STORAGE_KEY)
-//!   ─► replay of controllers (ReplayRuns) ─► charts on linked time axes, CSV export
+//!   ─► replay of controllers (ReplayRuns, in the workers) ─► charts on linked time axes, CSV export
 //! ```
 //!
-//! Every long job runs in pieces (the file a chunk per task, the chain a stage per task, fits and
-//! replays a budget of periods per task), so the page never freezes. Every field is a row of a
+//! Replays compute in the workers ([`in_workers`]); every other long job runs in pieces on the
+//! page (the file a chunk per task, the chain a stage per task, a fit a budget of periods per
+//! task), so the page never freezes. Every field is a row of a
 //! core table: the analysis's ([`crate::log::settings`]), the modelled cut's
 //! ([`crate::estimation::cut_settings`]) and the run definition's target
 //! ([`crate::closed_loop::definition::RunSetting`]), checked as typed.
@@ -22,6 +23,7 @@
 //! | `chain.rs` | the signal chain on a column |
 //! | `calibration.rs` | the calibration from the log, saved or downloaded |
 //! | `replay.rs` | controllers replayed on the log |
+//! | `in_workers.rs` | the replays computed in the workers |
 //! | `export.rs` | the analysed channels and the replays as CSV |
 //! | `results.rs`, `summary.rs`, `reports.rs`, `charts.rs` | the results column: the log and its mapping, the charts, the statistics and the replays' numbers |
 //! | [`open`] | opening logs: file picker, drop zone, sample logs |
@@ -30,6 +32,7 @@
 //! | [`chain`] | the signal chain on one column of the active log |
 //! | [`calibration`] | the current-to-force fit from the active log |
 //! | [`replay`] | controllers replayed on the active log |
+//! | [`in_workers`] | the replays computed in the workers |
 //! | [`results`] | the results column: the active log, its mapping, every open log |
 //! | [`charts`] | the page's charts, made of what the core computed |
 //! | [`reports`] | the chain's statistics, notes and peaks; each replay's numbers |
@@ -39,6 +42,7 @@ mod calibration;
 mod chain;
 mod charts;
 mod export;
+mod in_workers;
 mod loader;
 mod open;
 mod replay;

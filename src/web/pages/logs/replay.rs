@@ -1,12 +1,14 @@
 //! Controllers replayed on the active log: the override each would have commanded and what the
-//! envelope would have done, through the loop every run uses; the target is the run definition's
-//! row (as `cutlab log replay --target-n/--target-a`), checked as typed.
+//! envelope would have done, through the loop every run uses, computed in the workers
+//! ([`super::in_workers`]); the target is the run definition's row (as
+//! `cutlab log replay --target-n/--target-a`), checked as typed.
 
 use std::sync::Arc;
 
 use leptos::prelude::*;
 
 use super::calibration::FitForm;
+use super::in_workers::{start_replays, ReplayRunner};
 use super::LogsState;
 use crate::closed_loop::definition::{max_override_pct_of, RunSetting};
 use crate::closed_loop::error::LoopError;
@@ -14,14 +16,14 @@ use crate::control::registry::ControllerKind;
 use crate::estimation::estimator::Calibration;
 use crate::log::link::{machine_label, machine_named, machines, LogsLink, TargetKind};
 use crate::log::machine::ReplayError;
-use crate::log::replay::{ReplayResult, ReplayRun, ReplayRuns};
+use crate::log::replay::{ReplayResult, ReplayRun};
 use crate::web::components::fields::{ChoiceField, NumberField, SelectField};
-use crate::web::components::runner::{RunProgress, Runner};
+use crate::web::components::runner::RunProgress;
 
 /// The replays' form and run.
 #[derive(Clone, Copy)]
 pub struct Replay {
-    runner: StoredValue<Runner<Vec<Arc<ReplayResult>>>>,
+    runner: StoredValue<ReplayRunner>,
     /// The last replays.
     pub done: ReadSignal<Option<Vec<Arc<ReplayResult>>>>,
     /// Whether each of [`ControllerKind::ALL`] is replayed.
@@ -38,7 +40,7 @@ impl Replay {
     /// No replay yet; the form as `link` sets it. Each finished set of replays goes to the
     /// lesson panel.
     pub fn new(link: &LogsLink) -> Self {
-        let runner = Runner::<Vec<Arc<ReplayResult>>>::new();
+        let runner = ReplayRunner::new();
         let done = runner.finished();
         Effect::new(move |_| {
             if let Some(replays) = done.get() {
@@ -170,12 +172,13 @@ pub fn ReplayPanel(shared: LogsState, fit: FitForm, replay: Replay) -> impl Into
             }
             return;
         }
-        runner.start(ReplayRuns::new(
+        start_replays(
+            &runner,
             l.log.clone(),
             l.mapping.clone(),
             settings,
             controllers,
-        ));
+        );
     };
     view! {
         <fieldset>

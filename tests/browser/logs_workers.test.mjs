@@ -1,0 +1,129 @@
+// The Logs page's replays compute in the workers (issue 28): each controller's replay is a job of
+// its own, sent with the log's mapped columns, and its results show on the page; on a big log two
+// controllers replay at once on two workers; Cancel during a replay terminates its workers, keeps
+// the log, and the next replay succeeds; a worker that throws fails the replay with the reason, the
+// log stays, and the next replay succeeds.
+//
+// The pool publishes `data-busy-workers` (the workers computing now) on <html>; nothing else on
+// the Logs page computes in a worker, so a busy worker there is a replay. The tests wait on that
+// and on what the page shows, never on time.
+import { test, before, after } from 'node:test';
+import assert from 'node:assert/strict';
+import { writeFile, mkdtemp, rm } from 'node:fs/promises';
+import { tmpdir } from 'node:os';
+import { join } from 'node:path';
+import { serveDist, launchBrowser, openLab, openLabWithThrowingWorker, root } from './harness.mjs';
+
+const DAQ = 'synthetic-maneerat-doc-2-daq.csv';
+const TIMEOUT = 120_000;
+
+let server;
+let browser;
+before(async () => {
+  server = await serveDist();
+  browser = await launchBrowser();
+});
+after(async () => {
+  await browser?.close();
+  await server?.close();
+});
+
+/** From now on, the most workers busy at once; returns a function that reads it. */
+async function watchBusyWorkers(page) {
+  await page.evaluate(() => {
+    window.cutlabMostBusy = 0;
+    new MutationObserver(() => {
+      const busy = Number(document.documentElement.dataset.busyWorkers ?? 0);
+      window.cutlabMostBusy = Math.max(window.cutlabMostBusy, busy);
+    }).observe(document.documentElement, { attributes: true, attributeFilter: ['data-busy-workers'] });
+  });
+  return () => page.evaluate(() => window.cutlabMostBusy);
+}
+
+/** Waits until `count` workers compute at once. */
+async function waitForBusyWorkers(page, count) {
+  await page.waitForFunction((n) => document.documentElement.dataset.busyWorkers === String(n), count, { timeout: TIMEOUT });
+}
+
+/** Replays the chosen controllers (Threshold and PI) on a current target of `amperes`. */
+async function replay(page, amperes) {
+  await page.getByLabel('Target is a').selectOption('current');
+  await page.getByLabel(/^Target value/).fill(String(amperes));
+  await page.getByRole('button', { name: 'Replay', exact: true }).click();
+}
+
+const replayTable = (page) => page.getByRole('table', { name: 'What each controller would have done on this log' });
+
+test('a replay computes in a worker and its results show', async () => {
+  const { page, problems, context } = await openLab(browser, server.url, '#/logs');
+  await page.getByLabel('Open log files').setInputFiles(join(root, 'www', 'data', DAQ));
+  await page.getByRole('status').filter({ hasText: `Loaded ${DAQ}: 12000 rows × 9 columns` }).waitFor({ timeout: TIMEOUT });
+  const mostBusy = await watchBusyWorkers(page);
+  await replay(page, 40);
+  const table = replayTable(page);
+  await table.getByRole('columnheader', { name: 'PI with anti-windup' }).waitFor({ timeout: TIMEOUT });
+  await table.getByRole('columnheader', { name: 'Threshold-proportional' }).waitFor();
+  await page.getByRole('region', { name: 'Envelope events of PI with anti-windup' }).getByText(/armed: the controller now sets the override/).waitFor();
+  await waitForBusyWorkers(page, 0);
+  assert.ok(await mostBusy() >= 1, 'no worker computed the replay');
+  assert.ok(page.workers().length >= 1);
+  assert.deepEqual(problems, []);
+  await context.close();
+});
+
+test('on a big log two controllers replay at once; Cancel keeps the log and the next replay succeeds', async () => {
+  const { page, problems, context } = await openLab(browser, server.url, '#/logs');
+  // 360 s of a 10 kHz log (3.6 million rows, about 75 MB): a spindle current at 3000 rpm, long
+  // enough that its replays (about a second each here) are still computing when Cancel is pressed.
+  const dir = await mkdtemp(join(tmpdir(), 'cutlab-logs-workers-'));
+  const file = join(dir, 'long.csv');
+  const rows = 3_600_000;
+  const lines = ['time [s],S_I [A],S_speed [rpm]'];
+  for (let i = 0; i < rows; i++) {
+    lines.push(`${(i / 1e4).toFixed(4)},${(10 + 4 * Math.sin(i / 5000) + 0.5 * Math.sin(i / 7)).toFixed(4)},3000`);
+  }
+  await writeFile(file, lines.join('\n') + '\n');
+  await page.getByLabel('Open log files').setInputFiles(file);
+  await page.getByRole('status').filter({ hasText: `Loaded long.csv: ${rows} rows × 3 columns` }).waitFor({ timeout: TIMEOUT });
+  await rm(dir, { recursive: true });
+  const cores = await page.evaluate(() => navigator.hardwareConcurrency);
+
+  // Cancelled while the workers replay: the page says so, the workers stop, the log stays.
+  await replay(page, 12);
+  await waitForBusyWorkers(page, Math.min(cores, 2));
+  await page.getByRole('status').filter({ hasText: cores >= 2 ? 'Replaying 2 controllers on 2 workers' : 'Replaying 2 controllers in a worker' }).waitFor();
+  await page.getByRole('status').filter({ has: page.getByRole('progressbar', { name: /^Replaying/ }) })
+    .getByRole('button', { name: 'Cancel' }).click();
+  await page.getByText(/^Cancelled\./).waitFor();
+  await waitForBusyWorkers(page, 0);
+  assert.equal(await page.getByLabel('Analyse long.csv').count(), 1);
+  assert.equal(await replayTable(page).count(), 0);
+
+  // The next replay runs to its end and shows.
+  await replay(page, 11);
+  await waitForBusyWorkers(page, Math.min(cores, 2));
+  const table = replayTable(page);
+  await table.getByRole('columnheader', { name: 'PI with anti-windup' }).waitFor({ timeout: TIMEOUT });
+  await table.getByRole('columnheader', { name: 'Threshold-proportional' }).waitFor();
+  await waitForBusyWorkers(page, 0);
+  assert.deepEqual(problems, []);
+  await context.close();
+});
+
+test('a worker that throws fails the replay beside its button, the log stays, and the next replay succeeds', async () => {
+  // The first worker to start throws on its first request (a bug in the worker).
+  const { page, problems, context, served } = await openLabWithThrowingWorker(browser, server.url, '#/logs');
+  await page.getByLabel('Open log files').setInputFiles(join(root, 'www', 'data', DAQ));
+  await page.getByRole('status').filter({ hasText: `Loaded ${DAQ}: 12000 rows × 9 columns` }).waitFor({ timeout: TIMEOUT });
+  await replay(page, 40);
+  await page.getByRole('alert').filter({ hasText: /^The replay failed: the computation worker stopped: .*worker bug for the test/ }).waitFor({ timeout: TIMEOUT });
+  await waitForBusyWorkers(page, 0);
+  assert.equal(await page.getByLabel(`Analyse ${DAQ}`).count(), 1);
+  // Fresh workers took the thrower's place: the next replay completes.
+  await replay(page, 41);
+  await replayTable(page).getByRole('columnheader', { name: 'PI with anti-windup' }).waitFor({ timeout: TIMEOUT });
+  await page.getByRole('alert').filter({ hasText: /worker bug/ }).waitFor({ state: 'detached' });
+  assert.ok(served() >= 2, `${served()} worker scripts served`);
+  assert.deepEqual(problems, []);
+  await context.close();
+});
