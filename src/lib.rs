@@ -73,6 +73,7 @@ pub mod plant;
 pub mod protocol;
 pub mod rng;
 pub mod safety;
+pub mod sections;
 pub mod signal;
 pub mod tuning;
 pub mod work;

@@ -11,12 +11,12 @@ use crate::control::registry::{ControllerConfig, ControllerKind};
 use crate::input::parse_number;
 use crate::log::link::LogsLink;
 use crate::plant::Preset;
+use crate::sections::Page;
 use crate::signal::butterworth::ButterworthSpec;
 use crate::signal::design_settings::{parse_design, query_texts};
 use crate::signal::sos::Sos;
 
-/// A page of the lab a step can open. Its slug is the page's URL hash (`#/simulate`); the browser's
-/// router (`web::route::Page`) knows every page, this list the ones a lesson can set up.
+/// A page of the lab a step can open: the sections ([`Page`]) a lesson can set up.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum LabPage {
     /// One closed-loop run.
@@ -47,17 +47,22 @@ impl LabPage {
         LabPage::Plant,
     ];
 
-    /// The URL hash's page part.
-    pub fn slug(self) -> &'static str {
+    /// The lab's section it is.
+    pub fn section(self) -> Page {
         match self {
-            LabPage::Simulate => "simulate",
-            LabPage::Compare => "compare",
-            LabPage::Fuzzy => "fuzzy",
-            LabPage::SignalChain => "signal",
-            LabPage::Tune => "tune",
-            LabPage::Logs => "logs",
-            LabPage::Plant => "plant",
+            LabPage::Simulate => Page::Simulate,
+            LabPage::Compare => Page::Compare,
+            LabPage::Fuzzy => Page::Fuzzy,
+            LabPage::SignalChain => Page::SignalChain,
+            LabPage::Tune => Page::Tune,
+            LabPage::Logs => Page::Logs,
+            LabPage::Plant => Page::Plant,
         }
+    }
+
+    /// The URL hash's page part (the section's).
+    pub fn slug(self) -> &'static str {
+        self.section().slug()
     }
 
     /// The page whose slug is `slug`.

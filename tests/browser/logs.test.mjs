@@ -90,6 +90,14 @@ test('two sample logs are opened, mapped, filtered, calibrated from, replayed an
   await page.getByLabel('Zero-phase low-pass cut-off (empty: none)').fill('800');
   await page.getByText(/above its Nyquist frequency \(500 Hz\), so the stage is skipped/).waitFor({ timeout: TIMEOUT });
   await page.getByLabel('Zero-phase low-pass cut-off (empty: none)').fill('100');
+  // A setting that no longer validates marks the chain shown as stale, announced, until fixed.
+  const banner = page.getByRole('status').filter({ hasText: 'These results are from the last valid settings' });
+  assert.equal(await banner.count(), 0);
+  await page.getByLabel('Cutter teeth (tooth-passing marker)').fill('abc');
+  await banner.waitFor();
+  assert.equal(await page.locator('.results.stale').count(), 1);
+  await page.getByLabel('Cutter teeth (tooth-passing marker)').fill('4');
+  await banner.waitFor({ state: 'detached' });
 
   // Calibration from the dynamometer column, saved where Simulate and the Hardware page look.
   await page.getByRole('button', { name: 'Calibrate', exact: true }).click();

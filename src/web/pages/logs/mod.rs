@@ -59,6 +59,7 @@ use crate::log::link::{sample_named, LogsLink};
 use crate::log::settings::{parse_analysis, sample_period, AnalysisSettings, LogSetting};
 use crate::web::components::later::Later;
 use crate::web::components::page::PageShell;
+use crate::web::components::run_view::StaleNotice;
 use crate::web::components::table_form::{FieldErrors, TableForm};
 use crate::web::route::{query_params, replace_query, Page};
 use calibration::{CalibrationPanel, FitForm};
@@ -187,6 +188,12 @@ pub fn LogsPage() -> impl IntoView {
                 .map(|l| l.mapping.len())
         })
     };
+    // A setting that no longer validates leaves the chain shown from the last valid settings:
+    // marked stale, as Simulate's results are, until it is fixed.
+    let chain_done = chain.done;
+    let stale = Signal::derive(move || {
+        !shared.errors.with(|e| e.is_empty()) && chain_done.with(Option::is_some)
+    });
     view! {
         <PageShell id="logs" title="Machine logs">
             <p class="lede">
@@ -219,7 +226,8 @@ pub fn LogsPage() -> impl IntoView {
                         <ExportPanel shared=shared chain=chain replay=replay />
                     </Later>
                 </form>
-                <div class="results">
+                <div class="results" class:stale=stale>
+                    <StaleNotice stale=stale />
                     <Later>
                         <LogResults shared=shared chain=chain fit=fit replay=replay />
                     </Later>

@@ -37,7 +37,7 @@ use crate::tuning::{ParamRange, TeachIn, Tuned, TuningMode, TuningPlan, TuningPr
 use crate::web::components::page::PageShell;
 use crate::web::components::run_view::StaleNotice;
 use crate::web::components::runner::{RunProgress, Runner};
-use crate::web::components::table_form::TableForm;
+use crate::web::components::table_form::{FieldErrors, TableForm};
 use crate::web::route::{query_params, replace_query, Page};
 use in_workers::start_tuning;
 use method::{method_errors, MethodPanel};
@@ -116,12 +116,7 @@ pub fn TunePage() -> impl IntoView {
         replace_query(Page::Tune, &pairs);
     });
     let errors = Memo::new(move |_| method_errors(form));
-    // A field that no longer validates leaves the results shown from settings the form does not
-    // hold: they are marked stale (as Simulate's and Compare's are) until the next run.
-    let fields_invalid = Memo::new(move |_| {
-        let count = if second_on.get() { 2 } else { 1 };
-        !errors.get().is_empty() || rows[..count].iter().any(|row| row.parse().is_err())
-    });
+    let fields_invalid = any_field_invalid(errors, rows, second_on);
 
     let runner = Runner::<Tuned>::new();
     let teach_runner = Runner::<Vec<TeachIn>>::new();
@@ -223,7 +218,6 @@ pub fn TunePage() -> impl IntoView {
 
     let tuned = runner.finished();
     let stale = Signal::derive(move || fields_invalid.get() && tuned.with(Option::is_some));
-
     view! {
         <PageShell id="tune" title="Tune a controller">
             <p class="lede">
@@ -255,4 +249,17 @@ pub fn TunePage() -> impl IntoView {
             </div>
         </PageShell>
     }
+}
+
+/// Whether a field no longer validates: the results shown are then from settings the form does
+/// not hold, and are marked stale (as Simulate's and Compare's are) until the next run.
+fn any_field_invalid(
+    errors: Memo<FieldErrors>,
+    rows: [ParamRow; 2],
+    second_on: RwSignal<bool>,
+) -> Memo<bool> {
+    Memo::new(move |_| {
+        let count = if second_on.get() { 2 } else { 1 };
+        !errors.get().is_empty() || rows[..count].iter().any(|row| row.parse().is_err())
+    })
 }
