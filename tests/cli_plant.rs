@@ -339,3 +339,149 @@ fn learn_fits_paper_004s_network_on_a_presets_trial_cuts_and_refuses_what_it_can
         assert!(error.contains(message), "{args:?}: {error}");
     }
 }
+
+/// A shop's own trial cuts as a table (`learn --cuts`): the table `--write-cuts` writes of a
+/// preset's cuts learns what the preset's learning learns from the same forces, bit for bit;
+/// a damaged table's rows are left out by line, never silently, and what cannot be read is
+/// refused with the reason.
+#[test]
+fn learn_from_a_table_of_your_own_cuts_learns_what_the_lab_learns_and_names_every_row_left_out() {
+    use cutlab::closed_loop::trial_cuts::learn_on_preset;
+    let dir = std::env::temp_dir().join(format!("cutlab-learn-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let table = dir.join("cuts.csv");
+    let table = table.to_str().unwrap();
+    let (written, _) = cutlab(&[
+        "learn",
+        "--scenario",
+        "kim-step-doc",
+        "--feeds-pct",
+        "70,100",
+        "--write-cuts",
+        table,
+    ]);
+    written.unwrap();
+    let preset = learn_on_preset(Preset::KimStepDoc, &[70.0, 100.0]).unwrap();
+    for (force_column, expected) in [
+        (None, &preset.from_estimate),
+        (Some("dynamometer force [N]"), &preset.from_force),
+    ] {
+        let mut args = vec!["learn", "--cuts", table, "--json"];
+        if let Some(column) = force_column {
+            args.extend(["--force-column", column]);
+        }
+        let v = json(&args);
+        assert_eq!(v["lines"].as_array().unwrap().len(), 10);
+        assert!(v["left_out"].as_array().unwrap().is_empty());
+        for (got, want) in v["learned"]["learned"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .zip(&expected.learned)
+        {
+            assert_eq!(
+                got["exponent"].as_f64().unwrap(),
+                want.exponent,
+                "{force_column:?}"
+            );
+        }
+        assert_eq!(v["learned"]["bias_n"].as_f64().unwrap(), expected.bias_n);
+    }
+
+    // A table from another shop: semicolons and decimal commas, its own names, the tool given
+    // once, a row with a gap and one with a negative force.
+    let messy = dir.join("messy.csv");
+    let mut text = String::from("Width of cut (mm);FZ [mm];ap;Force [N]\n");
+    for (i, a_e) in [4.0, 5.0, 6.0].iter().enumerate() {
+        for (j, f) in [0.08, 0.1, 0.12].iter().enumerate() {
+            let depth = 1.0 + ((i + 2 * j) % 3) as f64;
+            let force = 600.0 * f64::powf(*a_e, 0.8) * f64::powf(*f, 0.7) * depth;
+            text.push_str(&format!("{a_e};{f};{depth};{force:.6}\n").replace('.', ","));
+        }
+    }
+    text.push_str("5;0,1;;300\n6;0,1;2;-3\n");
+    std::fs::write(&messy, &text).unwrap();
+    let messy = messy.to_str().unwrap();
+    let (result, out) = cutlab(&[
+        "learn",
+        "--cuts",
+        messy,
+        "--diameter-mm",
+        "20",
+        "--teeth",
+        "2",
+    ]);
+    result.unwrap();
+    assert!(
+        out.contains("9 trial cuts (2 rows left out, above)"),
+        "{out}"
+    );
+    assert!(
+        out.contains("note: line 11, ap: the depth of cut a_p is missing"),
+        "{out}"
+    );
+    assert!(
+        out.contains("note: line 12, Force [N]: the force is -3"),
+        "{out}"
+    );
+    assert!(
+        out.contains("0.70 ± 0.00"),
+        "the feed's exponent 0.7 in\n{out}"
+    );
+    assert!(
+        out.contains("0.80 ± 0.00"),
+        "the width's exponent 0.8 in\n{out}"
+    );
+    // Width and feed stepped together cannot be told apart: said in the cuts' terms.
+    let collinear = dir.join("collinear.csv");
+    std::fs::write(
+        &collinear,
+        "a_e,f_z,a_p,d,z,force\n4,0.08,1,20,2,100\n5,0.1,2,20,2,220\n6,0.12,3,20,2,400\n\
+         4,0.08,2,20,2,190\n5,0.1,3,20,2,330\n6,0.12,1,20,2,140\n4,0.08,3,20,2,280\n",
+    )
+    .unwrap();
+    let (result, _) = cutlab(&["learn", "--cuts", collinear.to_str().unwrap()]);
+    let error = result.unwrap_err();
+    assert!(
+        error.contains("vary width, feed per tooth and depth apart"),
+        "{error}"
+    );
+
+    for (args, message) in [
+        (
+            vec!["learn", "--cuts", messy],
+            "no column for the tool diameter d",
+        ),
+        (
+            vec![
+                "learn",
+                "--cuts",
+                messy,
+                "--diameter-mm",
+                "20",
+                "--teeth",
+                "2",
+                "--material",
+                "brass",
+            ],
+            "--material: no material \"brass\"",
+        ),
+        (
+            vec!["learn", "--cuts", messy, "--scenario", "kim-step-doc"],
+            "leave out --scenario",
+        ),
+        (
+            vec!["learn", "--scenario", "kim-step-doc", "--teeth", "2"],
+            "--teeth goes with --cuts",
+        ),
+        (
+            vec!["learn", "--cuts", table, "--force-column", "F"],
+            "the force column \"F\" is not in the table",
+        ),
+    ] {
+        let (result, _) = cutlab(&args);
+        let error = result.unwrap_err();
+        assert!(error.contains(message), "{args:?}: {error}");
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -431,3 +431,23 @@ fn the_shipped_references_are_kim_step_docs_reference_search() {
     );
     assert_eq!(ScenarioKey::of(&spelled).unwrap(), key);
 }
+
+/// The shipped table of kim-step-doc's trial cuts is its trial cuts as made today, and it
+/// reads back as a table of cuts.
+#[test]
+fn the_shipped_trial_cuts_are_kim_step_docs() {
+    use cutlab::closed_loop::trial_cuts::{learn_on_preset, DEFAULT_TRIAL_FEEDS_PCT};
+    use cutlab::log::trial_cuts::{learning_table, read_table, TableTool};
+    use cutlab::plant::Preset;
+    let shipped = read("kim-step-doc-trial-cuts.csv");
+    let learning = learn_on_preset(Preset::KimStepDoc, &DEFAULT_TRIAL_FEEDS_PCT).unwrap();
+    assert_eq!(
+        shipped,
+        learning_table(&learning).unwrap(),
+        "kim-step-doc-trial-cuts.csv is stale: run scripts/sample-data"
+    );
+    let log = cutlab::log::load(shipped.as_bytes(), None).unwrap();
+    let table = read_table(&log, None, TableTool::default()).unwrap();
+    assert_eq!(table.cuts.len(), learning.cuts.len());
+    assert!(table.left_out.is_empty());
+}

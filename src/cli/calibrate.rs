@@ -186,18 +186,23 @@ pub fn read_log(file: &str) -> Result<crate::log::Log, CliError> {
     Ok(log)
 }
 
+/// One problem of a file as a note line: "note: line 12, Force [N]: …".
+pub fn problem_note(p: &crate::log::LineProblem) -> String {
+    format!(
+        "note: line {}{}: {}\n",
+        p.line,
+        p.column
+            .as_deref()
+            .map_or(String::new(), |c| format!(", {c}")),
+        p.message
+    )
+}
+
 /// Notes on the log reader's problems (damaged lines kept as gaps), at most five lines.
 pub fn problem_notes(log: &crate::log::Log) -> String {
     let mut out = String::new();
     for p in log.problems.iter().take(5) {
-        out.push_str(&format!(
-            "note: line {}{}: {}\n",
-            p.line,
-            p.column
-                .as_deref()
-                .map_or(String::new(), |c| format!(", {c}")),
-            p.message
-        ));
+        out.push_str(&problem_note(p));
     }
     if log.problems.len() > 5 {
         out.push_str(&format!(

@@ -117,6 +117,12 @@ impl fmt::Display for LearnError {
                 f,
                 "{cuts} trial cuts cannot determine the exponents that vary: give at least {needed}"
             ),
+            // The fit's own hint is a teach cut's; trial cuts are varied differently.
+            LearnError::Collinear(FitError::RankDeficient { column }) => write!(
+                f,
+                "the trial cuts do not vary {column} independently of the other inputs: vary \
+                 width, feed per tooth and depth apart (paper 004's stepped specimen crosses them)"
+            ),
             LearnError::Collinear(e) => write!(f, "{e}"),
         }
     }

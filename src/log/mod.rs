@@ -33,6 +33,7 @@
 //! | [`settings`] | the settings of a log's analysis as one table (Logs page fields, CLI options) |
 //! | [`link`] | the Logs page's state in its URL (sample, mapping, analysed column, replay form), read by the page and by lessons |
 //! | [`transfer`] | the Logs page's replays sent to a computation worker and back |
+//! | [`trial_cuts`] | a shop's own trial cuts as a table (conditions and a monitor's force), what paper 004's network learns from |
 
 pub mod analysis;
 pub mod calibration;
@@ -44,6 +45,7 @@ pub mod period_log;
 pub mod replay;
 pub mod settings;
 pub mod transfer;
+pub mod trial_cuts;
 
 use serde::{Deserialize, Serialize};
 
