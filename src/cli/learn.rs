@@ -14,12 +14,12 @@ use super::{write_json, CliError, Io};
 use crate::closed_loop::trial_cuts::{
     learn_on_preset, preset_networks, LearningError, PresetLearning, DEFAULT_TRIAL_FEEDS_PCT,
 };
-use crate::estimation::power_law_fit::{learn, LearnError, LearnedPowerLaw};
+use crate::estimation::power_law_fit::{LearnError, LearnedPowerLaw};
 use crate::input::{parse_number, readable};
-use crate::log::trial_cuts::{learning_table, read_table, CutColumn, TableTool, TrialCutTable};
+use crate::log::trial_cuts::{
+    learn_from_table, learning_table, TableLearning, TableTool, TrialCutTable,
+};
 use crate::plant::materials::Material;
-use crate::plant::power_law::PowerLawReading;
-use crate::plant::simulator::power_law_material;
 use crate::plant::Preset;
 
 pub(crate) const ABOUT: &str =
@@ -134,7 +134,7 @@ pub fn run(args: LearnArgs, io: &mut Io<'_>) -> Result<(), CliError> {
                  and --write-cuts",
             ));
         }
-        return learn_from_table(file, &args, io);
+        return run_on_table(file, &args, io);
     }
     for (given, name) in [
         (args.force_column.is_some(), "--force-column"),
@@ -281,7 +281,7 @@ struct TableReport<'a> {
 }
 
 /// `cutlab learn --cuts FILE`: the network learned from a table of the user's own cuts.
-fn learn_from_table(file: &str, args: &LearnArgs, io: &mut Io<'_>) -> Result<(), CliError> {
+fn run_on_table(file: &str, args: &LearnArgs, io: &mut Io<'_>) -> Result<(), CliError> {
     let tool = TableTool {
         diameter_mm: value::<f64>("diameter-mm", &args.diameter_mm)?,
         teeth: value::<u32>("teeth", &args.teeth)?,
@@ -295,27 +295,20 @@ fn learn_from_table(file: &str, args: &LearnArgs, io: &mut Io<'_>) -> Result<(),
         })?,
         None => Material::Sm45c,
     };
-    let weights = power_law_material(material);
     let log = read_log(file)?;
-    let table = read_table(&log, args.force_column.as_deref(), tool)
+    let learning = learn_from_table(&log, args.force_column.as_deref(), tool, material)
         .map_err(|e| CliError::new(format!("{file}: {e}")))?;
-    let TrialCutTable {
-        cuts,
-        lines,
-        columns,
-        left_out,
-    } = &table;
-    let learned = learn(cuts, PowerLawReading::USED, weights).map_err(|e| {
-        let e = match e {
-            // The learning numbers the cuts it was given; the user reads lines of the file.
-            LearnError::NotACut { index, problem } => format!(
-                "line {}: {problem}",
-                lines.get(index).copied().unwrap_or_default()
-            ),
-            e => e.to_string(),
-        };
-        CliError::new(format!("{file}: {e}"))
-    })?;
+    let TableLearning {
+        table:
+            TrialCutTable {
+                cuts,
+                lines,
+                columns,
+                left_out,
+            },
+        material: weights,
+        learned,
+    } = &learning;
     if args.json {
         return write_json(
             io.stdout,
@@ -328,7 +321,7 @@ fn learn_from_table(file: &str, args: &LearnArgs, io: &mut Io<'_>) -> Result<(),
                 lines,
                 left_out,
                 material: weights.name(),
-                learned: &learned,
+                learned,
             },
         );
     }
@@ -336,11 +329,7 @@ fn learn_from_table(file: &str, args: &LearnArgs, io: &mut Io<'_>) -> Result<(),
     for p in left_out {
         out.push_str(&problem_note(p));
     }
-    let force = columns
-        .iter()
-        .find(|(q, _)| *q == CutColumn::Force)
-        .and_then(|(_, c)| c.as_deref())
-        .unwrap_or_default();
+    let force = learning.force_column();
     let _ = writeln!(
         out,
         "Paper 004's network learned from {file}: {} trial cuts{}, the force from {force:?}, \

@@ -18,8 +18,10 @@ use std::fmt::Write as _;
 
 use super::{name_words, unit_of, Column, ColumnKind, LineProblem, Log};
 use crate::closed_loop::trial_cuts::PresetLearning;
-use crate::estimation::power_law_fit::TrialCut;
-use crate::plant::power_law::PowerLawInputs;
+use crate::estimation::power_law_fit::{learn, LearnError, LearnedPowerLaw, TrialCut};
+use crate::plant::materials::Material;
+use crate::plant::power_law::{PowerLawInputs, PowerLawMaterial, PowerLawReading};
+use crate::plant::simulator::power_law_material;
 
 /// A column of a trial-cut table: one quantity of each cut.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -266,6 +268,56 @@ pub fn read_table(
         table.lines.push(line);
     }
     Ok(table)
+}
+
+/// Paper 004's network learned from a table of trial cuts: what `cutlab learn --cuts` prints and
+/// the Machine page shows.
+#[derive(Debug, Clone, PartialEq)]
+pub struct TableLearning {
+    /// The cuts read, and the rows left out.
+    pub table: TrialCutTable,
+    /// The published weights the learned ones are compared with.
+    pub material: PowerLawMaterial,
+    /// The network learned on the table's forces.
+    pub learned: LearnedPowerLaw,
+}
+
+/// Reads the trial cuts of `log` ([`read_table`]) and learns paper 004's network on them, in the
+/// reading the lab uses, beside `material`'s published weights. A cut the learning refuses is
+/// named by its line in the file.
+pub fn learn_from_table(
+    log: &Log,
+    force_column: Option<&str>,
+    tool: TableTool,
+    material: Material,
+) -> Result<TableLearning, String> {
+    let table = read_table(log, force_column, tool)?;
+    let material = power_law_material(material);
+    let learned = learn(&table.cuts, PowerLawReading::USED, material).map_err(|e| match e {
+        // The learning numbers the cuts it was given; a person reads lines of the file.
+        LearnError::NotACut { index, problem } => format!(
+            "line {}: {problem}",
+            table.lines.get(index).copied().unwrap_or_default()
+        ),
+        e => e.to_string(),
+    })?;
+    Ok(TableLearning {
+        table,
+        material,
+        learned,
+    })
+}
+
+impl TableLearning {
+    /// The column the force was read from.
+    pub fn force_column(&self) -> &str {
+        self.table
+            .columns
+            .iter()
+            .find(|(q, _)| *q == CutColumn::Force)
+            .and_then(|(_, c)| c.as_deref())
+            .unwrap_or_default()
+    }
 }
 
 /// Where a quantity's values come from.

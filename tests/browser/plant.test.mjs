@@ -80,3 +80,44 @@ test('paper 004\'s network learned from trial cuts in a worker equals the native
   assert.deepEqual(problems, []);
   await context.close();
 });
+
+test('paper 004\'s network learned from a table of your own trial cuts equals cutlab learn --cuts, and every row left out is named', async () => {
+  const { page, problems, context } = await openLab(browser, server.url, '#/plant?preset=kim-step-doc');
+  const panel = page.getByRole('region', { name: "Paper 004's network, learned from your own trial cuts" });
+  const table = new URL('../../www/data/kim-step-doc-trial-cuts.csv', import.meta.url).pathname;
+  await panel.getByLabel('Trial-cut table (CSV)').setInputFiles(table);
+  const exponents = panel.getByRole('table', { name: /Exponents learned from your cuts/ });
+  await exponents.waitFor();
+  const native = JSON.parse(execFileSync(nativeCli(), ['learn', '--cuts', table, '--json']).toString());
+  for (const learned of native.learned.learned) {
+    const symbol = { 'feed-per-tooth': 'f', 'axial-depth': 'a_p', 'radial-width': 'a_e' }[learned.input];
+    const row = exponents.getByRole('row').filter({ has: page.getByRole('rowheader', { name: symbol, exact: true }) });
+    const cells = await row.getByRole('cell').allTextContents();
+    assert.equal(cells[0], `${learned.exponent.toFixed(2)} ± ${learned.uncertainty.toFixed(2)}`, symbol);
+  }
+  const cuts = panel.getByRole('table', { name: 'Your trial cuts and residuals' });
+  assert.equal(await cuts.getByRole('row').count(), native.lines.length + 1);
+
+  // Another shop's table: semicolons, decimal commas, its own names, no tool columns, a row with
+  // a gap. Refused until the tool is given, then learned with the gap's row named.
+  let text = 'Width of cut (mm);FZ [mm];ap;Force [N]\n';
+  for (const [i, ae] of [4, 5, 6].entries()) {
+    for (const [j, fz] of [0.08, 0.1, 0.12].entries()) {
+      const depth = 1 + ((i + 2 * j) % 3);
+      const force = 600 * ae ** 0.8 * fz ** 0.7 * depth;
+      text += `${ae};${fz};${depth};${force.toFixed(6)}\n`.replaceAll('.', ',');
+    }
+  }
+  text += '5;0,1;;300\n';
+  await panel.getByLabel('Trial-cut table (CSV)').setInputFiles({ name: 'shop.csv', mimeType: 'text/csv', buffer: Buffer.from(text) });
+  await panel.getByRole('alert').filter({ hasText: 'shop.csv: no column for the tool diameter d' }).waitFor();
+  await panel.getByLabel('Tool diameter (mm), if the table has no d column').fill('20');
+  await panel.getByLabel('Teeth, if the table has no z column').fill('2');
+  await panel.getByRole('list', { name: 'Rows left out' }).getByText('Line 11, ap: the depth of cut a_p is missing').waitFor();
+  const feed = exponents.getByRole('row').filter({ has: page.getByRole('rowheader', { name: 'f', exact: true }) });
+  assert.equal((await feed.getByRole('cell').allTextContents())[0], '0.70 ± 0.00');
+  await panel.getByLabel('Teeth, if the table has no z column').fill('2.5');
+  await panel.getByRole('alert').filter({ hasText: 'Teeth: 2.5 is not a whole number above 0' }).waitFor();
+  assert.deepEqual(problems, []);
+  await context.close();
+});

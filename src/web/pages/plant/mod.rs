@@ -1,14 +1,16 @@
 //! Plant: the simulated machine on its own — a preset's tool path and depth profile, and its
 //! forces, torque and motor currents at a fixed override; for paper 000's brake bench, the
 //! current spectrum at each load step and the RMS-current-versus-load line (Fig. 9 and 11); and
-//! paper 004's network learned on the machine's trial cuts.
+//! paper 004's network learned on the machine's trial cuts, or on the user's own.
 //!
 //! | file | what |
 //! |---|---|
 //! | `mod.rs` | the page: the preset, its open-loop run (recorded in a computation worker, [`crate::web::components::pool`]) and charts |
 //! | [`learning`] | paper 004's network learned from trial cuts, with its residuals |
+//! | [`own_cuts`] | the same network learned from a table of the user's own trial cuts |
 
 mod learning;
+mod own_cuts;
 
 use std::ops::Range;
 use std::sync::Arc;
@@ -32,6 +34,7 @@ use crate::web::components::table_form::{SettingField, TableForm};
 use crate::web::route::{query_params, replace_query, Page};
 
 use learning::LearningPanel;
+use own_cuts::OwnCutsPanel;
 
 /// Wait after the last edit before re-running.
 const RERUN_DELAY: Duration = Duration::from_millis(300);
@@ -414,6 +417,7 @@ pub fn PlantPage() -> impl IntoView {
                 </div>
             </div>
             <LearningPanel preset=preset />
+            <OwnCutsPanel />
         </PageShell>
     }
 }
