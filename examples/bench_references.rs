@@ -1,5 +1,5 @@
 //! The savings' reference search of one preset, run by run: which fixed overrides it probes and
-//! the processor time each run takes (issue 28: why `kim-circular-taper`'s savings take seconds).
+//! the processor time each run takes (issue 28: why `kim-circular-taper`'s savings took seconds).
 //!
 //! ```text
 //! cargo run --release --example bench_references -- kim-circular-taper [--applied 100,36,14,2]

@@ -194,6 +194,31 @@ impl ChipLoad {
     }
 }
 
+/// The overrides the envelope commands inside in a period at `programmed_feed_mm_min` and
+/// `spindle_rpm`, %: the band `(min, max)` narrowed to those that keep the feed per tooth inside
+/// `window`; the whole band without a window, or where the feed and speed give no feed per tooth.
+/// A window that lies outside the band gives the band's nearer end (the band is the machine's).
+///
+/// ```
+/// use cutlab::safety::{chip_load_band_pct, ChipLoad};
+/// let window = ChipLoad { teeth: 2, min_mm: 0.02, max_mm: 0.15 };
+/// // 200 mm/min at 1000 rpm: 20–150 % keeps the feed per tooth inside, within 0–255 %.
+/// assert_eq!(chip_load_band_pct(Some(&window), (0.0, 255.0), 200.0, 1000.0), (20.0, 150.0));
+/// assert_eq!(chip_load_band_pct(Some(&window), (10.0, 120.0), 200.0, 1000.0), (20.0, 120.0));
+/// assert_eq!(chip_load_band_pct(None, (10.0, 120.0), 200.0, 1000.0), (10.0, 120.0));
+/// ```
+pub fn chip_load_band_pct(
+    window: Option<&ChipLoad>,
+    (min_pct, max_pct): (f64, f64),
+    programmed_feed_mm_min: f64,
+    spindle_rpm: f64,
+) -> (f64, f64) {
+    match window.and_then(|w| w.override_range_pct(programmed_feed_mm_min, spindle_rpm)) {
+        Some((lo, hi)) => (lo.clamp(min_pct, max_pct), hi.clamp(min_pct, max_pct)),
+        None => (min_pct, max_pct),
+    }
+}
+
 /// What the arming delay counts from. While the trigger is off, the envelope is disarmed and
 /// commands the arming override.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -855,17 +880,17 @@ impl SafetyEnvelope {
         };
         // The band, narrowed to the overrides that keep the feed per tooth inside the chip-load
         // window at this period's programmed feed and speed.
+        let (lowest, highest) = chip_load_band_pct(
+            c.chip_load.as_ref(),
+            (c.min_override_pct, c.max_override_pct),
+            sample.programmed_feed_mm_min,
+            sample.spindle_command_rpm,
+        );
+        // Which end of the window holds the request, if either (for the event log).
         let window = c.chip_load.and_then(|w| {
             w.override_range_pct(sample.programmed_feed_mm_min, sample.spindle_command_rpm)
                 .map(|range| (w, range))
         });
-        let (lowest, highest) = match window {
-            Some((_, (lo, hi))) => (
-                lo.clamp(c.min_override_pct, c.max_override_pct),
-                hi.clamp(c.min_override_pct, c.max_override_pct),
-            ),
-            None => (c.min_override_pct, c.max_override_pct),
-        };
         let chip_end = match window {
             Some((_, (_, hi))) if wanted > hi && hi < c.max_override_pct => {
                 Some(ChipLoadEnd::Highest)

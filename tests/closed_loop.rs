@@ -365,6 +365,79 @@ fn the_reference_search_finds_the_highest_safe_fixed_override_in_pieces_or_at_on
     );
 }
 
+/// The rows of `r` in the program's cut, armed: where the fixed override is the machine's.
+fn applied_overrides_pct(r: &RunResult) -> Vec<f64> {
+    r.trace
+        .rows
+        .iter()
+        .filter(|row| row.armed && row.programmed_feed_mm_min > 0.0)
+        .map(|row| row.applied_override_pct)
+        .collect()
+}
+
+/// Natively only: three whole runs and a teach cut.
+#[cfg(not(target_arch = "wasm32"))]
+#[test]
+fn the_safe_fixed_override_reported_is_the_one_the_machine_ran_at() {
+    use cutlab::closed_loop::references::{fixed_feed_spec, references};
+    // kim-step-doc's 0.1 mm per tooth lies inside SM45C's chip-load window (0.01–0.15 mm) from
+    // 10 to 150 %; with a target no fixed feed reaches, the highest safe override is the window's
+    // ceiling. (The search once reported a fixed 249 %, which the envelope ran as 150 %.)
+    let mut spec = RunSpec::new(Preset::KimStepDoc, ControllerKind::Fixed);
+    spec.settings.target_force_n = Some(20_000.0);
+    let found = references(&spec).unwrap();
+    let safe = simulate(&fixed_feed_spec(&spec, found.safe_fixed_override_pct).unwrap()).unwrap();
+    let applied = applied_overrides_pct(&safe);
+    assert!(!applied.is_empty());
+    assert!(
+        applied.iter().all(|&p| p == found.safe_fixed_override_pct),
+        "reported {} %, applied {:?} %",
+        found.safe_fixed_override_pct,
+        applied
+            .iter()
+            .fold((f64::INFINITY, 0.0_f64), |(lo, hi), &p| (
+                lo.min(p),
+                hi.max(p)
+            ))
+    );
+    assert_eq!(found.safe_fixed_override_pct, 150.0);
+    assert_eq!(safe.metrics.cycle_time_s, found.safe_fixed_cycle_time_s);
+}
+
+/// Natively only: four whole runs of a 170 s program, a teach cut and a check run.
+#[cfg(not(target_arch = "wasm32"))]
+#[test]
+fn the_reference_search_starts_at_the_chip_load_floor_and_runs_it_once() {
+    use cutlab::closed_loop::references::{
+        fixed_feed_spec, fixed_override_range_pct, ReferenceSearch,
+    };
+    let spec = RunSpec::new(Preset::KimCircularTaper, ControllerKind::Threshold);
+    // Below 36 % the envelope raises any fixed override to the chip-load window's floor at this
+    // program's 170 mm/min (SM45C's 0.01 mm per tooth), so every slower fixed feed is one run.
+    let (floor_pct, _) = fixed_override_range_pct(&spec).unwrap();
+    assert_eq!(floor_pct, 36.0);
+    let at_floor = simulate(&fixed_feed_spec(&spec, floor_pct).unwrap()).unwrap();
+    let below = simulate(&fixed_feed_spec(&spec, 14.0).unwrap()).unwrap();
+    assert!(applied_overrides_pct(&below)
+        .iter()
+        .all(|&p| p == floor_pct));
+    assert_eq!(below.metrics.peak_force_n, at_floor.metrics.peak_force_n);
+
+    let mut search = ReferenceSearch::new(&spec).unwrap();
+    let found = loop {
+        if search.advance(1000).unwrap() {
+            break search.finish().unwrap();
+        }
+    };
+    // 100 and 60 % whole (they fix the line), a probe just above the floor and the floor: the
+    // search once halved its way down to 1 %, ten runs of which the last eight were the floor's.
+    assert!(search.runs_done() <= 5, "{} runs", search.runs_done());
+    // Even the floor's peak lies above the target: no fixed feed is safe.
+    assert!(at_floor.metrics.peak_force_n > at_floor.settings.target_force_n);
+    assert!(found.safe_fixed_override_pct.is_nan(), "{found:?}");
+    assert!(found.safe_fixed_cycle_time_s.is_nan());
+}
+
 #[test]
 fn on_the_brake_bench_restriction_steps_the_dial_down_under_load_and_back_up() {
     // Paper 000's bench has no spindle: the envelope arms from the first feed motion, and the

@@ -13,6 +13,7 @@ use crate::control::registry::{ControllerConfig, ControllerKind};
 use crate::estimation::estimator::Calibration;
 use crate::plant::presets::PlantEdits;
 use crate::plant::Preset;
+use crate::safety::chip_load_band_pct;
 use crate::work::{Progress, Work};
 
 /// The reference runs of the savings.
@@ -23,10 +24,12 @@ pub struct References {
     #[serde(deserialize_with = "crate::estimation::null_as_nan")]
     pub programmed_cycle_time_s: f64,
     /// The highest fixed override whose peak regulated force stays at or below the target (NaN
-    /// when not even the lowest does, and with it the cycle time and that saving): the
-    /// feed a machinist would fix for the part's worst spot, judged against the same force the
-    /// controllers are asked to hold (not the 1.2 × target limit, which would let the fixed feed
-    /// run 20 % harder than any controller aims to).
+    /// when not even the lowest the envelope applies does, and with it the cycle time and that
+    /// saving): the feed a machinist would fix for the part's worst spot, judged against the same
+    /// force the controllers are asked to hold (not the 1.2 × target limit, which would let the
+    /// fixed feed run 20 % harder than any controller aims to). Always an override the safety
+    /// envelope applies as set in every block of the program ([`fixed_override_range_pct`]): the
+    /// override the machine ran at, not one the chip-load window raised or lowered.
     #[serde(deserialize_with = "crate::estimation::null_as_nan")]
     pub safe_fixed_override_pct: f64,
     /// Cycle time at that override.
@@ -35,14 +38,76 @@ pub struct References {
 }
 
 /// Runs the fixed-feed references for `spec`'s preset and settings: 100 %, and a search for the
-/// highest fixed override that keeps the peak force at or below the target (to 1 %).
+/// highest fixed override that keeps the peak force at or below the target (to
+/// [`REFERENCE_RESOLUTION_PCT`]), among those the envelope applies ([`fixed_override_range_pct`]).
 pub fn references(spec: &RunSpec) -> Result<References, LoopError> {
     ReferenceSearch::new(spec)?.run_to_end()
 }
 
-/// The search's bracket of fixed overrides, percent: the answer lies in [low, high), and neither
-/// end is run unless the search comes down to it.
-const REFERENCE_BRACKET_PCT: (f64, f64) = (1.0, 250.0);
+/// The slowest fixed feed the search considers where nothing else bounds it (a machine without a
+/// chip-load window), percent: a fixed 0 % never finishes the program.
+const SLOWEST_FIXED_PCT: f64 = 1.0;
+
+/// The fixed overrides the safety envelope applies as set in every block of `spec`'s program, %:
+/// from the highest of the blocks' lowest overrides to the lowest of their highest. In each block
+/// the envelope narrows any override to the chip-load window at that block's programmed feed and
+/// spindle speed, within a fixed-feed run's band (up to the machine's highest override), and the
+/// machine takes the nearest of its override positions; a fixed override is one number for the
+/// whole program, so the one it runs at everywhere lies in this range. Below it, the block with
+/// the highest floor runs at its floor whatever is set (a fixed 14 % on kim-circular-taper's
+/// 170 mm/min runs as 36 %); above it, the block with the lowest ceiling runs at its ceiling.
+/// Where the blocks' windows share no override, the range is the highest floor alone (which the
+/// envelope then lowers in the blocks whose ceiling lies below it). At least
+/// [`SLOWEST_FIXED_PCT`] where the machine has no window.
+///
+/// ```
+/// use cutlab::closed_loop::definition::RunSpec;
+/// use cutlab::closed_loop::references::fixed_override_range_pct;
+/// use cutlab::control::registry::ControllerKind;
+/// use cutlab::plant::Preset;
+/// // 200 mm/min at 1000 rpm on two teeth is 0.1 mm per tooth; SM45C's window for a Ø20 mm
+/// // cutter, 0.01–0.15 mm, is 10–150 %.
+/// let spec = RunSpec::new(Preset::KimStepDoc, ControllerKind::Fixed);
+/// assert_eq!(fixed_override_range_pct(&spec).unwrap(), (10.0, 150.0));
+/// ```
+pub fn fixed_override_range_pct(spec: &RunSpec) -> Result<(f64, f64), LoopError> {
+    let plan = preset_plan(&fixed_feed_spec(spec, 100.0)?)?;
+    let limits = &plan.limits;
+    let band = (
+        limits.min_override_pct.max(SLOWEST_FIXED_PCT),
+        limits.max_override_pct,
+    );
+    // What the machine runs at in a block whose band is [lo, hi], set to `pct` inside it.
+    let applied =
+        |pct: f64, (lo, hi): (f64, f64)| limits.resolution.nearest(pct, lo, hi).unwrap_or(pct);
+    let blocks: Vec<(f64, f64)> = spec
+        .preset
+        .edited_scenario_spec(&spec.plant)
+        .map(|program| {
+            program
+                .moves
+                .iter()
+                .map(|m| {
+                    chip_load_band_pct(plan.chip_load.as_ref(), band, m.feed_mm_min, m.spindle_rpm)
+                })
+                .collect()
+        })
+        .unwrap_or_default();
+    let blocks = if blocks.is_empty() {
+        vec![band]
+    } else {
+        blocks
+    };
+    let floor_pct = blocks
+        .iter()
+        .map(|&b| applied(b.0, b))
+        .fold(f64::NEG_INFINITY, f64::max);
+    let ceiling_pct = blocks
+        .iter()
+        .map(|&b| applied(b.1, b))
+        .fold(f64::INFINITY, f64::min);
+    Ok((floor_pct, ceiling_pct.max(floor_pct)))
+}
 
 /// The search stops once the bracket is this narrow, percent of override.
 pub const REFERENCE_RESOLUTION_PCT: f64 = 1.0;
@@ -55,6 +120,12 @@ const VERDICT_CHECK_PERIODS: usize = 20;
 
 /// The reference runs of [`references`], done a piece at a time so a browser can show progress
 /// and stay responsive: the programmed feed at 100 %, then probes of fixed overrides.
+///
+/// The probes lie in the range the envelope applies ([`fixed_override_range_pct`]): below its
+/// floor every fixed override is the same run as the floor (the envelope raises it to the
+/// chip-load window), so a probe there would only repeat one, and report an override the machine
+/// never ran at. The floor is run once, last, when nothing above it kept the force; if it breaks
+/// the target too, no fixed feed is safe (NaN).
 ///
 /// The peak force of a fixed-feed run grows with the override, nearly in a straight line (the
 /// chip's force with the feed per tooth, plus the edge forces), so the probes are placed where
@@ -76,9 +147,14 @@ pub struct ReferenceSearch {
     programmed_cycle_time_s: f64,
     /// The force no reference run may exceed: the target the controllers hold.
     reference_force_n: f64,
-    /// The highest override known to keep the force (the bracket's floor until one is run).
+    /// The lowest fixed override the envelope applies as set: the bracket's floor.
+    floor_pct: f64,
+    /// Whether a run at the floor has broken the target (no fixed feed is safe).
+    floor_broke: bool,
+    /// The highest override known to keep the force (the floor until one is run).
     low_pct: f64,
-    /// The lowest override known to break it (the bracket's top until one is run).
+    /// The lowest override known to break it (just above the highest the envelope applies until
+    /// one is run: the answer lies in [low, high)).
     high_pct: f64,
     best_cycle_time_s: Option<f64>,
     /// (override, peak force) of every whole run so far: the line's points.
@@ -96,14 +172,15 @@ pub struct ReferenceSearch {
 enum RunKind {
     Programmed,
     Probe,
-    /// No probe stayed under the target: the lowest override, checked like the others.
+    /// No probe stayed under the target: the floor, checked like the others.
     Lowest,
 }
 
 impl ReferenceSearch {
     /// Starts with the programmed-feed run (and its teach cut).
     pub fn new(spec: &RunSpec) -> Result<Self, LoopError> {
-        Self::starting(spec, LabRun::new(&fixed_feed_spec(spec, 100.0)?)?, None)
+        let run = LabRun::new(&fixed_feed_spec(spec, 100.0)?)?;
+        Self::starting(spec, run, None)
     }
 
     /// Starts with the programmed-feed run, calibrated by `calibration` (from a teach cut of a
@@ -118,18 +195,20 @@ impl ReferenceSearch {
         run: LabRun,
         calibration: Option<Calibration>,
     ) -> Result<Self, LoopError> {
-        let (low_pct, bracket_high_pct) = REFERENCE_BRACKET_PCT;
-        // A dial that stops at 150 % cannot run a fixed 250 %.
-        let high_pct = bracket_high_pct.min(machine_max_override_pct(spec.preset));
+        let (floor_pct, ceiling_pct) = fixed_override_range_pct(spec)?;
+        // The programmed feed is a probe at the override the machine runs it at.
+        let programmed_pct = 100.0_f64.clamp(floor_pct, ceiling_pct);
         Ok(Self {
             run,
-            running: (100.0, RunKind::Programmed),
+            running: (programmed_pct, RunKind::Programmed),
             spec: spec.clone(),
             calibration,
             programmed_cycle_time_s: f64::NAN,
             reference_force_n: f64::NAN,
-            low_pct,
-            high_pct,
+            floor_pct,
+            floor_broke: false,
+            low_pct: floor_pct,
+            high_pct: ceiling_pct + REFERENCE_RESOLUTION_PCT,
             best_cycle_time_s: None,
             peaks: Vec::new(),
             rows_checked: 0,
@@ -148,6 +227,18 @@ impl ReferenceSearch {
     /// The calibration of the scenario's teach cut, once made (or given).
     pub fn calibration(&self) -> Option<&Calibration> {
         self.calibration.as_ref()
+    }
+
+    /// The reference runs ended so far, the programmed feed's included (a probe stopped once it
+    /// broke the target counts as one).
+    pub fn runs_done(&self) -> usize {
+        self.runs_done
+    }
+
+    /// Narrows the bracket after a run at `pct` that broke the target (or did not finish).
+    fn broke_at(&mut self, pct: f64) {
+        self.high_pct = self.high_pct.min(pct);
+        self.floor_broke |= pct <= self.floor_pct;
     }
 
     /// Whether the run under way has already broken the reference force, checking the rows added
@@ -204,20 +295,18 @@ impl ReferenceSearch {
         Some(pct.clamp(inside_low, inside_high))
     }
 
-    /// The run after a `kind` run ended: the next probe, the lowest override's check, or the
-    /// answer.
-    fn next(&mut self, kind: RunKind) -> Result<bool, LoopError> {
+    /// The run after one ended: the next probe, the floor's check, or the answer.
+    fn next(&mut self) -> Result<bool, LoopError> {
         let next = match self.next_probe_pct() {
             Some(pct) => Some((pct, RunKind::Probe)),
-            None if self.best_cycle_time_s.is_none() && kind != RunKind::Lowest => {
-                Some((self.low_pct, RunKind::Lowest))
+            None if self.best_cycle_time_s.is_none() && !self.floor_broke => {
+                Some((self.floor_pct, RunKind::Lowest))
             }
             None => None,
         };
         match (
             next,
-            self.best_cycle_time_s
-                .or_else(|| self.no_safe_fixed_feed(kind)),
+            self.best_cycle_time_s.or_else(|| self.no_safe_fixed_feed()),
         ) {
             (Some((pct, kind)), _) => {
                 let spec = fixed_feed_spec(&self.spec, pct)?;
@@ -241,12 +330,12 @@ impl ReferenceSearch {
         }
     }
 
-    /// After the lowest override also broke the target, the answer is that no fixed feed keeps
-    /// the force at the target (the cut's floor, its edge forces at the deepest point, lies
-    /// above it): NaN, which leaves the saving against a safe fixed feed undefined rather than
-    /// measured against a 1 % crawl that is not safe either.
-    fn no_safe_fixed_feed(&mut self, kind: RunKind) -> Option<f64> {
-        (kind == RunKind::Lowest).then(|| {
+    /// After the floor also broke the target, the answer is that no fixed feed keeps the force
+    /// at the target (the chip-load window allows none slower, or the cut's own floor, its edge
+    /// forces at the deepest point, lies above it): NaN, which leaves the saving against a safe
+    /// fixed feed undefined rather than measured against a crawl that is not safe either.
+    fn no_safe_fixed_feed(&mut self) -> Option<f64> {
+        self.floor_broke.then(|| {
             self.low_pct = f64::NAN;
             f64::NAN
         })
@@ -280,8 +369,8 @@ impl Work for ReferenceSearch {
             }
             if verdict_only && self.run_broke_target() {
                 self.runs_done += 1;
-                self.high_pct = self.high_pct.min(pct);
-                return self.next(kind);
+                self.broke_at(pct);
+                return self.next();
             }
             if left == 0 {
                 break false;
@@ -302,23 +391,14 @@ impl Work for ReferenceSearch {
         if result.trace.completed && (kept || !verdict_only) {
             self.peaks.push((pct, peak_n));
         }
-        match kind {
-            // The programmed feed is a probe at 100 % too.
-            RunKind::Programmed | RunKind::Probe => {
-                if kept && pct > self.low_pct {
-                    self.low_pct = pct;
-                    self.best_cycle_time_s = Some(result.metrics.cycle_time_s);
-                } else if !kept {
-                    self.high_pct = self.high_pct.min(pct);
-                }
-            }
-            RunKind::Lowest => {
-                if kept {
-                    self.best_cycle_time_s = Some(result.metrics.cycle_time_s);
-                }
-            }
+        // The programmed feed and the floor's check are probes too.
+        if !kept {
+            self.broke_at(pct);
+        } else if pct >= self.low_pct {
+            self.low_pct = pct;
+            self.best_cycle_time_s = Some(result.metrics.cycle_time_s);
         }
-        self.next(kind)
+        self.next()
     }
 
     /// The fixed override of the current run and the rough fraction done.
