@@ -28,7 +28,7 @@ enum Lane {
         teacher: usize,
     },
     Running(Box<LabRun>),
-    Done(Result<RunResult, LoopError>),
+    Done(Box<Result<RunResult, LoopError>>),
 }
 
 /// Runs of one plant advanced together, a control period of each per round.
@@ -56,7 +56,7 @@ impl LabBatch {
                     Some(teacher) => Lane::Waiting { teacher },
                     None => match LabRun::new(spec) {
                         Ok(run) => Lane::Running(Box::new(run)),
-                        Err(e) => Lane::Done(Err(e)),
+                        Err(e) => Lane::Done(Box::new(Err(e))),
                     },
                 }
             })
@@ -74,18 +74,18 @@ impl LabBatch {
                 Lane::Running(run) => run.loop_so_far().map(|(_, calibration)| {
                     LabRun::calibrated(&self.specs[i], calibration.clone())
                 }),
-                Lane::Done(Ok(result)) => Some(LabRun::calibrated(
-                    &self.specs[i],
-                    result.calibration.clone(),
-                )),
-                // The teacher failed: this run makes its own teach cut, and fails or not alone.
-                Lane::Done(Err(_)) => Some(LabRun::new(&self.specs[i])),
+                Lane::Done(outcome) => Some(match outcome.as_ref() {
+                    Ok(result) => LabRun::calibrated(&self.specs[i], result.calibration.clone()),
+                    // The teacher failed: this run makes its own teach cut, and fails or not
+                    // alone.
+                    Err(_) => LabRun::new(&self.specs[i]),
+                }),
                 Lane::Waiting { .. } => None,
             };
             if let Some(started) = started {
                 self.lanes[i] = match started {
                     Ok(run) => Lane::Running(Box::new(run)),
-                    Err(e) => Lane::Done(Err(e)),
+                    Err(e) => Lane::Done(Box::new(Err(e))),
                 };
             }
         }
@@ -111,8 +111,8 @@ impl Work for LabBatch {
                 let Lane::Running(run) = lane else { continue };
                 match run.advance(1) {
                     Ok(false) => {}
-                    Ok(true) => *lane = Lane::Done(run.finish()),
-                    Err(e) => *lane = Lane::Done(Err(e)),
+                    Ok(true) => *lane = Lane::Done(Box::new(run.finish())),
+                    Err(e) => *lane = Lane::Done(Box::new(Err(e))),
                 }
             }
         }
@@ -141,7 +141,7 @@ impl Work for LabBatch {
         Ok(std::mem::take(&mut self.lanes)
             .into_iter()
             .filter_map(|lane| match lane {
-                Lane::Done(outcome) => Some(outcome),
+                Lane::Done(outcome) => Some(*outcome),
                 _ => None,
             })
             .collect())
