@@ -163,7 +163,9 @@ impl Work for LabBatch {
 /// ];
 /// let together = run_batch(&specs);
 /// let alone = simulate(&specs[1]).unwrap();
-/// assert_eq!(together[1].as_ref().unwrap().trace, alone.trace);
+/// // Every number, NaN included, by its shortest round-trip text.
+/// let exact = |trace| format!("{trace:?}");
+/// assert_eq!(exact(&together[1].as_ref().unwrap().trace), exact(&alone.trace));
 /// ```
 pub fn run_batch(specs: &[RunSpec]) -> Vec<Result<RunResult, LoopError>> {
     let mut batch = LabBatch::new(specs.to_vec());
