@@ -23,24 +23,18 @@ use cutlab::plant::Preset;
 #[path = "common/trace_digest.rs"]
 mod trace_digest;
 
+#[path = "common/timing.rs"]
+mod timing;
+use timing::{repeats_from_args, thread_cpu_s};
+
 fn main() {
-    let mut args = std::env::args().skip(1);
-    let mut repeats = 3usize;
-    while let Some(arg) = args.next() {
-        match (arg.as_str(), args.next().and_then(|v| v.parse().ok())) {
-            ("--repeats", Some(n)) => repeats = n,
-            _ => {
-                eprintln!("usage: bench_loop [--repeats N]");
-                std::process::exit(2);
-            }
-        }
-    }
+    let repeats = repeats_from_args("bench_loop [--repeats N]");
     let spec = RunSpec::new(Preset::KimStepDoc, ControllerKind::FuzzyDynamics);
     let mut best_s = f64::INFINITY;
     let mut best_cpu_s = f64::INFINITY;
     let mut simulated_s = f64::NAN;
     let mut digest = String::new();
-    for _ in 0..repeats.max(1) {
+    for _ in 0..repeats {
         let start = Instant::now();
         let cpu_start = thread_cpu_s();
         match simulate(&spec) {
@@ -64,13 +58,4 @@ fn main() {
             "null".to_string()
         }
     );
-}
-
-/// Seconds this thread has run on a processor (Linux's /proc/thread-self/schedstat; NaN
-/// elsewhere).
-fn thread_cpu_s() -> f64 {
-    std::fs::read_to_string("/proc/thread-self/schedstat")
-        .ok()
-        .and_then(|s| s.split_whitespace().next()?.parse::<f64>().ok())
-        .map_or(f64::NAN, |ns| ns * 1e-9)
 }

@@ -9,11 +9,18 @@
 //! node scripts/bench/wasm_loop.mjs target/bench-wasm
 //! ```
 //!
+//! It also exports the batched loop's workload (`examples/common/batch_workload.rs`), which
+//! `scripts/bench/wasm_batch.mjs` times one run after another and as one batch.
+//!
 //! Natively the example is empty (it exists for the wasm build).
 
 #[cfg(target_arch = "wasm32")]
 #[path = "common/trace_digest.rs"]
 mod trace_digest;
+
+#[cfg(target_arch = "wasm32")]
+#[path = "common/batch_workload.rs"]
+mod batch_workload;
 
 #[cfg(target_arch = "wasm32")]
 mod wasm {
@@ -46,5 +53,21 @@ mod wasm {
             ControllerKind::FuzzyDynamics,
         ))
         .map_or_else(|e| e.to_string(), |r| super::trace_digest::trace_digest(&r))
+    }
+
+    /// The batched loop's workload (`examples/common/batch_workload.rs`) one run after another
+    /// (`batched` false) or as one batch; returns the seconds simulated, or NaN if a run failed.
+    /// Timed by `scripts/bench/wasm_batch.mjs`.
+    #[wasm_bindgen]
+    pub fn run_batch_workload(batched: bool) -> f64 {
+        super::batch_workload::run(batched).map_or(f64::NAN, |(simulated_s, _)| simulated_s)
+    }
+
+    /// The same workload's run digests, joined by commas (or the error).
+    #[wasm_bindgen]
+    pub fn batch_workload_digests(batched: bool) -> String {
+        super::batch_workload::run(batched)
+            .unwrap_or_else(|e| (f64::NAN, e))
+            .1
     }
 }

@@ -8,6 +8,9 @@
   worker-release, wasm-opt -Oz) and run under node (examples/bench_loop_wasm.rs,
   scripts/bench/wasm_loop.mjs), simulated seconds per wall second;
 * `cutlab compare` of six controllers with the fixed-feed references on kim-step-doc: wall time;
+* the batched loop (issue 28): four runs of kim-step-doc one after another and as one batch
+  (`closed_loop::batch`), natively (examples/bench_batch.rs) and in wasm
+  (scripts/bench/wasm_batch.mjs), simulated seconds per CPU second of each way;
 * the NumPy anchor: an open-loop milling simulation vectorised with NumPy at the same 10 kHz
   (mechanistic forces of a 2-tooth cutter, two three-phase drives with noise, RMS per period),
   simulated seconds per wall second.
@@ -118,6 +121,19 @@ def cutlab_wasm() -> tuple[float, float, float]:
     return data["wall_s"], data["cpu_s"], data["simulated_s"]
 
 
+def batched_loop(wasm: bool) -> dict:
+    """The four runs of examples/common/batch_workload.rs one after another and as one batch,
+    natively or in wasm under node; the JSON line of examples/bench_batch.rs or
+    scripts/bench/wasm_batch.mjs (best of three alternating rounds each)."""
+    if wasm:
+        command = ["node", os.path.join(ROOT, "scripts", "bench", "wasm_batch.mjs"), WASM_DIR, "3"]
+    else:
+        command = [os.path.join(ROOT, "target", "release", "examples", "bench_batch"),
+                   "--repeats", "3"]
+    out = subprocess.run(command, check=True, capture_output=True, text=True).stdout
+    return json.loads(out.strip().splitlines()[-1])
+
+
 def cutlab_compare() -> float:
     start = time.perf_counter()
     subprocess.run(
@@ -137,6 +153,8 @@ def main() -> None:
     if not args.no_build:
         subprocess.run(["cargo", "build", "--release", "--features", "cli", "-q"], cwd=ROOT,
                        check=True)
+        subprocess.run(["cargo", "build", "--release", "--example", "bench_batch", "-q"],
+                       cwd=ROOT, check=True)
         if not args.no_wasm:
             build_wasm()
     sim_best = compare_best = anchor_best = wasm_best = None
@@ -156,6 +174,10 @@ def main() -> None:
             wasm_best = w if wasm_best is None else min(wasm_best, w)
         c = cutlab_compare()
         compare_best = c if compare_best is None else min(compare_best, c)
+    # The batched loop after the rounds above: each call alternates its two ways itself.
+    batches = {"native": batched_loop(False)}
+    if not args.no_wasm:
+        batches["wasm"] = batched_loop(True)
     cutlab_rate = simulated / sim_best
     anchor_rate = simulated / anchor_best
     print(f"simulated seconds per run: {simulated:.1f} (teach cut + cut)", file=sys.stderr)
@@ -172,6 +194,11 @@ def main() -> None:
     if wasm_best is not None:
         print(f"| cutlab wasm / NumPy anchor | {simulated / wasm_best / anchor_rate:.2f}× | — |")
     print(f"| `cutlab compare`, six controllers with references: wall s | {compare_best:.2f} | ≤ 1.5 |")
+    for where, b in batches.items():
+        for way in ("single", "batch"):
+            label = "one after another" if way == "single" else "as one batch"
+            print(f"| batched loop, {where}: four kim-step-doc runs {label}, simulated s per CPU s "
+                  f"| {b['simulated_s'] / b[way + '_cpu_s']:.0f} | — |")
     print(json.dumps({
         "simulated_s": simulated,
         "native_sim_s_per_s": cutlab_rate,
@@ -181,6 +208,10 @@ def main() -> None:
         "numpy_sim_s_per_s": anchor_rate,
         "native_over_numpy": cutlab_rate / anchor_rate,
         "compare_wall_s": compare_best,
+        "batched_loop": {
+            where: {way: b["simulated_s"] / b[way + "_cpu_s"] for way in ("single", "batch")}
+            for where, b in batches.items()
+        },
     }))
 
 

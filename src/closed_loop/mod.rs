@@ -15,6 +15,7 @@
 //! | [`feedback_loop`] | the closed loop itself |
 //! | [`metrics`] | what a trace is judged by |
 //! | [`lab`] | runs on the papers' presets: teach cut then loop, in pieces; several runs in turn |
+//! | [`batch`] | runs of one plant stepped together, each equal bit for bit to the run alone |
 //! | [`trial_cuts`] | trial cuts read from a run's depth sections, for paper 004's network |
 //! | [`recording_jobs`] | the other jobs a computation worker does: bench and open-loop recordings, packed as raw numbers, and a teach-in's teach cuts |
 //! | [`transfer`] | runs sent to a computation worker and back, bit for bit (the browser's worker pool) |
@@ -25,6 +26,7 @@
 //! | [`config`], [`file_format`] | a saved configuration of runs, and the format check every saved file shares |
 //! | [`precomputed`] | the default scenario's teach cut and references, shipped with the lab |
 
+pub mod batch;
 pub mod calibration_file;
 pub mod calibration_store;
 pub mod config;
