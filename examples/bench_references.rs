@@ -18,6 +18,12 @@ use cutlab::control::registry::ControllerKind;
 use cutlab::plant::Preset;
 use cutlab::work::Work;
 
+#[path = "common/timing.rs"]
+// This bench takes its own arguments, not the shared `--repeats`.
+#[allow(dead_code)]
+mod timing;
+use timing::thread_cpu_s;
+
 fn main() {
     let mut args = std::env::args().skip(1);
     let name = args.next().unwrap_or_else(|| "kim-circular-taper".into());
@@ -87,13 +93,4 @@ fn main() {
             Err(e) => println!("fixed {pct} %: {e}"),
         }
     }
-}
-
-/// Seconds this thread has run on a processor (Linux's /proc/thread-self/schedstat; NaN
-/// elsewhere).
-fn thread_cpu_s() -> f64 {
-    std::fs::read_to_string("/proc/thread-self/schedstat")
-        .ok()
-        .and_then(|s| s.split_whitespace().next()?.parse::<f64>().ok())
-        .map_or(f64::NAN, |ns| ns * 1e-9)
 }
