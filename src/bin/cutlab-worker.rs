@@ -7,15 +7,16 @@
 //! | `ready` | — (the module is loaded: requests posted before this would be lost) |
 //! | `progress` | `job`, `stage`, `fraction` (about ten times a second) |
 //! | `chunk` | `job`, `run`, `rows`, `terms`, and with a run's first chunk `calibration`: the trace rows added since the last chunk ([`TraceChunk`]), about every `CHUNK_EVERY_MS` (20 ms) once the closed loop runs |
-//! | `done` | `job`, and for runs `runs`: one `{ header, rows, terms }` per spec ([`RunParts`]; `rows` and `terms` are `Float64Array`s, transferred); for references `references`, as JSON; for a bench or open-loop recording or teach cuts `json` and `arrays`, a list of `Float64Array`s, transferred (`cutlab::closed_loop::recording_jobs::Packed`); for replays `replays`: one `{ header, rows, terms }` per controller ([`ReplayParts`], the same way) |
+//! | `done` | `job`, and for runs `runs`: one `{ header, rows, terms }` per spec ([`RunParts`]; `rows` and `terms` are `Float64Array`s, transferred); for references `references`, as JSON; for a bench or open-loop recording, teach cuts, a log's signal chain or a calibration fitted to a log `json` and `arrays`, a list of `Float64Array`s, transferred (`cutlab::closed_loop::recording_jobs::Packed`); for replays `replays`: one `{ header, rows, terms }` per controller ([`ReplayParts`], the same way) |
 //! | `failed` | `job`, `message` (shown to a person as is) |
 //!
 //! A request is `{ job, request }`, `request` being a [`JobRequest`] as JSON: closed-loop runs, a
 //! scenario's fixed-feed references, paper 004's learning, paper 000's bench recording (Signal
 //! chain), a preset's open-loop recording (Machine) or a teach-in's teach cuts (Tune); or
-//! `{ job, replay, numbers }`, `replay` being a [`ReplayRequest`] as JSON (controllers replayed on
-//! a log, a layer above the loop's protocol) and `numbers` one `Float64Array` per column of the
-//! log it sends. The job is done in one go: the page cancels it by terminating the worker.
+//! `{ job, log_job, numbers }`, `log_job` being a [`LogJobRequest`] as JSON (the Logs page's
+//! replays, signal chain or calibration fit, a layer above the loop's protocol) and `numbers`
+//! one `Float64Array` per column of the log it sends. The job is done in one go: the page
+//! cancels it by terminating the worker.
 
 #[cfg(target_arch = "wasm32")]
 fn main() {
@@ -36,7 +37,9 @@ mod worker {
         learning_to_json, references_to_json, JobRequest, LearningRequest, ReferenceRequest,
         RunParts, RunRequest, TraceChunk, TraceStream,
     };
-    use cutlab::log::transfer::{ReplayParts, ReplayRequest};
+    use cutlab::log::transfer::{
+        pack_chain_output, pack_log_fit, LogJobRequest, ReplayParts, ReplayRequest,
+    };
     use cutlab::work::Work;
     use js_sys::{Array, Float64Array, Object, Reflect};
     use wasm_bindgen::prelude::{Closure, JsCast, JsValue};
@@ -62,12 +65,12 @@ mod worker {
                 .ok()
                 .and_then(|j| j.as_f64())
                 .unwrap_or(-1.0);
-            let replay = Reflect::get(&data, &"replay".into())
+            let log_job = Reflect::get(&data, &"log_job".into())
                 .ok()
                 .and_then(|r| r.as_string());
-            let outcome = match replay {
-                Some(json) => ReplayRequest::from_json(&json)
-                    .and_then(|request| replay_on_log(&replies, job, request, &data)),
+            let outcome = match log_job {
+                Some(json) => LogJobRequest::from_json(&json)
+                    .and_then(|request| work_on_log(&replies, job, request, &data)),
                 None => Reflect::get(&data, &"request".into())
                     .ok()
                     .and_then(|r| r.as_string())
@@ -113,19 +116,19 @@ mod worker {
         }
     }
 
-    /// Replays controllers on the log whose numbers came with the request (`data`, the whole
-    /// message), and posts their traces.
-    fn replay_on_log(
+    /// Does a job on the log whose numbers came with the request (`data`, the whole message)
+    /// and posts its answer.
+    fn work_on_log(
         scope: &DedicatedWorkerGlobalScope,
         job: f64,
-        request: ReplayRequest,
+        request: LogJobRequest,
         data: &JsValue,
     ) -> Result<(), String> {
         let numbers = Reflect::get(data, &"numbers".into())
             .ok()
             .filter(Array::is_array)
             .map(|a| Array::from(&a))
-            .ok_or("the worker received a replay without the log's numbers")?
+            .ok_or("the worker received a job on a log without the log's numbers")?
             .iter()
             .map(|column| {
                 column
@@ -134,6 +137,24 @@ mod worker {
                     .map_err(|_| "a column of the log's numbers is not an array of numbers")
             })
             .collect::<Result<Vec<_>, _>>()?;
+        match request {
+            LogJobRequest::Replay(request) => replay_on_log(scope, job, request, numbers),
+            LogJobRequest::Chain(request) => {
+                answer_packed(scope, job, request.into_work(numbers)?, pack_chain_output)
+            }
+            LogJobRequest::Fit(request) => {
+                answer_packed(scope, job, request.into_work(numbers)?, pack_log_fit)
+            }
+        }
+    }
+
+    /// Replays controllers on the log rebuilt from `numbers`, and posts their traces.
+    fn replay_on_log(
+        scope: &DedicatedWorkerGlobalScope,
+        job: f64,
+        request: ReplayRequest,
+        numbers: Vec<Vec<f64>>,
+    ) -> Result<(), String> {
         let mut work = request.into_work(numbers)?;
         let replays = advance_to_end(scope, job, &mut work, |_, _| Ok(()))?;
         let sent = Array::new();

@@ -12,7 +12,7 @@ use crate::plant::materials::{CuttingCoefficients, Material};
 use crate::plant::mechanics::{mean_forces, Cutter, Immersion, MillingMode, ToolForces};
 
 /// The cut a log was made with, apart from what each row says.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct CutGeometry {
     /// The cutter (diameter, teeth; the helix does not change a mean force).
     pub cutter: Cutter,

@@ -4,7 +4,7 @@
 //! A slow log (10 Hz of RMS or "current feedback" values) cannot take a low-pass above its Nyquist
 //! frequency: that stage is skipped, and the analysis says so, instead of failing.
 
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 use super::{ColumnKind, Log};
 use crate::signal::butterworth::{butter, ButterworthSpec, Cutoff, FilterKind};
@@ -12,7 +12,7 @@ use crate::signal::filtfilt::filtfilt;
 use crate::signal::spectrum::{find_peaks, welch};
 
 /// Statistics of some values; NaN and ±∞ (gaps, damaged cells) are left out and counted.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct Stats {
     /// Values counted: the finite ones.
     pub count: usize,
@@ -115,7 +115,7 @@ fn by_label(labels: &super::Column, values: &[f64], period_s: Option<f64>) -> Ve
 }
 
 /// One label's rows of a column.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct LabelStats {
     /// The label (a machining phase).
     pub label: String,
@@ -288,7 +288,7 @@ fn bridge_gaps(values: &mut [f64]) -> usize {
 }
 
 /// What the signal chain of the Logs page does to one column.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct ChainRequest {
     /// The column.
     pub column: String,
@@ -301,6 +301,21 @@ pub struct ChainRequest {
     pub by: Option<String>,
     /// The sample period of a log without a time column (overrides the log's).
     pub sample_period_s: Option<f64>,
+}
+
+impl ChainRequest {
+    /// The column of `log` the chain analyses; an unknown or text column is an error naming it.
+    pub fn check<'a>(&self, log: &'a Log) -> Result<&'a super::Column, String> {
+        let column = log
+            .columns
+            .iter()
+            .find(|c| c.name == self.column)
+            .ok_or_else(|| format!("no column {:?}", self.column))?;
+        if !matches!(column.kind, ColumnKind::Number | ColumnKind::Time) {
+            return Err(format!("column {:?} holds no numbers", self.column));
+        }
+        Ok(column)
+    }
 }
 
 /// The chain's output for one column: the filtered values, their moving RMS, the spectrum and the
@@ -345,15 +360,7 @@ const SPECTRUM_BLOCK: usize = 1 << 16;
 impl ChainWork {
     /// The chain of `request` on `log`; an unknown or text column is an error naming it.
     pub fn new(log: std::sync::Arc<Log>, request: ChainRequest) -> Result<Self, String> {
-        let column = log
-            .columns
-            .iter()
-            .find(|c| c.name == request.column)
-            .ok_or_else(|| format!("no column {:?}", request.column))?;
-        if !matches!(column.kind, ColumnKind::Number | ColumnKind::Time) {
-            return Err(format!("column {:?} holds no numbers", request.column));
-        }
-        let filtered = column.values.clone();
+        let filtered = request.check(&log)?.values.clone();
         Ok(Self {
             log,
             request,

@@ -21,7 +21,7 @@ use crate::estimation::teach_fit::FitPoint;
 use crate::work::{Progress, Work};
 
 /// Where a calibration from a log takes its force.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub enum ForceSource {
     /// The log's measured force (the [`Channel::Force`] column).
     Measured,

@@ -14,7 +14,7 @@
 //! | [`savings`] | the savings rows of the metrics tables |
 //! | [`teach_cuts`], [`recent`] | the last teach cuts' calibrations and other recent answers, by key |
 //! | [`saved_calibrations`] | the calibrations saved in this browser |
-//! | [`runner`], [`work_job`] | a job's status, progress and Cancel, in the workers or (the Logs page's) in slices of a task, and the job a page shares |
+//! | [`runner`] | a job's status, progress and Cancel, the job in the workers |
 //! | [`pool`] | the computation workers: runs, references, recordings and teach cuts off the page's thread, one worker per core |
 //! | [`later`] | a page mounted in pieces, and its own work after its mount (the reason, once) |
 //! | [`download`] | saving what the lab made as a file |
@@ -36,4 +36,3 @@ pub mod saved_calibrations;
 pub mod savings;
 pub mod table_form;
 pub mod teach_cuts;
-pub mod work_job;

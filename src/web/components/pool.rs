@@ -1,8 +1,8 @@
 //! The computation workers: the lab's long computations off the page's thread — closed-loop
 //! runs, the savings' reference runs, Tune's evaluations and teach cuts, paper 004's learning,
-//! the Signal chain page's bench recording and the Machine page's open-loop recording — one Web
-//! Worker per core the browser reports. (The Logs page's computations are still sliced on the
-//! page's thread by [`super::runner`].)
+//! the Signal chain page's bench recording, the Machine page's open-loop recording, and the Logs
+//! page's replays, signal chain and calibration fit — one Web Worker per core the browser
+//! reports.
 //!
 //! Each worker instantiates the core-only module (`src/bin/cutlab-worker.rs`, no Leptos, no
 //! pages) and does one [`JobRequest`] at a time; jobs wait in one queue and each goes to the next
@@ -18,6 +18,7 @@
 //! The page's `<html>` element carries `data-busy-workers` (the workers computing now) and
 //! `data-workers` (the pool's size), for a person's devtools and the browser tests.
 
+use std::borrow::Cow;
 use std::cell::RefCell;
 use std::collections::{HashMap, VecDeque};
 use std::sync::Arc;
@@ -38,7 +39,9 @@ use crate::closed_loop::transfer::{
     learning_from_json, references_from_json, JobRequest, RunParts, TraceChunk,
 };
 use crate::closed_loop::trial_cuts::PresetLearning;
-use crate::log::transfer::{ReplayParts, ReplayRequest};
+use crate::log::analysis::ChainOutput;
+use crate::log::calibration::LogFit;
+use crate::log::transfer::{unpack_chain_output, unpack_log_fit, LogJobRequest, ReplayParts};
 use crate::plant::recording::{OpenLoopRecording, PhaseRecording};
 use crate::tuning::{simulated_teach_in, TeachIn};
 use crate::work::Progress;
@@ -80,6 +83,10 @@ pub enum Answer {
     /// Replays' traces, in the order of the request's controllers (the page rebuilds each with
     /// the replay it prepares, [`ReplayParts::into_result`]).
     Replays(Vec<ReplayParts>),
+    /// The Logs page's signal chain on a column.
+    Chain(Arc<ChainOutput>),
+    /// A calibration fitted to a log.
+    LogFit(Arc<LogFit>),
 }
 
 /// What a job's answer is rebuilt from: for runs, their specs.
@@ -100,6 +107,8 @@ enum PackedKind {
     OpenLoopRecording,
     /// The teach-ins of these scenarios.
     TeachIns(Vec<RunSpec>),
+    Chain,
+    LogFit,
 }
 
 impl PackedKind {
@@ -121,6 +130,8 @@ impl PackedKind {
                     .collect::<Result<_, _>>()?;
                 Answer::TeachIns(teach_ins)
             }
+            Self::Chain => Answer::Chain(Arc::new(unpack_chain_output(packed)?)),
+            Self::LogFit => Answer::LogFit(Arc::new(unpack_log_fit(packed)?)),
         })
     }
 }
@@ -136,8 +147,8 @@ struct Queued {
     id: u64,
     expecting: Expecting,
     request_json: String,
-    /// The message's field the JSON goes in: `request` for a [`JobRequest`], `replay` for a
-    /// [`ReplayRequest`].
+    /// The message's field the JSON goes in: `request` for a [`JobRequest`], `log_job` for a
+    /// [`LogJobRequest`].
     field: &'static str,
     /// Numbers sent beside the JSON (`Float64Array`s, moved to the worker with the request).
     numbers: Array,
@@ -199,21 +210,21 @@ pub fn submit(request: JobRequest, listener: impl FnMut(JobEvent) + 'static) -> 
     enqueue("request", request.to_json(), expecting, &[], listener)
 }
 
-/// Queues a replay on a log as one job, as [`submit`] does, with `numbers` (the log's columns,
-/// [`ReplayRequest::new`]) sent beside its JSON: each copied once, into an array moved to the
-/// worker with the request. It is answered by [`Answer::Replays`].
-pub fn submit_replay(
-    request: &ReplayRequest,
-    numbers: &[&[f64]],
+/// Queues a job on a log as one job, as [`submit`] does, with `numbers` (the log's columns,
+/// [`crate::log::transfer::LogNumbers`]) sent beside its JSON: each copied once, into an array
+/// moved to the worker with the request. A replay is answered by [`Answer::Replays`], the signal
+/// chain by [`Answer::Chain`], a fit by [`Answer::LogFit`].
+pub fn submit_log_job(
+    request: &LogJobRequest,
+    numbers: &[Cow<[f64]>],
     listener: impl FnMut(JobEvent) + 'static,
 ) -> JobId {
-    enqueue(
-        "replay",
-        request.to_json(),
-        Expecting::Replays,
-        numbers,
-        listener,
-    )
+    let expecting = match request {
+        LogJobRequest::Replay(_) => Expecting::Replays,
+        LogJobRequest::Chain(_) => Expecting::Packed(PackedKind::Chain),
+        LogJobRequest::Fit(_) => Expecting::Packed(PackedKind::LogFit),
+    };
+    enqueue("log_job", request.to_json(), expecting, numbers, listener)
 }
 
 /// Queues a job whose JSON goes in the message's `field`.
@@ -221,7 +232,7 @@ fn enqueue(
     field: &'static str,
     json: Result<String, String>,
     expecting: Expecting,
-    numbers: &[&[f64]],
+    numbers: &[Cow<[f64]>],
     mut listener: impl FnMut(JobEvent) + 'static,
 ) -> JobId {
     let id = POOL.with(|pool| {
@@ -233,7 +244,7 @@ fn enqueue(
         Ok(request_json) => {
             let sent = Array::new();
             for column in numbers {
-                sent.push(&Float64Array::from(*column));
+                sent.push(&Float64Array::from(&**column));
             }
             POOL.with(|pool| {
                 let mut pool = pool.borrow_mut();

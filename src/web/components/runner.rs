@@ -1,17 +1,13 @@
-//! Runs long computations in the browser without freezing the page.
-//!
-//! Any core [`Work`] advances a little at a time; between chunks the browser gets control back (a
-//! message the page posts to itself, which starts a new task without the ≥ 4 ms a nested
-//! zero-delay timeout waits), so input, painting and the Cancel button stay responsive. The chunk size
-//! adapts so each chunk takes about [`CHUNK_BUDGET_MS`], well under the 100 ms a person notices.
-//! Starting a new job or cancelling bumps a generation counter; a pump that sees a newer
-//! generation stops, so a stale job never overwrites a fresh result, and a job whose page was left
-//! ends quietly.
-//!
-//! Most jobs do not share the page's thread at all: [`Runner::start_in_workers`] (closed-loop
-//! runs) and [`Runner::start_in_worker`] (any other [`JobRequest`]: references, learning,
-//! recordings, teach cuts) hand them to the worker pool ([`super::pool`]) behind the same
-//! status, progress bar and Cancel. Only the Logs page's computations are still sliced here.
+//! A long computation's status, progress and Cancel on the page, the computation itself in the
+//! worker pool ([`super::pool`]): [`Runner::start_in_workers`] (closed-loop runs, each a job of
+//! its own), [`Runner::start_in_worker`] (any other [`JobRequest`]: references, learning,
+//! recordings, teach cuts), [`Runner::start_log_job`] (the Logs page's signal chain and
+//! calibration fit) and, for callers that drive the pool themselves (the Logs page's replays,
+//! Tune's search), [`Runner::begin_in_workers`]. Starting a new job or cancelling bumps a
+//! generation counter and cancels the job's pool jobs (their workers are terminated); an answer
+//! of an older generation is dropped, so a stale job never overwrites a fresh result, and a job
+//! whose page was left ends quietly. What an answer redraws runs in a task of its own
+//! ([`next_task`]), never in the task that received it.
 
 use std::cell::RefCell;
 use std::collections::VecDeque;
@@ -27,18 +23,14 @@ use crate::closed_loop::definition::RunSpec;
 use crate::closed_loop::lab::{RunResult, TeachKey};
 use crate::closed_loop::transfer::{JobRequest, RunRequest, StreamedRun, TraceChunk};
 use crate::estimation::estimator::Calibration;
+use crate::log::transfer::{LogJobRequest, LogNumbers};
 use crate::web::components::pool::{self, Answer, JobEvent, JobId};
-use crate::work::{Progress, Work};
-
-/// Longest duration of one chunk of work: a chunk ends before a step that would take it past
-/// this, so with the page's own work around it a chunk stays under the 50 ms a task should take;
-/// between chunks the browser draws a frame (a few ms), so shorter chunks would cost the run time.
-pub const CHUNK_BUDGET_MS: f64 = 35.0;
+use crate::work::Progress;
 
 /// How often the output so far of a job is shown while it runs: the traces a worker streams
 /// ([`Runner::start_in_workers`]; the first piece is drawn at once, so the start of a long cut
-/// shows as soon as it is computed), or a sliced job's preview. A preview redraws every chart of
-/// the page, tens of milliseconds in all, so a run fills in twice a second.
+/// shows as soon as it is computed). A preview redraws every chart of the page, tens of
+/// milliseconds in all, so a run fills in twice a second.
 pub const PREVIEW_EVERY_MS: f64 = 500.0;
 
 /// How often a running job's progress (stage and fraction) is published. Each change of the
@@ -67,14 +59,13 @@ pub enum RunStatus<T> {
     Cancelled,
 }
 
-/// Drives jobs — sliced on the page's thread, or closed-loop runs in the worker pool
-/// ([`Runner::start_in_workers`]) — and publishes their status.
+/// Hands jobs to the worker pool and publishes their status.
 pub struct Runner<T: Send + Sync + 'static> {
     /// The status, for the page to show.
     pub status: RwSignal<RunStatus<T>>,
-    /// The output so far of a previewing job, refreshed every
-    /// [`PREVIEW_EVERY_MS`] while it runs and set to its output when it is done; `None` for
-    /// other jobs, before the first preview, and after a failure or cancel.
+    /// The runs so far of [`Runner::start_in_workers`], refreshed every [`PREVIEW_EVERY_MS`]
+    /// while they compute and set to the runs when they are done; `None` for other jobs, before
+    /// the first preview, and after a failure or cancel.
     pub preview: RwSignal<Option<T>>,
     generation: Arc<AtomicU64>,
     /// The worker-pool jobs of the job under way, cancelled with it.
@@ -149,38 +140,6 @@ impl<T: Clone + Send + Sync + 'static> Runner<T> {
             let _ = self.status.try_set(RunStatus::Cancelled);
         }
     }
-
-    /// Starts `job`, replacing anything running.
-    pub fn start<J: Work<Output = T> + 'static>(&self, job: J) {
-        self.start_with(job, None);
-    }
-
-    fn start_with<J: Work<Output = T> + 'static>(
-        &self,
-        job: J,
-        preview: Option<fn(&J) -> Option<T>>,
-    ) {
-        let generation = self.generation.fetch_add(1, Ordering::SeqCst) + 1;
-        cancel_pool_jobs(&self.pool_jobs);
-        let Progress { stage, fraction } = job.progress();
-        let _ = self.status.try_set(RunStatus::Running { stage, fraction });
-        let _ = self.preview.try_set(None);
-        let state = Rc::new(RefCell::new(Pumped {
-            job,
-            budget: 1,
-            preview,
-            previewed_at_ms: now_ms(),
-            progress_at_ms: now_ms(),
-            phase: Phase::Working,
-        }));
-        let signals = Published {
-            status: self.status,
-            preview: self.preview,
-        };
-        // The first chunk in a task of its own: a page that starts a run as it mounts paints first.
-        let generations = self.generation.clone();
-        next_task(move || pump(state, signals, generations, generation));
-    }
 }
 
 impl<T: Clone + Send + Sync + 'static> Default for Runner<T> {
@@ -214,10 +173,33 @@ impl<T: Send + Sync + 'static> Runner<T> {
 pub const ANOTHER_ANSWER: &str = "the computation worker answered another job than the one asked";
 
 impl<T: Clone + Send + Sync + 'static> Runner<T> {
-    /// Does `request` in the worker pool, replacing anything running, behind the same status,
-    /// progress bar and Cancel as a sliced job; `output` takes the answer (`None`: an answer of
+    /// Does `request` in the worker pool, replacing anything running, behind the runner's
+    /// status, progress bar and Cancel; `output` takes the answer (`None`: an answer of
     /// another kind, a bug, fails the job). The output is published in a task of its own.
     pub fn start_in_worker(&self, request: JobRequest, output: fn(Answer) -> Option<T>) {
+        self.start_in_pool(|listener| pool::submit(request, listener), output);
+    }
+
+    /// Does a job on a log in the worker pool, its `numbers` sent beside it
+    /// ([`pool::submit_log_job`]), as [`Runner::start_in_worker`] does a [`JobRequest`].
+    pub fn start_log_job(
+        &self,
+        request: &LogJobRequest,
+        numbers: &LogNumbers<'_>,
+        output: fn(Answer) -> Option<T>,
+    ) {
+        self.start_in_pool(
+            |listener| pool::submit_log_job(request, numbers, listener),
+            output,
+        );
+    }
+
+    /// Submits one job with `submit`, given its listener, behind this runner's status.
+    fn start_in_pool(
+        &self,
+        submit: impl FnOnce(Box<dyn FnMut(JobEvent)>) -> JobId,
+        output: fn(Answer) -> Option<T>,
+    ) {
         let generation = self.generation.fetch_add(1, Ordering::SeqCst) + 1;
         cancel_pool_jobs(&self.pool_jobs);
         let _ = self.preview.try_set(None);
@@ -229,7 +211,7 @@ impl<T: Clone + Send + Sync + 'static> Runner<T> {
         let generations = self.generation.clone();
         let current = move || generations.load(Ordering::SeqCst) == generation;
         let mut progress_at_ms = f64::NEG_INFINITY;
-        let job = pool::submit(request, move |event| {
+        let job = submit(Box::new(move |event| {
             if !current() {
                 return;
             }
@@ -256,7 +238,7 @@ impl<T: Clone + Send + Sync + 'static> Runner<T> {
                     let _ = status.try_set(RunStatus::Failed(message));
                 }
             }
-        });
+        }));
         if let Ok(mut pool_jobs) = self.pool_jobs.lock() {
             *pool_jobs = vec![job];
         }
@@ -342,7 +324,7 @@ impl Runner<Vec<Arc<RunResult>>> {
                     }
                     JobEvent::Progress(p) => {
                         fractions.borrow_mut()[index] = p.fraction;
-                        // At most every PROGRESS_EVERY_MS, as for a sliced job.
+                        // At most every PROGRESS_EVERY_MS.
                         let due = now_ms() - *progress_at_ms.borrow() >= PROGRESS_EVERY_MS;
                         if due {
                             *progress_at_ms.borrow_mut() = now_ms();
@@ -433,171 +415,8 @@ impl Streams {
     }
 }
 
-/// How a job shows its output so far.
-type PreviewOf<J> = fn(&J) -> Option<<J as Work>::Output>;
-
-struct Pumped<J: Work> {
-    job: J,
-    budget: usize,
-    preview: Option<PreviewOf<J>>,
-    previewed_at_ms: f64,
-    /// When the progress was last published.
-    progress_at_ms: f64,
-    phase: Phase,
-}
-
-/// Where a pumped job is.
-#[derive(Clone, Copy, PartialEq)]
-enum Phase {
-    /// More work to do.
-    Working,
-    /// The work is done; its output is published next.
-    Finished,
-}
-
-/// Where a pump publishes.
-struct Published<T: Send + Sync + 'static> {
-    status: RwSignal<RunStatus<T>>,
-    preview: RwSignal<Option<T>>,
-}
-
-impl<T: Send + Sync + 'static> Clone for Published<T> {
-    fn clone(&self) -> Self {
-        *self
-    }
-}
-
-impl<T: Send + Sync + 'static> Copy for Published<T> {}
-
 fn now_ms() -> f64 {
     window().performance().map_or(0.0, |p| p.now())
-}
-
-/// Does one chunk of work, publishes progress, and schedules the next chunk.
-fn pump<J: Work + 'static>(
-    state: Rc<RefCell<Pumped<J>>>,
-    published: Published<J::Output>,
-    generation: Arc<AtomicU64>,
-    mine: u64,
-) where
-    J::Output: Clone + Send + Sync + 'static,
-{
-    let status = published.status;
-    if generation.load(Ordering::SeqCst) != mine {
-        return;
-    }
-    // What the page redraws — a preview of the work so far, or the finished output — is
-    // published in a task of its own, not after a chunk of work: the redraw runs in the task that
-    // sets the signals, and a chunk plus a redraw could exceed the 50 ms a task should take.
-    let phase = state.borrow().phase;
-    let next = match phase {
-        Phase::Finished => {
-            let finished = state.borrow_mut().job.finish();
-            match finished {
-                Ok(out) => RunStatus::Done(out),
-                Err(e) => RunStatus::Failed(e.to_string()),
-            }
-        }
-        Phase::Working => {
-            let preview = {
-                let mut s = state.borrow_mut();
-                match s.preview {
-                    Some(show) if now_ms() - s.previewed_at_ms >= PREVIEW_EVERY_MS => {
-                        s.previewed_at_ms = now_ms();
-                        Some(show(&s.job))
-                    }
-                    _ => None,
-                }
-            };
-            match preview {
-                Some(so_far) => {
-                    if so_far.is_some() {
-                        let _ = published.preview.try_set(so_far);
-                    }
-                    let Progress { stage, fraction } = state.borrow().job.progress();
-                    RunStatus::Running { stage, fraction }
-                }
-                None => work_chunk(&mut state.borrow_mut()),
-            }
-        }
-    };
-    let running = matches!(next, RunStatus::Running { .. });
-    match &next {
-        // A previewed job's final output is its last preview, so the page shows it at once.
-        RunStatus::Done(output) if state.borrow().preview.is_some() => {
-            let _ = published.preview.try_set(Some(output.clone()));
-        }
-        RunStatus::Running { .. } => {}
-        _ => {
-            let _ = published.preview.try_set(None);
-        }
-    }
-    // Progress at most every PROGRESS_EVERY_MS; an end (done, failed) at once.
-    let publish = !running || {
-        let mut s = state.borrow_mut();
-        let due = now_ms() - s.progress_at_ms >= PROGRESS_EVERY_MS;
-        if due {
-            s.progress_at_ms = now_ms();
-        }
-        due
-    };
-    // The page may have been left meanwhile: a disposed status ends the job quietly.
-    let alive = if publish {
-        status.try_set(next).is_none()
-    } else {
-        status.try_with_untracked(|_| ()).is_some()
-    };
-    if alive && running {
-        next_task(move || pump(state, published, generation, mine));
-    }
-}
-
-/// One chunk of work of about [`CHUNK_BUDGET_MS`]; the status to show after it (still running
-/// when the work is done: the output is published by the next task).
-fn work_chunk<J: Work>(s: &mut Pumped<J>) -> RunStatus<J::Output> {
-    let started = now_ms();
-    let stage_at_start = s.job.progress().stage;
-    // Work in small steps until the chunk's time is used up: the cost of a step can jump (a run
-    // enters the cut and the force model wakes up), and checking the clock between steps keeps
-    // the chunk near its budget whatever the step costs.
-    loop {
-        let step_started = now_ms();
-        let budget = s.budget;
-        match s.job.advance(budget) {
-            Err(e) => return RunStatus::Failed(e.to_string()),
-            Ok(true) => {
-                s.phase = Phase::Finished;
-                break;
-            }
-            Ok(false) => {}
-        }
-        // Aim each step at an eighth of the chunk; grow at most 2× at a time.
-        let elapsed = (now_ms() - step_started).max(0.05);
-        let b = budget as f64;
-        s.budget = (b * CHUNK_BUDGET_MS / 8.0 / elapsed)
-            .clamp(b / 4.0, b * 2.0)
-            .round()
-            .clamp(1.0, 1e9) as usize;
-        // End the chunk before a step that would take it past its budget, at the last step's
-        // pace: a job's first step, which sets it up (and has V8 compile its code), can take
-        // most of a chunk by itself.
-        let next_step_ms = elapsed * s.budget as f64 / b;
-        if now_ms() - started + next_step_ms >= CHUNK_BUDGET_MS {
-            break;
-        }
-        // A new stage (the spectrum after the samples, the closed loop after the teach cut, the
-        // next reference run) costs what the last step cannot tell: it starts a chunk of its
-        // own rather than finishing this one past its budget.
-        let progress = s.job.progress();
-        if progress.stage != stage_at_start {
-            return RunStatus::Running {
-                stage: progress.stage,
-                fraction: progress.fraction,
-            };
-        }
-    }
-    let Progress { stage, fraction } = s.job.progress();
-    RunStatus::Running { stage, fraction }
 }
 
 /// Callbacks waiting for their task, first in first out.

@@ -1,6 +1,7 @@
 //! The calibration from the active log: the current-to-force fit of the spindle or feed current
 //! against the log's measured force or the force modelled from the cut (the cut table's rows, as
-//! `cutlab calibrate --material`), saved in this browser or downloaded.
+//! `cutlab calibrate --material`), saved in this browser or downloaded. The fit computes in a
+//! worker ([`FitJobRequest`]: the log's mapped columns go with the request as numbers).
 
 use std::sync::Arc;
 
@@ -14,12 +15,13 @@ use crate::estimation::estimator::Feedback;
 use crate::input::table::{form_errors, Table};
 use crate::log::calibration::{ForceSource, LogFit, LogFitWork};
 use crate::log::replay::ReplaySettings;
+use crate::log::transfer::FitJobRequest;
 use crate::web::components::download::download_text;
 use crate::web::components::fields::SelectField;
+use crate::web::components::pool::Answer;
 use crate::web::components::runner::{RunProgress, Runner};
 use crate::web::components::saved_calibrations::{save_calibration, stored_calibrations};
 use crate::web::components::table_form::{SettingField, TableForm};
-use crate::web::components::work_job::Shared;
 
 /// The calibrations saved in this browser, and what could not be read of them.
 pub type Stored = (Vec<CalibrationFile>, Vec<String>);
@@ -114,10 +116,16 @@ pub fn CalibrationPanel(shared: LogsState, fit: FitForm) -> impl IntoView {
             sample_period_s: shared.period_s_untracked(),
             ..ReplaySettings::default()
         };
-        match LogFitWork::new(&l.log, &l.mapping, &settings, &force) {
-            Ok(work) => runner_for_click.start(Shared(work)),
-            Err(e) => fit_error.set(Some(e.to_string())),
+        // Checked here, so what the fit lacks shows at once, beside the button.
+        if let Err(e) = LogFitWork::new(&l.log, &l.mapping, &settings, &force) {
+            fit_error.set(Some(e.to_string()));
+            return;
         }
+        let (job, numbers) = FitJobRequest::job(&l.log, l.mapping.clone(), settings, force);
+        runner_for_click.start_log_job(&job, &numbers, |answer| match answer {
+            Answer::LogFit(fit) => Some(fit),
+            _ => None,
+        });
     };
     let saved_message = RwSignal::new(None::<Result<String, String>>);
     let fit_file = move || {

@@ -1,5 +1,9 @@
 //! The signal chain on one column of the active log: a zero-phase low-pass, a moving RMS, the
-//! spectrum and statistics per label, re-run (debounced, in pieces) whenever a setting changes.
+//! spectrum and statistics per label, re-run (debounced) whenever a setting changes. It
+//! computes in a worker ([`ChainJobRequest`]: the column and its label column go with the
+//! request as numbers, the output comes back as numbers), so the page's thread stays free
+//! however long the log; a new setting cancels the computation under way (its worker is
+//! terminated) and starts the next.
 
 use std::sync::Arc;
 use std::time::Duration;
@@ -9,15 +13,16 @@ use leptos::prelude::*;
 use super::charts::{channel_column, CURRENTS};
 use super::loader::LoadedLog;
 use super::LogsState;
-use crate::log::analysis::{ChainOutput, ChainRequest, ChainWork};
+use crate::log::analysis::{ChainOutput, ChainRequest};
 use crate::log::link::LogsLink;
 use crate::log::mapping::Channel;
 use crate::log::settings::LogSetting;
+use crate::log::transfer::ChainJobRequest;
 use crate::log::ColumnKind;
 use crate::web::components::fields::ChoiceField;
+use crate::web::components::pool::Answer;
 use crate::web::components::runner::{Debounce, RunProgress, Runner};
 use crate::web::components::table_form::SettingField;
-use crate::web::components::work_job::Shared;
 
 /// The chain's column, its grouping and its run.
 #[derive(Clone, Copy)]
@@ -74,10 +79,13 @@ impl Chain {
                 sample_period_s: shared.period_s(),
             };
             let runner = runner_for_effect.clone();
-            debounce.request(move || match ChainWork::new(l.log.clone(), request) {
-                Ok(work) => {
+            debounce.request(move || match ChainJobRequest::job(&l.log, request) {
+                Ok((job, numbers)) => {
                     error.set(None);
-                    runner.start(Shared(work));
+                    runner.start_log_job(&job, &numbers, |answer| match answer {
+                        Answer::Chain(output) => Some(output),
+                        _ => None,
+                    });
                 }
                 Err(e) => error.set(Some(e)),
             });

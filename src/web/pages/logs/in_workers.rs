@@ -109,9 +109,9 @@ pub fn start_replays(
     let _ = runner.status.try_set(replays.borrow().running());
     for (index, controller) in controllers.into_iter().enumerate() {
         let (request, numbers) =
-            ReplayRequest::new(&log, mapping.clone(), settings.clone(), vec![controller]);
+            ReplayRequest::job(&log, mapping.clone(), settings.clone(), vec![controller]);
         let (runner_in, replays, current) = (runner.clone(), replays.clone(), current.clone());
-        let job = pool::submit_replay(&request, &numbers, move |event| {
+        let job = pool::submit_log_job(&request, &numbers, move |event| {
             if !current() {
                 return;
             }
