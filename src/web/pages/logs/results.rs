@@ -2,6 +2,8 @@
 //! linked time axis, the chain's output and spectrum with its statistics, the calibration's fit,
 //! and the replays' overrides, force estimates and numbers.
 
+use std::sync::Arc;
+
 use leptos::prelude::*;
 
 use super::calibration::FitForm;
@@ -47,6 +49,16 @@ pub fn LogResults(shared: LogsState, chain: Chain, fit: FitForm, replay: Replay)
     }
 }
 
+/// A log's row times, compared by identity: a memo must not compare millions of values.
+#[derive(Clone)]
+struct RowTimes(Arc<Vec<f64>>);
+
+impl PartialEq for RowTimes {
+    fn eq(&self, other: &Self) -> bool {
+        Arc::ptr_eq(&self.0, &other.0)
+    }
+}
+
 /// Every open log's current and force, the chain on the chosen column and its spectrum, and the
 /// chain's statistics.
 #[component]
@@ -58,6 +70,21 @@ fn LogCharts(shared: LogsState, chain: Chain) -> impl IntoView {
         ..
     } = shared;
     let Chain { column, done, .. } = chain;
+    // Once per log (and period), not once per chain: a big log's times are millions of values,
+    // and its speed's median a selection over them; a chain's arrival only draws.
+    let times = Memo::new(move |_| {
+        active.with(|l| {
+            l.as_ref()
+                .map(|l| RowTimes(Arc::new(row_times(&l.log, shared.period_s()))))
+        })
+    });
+    let spindle_speed = Memo::new(move |_| {
+        active.with(|l| {
+            l.as_ref()
+                .and_then(|l| channel_column(l, &[Channel::SpindleSpeed, Channel::SpindleCommand]))
+                .map(|c| crate::signal::stats::median(c.values.iter().copied()))
+        })
+    });
     let overlay_current = Signal::derive(move || {
         logs.logs
             .with(|l| overlay_chart(l, &CURRENTS, "current (A)", time_view.get().as_ref()))
@@ -66,7 +93,7 @@ fn LogCharts(shared: LogsState, chain: Chain) -> impl IntoView {
         logs.logs
             .with(|l| overlay_chart(l, &[Channel::Force], "force (N)", time_view.get().as_ref()))
     });
-    let chain_chart = Signal::derive(move || {
+    let chain_chart = Memo::new(move |_| {
         let view = time_view.get();
         let mut chart = LineChart::new(Axis::linear("time (s)"), Axis::linear(column.get()));
         let (Some(l), Some(out)) = (active.get(), done.get()) else {
@@ -84,7 +111,9 @@ fn LogCharts(shared: LogsState, chain: Chain) -> impl IntoView {
         if out.filtered.len() != values.len() {
             return chart;
         }
-        let times = row_times(&l.log, shared.period_s());
+        let Some(RowTimes(times)) = times.get() else {
+            return chart;
+        };
         chart.series.push(Series::new(
             "as logged",
             PALETTE[4],
@@ -109,12 +138,7 @@ fn LogCharts(shared: LogsState, chain: Chain) -> impl IntoView {
         let Some(out) = done.get() else {
             return LineChart::new(Axis::log("frequency (Hz)"), Axis::log("PSD"));
         };
-        let speed = active.with(|l| {
-            l.as_ref()
-                .and_then(|l| channel_column(l, &[Channel::SpindleSpeed, Channel::SpindleCommand]))
-                .map(|c| crate::signal::stats::median(c.values.iter().copied()))
-        });
-        spectrum_chart(&out, speed, shared.teeth.get().ok())
+        spectrum_chart(&out, spindle_speed.get(), shared.teeth.get().ok())
     });
     view! {
         <div class="charts">
