@@ -70,6 +70,28 @@ fn controllers_json_lists_every_controller_with_parameter_units() {
     assert!(table.contains("ki_per_s"));
 }
 
+/// `cutlab metrics` is the browser's glossary: every row of the metrics table, in its order, with
+/// its unit and its help (and the ★ rule where the row ranks runs).
+#[test]
+fn metrics_lists_every_rows_glossary_entry() {
+    use cutlab::closed_loop::summary::METRIC_ROWS;
+    let (result, out) = cutlab(&["metrics", "--json"], "");
+    result.unwrap();
+    let listing: serde_json::Value = serde_json::from_str(&out).unwrap();
+    let listing = listing.as_array().unwrap();
+    assert_eq!(listing.len(), METRIC_ROWS.len());
+    for (entry, row) in listing.iter().zip(METRIC_ROWS.iter()) {
+        assert_eq!(entry["label"], row.label);
+        assert_eq!(entry["help"], row.help_with_rule());
+        assert!(entry["help"].as_str().unwrap().len() > 20, "{entry}");
+    }
+    let (result, text) = cutlab(&["metrics"], "");
+    result.unwrap();
+    let first = &METRIC_ROWS[0];
+    assert!(text.contains(first.help), "{text}");
+    assert!(text.contains("A ★ only where"), "{text}");
+}
+
 /// The real process: a bad argument or a bad value ends in one stderr line and a failure exit,
 /// never a panic (exit 101) or an abort.
 #[cfg(unix)]

@@ -9,10 +9,10 @@
 //! | [`args`] | option values and the errors of the command line |
 //! | [`sim`] | `cutlab sim` and `cutlab compare`: closed-loop runs on the presets, or a saved configuration |
 //! | [`tune`] | `cutlab tune`: sweeps, Nelder–Mead and teach-in |
-//! | [`controllers`], [`scenarios`] | `cutlab controllers` and `cutlab scenarios`: what the lab offers |
+//! | [`controllers`], [`scenarios`], [`metrics`] | `cutlab controllers`, `cutlab scenarios` and `cutlab metrics`: what the lab offers and what its metrics mean |
 //! | [`calibrate`] | `cutlab calibrate`: the current-to-force models from a log of control periods |
 //! | [`log`] | `cutlab log inspect`, `analyse`, `replay`: engineers' own logs |
-//! | [`learn`] | `cutlab learn`: paper 004's power-law network learned from trial cuts on a preset |
+//! | [`learn`] | `cutlab learn`: paper 004's power-law network learned from trial cuts on a preset or from a table of your own |
 //! | [`lesson`] | `cutlab lesson check`: lesson files' schema, references, reference solutions and starting points |
 //! | [`force`], [`filter`], [`spectrum`] | one cut's forces; Butterworth design and filtering; Welch spectra |
 //! | [`fuzzy`] | `cutlab fuzzy eval` and `export`: the fuzzy engine on FLL and FIS files |
@@ -30,6 +30,7 @@ pub mod host;
 pub mod learn;
 pub mod lesson;
 pub mod log;
+pub mod metrics;
 pub mod protocol;
 pub mod scenarios;
 pub mod sim;
@@ -96,7 +97,7 @@ enum Command {
     /// Run the closed loop against a device over the feed-override protocol
     #[command(long_about = host::ABOUT)]
     Host(host::HostArgs),
-    /// Learn paper 004's power-law network from trial cuts on a preset's simulated machine
+    /// Learn paper 004's power-law network from trial cuts on a preset's machine or your own table
     #[command(long_about = learn::ABOUT)]
     Learn(learn::LearnArgs),
     /// Check lesson files: schema, references, reference solutions (pass), starting points (fail)
@@ -105,6 +106,8 @@ enum Command {
     /// Read a machine's CSV log as it is: its dialect, columns and problems
     #[command(long_about = log::ABOUT)]
     Log(log::LogArgs),
+    /// What each row of the metrics table means, and when a run's value is marked better
+    Metrics(metrics::MetricsArgs),
     /// Decode the feed-override protocol's bytes to JSON lines, or encode JSON lines to bytes
     #[command(long_about = protocol::ABOUT)]
     Protocol(protocol::ProtocolArgs),
@@ -141,6 +144,7 @@ pub const COMMANDS: &[CommandInfo] = &[
     CommandInfo { name: "learn" },
     CommandInfo { name: "lesson" },
     CommandInfo { name: "log" },
+    CommandInfo { name: "metrics" },
     CommandInfo { name: "protocol" },
     CommandInfo { name: "scenarios" },
     CommandInfo { name: "sim" },
@@ -230,6 +234,7 @@ pub fn run(args: &[String], io: &mut Io<'_>) -> Result<(), CliError> {
         Some(Command::Learn(a)) => learn::run(a, io),
         Some(Command::Lesson(a)) => lesson::run(a, io),
         Some(Command::Log(a)) => log::run(a, io),
+        Some(Command::Metrics(a)) => metrics::run(a, io),
         Some(Command::Protocol(a)) => protocol::run(a, io),
         Some(Command::Scenarios(a)) => scenarios::run(a, io),
         Some(Command::Sim(a)) => sim::run_sim(a, io),
