@@ -37,5 +37,6 @@ mod route;
 /// longer than the 50 ms a task should.
 pub fn start() {
     console_error_panic_hook::set_once();
+    components::pool::start_workers();
     components::runner::next_task(|| leptos::mount::mount_to_body(app::App));
 }

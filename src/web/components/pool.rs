@@ -53,6 +53,9 @@ pub const MAX_WORKERS: usize = 8;
 /// The worker's script and module as Trunk writes them (`data-type="worker"` keeps their names).
 const WORKER_SCRIPT: &str = "cutlab-worker.js";
 const WORKER_MODULE: &str = "cutlab-worker_bg.wasm";
+/// Where the page's loader (Trunk.toml's `pattern_script`) leaves the promise of the worker's
+/// module, fetched and compiled beside the page's own as the page loads.
+const COMPILED_MODULE: &str = "cutlabWorkerModule";
 
 /// What a job tells its caller.
 pub enum JobEvent {
@@ -284,8 +287,10 @@ pub fn cancel(JobId(id): JobId) {
     show_busy();
 }
 
-/// Starts the pool's workers that are not running yet.
-fn start_workers() {
+/// Starts the pool's workers that are not running yet. The page calls it as it loads (nearly
+/// every page computes), so that the first job finds them ready; a job submitted calls it again
+/// for any worker that could not start.
+pub fn start_workers() {
     let size = pool_size();
     let missing: Vec<usize> = POOL.with(|pool| {
         let mut pool = pool.borrow_mut();
@@ -324,8 +329,7 @@ fn replace_worker(index: usize) {
 
 /// A new worker for slot `index`.
 fn spawn(index: usize) -> Result<Slot, String> {
-    let loader = loader_url()?;
-    let worker = Worker::new(&loader).map_err(|e| crate::web::js::describe(&e))?;
+    let worker = module_worker()?;
     let serial = POOL.with(|pool| {
         let mut pool = pool.borrow_mut();
         pool.next_serial += 1;
@@ -351,26 +355,64 @@ fn spawn(index: usize) -> Result<Slot, String> {
     })
 }
 
-/// The worker loader's URL, made once: a script that imports the worker's script and
-/// instantiates its module from the page's address.
-fn loader_url() -> Result<String, String> {
-    if let Some(url) = POOL.with(|pool| pool.borrow().loader_url.clone()) {
-        return Ok(url);
-    }
+/// A new worker of the computation module (its first message is `ready`, its requests those of
+/// `src/bin/cutlab-worker.rs`). The pool's own, and one a caller keeps outside the pool for a
+/// computation that lasts as long as a page wants it; terminating that one is the caller's.
+pub fn module_worker() -> Result<Worker, String> {
+    let worker = Worker::new(&loader_url()?).map_err(|e| crate::web::js::describe(&e))?;
+    hand_module(&worker)?;
+    Ok(worker)
+}
+
+/// Gives a new worker its module: the one the page's loader compiled (once, for every worker
+/// the page starts, a replaced one included), or, where that is missing or failed, the module's
+/// address, which the worker then fetches and compiles itself.
+fn hand_module(worker: &Worker) -> Result<(), String> {
+    let address = JsValue::from_str(&absolute(WORKER_MODULE)?);
+    let compiled = Reflect::get(&window(), &COMPILED_MODULE.into())
+        .ok()
+        .and_then(|promise| promise.dyn_into::<js_sys::Promise>().ok());
+    let Some(compiled) = compiled else {
+        return worker
+            .post_message(&address)
+            .map_err(|e| crate::web::js::describe(&e));
+    };
+    let worker = worker.clone();
+    wasm_bindgen_futures::spawn_local(async move {
+        let module = wasm_bindgen_futures::JsFuture::from(compiled)
+            .await
+            .unwrap_or(address);
+        // A worker terminated meanwhile (its job cancelled) ignores it.
+        let _ = worker.post_message(&module);
+    });
+    Ok(())
+}
+
+/// `name` as an address on the page's server.
+fn absolute(name: &str) -> Result<String, String> {
     let page = window()
         .location()
         .href()
         .map_err(|e| crate::web::js::describe(&e))?;
-    let absolute = |name: &str| {
-        web_sys::Url::new_with_base(name, &page)
-            .map(|u| u.href())
-            .map_err(|e| crate::web::js::describe(&e))
-    };
+    web_sys::Url::new_with_base(name, &page)
+        .map(|u| u.href())
+        .map_err(|e| crate::web::js::describe(&e))
+}
+
+/// The worker loader's URL, made once: a script that imports the worker's script, then
+/// instantiates the module its first message gives ([`hand_module`]: compiled, or an address).
+/// A module that cannot be instantiated is thrown again as the worker's error, which the pool
+/// reports ([`on_error`]) rather than waiting for a `ready` that will not come.
+fn loader_url() -> Result<String, String> {
+    if let Some(url) = POOL.with(|pool| pool.borrow().loader_url.clone()) {
+        return Ok(url);
+    }
     let quoted = |text: String| serde_json::to_string(&text).map_err(|e| e.to_string());
     let source = format!(
-        "importScripts({});wasm_bindgen({{ module_or_path: {} }});",
+        "importScripts({});self.onmessage=function(e){{self.onmessage=null;\
+         Promise.resolve(wasm_bindgen({{module_or_path:e.data}})).catch(function(error){{\
+         setTimeout(function(){{throw error;}});}});}};",
         quoted(absolute(WORKER_SCRIPT)?)?,
-        quoted(absolute(WORKER_MODULE)?)?,
     );
     let parts = Array::of1(&JsValue::from_str(&source));
     let options = web_sys::BlobPropertyBag::new();
