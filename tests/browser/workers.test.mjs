@@ -1,7 +1,8 @@
 // The computation workers (issue 28): Simulate's run and Compare's variants compute in Web Workers
 // built from the core alone, so the page's thread stays free; independent variants compute at once
 // on different workers; a run's trace streams back in pieces and its chart draws the start of the
-// cut before the run is done; the savings' reference runs compute in a worker too; Cancel
+// cut before the run is done; the savings' reference runs compute in a worker too, beside the run
+// from its teach cut on; Cancel
 // terminates the worker at once; a run made in a worker equals the native CLI's, byte for byte in
 // the exported trace. The Signal chain page's bench recording, the Machine page's open-loop
 // recording, the Fuzzy rules page's run and Tune's teach cuts compute in a worker too.
@@ -134,6 +135,31 @@ test('Cancel terminates the worker at once and a fresh one runs the next run', a
   await context.close();
 });
 
+test("the workers' module is downloaded once as the page loads, and every worker, a replaced one too, starts from it", async () => {
+  const context = await browser.newContext({ viewport: { width: 1280, height: 720 } });
+  const fetched = [];
+  context.on('request', (r) => { if (/cutlab-worker_bg\.wasm$/.test(r.url())) fetched.push(r.url()); });
+  const page = await context.newPage();
+  const problems = [];
+  page.on('console', (m) => { if (m.type() === 'error') problems.push(m.text()); });
+  page.on('pageerror', (e) => problems.push(e.message));
+  // The home page computes nothing, yet the pool is started as the app loads.
+  await page.goto(server.url);
+  await page.waitForFunction(() => Number(document.documentElement.dataset.workers) >= 1, null, { timeout: RUN_TIMEOUT });
+  // The same document moves to a long run (a hash change, not a new load).
+  await page.evaluate(() => { location.hash = '#/simulate?preset=kim-circular-taper&controller=threshold'; });
+  await waitForBusyWorkers(page, 1);
+  // A cancelled run's worker is replaced; the replacement runs the next run.
+  await page.getByRole('button', { name: 'Cancel' }).click();
+  await page.getByText(/^Cancelled\./).waitFor();
+  await page.getByLabel('Seed').fill('2');
+  const table = page.getByRole('table', { name: /Metrics of the run/ });
+  await table.getByRole('row', { name: /Cycle time/ }).getByRole('cell').first().waitFor({ timeout: RUN_TIMEOUT });
+  assert.equal(fetched.length, 1, `the workers' module was fetched ${fetched.length} times`);
+  assert.deepEqual(problems, []);
+  await context.close();
+});
+
 test("a run made in a worker exports the native CLI's trace, byte for byte", async () => {
   const { page, problems, context } = await openLab(browser, server.url, '#/simulate?preset=maneerat-doc-1&controller=pi&kp=1.5');
   const table = page.getByRole('table', { name: /Metrics of the run/ });
@@ -159,15 +185,21 @@ test("a run made in a worker exports the native CLI's trace, byte for byte", asy
 });
 
 test("the savings' reference runs compute in a worker and equal the native CLI's", async () => {
-  // maneerat-doc-2 ships no references: its savings need the fixed-feed search.
-  const { page, problems, context } = await openLab(browser, server.url, '#/simulate?preset=maneerat-doc-2&controller=pi');
+  // kim-material-taper ships no references: its savings need the fixed-feed search (and its cut,
+  // 47 s, is long enough after its teach cut for the search to start beside it).
+  const { page, problems, context } = await openLab(browser, server.url, '#/simulate?preset=kim-material-taper&controller=pi');
   // Whether the savings' search was ever under way (its progress bar shown) while the run's
   // metrics were shown and a worker computed: after the run, only the search can be that work.
+  // And whether it started beside the run, on the other worker, before the run's metrics showed:
+  // it needs only the run's teach cut, which the run's first streamed piece carries.
   await page.evaluate(() => {
     window.cutlabSearchInWorker = false;
+    window.cutlabSearchBesideRun = false;
     new MutationObserver(() => {
-      if (document.getElementById('savings-progress') && document.querySelector('table.metrics')
-        && document.documentElement.dataset.busyWorkers === '1') window.cutlabSearchInWorker = true;
+      const busy = document.documentElement.dataset.busyWorkers;
+      const metrics = document.querySelector('table.metrics');
+      if (document.getElementById('savings-progress') && metrics && busy === '1') window.cutlabSearchInWorker = true;
+      if (document.getElementById('savings-progress') && !metrics && busy === '2') window.cutlabSearchBesideRun = true;
     }).observe(document, { subtree: true, childList: true, attributes: true });
   });
   const table = page.getByRole('table', { name: /Metrics of the run/ });
@@ -175,6 +207,7 @@ test("the savings' reference runs compute in a worker and equal the native CLI's
   await saving('Saving vs safe fixed feed (%)').filter({ hasText: /\d/ }).waitFor({ timeout: RUN_TIMEOUT });
   await waitForBusyWorkers(page, 0);
   assert.ok(await page.evaluate(() => window.cutlabSearchInWorker), 'the search never ran in a worker');
+  assert.ok(await page.evaluate(() => window.cutlabSearchBesideRun), 'the search did not start until the run had ended');
   const download = async (name) => {
     const [file] = await Promise.all([page.waitForEvent('download'), page.getByRole('button', { name }).click()]);
     return readFile(await file.path(), 'utf8');

@@ -1,9 +1,10 @@
 //! The savings rows of the metrics tables. A saving compares a run's cycle time with reference
 //! runs at a fixed feed (the programmed feed, and the fastest fixed feed that keeps the force
 //! under the limit), which take three to five runs (on the teach cut of the run that asked). They depend on the scenario, not on the
-//! controller, so they run in the background after a result is shown, once per scenario, and
-//! the answers of the last few scenarios are kept: retuning a controller never waits for them.
-//! The search runs in a computation worker ([`super::pool`]), beside the run's own.
+//! controller, so they run in the background once per scenario, from the moment a run's teach
+//! cut is known, and the answers of the last few scenarios are kept: retuning a controller never
+//! waits for them. The search runs in a computation worker ([`super::pool`]), beside the run's
+//! own.
 
 use std::sync::{Arc, OnceLock};
 
@@ -131,6 +132,27 @@ impl Savings {
                 _ => None,
             },
         );
+    }
+
+    /// Starts the reference runs as soon as the first run under way (`preview`, a runner's) has
+    /// its teach cut, which its first streamed piece carries: on another worker, beside the run,
+    /// instead of after it. The finished run's own request then finds them under way or known.
+    pub fn request_while_running(&self, preview: RwSignal<Option<Vec<Arc<RunResult>>>>) {
+        let first = Memo::new(move |_| {
+            preview.with(|runs| {
+                runs.as_ref()
+                    .and_then(|runs| runs.first())
+                    .map(|r| (r.spec.clone(), r.calibration.clone()))
+            })
+        });
+        let savings = self.clone();
+        Effect::new(move |_| {
+            first.with(|first| {
+                if let Some((spec, calibration)) = first {
+                    savings.request(spec, Some(calibration));
+                }
+            })
+        });
     }
 
     /// Stops a search for another scenario than `spec`'s, so it does not slow the new run.
