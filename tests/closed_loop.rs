@@ -429,9 +429,10 @@ fn the_reference_search_starts_at_the_chip_load_floor_and_runs_it_once() {
             break search.finish().unwrap();
         }
     };
-    // 100 and 60 % whole (they fix the line), a probe just above the floor and the floor: the
-    // search once halved its way down to 1 %, ten runs of which the last eight were the floor's.
-    assert!(search.runs_done() <= 5, "{} runs", search.runs_done());
+    // 100 and 60 % whole (they fix the line, which places the target below the floor), then the
+    // floor, stopped where it breaks: the search once halved its way down to 1 %, ten runs of
+    // which the last eight were the floor's, and later probed just above the floor before it.
+    assert_eq!(search.runs_done(), 3);
     // Even the floor's peak lies above the target: no fixed feed is safe.
     assert!(at_floor.metrics.peak_force_n > at_floor.settings.target_force_n);
     assert!(found.safe_fixed_override_pct.is_nan(), "{found:?}");

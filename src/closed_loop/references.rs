@@ -124,8 +124,9 @@ const VERDICT_CHECK_PERIODS: usize = 20;
 /// The probes lie in the range the envelope applies ([`fixed_override_range_pct`]): below its
 /// floor every fixed override is the same run as the floor (the envelope raises it to the
 /// chip-load window), so a probe there would only repeat one, and report an override the machine
-/// never ran at. The floor is run once, last, when nothing above it kept the force; if it breaks
-/// the target too, no fixed feed is safe (NaN).
+/// never ran at. The floor is run once: last, when nothing above it kept the force, or next, as
+/// soon as the line through the runs so far places the target at or just above it; if it breaks
+/// the target too (the run is stopped there), no fixed feed is safe (NaN).
 ///
 /// The peak force of a fixed-feed run grows with the override, nearly in a straight line (the
 /// chip's force with the feed per tooth, plus the edge forces), so the probes are placed where
@@ -295,9 +296,25 @@ impl ReferenceSearch {
         Some(pct.clamp(inside_low, inside_high))
     }
 
+    /// Whether the floor is still to be checked and the line already places the target at or
+    /// just above it: no probe between could keep the force where the floor does not, so the
+    /// floor decides next (a verdict, stopped where it breaks), instead of last.
+    fn floor_decides(&self) -> bool {
+        self.best_cycle_time_s.is_none()
+            && !self.floor_broke
+            && self
+                .line_reaches_target_pct()
+                .is_some_and(|pct| pct <= self.floor_pct + REFERENCE_RESOLUTION_PCT)
+    }
+
     /// The run after one ended: the next probe, the floor's check, or the answer.
     fn next(&mut self) -> Result<bool, LoopError> {
-        let next = match self.next_probe_pct() {
+        let probe = if self.floor_decides() {
+            None
+        } else {
+            self.next_probe_pct()
+        };
+        let next = match probe {
             Some(pct) => Some((pct, RunKind::Probe)),
             None if self.best_cycle_time_s.is_none() && !self.floor_broke => {
                 Some((self.floor_pct, RunKind::Lowest))
@@ -355,7 +372,9 @@ impl Work for ReferenceSearch {
         // Once the line is fixed by two whole runs, a probe needs no more than a verdict: it is
         // looked at every few periods and stopped when it breaks the target. (The answer does not
         // depend on where it stops, nor on the budget: such a probe adds no point to the line.)
-        let verdict_only = kind == RunKind::Probe && self.peaks.len() >= 2;
+        // The floor's check is a verdict too: if it breaks, no fixed feed is safe.
+        let verdict_only =
+            (kind == RunKind::Probe && self.peaks.len() >= 2) || kind == RunKind::Lowest;
         let mut left = periods.max(1);
         let finished = loop {
             let piece = if verdict_only {
