@@ -10,109 +10,49 @@ use crate::closed_loop::transfer::{JobRequest, LearningRequest};
 use crate::closed_loop::trial_cuts::{PresetLearning, DEFAULT_TRIAL_FEEDS_PCT};
 use crate::plant::presets::PlantKind;
 use crate::plant::Preset;
-use crate::web::components::page::TableScroll;
 use crate::web::components::paper_link::WithPaperLinks;
 use crate::web::components::pool::Answer;
 use crate::web::components::runner::{RunProgress, Runner};
 
-/// The learned exponents beside the published and the mechanistic model's.
-fn exponents_table(learning: &PresetLearning) -> impl IntoView {
-    let rows = learning
+use super::learned_tables::{
+    CutRow, ForceFit, LearnedExponentsTable, LearnedFrom, TrialCutResiduals,
+};
+
+/// Both tables of a preset's learning: the force on the tool and the lab's estimate of it, each
+/// learned on, with the mechanistic model's exponents beside them.
+fn learning_tables(learning: &PresetLearning) -> impl IntoView {
+    let fits = vec![
+        ForceFit {
+            from: LearnedFrom::Force,
+            forces_n: learning.cuts.iter().map(|c| c.force_n).collect(),
+            learned: learning.from_force.clone(),
+        },
+        ForceFit {
+            from: LearnedFrom::Estimate,
+            forces_n: learning.cuts.iter().map(|c| c.estimate_n).collect(),
+            learned: learning.from_estimate.clone(),
+        },
+    ];
+    let mechanistic = learning
         .from_force
         .learned
         .iter()
-        .zip(&learning.from_estimate.learned)
-        .map(|(force, estimate)| {
-            let mechanistic = learning
-                .mechanistic_text(force.input)
-                .unwrap_or_else(|| "—".to_string());
-            view! {
-                <tr>
-                    <th scope="row">{force.input.symbol()}</th>
-                    <td>{force.with_uncertainty()}</td>
-                    <td>{estimate.with_uncertainty()}</td>
-                    <td>{format!("{:.2}", force.published)}</td>
-                    <td>{mechanistic}</td>
-                </tr>
-            }
-        })
-        .collect_view();
-    let held = learning
-        .from_force
-        .held
-        .iter()
-        .map(|(input, w)| format!("{} {w:.2}", input.symbol()))
-        .collect::<Vec<_>>()
-        .join(", ");
-    view! {
-        <table class="metrics">
-            <caption>"Learned exponents (± two standard errors)"</caption>
-            <thead>
-                <tr>
-                    <th scope="col">"Input"</th>
-                    <th scope="col">"From the force"</th>
-                    <th scope="col">"From the estimate"</th>
-                    <th scope="col">"Published"</th>
-                    <th scope="col">"Mechanistic"</th>
-                </tr>
-            </thead>
-            <tbody>{rows}</tbody>
-        </table>
-        <p class="hint">
-            {format!(
-                "Held at the published exponents (they do not vary over the cuts): {held}. Bias {:.1} N \
-                 from the force, {:.1} N from the estimate; residual RMS {:.2} % and {:.2} %.",
-                learning.from_force.bias_n,
-                learning.from_estimate.bias_n,
-                100.0 * learning.from_force.residual_rms_log,
-                100.0 * learning.from_estimate.residual_rms_log,
-            )}
-        </p>
-    }
-}
-
-/// Each trial cut with both forces and both fits' residuals.
-fn residuals_table(learning: &PresetLearning) -> impl IntoView {
-    let residual =
-        |fit: &[f64], k: usize| fit.get(k).map_or("—".to_string(), |r| format!("{r:+.2}"));
-    let rows = learning
+        .filter_map(|e| Some((e.input, learning.mechanistic_text(e.input)?)))
+        .collect::<Vec<_>>();
+    let cuts = learning
         .cuts
         .iter()
         .enumerate()
-        .map(|(k, cut)| {
-            view! {
-                <tr>
-                    <th scope="row">{k + 1}</th>
-                    <td>{format!("{:.2}", cut.radial_width_mm)}</td>
-                    <td>{format!("{:.4}", cut.feed_per_tooth_mm)}</td>
-                    <td>{format!("{:.2}", cut.axial_depth_mm)}</td>
-                    <td>{format!("{:.1}", cut.force_n)}</td>
-                    <td>{format!("{:.1}", cut.estimate_n)}</td>
-                    <td>{residual(&learning.from_force.residuals_pct, k)}</td>
-                    <td>{residual(&learning.from_estimate.residuals_pct, k)}</td>
-                </tr>
-            }
+        .map(|(k, cut)| CutRow {
+            label: k + 1,
+            radial_width_mm: cut.radial_width_mm,
+            feed_per_tooth_mm: cut.feed_per_tooth_mm,
+            axial_depth_mm: cut.axial_depth_mm,
         })
-        .collect_view();
+        .collect();
     view! {
-        <TableScroll label="Trial cuts and residuals".to_string()>
-            <table class="metrics">
-                <caption>"Trial cuts and residuals"</caption>
-                <thead>
-                    <tr>
-                        <th scope="col">"Cut"</th>
-                        <th scope="col">"a_e (mm)"</th>
-                        <th scope="col">"f (mm)"</th>
-                        <th scope="col">"a_p (mm)"</th>
-                        <th scope="col">"Force (N)"</th>
-                        <th scope="col">"Estimate (N)"</th>
-                        <th scope="col">"Residual, force fit (%)"</th>
-                        <th scope="col">"Residual, estimate fit (%)"</th>
-                    </tr>
-                </thead>
-                <tbody>{rows}</tbody>
-            </table>
-        </TableScroll>
+        <LearnedExponentsTable caption="Learned exponents" fits=fits.clone() mechanistic />
+        <TrialCutResiduals caption="Trial cuts and residuals" row_heading="Cut" cuts fits />
     }
 }
 
@@ -167,10 +107,7 @@ pub fn LearningPanel(
             {move || {
                 // The last learning, while its preset is the one chosen.
                 learned.get().filter(|l| l.preset.name() == preset.get()).map(|learning| {
-                    view! {
-                        {exponents_table(&learning)}
-                        {residuals_table(&learning)}
-                    }
+                    learning_tables(&learning)
                 })
             }}
         </section>

@@ -8,7 +8,9 @@
 //! | `mod.rs` | the page: the preset, its open-loop run (recorded in a computation worker, [`crate::web::components::pool`]) and charts |
 //! | [`learning`] | paper 004's network learned from trial cuts, with its residuals |
 //! | [`own_cuts`] | the same network learned from a table of the user's own trial cuts |
+//! | [`learned_tables`] | the two panels' tables: learned exponents, and each cut's residuals, for one force or two |
 
+mod learned_tables;
 mod learning;
 mod own_cuts;
 

@@ -2,36 +2,58 @@
 //! by the lab's log reader and learned by the core's one function for it
 //! ([`learn_from_table`], what `cutlab learn --cuts` prints). A table of trial cuts has tens of
 //! rows — its least squares takes well under a frame — so it is learned on the page as the
-//! fields change; a file too big to be one is refused, not read.
+//! fields change, from the file's log read once when it was chosen; a file too big to be one is
+//! refused, not read.
 
 use leptos::prelude::*;
 
 use crate::input::parse_number;
 use crate::log::trial_cuts::{learn_from_table, TableLearning, TableTool};
+use crate::log::Log;
 use crate::plant::materials::Material;
-use crate::web::components::page::TableScroll;
 use crate::web::js::read_chosen_file;
+
+use super::learned_tables::{
+    CutRow, ForceFit, LearnedExponentsTable, LearnedFrom, TrialCutResiduals,
+};
 
 /// A table of trial cuts larger than this is no table of cuts (a sample log goes to the Logs
 /// page), bytes.
 const MAX_TABLE_BYTES: usize = 1 << 20;
 
-/// What the fields hold and what was learned from them.
+/// A chosen file, read once: its name and its log, or why it has none. The fields' changes learn
+/// again from the log; the file's text is read into it and dropped.
+struct ChosenTable {
+    name: String,
+    log: Result<Log, String>,
+}
+
+impl ChosenTable {
+    /// Reads the file's text as a log, refusing a file too big to be a table of cuts.
+    fn read(name: String, text: Result<String, String>) -> Self {
+        let log = text.and_then(|text| {
+            if text.len() > MAX_TABLE_BYTES {
+                return Err(format!(
+                    "{name} is {:.1} MB: a table of trial cuts has one row per cut (a log of \
+                     samples is read on the Logs page)",
+                    text.len() as f64 / 1e6
+                ));
+            }
+            crate::log::load(text.as_bytes(), None).map_err(|e| format!("{name}: {e}"))
+        });
+        ChosenTable { name, log }
+    }
+}
+
+/// What was learned from the chosen table with what the fields hold.
 fn learned(
-    file: &(String, String),
+    chosen: &ChosenTable,
     material: &str,
     diameter: &str,
     teeth: &str,
     force_column: &str,
 ) -> Result<TableLearning, String> {
-    let (name, text) = file;
-    if text.len() > MAX_TABLE_BYTES {
-        return Err(format!(
-            "{name} is {:.1} MB: a table of trial cuts has one row per cut (a log of samples is \
-             read on the Logs page)",
-            text.len() as f64 / 1e6
-        ));
-    }
+    let log = chosen.log.as_ref().map_err(Clone::clone)?;
     let optional = |label: &str, text: &str| -> Result<Option<f64>, String> {
         match text.trim() {
             "" => Ok(None),
@@ -47,55 +69,32 @@ fn learned(
         None => None,
     };
     let material = Material::from_name(material).unwrap_or(Material::Sm45c);
-    let log = crate::log::load(text.as_bytes(), None).map_err(|e| format!("{name}: {e}"))?;
     let force = Some(force_column).filter(|c| !c.is_empty());
-    learn_from_table(&log, force, TableTool { diameter_mm, teeth }, material)
-        .map_err(|e| format!("{name}: {e}"))
+    learn_from_table(log, force, TableTool { diameter_mm, teeth }, material)
+        .map_err(|e| format!("{}: {e}", chosen.name))
 }
 
-/// The learned exponents beside the published, the held ones, and every cut's residual by line.
+/// What was read and left out, then the learned exponents beside the published, the held ones,
+/// and every cut's residual by its line.
 fn result_view(learning: &TableLearning) -> impl IntoView {
-    let learned = &learning.learned;
-    let rows = learned
-        .learned
-        .iter()
-        .map(|e| {
-            view! {
-                <tr>
-                    <th scope="row">{e.input.symbol()}</th>
-                    <td>{e.with_uncertainty()}</td>
-                    <td>{format!("{:.2}", e.published)}</td>
-                </tr>
-            }
-        })
-        .collect_view();
-    let held = learned
-        .held
-        .iter()
-        .map(|(input, w)| format!("{} {w:.2}", input.symbol()))
-        .collect::<Vec<_>>()
-        .join(", ");
-    let cuts = learning
-        .table
+    let table = &learning.table;
+    let fits = vec![ForceFit {
+        from: LearnedFrom::Force,
+        forces_n: table.cuts.iter().map(|c| c.force_n).collect(),
+        learned: learning.learned.clone(),
+    }];
+    let cuts = table
         .cuts
         .iter()
-        .zip(&learning.table.lines)
-        .zip(&learned.residuals_pct)
-        .map(|((cut, line), residual)| {
-            view! {
-                <tr>
-                    <th scope="row">{*line}</th>
-                    <td>{format!("{:.2}", cut.inputs.radial_width_mm)}</td>
-                    <td>{format!("{:.4}", cut.inputs.feed_per_tooth_mm)}</td>
-                    <td>{format!("{:.2}", cut.inputs.axial_depth_mm)}</td>
-                    <td>{format!("{:.1}", cut.force_n)}</td>
-                    <td>{format!("{residual:+.2}")}</td>
-                </tr>
-            }
+        .zip(&table.lines)
+        .map(|(cut, &line)| CutRow {
+            label: line as usize,
+            radial_width_mm: cut.inputs.radial_width_mm,
+            feed_per_tooth_mm: cut.inputs.feed_per_tooth_mm,
+            axial_depth_mm: cut.inputs.axial_depth_mm,
         })
-        .collect_view();
-    let left_out = learning
-        .table
+        .collect();
+    let left_out = table
         .left_out
         .iter()
         .map(|p| {
@@ -110,74 +109,40 @@ fn result_view(learning: &TableLearning) -> impl IntoView {
         <p role="status">
             {format!(
                 "{} trial cuts, the force from the column {:?}; published weights: {}.",
-                learning.table.cuts.len(),
+                table.cuts.len(),
                 learning.force_column(),
                 learning.material.label()
             )}
         </p>
-        <ul aria-label="Rows left out" hidden=learning.table.left_out.is_empty()>{left_out}</ul>
-        <table class="metrics">
-            <caption>"Exponents learned from your cuts (± two standard errors)"</caption>
-            <thead>
-                <tr>
-                    <th scope="col">"Input"</th>
-                    <th scope="col">"Learned"</th>
-                    <th scope="col">"Published"</th>
-                </tr>
-            </thead>
-            <tbody>{rows}</tbody>
-        </table>
-        <p class="hint">
-            {format!(
-                "Held at the published exponents (they do not vary over the cuts): {held}. Bias {:.1} N; \
-                 residual RMS {:.2} %.",
-                learned.bias_n,
-                100.0 * learned.residual_rms_log
-            )}
-        </p>
-        <TableScroll label="Your trial cuts and residuals".to_string()>
-            <table class="metrics">
-                <caption>"Your trial cuts and residuals"</caption>
-                <thead>
-                    <tr>
-                        <th scope="col">"Line"</th>
-                        <th scope="col">"a_e (mm)"</th>
-                        <th scope="col">"f (mm)"</th>
-                        <th scope="col">"a_p (mm)"</th>
-                        <th scope="col">"Force (N)"</th>
-                        <th scope="col">"Residual (%)"</th>
-                    </tr>
-                </thead>
-                <tbody>{cuts}</tbody>
-            </table>
-        </TableScroll>
+        <ul aria-label="Rows left out" hidden=table.left_out.is_empty()>{left_out}</ul>
+        <LearnedExponentsTable caption="Exponents learned from your cuts" fits=fits.clone() />
+        <TrialCutResiduals caption="Your trial cuts and residuals" row_heading="Line" cuts fits />
     }
 }
 
 /// The panel: the table, the tool and material it needs, and what was learned from it.
 #[component]
 pub fn OwnCutsPanel() -> impl IntoView {
-    let file = RwSignal::new(None::<(String, Result<String, String>)>);
+    let file = RwSignal::new(None::<ChosenTable>);
     let material = RwSignal::new(Material::Sm45c.name().to_string());
     let diameter = RwSignal::new(String::new());
     let teeth = RwSignal::new(String::new());
     let force_column = RwSignal::new(String::new());
     let result = Memo::new(move |_| {
-        file.with(|f| {
-            let (name, text) = f.as_ref()?;
-            Some(text.clone().and_then(|text| {
-                learned(
-                    &(name.clone(), text),
-                    &material.get(),
-                    &diameter.get(),
-                    &teeth.get(),
-                    &force_column.get(),
-                )
-            }))
+        file.with(|chosen| {
+            Some(learned(
+                chosen.as_ref()?,
+                &material.get(),
+                &diameter.get(),
+                &teeth.get(),
+                &force_column.get(),
+            ))
         })
     });
     let on_file = move |ev: leptos::ev::Event| {
-        read_chosen_file(&ev, move |name, text| file.set(Some((name, text))));
+        read_chosen_file(&ev, move |name, text| {
+            file.set(Some(ChosenTable::read(name, text)));
+        });
     };
     let text_field = |id: &'static str, label: &'static str, value: RwSignal<String>, hint| {
         view! {
@@ -222,11 +187,11 @@ pub fn OwnCutsPanel() -> impl IntoView {
             {text_field("own-cuts-diameter", "Tool diameter (mm), if the table has no d column", diameter, "blank: the table's")}
             {text_field("own-cuts-teeth", "Teeth, if the table has no z column", teeth, "blank: the table's")}
             {text_field("own-cuts-force", "Force column (blank: the one named force)", force_column, "blank: found by name")}
-            {move || match result.get() {
+            {move || result.with(|result| match result {
                 None => None,
-                Some(Err(e)) => Some(view! { <p class="field-error" role="alert">{e}</p> }.into_any()),
-                Some(Ok(learning)) => Some(result_view(&learning).into_any()),
-            }}
+                Some(Err(e)) => Some(view! { <p class="field-error" role="alert">{e.clone()}</p> }.into_any()),
+                Some(Ok(learning)) => Some(result_view(learning).into_any()),
+            })}
         </section>
     }
 }
