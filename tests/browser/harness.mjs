@@ -99,11 +99,16 @@ export const WORKER_BUG = 'worker bug for the test';
 /**
  * Opens the lab at `hash` in a fresh page whose first computation worker is a stand-in that
  * reports ready and throws on its first request (a bug in the worker); the workers after it load
- * the real module. Returns { page, problems, context, served }: `problems` as [openLab]'s but for
- * the stand-in's own error, `served()` how many worker scripts were served.
+ * the real module. The browser reports one core, so the pool has one worker and the first request
+ * is the stand-in's (with two, started as the page loads, either could be asked first). Returns
+ * { page, problems, context, served }: `problems` as [openLab]'s but for the stand-in's own error,
+ * `served()` how many worker scripts were served.
  */
 export async function openLabWithThrowingWorker(browser, baseUrl, hash) {
   const context = await browser.newContext({ viewport: { width: 1280, height: 720 } });
+  await context.addInitScript(() => {
+    Object.defineProperty(Navigator.prototype, 'hardwareConcurrency', { get: () => 1 });
+  });
   let served = 0;
   await context.route(/cutlab-worker\.js$/, (route) => {
     served += 1;
