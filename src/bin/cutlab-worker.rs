@@ -30,8 +30,6 @@ fn main() {
 
 #[cfg(target_arch = "wasm32")]
 mod worker {
-    use cutlab::closed_loop::definition::RunSpec;
-    use cutlab::closed_loop::lab::LabRun;
     use cutlab::closed_loop::recording_jobs::{
         pack_calibrations, pack_open_loop_recording, pack_phase_recording, Packed,
     };
@@ -39,11 +37,9 @@ mod worker {
         learning_to_json, references_to_json, JobRequest, LearningRequest, ReferenceRequest,
         RunParts, RunRequest, TraceChunk, TraceStream,
     };
-    use cutlab::control::registry::ControllerKind;
     use cutlab::log::transfer::{
         pack_chain_output, pack_log_fit, LogJobRequest, ReplayParts, ReplayRequest,
     };
-    use cutlab::plant::Preset;
     use cutlab::work::Work;
     use js_sys::{Array, Float64Array, Object, Reflect};
     use wasm_bindgen::prelude::{Closure, JsCast, JsValue};
@@ -64,7 +60,6 @@ mod worker {
         let scope: DedicatedWorkerGlobalScope = js_sys::global().unchecked_into();
         let replies = scope.clone();
         let on_message = Closure::<dyn FnMut(MessageEvent)>::new(move |event: MessageEvent| {
-            JOB_SEEN.set(true);
             let data = event.data();
             let job = Reflect::get(&data, &"job".into())
                 .ok()
@@ -99,34 +94,6 @@ mod worker {
         // The handler lives as long as the worker.
         on_message.forget();
         let _ = post(&scope, &[("kind", "ready".into())], None);
-        // After any job already posted (a message queued before this task is run first).
-        let _ = scope.set_timeout_with_callback_and_timeout_and_arguments_0(
-            Closure::once_into_js(warm_up).unchecked_ref(),
-            0,
-        );
-    }
-
-    thread_local! {
-        /// Whether a job has reached this worker.
-        static JOB_SEEN: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };
-    }
-
-    /// Control periods of the warm-up: 1.5 s of the default preset's teach cut, about 10 ms.
-    const WARM_UP_PERIODS: usize = 150;
-
-    /// While no job has come yet, steps the first periods of a teach cut, whose result is thrown
-    /// away. The browser compiles a module's functions for speed only once they have run a while
-    /// (before that, a quick baseline compile runs them: the first run of a page took a third
-    /// longer than the next under node); the workers share one compiled module, so the
-    /// simulator's code is optimised while the page still loads, not during its first run.
-    fn warm_up() {
-        if JOB_SEEN.get() {
-            return;
-        }
-        let spec = RunSpec::new(Preset::KimStepDoc, ControllerKind::FuzzyDynamics);
-        if let Ok(mut run) = LabRun::new(&spec) {
-            let _ = run.advance(WARM_UP_PERIODS);
-        }
     }
 
     /// Does `json`'s job, posting progress and, at the end, its answer.
