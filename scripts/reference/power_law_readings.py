@@ -32,7 +32,7 @@ import numpy as np
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from plant_reference import MATERIALS, OUT, POWER_LAW, immersion, mean_forces  # noqa: E402
 
-# The mill presets' cuts, copies of src/plant/presets.rs (change both together): name, tool
+# The mill presets' cuts, copies of src/plant/presets/definitions.rs (change both together): name, tool
 # diameter (mm), teeth, mode, radial width (mm), spindle (rpm), programmed feed (mm/min), the
 # largest depth (mm), the material whose coefficients give the mechanistic force (kim-material-
 # taper's composite region takes its SM45C half's, as src/plant/materials.rs does) and the

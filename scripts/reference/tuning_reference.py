@@ -125,7 +125,7 @@ def mean_forces_xy(teeth, depth, feed, k, st, ex):
 
 
 def mill_reference():
-    """Paper 001's presets (src/plant/presets.rs): a Ø10 mm 4-flute end mill, down milling 3 mm
+    """Paper 001's presets (src/plant/presets/definitions.rs): a Ø10 mm 4-flute end mill, down milling 3 mm
     wide, 3000 rpm, 900 mm/min, hardened tool steel; depth 1, 2 and 4 mm."""
     tool_steel = (3600.0, 1500.0, 750.0, 45.0, 60.0, 5.0)
     diameter, teeth, width, rpm, feed = 10.0, 4, 3.0, 3000.0, 900.0
