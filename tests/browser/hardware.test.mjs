@@ -495,6 +495,15 @@ test('without WebSerial the page says why and what works instead; the virtual de
   await page.getByText('Link state: closed').waitFor();
   await deviceWorkerClosed;
   assert.equal(await page.evaluate(() => document.documentElement.dataset.deviceWorker), undefined);
+  // Started again and its cable pulled: the link is lost at once and that worker ends too.
+  await page.getByRole('button', { name: 'Start the virtual device' }).click();
+  await page.getByText('Link state: streaming').waitFor({ timeout: LONG });
+  assert.equal(started.length, 2);
+  const unpluggedClosed = started[1].waitForEvent('close', { timeout: LONG });
+  await page.getByRole('button', { name: 'Pull the virtual cable' }).click();
+  await page.getByText(/link lost: the virtual device's cable was pulled/).first().waitFor();
+  await unpluggedClosed;
+  assert.equal(await page.evaluate(() => document.documentElement.dataset.deviceWorker), undefined);
   assert.deepEqual(problems, []);
   await context.close();
 });
