@@ -17,6 +17,13 @@
 //! replays, signal chain or calibration fit, a layer above the loop's protocol) and `numbers`
 //! one `Float64Array` per column of the log it sends. The job is done in one go: the page
 //! cancels it by terminating the worker.
+//!
+//! A worker the Hardware page starts for its virtual device (outside the pool) gets instead
+//! `{ device_start }`, a `DeviceStart` as JSON, then `{ device_bytes }`, each a `Uint8Array` of
+//! what the host wrote; it runs the device on its own timer (`cutlab::protocol::device_worker`'s
+//! `ClockedDevice`, every `VIRTUAL_TICK_MS`) and answers `{ kind: "device_bytes", bytes }` (transferred) with what the
+//! device sent, or `{ kind: "device_failed", message }` if it cannot start. The page switches the
+//! device off by terminating the worker.
 
 #[cfg(target_arch = "wasm32")]
 fn main() {
@@ -61,6 +68,9 @@ mod worker {
         let replies = scope.clone();
         let on_message = Closure::<dyn FnMut(MessageEvent)>::new(move |event: MessageEvent| {
             let data = event.data();
+            if device::handled(&replies, &data) {
+                return;
+            }
             let job = Reflect::get(&data, &"job".into())
                 .ok()
                 .and_then(|j| j.as_f64())
@@ -362,6 +372,92 @@ mod worker {
             let _ = Reflect::set(&object, &(*name).into(), value);
         }
         object.into()
+    }
+
+    /// The Hardware page's virtual device, ticked on this worker's timer.
+    mod device {
+        use std::cell::RefCell;
+        use std::rc::Rc;
+
+        use cutlab::protocol::device_worker::{ClockedDevice, DeviceStart, VIRTUAL_TICK_MS};
+        use js_sys::{Array, Reflect, Uint8Array};
+        use wasm_bindgen::prelude::{Closure, JsCast, JsValue};
+        use web_sys::DedicatedWorkerGlobalScope;
+
+        use super::post;
+
+        thread_local! {
+            /// The device this worker runs, once started.
+            static DEVICE: RefCell<Option<Rc<RefCell<ClockedDevice>>>> = const { RefCell::new(None) };
+        }
+
+        /// Whether `data` was a message for the virtual device (and is now handled).
+        pub fn handled(scope: &DedicatedWorkerGlobalScope, data: &JsValue) -> bool {
+            let field = |name: &str| Reflect::get(data, &name.into()).unwrap_or(JsValue::UNDEFINED);
+            if let Some(json) = field("device_start").as_string() {
+                if let Err(message) = start(scope, &json) {
+                    let _ = post(
+                        scope,
+                        &[
+                            ("kind", "device_failed".into()),
+                            ("message", message.into()),
+                        ],
+                        None,
+                    );
+                }
+                return true;
+            }
+            if let Ok(bytes) = field("device_bytes").dyn_into::<Uint8Array>() {
+                DEVICE.with(|d| {
+                    if let Some(device) = d.borrow().as_ref() {
+                        device.borrow_mut().receive(&bytes.to_vec());
+                    }
+                });
+                return true;
+            }
+            false
+        }
+
+        /// Wall time, seconds (this worker's clock).
+        fn now_s(scope: &DedicatedWorkerGlobalScope) -> f64 {
+            scope.performance().map_or(0.0, |p| p.now()) / 1000.0
+        }
+
+        /// Powers the device on and ticks it until the page terminates this worker.
+        fn start(scope: &DedicatedWorkerGlobalScope, json: &str) -> Result<(), String> {
+            if DEVICE.with(|d| d.borrow().is_some()) {
+                return Err("its worker already runs a device".into());
+            }
+            let request = DeviceStart::from_json(json)?;
+            let device = Rc::new(RefCell::new(ClockedDevice::start(&request, now_s(scope))?));
+            let tick = {
+                let (scope, device) = (scope.clone(), Rc::clone(&device));
+                Closure::<dyn FnMut()>::new(move || {
+                    let bytes = device.borrow_mut().tick(now_s(&scope));
+                    if bytes.is_empty() {
+                        return;
+                    }
+                    let bytes = Uint8Array::from(bytes.as_slice());
+                    let transfer = Array::of1(&bytes.buffer());
+                    // Bytes that cannot be posted are lost as on a noisy line; the host counts them.
+                    let _ = post(
+                        &scope,
+                        &[("kind", "device_bytes".into()), ("bytes", bytes.into())],
+                        Some(&transfer),
+                    );
+                })
+            };
+            scope
+                .set_interval_with_callback_and_timeout_and_arguments_0(
+                    tick.as_ref().unchecked_ref(),
+                    VIRTUAL_TICK_MS as i32,
+                )
+                .map_err(|e| format!("its timer did not start ({e:?})"))?;
+            // The timer runs as long as the worker.
+            tick.forget();
+            DEVICE.with(|d| *d.borrow_mut() = Some(device));
+            Ok(())
+        }
     }
 
     /// Posts a message to the page; false if it could not be sent.

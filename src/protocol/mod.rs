@@ -20,6 +20,7 @@
 //! | [`host`] | the host's side without I/O: samples, faults, the stuck-override watch, the line budget, keeping a device up |
 //! | [`device`] | the device emulator without I/O: the simulated machine, its watchdog, fallback, latched hold and injected faults |
 //! | [`device_settings`] | the emulator's settings as one table, which `cutlab device` and the Hardware page's virtual device parse alike |
+//! | [`device_worker`] | the Hardware page's virtual device as its worker runs it: the start request, the emulator on a wall clock ticked by a timer |
 //! | `link` | byte links in real time (native): the emulator on a clock, the host's end of a line, each part as a machine |
 //!
 //! This is a transport: it knows frames, parts and watchdogs, not runs. The closed loop over a
@@ -34,6 +35,7 @@ pub mod codec;
 pub mod crc;
 pub mod device;
 pub mod device_settings;
+pub mod device_worker;
 pub mod frame;
 pub mod host;
 pub mod json;

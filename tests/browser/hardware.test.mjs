@@ -2,7 +2,7 @@
 // `cutlab device --stdio` (connect, handshake, teach cut, arm, commands and acknowledgements,
 // unplug, the device's fallback, recordings after a reload, export read back by the core's log
 // reader); the virtual device with injected faults (counters, both watchdogs, a reload mid-run);
-// and a browser without WebSerial.
+// and a browser without WebSerial, where the virtual device runs in a worker of its own.
 //
 // The device binary is the one `cargo test --features cli,charts` builds (scripts/test's native
 // step, before the browser tests); if it is missing, it is built here.
@@ -459,8 +459,15 @@ test('without WebSerial the page says why and what works instead; the virtual de
   // The virtual device, as a real bridge's twin (no truth), is one click away.
   await page.getByLabel("Send the simulation's truth (off: a real bridge's twin)").uncheck();
   await page.getByLabel('Time scale').fill('4');
+  // The device runs in a worker of its own (the page's module holds no plant), which the click
+  // starts and Disconnect ends.
+  const started = [];
+  page.on('worker', (w) => started.push(w));
   await page.getByRole('button', { name: 'Start the virtual device' }).click();
   await page.getByText('Link state: streaming').waitFor({ timeout: LONG });
+  assert.equal(started.length, 1, `workers started by the click: ${started.map((w) => w.url())}`);
+  assert.ok(started[0].url().startsWith('blob:'), `the device's worker: ${started[0].url()}`);
+  assert.equal(await page.evaluate(() => document.documentElement.dataset.deviceWorker), 'on');
   const features = page.getByRole('definition').filter({ hasText: /^none$/ });
   await features.waitFor();
   await confirm(page, 'Arm…', 'Arm now', [/holding 150 N/]);
@@ -483,8 +490,20 @@ test('without WebSerial the page says why and what works instead; the virtual de
   await writeFile(again, await readFile(await download.path()));
   const run = execFileSync(cutlab, ['sim', '--scenario', 'maneerat-doc-1', '--controller', 'threshold', '--calibration', again]).toString();
   assert.match(run, /Cycle time/);
+  const deviceWorkerClosed = started[0].waitForEvent('close', { timeout: LONG });
   await page.getByRole('button', { name: 'Disconnect' }).click();
   await page.getByText('Link state: closed').waitFor();
+  await deviceWorkerClosed;
+  assert.equal(await page.evaluate(() => document.documentElement.dataset.deviceWorker), undefined);
+  // Started again and its cable pulled: the link is lost at once and that worker ends too.
+  await page.getByRole('button', { name: 'Start the virtual device' }).click();
+  await page.getByText('Link state: streaming').waitFor({ timeout: LONG });
+  assert.equal(started.length, 2);
+  const unpluggedClosed = started[1].waitForEvent('close', { timeout: LONG });
+  await page.getByRole('button', { name: 'Pull the virtual cable' }).click();
+  await page.getByText(/link lost: the virtual device's cable was pulled/).first().waitFor();
+  await unpluggedClosed;
+  assert.equal(await page.evaluate(() => document.documentElement.dataset.deviceWorker), undefined);
   assert.deepEqual(problems, []);
   await context.close();
 });

@@ -1,5 +1,5 @@
 //! Byte ports the Hardware page talks through: a serial port opened with WebSerial, or the
-//! virtual device (the emulator running in the page). Both deliver what arrives, and their
+//! virtual device (the emulator running in a worker of its own). Both deliver what arrives, and their
 //! closing, to a [`Sink`] called from the browser's event loop (never from inside a write), and
 //! both take bytes with [`Port::write`].
 
@@ -7,15 +7,16 @@ use std::cell::{Cell, RefCell};
 use std::rc::Rc;
 use std::time::Duration;
 
-use leptos::prelude::{set_interval_with_handle, window, IntervalHandle};
+use leptos::prelude::window;
 use wasm_bindgen::closure::Closure;
 use wasm_bindgen::{JsCast, JsValue};
 use web_sys::{
-    FlowControlType, ParityType, ReadableStreamDefaultReader, SerialOptions, SerialPort,
-    WritableStreamDefaultWriter,
+    ErrorEvent, FlowControlType, MessageEvent, ParityType, ReadableStreamDefaultReader,
+    SerialOptions, SerialPort, Worker, WritableStreamDefaultWriter,
 };
 
-use crate::protocol::device::DeviceEmulator;
+use crate::protocol::device_worker::DeviceStart;
+use crate::web::components::pool::module_worker;
 use crate::web::js::describe;
 
 /// What a port reports.
@@ -24,6 +25,8 @@ pub enum PortEvent {
     Bytes(Vec<u8>),
     /// The port closed under us (unplugged, a read or write error), with why.
     Closed(String),
+    /// The port never opened: the virtual device's worker refused its settings, with why.
+    Refused(String),
 }
 
 /// Where a port delivers what happens.
@@ -201,83 +204,112 @@ pub fn now_s() -> f64 {
     window().performance().map_or(0.0, |p| p.now()) / 1000.0
 }
 
-/// How often the virtual device runs.
-const VIRTUAL_TICK: Duration = Duration::from_millis(10);
-/// Frames the virtual device runs at most per tick, so a tick stays short; behind the clock, it
-/// catches up over the next ticks.
-const MAX_VIRTUAL_FRAMES_PER_TICK: usize = 400;
+/// The name of the `<html>` attribute that says the virtual device runs in its worker ("on"
+/// while such a worker lives), for a person's devtools and the browser tests.
+const DEVICE_WORKER_ATTRIBUTE: &str = "data-device-worker";
 
-struct VirtualState {
-    device: DeviceEmulator,
-    started_s: f64,
-    time_scale: f64,
-    inbox: Vec<u8>,
-    out: Vec<u8>,
+thread_local! {
+    /// Device workers started and not yet terminated.
+    static DEVICE_WORKERS: Cell<usize> = const { Cell::new(0) };
 }
 
-/// The device emulator in the page, behind the same protocol bytes as a serial device.
+/// The virtual device: the emulator in a worker of the computation module (the plant lives in
+/// that module, not the page's), behind the same protocol bytes as a serial device. The worker
+/// ticks it on its own timer (`cutlab::protocol::device_worker`); the bytes the host writes
+/// before the worker is ready wait here.
 pub struct VirtualLink {
-    state: Rc<RefCell<VirtualState>>,
+    worker: Worker,
+    /// What the host wrote before the worker was ready; `None` once it is.
+    waiting: Rc<RefCell<Option<Vec<u8>>>>,
     alive: Rc<Cell<bool>>,
+    /// The worker was terminated.
+    closed: bool,
     sink: Sink,
-    interval: Option<IntervalHandle>,
+    _on_message: Closure<dyn FnMut(MessageEvent)>,
+    _on_error: Closure<dyn FnMut(ErrorEvent)>,
 }
 
 impl VirtualLink {
-    /// Powers `device` on at `time_scale` device seconds per wall second.
-    pub fn start(device: DeviceEmulator, time_scale: f64, sink: Sink) -> Result<Self, String> {
-        let state = Rc::new(RefCell::new(VirtualState {
-            device,
-            started_s: now_s(),
-            time_scale,
-            inbox: Vec::new(),
-            out: Vec::with_capacity(64 * 1024),
-        }));
+    /// Starts a worker and powers on the device `request` describes in it; `Err` says why the
+    /// worker did not start. A device the worker cannot start is reported to `sink` as
+    /// [`PortEvent::Refused`].
+    pub fn start(request: DeviceStart, sink: Sink) -> Result<Self, String> {
+        let worker = module_worker().map_err(|e| format!("its worker did not start ({e})"))?;
+        let waiting = Rc::new(RefCell::new(Some(Vec::new())));
         let alive = Rc::new(Cell::new(true));
-        let tick = {
-            let state = Rc::clone(&state);
-            let alive = Rc::clone(&alive);
-            let sink = Rc::clone(&sink);
-            move || {
+        let on_message = {
+            let (worker, waiting, alive, sink) = (
+                worker.clone(),
+                Rc::clone(&waiting),
+                Rc::clone(&alive),
+                Rc::clone(&sink),
+            );
+            let start = request.to_json();
+            Closure::<dyn FnMut(MessageEvent)>::new(move |event: MessageEvent| {
                 if !alive.get() {
                     return;
                 }
-                let bytes = {
-                    let Ok(mut s) = state.try_borrow_mut() else {
-                        return;
-                    };
-                    let s = &mut *s;
-                    let due_s = (now_s() - s.started_s) * s.time_scale;
-                    let inbox = std::mem::take(&mut s.inbox);
-                    s.device.receive(&inbox, &mut s.out);
-                    let mut frames = 0;
-                    while s.device.time_s() + s.device.frame_period_s() <= due_s
-                        && frames < MAX_VIRTUAL_FRAMES_PER_TICK
-                    {
-                        s.device.step_frame(&mut s.out);
-                        frames += 1;
-                    }
-                    std::mem::take(&mut s.out)
+                let data = event.data();
+                let field = |name: &str| {
+                    js_sys::Reflect::get(&data, &name.into()).unwrap_or(JsValue::UNDEFINED)
                 };
-                if !bytes.is_empty() {
-                    sink(PortEvent::Bytes(bytes));
+                match field("kind").as_string().as_deref() {
+                    Some("ready") => {
+                        let _ =
+                            worker.post_message(&message("device_start", &start.as_str().into()));
+                        if let Some(bytes) = waiting.borrow_mut().take() {
+                            send(&worker, &bytes);
+                        }
+                    }
+                    Some("device_bytes") => {
+                        if let Ok(bytes) = field("bytes").dyn_into::<js_sys::Uint8Array>() {
+                            sink(PortEvent::Bytes(bytes.to_vec()));
+                        }
+                    }
+                    Some("device_failed") => {
+                        alive.set(false);
+                        let why = field("message").as_string().unwrap_or_default();
+                        sink(PortEvent::Refused(why));
+                    }
+                    _ => {}
                 }
-            }
+            })
         };
-        let interval = set_interval_with_handle(tick, VIRTUAL_TICK)
-            .map_err(|e| format!("the virtual device could not start: {}", describe(&e)))?;
+        let on_error = {
+            let (alive, sink) = (Rc::clone(&alive), Rc::clone(&sink));
+            Closure::<dyn FnMut(ErrorEvent)>::new(move |event: ErrorEvent| {
+                // Reported here, in the page, as the link's end.
+                event.prevent_default();
+                if alive.replace(false) {
+                    sink(PortEvent::Closed(format!(
+                        "the virtual device's worker stopped: {}",
+                        event.message()
+                    )));
+                }
+            })
+        };
+        worker.set_onmessage(Some(on_message.as_ref().unchecked_ref()));
+        worker.set_onerror(Some(on_error.as_ref().unchecked_ref()));
+        count_device_worker(1);
         Ok(Self {
-            state,
+            worker,
+            waiting,
             alive,
+            closed: false,
             sink,
-            interval: Some(interval),
+            _on_message: on_message,
+            _on_error: on_error,
         })
     }
 
     /// Sends `bytes` to the device (it reads them at its next tick).
     pub fn write(&self, bytes: &[u8]) {
-        if let Ok(mut s) = self.state.try_borrow_mut() {
-            s.inbox.extend_from_slice(bytes);
+        if bytes.is_empty() || !self.alive.get() {
+            return;
+        }
+        match self.waiting.borrow_mut().as_mut() {
+            Some(waiting) => waiting.extend_from_slice(bytes),
+            None => send(&self.worker, bytes),
         }
     }
 
@@ -297,12 +329,16 @@ impl VirtualLink {
         }
     }
 
-    /// Switches the device off.
+    /// Switches the device off: its worker ends.
     pub fn close(&mut self) {
         self.alive.set(false);
-        if let Some(i) = self.interval.take() {
-            i.clear();
+        if std::mem::replace(&mut self.closed, true) {
+            return;
         }
+        self.worker.set_onmessage(None);
+        self.worker.set_onerror(None);
+        self.worker.terminate();
+        count_device_worker(-1);
     }
 }
 
@@ -312,11 +348,46 @@ impl Drop for VirtualLink {
     }
 }
 
+/// `{ name: value }`, a message to the device's worker.
+fn message(name: &str, value: &JsValue) -> JsValue {
+    let object = js_sys::Object::new();
+    let _ = js_sys::Reflect::set(&object, &name.into(), value);
+    object.into()
+}
+
+/// Posts what the host wrote to the device's worker, the copy's buffer transferred.
+fn send(worker: &Worker, bytes: &[u8]) {
+    if bytes.is_empty() {
+        return;
+    }
+    let array = js_sys::Uint8Array::from(bytes);
+    let transfer = js_sys::Array::of1(&array.buffer());
+    // A worker that cannot take a message has failed, which its onerror reports.
+    let _ = worker.post_message_with_transfer(&message("device_bytes", &array), &transfer);
+}
+
+/// Counts a device worker started (+1) or terminated (−1), and marks on `<html>` whether one
+/// runs.
+fn count_device_worker(change: isize) {
+    let running = DEVICE_WORKERS.with(|n| {
+        n.set(n.get().saturating_add_signed(change));
+        n.get()
+    });
+    let Some(html) = window().document().and_then(|d| d.document_element()) else {
+        return;
+    };
+    let _ = if running > 0 {
+        html.set_attribute(DEVICE_WORKER_ATTRIBUTE, "on")
+    } else {
+        html.remove_attribute(DEVICE_WORKER_ATTRIBUTE)
+    };
+}
+
 /// A port of either kind.
 pub enum Port {
     /// WebSerial.
     Serial(SerialLink),
-    /// The emulator in the page.
+    /// The emulator in its worker.
     Virtual(VirtualLink),
 }
 

@@ -1,6 +1,6 @@
 //! Connecting: a serial port through WebSerial (its line settings, the serial table's rows), or
-//! the virtual device — the emulator in this page behind the same protocol bytes, its settings
-//! the device table's rows, as `cutlab device`'s options — and disconnecting.
+//! the virtual device — the emulator in a worker of its own behind the same protocol bytes, its
+//! settings the device table's rows, as `cutlab device`'s options — and disconnecting.
 
 use leptos::prelude::*;
 
@@ -8,8 +8,8 @@ use super::ui::sink;
 use super::{reduce_only, HardwareState};
 use crate::hardware::serial_settings::{parse_serial, SerialSetting};
 use crate::input::table::{form_errors, Table};
-use crate::protocol::device::DeviceEmulator;
 use crate::protocol::device_settings::{parse_device, DeviceSetting};
+use crate::protocol::device_worker::{refusal, DeviceStart};
 use crate::web::components::later::Later;
 use crate::web::components::table_form::{SettingField, TableForm};
 use crate::web::hardware::port::{Port, SerialLink, VirtualLink};
@@ -138,36 +138,26 @@ fn VirtualDeviceFields(shared: HardwareState) -> impl IntoView {
     let truth = RwSignal::new(true);
     let start_virtual = move |_| {
         ui.message.set(None);
-        let asked = parsed.get_untracked().map_err(|errors| {
-            errors
-                .iter()
-                .map(|e| e.to_string())
-                .collect::<Vec<_>>()
-                .join("; ")
-        });
-        let started = asked.and_then(|mut asked| {
-            asked.config.sim_truth = truth.get_untracked();
-            DeviceEmulator::new(asked.config)
-                .map(|device| (device, asked.time_scale))
-                .map_err(|e| e.to_string())
-        });
-        let (device, scale) = match started {
-            Ok(v) => v,
-            Err(e) => {
-                ui.message
-                    .set(Some(format!("The virtual device cannot start: {e}.")));
-                return;
-            }
-        };
+        // The form's errors at once (the worker parses the same texts the same way).
+        if let Err(errors) = parsed.get_untracked() {
+            ui.message.set(Some(format!(
+                "The virtual device cannot start: {}.",
+                refusal(&errors)
+            )));
+            return;
+        }
+        let request = DeviceStart::new(&device.texts_untracked(), truth.get_untracked());
         let Some(generation) = station.try_update_value(Station::next_generation) else {
             return;
         };
-        match VirtualLink::start(device, scale, sink(station, ui, generation)) {
+        match VirtualLink::start(request, sink(station, ui, generation)) {
             Ok(link) => {
                 station.try_update_value(|s| s.connect(Port::Virtual(link), generation));
                 ui.publish(station, true);
             }
-            Err(e) => ui.message.set(Some(e)),
+            Err(e) => ui
+                .message
+                .set(Some(format!("The virtual device cannot start: {e}."))),
         }
     };
     let unplug = move |_| {

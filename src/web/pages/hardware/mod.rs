@@ -1,5 +1,5 @@
 //! Hardware: a real machine through its bridge over WebSerial, or the virtual device (the device
-//! emulator running in this page behind the same protocol bytes), driven by the same closed loop
+//! emulator running in a worker of this page behind the same protocol bytes), driven by the same closed loop
 //! as Simulate and `cutlab host`.
 //!
 //! The page is a thin shell over [`crate::web::hardware::station::Station`], which holds the
@@ -270,7 +270,7 @@ pub fn HardwarePage() -> impl IntoView {
             <p class="lede">
                 "Connect the bridge on a real machine (Hall sensors in, feed override out; the "
                 "project's hardware guide says how to build and wire one) over WebSerial, or start "
-                "the virtual device: the simulated machine running in this page behind the same "
+                "the virtual device: the simulated machine running in this browser behind the same "
                 "protocol bytes, with the same fault switches as the command line's device "
                 "emulator. The teach cut and the closed loop are the ones Simulate runs; everything "
                 "received is recorded as it streams."

@@ -142,9 +142,18 @@ impl Ui {
 /// A port's events, into the station (ignored once connection `generation` is over).
 pub fn sink(station: StationRef, ui: Ui, generation: u64) -> Sink {
     Rc::new(move |event: PortEvent| {
+        if let PortEvent::Refused(why) = &event {
+            if station.try_with_value(Station::generation) != Some(generation) {
+                return;
+            }
+            ui.message
+                .set(Some(format!("The virtual device cannot start: {why}.")));
+        }
         let effects = station.try_update_value(|s| match &event {
             PortEvent::Bytes(bytes) => s.on_bytes(generation, bytes),
             PortEvent::Closed(why) => s.on_closed(generation, why),
+            // It never connected: as if the operator had disconnected at once.
+            PortEvent::Refused(_) => s.disconnect(),
         });
         if let Some(e) = effects {
             ui.apply(station, e);
