@@ -424,11 +424,22 @@ fn the_reference_search_starts_at_the_chip_load_floor_and_runs_it_once() {
     assert_eq!(below.metrics.peak_force_n, at_floor.metrics.peak_force_n);
 
     let mut search = ReferenceSearch::new(&spec).unwrap();
+    let mut labels = Vec::new();
     let found = loop {
+        labels.push(search.progress().stage);
         if search.advance(1000).unwrap() {
             break search.finish().unwrap();
         }
     };
+    // The total a person reads stays the first estimate while the search keeps within it (it
+    // read 4, 5, 6 run by run before).
+    assert!(
+        labels.iter().all(|l| l.contains(" of about 4,")),
+        "{labels:?}"
+    );
+    assert!(labels
+        .iter()
+        .any(|l| l.starts_with("Savings: reference run 3 of about 4,")));
     // 100 and 60 % whole (they fix the line, which places the target below the floor), then the
     // floor, stopped where it breaks: the search once halved its way down to 1 %, ten runs of
     // which the last eight were the floor's, and later probed just above the floor before it.

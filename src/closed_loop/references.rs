@@ -166,6 +166,9 @@ pub struct ReferenceSearch {
     runs_done: usize,
     /// The largest fraction shown so far (the number of runs is not known in advance).
     shown_fraction: std::cell::Cell<f64>,
+    /// The runs the search is expected to take, as first estimated: the total a person reads
+    /// rises only once the search has run that many.
+    expected_runs: usize,
     found: Option<References>,
 }
 
@@ -216,6 +219,9 @@ impl ReferenceSearch {
             guided_probes: 0,
             runs_done: 0,
             shown_fraction: std::cell::Cell::new(0.0),
+            expected_runs: 1 + Self::probes_expected(
+                ceiling_pct + REFERENCE_RESOLUTION_PCT - floor_pct,
+            ),
             found: None,
         })
     }
@@ -234,6 +240,12 @@ impl ReferenceSearch {
     /// broke the target counts as one).
     pub fn runs_done(&self) -> usize {
         self.runs_done
+    }
+
+    /// The probes expected after the programmed run in a bracket `width_pct` wide: about one per
+    /// halving of it, at most three, since the line guides them.
+    fn probes_expected(width_pct: f64) -> usize {
+        (width_pct.max(1.0).log2().ceil() as usize).min(3)
     }
 
     /// Narrows the bracket after a run at `pct` that broke the target (or did not finish).
@@ -422,15 +434,14 @@ impl Work for ReferenceSearch {
 
     /// The fixed override of the current run and the rough fraction done.
     fn progress(&self) -> Progress {
-        // The runs still to come: about one per halving of the bracket, at most three once the
-        // line guides the probes, and the run under way.
-        let width = (self.high_pct - self.low_pct).max(1.0);
-        let remaining = if self.found.is_some() {
-            0
+        // The first estimate stands while the search keeps within it (a total that grew with
+        // every run, 4, 5, 6, read as a goal moving away); past it, the run under way is the last
+        // one counted.
+        let expected = if self.found.is_some() {
+            self.runs_done.max(1)
         } else {
-            1 + (width.log2().ceil() as usize).min(3)
+            self.expected_runs.max(self.runs_done + 1)
         };
-        let expected = (self.runs_done + remaining).max(1);
         let label = format!(
             "Savings: reference run {} of about {expected}, fixed feed at {:.0} %",
             self.runs_done + 1,
