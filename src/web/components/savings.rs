@@ -138,20 +138,20 @@ impl Savings {
     /// its teach cut, which its first streamed piece carries: on another worker, beside the run,
     /// instead of after it. The finished run's own request then finds them under way or known.
     pub fn request_while_running(&self, preview: RwSignal<Option<Vec<Arc<RunResult>>>>) {
-        let first = Memo::new(move |_| {
-            preview.with(|runs| {
-                runs.as_ref()
-                    .and_then(|runs| runs.first())
-                    .map(|r| (r.spec.clone(), r.calibration.clone()))
-            })
-        });
+        let first = move |runs: &Option<Vec<Arc<RunResult>>>| {
+            runs.as_ref().and_then(|runs| runs.first().cloned())
+        };
+        // Keyed by the run's spec alone: each streamed piece replaces the preview, and a
+        // calibration holding a NaN (a speed range not fitted) never equals itself, so a memo of
+        // it would ask again with every piece. The calibration is read with the spec.
+        let spec = Memo::new(move |_| preview.with(|runs| first(runs).map(|r| r.spec.clone())));
         let savings = self.clone();
         Effect::new(move |_| {
-            first.with(|first| {
-                if let Some((spec, calibration)) = first {
-                    savings.request(spec, Some(calibration));
+            if spec.with(Option::is_some) {
+                if let Some(run) = preview.with_untracked(first) {
+                    savings.request(&run.spec, Some(&run.calibration));
                 }
-            })
+            }
         });
     }
 
