@@ -53,8 +53,9 @@ pub const MAX_WORKERS: usize = 8;
 /// The worker's script and module as Trunk writes them (`data-type="worker"` keeps their names).
 const WORKER_SCRIPT: &str = "cutlab-worker.js";
 const WORKER_MODULE: &str = "cutlab-worker_bg.wasm";
-/// Where the page's loader (Trunk.toml's `pattern_script`) leaves the promise of the worker's
-/// module, fetched and compiled beside the page's own as the page loads.
+/// Where index.html's compiler script leaves the promise of the worker's module, fetched and
+/// compiled beside the page's own as the page loads (it names [`WORKER_MODULE`]'s file again:
+/// change both together).
 const COMPILED_MODULE: &str = "cutlabWorkerModule";
 
 /// What a job tells its caller.
