@@ -148,6 +148,76 @@ pub fn parallel_map_reporting<T: Sync, R: Send>(
         .collect()
 }
 
+/// Jobs handed out as they become known, run on up to `threads` threads natively (a queue the
+/// threads take from in order), in turn on the calling thread in wasm or with one thread.
+///
+/// `feed` is called on the calling thread: first with `None`, then with each finished job and
+/// its result, in the order they finish. It is told how many threads are idle (none is counted
+/// idle while jobs wait in the queue) and returns the jobs to queue; the queue ends once nothing
+/// is queued or running after a call. A tuning's search feeds its next point's runs this way,
+/// and runs ahead of it into the idle threads ([`crate::tuning::plan`]).
+pub fn job_queue<J: Send, R: Send>(
+    threads: usize,
+    run: impl Fn(&J) -> R + Sync,
+    mut feed: impl FnMut(Option<(J, R)>, usize) -> Vec<J>,
+) {
+    #[cfg(not(target_arch = "wasm32"))]
+    if threads > 1 {
+        use std::sync::{mpsc, Mutex};
+        let (queue, taken) = mpsc::channel::<J>();
+        let taken = Mutex::new(taken);
+        std::thread::scope(|scope| {
+            let queue = queue;
+            let (finished, results) = mpsc::channel::<(J, R)>();
+            for _ in 0..threads {
+                let (taken, finished, run) = (&taken, finished.clone(), &run);
+                scope.spawn(move || loop {
+                    // One thread waits on the queue at a time; the others wait for the lock.
+                    let job = match taken.lock() {
+                        Ok(receiver) => receiver.recv(),
+                        Err(_) => break,
+                    };
+                    let Ok(job) = job else { break };
+                    let result = run(&job);
+                    if finished.send((job, result)).is_err() {
+                        break;
+                    }
+                });
+            }
+            drop(finished);
+            let mut out = 0;
+            let mut last = None;
+            loop {
+                for job in feed(last.take(), threads.saturating_sub(out)) {
+                    if queue.send(job).is_ok() {
+                        out += 1;
+                    }
+                }
+                if out == 0 {
+                    break;
+                }
+                // A thread that panicked ends the queue; the scope then passes the panic on.
+                let Ok(done) = results.recv() else { break };
+                out -= 1;
+                last = Some(done);
+            }
+            // The threads end once the queue's sender is gone.
+            drop(queue);
+        });
+        return;
+    }
+    let _ = threads;
+    let mut queue = std::collections::VecDeque::new();
+    let mut last = None;
+    loop {
+        let idle = usize::from(queue.is_empty());
+        queue.extend(feed(last.take(), idle));
+        let Some(job) = queue.pop_front() else { break };
+        let result = run(&job);
+        last = Some((job, result));
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -222,5 +292,52 @@ mod tests {
         assert_eq!(Progress::new("x", 1.5).fraction, 1.0);
         assert_eq!(Progress::new("x", -0.5).fraction, 0.0);
         assert_eq!(Progress::new("x", f64::NAN).fraction, 0.0);
+    }
+
+    #[test]
+    fn a_job_queue_runs_what_it_is_fed_until_nothing_is_left() {
+        // Each job n < 20 finished feeds n + 10 and n + 11; the results come back to the feed.
+        for threads in [1, 2, 4] {
+            let mut seen = Vec::new();
+            let mut most_idle = 0;
+            job_queue(
+                threads,
+                |n: &u32| n * 2,
+                |finished, idle| {
+                    most_idle = most_idle.max(idle);
+                    match finished {
+                        None => vec![0, 1],
+                        Some((n, doubled)) => {
+                            assert_eq!(doubled, n * 2);
+                            seen.push(n);
+                            if n < 20 {
+                                vec![n + 10, n + 11]
+                            } else {
+                                Vec::new()
+                            }
+                        }
+                    }
+                },
+            );
+            seen.sort_unstable();
+            let mut expected = vec![0, 1];
+            let mut i = 0;
+            while i < expected.len() {
+                if expected[i] < 20 {
+                    expected.extend([expected[i] + 10, expected[i] + 11]);
+                }
+                i += 1;
+            }
+            expected.sort_unstable();
+            assert_eq!(seen, expected, "{threads} threads");
+            assert_eq!(
+                most_idle,
+                if cfg!(target_arch = "wasm32") {
+                    1
+                } else {
+                    threads
+                }
+            );
+        }
     }
 }

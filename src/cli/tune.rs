@@ -41,7 +41,8 @@ most 400 points); without it, Nelder-Mead searches the parameters' box for the l
 
 averaged over the scenarios; T0 is the program's duration at 100 % override. Each scenario's \
 teach cut runs once and keeps its preset's own controller values for the parameters not tuned; \
-natively every run of a sweep, and the scenarios of each search evaluation, share all cores.
+natively every run of a sweep, and the scenarios of each search evaluation, share all cores; a \
+core a search leaves idle runs ahead (points it may ask next), which changes none of its results.
 
 --teach-in proposes a force target (80 % of the force the teach cut measured at 100 % override, \
 kept inside the calibrated currents), its reference current and a threshold gap (±3 σ of the \

@@ -14,19 +14,22 @@
 //! scenario's teach cut runs once and its calibration is reused for every parameter set, since it
 //! does not depend on the controller. Each scenario runs its own controller settings (its preset's
 //! paper values and the caller's) with the tuned parameters set. Natively every (point, scenario)
-//! run of a sweep, and the scenarios of each search evaluation, share the machine's cores through
-//! one queue; the results are in the same order, bit for bit, however many threads ran them.
+//! run of a sweep, and the runs of each search evaluation (with runs ahead of the search in idle
+//! threads, [`plan`]), share the machine's cores through one queue; the results are in the same
+//! order, bit for bit, however many threads ran them.
 //!
 //! | file | what |
 //! |---|---|
 //! | this file | the problem (controller, ranges, scenarios, objective), sweeps, searches, the Pareto front |
 //! | [`objective`] | the weighted objective a tuning minimises |
 //! | [`nelder_mead`] | Nelder–Mead inside a box, deterministic |
+//! | [`plan`] | tuning whose runs are made elsewhere (the browser's workers), with runs ahead of a search |
 //! | [`teach_in`](mod@teach_in) | what a teach cut learned and the target, reference current and gap proposed from it |
 //! | [`settings`] | a tuning's settings as one table (Tune page fields, `cutlab tune` options) |
 
 pub mod nelder_mead;
 pub mod objective;
+pub mod plan;
 pub mod settings;
 pub mod teach_in;
 
@@ -41,6 +44,7 @@ use crate::estimation::estimator::Calibration;
 use crate::work::{parallel_map_reporting as parallel_map, Work};
 use nelder_mead::NelderMead;
 pub use objective::Objective;
+pub use plan::{PlannedRun, RunId, TuningPlan};
 pub use teach_in::{simulated_teach_in, teach_in, TeachIn};
 
 /// One parameter to tune and its bounds.
@@ -336,40 +340,57 @@ impl Tuner {
     }
 
     /// [`Tuner::tune`], telling `report` after each evaluation.
+    ///
+    /// The runs go through a [`TuningPlan`] on the tuner's threads: each point's runs at once,
+    /// and runs ahead of the search in threads it leaves idle, as the browser's workers make
+    /// them; the result does not depend on the threads. A run that fails fails the tuning, with
+    /// its scenario named (a run ahead of the search that fails is only made again if the
+    /// search asks for its point).
     pub fn tune_reporting(
         &self,
         search: &NelderMead,
         report: &mut dyn FnMut(&Report<'_>),
     ) -> Result<Tuned, TuningError> {
-        let bounds: Vec<(f64, f64)> = self.problem.params.iter().map(|r| (r.lo, r.hi)).collect();
-        let start = start_point(&self.problem);
-        let mut evaluations = Vec::new();
+        let mut plan = TuningPlan::new(self.problem.clone(), TuningMode::Search(*search))?;
         let mut failure = None;
-        let minimum = search.minimize(
-            |values| match self.evaluate(values) {
-                Ok(e) => {
-                    let cost = e.cost;
-                    evaluations.push(e);
+        let mut reported = 0;
+        crate::work::job_queue(
+            self.threads,
+            |run: &PlannedRun| {
+                run_calibrated(&run.spec, self.calibrations[run.id.scenario].clone())
+            },
+            |finished, idle| {
+                if let Some((run, result)) = finished {
+                    match result {
+                        Ok(metrics) => plan.tell(run.id, metrics),
+                        Err(_) if plan.is_ahead(run.id) => plan.forget(run.id),
+                        Err(e) => {
+                            failure.get_or_insert(e);
+                        }
+                    }
+                }
+                while let Some(evaluation) = plan.evaluation(reported) {
+                    reported += 1;
                     report(&Report::Evaluated {
-                        done: evaluations.len(),
+                        done: reported,
                         total: search.max_evaluations,
                         at_most: true,
-                        evaluation: &evaluations[evaluations.len() - 1],
+                        evaluation,
                     });
-                    cost
                 }
-                Err(e) => {
-                    failure.get_or_insert(e);
-                    f64::INFINITY
+                if failure.is_some() {
+                    return Vec::new();
                 }
+                plan.next_runs(idle).unwrap_or_else(|e| {
+                    failure = Some(e);
+                    Vec::new()
+                })
             },
-            &bounds,
-            &start,
         );
-        if let Some(e) = failure.filter(|_| evaluations.is_empty()) {
-            return Err(e);
+        match failure {
+            Some(e) => Err(e),
+            None => plan.finish(),
         }
-        tuned(evaluations, minimum.converged)
     }
 }
 
@@ -537,7 +558,7 @@ pub struct TuningWork {
 
 enum Points {
     Grid { points: Vec<Vec<f64>>, next: usize },
-    Search(nelder_mead::Search),
+    Search(Box<nelder_mead::Search>),
 }
 
 impl Points {
@@ -550,7 +571,7 @@ impl Points {
             },
             TuningMode::Search(search) => {
                 let bounds: Vec<(f64, f64)> = problem.params.iter().map(|r| (r.lo, r.hi)).collect();
-                Points::Search(search.search(&bounds, &start_point(problem)))
+                Points::Search(Box::new(search.search(&bounds, &start_point(problem))))
             }
         })
     }
@@ -827,97 +848,6 @@ fn tuned(evaluations: Vec<Evaluation>, converged: bool) -> Result<Tuned, TuningE
         pareto,
         converged,
     })
-}
-
-/// Tuning whose runs are made elsewhere — the browser's computation workers, several at once:
-/// it asks for each point's runs (one per scenario, each calibrated by its scenario's teach cut)
-/// and is told their metrics, in any order. Its result is [`TuningWork`]'s for the same runs.
-///
-/// A sweep's points can all be asked at once; a search asks its next point only once the last
-/// one's cost is known.
-pub struct TuningPlan {
-    problem: TuningProblem,
-    points: Points,
-    /// Each point asked: its values, and each scenario's metrics once told.
-    asked: Vec<(Vec<f64>, Vec<Option<Metrics>>)>,
-    /// The evaluations of the points whose runs have all been told, in the order asked.
-    evaluations: Vec<Option<Evaluation>>,
-    /// No point is left to ask.
-    exhausted: bool,
-    converged: bool,
-}
-
-impl TuningPlan {
-    /// Checks the problem; nothing is asked yet.
-    pub fn new(problem: TuningProblem, mode: TuningMode) -> Result<Self, TuningError> {
-        check(&problem)?;
-        let points = Points::of(&problem, mode)?;
-        Ok(Self {
-            problem,
-            points,
-            asked: Vec::new(),
-            evaluations: Vec::new(),
-            exhausted: false,
-            converged: false,
-        })
-    }
-
-    /// The next point's runs, one spec per scenario (in the problem's order), with the point's
-    /// number for [`TuningPlan::tell`]; `None` when no point can be asked now (a search's last
-    /// point is still out, or none is left).
-    pub fn ask(&mut self) -> Result<Option<(usize, Vec<RunSpec>)>, TuningError> {
-        let waiting = self.evaluations.iter().any(Option::is_none);
-        if self.exhausted || (waiting && matches!(self.points, Points::Search(_))) {
-            return Ok(None);
-        }
-        let last = self.evaluations.last().and_then(Option::as_ref);
-        let Some(values) = self.points.next(last, &mut self.converged) else {
-            self.exhausted = true;
-            return Ok(None);
-        };
-        let specs = (0..self.problem.scenarios.len())
-            .map(|i| spec_with(&self.problem, i, &values))
-            .collect::<Result<Vec<_>, _>>()?;
-        self.asked
-            .push((values, vec![None; self.problem.scenarios.len()]));
-        self.evaluations.push(None);
-        Ok(Some((self.asked.len() - 1, specs)))
-    }
-
-    /// The metrics of point `point`'s run on scenario `scenario` (a number out of range, or a
-    /// run told twice, changes nothing).
-    pub fn tell(&mut self, point: usize, scenario: usize, metrics: Metrics) {
-        let Some((values, told)) = self.asked.get_mut(point) else {
-            return;
-        };
-        if let Some(slot @ None) = told.get_mut(scenario) {
-            *slot = Some(metrics);
-        }
-        if told.iter().all(Option::is_some) && self.evaluations[point].is_none() {
-            let metrics = told.iter_mut().filter_map(Option::take).collect();
-            self.evaluations[point] = Some(summarise(&self.problem, values.clone(), metrics));
-        }
-    }
-
-    /// Evaluations done and evaluations in all (the grid's points, or the search's budget).
-    pub fn count(&self) -> (usize, usize) {
-        let done = self.evaluations.iter().flatten().count();
-        (done, self.points.total())
-    }
-
-    /// Whether every point has been asked and told.
-    pub fn is_done(&self) -> bool {
-        self.exhausted && self.evaluations.iter().all(Option::is_some)
-    }
-
-    /// The outcome, once [`TuningPlan::is_done`].
-    pub fn finish(&mut self) -> Result<Tuned, TuningError> {
-        if !self.is_done() {
-            return Err(TuningError::Setup("the tuning has not finished".into()));
-        }
-        let evaluations = std::mem::take(&mut self.evaluations).into_iter().flatten();
-        tuned(evaluations.collect(), self.converged)
-    }
 }
 
 impl TuningWork {

@@ -98,6 +98,7 @@ impl NelderMead {
             pending: None,
             best: None,
             converged: false,
+            ways: [0; WAYS],
         }
     }
 }
@@ -119,6 +120,36 @@ enum Step {
     Done,
 }
 
+/// Which way a told cost sent the search (counted, to rank [`Search::candidates`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Way {
+    /// A vertex of the initial simplex.
+    Vertex,
+    /// The reflection beat the best vertex: expand.
+    Expanding,
+    /// The reflection replaces the worst vertex.
+    Accepted,
+    /// The reflection beat only the worst vertex: contract outside.
+    ContractingOutside,
+    /// The reflection beat no vertex: contract inside.
+    ContractingInside,
+    /// The expansion beat the reflection.
+    ExpansionKept,
+    /// The reflection beat the expansion.
+    ReflectionKept,
+    /// The contraction replaces the worst vertex.
+    ContractionKept,
+    /// The contraction failed: shrink.
+    Shrinking,
+    /// A vertex of a shrink.
+    ShrinkVertex,
+    /// Nothing (the search is over).
+    Finished,
+}
+
+/// How many kinds of [`Way`] there are.
+const WAYS: usize = Way::Finished as usize + 1;
+
 /// A Nelder–Mead search in progress (see [`NelderMead::search`]).
 #[derive(Debug, Clone, PartialEq)]
 pub struct Search {
@@ -135,6 +166,8 @@ pub struct Search {
     /// reflection and the expansion it asked for keeps the reflected point this way.
     best: Option<(Vec<f64>, f64)>,
     converged: bool,
+    /// How often each way has been gone.
+    ways: [u32; WAYS],
 }
 
 impl Search {
@@ -162,51 +195,117 @@ impl Search {
         if self.best.as_ref().is_none_or(|(_, best)| cost < *best) {
             self.best = Some((point.clone(), cost));
         }
+        let way = self.way_of(cost);
+        self.ways[way as usize] += 1;
         let n = self.bounds.len();
-        match std::mem::replace(&mut self.step, Step::Done) {
-            Step::Initial => {
+        let step = std::mem::replace(&mut self.step, Step::Done);
+        self.step = match (way, step) {
+            (Way::Vertex, _) => {
                 self.simplex.push((point, cost));
-                self.step = Step::Initial;
+                Step::Initial
             }
-            Step::Reflect => {
-                if cost < self.simplex[0].1 {
-                    self.step = Step::Expand(point, cost);
-                } else if cost < self.simplex[n - 1].1 {
-                    self.simplex[n] = (point, cost);
-                    self.step = Step::Reflect;
-                } else {
-                    // Contract towards the better of the worst point and its reflection.
-                    self.step = Step::Contract(cost.min(self.simplex[n].1));
-                }
+            (Way::Expanding, _) => Step::Expand(point, cost),
+            (Way::Accepted, _) | (Way::ContractionKept, _) | (Way::ExpansionKept, _) => {
+                self.simplex[n] = (point, cost);
+                Step::Reflect
             }
-            Step::Expand(reflected, reflected_cost) => {
-                self.simplex[n] = if cost < reflected_cost {
-                    (point, cost)
-                } else {
-                    (reflected, reflected_cost)
-                };
-                self.step = Step::Reflect;
+            // Contract towards the better of the worst point and its reflection.
+            (Way::ContractingOutside | Way::ContractingInside, _) => {
+                Step::Contract(cost.min(self.simplex[n].1))
             }
-            Step::Contract(reference) => {
-                if cost < reference {
-                    self.simplex[n] = (point, cost);
-                    self.step = Step::Reflect;
-                } else {
-                    self.step = Step::Shrink(1);
-                }
+            (Way::ReflectionKept, Step::Expand(reflected, reflected_cost)) => {
+                self.simplex[n] = (reflected, reflected_cost);
+                Step::Reflect
             }
-            Step::Shrink(i) => {
+            (Way::Shrinking, _) => Step::Shrink(1),
+            (Way::ShrinkVertex, Step::Shrink(i)) => {
                 self.simplex[i] = (point, cost);
-                self.step = if i < n {
+                if i < n {
                     Step::Shrink(i + 1)
                 } else {
                     Step::Reflect
-                };
+                }
             }
-            Step::Done => {}
+            (_, step) => step,
+        };
+    }
+
+    /// Which way the search goes when the pending point's cost is `cost` (finite or +∞).
+    fn way_of(&self, cost: f64) -> Way {
+        let n = self.bounds.len();
+        match &self.step {
+            Step::Initial => Way::Vertex,
+            Step::Reflect if cost < self.simplex[0].1 => Way::Expanding,
+            Step::Reflect if cost < self.simplex[n - 1].1 => Way::Accepted,
+            Step::Reflect if cost < self.simplex[n].1 => Way::ContractingOutside,
+            Step::Reflect => Way::ContractingInside,
+            Step::Expand(_, reflected_cost) if cost < *reflected_cost => Way::ExpansionKept,
+            Step::Expand(..) => Way::ReflectionKept,
+            Step::Contract(reference) if cost < *reference => Way::ContractionKept,
+            Step::Contract(_) => Way::Shrinking,
+            Step::Shrink(_) => Way::ShrinkVertex,
+            Step::Done => Way::Finished,
         }
-        // A contraction's own point was the one just told; `Contract` above either kept it or
-        // moved on to shrinking, which asks for new points.
+    }
+
+    /// The points the search can ask after the pending one (see [`Search::ask`]), the likeliest
+    /// first; empty when nothing is pending.
+    ///
+    /// What the search asks next depends only on where the pending point's cost falls among the
+    /// costs it compares it with (its simplex's, and the reflected point's or the contraction's
+    /// reference), so one cost from each interval between them gives every point it can ask. A
+    /// way the search has gone more often so far ranks first. Evaluating these ahead changes
+    /// nothing of the search, which is told real costs only: a point evaluated ahead is used if
+    /// the search asks for it, bit for bit the same point.
+    ///
+    /// ```
+    /// use cutlab::tuning::nelder_mead::NelderMead;
+    /// let bowl = |p: &[f64]| (p[0] - 0.3).powi(2) + (p[1] + 0.2).powi(2);
+    /// let mut search = NelderMead::default().search(&[(-1.0, 1.0), (-1.0, 1.0)], &[0.8, 0.8]);
+    /// while let Some(point) = search.ask() {
+    ///     let ahead = search.candidates();
+    ///     search.tell(bowl(&point));
+    ///     if let Some(next) = search.ask() {
+    ///         assert!(ahead.contains(&next));
+    ///     }
+    /// }
+    /// ```
+    pub fn candidates(&self) -> Vec<Vec<f64>> {
+        if self.pending.is_none() {
+            return Vec::new();
+        }
+        // The costs a told one is compared with. Both ends of every interval between them: each
+        // of them (a cost equal to one goes the way of the interval above it, as every
+        // comparison is strict) and the number just below it, with the lowest finite cost and
+        // +∞ (a failed run). Both ends, because whether the search has converged can change
+        // within an interval (with the spread of the simplex's costs, monotonically).
+        let mut thresholds: Vec<f64> = self.simplex.iter().map(|(_, c)| *c).collect();
+        match &self.step {
+            Step::Expand(_, reflected_cost) => thresholds.push(*reflected_cost),
+            Step::Contract(reference) => thresholds.push(*reference),
+            _ => {}
+        }
+        thresholds.retain(|c| c.is_finite());
+        let mut costs: Vec<f64> = thresholds.iter().map(|c| c.next_down()).collect();
+        costs.extend(thresholds);
+        costs.push(f64::MIN);
+        costs.push(f64::INFINITY);
+        costs.sort_by(f64::total_cmp);
+        costs.dedup();
+        let mut found: Vec<(Way, Vec<f64>)> = Vec::new();
+        for cost in costs {
+            let mut then = self.clone();
+            let way = then.way_of(cost);
+            then.tell(cost);
+            if let Some(point) = then.ask() {
+                if !found.iter().any(|(_, p)| same_point(p, &point)) {
+                    found.push((way, point));
+                }
+            }
+        }
+        // Stable: ties keep the order of the costs.
+        found.sort_by_key(|(way, _)| std::cmp::Reverse(self.ways[*way as usize]));
+        found.into_iter().map(|(_, point)| point).collect()
     }
 
     /// The search's evaluation budget.
@@ -344,6 +443,11 @@ impl Search {
     }
 }
 
+/// Whether two points are the same bit for bit.
+pub(crate) fn same_point(a: &[f64], b: &[f64]) -> bool {
+    a.len() == b.len() && a.iter().zip(b).all(|(x, y)| x.to_bits() == y.to_bits())
+}
+
 fn distance(a: &[f64], b: &[f64]) -> f64 {
     a.iter()
         .zip(b)
@@ -405,6 +509,15 @@ mod tests {
         assert_eq!(m.evaluations, calls);
     }
 
+    /// Costs that take a search through expansions (a bowl), contractions (a narrow valley)
+    /// and shrinks (a plateau).
+    const BOWL: fn(&[f64]) -> f64 = |p| p.iter().map(|x| (x - 0.2).powi(2)).sum();
+    const VALLEY: fn(&[f64]) -> f64 = |p| {
+        let y = p.get(1).copied().unwrap_or(0.0);
+        (p[0] - 0.3).powi(2) + 50.0 * (y - p[0] * p[0]).powi(2)
+    };
+    const PLATEAU: fn(&[f64]) -> f64 = |p| if p[0] > 0.6 { 1.0 } else { p[0] };
+
     /// Counts the evaluations of a search of `cost` over `dimensions` parameters on [0, 1] with
     /// budget `max`, returning (calls, the minimum).
     fn budgeted(cost: fn(&[f64]) -> f64, dimensions: usize, max: usize) -> (usize, Minimum) {
@@ -431,13 +544,7 @@ mod tests {
         // The audit's cases (30 → 32, 3 → 4, 5 → 7, 1 → 3 before the fix) and every budget up
         // to 40 on a bowl (expansions), a narrow valley (contractions) and a cost with a plateau
         // that forces shrinks.
-        let bowl: fn(&[f64]) -> f64 = |p| p.iter().map(|x| (x - 0.2).powi(2)).sum();
-        let valley: fn(&[f64]) -> f64 = |p| {
-            let y = p.get(1).copied().unwrap_or(0.0);
-            (p[0] - 0.3).powi(2) + 50.0 * (y - p[0] * p[0]).powi(2)
-        };
-        let plateau: fn(&[f64]) -> f64 = |p| if p[0] > 0.6 { 1.0 } else { p[0] };
-        for cost in [bowl, valley, plateau] {
+        for cost in [BOWL, VALLEY, PLATEAU] {
             for dimensions in [1, 2, 3] {
                 for max in 1..=40 {
                     let (calls, m) = budgeted(cost, dimensions, max);
@@ -447,6 +554,47 @@ mod tests {
                 }
             }
         }
+    }
+
+    #[test]
+    fn the_point_asked_next_is_always_among_the_candidates() {
+        // Every way a search can go — expansions, both contractions, shrinks, failed (NaN)
+        // evaluations, the budget and the tolerances — over one to three parameters.
+        let holed: fn(&[f64]) -> f64 = |p| {
+            if p[0] > 0.7 {
+                f64::NAN
+            } else {
+                (p[0] - 0.4).abs() + p.iter().skip(1).map(|x| (x - 0.6).abs()).sum::<f64>()
+            }
+        };
+        let mut asked = 0;
+        let mut first_choice = 0;
+        for cost in [BOWL, VALLEY, PLATEAU, holed] {
+            for dimensions in [1, 2, 3] {
+                let mut search = NelderMead {
+                    max_evaluations: 80,
+                    cost_tolerance: 1e-6,
+                    point_tolerance: 1e-4,
+                }
+                .search(&vec![(0.0, 1.0); dimensions], &vec![0.9; dimensions]);
+                while let Some(point) = search.ask() {
+                    let candidates = search.candidates();
+                    search.tell(cost(&point));
+                    if let Some(next) = search.ask() {
+                        let at = candidates.iter().position(|c| same_point(c, &next));
+                        assert!(
+                            at.is_some(),
+                            "{dimensions} parameters: {next:?} not in {candidates:?}"
+                        );
+                        asked += 1;
+                        first_choice += usize::from(at == Some(0));
+                    }
+                }
+                assert!(search.candidates().is_empty());
+            }
+        }
+        // The ranking by the ways gone so far picks the next point first more often than not.
+        assert!(2 * first_choice > asked, "{first_choice} of {asked}");
     }
 
     #[test]

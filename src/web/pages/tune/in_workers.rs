@@ -1,6 +1,7 @@
 //! Tune's evaluations in the computation workers: every run of an evaluation (one per scenario)
 //! is a job of its own, so the scenarios of a search's point, or a sweep's points, compute at
-//! once on different workers. The first point's runs make their scenarios' teach cuts; every
+//! once on different workers, and a worker a search leaves idle runs ahead of it
+//! ([`crate::tuning::plan`]). The first point's runs make their scenarios' teach cuts; every
 //! later run starts from those calibrations, as the page's own [`crate::tuning::TuningWork`]
 //! did, and the result is the same ([`TuningPlan`]).
 
@@ -9,52 +10,50 @@ use std::rc::Rc;
 
 use leptos::prelude::Set;
 
-use crate::closed_loop::definition::RunSpec;
 use crate::closed_loop::lab::TeachKey;
 use crate::closed_loop::transfer::{JobRequest, RunRequest};
 use crate::estimation::estimator::Calibration;
-use crate::tuning::{Tuned, TuningPlan};
+use crate::tuning::{PlannedRun, RunId, Tuned, TuningPlan};
 use crate::web::components::pool::{self, Answer, JobEvent};
-use crate::web::components::runner::{next_task, RunStatus, Runner};
+use crate::web::components::runner::{next_task, RunStatus, Runner, ANOTHER_ANSWER};
 
 /// Where a tuning in the workers is.
 struct Tuning {
     plan: TuningPlan,
     /// The scenarios' teach cuts, by key: those of the first point's runs.
-    teach_keys: Vec<TeachKey>,
     known: Vec<(TeachKey, Calibration)>,
-    /// Runs sent and not yet answered.
-    out: usize,
+    /// The runs sent and not yet answered.
+    out: Vec<RunId>,
     /// Whether a search asks at most its budget ("at most") or a grid's points.
     at_most: bool,
 }
 
-/// Starts `plan` in the workers on `runner`, replacing anything it runs; `teach_keys` are the
-/// scenarios' teach cuts; `at_most` says the plan is a search (which may stop before its
-/// budget).
-pub fn start_tuning(
-    runner: &Runner<Tuned>,
-    plan: TuningPlan,
-    teach_keys: Vec<TeachKey>,
-    at_most: bool,
-) {
+/// Starts `plan` in the workers on `runner`, replacing anything it runs; `at_most` says the plan
+/// is a search (which may stop before its budget).
+pub fn start_tuning(runner: &Runner<Tuned>, plan: TuningPlan, at_most: bool) {
     let current = runner.begin_in_workers();
     let tuning = Rc::new(RefCell::new(Tuning {
         plan,
-        teach_keys,
         known: Vec::new(),
-        out: 0,
+        out: Vec::new(),
         at_most,
     }));
     show_progress(runner, &tuning.borrow());
     send_ready(runner, &tuning, &current);
 }
 
-/// The status while the evaluations run: how many are done, of how many.
+/// The status while the evaluations run: how many are done, of how many, and how many of the
+/// runs made ahead of a search it used.
 fn show_progress(runner: &Runner<Tuned>, tuning: &Tuning) {
     let (done, total) = tuning.plan.count();
+    let (made_ahead, used) = tuning.plan.runs_ahead();
+    let ahead = if made_ahead > 0 {
+        format!("; {used} of {made_ahead} runs made ahead of the search used")
+    } else {
+        String::new()
+    };
     let stage = format!(
-        "Evaluation {} of {}{total} (runs on {} workers)",
+        "Evaluation {} of {}{total} (runs on {} workers{ahead})",
         (done + 1).min(total),
         if tuning.at_most { "at most " } else { "" },
         pool::pool_size(),
@@ -65,87 +64,34 @@ fn show_progress(runner: &Runner<Tuned>, tuning: &Tuning) {
     });
 }
 
-/// Sends the runs of every point the plan can ask now (after the first point, only once its
-/// teach cuts are known, so no run makes one again); publishes the outcome once all are done.
+/// Sends the runs the plan asks for now: every asked point's, then runs ahead of a search in
+/// the workers left idle. A run ahead that the search no longer needs is left to finish (it may
+/// be asked later): cancelling it would restart its worker, which costs more than the short
+/// wait of the runs queued behind it. Publishes the outcome once all is done.
 fn send_ready(
     runner: &Runner<Tuned>,
     tuning: &Rc<RefCell<Tuning>>,
     current: &(impl Fn() -> bool + Clone + 'static),
 ) {
-    let mut sends: Vec<(usize, usize, RunSpec)> = Vec::new();
     let asked = {
         let mut t = tuning.borrow_mut();
-        let mut asked = Ok(());
-        loop {
-            let taught = t
-                .teach_keys
-                .iter()
-                .all(|key| t.known.iter().any(|(k, _)| k == key));
-            let idle = t.out == 0 && sends.is_empty();
-            if !idle && !taught {
-                break;
-            }
-            match t.plan.ask() {
-                Ok(Some((point, specs))) => {
-                    sends.extend(specs.into_iter().enumerate().map(|(i, s)| (point, i, s)));
-                }
-                Ok(None) => break,
-                Err(e) => {
-                    asked = Err(e.to_string());
-                    break;
-                }
-            }
-        }
-        t.out += sends.len();
-        asked
+        let idle = pool::pool_size().saturating_sub(t.out.len());
+        t.plan.next_runs(idle)
     };
-    if let Err(message) = asked {
-        runner.cancel();
-        let _ = runner.status.try_set(RunStatus::Failed(message));
-        return;
-    }
-    for (point, scenario, spec) in sends {
-        let known = tuning.borrow().known.clone();
-        let request = JobRequest::Runs(RunRequest::new(vec![spec], &known));
-        let (runner_in, tuning, current) = (runner.clone(), tuning.clone(), current.clone());
-        let job = pool::submit(request, move |event| {
-            if !current() {
-                return;
-            }
-            match event {
-                JobEvent::Progress(_) | JobEvent::Chunk(_) => {}
-                JobEvent::Done(Answer::Runs(mut runs)) if runs.len() == 1 => {
-                    let run = runs.remove(0);
-                    {
-                        let mut t = tuning.borrow_mut();
-                        t.out = t.out.saturating_sub(1);
-                        if let Ok(key) = TeachKey::of(&run.spec) {
-                            if !t.known.iter().any(|(k, _)| *k == key) {
-                                t.known.push((key, run.calibration.clone()));
-                            }
-                        }
-                        t.plan.tell(point, scenario, run.metrics.clone());
-                    }
-                    show_progress(&runner_in, &tuning.borrow());
-                    send_ready(&runner_in, &tuning, &current);
-                }
-                JobEvent::Done(_) => {
-                    runner_in.cancel();
-                    let _ = runner_in.status.try_set(RunStatus::Failed(
-                        "the computation worker answered another job than the one asked".into(),
-                    ));
-                }
-                JobEvent::Failed(message) => {
-                    runner_in.cancel();
-                    let _ = runner_in.status.try_set(RunStatus::Failed(message));
-                }
-            }
-        });
-        runner.track(job);
+    let runs = match asked {
+        Ok(runs) => runs,
+        Err(e) => {
+            runner.cancel();
+            let _ = runner.status.try_set(RunStatus::Failed(e.to_string()));
+            return;
+        }
+    };
+    for run in runs {
+        send(runner, tuning, current, run);
     }
     let done = {
         let t = tuning.borrow();
-        t.out == 0 && t.plan.is_done()
+        t.out.is_empty() && t.plan.is_done()
     };
     if done {
         let outcome = tuning.borrow_mut().plan.finish();
@@ -161,4 +107,64 @@ fn send_ready(
             }
         });
     }
+}
+
+/// Sends one run to the pool; its answer is told to the plan, which may ask for more.
+fn send(
+    runner: &Runner<Tuned>,
+    tuning: &Rc<RefCell<Tuning>>,
+    current: &(impl Fn() -> bool + Clone + 'static),
+    run: PlannedRun,
+) {
+    let id = run.id;
+    let request = JobRequest::Runs(RunRequest::new(vec![run.spec], &tuning.borrow().known));
+    let (runner_in, tuning_in, current_in) = (runner.clone(), tuning.clone(), current.clone());
+    let job = pool::submit(request, move |event| {
+        if !current_in() {
+            return;
+        }
+        let fail = |message: String| {
+            runner_in.cancel();
+            let _ = runner_in.status.try_set(RunStatus::Failed(message));
+        };
+        match event {
+            JobEvent::Progress(_) | JobEvent::Chunk(_) => {}
+            JobEvent::Done(Answer::Runs(mut runs)) if runs.len() == 1 => {
+                let result = runs.remove(0);
+                {
+                    let mut t = tuning_in.borrow_mut();
+                    t.out.retain(|run| *run != id);
+                    if let Ok(key) = TeachKey::of(&result.spec) {
+                        if !t.known.iter().any(|(k, _)| *k == key) {
+                            t.known.push((key, result.calibration.clone()));
+                        }
+                    }
+                    t.plan.tell(id, result.metrics.clone());
+                }
+                show_progress(&runner_in, &tuning_in.borrow());
+                send_ready(&runner_in, &tuning_in, &current_in);
+            }
+            JobEvent::Done(_) => fail(ANOTHER_ANSWER.into()),
+            JobEvent::Failed(message) => {
+                let ahead = {
+                    let mut t = tuning_in.borrow_mut();
+                    t.out.retain(|run| *run != id);
+                    let ahead = t.plan.is_ahead(id);
+                    if ahead {
+                        // Not the tuning's failure: the search has not asked for this point,
+                        // and if it does, the run is sent again and fails then.
+                        t.plan.forget(id);
+                    }
+                    ahead
+                };
+                if ahead {
+                    send_ready(&runner_in, &tuning_in, &current_in);
+                } else {
+                    fail(message);
+                }
+            }
+        }
+    });
+    tuning.borrow_mut().out.push(id);
+    runner.track(job);
 }

@@ -26,7 +26,6 @@ mod teach_in;
 use leptos::prelude::*;
 
 use crate::closed_loop::definition::{preset_controller, RunSpec};
-use crate::closed_loop::lab::TeachKey;
 use crate::control::fuzzy::fll;
 use crate::control::registry::{ControllerConfig, ControllerKind};
 use crate::input::table::{self, Table};
@@ -195,11 +194,6 @@ pub fn TunePage() -> impl IntoView {
             }
         }
         let controller = problem.controller.clone();
-        let teach_keys = problem
-            .scenarios
-            .iter()
-            .filter_map(|s| TeachKey::of(s).ok())
-            .collect();
         match TuningPlan::new(problem, tuning_mode) {
             Ok(plan) => {
                 set_form_error.set(None);
@@ -210,7 +204,7 @@ pub fn TunePage() -> impl IntoView {
                 asked.set(Some((params, steps, first, controller)));
                 // Each run of an evaluation in a computation worker of its own, several at once.
                 let search = matches!(tuning_mode, TuningMode::Search(_));
-                start_tuning(&runner_for_start, plan, teach_keys, search);
+                start_tuning(&runner_for_start, plan, search);
             }
             Err(e) => set_form_error.set(Some(e.to_string())),
         }
