@@ -5,10 +5,12 @@
 //   first result    the Simulate page's default run (kim-step-doc, threshold: teach cut + loop)
 //                   shown in the metrics table, from navigation start            ≤ 500 ms
 //   edit → redraw   a controller parameter changed (its teach cut reused) until the new run is
-//                   drawn (the next animation frame after the run's end), savings already in
-//                                                                                ≤ 100 ms
+//                   drawn (the next animation frame after the run's end), savings already in,
+//                   on each of three presets (issue 28: any preset)               ≤ 100 ms
 //   compare         the Compare page with four controllers until every column's savings are
-//                   shown, from navigation start                                 ≤ 2000 ms
+//                   shown (or the search has ended where a column has none to show), from
+//                   navigation start, on each of the three presets               ≤ 1000 ms
+//                                                         (issue 28's; issue 14's was 2000 ms)
 //   longest task    main-thread work over 50 ms, as Chromium reports it (longtask) ≤ 50 ms,
 //                   in the cases above and in the first load of every other page
 //
@@ -20,6 +22,9 @@ import { serveDist, launchBrowser } from '../../tests/browser/harness.mjs';
 
 const rounds = Number(process.argv[process.argv.indexOf('--rounds') + 1]) || 3;
 const TIMEOUT = 120_000;
+/** The presets of the edit and Compare cases: the default, whose teach cut and references ship
+ * precomputed, and two that have none (issue 28's cases, as workers.mjs's). */
+const PRESETS = ['kim-step-doc', 'maneerat-doc-2', 'kim-circular-taper'];
 
 /** Installed before the app loads: long tasks from the start, and the first metrics table. */
 function instrument() {
@@ -28,7 +33,9 @@ function instrument() {
     for (const e of list.getEntries()) window.cutlabLongTasks.push(e.duration);
   }).observe({ type: 'longtask', buffered: true });
   window.cutlabFirstResultMs = null;
+  window.cutlabSearchSeen = false;
   new MutationObserver(() => {
+    window.cutlabSearchSeen ||= document.getElementById('savings-progress') !== null;
     if (window.cutlabFirstResultMs !== null) return;
     const rows = document.querySelectorAll('table.metrics tbody tr');
     for (const row of rows) {
@@ -51,17 +58,22 @@ async function open(browser, url) {
 }
 
 const running = (page) => page.getByRole('status').filter({ hasText: /Running|teach cut|closed loop/ });
+/** Every column's savings shown, or the reference search has been and gone where a column has
+ * none to show (a run stopped by the envelope before its program ended shows "—"). */
 const savingsShown = (page, columns) => page.waitForFunction((n) => {
   const rows = [...document.querySelectorAll('table.metrics tbody tr')]
     .filter((r) => /Saving vs/.test(r.textContent));
-  return rows.length === 2 && rows.every((r) => {
+  const filled = rows.length === 2 && rows.every((r) => {
     const cells = [...r.querySelectorAll('td')];
     return cells.length === n && cells.every((c) => /\d/.test(c.textContent));
   });
+  const searched = window.cutlabSearchSeen && document.getElementById('savings-progress') === null
+    && rows.length === 2 && rows.every((r) => r.querySelectorAll('td').length === n);
+  return filled || searched;
 }, columns, { timeout: TIMEOUT });
 
-async function simulateRound(browser, base) {
-  const { context, page, problems } = await open(browser, base + '#/simulate');
+async function simulateRound(browser, base, preset) {
+  const { context, page, problems } = await open(browser, `${base}#/simulate?preset=${preset}`);
   await page.waitForFunction(() => window.cutlabFirstResultMs !== null, null, { timeout: TIMEOUT });
   const first = await page.evaluate(() => window.cutlabFirstResultMs);
   // Edit once everything the first run set off is done (its savings), as a person reads first.
@@ -99,8 +111,8 @@ async function simulateRound(browser, base) {
   return { first, edit, longest, problems };
 }
 
-async function compareRound(browser, base) {
-  const { context, page, problems } = await open(browser, base + '#/compare?variants=4');
+async function compareRound(browser, base, preset) {
+  const { context, page, problems } = await open(browser, `${base}#/compare?preset=${preset}&variants=4`);
   await savingsShown(page, 4);
   const done = await page.evaluate(() => performance.now());
   const longest = Math.max(0, ...(await page.evaluate(() => window.cutlabLongTasks)));
@@ -131,18 +143,23 @@ async function otherPagesRound(browser, base) {
 
 const server = await serveDist();
 const browser = await launchBrowser();
-const best = { first: Infinity, edit: Infinity, compare: Infinity, longest: 0 };
+const best = { first: Infinity, longest: 0 };
+const edit = Object.fromEntries(PRESETS.map((p) => [p, Infinity]));
+const compare = Object.fromEntries(PRESETS.map((p) => [p, Infinity]));
 const pagesLongest = Object.fromEntries(OTHER_PAGES.map((slug) => [slug, 0]));
 const problems = [];
 try {
   for (let i = 0; i < rounds; i++) {
-    const s = await simulateRound(browser, server.url);
-    const c = await compareRound(browser, server.url);
-    best.first = Math.min(best.first, s.first);
-    best.edit = Math.min(best.edit, s.edit);
-    best.compare = Math.min(best.compare, c.compare);
-    best.longest = Math.max(best.longest, s.longest, c.longest);
-    problems.push(...s.problems, ...c.problems);
+    for (const preset of PRESETS) {
+      const s = await simulateRound(browser, server.url, preset);
+      const c = await compareRound(browser, server.url, preset);
+      // The first result is the default page's (the preset a newcomer meets).
+      if (preset === PRESETS[0]) best.first = Math.min(best.first, s.first);
+      edit[preset] = Math.min(edit[preset], s.edit);
+      compare[preset] = Math.min(compare[preset], c.compare);
+      best.longest = Math.max(best.longest, s.longest, c.longest);
+      problems.push(...s.problems, ...c.problems);
+    }
     const o = await otherPagesRound(browser, server.url);
     for (const slug of OTHER_PAGES) pagesLongest[slug] = Math.max(pagesLongest[slug], o.longest[slug]);
     problems.push(...o.problems);
@@ -154,14 +171,19 @@ try {
 const ms = (v) => `${Math.round(v)} ms`;
 console.log('| case | measured | target |');
 console.log('|---|---:|---|');
-console.log(`| Simulate: first result after load | ${ms(best.first)} | ≤ 500 ms |`);
-console.log(`| Simulate: edit → re-simulated and redrawn | ${ms(best.edit)} | ≤ 100 ms |`);
-console.log(`| Compare: four controllers with savings | ${ms(best.compare)} | ≤ 2000 ms |`);
-console.log(`| longest main-thread task (Simulate with an edit, Compare) | ${ms(best.longest)} | ≤ 50 ms |`);
+console.log(`| Simulate: first result after load (${PRESETS[0]}) | ${ms(best.first)} | ≤ 500 ms |`);
+for (const preset of PRESETS) {
+  console.log(`| Simulate: edit → re-simulated and redrawn, ${preset} | ${ms(edit[preset])} | ≤ 100 ms |`);
+}
+for (const preset of PRESETS) {
+  console.log(`| Compare: four controllers with savings, ${preset} | ${ms(compare[preset])} | ≤ 1000 ms |`);
+}
+console.log(`| longest main-thread task (Simulate with an edit, Compare, every preset) | ${ms(best.longest)} | ≤ 50 ms |`);
 const worstPage = OTHER_PAGES.reduce((a, b) => (pagesLongest[b] > pagesLongest[a] ? b : a));
 console.log(`| longest main-thread task, the other pages' first loads (worst: ${worstPage}) | ${ms(pagesLongest[worstPage])} | ≤ 50 ms |`);
 console.log(`pages: ${OTHER_PAGES.map((slug) => `${slug} ${ms(pagesLongest[slug])}`).join(', ')}`);
-console.log(JSON.stringify({ rounds, first_result_ms: best.first, edit_ms: best.edit, compare_ms: best.compare, longest_task_ms: best.longest, pages_longest_task_ms: pagesLongest, console_errors: problems.length }));
+const worst = (by) => Math.max(...Object.values(by));
+console.log(JSON.stringify({ rounds, first_result_ms: best.first, edit_ms: worst(edit), compare_ms: worst(compare), edit_ms_by_preset: edit, compare_ms_by_preset: compare, longest_task_ms: best.longest, pages_longest_task_ms: pagesLongest, console_errors: problems.length }));
 if (problems.length) {
   console.error(`browser bench: ${problems.length} console errors, first: ${problems[0]}`);
   process.exitCode = 1;

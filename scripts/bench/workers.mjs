@@ -12,7 +12,7 @@
 // (Chromium's own network emulation, CDP `Network.emulateNetworkConditions`, cache disabled),
 // the time to the first chart points and to the first metrics; then the Tune page's 60-evaluation
 // search (its default scenarios and kim-step-doc), from Run to the best shown, with the most
-// workers that computed at once. Both modules' sizes come from
+// workers that computed at once, and the same search with one worker. Both modules' sizes come from
 // `scripts/wasm-size`, printed beside the table by `scripts/bench/run`.
 //
 //   node scripts/bench/workers.mjs [--rounds 3]
@@ -80,9 +80,15 @@ async function round(browser, url, throttled, until) {
 
 /** The Tune page's Nelder–Mead search of at most 60 evaluations on its default scenarios and
  * kim-step-doc (issue 28's case), from the Run click to the best shown, and the most workers
- * that computed at once. */
-async function tuneRound(browser, base) {
+ * that computed at once; with `cores` set, the browser reports that many cores (so the pool
+ * has that many workers). */
+async function tuneRound(browser, base, cores = null) {
   const context = await browser.newContext({ viewport: { width: 1280, height: 900 } });
+  if (cores !== null) {
+    await context.addInitScript((n) => {
+      Object.defineProperty(Navigator.prototype, 'hardwareConcurrency', { get: () => n });
+    }, cores);
+  }
   const page = await context.newPage();
   const problems = [];
   page.on('console', (m) => { if (m.type() === 'error') problems.push(m.text()); });
@@ -110,6 +116,7 @@ const browser = await launchBrowser();
 const best = Object.fromEntries(PRESETS.map((p) => [p, { firstPoints: Infinity, metrics: Infinity, savings: Infinity }]));
 const throttled = { firstPoints: Infinity, metrics: Infinity };
 const tune = { ms: Infinity, mostBusy: 0 };
+const tuneOneWorker = { ms: Infinity, mostBusy: 0 };
 const problems = [];
 try {
   for (let i = 0; i < rounds; i++) {
@@ -125,6 +132,10 @@ try {
     tune.ms = Math.min(tune.ms, u.ms);
     tune.mostBusy = Math.max(tune.mostBusy, u.mostBusy);
     problems.push(...u.problems);
+    const one = await tuneRound(browser, server.url, 1);
+    tuneOneWorker.ms = Math.min(tuneOneWorker.ms, one.ms);
+    tuneOneWorker.mostBusy = Math.max(tuneOneWorker.mostBusy, one.mostBusy);
+    problems.push(...one.problems);
   }
 } finally {
   await browser.close();
@@ -142,7 +153,8 @@ console.log('');
 console.log('| case | measured | workers at once |');
 console.log('|---|---:|---:|');
 console.log(`| Tune: search of at most 60 evaluations, maneerat-doc-1 and kim-step-doc, Run → best shown | ${ms(tune.ms)} | ${tune.mostBusy} |`);
-console.log(JSON.stringify({ rounds, presets: best, throttled_10_mbit: throttled, tune_search: tune, console_errors: problems.length }));
+console.log(`| Tune: the same search with one worker (the browser reporting one core) | ${ms(tuneOneWorker.ms)} | ${tuneOneWorker.mostBusy} |`);
+console.log(JSON.stringify({ rounds, presets: best, throttled_10_mbit: throttled, tune_search: tune, tune_search_one_worker: tuneOneWorker, console_errors: problems.length }));
 if (problems.length) {
   console.error(`workers bench: ${problems.length} console errors, first: ${problems[0]}`);
   process.exitCode = 1;
