@@ -1,21 +1,12 @@
 // Every page, as a keyboard, screen-reader or phone user meets it: axe-core finds no violation
 // once the page shows its first results, and on a 390 px phone no page scrolls sideways.
-import { test, before, after } from 'node:test';
+import { test } from 'node:test';
 import assert from 'node:assert/strict';
-import { serveDist, launchBrowser, openLab, axeViolations, documentWidth, screenshot } from './harness.mjs';
+import { useLab, server, browser, openLab, axeViolations, documentWidth, screenshot } from './harness.mjs';
 
 const LONG = 60_000;
 
-let server;
-let browser;
-before(async () => {
-  server = await serveDist();
-  browser = await launchBrowser();
-});
-after(async () => {
-  await browser?.close();
-  await server?.close();
-});
+useLab();
 
 /** Every page of the navigation: its hash and what shows that its first results are in. */
 const PAGES = [

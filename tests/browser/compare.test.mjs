@@ -1,8 +1,8 @@
 // The Compare page: one click on a paper's comparison runs it; the table marks the best values.
-import { test, before, after } from 'node:test';
+import { test } from 'node:test';
 import assert from 'node:assert/strict';
 import { readFile } from 'node:fs/promises';
-import { serveDist, launchBrowser, openLab, screenshot } from './harness.mjs';
+import { useLab, server, browser, openLab, screenshot } from './harness.mjs';
 
 const RUN_TIMEOUT = 120_000;
 
@@ -18,16 +18,7 @@ async function downloadText(page, button) {
 /** The metrics CSV without the savings rows, which fill in later from background runs. */
 const withoutSavings = (csv) => csv.split('\n').filter((line) => !line.startsWith('saving_')).join('\n');
 
-let server;
-let browser;
-before(async () => {
-  server = await serveDist();
-  browser = await launchBrowser();
-});
-after(async () => {
-  await browser?.close();
-  await server?.close();
-});
+useLab();
 
 test('a paper comparison runs its controllers side by side with the best values marked', async () => {
   const { page, problems, context } = await openLab(browser, server.url, '#/compare', { width: 1440, height: 900 });

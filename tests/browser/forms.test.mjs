@@ -1,20 +1,11 @@
 // Forms show the values in use: a blank field's placeholder is what the run uses (the preset's),
 // a unit is written once, the preset's full title is shown, every number field brings up a
 // numeric keypad, and no message uses a command-line flag or Rust's range syntax.
-import { test, before, after } from 'node:test';
+import { test } from 'node:test';
 import assert from 'node:assert/strict';
-import { serveDist, launchBrowser, openLab } from './harness.mjs';
+import { useLab, server, browser, openLab } from './harness.mjs';
 
-let server;
-let browser;
-before(async () => {
-  server = await serveDist();
-  browser = await launchBrowser();
-});
-after(async () => {
-  await browser?.close();
-  await server?.close();
-});
+useLab();
 
 test('Simulate: blank fields show the preset\'s values, units once, the full title, numeric keypads', async () => {
   const { page, problems, context } = await openLab(browser, server.url, '#/simulate?preset=kim-step-doc&controller=pi');

@@ -1,19 +1,10 @@
 // The Fuzzy rules page: edit the table, see the surface change, inspect firing rules, FLL in and out.
-import { test, before, after } from 'node:test';
+import { test } from 'node:test';
 import assert from 'node:assert/strict';
 import { readFile } from 'node:fs/promises';
-import { serveDist, launchBrowser, openLab, canvasPixels, waitForRedraw, screenshot } from './harness.mjs';
+import { useLab, server, browser, openLab, canvasPixels, waitForRedraw, screenshot } from './harness.mjs';
 
-let server;
-let browser;
-before(async () => {
-  server = await serveDist();
-  browser = await launchBrowser();
-});
-after(async () => {
-  await browser?.close();
-  await server?.close();
-});
+useLab();
 
 test('editing a rule cell changes the control surface and the link', async () => {
   const { page, problems, context } = await openLab(browser, server.url, '#/fuzzy');

@@ -6,25 +6,18 @@
 //
 // The device binary is the one `cargo test --features cli,charts` builds (scripts/test's native
 // step, before the browser tests); if it is missing, it is built here.
-import { test, before, after } from 'node:test';
+import { test, before } from 'node:test';
 import assert from 'node:assert/strict';
 import { spawn, execFileSync } from 'node:child_process';
 import { readFile, writeFile, mkdir } from 'node:fs/promises';
 import { join } from 'node:path';
-import { serveDist, launchBrowser, artifacts, screenshot, watchLongTasks, nativeCli } from './harness.mjs';
+import { useLab, server, browser, artifacts, screenshot, watchLongTasks, nativeCli } from './harness.mjs';
 
 let cutlab;
-let server;
-let browser;
-before(async () => {
+before(() => {
   cutlab = nativeCli();
-  server = await serveDist();
-  browser = await launchBrowser();
 });
-after(async () => {
-  await browser?.close();
-  await server?.close();
-});
+useLab();
 
 const LONG = 60_000;
 

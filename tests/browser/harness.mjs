@@ -1,6 +1,7 @@
 // Shared set-up for the browser tests: serves the release build in dist/ on a free loopback port,
 // drives Debian's Chromium through playwright-core, and records every console error and uncaught
 // exception so each test can fail on them.
+import { before, after } from 'node:test';
 import { createServer } from 'node:http';
 import { gzipSync } from 'node:zlib';
 import { readFile, mkdir } from 'node:fs/promises';
@@ -29,6 +30,25 @@ const types = {
   '.txt': 'text/plain; charset=utf-8',
   '.fll': 'text/plain; charset=utf-8',
 };
+
+/** The served build (`{ url, close }`) and the browser of the test file that called [useLab],
+ * set before its first test. Exports are live bindings: a file imports them and reads them in
+ * its tests. */
+export let server;
+export let browser;
+
+/** Serves dist/ and launches Chromium before the calling test file's tests, and closes both
+ * after them. Each test file runs in a process of its own, so each has its own. */
+export function useLab() {
+  before(async () => {
+    server = await serveDist();
+    browser = await launchBrowser();
+  });
+  after(async () => {
+    await browser?.close();
+    await server?.close();
+  });
+}
 
 /** Serves dist/ (or another build's `directory`) on 127.0.0.1 at a free port; resolves to
  * { url, close }. Files go gzip-compressed to a browser that accepts it, as any web server the lab

@@ -1,19 +1,10 @@
 // The home page: what the lab is for, the loop whose blocks open their pages, where to start,
 // and the five papers — the page the lab opens on.
-import { test, before, after } from 'node:test';
+import { test } from 'node:test';
 import assert from 'node:assert/strict';
-import { serveDist, launchBrowser, openLab } from './harness.mjs';
+import { useLab, server, browser, openLab } from './harness.mjs';
 
-let server;
-let browser;
-before(async () => {
-  server = await serveDist();
-  browser = await launchBrowser();
-});
-after(async () => {
-  await browser?.close();
-  await server?.close();
-});
+useLab();
 
 const LOOP = [
   ['Motor currents', 'The simulated machine'],

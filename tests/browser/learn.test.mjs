@@ -1,18 +1,9 @@
 // The Learn page: lessons with equations and links into the lab.
-import { test, before, after } from 'node:test';
+import { test } from 'node:test';
 import assert from 'node:assert/strict';
-import { serveDist, launchBrowser, openLab } from './harness.mjs';
+import { useLab, server, browser, openLab } from './harness.mjs';
 
-let server;
-let browser;
-before(async () => {
-  server = await serveDist();
-  browser = await launchBrowser();
-});
-after(async () => {
-  await browser?.close();
-  await server?.close();
-});
+useLab();
 
 test('the lessons show the papers\' equations and link into the lab', async () => {
   const { page, problems, context } = await openLab(browser, server.url);

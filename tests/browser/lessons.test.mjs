@@ -3,20 +3,11 @@
 // and sees the check turn from unmet to met with the measured value; the progress survives a
 // reload and shows on the Lessons page; on the Logs page a replay the student starts is checked
 // the same way.
-import { test, before, after } from 'node:test';
+import { test } from 'node:test';
 import assert from 'node:assert/strict';
-import { serveDist, launchBrowser, openLab, screenshot } from './harness.mjs';
+import { useLab, server, browser, openLab, screenshot } from './harness.mjs';
 
-let server;
-let browser;
-before(async () => {
-  server = await serveDist();
-  browser = await launchBrowser();
-});
-after(async () => {
-  await browser?.close();
-  await server?.close();
-});
+useLab();
 
 const RUN_TIMEOUT = 90_000;
 const TITLE = 'The entry into a cut, and the safety envelope';

@@ -2,27 +2,18 @@
 // columns mapped, the signal chain filtering one and showing its spectrum, a calibration from the
 // log, two controllers replayed, and both CSV exports; a big file streams with a progress bar and
 // Cancel, and the page never freezes.
-import { test, before, after } from 'node:test';
+import { test } from 'node:test';
 import assert from 'node:assert/strict';
 import { readFile, writeFile, mkdtemp, rm } from 'node:fs/promises';
 import { tmpdir } from 'node:os';
 import { join } from 'node:path';
-import { serveDist, launchBrowser, openLab, screenshot, watchLongTasks, root } from './harness.mjs';
+import { useLab, server, browser, openLab, screenshot, watchLongTasks, root } from './harness.mjs';
 
 const DAQ = 'synthetic-maneerat-doc-2-daq.csv';
 const EXPORT = 'synthetic-kim-step-doc-export.csv';
 const TIMEOUT = 120_000;
 
-let server;
-let browser;
-before(async () => {
-  server = await serveDist();
-  browser = await launchBrowser();
-});
-after(async () => {
-  await browser?.close();
-  await server?.close();
-});
+useLab();
 
 /** Clicks `button` and returns the text of the file it downloads. */
 async function downloadText(page, button) {

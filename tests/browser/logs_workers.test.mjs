@@ -9,26 +9,17 @@
 //
 // The pool publishes `data-busy-workers` (the workers computing now) on <html>. The tests wait on
 // that and on what the page shows, never on time.
-import { test, before, after } from 'node:test';
+import { test } from 'node:test';
 import assert from 'node:assert/strict';
 import { writeFile, mkdtemp, rm } from 'node:fs/promises';
 import { tmpdir } from 'node:os';
 import { join } from 'node:path';
-import { serveDist, launchBrowser, openLab, openLabWithThrowingWorker, root } from './harness.mjs';
+import { useLab, server, browser, openLab, openLabWithThrowingWorker, root } from './harness.mjs';
 
 const DAQ = 'synthetic-maneerat-doc-2-daq.csv';
 const TIMEOUT = 120_000;
 
-let server;
-let browser;
-before(async () => {
-  server = await serveDist();
-  browser = await launchBrowser();
-});
-after(async () => {
-  await browser?.close();
-  await server?.close();
-});
+useLab();
 
 /** From now on, the most workers busy at once; returns a function that reads it. */
 async function watchBusyWorkers(page) {

@@ -1,19 +1,10 @@
 // The Machine page: a preset's path, depth profile, forces and currents; the brake bench's line.
-import { test, before, after } from 'node:test';
+import { test } from 'node:test';
 import assert from 'node:assert/strict';
 import { execFileSync } from 'node:child_process';
-import { serveDist, launchBrowser, openLab, screenshot, nativeCli } from './harness.mjs';
+import { useLab, server, browser, openLab, screenshot, nativeCli } from './harness.mjs';
 
-let server;
-let browser;
-before(async () => {
-  server = await serveDist();
-  browser = await launchBrowser();
-});
-after(async () => {
-  await browser?.close();
-  await server?.close();
-});
+useLab();
 
 test('a mill preset shows its tool path, depth profile, forces, torque and currents', async () => {
   const { page, problems, context } = await openLab(browser, server.url, '#/plant?preset=kim-circular-taper');

@@ -1,22 +1,13 @@
 // Tune, Logs and Hardware keep what is settable in the URL: a reload (or the link, shared)
 // restores it — never a person's own file or serial port (a Logs link's column mapping waits for
 // the next log opened instead).
-import { test, before, after } from 'node:test';
+import { test } from 'node:test';
 import assert from 'node:assert/strict';
-import { serveDist, launchBrowser, openLab } from './harness.mjs';
+import { useLab, server, browser, openLab } from './harness.mjs';
 
 const LONG = 60_000;
 
-let server;
-let browser;
-before(async () => {
-  server = await serveDist();
-  browser = await launchBrowser();
-});
-after(async () => {
-  await browser?.close();
-  await server?.close();
-});
+useLab();
 
 /** Reloads and waits for the app again. */
 async function reload(page) {

@@ -1,19 +1,10 @@
 // The signal-chain page: design a filter by its labelled controls, see the response redraw, and
 // find the design in the URL.
-import { test, before, after } from 'node:test';
+import { test } from 'node:test';
 import assert from 'node:assert/strict';
-import { serveDist, launchBrowser, openLab, canvasPixels, waitForRedraw, screenshot, watchLongTasks } from './harness.mjs';
+import { useLab, server, browser, openLab, canvasPixels, waitForRedraw, screenshot, watchLongTasks } from './harness.mjs';
 
-let server;
-let browser;
-before(async () => {
-  server = await serveDist();
-  browser = await launchBrowser();
-});
-after(async () => {
-  await browser?.close();
-  await server?.close();
-});
+useLab();
 
 test('the lab loads with its navigation and the signal-chain section', async () => {
   const { page, problems, context } = await openLab(browser, server.url);

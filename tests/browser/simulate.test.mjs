@@ -1,19 +1,10 @@
 // The Simulate page: run a preset, change a parameter and see it re-run, explore a chart, export.
-import { test, before, after } from 'node:test';
+import { test } from 'node:test';
 import assert from 'node:assert/strict';
 import { readFile } from 'node:fs/promises';
-import { serveDist, launchBrowser, openLab, canvasPixels, waitForRedraw, screenshot, watchLongTasks } from './harness.mjs';
+import { useLab, server, browser, openLab, canvasPixels, waitForRedraw, screenshot, watchLongTasks } from './harness.mjs';
 
-let server;
-let browser;
-before(async () => {
-  server = await serveDist();
-  browser = await launchBrowser();
-});
-after(async () => {
-  await browser?.close();
-  await server?.close();
-});
+useLab();
 
 const RUN_TIMEOUT = 60_000;
 

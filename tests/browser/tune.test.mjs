@@ -3,24 +3,15 @@
 // in Simulate, and a long search that shows progress, keeps the page responsive and can be
 // cancelled — all found by role and label, as a person would. A search's runs compute in the
 // computation workers, several at once, and find what the page found on its own thread.
-import { test, before, after } from 'node:test';
+import { test } from 'node:test';
 import assert from 'node:assert/strict';
 import { readFile } from 'node:fs/promises';
 import { join } from 'node:path';
-import { serveDist, launchBrowser, openLab, root, watchLongTasks, screenshot } from './harness.mjs';
+import { useLab, server, browser, openLab, root, watchLongTasks, screenshot } from './harness.mjs';
 
 const RUN_TIMEOUT = 180_000;
 
-let server;
-let browser;
-before(async () => {
-  server = await serveDist();
-  browser = await launchBrowser();
-});
-after(async () => {
-  await browser?.close();
-  await server?.close();
-});
+useLab();
 
 /** The cells of the teach-in table's row whose header matches `name`, as text. */
 async function teachInRow(page, name) {

@@ -11,26 +11,19 @@
 // on <html>; the tests wait on those and on what the page shows, never on time.
 //
 // The CLI binary is the one `cargo test --features cli,charts` builds; if missing, it is built here.
-import { test, before, after } from 'node:test';
+import { test, before } from 'node:test';
 import assert from 'node:assert/strict';
 import { execFileSync } from 'node:child_process';
 import { readFile, writeFile, mkdir } from 'node:fs/promises';
 import { join } from 'node:path';
-import { serveDist, launchBrowser, openLab, openLabWithThrowingWorker, artifacts, watchLongTasks, nativeCli } from './harness.mjs';
+import { useLab, server, browser, openLab, openLabWithThrowingWorker, artifacts, watchLongTasks, nativeCli } from './harness.mjs';
 
 let cutlab;
 const RUN_TIMEOUT = 60_000;
-let server;
-let browser;
-before(async () => {
+before(() => {
   cutlab = nativeCli();
-  server = await serveDist();
-  browser = await launchBrowser();
 });
-after(async () => {
-  await browser?.close();
-  await server?.close();
-});
+useLab();
 
 /** Waits until `count` workers compute at once. */
 async function waitForBusyWorkers(page, count) {
