@@ -322,6 +322,11 @@ pub struct StreamedRun {
 }
 
 impl StreamedRun {
+    /// The calibration the run started from (its teach cut's, or one given).
+    pub fn calibration(&self) -> &Calibration {
+        &self.calibration
+    }
+
     /// The run of `spec` whose first piece is `first` (which carries the calibration).
     pub fn start(spec: RunSpec, first: TraceChunk) -> Result<Self, String> {
         let json = first

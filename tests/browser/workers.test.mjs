@@ -105,6 +105,37 @@ test('two Compare variants compute at once, on two workers', async () => {
   await context.close();
 });
 
+test("Compare's variants beyond the workers start from the teach cut a variant before them made", async () => {
+  // Every runs request the page sends to a worker, as the number of calibrations it carries.
+  const context = await browser.newContext({ viewport: { width: 1280, height: 720 } });
+  await context.addInitScript(() => {
+    window.cutlabRunRequests = [];
+    const post = Worker.prototype.postMessage;
+    Worker.prototype.postMessage = function (message, ...rest) {
+      const request = typeof message?.request === 'string' ? JSON.parse(message.request) : null;
+      if (request?.kind === 'runs') window.cutlabRunRequests.push(request.calibrations.length);
+      return post.call(this, message, ...rest);
+    };
+  });
+  const page = await context.newPage();
+  const problems = [];
+  page.on('console', (m) => { if (m.type() === 'error') problems.push(m.text()); });
+  page.on('pageerror', (e) => problems.push(e.message));
+  await page.goto(server.url + '#/compare?preset=maneerat-doc-2&variants=4');
+  const table = page.getByRole('table', { name: /Metrics of the runs/ });
+  await table.getByRole('columnheader', { name: /^D: / }).waitFor({ timeout: RUN_TIMEOUT });
+  const cores = await page.evaluate(() => navigator.hardwareConcurrency);
+  const sent = await page.evaluate(() => window.cutlabRunRequests);
+  // One request per variant: as many start at once as there are workers, each making the
+  // (shared) teach cut; the others are sent as those finish, with its calibration.
+  assert.equal(sent.length, 4, JSON.stringify(sent));
+  const workers = Math.min(cores, 4);
+  assert.ok(sent.slice(workers).every((n) => n === 1), JSON.stringify(sent));
+  assert.ok(sent.filter((n) => n === 0).length <= workers, JSON.stringify(sent));
+  assert.deepEqual(problems, []);
+  await context.close();
+});
+
 test('Cancel terminates the worker at once and a fresh one runs the next run', async () => {
   const { page, problems, context } = await openLab(browser, server.url, '#/simulate?preset=kim-circular-taper&controller=threshold');
   const started = [];

@@ -67,6 +67,10 @@ pub struct Runner<T: Send + Sync + 'static> {
     /// while they compute and set to the runs when they are done; `None` for other jobs, before
     /// the first preview, and after a failure or cancel.
     pub preview: RwSignal<Option<T>>,
+    /// The first run of [`Runner::start_in_workers`] to stream its calibration (its teach cut
+    /// made, or one given), with its spec: what the savings' reference search starts from,
+    /// beside the runs. `None` before, and for other jobs.
+    pub taught: RwSignal<Option<(RunSpec, Calibration)>>,
     generation: Arc<AtomicU64>,
     /// The worker-pool jobs of the job under way, cancelled with it.
     pool_jobs: Arc<Mutex<Vec<JobId>>>,
@@ -77,6 +81,7 @@ impl<T: Send + Sync + 'static> Clone for Runner<T> {
         Self {
             status: self.status,
             preview: self.preview,
+            taught: self.taught,
             generation: self.generation.clone(),
             pool_jobs: self.pool_jobs.clone(),
         }
@@ -107,6 +112,7 @@ impl<T: Clone + Send + Sync + 'static> Runner<T> {
         Self {
             status: RwSignal::new(RunStatus::Idle),
             preview: RwSignal::new(None),
+            taught: RwSignal::new(None),
             generation,
             pool_jobs,
         }
@@ -252,6 +258,11 @@ impl Runner<Vec<Arc<RunResult>>> {
     /// output is the runs in `specs`' order, published in a task of its own once all are done
     /// (the first failure fails the whole and cancels the rest).
     ///
+    /// As many runs as there are workers start at once; each of the others is sent when one
+    /// finishes, with the calibrations known by then, so it does not make again a teach cut a
+    /// run before it made (Compare's four variants share one). A job another part of the page
+    /// sends meanwhile (the savings' reference search) takes the next free worker.
+    ///
     /// While they compute, [`Runner::preview`] holds the runs so far as the workers stream them
     /// (in `specs`' order, up to the first that has nothing yet): the first piece at once, then
     /// every [`PREVIEW_EVERY_MS`], each in a task of its own; once all are done, the runs.
@@ -259,117 +270,180 @@ impl Runner<Vec<Arc<RunResult>>> {
         let generation = self.generation.fetch_add(1, Ordering::SeqCst) + 1;
         cancel_pool_jobs(&self.pool_jobs);
         let _ = self.preview.try_set(None);
+        let _ = self.taught.try_set(None);
         let count = specs.len();
         if count == 0 {
             let _ = self.status.try_set(RunStatus::Done(Vec::new()));
             return;
         }
         let workers = pool::pool_size().min(count);
-        let stage = move |fractions: &[f64]| {
-            let label = match (count, workers) {
-                (1, _) => "Running in a worker".to_string(),
-                (_, 1) => format!("{count} runs in a worker"),
-                _ => format!("{count} runs on {workers} workers"),
-            };
-            RunStatus::Running {
-                stage: label,
-                fraction: fractions.iter().sum::<f64>() / count as f64,
-            }
-        };
-        let _ = self.status.try_set(stage(&vec![0.0; count]));
-        // What the jobs have reported, shared by their listeners.
-        let fractions = std::rc::Rc::new(RefCell::new(vec![0.0; count]));
-        let results = std::rc::Rc::new(RefCell::new(vec![None::<Arc<RunResult>>; count]));
-        let progress_at_ms = std::rc::Rc::new(RefCell::new(f64::NEG_INFINITY));
-        let streams = Rc::new(RefCell::new(Streams {
-            runs: vec![None; count],
-            previewed_at_ms: f64::NEG_INFINITY,
-            preview_due: false,
-        }));
-        let mut jobs = Vec::with_capacity(count);
-        for (index, spec) in specs.into_iter().enumerate() {
-            let (status, runner) = (self.status, self.clone());
-            let (fractions, results) = (fractions.clone(), results.clone());
-            let progress_at_ms = progress_at_ms.clone();
-            let generations = self.generation.clone();
-            let current = move || generations.load(Ordering::SeqCst) == generation;
-            let (streams, preview) = (streams.clone(), self.preview);
-            let spec_streamed = spec.clone();
-            let request = JobRequest::Runs(RunRequest::new(vec![spec], &known));
-            let job = pool::submit(request, move |event| {
-                if !current() {
-                    return;
-                }
-                match event {
-                    JobEvent::Chunk(chunk) => {
-                        let outcome = streams.borrow_mut().receive(index, &spec_streamed, chunk);
-                        match outcome {
-                            Err(message) => {
-                                runner.cancel();
-                                let _ = status.try_set(RunStatus::Failed(message));
-                            }
-                            Ok(true) => {
-                                let (streams, results) = (streams.clone(), results.clone());
-                                let current = current.clone();
-                                // The redraw a preview starts runs in a task of its own.
-                                next_task(move || {
-                                    if current() {
-                                        let so_far = streams.borrow_mut().so_far(&results.borrow());
-                                        let _ = preview.try_set(Some(so_far));
-                                    }
-                                });
-                            }
-                            Ok(false) => {}
-                        }
-                    }
-                    JobEvent::Progress(p) => {
-                        fractions.borrow_mut()[index] = p.fraction;
-                        // At most every PROGRESS_EVERY_MS.
-                        let due = now_ms() - *progress_at_ms.borrow() >= PROGRESS_EVERY_MS;
-                        if due {
-                            *progress_at_ms.borrow_mut() = now_ms();
-                            let _ = status.try_set(stage(&fractions.borrow()));
-                        }
-                    }
-                    JobEvent::Done(Answer::Runs(mut runs)) => {
-                        results.borrow_mut()[index] = runs.pop();
-                        fractions.borrow_mut()[index] = 1.0;
-                        let all: Option<Vec<_>> = results.borrow().iter().cloned().collect();
-                        match all {
-                            Some(all) => {
-                                let current = current.clone();
-                                // The redraw the output starts runs in a task of its own.
-                                next_task(move || {
-                                    if current() {
-                                        // The finished runs replace what was streamed of them.
-                                        let _ = preview.try_set(Some(all.clone()));
-                                        // An open lesson checks every finished run.
-                                        crate::web::pages::lessons::feed::publish(&all);
-                                        let _ = status.try_set(RunStatus::Done(all));
-                                    }
-                                });
-                            }
-                            None => {
-                                let _ = status.try_set(stage(&fractions.borrow()));
-                            }
-                        }
-                    }
-                    JobEvent::Done(_) => {
-                        runner.cancel();
-                        let _ = status.try_set(RunStatus::Failed(ANOTHER_ANSWER.into()));
-                    }
-                    JobEvent::Failed(message) => {
-                        runner.cancel();
-                        let _ = status.try_set(RunStatus::Failed(message));
-                    }
-                }
-            });
-            jobs.push(job);
-        }
-        if let Ok(mut pool_jobs) = self.pool_jobs.lock() {
-            *pool_jobs = jobs;
+        let runs = Rc::new(RunsInWorkers {
+            runner: self.clone(),
+            generation,
+            count,
+            workers,
+            fractions: RefCell::new(vec![0.0; count]),
+            results: RefCell::new(vec![None; count]),
+            progress_at_ms: std::cell::Cell::new(f64::NEG_INFINITY),
+            streams: RefCell::new(Streams {
+                runs: vec![None; count],
+                previewed_at_ms: f64::NEG_INFINITY,
+                preview_due: false,
+            }),
+            known: RefCell::new(known),
+            waiting: RefCell::new(specs.into_iter().enumerate().collect()),
+        });
+        let _ = self.status.try_set(runs.stage());
+        for _ in 0..workers {
+            send_next_run(&runs);
         }
     }
+}
+
+/// The runs of one [`Runner::start_in_workers`], shared by their jobs' listeners.
+struct RunsInWorkers {
+    runner: Runner<Vec<Arc<RunResult>>>,
+    /// The runner's generation they belong to (a later start or a cancel ends them).
+    generation: u64,
+    count: usize,
+    /// The workers they run on at once.
+    workers: usize,
+    /// Each run's progress, 0–1.
+    fractions: RefCell<Vec<f64>>,
+    results: RefCell<Vec<Option<Arc<RunResult>>>>,
+    progress_at_ms: std::cell::Cell<f64>,
+    streams: RefCell<Streams>,
+    /// The calibrations known so far: given, or of the runs' teach cuts.
+    known: RefCell<Vec<(TeachKey, Calibration)>>,
+    /// The runs not sent yet, with their index in the specs.
+    waiting: RefCell<VecDeque<(usize, RunSpec)>>,
+}
+
+impl RunsInWorkers {
+    fn current(&self) -> bool {
+        self.runner.generation.load(Ordering::SeqCst) == self.generation
+    }
+
+    /// The status while they run: their mean progress.
+    fn stage(&self) -> RunStatus<Vec<Arc<RunResult>>> {
+        let (count, workers) = (self.count, self.workers);
+        let label = match (count, workers) {
+            (1, _) => "Running in a worker".to_string(),
+            (_, 1) => format!("{count} runs in a worker"),
+            _ => format!("{count} runs on {workers} workers"),
+        };
+        RunStatus::Running {
+            stage: label,
+            fraction: self.fractions.borrow().iter().sum::<f64>() / count as f64,
+        }
+    }
+
+    /// Adds `calibration`, of `spec`'s teach cut, to those known; the first of the runs to
+    /// have one is the runner's [`Runner::taught`].
+    fn learn(&self, spec: &RunSpec, calibration: &Calibration) {
+        if self.runner.taught.with_untracked(Option::is_none) {
+            let _ = self
+                .runner
+                .taught
+                .try_set(Some((spec.clone(), calibration.clone())));
+        }
+        let Ok(key) = TeachKey::of(spec) else { return };
+        let mut known = self.known.borrow_mut();
+        if !known.iter().any(|(k, _)| *k == key) {
+            known.push((key, calibration.clone()));
+        }
+    }
+}
+
+/// Sends the next waiting run of `runs` to the pool, with the calibrations known now.
+fn send_next_run(runs: &Rc<RunsInWorkers>) {
+    let Some((index, spec)) = runs.waiting.borrow_mut().pop_front() else {
+        return;
+    };
+    let request = JobRequest::Runs(RunRequest::new(vec![spec.clone()], &runs.known.borrow()));
+    let shared = runs.clone();
+    let job = pool::submit(request, move |event| {
+        let runs = &shared;
+        if !runs.current() {
+            return;
+        }
+        let (status, preview) = (runs.runner.status, runs.runner.preview);
+        match event {
+            JobEvent::Chunk(chunk) => {
+                let first = chunk.calibration_json.is_some();
+                let outcome = runs.streams.borrow_mut().receive(index, &spec, chunk);
+                if first {
+                    let streams = runs.streams.borrow();
+                    if let Some(Some(streamed)) = streams.runs.get(index) {
+                        runs.learn(&spec, streamed.calibration());
+                    }
+                }
+                match outcome {
+                    Err(message) => {
+                        runs.runner.cancel();
+                        let _ = status.try_set(RunStatus::Failed(message));
+                    }
+                    Ok(true) => {
+                        let runs = runs.clone();
+                        // The redraw a preview starts runs in a task of its own.
+                        next_task(move || {
+                            if runs.current() {
+                                let so_far =
+                                    runs.streams.borrow_mut().so_far(&runs.results.borrow());
+                                let _ = preview.try_set(Some(so_far));
+                            }
+                        });
+                    }
+                    Ok(false) => {}
+                }
+            }
+            JobEvent::Progress(p) => {
+                runs.fractions.borrow_mut()[index] = p.fraction;
+                // At most every PROGRESS_EVERY_MS.
+                if now_ms() - runs.progress_at_ms.get() >= PROGRESS_EVERY_MS {
+                    runs.progress_at_ms.set(now_ms());
+                    let _ = status.try_set(runs.stage());
+                }
+            }
+            JobEvent::Done(Answer::Runs(mut finished)) => {
+                let run = finished.pop();
+                if let Some(run) = &run {
+                    runs.learn(&spec, &run.calibration);
+                }
+                runs.results.borrow_mut()[index] = run;
+                runs.fractions.borrow_mut()[index] = 1.0;
+                send_next_run(runs);
+                let all: Option<Vec<_>> = runs.results.borrow().iter().cloned().collect();
+                match all {
+                    Some(all) => {
+                        let runs = runs.clone();
+                        // The redraw the output starts runs in a task of its own.
+                        next_task(move || {
+                            if runs.current() {
+                                // The finished runs replace what was streamed of them.
+                                let _ = preview.try_set(Some(all.clone()));
+                                // An open lesson checks every finished run.
+                                crate::web::pages::lessons::feed::publish(&all);
+                                let _ = status.try_set(RunStatus::Done(all));
+                            }
+                        });
+                    }
+                    None => {
+                        let _ = status.try_set(runs.stage());
+                    }
+                }
+            }
+            JobEvent::Done(_) => {
+                runs.runner.cancel();
+                let _ = status.try_set(RunStatus::Failed(ANOTHER_ANSWER.into()));
+            }
+            JobEvent::Failed(message) => {
+                runs.runner.cancel();
+                let _ = status.try_set(RunStatus::Failed(message));
+            }
+        }
+    });
+    runs.runner.track(job);
 }
 
 /// What the workers of [`Runner::start_in_workers`] have streamed of their runs.

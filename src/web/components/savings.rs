@@ -134,24 +134,21 @@ impl Savings {
         );
     }
 
-    /// Starts the reference runs as soon as the first run under way (`preview`, a runner's) has
-    /// its teach cut, which its first streamed piece carries: on another worker, beside the run,
-    /// instead of after it. The finished run's own request then finds them under way or known.
-    pub fn request_while_running(&self, preview: RwSignal<Option<Vec<Arc<RunResult>>>>) {
-        let first = move |runs: &Option<Vec<Arc<RunResult>>>| {
-            runs.as_ref().and_then(|runs| runs.first().cloned())
-        };
-        // Keyed by the run's spec alone: each streamed piece replaces the preview, and a
-        // calibration holding a NaN (a speed range not fitted) never equals itself, so a memo of
-        // it would ask again with every piece. The calibration is read with the spec.
-        let spec = Memo::new(move |_| preview.with(|runs| first(runs).map(|r| r.spec.clone())));
+    /// Starts the reference runs as soon as the first run `runner` makes in the workers has its
+    /// calibration (its teach cut made), which its first streamed piece carries: on another
+    /// worker, beside the runs, instead of after them (the search needs only the scenario and
+    /// that teach cut). The finished run's own request then finds them under way or known.
+    pub fn request_while_running<T: Send + Sync + 'static>(&self, runner: &Runner<T>) {
+        let taught = runner.taught;
         let savings = self.clone();
         Effect::new(move |_| {
-            if spec.with(Option::is_some) {
-                if let Some(run) = preview.with_untracked(first) {
-                    savings.request(&run.spec, Some(&run.calibration));
+            // Set once per start (a calibration holding a NaN never equals itself, so the signal
+            // is not compared; it is only set when the first run is taught).
+            taught.with(|taught| {
+                if let Some((spec, calibration)) = taught {
+                    savings.request(spec, Some(calibration));
                 }
-            }
+            });
         });
     }
 

@@ -102,7 +102,7 @@ pub fn SimulatePage() -> impl IntoView {
     // it advances); its savings fill in when the reference runs of its scenario are done.
     let done = runner.finished();
     let finished = Memo::new(move |_| done.get().and_then(|mut runs| runs.pop()));
-    savings.request_while_running(runner.preview);
+    savings.request_while_running(&runner);
     let savings_for_effect = savings.clone();
     Effect::new(move |_| {
         if let Some(r) = finished.get() {

@@ -137,7 +137,7 @@ pub fn ComparePage() -> impl IntoView {
     let results = Memo::new(move |_| named(done.get().unwrap_or_default()));
     // Every variant shares the scenario, so one set of reference runs serves them all, on the
     // variants' teach cut.
-    savings.request_while_running(runner.preview);
+    savings.request_while_running(&runner);
     let savings_for_effect = savings.clone();
     Effect::new(move |_| {
         results.with(|runs| {
