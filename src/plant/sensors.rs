@@ -345,10 +345,22 @@ impl CurrentSensor {
     /// Samples the true phase currents; returns what the ADC reads, in amperes.
     #[inline(always)]
     pub fn read(&mut self, currents_a: [f64; 3]) -> [f64; 3] {
+        // The wiring never changes in a run: one branch here, and each loop below has a count
+        // the compiler knows (unrolled, no bounds checks).
+        if self.measured == 2 {
+            self.read_phases::<2>(currents_a)
+        } else {
+            self.read_phases::<3>(currents_a)
+        }
+    }
+
+    /// [`CurrentSensor::read`] with `MEASURED` (2 or 3) phases measured.
+    #[inline(always)]
+    fn read_phases<const MEASURED: usize>(&mut self, currents_a: [f64; 3]) -> [f64; 3] {
         let mut out = [0.0; 3];
         // Each phase draws from its own stream, so an unmeasured phase (W in two-phase wiring)
         // need not draw at all: the others' noise is the same either way.
-        for k in 0..self.measured {
+        for k in 0..MEASURED {
             let noise_v = if self.noise_v == 0.0 {
                 0.0
             } else {
@@ -358,7 +370,7 @@ impl CurrentSensor {
             let volts = self.lags[k].step(seen_v) + noise_v;
             out[k] = self.quantiser.code(volts) * self.amps_per_code;
         }
-        if self.measured == 2 {
+        if MEASURED == 2 {
             out[2] = -(out[0] + out[1]);
         }
         out

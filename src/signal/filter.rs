@@ -393,21 +393,30 @@ fn run_cascade<const C: usize, const L: usize>(
             let Some(s) = state.get_mut(2 * k * C..2 * (k + 1) * C) else {
                 continue;
             };
-            // Plain loops (the size-optimised build calls array helpers out of line).
+            // The channels side by side in one pass: each channel's section is a recurrence
+            // whose every step waits for the one before (a multiplication and two additions),
+            // so one channel at a time leaves the processor idle; C independent recurrences
+            // overlap. Per channel the operations and their order are those of `process`.
+            let mut q = [[0.0; 5]; C];
+            let mut sk = [[0.0; 2]; C];
             for c in 0..C {
-                let q = [
+                q[c] = [
                     lanes[0][c],
                     lanes[1][c],
                     lanes[2][c],
                     lanes[3][c],
                     lanes[4][c],
                 ];
-                let mut sk = [s[c], s[C + c]];
-                for frame in block.iter_mut() {
-                    frame[c] = section_step(&q, &mut sk, frame[c]);
+                sk[c] = [s[c], s[C + c]];
+            }
+            for frame in block.iter_mut() {
+                for c in 0..C {
+                    frame[c] = section_step(&q[c], &mut sk[c], frame[c]);
                 }
-                s[c] = sk[0];
-                s[C + c] = sk[1];
+            }
+            for c in 0..C {
+                s[c] = sk[c][0];
+                s[C + c] = sk[c][1];
             }
         }
     }
