@@ -30,10 +30,19 @@ const PRESETS = ['kim-step-doc', 'maneerat-doc-2', 'kim-circular-taper'];
 function instrument() {
   window.cutlabLongTasks = [];
   new PerformanceObserver((list) => {
-    for (const e of list.getEntries()) window.cutlabLongTasks.push(e.duration);
+    for (const e of list.getEntries()) window.cutlabLongTasks.push({ start: e.startTime, duration: e.duration });
   }).observe({ type: 'longtask', buffered: true });
   window.cutlabFirstResultMs = null;
   window.cutlabSearchSeen = false;
+  // When a worker first computes: the tasks after it are those during the runs, the ones before
+  // it the page's start (its module instantiated, the app mounted).
+  window.cutlabRunsFrom = null;
+  new MutationObserver(() => {
+    if (window.cutlabRunsFrom === null && Number(document.documentElement.dataset.busyWorkers ?? 0) > 0) {
+      window.cutlabRunsFrom = performance.now();
+    }
+  // (`document`, not its root element: this runs before the page has one.)
+  }).observe(document, { subtree: true, attributes: true, attributeFilter: ['data-busy-workers'] });
   new MutationObserver(() => {
     window.cutlabSearchSeen ||= document.getElementById('savings-progress') !== null;
     if (window.cutlabFirstResultMs !== null) return;
@@ -44,6 +53,18 @@ function instrument() {
       }
     }
   }).observe(document, { subtree: true, childList: true, characterData: true });
+}
+
+/** The longest main-thread task of `page` so far, and the longest since its first run started. */
+async function longestTasks(page) {
+  return page.evaluate(() => {
+    const from = window.cutlabRunsFrom ?? Infinity;
+    const longest = (tasks) => Math.max(0, ...tasks.map((t) => t.duration));
+    return {
+      all: longest(window.cutlabLongTasks),
+      runs: longest(window.cutlabLongTasks.filter((t) => t.start >= from)),
+    };
+  });
 }
 
 async function open(browser, url) {
@@ -106,7 +127,7 @@ async function simulateRound(browser, base, preset) {
     input.dispatchEvent(new Event('input', { bubbles: true }));
     check();
   }));
-  const longest = Math.max(0, ...(await page.evaluate(() => window.cutlabLongTasks)));
+  const longest = await longestTasks(page);
   await context.close();
   return { first, edit, longest, problems };
 }
@@ -115,7 +136,7 @@ async function compareRound(browser, base, preset) {
   const { context, page, problems } = await open(browser, `${base}#/compare?preset=${preset}&variants=4`);
   await savingsShown(page, 4);
   const done = await page.evaluate(() => performance.now());
-  const longest = Math.max(0, ...(await page.evaluate(() => window.cutlabLongTasks)));
+  const longest = await longestTasks(page);
   await context.close();
   return { compare: done, longest, problems };
 }
@@ -134,7 +155,7 @@ async function otherPagesRound(browser, base) {
     await opened.page.getByRole('main').waitFor({ timeout: TIMEOUT });
     await opened.page.waitForLoadState('networkidle', { timeout: TIMEOUT });
     await opened.page.waitForTimeout(SETTLE_MS);
-    longest[slug] = Math.max(0, ...(await opened.page.evaluate(() => window.cutlabLongTasks)));
+    longest[slug] = (await longestTasks(opened.page)).all;
     problems.push(...opened.problems);
     await opened.context.close();
   }
@@ -143,7 +164,7 @@ async function otherPagesRound(browser, base) {
 
 const server = await serveDist();
 const browser = await launchBrowser();
-const best = { first: Infinity, longest: 0 };
+const best = { first: Infinity, longest: 0, longestDuringRuns: 0 };
 const edit = Object.fromEntries(PRESETS.map((p) => [p, Infinity]));
 const compare = Object.fromEntries(PRESETS.map((p) => [p, Infinity]));
 const pagesLongest = Object.fromEntries(OTHER_PAGES.map((slug) => [slug, 0]));
@@ -157,7 +178,8 @@ try {
       if (preset === PRESETS[0]) best.first = Math.min(best.first, s.first);
       edit[preset] = Math.min(edit[preset], s.edit);
       compare[preset] = Math.min(compare[preset], c.compare);
-      best.longest = Math.max(best.longest, s.longest, c.longest);
+      best.longest = Math.max(best.longest, s.longest.all, c.longest.all);
+      best.longestDuringRuns = Math.max(best.longestDuringRuns, s.longest.runs, c.longest.runs);
       problems.push(...s.problems, ...c.problems);
     }
     const o = await otherPagesRound(browser, server.url);
@@ -178,12 +200,13 @@ for (const preset of PRESETS) {
 for (const preset of PRESETS) {
   console.log(`| Compare: four controllers with savings, ${preset} | ${ms(compare[preset])} | ≤ 1000 ms |`);
 }
-console.log(`| longest main-thread task (Simulate with an edit, Compare, every preset) | ${ms(best.longest)} | ≤ 50 ms |`);
+console.log(`| longest main-thread task while runs compute (Simulate with an edit, Compare, every preset) | ${ms(best.longestDuringRuns)} | ≤ 50 ms |`);
+console.log(`| longest main-thread task, the same pages from navigation (their start included) | ${ms(best.longest)} | ≤ 50 ms |`);
 const worstPage = OTHER_PAGES.reduce((a, b) => (pagesLongest[b] > pagesLongest[a] ? b : a));
 console.log(`| longest main-thread task, the other pages' first loads (worst: ${worstPage}) | ${ms(pagesLongest[worstPage])} | ≤ 50 ms |`);
 console.log(`pages: ${OTHER_PAGES.map((slug) => `${slug} ${ms(pagesLongest[slug])}`).join(', ')}`);
 const worst = (by) => Math.max(...Object.values(by));
-console.log(JSON.stringify({ rounds, first_result_ms: best.first, edit_ms: worst(edit), compare_ms: worst(compare), edit_ms_by_preset: edit, compare_ms_by_preset: compare, longest_task_ms: best.longest, pages_longest_task_ms: pagesLongest, console_errors: problems.length }));
+console.log(JSON.stringify({ rounds, first_result_ms: best.first, edit_ms: worst(edit), compare_ms: worst(compare), edit_ms_by_preset: edit, compare_ms_by_preset: compare, longest_task_ms: best.longest, longest_task_during_runs_ms: best.longestDuringRuns, pages_longest_task_ms: pagesLongest, console_errors: problems.length }));
 if (problems.length) {
   console.error(`browser bench: ${problems.length} console errors, first: ${problems[0]}`);
   process.exitCode = 1;

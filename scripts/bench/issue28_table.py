@@ -77,9 +77,13 @@ def main():
     compare = browser["compare_ms_by_preset"]
     row("Compare, four variants with savings, any of the three presets (worst)", "~1 s default",
         f"{min(compare.values()):,.0f}–{max(compare.values()):,.0f} ms", "≤ 1 s", max(compare.values()) <= 1000)
+    during = browser.get("longest_task_during_runs_ms")
+    if during is not None:
+        row("main-thread task during any run (Simulate with an edit, Compare, three presets)", "≤ 50 ms",
+            f"{during:,.0f} ms", "≤ 50 ms", during <= 50)
     longest = browser["longest_task_ms"]
-    row("main-thread task during any run (Simulate with an edit, Compare)", "≤ 50 ms",
-        f"{longest:,.0f} ms", "≤ 50 ms", longest <= 50)
+    row("main-thread task on the same pages from navigation (their start included)", "—",
+        f"{longest:,.0f} ms", "—", None)
 
 
 if __name__ == "__main__":

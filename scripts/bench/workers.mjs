@@ -15,13 +15,17 @@
 // workers that computed at once, and the same search with one worker. Both modules' sizes come from
 // `scripts/wasm-size`, printed beside the table by `scripts/bench/run`.
 //
-//   node scripts/bench/workers.mjs [--rounds 3]
+//   node scripts/bench/workers.mjs [--rounds 3] [--only tune]
+//
+// `--only tune` times the Tune searches alone; CUTLAB_DIST=<directory> serves another build than
+// dist/ (to compare two builds round by round).
 //
 // Each case runs --rounds times in a fresh page; the best round is kept (the machine is shared).
 // Prints a Markdown table and one JSON line.
 import { serveDist, launchBrowser } from '../../tests/browser/harness.mjs';
 
 const rounds = Number(process.argv[process.argv.indexOf('--rounds') + 1]) || 3;
+const tuneOnly = process.argv.includes('--only') && process.argv[process.argv.indexOf('--only') + 1] === 'tune';
 const TIMEOUT = Number(process.env.BENCH_TIMEOUT_MS) || 120_000;
 const PRESETS = ['kim-step-doc', 'maneerat-doc-2', 'kim-circular-taper'];
 /** The throttled link: 10 Mbit/s each way, in bytes per second, and a round trip's latency. */
@@ -111,7 +115,7 @@ async function tuneRound(browser, base, cores = null) {
   return { ms: ended - started, mostBusy, problems };
 }
 
-const server = await serveDist();
+const server = await serveDist(process.env.CUTLAB_DIST);
 const browser = await launchBrowser();
 const best = Object.fromEntries(PRESETS.map((p) => [p, { firstPoints: Infinity, metrics: Infinity, savings: Infinity }]));
 const throttled = { firstPoints: Infinity, metrics: Infinity };
@@ -120,14 +124,16 @@ const tuneOneWorker = { ms: Infinity, mostBusy: 0 };
 const problems = [];
 try {
   for (let i = 0; i < rounds; i++) {
-    for (const preset of PRESETS) {
+    for (const preset of tuneOnly ? [] : PRESETS) {
       const r = await round(browser, `${server.url}#/simulate?preset=${preset}`, false, ['firstPoints', 'metrics', 'savings']);
       for (const k of Object.keys(best[preset])) best[preset][k] = Math.min(best[preset][k], r.times[k]);
       problems.push(...r.problems);
     }
-    const t = await round(browser, `${server.url}#/simulate?preset=${PRESETS[0]}`, true, ['firstPoints', 'metrics']);
-    for (const k of Object.keys(throttled)) throttled[k] = Math.min(throttled[k], t.times[k]);
-    problems.push(...t.problems);
+    if (!tuneOnly) {
+      const t = await round(browser, `${server.url}#/simulate?preset=${PRESETS[0]}`, true, ['firstPoints', 'metrics']);
+      for (const k of Object.keys(throttled)) throttled[k] = Math.min(throttled[k], t.times[k]);
+      problems.push(...t.problems);
+    }
     const u = await tuneRound(browser, server.url);
     tune.ms = Math.min(tune.ms, u.ms);
     tune.mostBusy = Math.max(tune.mostBusy, u.mostBusy);
