@@ -369,6 +369,16 @@ impl Tuner {
                         }
                     }
                 }
+                let runs = if failure.is_some() {
+                    Vec::new()
+                } else {
+                    plan.next_runs(idle).unwrap_or_else(|e| {
+                        failure = Some(e);
+                        Vec::new()
+                    })
+                };
+                // After asking: a point asked now whose runs were all made ahead is evaluated at
+                // once, and may be the last.
                 while let Some(evaluation) = plan.evaluation(reported) {
                     reported += 1;
                     report(&Report::Evaluated {
@@ -378,13 +388,7 @@ impl Tuner {
                         evaluation,
                     });
                 }
-                if failure.is_some() {
-                    return Vec::new();
-                }
-                plan.next_runs(idle).unwrap_or_else(|e| {
-                    failure = Some(e);
-                    Vec::new()
-                })
+                runs
             },
         );
         match failure {
