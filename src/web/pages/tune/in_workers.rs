@@ -14,7 +14,7 @@ use crate::closed_loop::lab::TeachKey;
 use crate::closed_loop::transfer::{JobRequest, RunRequest};
 use crate::estimation::estimator::Calibration;
 use crate::tuning::{PlannedRun, RunId, Tuned, TuningPlan};
-use crate::web::components::pool::{self, Answer, JobEvent};
+use crate::web::components::pool::{self, Answer, JobEvent, JobId};
 use crate::web::components::runner::{next_task, RunStatus, Runner, ANOTHER_ANSWER};
 
 /// Where a tuning in the workers is.
@@ -22,8 +22,10 @@ struct Tuning {
     plan: TuningPlan,
     /// The scenarios' teach cuts, by key: those of the first point's runs.
     known: Vec<(TeachKey, Calibration)>,
-    /// The runs sent and not yet answered.
-    out: Vec<RunId>,
+    /// The runs sent and not yet answered, with their jobs.
+    out: Vec<(RunId, JobId)>,
+    /// The outcome has been published: answers still coming (runs ahead) change nothing.
+    published: bool,
     /// Whether a search asks at most its budget ("at most") or a grid's points.
     at_most: bool,
 }
@@ -36,6 +38,7 @@ pub fn start_tuning(runner: &Runner<Tuned>, plan: TuningPlan, at_most: bool) {
         plan,
         known: Vec::new(),
         out: Vec::new(),
+        published: false,
         at_most,
     }));
     show_progress(runner, &tuning.borrow());
@@ -67,7 +70,8 @@ fn show_progress(runner: &Runner<Tuned>, tuning: &Tuning) {
 /// Sends the runs the plan asks for now: every asked point's, then runs ahead of a search in
 /// the workers left idle. A run ahead that the search no longer needs is left to finish (it may
 /// be asked later): cancelling it would restart its worker, which costs more than the short
-/// wait of the runs queued behind it. Publishes the outcome once all is done.
+/// wait of the runs queued behind it. Publishes the outcome once every point asked is
+/// evaluated.
 fn send_ready(
     runner: &Runner<Tuned>,
     tuning: &Rc<RefCell<Tuning>>,
@@ -89,12 +93,21 @@ fn send_ready(
     for run in runs {
         send(runner, tuning, current, run);
     }
+    // Done once every point the search asked is evaluated: runs still out were run ahead of it
+    // for points it did not ask, and are cancelled to free their workers.
     let done = {
         let t = tuning.borrow();
-        t.out.is_empty() && t.plan.is_done()
+        !t.published && t.plan.is_done()
     };
     if done {
-        let outcome = tuning.borrow_mut().plan.finish();
+        let (outcome, unused) = {
+            let mut t = tuning.borrow_mut();
+            t.published = true;
+            (t.plan.finish(), std::mem::take(&mut t.out))
+        };
+        for (_, job) in unused {
+            pool::cancel(job);
+        }
         let status = runner.status;
         let current = current.clone();
         // The redraw of the results runs in a task of its own.
@@ -120,7 +133,7 @@ fn send(
     let request = JobRequest::Runs(RunRequest::new(vec![run.spec], &tuning.borrow().known));
     let (runner_in, tuning_in, current_in) = (runner.clone(), tuning.clone(), current.clone());
     let job = pool::submit(request, move |event| {
-        if !current_in() {
+        if !current_in() || tuning_in.borrow().published {
             return;
         }
         let fail = |message: String| {
@@ -133,7 +146,7 @@ fn send(
                 let result = runs.remove(0);
                 {
                     let mut t = tuning_in.borrow_mut();
-                    t.out.retain(|run| *run != id);
+                    t.out.retain(|(run, _)| *run != id);
                     if let Ok(key) = TeachKey::of(&result.spec) {
                         if !t.known.iter().any(|(k, _)| *k == key) {
                             t.known.push((key, result.calibration.clone()));
@@ -148,7 +161,7 @@ fn send(
             JobEvent::Failed(message) => {
                 let ahead = {
                     let mut t = tuning_in.borrow_mut();
-                    t.out.retain(|run| *run != id);
+                    t.out.retain(|(run, _)| *run != id);
                     let ahead = t.plan.is_ahead(id);
                     if ahead {
                         // Not the tuning's failure: the search has not asked for this point,
@@ -165,6 +178,6 @@ fn send(
             }
         }
     });
-    tuning.borrow_mut().out.push(id);
+    tuning.borrow_mut().out.push((id, job));
     runner.track(job);
 }
