@@ -74,6 +74,9 @@ pub struct TuningPlan {
     /// The points the search (or the grid) asked, in its order: each one's number in `planned`
     /// and its evaluation once all its runs are told.
     asked: Vec<(usize, Option<Evaluation>)>,
+    /// The scenarios' numbers, longest program first: the order a point's runs are sent in
+    /// (the one the others wait for first).
+    longest_first: Vec<usize>,
     /// No point is left to ask.
     exhausted: bool,
     converged: bool,
@@ -84,11 +87,15 @@ impl TuningPlan {
     pub fn new(problem: TuningProblem, mode: TuningMode) -> Result<Self, TuningError> {
         check(&problem)?;
         let points = Points::of(&problem, mode)?;
+        let durations: Vec<f64> = problem.scenarios.iter().map(nominal_duration_s).collect();
+        let mut longest_first: Vec<usize> = (0..durations.len()).collect();
+        longest_first.sort_by(|&a, &b| durations[b].total_cmp(&durations[a]));
         Ok(Self {
             problem,
             points,
             planned: Vec::new(),
             asked: Vec::new(),
+            longest_first,
             exhausted: false,
             converged: false,
         })
@@ -107,6 +114,7 @@ impl TuningPlan {
             send_unsent(
                 &mut self.planned[index],
                 index,
+                &self.longest_first,
                 false,
                 usize::MAX,
                 &mut runs,
@@ -128,7 +136,14 @@ impl TuningPlan {
             let Some(index) = self.plan_point(values).ok() else {
                 continue;
             };
-            spare -= send_unsent(&mut self.planned[index], index, true, spare, &mut runs);
+            spare -= send_unsent(
+                &mut self.planned[index],
+                index,
+                &self.longest_first,
+                true,
+                spare,
+                &mut runs,
+            );
         }
         Ok(runs)
     }
@@ -291,21 +306,18 @@ impl TuningPlan {
     }
 }
 
-/// Marks at most `limit` of `point`'s unsent runs sent and adds them to `runs`, its longest
-/// scenario first (the one the others wait for); returns how many.
+/// Marks at most `limit` of `point`'s unsent runs sent, in the scenario order `order`, and adds
+/// them to `runs`; returns how many.
 fn send_unsent(
     point: &mut PlannedPoint,
     index: usize,
+    order: &[usize],
     ahead: bool,
     limit: usize,
     runs: &mut Vec<PlannedRun>,
 ) -> usize {
-    let mut order: Vec<usize> = (0..point.runs.len()).collect();
-    order.sort_by(|&a, &b| {
-        nominal_duration_s(&point.specs[b]).total_cmp(&nominal_duration_s(&point.specs[a]))
-    });
     let mut sent = 0;
-    for scenario in order {
+    for &scenario in order {
         if sent == limit {
             break;
         }
