@@ -67,9 +67,9 @@ pub struct Runner<T: Send + Sync + 'static> {
     /// while they compute and set to the runs when they are done; `None` for other jobs, before
     /// the first preview, and after a failure or cancel.
     pub preview: RwSignal<Option<T>>,
-    /// The first run of [`Runner::start_in_workers`] to stream its calibration (its teach cut
-    /// made, or one given), with its spec: what the savings' reference search starts from,
-    /// beside the runs. `None` before, and for other jobs.
+    /// The first run of the latest [`Runner::start_in_workers`] to stream its calibration (its
+    /// teach cut made, or one given), with its spec: what the savings' reference search starts
+    /// from, beside the runs. `None` until one has; other kinds of job leave it as it is.
     pub taught: RwSignal<Option<(RunSpec, Calibration)>>,
     generation: Arc<AtomicU64>,
     /// The worker-pool jobs of the job under way, cancelled with it.
