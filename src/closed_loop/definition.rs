@@ -1022,6 +1022,29 @@ pub fn parse_texts<T: AsRef<str>>(
     }
 }
 
+/// One parameter of [`preset_controller`]`(preset, kind)`, without building the controller (the
+/// forms show every parameter of every controller as they mount, and a `fuzzy-engine`
+/// controller carries its engine's text): the paper's value where it states one, else the
+/// parameter's default. `None` for a key `kind` has not.
+///
+/// ```
+/// use cutlab::closed_loop::definition::{preset_controller, preset_parameter};
+/// use cutlab::control::registry::ControllerKind;
+/// use cutlab::plant::Preset;
+/// let kind = ControllerKind::FuzzyDynamics;
+/// assert_eq!(preset_parameter(Preset::LiuCurrentStep, kind, "output_range_pct"), Some(100.0));
+/// assert_eq!(preset_parameter(Preset::KimStepDoc, kind, "output_range_pct"),
+///     preset_controller(Preset::KimStepDoc, kind).get("output_range_pct"));
+/// assert_eq!(preset_parameter(Preset::KimStepDoc, kind, "no_such_key"), None);
+/// ```
+pub fn preset_parameter(preset: Preset, kind: ControllerKind, key: &str) -> Option<f64> {
+    let spec = kind.params().iter().find(|p| p.key == key)?;
+    let stated = paper_parameters(preset, kind)
+        .iter()
+        .find(|(k, _)| *k == key);
+    Some(stated.map_or(spec.default, |&(_, value)| value))
+}
+
 /// A controller at the defaults of `preset`: the generic defaults, except where the preset's paper
 /// states the controller's own parameters. Paper 002 states k_u = 250 mm/min per unit of U at
 /// 1500 mm/min, added to the feed each sampling period (eq 1), and gives the current change EC
@@ -1307,6 +1330,23 @@ mod tests {
 
     fn preset(name: &str) -> Preset {
         Preset::from_name(name).unwrap()
+    }
+
+    #[test]
+    fn a_preset_parameter_is_the_preset_controller_s() {
+        let mut stated = 0;
+        for preset in Preset::ALL {
+            for kind in ControllerKind::ALL {
+                let config = preset_controller(preset, kind);
+                for p in kind.params() {
+                    let value = preset_parameter(preset, kind, p.key);
+                    assert_eq!(value, config.get(p.key), "{preset:?} {kind:?} {}", p.key);
+                    stated += usize::from(value != Some(p.default));
+                }
+            }
+        }
+        // Paper 002's two values, on its preset, for both fuzzy controllers and the engine.
+        assert!(stated >= 4, "{stated}");
     }
 
     #[test]

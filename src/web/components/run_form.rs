@@ -9,7 +9,8 @@ use leptos::prelude::*;
 
 use crate::closed_loop::config::RunConfiguration;
 use crate::closed_loop::definition::{
-    parse_texts, preset_controller, RunSetting, RunSpec, SettingGroup, SettingsOverrides,
+    parse_texts, preset_controller, preset_parameter, RunSetting, RunSpec, SettingGroup,
+    SettingsOverrides,
 };
 use crate::closed_loop::lab::preset_plan;
 use crate::control::fuzzy::fll;
@@ -294,9 +295,7 @@ pub struct ControllerForm {
 
 /// The text of `key`'s default for `kind` on `preset`.
 fn default_text(preset: Preset, kind: ControllerKind, key: &str) -> String {
-    preset_controller(preset, kind)
-        .get(key)
-        .map_or_else(String::new, |v| v.to_string())
+    preset_parameter(preset, kind, key).map_or_else(String::new, |v| v.to_string())
 }
 
 /// A rule table as 49 digits 0–6 (level + 3), row by row, for URLs.
