@@ -96,12 +96,31 @@ fn parse_whole<T: std::str::FromStr>(text: &str, range: &str) -> Result<T, Strin
 /// assert_eq!(three_significant(f64::NAN), "NaN");
 /// ```
 pub fn three_significant(v: f64) -> String {
+    significant(v, 3)
+}
+
+/// `v` to `digits` significant digits (1 to 15), trailing zeros dropped; an exponent below 0.001
+/// or from a million up. [`three_significant`] is the tables' and result lines' precision; a
+/// lesson's check shows four, so that a value beside its threshold reads apart from it.
+///
+/// ```
+/// use cutlab::input::significant;
+/// assert_eq!(significant(3.214_59, 4), "3.215");
+/// assert_eq!(significant(1234.6, 4), "1235");
+/// assert_eq!(significant(12_345.6, 4), "12350");
+/// assert_eq!(significant(0.05, 4), "0.05");
+/// assert_eq!(significant(2.5e-5, 4), "2.5e-5");
+/// assert_eq!(significant(1.234_56e7, 2), "1.2e7");
+/// ```
+pub fn significant(v: f64, digits: u32) -> String {
     if v == 0.0 || !v.is_finite() {
         return readable(v);
     }
+    let digits = digits.clamp(1, 15) as i32;
     let magnitude = v.abs();
     if !(1e-3..1e6).contains(&magnitude) {
-        let text = format!("{v:.2e}");
+        let decimals = (digits - 1) as usize;
+        let text = format!("{v:.decimals$e}");
         return match text.split_once('e') {
             Some((mantissa, exponent)) => format!(
                 "{}e{exponent}",
@@ -112,11 +131,11 @@ pub fn three_significant(v: f64) -> String {
     }
     // Digits before the point, less one: 0 for 1.38, 2 for 116, -1 for 0.439.
     let order = magnitude.log10().floor() as i32;
-    if order >= 2 {
-        let unit = 10f64.powi(order - 2);
+    if order >= digits - 1 {
+        let unit = 10f64.powi(order - (digits - 1));
         format!("{:.0}", (v / unit).round() * unit)
     } else {
-        let decimals = (2 - order) as usize;
+        let decimals = (digits - 1 - order) as usize;
         let text = format!("{v:.decimals$}");
         text.trim_end_matches('0').trim_end_matches('.').to_string()
     }

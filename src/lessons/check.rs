@@ -208,18 +208,9 @@ fn metric_words(name: &str) -> String {
     name[..name.len() - unit_suffix].replace('_', " ")
 }
 
-/// A number as a student reads it: at most four significant figures, no trailing zeros.
+/// A number as a student reads it: four significant figures, no trailing zeros.
 pub fn shown(value: f64) -> String {
-    if value == 0.0 || !value.is_finite() {
-        return format!("{value}");
-    }
-    let digits = (3 - value.abs().log10().floor() as i32).clamp(0, 6) as usize;
-    let text = format!("{value:.digits$}");
-    if text.contains('.') {
-        text.trim_end_matches('0').trim_end_matches('.').to_string()
-    } else {
-        text
-    }
+    crate::input::significant(value, 4)
 }
 
 fn with_unit(value: f64, unit: &str) -> String {
