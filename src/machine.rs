@@ -100,6 +100,56 @@ pub struct PlantTruth {
     pub spindle_current_rms_a: f64,
 }
 
+/// A simulation's truth as [`crate::protocol::frame::SimTruth`] carries it, at full precision: what a device averages over
+/// a block and a host interpolates between samples, in the wire order ([`crate::protocol::frame::SimTruth::NAMES`]).
+impl PlantTruth {
+    /// The sixteen values in wire order.
+    pub fn wire_values(&self) -> [f64; 16] {
+        [
+            self.force_x_n,
+            self.force_y_n,
+            self.force_z_n,
+            self.force_resultant_n,
+            self.feed_force_n,
+            self.spindle_torque_nm,
+            self.cutting_power_w,
+            self.depth_mm,
+            self.width_mm,
+            self.feed_per_tooth_mm,
+            self.path_position_mm,
+            self.material_removal_mm3_s,
+            self.tool_x_mm,
+            self.tool_y_mm,
+            self.feed_current_rms_a,
+            self.spindle_current_rms_a,
+        ]
+    }
+
+    /// The truth from the sixteen values in wire order.
+    pub fn from_wire_values(v: [f64; 16]) -> Self {
+        let [force_x_n, force_y_n, force_z_n, force_resultant_n, feed_force_n, spindle_torque_nm, cutting_power_w, depth_mm, width_mm, feed_per_tooth_mm, path_position_mm, material_removal_mm3_s, tool_x_mm, tool_y_mm, feed_current_rms_a, spindle_current_rms_a] =
+            v;
+        Self {
+            force_x_n,
+            force_y_n,
+            force_z_n,
+            force_resultant_n,
+            feed_force_n,
+            spindle_torque_nm,
+            cutting_power_w,
+            depth_mm,
+            width_mm,
+            feed_per_tooth_mm,
+            path_position_mm,
+            material_removal_mm3_s,
+            tool_x_mm,
+            tool_y_mm,
+            feed_current_rms_a,
+            spindle_current_rms_a,
+        }
+    }
+}
+
 /// A sensorless force estimate from the programmed cutting conditions (paper 004's power law)
 /// and how far to trust it.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -186,5 +236,23 @@ pub trait Machine {
             }
         }
         out.len()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::protocol::frame::SimTruth;
+
+    #[test]
+    fn the_truth_s_wire_values_are_in_sim_truth_s_order_and_read_back() {
+        let values: [f64; 16] = std::array::from_fn(|i| i as f64 + 0.5);
+        let truth = PlantTruth::from_wire_values(values);
+        assert_eq!(truth.wire_values(), values);
+        // Each value is the field the protocol names at its place.
+        let fields = serde_json::to_value(truth).unwrap();
+        for (name, value) in SimTruth::NAMES.iter().zip(values) {
+            assert_eq!(fields[*name].as_f64(), Some(value), "{name}");
+        }
     }
 }

@@ -230,27 +230,6 @@ struct SampleSums {
     truth_seen: bool,
 }
 
-fn truth_values(t: &PlantTruth) -> [f64; 16] {
-    [
-        t.force_x_n,
-        t.force_y_n,
-        t.force_z_n,
-        t.force_resultant_n,
-        t.feed_force_n,
-        t.spindle_torque_nm,
-        t.cutting_power_w,
-        t.depth_mm,
-        t.width_mm,
-        t.feed_per_tooth_mm,
-        t.path_position_mm,
-        t.material_removal_mm3_s,
-        t.tool_x_mm,
-        t.tool_y_mm,
-        t.feed_current_rms_a,
-        t.spindle_current_rms_a,
-    ]
-}
-
 /// Counts of `value` at `per_count`, saturating at the ADC's range (NaN reads 0: a real ADC has
 /// no NaN; the sensor fault reports it).
 fn counts(value: f64, per_count: f64) -> i16 {
@@ -1191,7 +1170,7 @@ impl DeviceEmulator {
                 block.feed_mm_min += s.feed_mm_min;
                 block.last = s;
                 if let Some(t) = step.truth {
-                    for (sum, v) in block.truth.iter_mut().zip(truth_values(&t)) {
+                    for (sum, v) in block.truth.iter_mut().zip(t.wire_values()) {
                         *sum += v;
                     }
                     block.last_truth = t;
@@ -1213,12 +1192,13 @@ impl DeviceEmulator {
         let n = block.n.max(1) as f64;
         self.sample_seq = self.sample_seq.wrapping_add(1);
         if block.truth_seen && self.config.sim_truth {
-            let mut v: [f32; 16] = core::array::from_fn(|i| (block.truth[i] / n) as f32);
+            let mut mean = PlantTruth::from_wire_values(block.truth.map(|sum| sum / n));
             // Positions are where the tool is at the block's end, not on average.
-            let t = &block.last_truth;
-            v[10] = t.path_position_mm as f32;
-            v[12] = t.tool_x_mm as f32;
-            v[13] = t.tool_y_mm as f32;
+            let last = &block.last_truth;
+            mean.path_position_mm = last.path_position_mm;
+            mean.tool_x_mm = last.tool_x_mm;
+            mean.tool_y_mm = last.tool_y_mm;
+            let v = mean.wire_values().map(|value| value as f32);
             self.send(
                 &Frame::SimTruth(SimTruth::from_values(self.sample_seq, v)),
                 out,

@@ -778,7 +778,7 @@ impl HostSession {
         let truth = match self.pending_truth.take() {
             Some(t) if t.seq == s.seq => {
                 let v = t.values().map(f64::from);
-                let truth = truth_from(&v);
+                let truth = PlantTruth::from_wire_values(v);
                 self.last_truth = Some(truth);
                 Some(truth)
             }
@@ -825,28 +825,6 @@ impl HostSession {
     }
 }
 
-/// The truth from the sixteen wire values ([`SimTruth::NAMES`] order).
-fn truth_from(v: &[f64; 16]) -> PlantTruth {
-    PlantTruth {
-        force_x_n: v[0],
-        force_y_n: v[1],
-        force_z_n: v[2],
-        force_resultant_n: v[3],
-        feed_force_n: v[4],
-        spindle_torque_nm: v[5],
-        cutting_power_w: v[6],
-        depth_mm: v[7],
-        width_mm: v[8],
-        feed_per_tooth_mm: v[9],
-        path_position_mm: v[10],
-        material_removal_mm3_s: v[11],
-        tool_x_mm: v[12],
-        tool_y_mm: v[13],
-        feed_current_rms_a: v[14],
-        spindle_current_rms_a: v[15],
-    }
-}
-
 fn lerp(a: f64, b: f64, f: f64) -> f64 {
     a + (b - a) * f
 }
@@ -882,9 +860,9 @@ fn interpolate(a: &LinkSample, b: &LinkSample, f: f64) -> LinkSample {
     };
     let truth = match (a.step.truth, b.step.truth) {
         (Some(ta), Some(tb)) => {
-            let (va, vb) = (truth_values(&ta), truth_values(&tb));
+            let (va, vb) = (ta.wire_values(), tb.wire_values());
             let v: [f64; 16] = std::array::from_fn(|i| lerp(va[i], vb[i], f));
-            Some(truth_from(&v))
+            Some(PlantTruth::from_wire_values(v))
         }
         (t, _) => t,
     };
@@ -894,27 +872,6 @@ fn interpolate(a: &LinkSample, b: &LinkSample, f: f64) -> LinkSample {
         program_end: false,
         flags: a.flags,
     }
-}
-
-fn truth_values(t: &PlantTruth) -> [f64; 16] {
-    [
-        t.force_x_n,
-        t.force_y_n,
-        t.force_z_n,
-        t.force_resultant_n,
-        t.feed_force_n,
-        t.spindle_torque_nm,
-        t.cutting_power_w,
-        t.depth_mm,
-        t.width_mm,
-        t.feed_per_tooth_mm,
-        t.path_position_mm,
-        t.material_removal_mm3_s,
-        t.tool_x_mm,
-        t.tool_y_mm,
-        t.feed_current_rms_a,
-        t.spindle_current_rms_a,
-    ]
 }
 
 /// What a host keeps sending while it holds the device (docs/protocol.md §4 and §5): the command
