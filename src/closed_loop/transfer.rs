@@ -182,8 +182,65 @@ struct Header {
     completed: bool,
 }
 
-/// Numbers per trace row in [`RunParts::rows`]: its 21 quantities and 5 flags (as 0 or 1).
-pub const ROW_VALUES: usize = 29;
+/// A trace row as it travels: its numbers, then its flags as 0 or 1, in the order listed once
+/// here. Gives [`ROW_VALUES`], `row_values` and `row_from`; both take every field of
+/// [`TraceRow`] by name, so a field added to the row fails to compile until it travels.
+macro_rules! row_layout {
+    (numbers: $($number:ident),+ $(,)?; flags: $($flag:ident),+ $(,)?) => {
+        /// Numbers per trace row in [`RunParts::rows`]: its quantities, then its flags.
+        pub const ROW_VALUES: usize = [$(stringify!($number)),+, $(stringify!($flag)),+].len();
+
+        /// A row's numbers, in [`row_from`]'s order.
+        fn row_values(row: &TraceRow) -> [f64; ROW_VALUES] {
+            let TraceRow { $($number,)+ $($flag,)+ } = *row;
+            let flag = |b: bool| if b { 1.0 } else { 0.0 };
+            [$($number,)+ $(flag($flag),)+]
+        }
+
+        /// The row of `v`'s numbers (NaN for a missing one; a flag is set when not 0).
+        fn row_from(v: &[f64]) -> TraceRow {
+            let mut values = v.iter().copied();
+            let mut next = || values.next().unwrap_or(f64::NAN);
+            // A struct's fields are evaluated in the order written.
+            TraceRow { $($number: next(),)+ $($flag: next() != 0.0,)+ }
+        }
+    };
+}
+
+row_layout! {
+    numbers:
+    time_s,
+    depth_mm,
+    width_mm,
+    path_position_mm,
+    programmed_feed_mm_min,
+    feed_mm_min,
+    requested_override_pct,
+    override_pct,
+    applied_override_pct,
+    force_n,
+    force_est_n,
+    force_power_law_n,
+    target_force_n,
+    force_min_n,
+    force_max_n,
+    spindle_current_rms_a,
+    feed_current_rms_a,
+    feed_current_u_min_a,
+    feed_current_u_max_a,
+    spindle_speed_rpm,
+    material_removal_mm3_s,
+    surface_error_um,
+    compensated_error_power_law_um,
+    compensated_error_current_um,
+    ;
+    flags:
+    armed,
+    sensor_fault,
+    feed_hold,
+    estimate_in_range,
+    sensor_failure_predicted,
+}
 
 impl RunParts {
     /// The parts of `result` to send.
@@ -410,114 +467,26 @@ pub fn rows_from_flat(flat: &[f64], what: &str) -> Result<Vec<TraceRow>, String>
     Ok(flat.chunks_exact(ROW_VALUES).map(row_from).collect())
 }
 
-/// A row's numbers, in [`row_from`]'s order.
-fn row_values(row: &TraceRow) -> [f64; ROW_VALUES] {
-    // Destructured whole, so a field added to the row fails to compile here until it travels.
-    let TraceRow {
-        time_s,
-        depth_mm,
-        width_mm,
-        path_position_mm,
-        programmed_feed_mm_min,
-        feed_mm_min,
-        requested_override_pct,
-        override_pct,
-        applied_override_pct,
-        force_n,
-        force_est_n,
-        force_power_law_n,
-        target_force_n,
-        force_min_n,
-        force_max_n,
-        spindle_current_rms_a,
-        feed_current_rms_a,
-        feed_current_u_min_a,
-        feed_current_u_max_a,
-        spindle_speed_rpm,
-        material_removal_mm3_s,
-        surface_error_um,
-        compensated_error_power_law_um,
-        compensated_error_current_um,
-        armed,
-        sensor_fault,
-        feed_hold,
-        estimate_in_range,
-        sensor_failure_predicted,
-    } = *row;
-    let flag = |b: bool| if b { 1.0 } else { 0.0 };
-    [
-        time_s,
-        depth_mm,
-        width_mm,
-        path_position_mm,
-        programmed_feed_mm_min,
-        feed_mm_min,
-        requested_override_pct,
-        override_pct,
-        applied_override_pct,
-        force_n,
-        force_est_n,
-        force_power_law_n,
-        target_force_n,
-        force_min_n,
-        force_max_n,
-        spindle_current_rms_a,
-        feed_current_rms_a,
-        feed_current_u_min_a,
-        feed_current_u_max_a,
-        spindle_speed_rpm,
-        material_removal_mm3_s,
-        surface_error_um,
-        compensated_error_power_law_um,
-        compensated_error_current_um,
-        flag(armed),
-        flag(sensor_fault),
-        flag(feed_hold),
-        flag(estimate_in_range),
-        flag(sensor_failure_predicted),
-    ]
-}
-
-/// The row whose [`row_values`] are `v` (exactly [`ROW_VALUES`] long).
-fn row_from(v: &[f64]) -> TraceRow {
-    let at = |i: usize| v.get(i).copied().unwrap_or(f64::NAN);
-    let flag = |i: usize| at(i) != 0.0;
-    TraceRow {
-        time_s: at(0),
-        depth_mm: at(1),
-        width_mm: at(2),
-        path_position_mm: at(3),
-        programmed_feed_mm_min: at(4),
-        feed_mm_min: at(5),
-        requested_override_pct: at(6),
-        override_pct: at(7),
-        applied_override_pct: at(8),
-        force_n: at(9),
-        force_est_n: at(10),
-        force_power_law_n: at(11),
-        target_force_n: at(12),
-        force_min_n: at(13),
-        force_max_n: at(14),
-        spindle_current_rms_a: at(15),
-        feed_current_rms_a: at(16),
-        feed_current_u_min_a: at(17),
-        feed_current_u_max_a: at(18),
-        spindle_speed_rpm: at(19),
-        material_removal_mm3_s: at(20),
-        surface_error_um: at(21),
-        compensated_error_power_law_um: at(22),
-        compensated_error_current_um: at(23),
-        armed: flag(24),
-        sensor_fault: flag(25),
-        feed_hold: flag(26),
-        estimate_in_range: flag(27),
-        sensor_failure_predicted: flag(28),
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_row_travels_as_its_numbers_and_flags_and_reads_back() {
+        let mut values: Vec<f64> = (0..ROW_VALUES).map(|i| i as f64 + 0.25).collect();
+        // The flags, last: alternately set and clear.
+        let flags = ROW_VALUES - 5;
+        for (i, v) in values[flags..].iter_mut().enumerate() {
+            *v = if i % 2 == 0 { 1.0 } else { 0.0 };
+        }
+        let row = row_from(&values);
+        assert_eq!(row.time_s, 0.25);
+        assert_eq!(row.compensated_error_current_um, (flags - 1) as f64 + 0.25);
+        assert!(row.armed && !row.sensor_fault && row.feed_hold);
+        assert_eq!(row_values(&row).to_vec(), values);
+        // A short row reads its missing numbers as NaN.
+        assert!(row_from(&values[..3]).path_position_mm.is_nan());
+    }
 
     #[test]
     fn a_learning_crosses_to_the_page_unchanged() {
