@@ -15,6 +15,7 @@ use super::definition::RunSpec;
 use super::lab::teach_cut_work;
 use super::sample_loop::OnMachine;
 use super::teach_cut::TeachCut;
+use super::transfer::flat_row;
 use crate::estimation::estimator::Calibration;
 use crate::plant::recording::{
     BenchRecording, BlockRow, OpenLoopRecording, OpenLoopRun, PhaseRecording, StepSummary,
@@ -164,13 +165,13 @@ struct OpenLoopHeader {
     load_steps: Vec<StepSummary>,
 }
 
-/// Numbers per row in an open-loop recording's list ([`block_values`]).
-pub const BLOCK_VALUES: usize = 18;
-
-/// A row's numbers, in [`block_from`]'s order.
-fn block_values(row: &BlockRow) -> [f64; BLOCK_VALUES] {
-    // Destructured whole, so a field added to the row fails to compile here until it travels.
-    let BlockRow {
+flat_row! {
+    BlockRow;
+    /// Numbers per row in an open-loop recording's list, in `BlockRow`'s order.
+    BLOCK_VALUES,
+    block_values,
+    block_from;
+    numbers:
         time_s,
         force_x_n,
         force_y_n,
@@ -189,52 +190,6 @@ fn block_values(row: &BlockRow) -> [f64; BLOCK_VALUES] {
         feed_mm_min,
         spindle_rpm,
         brake_torque_nm,
-    } = *row;
-    [
-        time_s,
-        force_x_n,
-        force_y_n,
-        force_z_n,
-        resultant_min_n,
-        resultant_max_n,
-        spindle_torque_nm,
-        cutting_power_w,
-        feed_iu_min_a,
-        feed_iu_max_a,
-        spindle_iu_min_a,
-        spindle_iu_max_a,
-        feed_rms_a,
-        spindle_rms_a,
-        depth_mm,
-        feed_mm_min,
-        spindle_rpm,
-        brake_torque_nm,
-    ]
-}
-
-/// The row whose [`block_values`] are `v` (a chunk of exactly [`BLOCK_VALUES`]).
-fn block_from(v: &[f64]) -> BlockRow {
-    let at = |i: usize| v.get(i).copied().unwrap_or(f64::NAN);
-    BlockRow {
-        time_s: at(0),
-        force_x_n: at(1),
-        force_y_n: at(2),
-        force_z_n: at(3),
-        resultant_min_n: at(4),
-        resultant_max_n: at(5),
-        spindle_torque_nm: at(6),
-        cutting_power_w: at(7),
-        feed_iu_min_a: at(8),
-        feed_iu_max_a: at(9),
-        spindle_iu_min_a: at(10),
-        spindle_iu_max_a: at(11),
-        feed_rms_a: at(12),
-        spindle_rms_a: at(13),
-        depth_mm: at(14),
-        feed_mm_min: at(15),
-        spindle_rpm: at(16),
-        brake_torque_nm: at(17),
-    }
 }
 
 /// An open-loop recording to send: its rows as one list of [`BLOCK_VALUES`] numbers each, the

@@ -182,32 +182,44 @@ struct Header {
     completed: bool,
 }
 
-/// A trace row as it travels: its numbers, then its flags as 0 or 1, in the order listed once
-/// here. Gives [`ROW_VALUES`], `row_values` and `row_from`; both take every field of
-/// [`TraceRow`] by name, so a field added to the row fails to compile until it travels.
-macro_rules! row_layout {
-    (numbers: $($number:ident),+ $(,)?; flags: $($flag:ident),+ $(,)?) => {
-        /// Numbers per trace row in [`RunParts::rows`]: its quantities, then its flags.
-        pub const ROW_VALUES: usize = [$(stringify!($number)),+, $(stringify!($flag)),+].len();
+/// A row of numbers and flags as it travels between a worker and the page: one flat list of
+/// `f64`, its numbers, then its flags as 0 or 1, in the order the invocation lists them once.
+/// Gives the count per row (with the doc given), a function from a row to its values and one back
+/// (a missing value reads as NaN, a flag is set when not 0); both take every field of the row by
+/// name, so a field added to the row fails to compile until it travels.
+macro_rules! flat_row {
+    (
+        $row:ident;
+        $(#[$count_doc:meta])* $count:ident,
+        $values:ident,
+        $from:ident;
+        numbers: $($number:ident),+ $(,)?
+        $(; flags: $($flag:ident),+ $(,)?)?
+    ) => {
+        $(#[$count_doc])*
+        pub const $count: usize = [$(stringify!($number),)+ $($(stringify!($flag),)+)?].len();
 
-        /// A row's numbers, in [`row_from`]'s order.
-        fn row_values(row: &TraceRow) -> [f64; ROW_VALUES] {
-            let TraceRow { $($number,)+ $($flag,)+ } = *row;
-            let flag = |b: bool| if b { 1.0 } else { 0.0 };
-            [$($number,)+ $(flag($flag),)+]
+        fn $values(row: &$row) -> [f64; $count] {
+            let $row { $($number,)+ $($($flag,)+)? } = *row;
+            [$($number,)+ $($(if $flag { 1.0 } else { 0.0 },)+)?]
         }
 
-        /// The row of `v`'s numbers (NaN for a missing one; a flag is set when not 0).
-        fn row_from(v: &[f64]) -> TraceRow {
+        fn $from(v: &[f64]) -> $row {
             let mut values = v.iter().copied();
             let mut next = || values.next().unwrap_or(f64::NAN);
             // A struct's fields are evaluated in the order written.
-            TraceRow { $($number: next(),)+ $($flag: next() != 0.0,)+ }
+            $row { $($number: next(),)+ $($($flag: next() != 0.0,)+)? }
         }
     };
 }
+pub(crate) use flat_row;
 
-row_layout! {
+flat_row! {
+    TraceRow;
+    /// Numbers per trace row in [`RunParts::rows`]: its quantities, then its flags.
+    ROW_VALUES,
+    row_values,
+    row_from;
     numbers:
     time_s,
     depth_mm,
