@@ -79,6 +79,27 @@ fn parse_whole<T: std::str::FromStr>(text: &str, range: &str) -> Result<T, Strin
         .map_err(|_| format!("\"{cleaned}\" is not a whole number{range}"))
 }
 
+/// A name a person typed, as a file name's stem: ASCII letters and digits in lower case, every
+/// run of anything else one hyphen, none at either end ("Cutting force" → "cutting-force").
+///
+/// ```
+/// use cutlab::input::file_slug;
+/// assert_eq!(file_slug("Cutting force"), "cutting-force");
+/// assert_eq!(file_slug("  Run #3 (mill, 80 %) "), "run-3-mill-80");
+/// assert_eq!(file_slug("Ölfilm"), "lfilm");
+/// ```
+pub fn file_slug(text: &str) -> String {
+    let mut slug = String::with_capacity(text.len());
+    for c in text.chars() {
+        if c.is_ascii_alphanumeric() {
+            slug.push(c.to_ascii_lowercase());
+        } else if !slug.is_empty() && !slug.ends_with('-') {
+            slug.push('-');
+        }
+    }
+    slug.trim_end_matches('-').to_string()
+}
+
 /// `v` to three significant digits, as a table or a result line shows a measured or computed
 /// value (its meaning, not the float's noise): 0.439, 1.38, 116, 12300; an exponent below 0.001
 /// or from a million up.

@@ -211,22 +211,7 @@ impl RecordingMeta {
 
     /// The file name an export gets.
     pub fn file_name(&self) -> String {
-        let slug: String = self
-            .name
-            .chars()
-            .map(|c| {
-                if c.is_ascii_alphanumeric() {
-                    c.to_ascii_lowercase()
-                } else {
-                    '-'
-                }
-            })
-            .collect();
-        let slug = slug
-            .split('-')
-            .filter(|p| !p.is_empty())
-            .collect::<Vec<_>>()
-            .join("-");
+        let slug = crate::input::file_slug(&self.name);
         format!("cutlab-recording-{slug}.csv")
     }
 }

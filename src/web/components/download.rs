@@ -68,20 +68,6 @@ pub fn download_canvas_png(
 
 /// A file name from a chart's label: "Cutting force" → "cutting-force.png".
 pub fn png_name(label: &str) -> String {
-    let slug: String = label
-        .chars()
-        .map(|c| {
-            if c.is_ascii_alphanumeric() {
-                c.to_ascii_lowercase()
-            } else {
-                '-'
-            }
-        })
-        .collect();
-    let slug = slug
-        .split('-')
-        .filter(|p| !p.is_empty())
-        .collect::<Vec<_>>()
-        .join("-");
+    let slug = crate::input::file_slug(label);
     format!("{slug}.png")
 }
