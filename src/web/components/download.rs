@@ -4,27 +4,40 @@ use wasm_bindgen::JsCast;
 
 use crate::closed_loop::config::RunConfiguration;
 use crate::closed_loop::definition::RunSpec;
+use crate::web::js::describe;
 
 /// Offers `text` as a download named `file_name`. Returns a message if the browser refused.
 pub fn download_text(file_name: &str, mime: &str, text: &str) -> Result<(), String> {
-    let fail = |what: &str| format!("could not save {file_name}: {what}");
     let parts = js_sys::Array::of1(&wasm_bindgen::JsValue::from_str(text));
+    download_parts(file_name, mime, &parts)
+}
+
+/// Offers the strings of `parts`, joined, as a download named `file_name` (a long recording's
+/// CSV in the chunks it was stored in, without joining them in memory first).
+pub fn download_parts(file_name: &str, mime: &str, parts: &js_sys::Array) -> Result<(), String> {
+    let fail = |what: &str| format!("could not save {file_name}: {what}");
     let options = web_sys::BlobPropertyBag::new();
     options.set_type(mime);
-    let blob = web_sys::Blob::new_with_str_sequence_and_options(&parts, &options)
-        .map_err(|_| fail("no Blob"))?;
+    let blob = web_sys::Blob::new_with_str_sequence_and_options(parts, &options)
+        .map_err(|e| fail(&describe(&e)))?;
     let url =
         web_sys::Url::create_object_url_with_blob(&blob).map_err(|_| fail("no object URL"))?;
-    let document = leptos::prelude::document();
-    let anchor: web_sys::HtmlAnchorElement = document
+    let saved = save_url(&url, file_name);
+    let _ = web_sys::Url::revoke_object_url(&url);
+    saved
+}
+
+/// Clicks a link to `url` that downloads it as `file_name`.
+fn save_url(url: &str, file_name: &str) -> Result<(), String> {
+    let fail = |what: &str| format!("could not save {file_name}: {what}");
+    let anchor: web_sys::HtmlAnchorElement = leptos::prelude::document()
         .create_element("a")
         .map_err(|_| fail("no anchor"))?
         .dyn_into()
         .map_err(|_| fail("not an anchor"))?;
-    anchor.set_href(&url);
+    anchor.set_href(url);
     anchor.set_download(file_name);
     anchor.click();
-    let _ = web_sys::Url::revoke_object_url(&url);
     Ok(())
 }
 
@@ -55,15 +68,7 @@ pub fn download_canvas_png(
     let url = canvas
         .to_data_url_with_type("image/png")
         .map_err(|_| format!("could not save {file_name}: the canvas gave no image"))?;
-    let anchor: web_sys::HtmlAnchorElement = leptos::prelude::document()
-        .create_element("a")
-        .map_err(|_| format!("could not save {file_name}"))?
-        .dyn_into()
-        .map_err(|_| format!("could not save {file_name}"))?;
-    anchor.set_href(&url);
-    anchor.set_download(file_name);
-    anchor.click();
-    Ok(())
+    save_url(&url, file_name)
 }
 
 /// A file name from a chart's label: "Cutting force" → "cutting-force.png".

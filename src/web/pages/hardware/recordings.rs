@@ -2,34 +2,12 @@
 //! a crash cut short is offered first.
 
 use leptos::prelude::*;
-use wasm_bindgen::JsCast;
 
 use super::ui::{StationRef, Ui};
 use crate::hardware::recording::RecordingMeta;
+use crate::web::components::download::download_parts;
 use crate::web::components::page::TableScroll;
 use crate::web::hardware::station::Station;
-use crate::web::js::describe;
-
-/// Offers the chunks of a recording, joined, as a CSV download.
-fn download_chunks(file_name: &str, chunks: &js_sys::Array) -> Result<(), String> {
-    let fail = |what: &str| format!("could not save {file_name}: {what}");
-    let options = web_sys::BlobPropertyBag::new();
-    options.set_type("text/csv");
-    let blob = web_sys::Blob::new_with_str_sequence_and_options(chunks, &options)
-        .map_err(|e| fail(&describe(&e)))?;
-    let url =
-        web_sys::Url::create_object_url_with_blob(&blob).map_err(|_| fail("no object URL"))?;
-    let anchor: web_sys::HtmlAnchorElement = document()
-        .create_element("a")
-        .map_err(|_| fail("no anchor"))?
-        .dyn_into()
-        .map_err(|_| fail("not an anchor"))?;
-    anchor.set_href(&url);
-    anchor.set_download(file_name);
-    anchor.click();
-    let _ = web_sys::Url::revoke_object_url(&url);
-    Ok(())
-}
 
 /// The recordings: listed, exported as CSV, deleted; an unfinished one (a reload or crash cut it
 /// short) is offered first.
@@ -54,7 +32,7 @@ pub fn Recordings(ui: Ui, station: StationRef) -> impl IntoView {
             let result = if chunks.is_empty() {
                 Err("nothing of it was kept yet".to_string())
             } else {
-                download_chunks(&meta.file_name(), &array)
+                download_parts(&meta.file_name(), "text/csv", &array)
             };
             ui.store_error.set(
                 result
@@ -68,7 +46,7 @@ pub fn Recordings(ui: Ui, station: StationRef) -> impl IntoView {
                 Ok(chunks) if chunks.length() == 0 => {
                     Err("nothing of it was stored yet".to_string())
                 }
-                Ok(chunks) => download_chunks(&meta.file_name(), &chunks),
+                Ok(chunks) => download_parts(&meta.file_name(), "text/csv", &chunks),
                 Err(e) => Err(e),
             };
             ui.store_error.set(
