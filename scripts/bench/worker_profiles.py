@@ -2,14 +2,16 @@
 """Probes build settings for the computation worker (issue 28): its module's size and the wasm
 loop's speed, per variant, without editing Cargo.toml.
 
-  scripts/bench/worker_profiles.py build NAME [--wasm-opt z] [--config 'profile....=...' ...]
+  scripts/bench/worker_profiles.py build NAME [--wasm-opt z] [--wasm-opt-param=--converge ...]
+                                              [--config 'profile....=...' ...]
   scripts/bench/worker_profiles.py time NAME NAME ... [--rounds 3] [--repeats 3]
 
 `build` compiles the worker (`--bin cutlab-worker`, profile worker-release, feature worker) and
 the loop benchmark (`--example bench_loop_wasm`, same profile) with the given `--config` overrides
 (cargo's command-line config, which takes precedence over Cargo.toml's profiles), runs wasm-bindgen
 and `wasm-opt -O<level>` on each as Trunk 0.21.14 does (the worker: `--target no-modules`, then
-`wasm-opt --output=… -O<level>` with no other flag), and prints the worker's size raw and gzip -9.
+`wasm-opt --output=… -O<level>` and the given parameters, as index.html's
+`data-wasm-opt-params`), and prints the worker's size raw and gzip -9.
 The artefacts go to target/worker-probe/NAME/.
 
 `time` runs scripts/bench/wasm_loop.mjs on each named build in turn, round after round (so the
@@ -42,7 +44,7 @@ def gzip9(path: str) -> int:
     return len(subprocess.run(["gzip", "-9", "-c", path], check=True, capture_output=True).stdout)
 
 
-def build(name: str, level: str, config: list[str]) -> dict:
+def build(name: str, level: str, params: list[str], config: list[str]) -> dict:
     out = os.path.join(PROBE, name)
     shutil.rmtree(out, ignore_errors=True)
     worker_dir, bench_dir = os.path.join(out, "worker"), os.path.join(out, "bench")
@@ -50,14 +52,15 @@ def build(name: str, level: str, config: list[str]) -> dict:
     subprocess.run(["wasm-bindgen", "--target=no-modules", f"--out-dir={worker_dir}",
                     "--out-name=cutlab-worker", os.path.join(OUT, "cutlab-worker.wasm")], check=True)
     worker = os.path.join(worker_dir, "cutlab-worker_bg.wasm")
-    subprocess.run(["wasm-opt", f"--output={worker}", f"-O{level}", worker], check=True)
+    subprocess.run(["wasm-opt", f"--output={worker}", f"-O{level}", worker, *params], check=True)
     cargo(["--example", "bench_loop_wasm"], config)
     subprocess.run(["wasm-bindgen", "--target", "nodejs", "--out-dir", bench_dir,
                     os.path.join(OUT, "examples", "bench_loop_wasm.wasm")], check=True)
     bench = os.path.join(bench_dir, "bench_loop_wasm_bg.wasm")
-    subprocess.run(["wasm-opt", f"-O{level}", bench, "-o", bench], check=True)
-    result = {"name": name, "wasm_opt": level, "config": config, "raw_b": os.path.getsize(worker),
-              "gzip9_b": gzip9(worker), "bench_raw_b": os.path.getsize(bench)}
+    subprocess.run(["wasm-opt", f"-O{level}", *params, bench, "-o", bench], check=True)
+    result = {"name": name, "wasm_opt": level, "wasm_opt_params": params, "config": config,
+              "raw_b": os.path.getsize(worker), "gzip9_b": gzip9(worker),
+              "bench_raw_b": os.path.getsize(bench)}
     with open(os.path.join(out, "size.json"), "w") as f:
         json.dump(result, f)
     return result
@@ -77,6 +80,7 @@ def main() -> None:
     b = sub.add_parser("build")
     b.add_argument("name")
     b.add_argument("--wasm-opt", default="z")
+    b.add_argument("--wasm-opt-param", action="append", default=[])
     b.add_argument("--config", action="append", default=[])
     t = sub.add_parser("time")
     t.add_argument("names", nargs="+")
@@ -84,7 +88,7 @@ def main() -> None:
     t.add_argument("--repeats", type=int, default=3)
     args = parser.parse_args()
     if args.command == "build":
-        print(json.dumps(build(args.name, args.wasm_opt, args.config)))
+        print(json.dumps(build(args.name, args.wasm_opt, args.wasm_opt_param, args.config)))
         return
     best: dict[str, float] = {}
     digests: dict[str, set] = {}
