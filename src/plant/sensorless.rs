@@ -131,8 +131,12 @@ const SHIPPED_NETWORKS: &str = include_str!("../../www/data/sensorless-networks.
 /// The shipped networks, each with the preset whose trial cuts it learned on. A file that does
 /// not read (it cannot, short of a broken build) ships none: the plant then estimates with paper
 /// 004's published weights, calibrated ([`super::simulator`]).
-pub fn shipped_networks() -> Vec<(Preset, SensorlessNetwork)> {
-    serde_json::from_str(SHIPPED_NETWORKS).unwrap_or_default()
+pub fn shipped_networks() -> &'static [(Preset, SensorlessNetwork)] {
+    // Read once: every simulator a preset builds looks its network up here, and parsing the
+    // JSON each time cost the wasm loop 1-2 % (docs/benchmarks.md, "The worker's build").
+    static NETWORKS: std::sync::OnceLock<Vec<(Preset, SensorlessNetwork)>> =
+        std::sync::OnceLock::new();
+    NETWORKS.get_or_init(|| serde_json::from_str(SHIPPED_NETWORKS).unwrap_or_default())
 }
 
 /// The network `preset` learned on its own trial cuts, if it could learn one (a program with
@@ -146,9 +150,9 @@ pub fn shipped_networks() -> Vec<(Preset, SensorlessNetwork)> {
 /// ```
 pub fn shipped_network(preset: Preset) -> Option<SensorlessNetwork> {
     shipped_networks()
-        .into_iter()
+        .iter()
         .find(|(p, _)| *p == preset)
-        .map(|(_, network)| network)
+        .map(|(_, network)| network.clone())
 }
 
 #[cfg(test)]
