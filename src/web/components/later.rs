@@ -6,9 +6,12 @@
 //! charts and tables, more than the 50 ms a task should take (docs/benchmarks.md holds the first
 //! task to 50 ms). So what a person needs first (the header, the navigation, the form) mounts at
 //! once, and what waits for a result anyway (charts, tables, the later parts of a long form)
-//! mounts in a following task ([`Later`]); and the page's own work — parsing its form, writing
-//! its URL, starting its first run — starts in the task after its mount ([`effect_after_mount`]).
-//! Each `<Later>` on a page and each such effect needs no comment of its own.
+//! mounts after it ([`Later`]), a piece per frame: the browser styles and lays out each piece in
+//! a frame of its own, where all of them at once took 66–78 ms of Compare's first layout
+//! (docs/benchmarks.md, "The page's longest tasks"). The page's own work — parsing its form,
+//! writing its URL, starting its first run — starts in the task after its mount
+//! ([`effect_after_mount`]). Each `<Later>` on a page and each such effect needs no comment of its
+//! own.
 
 use leptos::prelude::*;
 
@@ -35,10 +38,61 @@ pub fn effect_after_mount(work: impl Fn() + 'static) {
     });
 }
 
-/// Shows `children` from the task after the one that mounts it: the browser paints what was
-/// mounted before and handles input in between. Nothing shows if the page is left meanwhile.
+/// The pieces waiting to be shown, in the order they were mounted, and whether a frame is asked
+/// for to show the first of them.
+struct Pieces {
+    waiting: std::collections::VecDeque<WriteSignal<bool>>,
+    frame_asked: bool,
+}
+
+thread_local! {
+    static PIECES: std::cell::RefCell<Pieces> = const {
+        std::cell::RefCell::new(Pieces { waiting: std::collections::VecDeque::new(), frame_asked: false })
+    };
+}
+
+/// `false` until it is this piece's turn: the first piece waiting is shown in the task after the
+/// next frame (so after the page mounted so far is laid out and painted), each next one a frame
+/// later. A page opened in a background tab, where the browser draws no frames, shows its pieces
+/// once it is shown; its own work ([`effect_after_mount`]) starts regardless.
+fn in_turn() -> ReadSignal<bool> {
+    let (ready, set_ready) = signal(false);
+    let ask = PIECES.with_borrow_mut(|pieces| {
+        pieces.waiting.push_back(set_ready);
+        !std::mem::replace(&mut pieces.frame_asked, true)
+    });
+    if ask {
+        show_next_after_frame();
+    }
+    ready
+}
+
+/// After the next frame, shows the first waiting piece (one that was left meanwhile shows
+/// nothing and gives its turn to the next) and asks for another frame while pieces wait.
+fn show_next_after_frame() {
+    request_animation_frame(|| {
+        next_task(|| {
+            let more = PIECES.with_borrow_mut(|pieces| {
+                while let Some(piece) = pieces.waiting.pop_front() {
+                    if piece.try_set(true).is_none() {
+                        break;
+                    }
+                }
+                pieces.frame_asked = !pieces.waiting.is_empty();
+                pieces.frame_asked
+            });
+            if more {
+                show_next_after_frame();
+            }
+        });
+    });
+}
+
+/// Shows `children` in its turn after the page mounted: the browser paints what was mounted
+/// before, a piece per frame, and handles input in between. Nothing shows if the page is left
+/// meanwhile.
 #[component]
 pub fn Later(children: ChildrenFn) -> impl IntoView {
-    let ready = from_next_task();
+    let ready = in_turn();
     move || ready.get().then(|| children())
 }
