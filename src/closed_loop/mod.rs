@@ -17,6 +17,7 @@
 //! | [`lab`] | runs on the papers' presets: teach cut then loop, in pieces; several runs in turn |
 //! | [`batch`] | runs of one plant stepped together, each equal bit for bit to the run alone |
 //! | [`trial_cuts`] | trial cuts read from a run's depth sections, for paper 004's network |
+//! | [`flat_row`] | a row of numbers as it travels to and from a computation worker, its order written once |
 //! | [`recording_jobs`] | the other jobs a computation worker does: bench and open-loop recordings, packed as raw numbers, and a teach-in's teach cuts |
 //! | [`transfer`] | runs sent to a computation worker and back, bit for bit (the browser's worker pool) |
 //! | [`references`] | the fixed-feed reference runs the savings are measured against |
@@ -34,6 +35,7 @@ pub mod definition;
 pub mod error;
 pub mod feedback_loop;
 pub mod file_format;
+pub mod flat_row;
 pub mod lab;
 pub mod metrics;
 pub mod paper_comparisons;

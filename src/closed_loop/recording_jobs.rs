@@ -12,10 +12,10 @@
 use serde::{Deserialize, Serialize};
 
 use super::definition::RunSpec;
+use super::flat_row::flat_row;
 use super::lab::teach_cut_work;
 use super::sample_loop::OnMachine;
 use super::teach_cut::TeachCut;
-use super::transfer::flat_row;
 use crate::estimation::estimator::Calibration;
 use crate::plant::recording::{
     BenchRecording, BlockRow, OpenLoopRecording, OpenLoopRun, PhaseRecording, StepSummary,
