@@ -459,7 +459,7 @@ test('without WebSerial the page says why and what works instead; the virtual de
   await page.getByRole('button', { name: 'Start the virtual device' }).click();
   await page.getByText('Link state: streaming').waitFor({ timeout: LONG });
   assert.equal(started.length, 1, `workers started by the click: ${started.map((w) => w.url())}`);
-  assert.ok(started[0].url().startsWith('blob:'), `the device's worker: ${started[0].url()}`);
+  assert.ok(started[0].url().endsWith('/worker-loader.js'), `the device's worker: ${started[0].url()}`);
   assert.equal(await page.evaluate(() => document.documentElement.dataset.deviceWorker), 'on');
   const features = page.getByRole('definition').filter({ hasText: /^none$/ });
   await features.waitFor();

@@ -5,7 +5,9 @@
 //! reports.
 //!
 //! Each worker instantiates the core-only module (`src/bin/cutlab-worker.rs`, no Leptos, no
-//! pages) and does one [`JobRequest`] at a time; jobs wait in one queue and each goes to the next
+//! pages) and does one [`JobRequest`] at a time. The first is started by index.html as the page
+//! is read: it fetches and compiles the module for all of them while the page's own module
+//! loads, so the first job finds it ready. Jobs wait in one queue and each goes to the next
 //! free worker, so independent runs (a comparison's variants) compute at once on different
 //! cores. A job's progress, the pieces of its trace as they are computed ([`JobEvent::Chunk`])
 //! and its result reach the caller through its listener. The result is rebuilt on the page from
@@ -50,12 +52,17 @@ use crate::work::Progress;
 /// runs' memory, and a comparison has at most four variants.
 pub const MAX_WORKERS: usize = 8;
 
-/// The worker's script and module as Trunk writes them (`data-type="worker"` keeps their names).
-const WORKER_SCRIPT: &str = "cutlab-worker.js";
+/// Every worker's loader (`www/worker-loader.js`, copied by Trunk): it instantiates the module
+/// its first message gives ([`hand_module`]) with the worker's script, `cutlab-worker.js`.
+const WORKER_LOADER: &str = "worker-loader.js";
+/// The worker's module as Trunk writes it (`data-type="worker"` keeps its name).
 const WORKER_MODULE: &str = "cutlab-worker_bg.wasm";
-/// Where index.html's compiler script leaves the promise of the worker's module, fetched and
-/// compiled beside the page's own as the page loads (it names [`WORKER_MODULE`]'s file again:
-/// change both together).
+/// Where index.html leaves the first worker, started from [`WORKER_LOADER`] as the page is read,
+/// for the pool to take as its first; with `cutlabReady` set once it has posted `ready`, and
+/// `cutlabFailed` if it threw before the pool took it. (index.html names both files again:
+/// change them together.)
+const FIRST_WORKER: &str = "cutlabFirstWorker";
+/// Where index.html leaves the promise of the workers' module, compiled by the first worker.
 const COMPILED_MODULE: &str = "cutlabWorkerModule";
 
 /// What a job tells its caller.
@@ -178,9 +185,6 @@ struct Pool {
     listeners: HashMap<u64, Listener>,
     next_id: u64,
     next_serial: u64,
-    /// The worker's loader as a script URL (a blob: it imports the script and instantiates the
-    /// module from the page's own address).
-    loader_url: Option<String>,
 }
 
 thread_local! {
@@ -328,9 +332,13 @@ fn replace_worker(index: usize) {
     }
 }
 
-/// A new worker for slot `index`.
+/// A new worker for slot `index`: index.html's first worker, the first time it is asked for,
+/// unless that one failed already.
 fn spawn(index: usize) -> Result<Slot, String> {
-    let worker = module_worker()?;
+    let (worker, ready) = match first_worker() {
+        Some(first) => first,
+        None => (module_worker()?, false),
+    };
     let serial = POOL.with(|pool| {
         let mut pool = pool.borrow_mut();
         pool.next_serial += 1;
@@ -349,7 +357,7 @@ fn spawn(index: usize) -> Result<Slot, String> {
     Ok(Slot {
         worker,
         serial,
-        ready: false,
+        ready,
         running: None,
         _on_message: on_message,
         _on_error: on_error,
@@ -360,12 +368,35 @@ fn spawn(index: usize) -> Result<Slot, String> {
 /// `src/bin/cutlab-worker.rs`). The pool's own, and one a caller keeps outside the pool for a
 /// computation that lasts as long as a page wants it; terminating that one is the caller's.
 pub fn module_worker() -> Result<Worker, String> {
-    let worker = Worker::new(&loader_url()?).map_err(|e| crate::web::js::describe(&e))?;
+    let worker =
+        Worker::new(&absolute(WORKER_LOADER)?).map_err(|e| crate::web::js::describe(&e))?;
     hand_module(&worker)?;
     Ok(worker)
 }
 
-/// Gives a new worker its module: the one the page's loader compiled (once, for every worker
+/// index.html's first worker, taken once, with whether it is ready; `None` once taken, where the
+/// page has none, or where it threw before the pool took it (terminated here: it has no module).
+fn first_worker() -> Option<(Worker, bool)> {
+    let window = window();
+    let worker = Reflect::get(&window, &FIRST_WORKER.into())
+        .ok()?
+        .dyn_into::<Worker>()
+        .ok()?;
+    let _ = Reflect::delete_property(&window, &FIRST_WORKER.into());
+    let flag = |name: &str| {
+        Reflect::get(&worker, &name.into())
+            .map(|v| v.is_truthy())
+            .unwrap_or(false)
+    };
+    if flag("cutlabFailed") {
+        worker.terminate();
+        return None;
+    }
+    let ready = flag("cutlabReady");
+    Some((worker, ready))
+}
+
+/// Gives a new worker its module: the one the first worker compiled (once, for every worker
 /// the page starts, a replaced one included), or, where that is missing or failed, the module's
 /// address, which the worker then fetches and compiles itself.
 fn hand_module(worker: &Worker) -> Result<(), String> {
@@ -398,32 +429,6 @@ fn absolute(name: &str) -> Result<String, String> {
     web_sys::Url::new_with_base(name, &page)
         .map(|u| u.href())
         .map_err(|e| crate::web::js::describe(&e))
-}
-
-/// The worker loader's URL, made once: a script that imports the worker's script, then
-/// instantiates the module its first message gives ([`hand_module`]: compiled, or an address).
-/// A module that cannot be instantiated is thrown again as the worker's error, which the pool
-/// reports ([`on_error`]) rather than waiting for a `ready` that will not come.
-fn loader_url() -> Result<String, String> {
-    if let Some(url) = POOL.with(|pool| pool.borrow().loader_url.clone()) {
-        return Ok(url);
-    }
-    let quoted = |text: String| serde_json::to_string(&text).map_err(|e| e.to_string());
-    let source = format!(
-        "importScripts({});self.onmessage=function(e){{self.onmessage=null;\
-         Promise.resolve(wasm_bindgen({{module_or_path:e.data}})).catch(function(error){{\
-         setTimeout(function(){{throw error;}});}});}};",
-        quoted(absolute(WORKER_SCRIPT)?)?,
-    );
-    let parts = Array::of1(&JsValue::from_str(&source));
-    let options = web_sys::BlobPropertyBag::new();
-    options.set_type("text/javascript");
-    let blob = web_sys::Blob::new_with_str_sequence_and_options(&parts, &options)
-        .map_err(|e| crate::web::js::describe(&e))?;
-    let url = web_sys::Url::create_object_url_with_blob(&blob)
-        .map_err(|e| crate::web::js::describe(&e))?;
-    POOL.with(|pool| pool.borrow_mut().loader_url = Some(url.clone()));
-    Ok(url)
 }
 
 /// Gives waiting jobs to the ready workers that are free.
