@@ -51,28 +51,40 @@ export function useLab() {
 }
 
 /** Serves dist/ (or another build's `directory`) on 127.0.0.1 at a free port; resolves to
- * { url, close }. Files go gzip-compressed to a browser that accepts it, as any web server the lab
- * is deployed on sends them (the modules are a third of their size compressed, which is what a
- * throttled link's measurement must see); each file is compressed once, on its first request. */
+ * { url, close }. Files go compressed to a browser that accepts it, as a web server hosting the lab
+ * sends them (README, "Hosting the lab"; the modules are a fifth to a third of their size
+ * compressed, which is what a throttled link's measurement must see): the release build's brotli
+ * file (`name.br`, written by scripts/precompress.mjs), else gzip, made once on the first request
+ * where the build has no `name.gz`. */
 export async function serveDist(directory = dist) {
   const compressed = new Map();
+  const encodings = [
+    ['br', '.br', null],
+    ['gzip', '.gz', (body) => gzipSync(body, { level: 9 })],
+  ];
   const server = createServer(async (req, res) => {
     try {
       const path = decodeURIComponent(new URL(req.url, 'http://x').pathname);
       const file = normalize(join(directory, path.endsWith('/') ? path + 'index.html' : path));
       if (!file.startsWith(directory)) throw new Error('outside dist');
       const body = await readFile(file);
-      const headers = { 'content-type': types[extname(file)] ?? 'application/octet-stream' };
-      if (/\bgzip\b/.test(req.headers['accept-encoding'] ?? '')) {
-        if (!compressed.has(file)) compressed.set(file, gzipSync(body, { level: 9 }));
-        headers['content-encoding'] = 'gzip';
-        headers.vary = 'accept-encoding';
+      const headers = { 'content-type': types[extname(file)] ?? 'application/octet-stream', vary: 'accept-encoding' };
+      const accepted = (req.headers['accept-encoding'] ?? '').split(',').map((e) => e.trim().split(';')[0]);
+      for (const [encoding, suffix, make] of encodings) {
+        if (!accepted.includes(encoding)) continue;
+        const key = file + suffix;
+        if (!compressed.has(key)) {
+          compressed.set(key, await readFile(key).catch(() => (make ? make(body) : null)));
+        }
+        const sent = compressed.get(key);
+        if (sent === null) continue;
+        headers['content-encoding'] = encoding;
         res.writeHead(200, headers);
-        res.end(compressed.get(file));
-      } else {
-        res.writeHead(200, headers);
-        res.end(body);
+        res.end(sent);
+        return;
       }
+      res.writeHead(200, headers);
+      res.end(body);
     } catch {
       res.writeHead(404, { 'content-type': 'text/plain' });
       res.end('not found');

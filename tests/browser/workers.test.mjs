@@ -160,10 +160,12 @@ test('Cancel terminates the worker at once and a fresh one runs the next run', a
   await context.close();
 });
 
-test("the workers' module is downloaded once as the page loads, and every worker, a replaced one too, starts from it", async () => {
+test("the workers' module is downloaded once as the page loads, brotli-compressed as the page's, and every worker, a replaced one too, starts from it", async () => {
   const context = await browser.newContext({ viewport: { width: 1280, height: 720 } });
   const fetched = [];
   context.on('request', (r) => { if (/cutlab-worker_bg\.wasm$/.test(r.url())) fetched.push(r.url()); });
+  const encodings = [];
+  context.on('response', (r) => { if (/\.wasm$/.test(r.url())) encodings.push(r.headers()['content-encoding']); });
   const page = await context.newPage();
   const problems = [];
   page.on('console', (m) => { if (m.type() === 'error') problems.push(m.text()); });
@@ -181,6 +183,9 @@ test("the workers' module is downloaded once as the page loads, and every worker
   const table = page.getByRole('table', { name: /Metrics of the run/ });
   await table.getByRole('row', { name: /Cycle time/ }).getByRole('cell').first().waitFor({ timeout: RUN_TIMEOUT });
   assert.equal(fetched.length, 1, `the workers' module was fetched ${fetched.length} times`);
+  // Both modules came as the release build precompressed them (scripts/precompress.mjs, served
+  // as a host that sends precompressed files would: tests/browser/harness.mjs).
+  assert.deepEqual(encodings, ['br', 'br']);
   assert.deepEqual(problems, []);
   await context.close();
 });
