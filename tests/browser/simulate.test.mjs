@@ -256,9 +256,11 @@ test('a long run shows progress, keeps the page responsive, and can be cancelled
   assert.ok(longest < 100, `the page froze for ${longest} ms`);
   // Start another run and cancel it while it computes.
   await page.getByLabel('Seed').fill('2');
-  const progress = page.getByRole('progressbar');
+  // The run's own progress and Cancel (the savings' reference search may show its own beside it).
+  const runForm = page.getByRole('form', { name: 'Run settings' });
+  const progress = runForm.getByRole('progressbar');
   await progress.waitFor({ timeout: RUN_TIMEOUT });
-  await page.getByRole('button', { name: 'Cancel' }).click();
+  await runForm.getByRole('button', { name: 'Cancel' }).click();
   await page.getByText(/^Cancelled\./).waitFor();
   await progress.waitFor({ state: 'detached' });
   assert.deepEqual(problems, []);

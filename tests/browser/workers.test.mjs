@@ -141,9 +141,12 @@ test('Cancel terminates the worker at once and a fresh one runs the next run', a
   const { page, problems, context } = await openLab(browser, server.url, '#/simulate?preset=kim-circular-taper&controller=threshold');
   const started = [];
   page.on('worker', (w) => started.push(w));
-  await waitForBusyWorkers(page, 1);
+  // The run's own Cancel (in the run's form: the savings' reference search, started beside the
+  // run from its teach cut on, has one of its own).
+  const cancel = page.getByRole('form', { name: 'Run settings' }).getByRole('button', { name: 'Cancel' });
+  await cancel.waitFor({ timeout: RUN_TIMEOUT });
   const before = started.length;
-  await page.getByRole('button', { name: 'Cancel' }).click();
+  await cancel.click();
   // No worker computes any more, and the cancelled one was replaced by a new worker.
   await waitForBusyWorkers(page, 0);
   await page.getByText(/^Cancelled\./).waitFor();
@@ -175,9 +178,8 @@ test("the workers' module is downloaded once as the page loads, brotli-compresse
   await page.waitForFunction(() => Number(document.documentElement.dataset.workers) >= 1, null, { timeout: RUN_TIMEOUT });
   // The same document moves to a long run (a hash change, not a new load).
   await page.evaluate(() => { location.hash = '#/simulate?preset=kim-circular-taper&controller=threshold'; });
-  await waitForBusyWorkers(page, 1);
   // A cancelled run's worker is replaced; the replacement runs the next run.
-  await page.getByRole('button', { name: 'Cancel' }).click();
+  await page.getByRole('form', { name: 'Run settings' }).getByRole('button', { name: 'Cancel' }).click();
   await page.getByText(/^Cancelled\./).waitFor();
   await page.getByLabel('Seed').fill('2');
   const table = page.getByRole('table', { name: /Metrics of the run/ });

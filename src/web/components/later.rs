@@ -38,6 +38,31 @@ pub fn effect_after_mount(work: impl Fn() + 'static) {
     });
 }
 
+/// Calls `work` with `value` at once, in the task that mounts the page, if it holds one: a page's
+/// first run is asked for as the page mounts, so that its worker computes while the page is laid
+/// out and painted (asking costs the mount only the request). Then, as [`effect_after_mount`],
+/// again whenever `value` changes to another `Some`; the value the page mounted with is not
+/// asked for twice.
+pub fn now_and_after_mount<T>(value: Memo<Option<T>>, work: impl Fn(T) + 'static)
+where
+    T: Clone + PartialEq + Send + Sync + 'static,
+{
+    let mounted_with = value.get_untracked();
+    if let Some(first) = mounted_with.clone() {
+        work(first);
+    }
+    let mounted_with = StoredValue::new(mounted_with);
+    effect_after_mount(move || {
+        let Some(now) = value.get() else {
+            return;
+        };
+        let first = mounted_with.try_update_value(Option::take).flatten();
+        if first.as_ref() != Some(&now) {
+            work(now);
+        }
+    });
+}
+
 /// The pieces waiting to be shown, in the order they were mounted, and whether a frame is asked
 /// for to show the first of them.
 struct Pieces {

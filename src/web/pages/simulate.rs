@@ -11,7 +11,7 @@ use crate::closed_loop::metrics::metrics_csv;
 use crate::closed_loop::trace::write_csv;
 use crate::control::registry::ControllerKind;
 use crate::web::components::download::{download_configuration, download_text, download_written};
-use crate::web::components::later::{effect_after_mount, Later};
+use crate::web::components::later::{effect_after_mount, now_and_after_mount, Later};
 use crate::web::components::page::PageShell;
 use crate::web::components::run_form::{
     ConfigurationFile, ControllerFields, ControllerForm, MachineAndSignalFields, ScenarioFields,
@@ -88,11 +88,9 @@ pub fn SimulatePage() -> impl IntoView {
         replace_query(Page::Simulate, &q);
     });
     // Re-run when the valid spec changes, and only then: `spec` is a memo, so the form's signals
-    // settling after the page mounts, or a field set to what it held, start nothing.
-    effect_after_mount(move || {
-        let Some(spec) = spec.get() else {
-            return;
-        };
+    // settling after the page mounts, or a field set to what it held, start nothing. The first
+    // run is asked for as the page mounts.
+    now_and_after_mount(spec, move |spec| {
         savings_for_edits.keep_only(&spec);
         let start = start_for_effect.clone();
         debounce.request(move || start(spec));

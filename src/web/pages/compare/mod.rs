@@ -20,7 +20,7 @@ use crate::closed_loop::config::RunConfiguration;
 use crate::closed_loop::definition::RunSpec;
 use crate::closed_loop::lab::RunResult;
 use crate::control::registry::ControllerKind;
-use crate::web::components::later::{effect_after_mount, Later};
+use crate::web::components::later::{effect_after_mount, now_and_after_mount, Later};
 use crate::web::components::page::PageShell;
 use crate::web::components::run_form::{
     ConfigurationFile, ControllerFields, ControllerForm, MachineAndSignalFields, ScenarioFields,
@@ -113,11 +113,9 @@ pub fn ComparePage() -> impl IntoView {
         replace_query(Page::Compare, &q);
     });
     // Re-run when the valid specs change, and only then: `specs` is a memo, so the forms' signals
-    // settling after the page mounts, or a field set to what it held, start nothing.
-    effect_after_mount(move || {
-        let Some(specs) = specs.get() else {
-            return;
-        };
+    // settling after the page mounts, or a field set to what it held, start nothing. The first
+    // runs are asked for as the page mounts.
+    now_and_after_mount(specs, move |specs| {
         if let Some(first) = specs.first() {
             savings_for_edits.keep_only(first);
         }
