@@ -1,6 +1,7 @@
 // Two or more builds of the lab side by side, on a fresh page each, alternating round by round:
 // when the page hands its first job to a worker, when that job is done, when the charts first
-// draw and when the metrics show (Simulate), from navigation start. For an A/B of a change to
+// draw and when the metrics show (Simulate; on Compare, until every worker is idle with the
+// metrics shown), from navigation start; and the page's longest main-thread task until then. For an A/B of a change to
 // how the page or its workers start, where a single build's numbers vary more than the change.
 //
 //   node scripts/bench/start_ab.mjs DIST_A,DIST_B[,…] ['#/simulate?preset=maneerat-doc-2'] [--rounds 6] [--throttle]
@@ -26,6 +27,10 @@ if (dists.length === 0) {
 /** Installed before the app loads: the moments above, in the page's clock. */
 function instrument() {
   window.cutlabStart = {};
+  window.cutlabLongest = 0;
+  new PerformanceObserver((list) => {
+    for (const e of list.getEntries()) window.cutlabLongest = Math.max(window.cutlabLongest, e.duration);
+  }).observe({ type: 'longtask', buffered: true });
   const at = (what) => { window.cutlabStart[what] ??= performance.now(); };
   const post = Worker.prototype.postMessage;
   Worker.prototype.postMessage = function (message, ...rest) {
@@ -65,8 +70,11 @@ async function once(server) {
     await cdp.send('Network.emulateNetworkConditions', { offline: false, latency: 20, downloadThroughput: 10e6 / 8, uploadThroughput: 10e6 / 8 });
   }
   await page.goto(server.url + hash);
-  await page.waitForFunction(() => window.cutlabStart.metrics !== undefined, null, { timeout: 60_000 });
-  const times = await page.evaluate(() => window.cutlabStart);
+  const done = hash.startsWith('#/compare')
+    ? () => document.documentElement.dataset.busyWorkers === '0' && document.querySelectorAll('table.metrics tbody tr').length > 0
+    : () => window.cutlabStart.metrics !== undefined;
+  await page.waitForFunction(done, null, { timeout: 60_000 });
+  const times = await page.evaluate(() => ({ ...window.cutlabStart, longest: window.cutlabLongest }));
   await context.close();
   return times;
 }
@@ -82,12 +90,12 @@ try {
     return sorted.length ? Math.round(sorted[Math.floor(sorted.length / 2)]) : NaN;
   };
   console.log(`${hash}${throttle ? ', throttled' : ''}, ${rounds} rounds, medians in ms from navigation start`);
-  console.log('| build | first job posted | its answer | first chart points | metrics | metrics, every round |');
-  console.log('|---|---:|---:|---:|---:|---|');
+  console.log('| build | first job posted | its answer | first chart points | metrics | longest task | metrics, every round |');
+  console.log('|---|---:|---:|---:|---:|---:|---|');
   dists.forEach((dist, i) => {
     const m = (key) => median(results[i].map((r) => r[key]));
     const all = results[i].map((r) => Math.round(r.metrics)).join(', ');
-    console.log(`| ${dist} | ${m('posted')} | ${m('done')} | ${m('drawn')} | ${m('metrics')} | ${all} |`);
+    console.log(`| ${dist} | ${m('posted')} | ${m('done')} | ${m('drawn')} | ${m('metrics')} | ${m('longest')} | ${all} |`);
   });
 } finally {
   await browser.close();
