@@ -40,15 +40,16 @@ use std::collections::BTreeMap;
 use std::path::PathBuf;
 use std::time::Instant;
 
-use cutlab::closed_loop::definition::{
-    parse_texts, preset_controller, RunSetting, RunSpec, PAPER_002_CONTROL_PERIOD_S,
-    PAPER_002_EC_TIME_BASE_S, PAPER_002_OUTPUT_RANGE_PCT,
-};
+use cutlab::closed_loop::definition::{parse_texts, RunSetting, RunSpec};
 use cutlab::closed_loop::lab::metrics_config;
 use cutlab::closed_loop::lab::{teach_cut_only, LabRun, RunResult, TeachKey};
 use cutlab::closed_loop::metrics::{Metrics, FLUCTUATION_WINDOW_S, PATH_SLOWDOWN_SHARE};
 use cutlab::closed_loop::paper_comparisons::{
     fig_7_judgement, Fig7Judgement, CLEARLY_SOONER, PAPER_COMPARISONS, SETTLED_FOR_S,
+};
+use cutlab::closed_loop::paper_defaults::{
+    preset_controller, PAPER_002_CONTROL_PERIOD_S, PAPER_002_EC_TIME_BASE_S,
+    PAPER_002_OUTPUT_RANGE_PCT,
 };
 use cutlab::closed_loop::references::{
     apply_references, ReferenceSearch, REFERENCE_RESOLUTION_PCT,

@@ -6,8 +6,9 @@
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
 
 use cutlab::closed_loop::config::RunConfiguration;
-use cutlab::closed_loop::definition::{preset_controller, RunSpec};
+use cutlab::closed_loop::definition::RunSpec;
 use cutlab::closed_loop::lab::{simulate, RunResult};
+use cutlab::closed_loop::paper_defaults::preset_controller;
 use cutlab::control::fuzzy::rules::{paper_002_engine, RuleBase};
 use cutlab::control::fuzzy::{fis, fll};
 use cutlab::control::law::ControlInput;

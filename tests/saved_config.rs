@@ -10,8 +10,9 @@
 mod common;
 
 use cutlab::closed_loop::config::RunConfiguration;
-use cutlab::closed_loop::definition::{parse_texts, preset_controller, RunSetting};
+use cutlab::closed_loop::definition::{parse_texts, RunSetting};
 use cutlab::closed_loop::paper_comparisons::PAPER_COMPARISONS;
+use cutlab::closed_loop::paper_defaults::preset_controller;
 use cutlab::control::registry::ControllerKind;
 use cutlab::plant::Preset;
 

@@ -20,9 +20,9 @@ use super::sim::{
 };
 use super::{write_json, CliError, Io};
 use crate::closed_loop::calibration_file::CalibrationFile;
-use crate::closed_loop::definition::preset_controller;
 use crate::closed_loop::definition::{RunSpec, SettingsOverrides};
 use crate::closed_loop::lab::RunResult;
+use crate::closed_loop::paper_defaults::preset_controller;
 use crate::closed_loop::references::{apply_references, references, References};
 use crate::closed_loop::trace::write_csv;
 use crate::control::registry::{ControllerConfig, ControllerKind};

@@ -8,12 +8,11 @@ use super::args::required;
 use super::{write_json, CliError, Io};
 use crate::closed_loop::config::RunConfiguration;
 use crate::closed_loop::definition::RunSpec;
-use crate::closed_loop::definition::{
-    parse_texts, preset_controller, RunSetting, SettingError, SettingKind,
-};
+use crate::closed_loop::definition::{parse_texts, RunSetting, SettingError, SettingKind};
 use crate::closed_loop::lab::{teach_cut_only, LabRun, RunResult, TeachKey};
 use crate::closed_loop::metrics::Metrics;
 use crate::closed_loop::paper_comparisons::PAPER_COMPARISONS;
+use crate::closed_loop::paper_defaults::preset_controller;
 use crate::closed_loop::references::{apply_references, ReferenceSearch, References};
 use crate::closed_loop::summary::{best_marks, not_best_note, METRIC_ROWS};
 use crate::closed_loop::trace::write_csv;

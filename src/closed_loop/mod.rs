@@ -5,6 +5,7 @@
 //!
 //! | file | what it holds |
 //! |---|---|
+//! | [`paper_defaults`] | the defaults a preset's paper states: a controller's parameters ([`paper_defaults::preset_controller`]) and paper 002's control period |
 //! | [`definition`] | the run definition: every setting a person may change ([`definition::RunSetting`], one table for the form, the command line and a saved configuration) and [`definition::RunSpec`], a run as asked for |
 //! | [`error`] | [`error::LoopError`], why a run could not be set up or made |
 //! | [`settings`] | the one resolution of a request on a machine: [`settings::plan`] before the teach cut, [`settings::Plan::settle`] after it |
@@ -39,6 +40,7 @@ pub mod flat_row;
 pub mod lab;
 pub mod metrics;
 pub mod paper_comparisons;
+pub mod paper_defaults;
 pub mod precomputed;
 pub mod recording_jobs;
 pub mod references;

@@ -6,9 +6,10 @@
 //! ([`fig_7_judgement`]).
 
 use super::definition::RunSpec;
-use super::definition::{parse_texts, preset_controller, RunSetting, SettingError};
+use super::definition::{parse_texts, RunSetting, SettingError};
 use super::lab::RunResult;
 use super::metrics::FLUCTUATION_WINDOW_S;
+use super::paper_defaults::preset_controller;
 use super::summary::format_metric;
 use crate::control::registry::ControllerKind;
 use crate::plant::Preset;

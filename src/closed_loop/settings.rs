@@ -21,9 +21,10 @@
 
 use super::definition::{
     check_band, machine_max_override_pct, RunProblem, RunSetting, RunSpec, SettingError,
-    SettingsOverrides, PAPER_002_CONTROL_PERIOD_S, PAPER_002_OUTPUT_RANGE_PCT,
+    SettingsOverrides,
 };
 use super::error::LoopError;
+use super::paper_defaults::{PAPER_002_CONTROL_PERIOD_S, PAPER_002_OUTPUT_RANGE_PCT};
 use crate::control::registry::ControllerConfig;
 use crate::estimation::estimator::{Calibration, Feedback};
 use crate::plant::cnc::OverrideMode;

@@ -327,7 +327,7 @@ pub struct ControllerConfig {
 /// their defaults, unknown or out-of-range ones are errors, and so is a field other than these
 /// four (a misspelt `"parms"` would otherwise run on the defaults). Whose defaults depends on
 /// the reader: a controller on its own takes its kind's ([`ControllerConfig::new`]), a run in a
-/// saved configuration its preset's (`closed_loop::definition::preset_controller`), through
+/// saved configuration its preset's (`closed_loop::paper_defaults::preset_controller`), through
 /// [`ControllerText::resolve`].
 #[derive(Debug, Clone, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]

@@ -6,7 +6,8 @@
 //! through the Logs page's own ([`LogsLink::parse`]): the same parsers the lab's pages use, so a
 //! lesson cannot set up something the lab would read differently.
 
-use crate::closed_loop::definition::{parse_texts, preset_controller, RunSetting, RunSpec};
+use crate::closed_loop::definition::{parse_texts, RunSetting, RunSpec};
+use crate::closed_loop::paper_defaults::preset_controller;
 use crate::control::registry::{ControllerConfig, ControllerKind};
 use crate::input::parse_number;
 use crate::log::link::LogsLink;

@@ -9,10 +9,10 @@ use leptos::prelude::*;
 
 use crate::closed_loop::config::RunConfiguration;
 use crate::closed_loop::definition::{
-    parse_texts, preset_controller, preset_parameter, RunSetting, RunSpec, SettingGroup,
-    SettingsOverrides,
+    parse_texts, RunSetting, RunSpec, SettingGroup, SettingsOverrides,
 };
 use crate::closed_loop::lab::preset_plan;
+use crate::closed_loop::paper_defaults::{preset_controller, preset_parameter};
 use crate::control::fuzzy::fll;
 use crate::control::fuzzy::rules::RuleTable;
 use crate::control::registry::{ControllerConfig, ControllerKind};

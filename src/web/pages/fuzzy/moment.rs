@@ -7,8 +7,9 @@ use std::sync::Arc;
 use leptos::prelude::*;
 
 use super::Fuzzy;
-use crate::closed_loop::definition::{preset_controller, RunSpec};
+use crate::closed_loop::definition::RunSpec;
 use crate::closed_loop::lab::RunResult;
+use crate::closed_loop::paper_defaults::preset_controller;
 use crate::control::registry::ControllerKind;
 use crate::plant::Preset;
 use crate::web::components::fields::SelectField;

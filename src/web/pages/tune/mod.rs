@@ -25,7 +25,8 @@ mod teach_in;
 
 use leptos::prelude::*;
 
-use crate::closed_loop::definition::{preset_controller, RunSpec};
+use crate::closed_loop::definition::RunSpec;
+use crate::closed_loop::paper_defaults::preset_controller;
 use crate::control::fuzzy::fll;
 use crate::control::registry::{ControllerConfig, ControllerKind};
 use crate::input::table::{self, Table};
