@@ -8,7 +8,8 @@
 // compresses another directory.
 import { readdir, readFile, writeFile } from 'node:fs/promises';
 import { extname, join } from 'node:path';
-import { brotliCompressSync, constants, gzipSync } from 'node:zlib';
+import { promisify } from 'node:util';
+import { brotliCompress, constants, gzip } from 'node:zlib';
 
 /** What is worth compressing: text and wasm, above a size where a header costs more than it saves. */
 const COMPRESSIBLE = new Set(['.wasm', '.js', '.css', '.html', '.svg', '.json', '.csv', '.md', '.fll', '.txt']);
@@ -30,20 +31,27 @@ async function* files(dir) {
   }
 }
 
-let count = 0;
-for await (const path of files(directory)) {
-  if (!COMPRESSIBLE.has(extname(path))) continue;
+/** Both compressed forms of `path`, written beside it; whether it was worth compressing. The
+ * files compress side by side (zlib's thread pool), so a build waits for about its largest. */
+async function compress(path) {
+  if (!COMPRESSIBLE.has(extname(path))) return false;
   const body = await readFile(path);
-  if (body.length < MIN_BYTES) continue;
-  const brotli = brotliCompressSync(body, {
-    params: {
-      [constants.BROTLI_PARAM_QUALITY]: constants.BROTLI_MAX_QUALITY,
-      [constants.BROTLI_PARAM_LGWIN]: constants.BROTLI_MAX_WINDOW_BITS,
-      [constants.BROTLI_PARAM_SIZE_HINT]: body.length,
-    },
-  });
-  await writeFile(`${path}.br`, brotli);
-  await writeFile(`${path}.gz`, gzipSync(body, { level: 9 }));
-  count += 1;
+  if (body.length < MIN_BYTES) return false;
+  const [brotli, gzipped] = await Promise.all([
+    promisify(brotliCompress)(body, {
+      params: {
+        [constants.BROTLI_PARAM_QUALITY]: constants.BROTLI_MAX_QUALITY,
+        [constants.BROTLI_PARAM_LGWIN]: constants.BROTLI_MAX_WINDOW_BITS,
+        [constants.BROTLI_PARAM_SIZE_HINT]: body.length,
+      },
+    }),
+    promisify(gzip)(body, { level: 9 }),
+  ]);
+  await Promise.all([writeFile(`${path}.br`, brotli), writeFile(`${path}.gz`, gzipped)]);
+  return true;
 }
+
+const paths = [];
+for await (const path of files(directory)) paths.push(path);
+const count = (await Promise.all(paths.map(compress))).filter(Boolean).length;
 console.error(`precompress: ${count} files in ${directory} written as .br and .gz beside themselves`);
