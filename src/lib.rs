@@ -75,6 +75,7 @@ pub mod rng;
 pub mod safety;
 pub mod sections;
 pub mod signal;
+pub mod truth_fields;
 pub mod tuning;
 pub mod work;
 

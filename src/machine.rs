@@ -10,6 +10,7 @@
 //! (the true force, the depth of cut) travels beside it in [`PlantTruth`], used for plots and
 //! metrics, never by a controller.
 
+use crate::truth_fields::TRUTH_VALUES;
 use serde::Serialize;
 
 /// What the adaptive controller asks of the machine for the next sample period.
@@ -100,55 +101,26 @@ pub struct PlantTruth {
     pub spindle_current_rms_a: f64,
 }
 
-/// A simulation's truth as [`crate::protocol::frame::SimTruth`] carries it, at full precision: what a device averages over
-/// a block and a host interpolates between samples, in the wire order ([`crate::protocol::frame::SimTruth::NAMES`]).
-impl PlantTruth {
-    /// The sixteen values in wire order.
-    pub fn wire_values(&self) -> [f64; 16] {
-        [
-            self.force_x_n,
-            self.force_y_n,
-            self.force_z_n,
-            self.force_resultant_n,
-            self.feed_force_n,
-            self.spindle_torque_nm,
-            self.cutting_power_w,
-            self.depth_mm,
-            self.width_mm,
-            self.feed_per_tooth_mm,
-            self.path_position_mm,
-            self.material_removal_mm3_s,
-            self.tool_x_mm,
-            self.tool_y_mm,
-            self.feed_current_rms_a,
-            self.spindle_current_rms_a,
-        ]
-    }
+/// A simulation's truth as [`crate::protocol::frame::SimTruth`] carries it, at full precision:
+/// what a device averages over a block and a host interpolates between samples, in the wire order
+/// ([`crate::truth_fields::in_wire_order`]).
+macro_rules! plant_truth_in_wire_order {
+    ($($field:ident,)*) => {
+        impl PlantTruth {
+            /// The values in wire order.
+            pub fn wire_values(&self) -> [f64; TRUTH_VALUES] {
+                [$(self.$field),*]
+            }
 
-    /// The truth from the sixteen values in wire order.
-    pub fn from_wire_values(v: [f64; 16]) -> Self {
-        let [force_x_n, force_y_n, force_z_n, force_resultant_n, feed_force_n, spindle_torque_nm, cutting_power_w, depth_mm, width_mm, feed_per_tooth_mm, path_position_mm, material_removal_mm3_s, tool_x_mm, tool_y_mm, feed_current_rms_a, spindle_current_rms_a] =
-            v;
-        Self {
-            force_x_n,
-            force_y_n,
-            force_z_n,
-            force_resultant_n,
-            feed_force_n,
-            spindle_torque_nm,
-            cutting_power_w,
-            depth_mm,
-            width_mm,
-            feed_per_tooth_mm,
-            path_position_mm,
-            material_removal_mm3_s,
-            tool_x_mm,
-            tool_y_mm,
-            feed_current_rms_a,
-            spindle_current_rms_a,
+            /// The truth from the values in wire order.
+            pub fn from_wire_values(values: [f64; TRUTH_VALUES]) -> Self {
+                let [$($field),*] = values;
+                Self { $($field),* }
+            }
         }
-    }
+    };
 }
+crate::truth_fields::in_wire_order!(plant_truth_in_wire_order);
 
 /// A sensorless force estimate from the programmed cutting conditions (paper 004's power law)
 /// and how far to trust it.
@@ -246,7 +218,7 @@ mod tests {
 
     #[test]
     fn the_truth_s_wire_values_are_in_sim_truth_s_order_and_read_back() {
-        let values: [f64; 16] = std::array::from_fn(|i| i as f64 + 0.5);
+        let values: [f64; TRUTH_VALUES] = std::array::from_fn(|i| i as f64 + 0.5);
         let truth = PlantTruth::from_wire_values(values);
         assert_eq!(truth.wire_values(), values);
         // Each value is the field the protocol names at its place.

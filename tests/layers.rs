@@ -19,7 +19,7 @@ use std::path::Path;
 /// The crate's top-level modules, lowest layer first: a module may use those before it (and
 /// those on its own line), never one after it.
 const LAYERS: &[&[&str]] = &[
-    &["math", "input", "work", "sections"],
+    &["math", "input", "work", "sections", "truth_fields"],
     &["rng"],
     &["machine"],
     &["signal"],

@@ -59,6 +59,7 @@ use crate::plant::cnc::{AppliedOverride, OverrideMode};
 use crate::plant::presets::PlantEdits;
 use crate::plant::Preset;
 use crate::rng::Rng;
+use crate::truth_fields::TRUTH_VALUES;
 
 /// [`Fault::channel`] when the fault concerns no channel.
 const NO_CHANNEL: u8 = 0xFF;
@@ -224,7 +225,7 @@ struct SampleSums {
     fv: f64,
     speed: f64,
     feed_mm_min: f64,
-    truth: [f64; 16],
+    truth: [f64; TRUTH_VALUES],
     last: SensorSample,
     last_truth: PlantTruth,
     truth_seen: bool,

@@ -13,6 +13,8 @@
 //!
 //! `core` only, no allocation, no panic on any bytes.
 
+use crate::truth_fields::TRUTH_VALUES;
+
 /// The protocol's major version: a host refuses a device of another major version.
 pub const VERSION_MAJOR: u8 = 2;
 /// The protocol's minor version: additions a host of a lower minor ignores.
@@ -932,7 +934,7 @@ impl Frame {
             }),
             FrameType::SimTruth => {
                 let seq = r.u32();
-                let v: [f32; 16] = core::array::from_fn(|_| r.f32());
+                let v: [f32; TRUTH_VALUES] = core::array::from_fn(|_| r.f32());
                 Frame::SimTruth(SimTruth::from_values(seq, v))
             }
             FrameType::SetOverride => Frame::SetOverride(SetOverride {
@@ -970,74 +972,28 @@ impl Frame {
     }
 }
 
-impl SimTruth {
-    /// The names of the sixteen values, in wire order.
-    pub const NAMES: [&'static str; 16] = [
-        "force_x_n",
-        "force_y_n",
-        "force_z_n",
-        "force_resultant_n",
-        "feed_force_n",
-        "spindle_torque_nm",
-        "cutting_power_w",
-        "depth_mm",
-        "width_mm",
-        "feed_per_tooth_mm",
-        "path_position_mm",
-        "material_removal_mm3_s",
-        "tool_x_mm",
-        "tool_y_mm",
-        "feed_current_rms_a",
-        "spindle_current_rms_a",
-    ];
+/// The truth's values in wire order ([`crate::truth_fields::in_wire_order`]), as the codecs
+/// (binary and JSON) read and write them.
+macro_rules! sim_truth_in_wire_order {
+    ($($field:ident,)*) => {
+        impl SimTruth {
+            /// The names of the values, in wire order.
+            pub const NAMES: [&'static str; TRUTH_VALUES] = [$(stringify!($field)),*];
 
-    /// The sixteen values in wire order ([`SimTruth::NAMES`]).
-    pub fn values(&self) -> [f32; 16] {
-        [
-            self.force_x_n,
-            self.force_y_n,
-            self.force_z_n,
-            self.force_resultant_n,
-            self.feed_force_n,
-            self.spindle_torque_nm,
-            self.cutting_power_w,
-            self.depth_mm,
-            self.width_mm,
-            self.feed_per_tooth_mm,
-            self.path_position_mm,
-            self.material_removal_mm3_s,
-            self.tool_x_mm,
-            self.tool_y_mm,
-            self.feed_current_rms_a,
-            self.spindle_current_rms_a,
-        ]
-    }
+            /// The values in wire order ([`SimTruth::NAMES`]).
+            pub fn values(&self) -> [f32; TRUTH_VALUES] {
+                [$(self.$field),*]
+            }
 
-    /// The truth of sample `seq` from the sixteen values in wire order.
-    pub fn from_values(seq: u32, v: [f32; 16]) -> Self {
-        let [force_x_n, force_y_n, force_z_n, force_resultant_n, feed_force_n, spindle_torque_nm, cutting_power_w, depth_mm, width_mm, feed_per_tooth_mm, path_position_mm, material_removal_mm3_s, tool_x_mm, tool_y_mm, feed_current_rms_a, spindle_current_rms_a] =
-            v;
-        Self {
-            seq,
-            force_x_n,
-            force_y_n,
-            force_z_n,
-            force_resultant_n,
-            feed_force_n,
-            spindle_torque_nm,
-            cutting_power_w,
-            depth_mm,
-            width_mm,
-            feed_per_tooth_mm,
-            path_position_mm,
-            material_removal_mm3_s,
-            tool_x_mm,
-            tool_y_mm,
-            feed_current_rms_a,
-            spindle_current_rms_a,
+            /// The truth of sample `seq` from the values in wire order.
+            pub fn from_values(seq: u32, values: [f32; TRUTH_VALUES]) -> Self {
+                let [$($field),*] = values;
+                Self { seq, $($field),* }
+            }
         }
-    }
+    };
 }
+crate::truth_fields::in_wire_order!(sim_truth_in_wire_order);
 
 /// The text of a zero-padded ASCII field (up to the first zero); `None` if it is not UTF-8.
 pub fn text_field(bytes: &[u8]) -> Option<&str> {

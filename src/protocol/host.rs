@@ -28,6 +28,7 @@ use super::frame::{
     Sample, SetOverride, SimTruth, VERSION_MAJOR, VERSION_MINOR,
 };
 use crate::machine::{MachineStep, OverrideCommand, PlantTruth, SensorSample};
+use crate::truth_fields::TRUTH_VALUES;
 
 /// The longest run of lost samples the host fills by interpolation.
 pub const MAX_FILLED_GAP: u32 = 8;
@@ -861,7 +862,7 @@ fn interpolate(a: &LinkSample, b: &LinkSample, f: f64) -> LinkSample {
     let truth = match (a.step.truth, b.step.truth) {
         (Some(ta), Some(tb)) => {
             let (va, vb) = (ta.wire_values(), tb.wire_values());
-            let v: [f64; 16] = std::array::from_fn(|i| lerp(va[i], vb[i], f));
+            let v: [f64; TRUTH_VALUES] = std::array::from_fn(|i| lerp(va[i], vb[i], f));
             Some(PlantTruth::from_wire_values(v))
         }
         (t, _) => t,

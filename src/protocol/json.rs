@@ -24,6 +24,7 @@ use serde::de::{self, Deserialize, Deserializer, MapAccess, SeqAccess, Visitor};
 use serde_json::{json, Map, Value};
 
 use crate::input::excerpt;
+use crate::truth_fields::TRUTH_VALUES;
 
 use super::frame::{
     padded, text_field, Ack, AckResult, Arm, Capabilities, Disarm, Fault, FaultKind, Frame,
@@ -224,10 +225,10 @@ pub fn field_names(frame_type: FrameType) -> &'static [&'static str] {
 }
 
 /// `seq` and the sixteen values of a SimTruth.
-const SIM_TRUTH_FIELDS: [&str; 17] = {
-    let mut names = ["seq"; 17];
+const SIM_TRUTH_FIELDS: [&str; TRUTH_VALUES + 1] = {
+    let mut names = ["seq"; TRUTH_VALUES + 1];
     let mut i = 0;
-    while i < 16 {
+    while i < TRUTH_VALUES {
         names[i + 1] = SimTruth::NAMES[i];
         i += 1;
     }
@@ -561,7 +562,7 @@ pub fn frame_from_json(value: &Value) -> Result<Frame, String> {
             faults: f.int("faults")?,
         }),
         FrameType::SimTruth => {
-            let mut v = [0f32; 16];
+            let mut v = [0f32; TRUTH_VALUES];
             for (slot, name) in v.iter_mut().zip(SimTruth::NAMES) {
                 *slot = f.f32(name)?;
             }

@@ -27,8 +27,9 @@
 //! link is the application's (`crate::hardware::link_run`).
 //!
 //! The codec — [`crc`], [`cobs`], [`frame`] and [`codec`] — uses `core` alone, allocates nothing
-//! and never panics, so a bridge's firmware can compile those four files as they are
-//! (`tests/no_std/lib.rs` proves it for `wasm32-unknown-unknown` without `std`).
+//! and never panics, so a bridge's firmware can compile those four files as they are, with
+//! [`crate::truth_fields`] beside them (`tests/no_std/lib.rs` proves it for
+//! `wasm32-unknown-unknown` without `std`).
 
 pub mod cobs;
 pub mod codec;

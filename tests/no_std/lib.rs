@@ -1,4 +1,4 @@
-//! The protocol codec built without `std` (and without `alloc`): the four files a bridge's
+//! The protocol codec built without `std` (and without `alloc`): the five files a bridge's
 //! firmware compiles as they are. `scripts/test` builds this for wasm32-unknown-unknown:
 //!
 //! ```text
@@ -18,6 +18,8 @@ pub mod codec;
 pub mod crc;
 #[path = "../../src/protocol/frame.rs"]
 pub mod frame;
+#[path = "../../src/truth_fields.rs"]
+mod truth_fields;
 
 /// One frame encoded and decoded, so the build exercises the whole path.
 pub fn round_trip_heartbeat(seq: u32) -> bool {
