@@ -6,14 +6,14 @@
 //! |---|---|
 //! | `ready` | — (the module is loaded: requests posted before this would be lost) |
 //! | `progress` | `job`, `stage`, `fraction` (about ten times a second) |
-//! | `chunk` | `job`, `run`, `rows`, `terms`, and with a run's first chunk `calibration`: the trace rows added since the last chunk ([`TraceChunk`]), about every `CHUNK_EVERY_MS` (20 ms) once the closed loop runs |
-//! | `done` | `job`, and for runs `runs`: one `{ header, rows, terms }` per spec ([`RunParts`]; `rows` and `terms` are `Float64Array`s, transferred); for references `references`, as JSON; for a bench or open-loop recording, teach cuts, a log's signal chain or a calibration fitted to a log `json` and `arrays`, a list of `Float64Array`s, transferred (`cutlab::closed_loop::recording_jobs::Packed`); for replays `replays`: one `{ header, rows, terms }` per controller ([`ReplayParts`], the same way) |
+//! | `chunk` | `job`, `run`, `rows`, `terms`, and with a run's first chunk `calibration`: the trace rows added since the last chunk ([`TraceChunk`](cutlab::closed_loop::transfer::TraceChunk)), about every `CHUNK_EVERY_MS` (20 ms) once the closed loop runs |
+//! | `done` | `job`, and for runs `runs`: one `{ header, rows, terms }` per spec ([`RunParts`](cutlab::closed_loop::transfer::RunParts); `rows` and `terms` are `Float64Array`s, transferred); for references `references`, as JSON; for a bench or open-loop recording, teach cuts, a log's signal chain or a calibration fitted to a log `json` and `arrays`, a list of `Float64Array`s, transferred (`cutlab::closed_loop::recording_jobs::Packed`); for replays `replays`: one `{ header, rows, terms }` per controller ([`ReplayParts`](cutlab::log::transfer::ReplayParts), the same way) |
 //! | `failed` | `job`, `message` (shown to a person as is) |
 //!
-//! A request is `{ job, request }`, `request` being a [`JobRequest`] as JSON: closed-loop runs, a
+//! A request is `{ job, request }`, `request` being a [`JobRequest`](cutlab::closed_loop::transfer::JobRequest) as JSON: closed-loop runs, a
 //! scenario's fixed-feed references, paper 004's learning, paper 000's bench recording (Signal
 //! chain), a preset's open-loop recording (Machine) or a teach-in's teach cuts (Tune); or
-//! `{ job, log_job, numbers }`, `log_job` being a [`LogJobRequest`] as JSON (the Logs page's
+//! `{ job, log_job, numbers }`, `log_job` being a [`LogJobRequest`](cutlab::log::transfer::LogJobRequest) as JSON (the Logs page's
 //! replays, signal chain or calibration fit, a layer above the loop's protocol) and `numbers`
 //! one `Float64Array` per column of the log it sends. The job is done in one go: the page
 //! cancels it by terminating the worker.

@@ -186,7 +186,7 @@ pub fn read_log(file: &str) -> Result<crate::log::Log, CliError> {
     Ok(log)
 }
 
-/// One problem of a file as a note line: "note: line 12, Force [N]: …".
+/// One problem of a file as a note line: `note: line 12, Force [N]: …`.
 pub fn problem_note(p: &crate::log::LineProblem) -> String {
     format!(
         "note: line {}{}: {}\n",

@@ -58,7 +58,7 @@ const SLOWEST_FIXED_PCT: f64 = 1.0;
 /// 170 mm/min runs as 36 %); above it, the block with the lowest ceiling runs at its ceiling.
 /// Where the blocks' windows share no override, the range is the highest floor alone (which the
 /// envelope then lowers in the blocks whose ceiling lies below it). At least
-/// [`SLOWEST_FIXED_PCT`] where the machine has no window.
+/// 1 % (the slowest fixed feed considered) where the machine has no window.
 ///
 /// ```
 /// use cutlab::closed_loop::definition::RunSpec;

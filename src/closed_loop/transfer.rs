@@ -426,7 +426,7 @@ impl StreamedRun {
     }
 }
 
-/// Rows' numbers, [`ROW_VALUES`] per row, in [`row_from`]'s order (a trace as it travels; the
+/// Rows' numbers, [`ROW_VALUES`] per row, in the order the row's fields are listed above (a trace as it travels; the
 /// Logs page's replays too, [`crate::log::transfer`]).
 pub fn flat_rows(rows: &[TraceRow]) -> Vec<f64> {
     let mut flat = Vec::with_capacity(rows.len() * ROW_VALUES);

@@ -476,7 +476,7 @@ pub fn unpack_log_fit(packed: Packed) -> Result<LogFit, String> {
 pub struct ReplayParts {
     /// The envelope's events and the completion, as JSON.
     pub header_json: String,
-    /// The trace's rows, [`ROW_VALUES`] numbers each.
+    /// The trace's rows, [`crate::closed_loop::transfer::ROW_VALUES`] numbers each.
     pub rows: Vec<f64>,
     /// The controller's terms, as in [`Trace::terms`].
     pub terms: Vec<f64>,

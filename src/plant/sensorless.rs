@@ -4,7 +4,8 @@
 //! on the force itself. Paper 004 uses it "in predicting failure occurrence of online sensors":
 //! where the current-based estimate leaves the network's prediction by more than the network's
 //! own uncertainty allows, the current sensor is predicted to be failing
-//! ([`crate::closed_loop::feedback_loop::sensor_failure_predicted`]).
+//! ([`crate::closed_loop::feedback_loop::estimates_disagree`], held for
+//! [`crate::closed_loop::feedback_loop::SENSOR_FAILURE_PERSISTENCE_S`]).
 //!
 //! **How far to trust it.** A prediction's relative uncertainty (1 = ±100 %) is the band the
 //! trial cuts leave about the network, [`UNCERTAINTY_STANDARD_ERRORS`] times the residuals' RMS on

@@ -19,7 +19,7 @@
 //! instead returns the middle of the range when no rule fires.) Every malformed line is an error
 //! naming it; nothing is dropped.
 //!
-//! [`write`] exports any engine FIS can say: one rule block whose rules name input variables
+//! [`write()`] exports any engine FIS can say: one rule block whose rules name input variables
 //! only, each at most once, joined all by `and` or all by `or`, hedges that have a code, one
 //! conclusion per output, one defuzzifier and aggregation for all outputs, no input locking its
 //! range. Anything else is an error saying what FIS cannot express.

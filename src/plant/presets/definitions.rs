@@ -32,15 +32,15 @@ pub struct Definition {
 pub enum PlantDefinition {
     /// The simulated mill cutting this.
     Mill(MillParameters),
-    /// Paper 002's bond graph on its Fig. 7 run ([`BondGraphRun::paper_002`]).
+    /// Paper 002's bond graph on its Fig. 7 run ([`crate::plant::bond_graph::BondGraphRun::paper_002`]).
     BondGraph {
         /// The reference current the paper regulates the spindle to.
         target_spindle_current_a: f64,
     },
-    /// Paper 000's brake bench on its default schedule ([`BrakeBenchConfig::default`]).
+    /// Paper 000's brake bench on its default schedule ([`crate::plant::bench::BrakeBenchConfig`]'s default).
     BrakeBench,
     /// Paper 001's eq 2.3 standing in for the mill on this cut
-    /// ([`Preset::second_order_equivalent`]).
+    /// ([`crate::plant::Preset::second_order_equivalent`]).
     SecondOrder(MillParameters),
 }
 

@@ -19,7 +19,7 @@ use crate::plant::PlantError;
 /// the serialised form).
 ///
 /// Each edit must lie in a physically sane range, checked by [`PlantEdits::check`] (and by
-/// [`Preset::machine_with`]):
+/// [`crate::plant::Preset::machine_with`]):
 ///
 /// | edit | accepted | why |
 /// |---|---|---|
