@@ -5,9 +5,7 @@
 use crate::machine::{OverrideCommand, SensorSample};
 
 use super::chip_load::{chip_load_band_pct, ChipLoadEnd};
-use super::config::{
-    ArmingTrigger, EnvelopeConfig, EnvelopeError, FaultAction, OverrideResolution,
-};
+use super::config::{ArmingTrigger, EnvelopeConfig, EnvelopeError, FaultAction};
 use super::events::{SafetyEvent, SensorFault};
 
 /// The envelope's state.
@@ -50,97 +48,8 @@ const EVENT_CAPACITY: usize = 16;
 impl SafetyEnvelope {
     /// An envelope for a machine whose sensors deliver `sample_rate_hz`.
     pub fn new(config: EnvelopeConfig, sample_rate_hz: f64) -> Result<Self, EnvelopeError> {
+        config.check(sample_rate_hz)?;
         let c = &config;
-        let err = |m: String| Err(EnvelopeError(m));
-        let all_finite = [
-            c.min_override_pct,
-            c.max_override_pct,
-            c.max_rate_pct_per_s,
-            c.arming_delay_s,
-            c.arming_override_pct,
-            c.max_current_a,
-            c.stuck_after_s,
-            c.max_gap_periods,
-            c.recover_after_s,
-            c.overload_limit_n,
-            c.overload_time_s,
-            c.air_cut_force_n,
-            c.entry_override_pct,
-            c.entry_hold_s,
-            sample_rate_hz,
-        ]
-        .iter()
-        .all(|v| v.is_finite());
-        if !all_finite {
-            return err("every safety setting must be a finite number".into());
-        }
-        if !(c.min_override_pct >= 0.0 && c.min_override_pct < c.max_override_pct) {
-            return err(format!(
-                "minimum override {} % must be at least 0 and below the maximum {} %",
-                c.min_override_pct, c.max_override_pct
-            ));
-        }
-        if c.max_rate_pct_per_s <= 0.0 {
-            return err("the override rate limit must be positive".into());
-        }
-        if sample_rate_hz <= 0.0 {
-            return err("the sample rate must be positive".into());
-        }
-        if c.air_cut_force_n < 0.0 {
-            return err("the air-cut force must not be negative (0 turns the rule off)".into());
-        }
-        if c.entry_hold_s < 0.0 || c.entry_release_n.is_nan() {
-            return err("the entry hold's time must not be negative (0 s: no hold)".into());
-        }
-        if let Some(w) = c.chip_load {
-            let valid = w.teeth > 0
-                && w.min_mm.is_finite()
-                && w.max_mm.is_finite()
-                && 0.0 < w.min_mm
-                && w.min_mm < w.max_mm;
-            if !valid {
-                return err(format!(
-                    "the chip-load window {}–{} mm per tooth must be positive and ascending, for \
-                     a cutter with teeth",
-                    w.min_mm, w.max_mm
-                ));
-            }
-        }
-        if c.max_current_a <= 0.0 || c.overload_limit_n <= 0.0 {
-            return err("the current range and the overload limit must be positive".into());
-        }
-        if c.stuck_after_s < 0.0
-            || c.recover_after_s < 0.0
-            || c.arming_delay_s < 0.0
-            || c.overload_time_s < 0.0
-            || c.max_gap_periods < 1.0
-        {
-            return err("safety times must be non-negative and the gap at least one period".into());
-        }
-        if let OverrideResolution::Dial(p) = &c.resolution {
-            if p.is_empty()
-                || p.windows(2).any(|w| w[1] <= w[0])
-                || p.iter().any(|v| !v.is_finite())
-            {
-                return err("the dial table must list finite positions in ascending order".into());
-            }
-        }
-        if c.resolution
-            .nearest(c.min_override_pct, c.min_override_pct, c.max_override_pct)
-            .is_none()
-        {
-            return err(format!(
-                "no override position of the machine lies between {} % and {} %",
-                c.min_override_pct, c.max_override_pct
-            ));
-        }
-        if let FaultAction::Fallback(v) = c.fault_action {
-            if !(v.is_finite() && v >= c.min_override_pct && v <= c.max_override_pct) {
-                return err(format!(
-                    "the fault fallback override {v} % must lie within the override limits"
-                ));
-            }
-        }
         let start = c
             .arming_override_pct
             .clamp(c.min_override_pct, c.max_override_pct);

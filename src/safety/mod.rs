@@ -34,7 +34,7 @@
 //! | file | what it holds |
 //! |---|---|
 //! | [`chip_load`] | the chip-load window ([`ChipLoad`]), the override band it leaves ([`chip_load_band_pct`]) and which end held ([`ChipLoadEnd`]) |
-//! | [`config`] | the settings ([`EnvelopeConfig`]): the machine's override positions ([`OverrideResolution`]), arming ([`ArmingTrigger`]), what a sensor fault does ([`FaultAction`]), and [`EnvelopeError`] |
+//! | [`config`] | the settings ([`EnvelopeConfig`]): the machine's override positions ([`OverrideResolution`]), arming ([`ArmingTrigger`]), what a sensor fault does ([`FaultAction`]), and their checks ([`EnvelopeError`]) |
 //! | [`events`] | what the envelope saw and did, for the event log: [`SensorFault`], [`SafetyEvent`] |
 //! | [`envelope`] | the envelope itself ([`SafetyEnvelope`]): every sample observed, every request commanded |
 //! | `tests` | the envelope's tests, rule by rule and as properties over random (also non-finite) inputs |
