@@ -46,8 +46,10 @@ impl Engine {
     }
 
     /// An engine of any number of rule blocks; a rule fires when its activation exceeds
-    /// `firing_threshold` (fuzzylite's is [`FUZZYLITE_EPSILON`](crate::control::fuzzy::FUZZYLITE_EPSILON)). Checks every name, range,
+    /// `firing_threshold` (fuzzylite's is [`FUZZYLITE_EPSILON`]). Checks every name, range,
     /// shape, index and weight, and that every rule has the operators it needs.
+    ///
+    /// [`FUZZYLITE_EPSILON`]: crate::control::fuzzy::FUZZYLITE_EPSILON
     pub fn with_blocks(
         name: impl Into<String>,
         inputs: Vec<InputVariable>,

@@ -405,8 +405,10 @@ impl Engine {
 }
 
 /// Sorts breakpoints and drops exact repeats. Near repeats stay: a piece a few ulps wide is
-/// evaluated exactly ([`Shape::piece`](crate::control::fuzzy::membership::Shape::piece)) and adds next to nothing, where merging points within a
+/// evaluated exactly ([`Shape::piece`]) and adds next to nothing, where merging points within a
 /// fixed tolerance erased every vertex of a term narrower than it.
+///
+/// [`Shape::piece`]: crate::control::fuzzy::membership::Shape::piece
 fn sort_dedup(v: &mut Vec<f64>) {
     v.sort_by(f64::total_cmp);
     v.dedup();

@@ -27,7 +27,7 @@
 //! * **Weighted average** Σ wᵢ·zᵢ / Σ wᵢ and **weighted sum** Σ wᵢ·zᵢ over the activated terms: zᵢ
 //!   is a Takagi–Sugeno term's value (Constant, Linear, Function at wᵢ); on an output whose
 //!   terms are all monotonic (Ramp, Sigmoid, SShape, ZShape, Concave: a Tsukamoto engine) the
-//!   term's inverse at wᵢ; on any other (Mamdani) output the term's centre ([`Shape::centre`](super::membership::Shape::centre),
+//!   term's inverse at wᵢ; on any other (Mamdani) output the term's centre ([`Shape::centre`],
 //!   paper 002 eq 7). fuzzylite 6 differs on a Mamdani output: it inverts the monotonic terms
 //!   among others and takes a non-monotonic term's degree at wᵢ, which is not a point of the
 //!   output axis.
@@ -41,7 +41,7 @@
 //! terms near 1e155 or 1e-300, or 1e-12 wide at 1.0. The exact centroid is integrated in
 //! coordinates relative to the aggregate's support (so its moments cannot overflow), breakpoints
 //! are merged only when equal (so a narrow term keeps its vertices), straight pieces are
-//! evaluated by their own formula at their ends ([`Shape::piece`](super::membership::Shape::piece)), and the weighted average is a
+//! evaluated by their own formula at their ends ([`Shape::piece`]), and the weighted average is a
 //! convex combination of the terms' values. The results agree with the closed forms and with the
 //! references moved to those magnitudes to within the rounding of the terms' own vertices
 //! (`tests/fuzzy.rs`). A universe or term wider than an f64 holds (−1e308 to 1e308) is refused
@@ -58,6 +58,9 @@
 //! | `build` | [`Engine::new`] and [`Engine::with_blocks`]: every check of a definition, the choice of each output's exact path, the scratch space allocated once |
 //! | `inference` | [`Engine::evaluate`]: inputs, rule activations block by block, and an output's value when no rule fired for it |
 //! | `defuzzify` | [`Defuzzifier`] and [`WeightedKind`], and each output's number: weighted, sampled, or the exact centroid and mean of maximum |
+//!
+//! [`Shape::centre`]: super::membership::Shape::centre
+//! [`Shape::piece`]: super::membership::Shape::piece
 
 mod build;
 mod defuzzify;
