@@ -6,7 +6,7 @@
 //! |---|---|
 //! | `ready` | — (the module is loaded: requests posted before this would be lost) |
 //! | `progress` | `job`, `stage`, `fraction` (about ten times a second) |
-//! | `chunk` | `job`, `run`, `rows`, `terms`, and with a run's first chunk `calibration`: the trace rows added since the last chunk ([`TraceChunk`](cutlab::closed_loop::transfer::TraceChunk)), about every `CHUNK_EVERY_MS` (20 ms) once the closed loop runs |
+//! | `chunk` | `job`, `run`, `rows`, `terms`, and with a run's first chunk `calibration`: the trace rows added since the last chunk ([`TraceChunk`](cutlab::closed_loop::transfer::TraceChunk)), about every `CHUNK_EVERY_MS` (100 ms) once the closed loop runs |
 //! | `done` | `job`, and for runs `runs`: one `{ header, rows, terms }` per spec ([`RunParts`](cutlab::closed_loop::transfer::RunParts); `rows` and `terms` are `Float64Array`s, transferred); for references `references`, as JSON; for a bench or open-loop recording, teach cuts, a log's signal chain or a calibration fitted to a log `json` and `arrays`, a list of `Float64Array`s, transferred (`cutlab::closed_loop::recording_jobs::Packed`); for replays `replays`: one `{ header, rows, terms }` per controller ([`ReplayParts`](cutlab::log::transfer::ReplayParts), the same way) |
 //! | `failed` | `job`, `message` (shown to a person as is) |
 //!
@@ -55,13 +55,19 @@ mod worker {
     /// How often progress is posted: a page shows it, and more would only cost messages.
     const PROGRESS_EVERY_MS: f64 = 100.0;
 
-    /// How often the trace so far is posted: the page draws the start of a cut from the first
-    /// chunk (sent as soon as the closed loop has traced anything), so a long run shows at once;
-    /// the page redraws at its own pace whatever arrives, and each chunk costs one small message.
-    pub const CHUNK_EVERY_MS: f64 = 20.0;
+    /// How often the trace so far is posted after its first chunk (sent as soon as the closed
+    /// loop has traced anything, so a long run shows at once). The page redraws a run under way
+    /// every half second (`PREVIEW_EVERY_MS` in `web::components::runner`) from what has arrived
+    /// and the finished run comes whole, so chunks in between only cost the page's thread work
+    /// beside the runs.
+    pub const CHUNK_EVERY_MS: f64 = 100.0;
 
-    /// Control periods advanced between looks at the clock.
-    const BUDGET: usize = 200;
+    /// Control periods advanced between looks at the clock: about a simulated second, a few ms
+    /// in the worker, so a run's first piece leaves a few ms after its closed loop starts and
+    /// later pieces keep to [`CHUNK_EVERY_MS`]. (200 periods, 8–12 simulated s, held the first
+    /// piece of an edited run back 30–50 ms.) A budget only says where work may pause: the
+    /// results are the same whatever it is ([`Work`]).
+    const BUDGET: usize = 20;
 
     pub fn start() {
         let scope: DedicatedWorkerGlobalScope = js_sys::global().unchecked_into();

@@ -426,8 +426,8 @@ impl StreamedRun {
     }
 }
 
-/// Rows' numbers, [`ROW_VALUES`] per row, in the order the row's fields are listed above (a trace as it travels; the
-/// Logs page's replays too, [`crate::log::transfer`]).
+/// Rows' numbers, [`ROW_VALUES`] per row, in the order the row's fields are listed above (a
+/// trace as it travels; the Logs page's replays too, [`crate::log::transfer`]).
 pub fn flat_rows(rows: &[TraceRow]) -> Vec<f64> {
     let mut flat = Vec::with_capacity(rows.len() * ROW_VALUES);
     for row in rows {
