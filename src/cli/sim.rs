@@ -727,10 +727,40 @@ pub(crate) fn metrics_table(runs: &[(String, &RunResult)]) -> String {
         }
         out.push('\n');
     }
+    out.push_str(&missing_notes(runs));
     let named: Vec<(&str, &RunResult)> = runs.iter().map(|(n, r)| (n.as_str(), *r)).collect();
     if let Some(note) = not_best_note(&named) {
         out.push_str(&note);
         out.push('\n');
+    }
+    out
+}
+
+/// A line for each "—" of the table saying why it has no value, as the lab's table says on
+/// hover: `— Saving vs safe fixed feed (%): no safe fixed feed: …`, the runs named where they
+/// differ.
+fn missing_notes(runs: &[(String, &RunResult)]) -> String {
+    let mut out = String::new();
+    for row in &METRIC_ROWS {
+        let mut whys: Vec<(&'static str, Vec<&str>)> = Vec::new();
+        for (name, run) in runs {
+            if (row.value)(run).is_some() {
+                continue;
+            }
+            let why = row.why_missing(run);
+            match whys.iter_mut().find(|(w, _)| *w == why) {
+                Some((_, names)) => names.push(name),
+                None => whys.push((why, vec![name])),
+            }
+        }
+        let all_alike = whys.len() == 1 && whys[0].1.len() == runs.len();
+        for (why, names) in whys {
+            let _ = if all_alike {
+                writeln!(out, "— {}: {why}", row.heading())
+            } else {
+                writeln!(out, "— {}, {}: {why}", row.heading(), names.join(", "))
+            };
+        }
     }
     out
 }
@@ -740,6 +770,38 @@ mod tests {
     use super::*;
 
     use crate::closed_loop::lab::simulate;
+
+    #[test]
+    fn every_dash_of_the_table_says_why() {
+        let spec = RunSpec::new(Preset::ManeeratDoc1, ControllerKind::Fixed);
+        let run = simulate(&spec).unwrap();
+        let mut none_safe = run.clone();
+        apply_references(
+            &mut none_safe,
+            &References {
+                programmed_cycle_time_s: 2.0 * run.metrics.cycle_time_s,
+                safe_fixed_override_pct: f64::NAN,
+                safe_fixed_cycle_time_s: f64::NAN,
+            },
+        );
+        // No references yet: both savings say so, for every run alike.
+        let table = metrics_table(&[("a".into(), &run), ("b".into(), &run)]);
+        assert!(
+            table.contains("— Saving vs safe fixed feed (%): no reference run yet"),
+            "{table}"
+        );
+        // References without a safe fixed feed: that run's reason is its own, and named.
+        let table = metrics_table(&[("a".into(), &run), ("b".into(), &none_safe)]);
+        assert!(
+            table.contains("— Saving vs safe fixed feed (%), b: no safe fixed feed"),
+            "{table}"
+        );
+        assert!(
+            table.contains("— Saving vs programmed feed (%), a: no reference run yet"),
+            "{table}"
+        );
+        assert!(!table.contains("programmed feed (%), b"), "{table}");
+    }
 
     #[test]
     fn a_controller_fault_fails_the_command_and_names_the_run() {

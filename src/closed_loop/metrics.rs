@@ -104,9 +104,31 @@ pub struct Metrics {
     /// `None` until reference runs are made, and always for a program whose cycle time does not
     /// depend on the feed ([`with_savings`]).
     pub saving_vs_programmed_pct: Option<f64>,
-    /// Cycle-time saving against the highest fixed override that keeps the peak force under the
-    /// limit, percent; `None` as [`Metrics::saving_vs_programmed_pct`].
+    /// Cycle-time saving against the highest fixed override that keeps the peak force at or
+    /// below the target, percent; `None` as [`Metrics::saving_vs_programmed_pct`], and where no
+    /// fixed override does ([`Metrics::no_safe_fixed_feed`]).
     pub saving_vs_safe_fixed_pct: Option<f64>,
+}
+
+impl Metrics {
+    /// Whether the reference runs were made and found no safe fixed feed: [`with_savings`] set
+    /// the saving against the programmed feed, but none against a safe fixed feed (the search
+    /// answered NaN: not even the slowest fixed override the envelope applies keeps the peak
+    /// force at the target).
+    ///
+    /// ```
+    /// use cutlab::closed_loop::metrics::{compute, with_savings, MetricsConfig};
+    /// use cutlab::closed_loop::trace::Trace;
+    /// use cutlab::plant::presets::ProgramLength;
+    /// let m = compute(&Trace::default(), &MetricsConfig::default());
+    /// assert!(!m.no_safe_fixed_feed()); // no references yet
+    /// let none_safe = with_savings(m.clone(), ProgramLength::Path, Some(40.0), Some(f64::NAN));
+    /// assert!(none_safe.no_safe_fixed_feed());
+    /// assert!(!with_savings(m, ProgramLength::Path, Some(40.0), Some(50.0)).no_safe_fixed_feed());
+    /// ```
+    pub fn no_safe_fixed_feed(&self) -> bool {
+        self.saving_vs_programmed_pct.is_some() && self.saving_vs_safe_fixed_pct.is_none()
+    }
 }
 
 /// The window at the end of the controlled cut over which the force's fluctuation is measured.
@@ -306,7 +328,8 @@ fn late_fluctuation_pct(rows: &[TraceRow]) -> f64 {
 }
 
 /// Fills the savings from the cycle times of the reference runs: the programmed feed at 100 %
-/// and the highest fixed override that keeps the peak force under the limit.
+/// and the highest fixed override that keeps the peak force at or below the target (NaN where
+/// none does: then no saving against it).
 ///
 /// A program whose length is a [`ProgramLength::Time`] ([`crate::plant::Preset::program_length`]) gets none: every run of it, reference or
 /// controlled, ends at the same moment, so its "saving" would be 0 % by construction and would

@@ -91,6 +91,9 @@ pub enum Missing {
     Unfinished,
     /// A saving: needs a finished run, a program of a set path, and the reference runs.
     Saving,
+    /// The saving against the safe fixed feed: as [`Missing::Saving`], and a fixed feed that
+    /// keeps the peak force at the target ([`super::metrics::Metrics::no_safe_fixed_feed`]).
+    SafeFixedSaving,
     /// Only where the controller held a cut.
     Uncontrolled,
     /// Only for a program with depth steps (and, for settling, a step that settled).
@@ -147,11 +150,19 @@ impl MetricRow {
         let m = &run.metrics;
         let unfinished = "the program did not finish: a run stopped early is not comparable";
         match self.missing {
-            Missing::Unfinished | Missing::Saving if !m.completed => unfinished,
-            Missing::Saving if run.spec.preset.program_length() == ProgramLength::Time => {
+            Missing::Unfinished | Missing::Saving | Missing::SafeFixedSaving if !m.completed => {
+                unfinished
+            }
+            Missing::Saving | Missing::SafeFixedSaving
+                if run.spec.preset.program_length() == ProgramLength::Time =>
+            {
                 "this program runs for a set time, so no run of it can be shorter"
             }
-            Missing::Saving => {
+            Missing::SafeFixedSaving if m.no_safe_fixed_feed() => {
+                "no safe fixed feed: even the slowest fixed override the envelope applies breaks \
+                 the target, so there is none to save against"
+            }
+            Missing::Saving | Missing::SafeFixedSaving => {
                 "no reference run yet: the fixed-feed runs it is measured against are not done"
             }
             Missing::Uncontrolled if m.controlled_cutting_time_s <= 0.0 => {
@@ -246,8 +257,8 @@ pub const METRIC_ROWS: [MetricRow; 22] = [
     .within(0.0, 1.0).missing(Missing::Saving),
     row("Saving vs safe fixed feed", "%", Better::Higher, |r| {
         if_finished(r, r.metrics.saving_vs_safe_fixed_pct)
-    }).explained("How much shorter the cycle is than at the highest fixed override that keeps the peak force under the limit: the fair baseline for adaptive control.")
-    .within(0.0, 1.0).missing(Missing::Saving),
+    }).explained("How much shorter the cycle is than at the highest fixed override that keeps the peak force at or below the target: the fair baseline for adaptive control.")
+    .within(0.0, 1.0).missing(Missing::SafeFixedSaving),
     row("Force IAE", "N·s", Better::Lower, |r| {
         if_controlled(r, r.metrics.force_iae_n_s)
     }).explained("Integral of |force − target| over the controlled cut: the whole force error, in newton-seconds.")
@@ -627,6 +638,27 @@ mod tests {
         let saving = row("Saving vs programmed feed");
         assert_eq!((saving.value)(&fixed), None);
         assert!(saving.why_missing(&fixed).starts_with("no reference run"));
+        // References made, and no fixed override keeps the peak at the target: the saving
+        // against the programmed feed shows, the one against a safe fixed feed says there is none.
+        let safe = row("Saving vs safe fixed feed");
+        assert!(safe.why_missing(&fixed).starts_with("no reference run"));
+        let mut none_safe = fixed.clone();
+        crate::closed_loop::references::apply_references(
+            &mut none_safe,
+            &crate::closed_loop::references::References {
+                programmed_cycle_time_s: 2.0 * fixed.metrics.cycle_time_s,
+                safe_fixed_override_pct: f64::NAN,
+                safe_fixed_cycle_time_s: f64::NAN,
+            },
+        );
+        assert_eq!((saving.value)(&none_safe), Some(50.0));
+        assert_eq!((safe.value)(&none_safe), None);
+        assert!(
+            safe.why_missing(&none_safe)
+                .starts_with("no safe fixed feed"),
+            "{}",
+            safe.why_missing(&none_safe)
+        );
 
         let mut held =
             simulate(&RunSpec::new(Preset::KimStepDoc, ControllerKind::Threshold)).unwrap();

@@ -49,6 +49,20 @@ test('a run shows force, current, override, feed, depth and wall-error charts, m
   await context.close();
 });
 
+test('where no fixed feed keeps the force at the target, the saving against one says so', async () => {
+  // kim-circular-taper: even the slowest fixed override the chip-load window allows breaks the
+  // target (docs/papers.md), so once the references are in that saving has nothing to compare.
+  const { page, problems, context } = await openLab(browser, server.url, '#/simulate?preset=kim-circular-taper');
+  const table = await waitForResult(page);
+  const row = (name) => table.getByRole('row').filter({ has: page.getByRole('rowheader', { name }) });
+  await row('Saving vs programmed feed (%)').filter({ hasText: /\d\s*$/ }).waitFor({ timeout: RUN_TIMEOUT });
+  const safe = await row('Saving vs safe fixed feed (%)').textContent();
+  assert.match(safe, /no safe fixed feed/);
+  assert.doesNotMatch(safe, /not done/);
+  assert.deepEqual(problems, []);
+  await context.close();
+});
+
 test('changing a controller parameter re-runs and redraws, and the URL keeps the setting', async () => {
   const { page, problems, context } = await openLab(browser, server.url, '#/simulate?preset=maneerat-doc-1&controller=pi');
   await waitForResult(page);

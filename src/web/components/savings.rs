@@ -1,6 +1,6 @@
 //! The savings rows of the metrics tables. A saving compares a run's cycle time with reference
-//! runs at a fixed feed (the programmed feed, and the fastest fixed feed that keeps the force
-//! under the limit), which take three to five runs (on the teach cut of the run that asked). They depend on the scenario, not on the
+//! runs at a fixed feed (the programmed feed, and the fastest fixed feed that keeps the peak force
+//! at or below the target), which take three to five runs (on the teach cut of the run that asked). They depend on the scenario, not on the
 //! controller, so they run in the background once per scenario, from the moment a run's teach
 //! cut is known, and the answers of the last few scenarios are kept: retuning a controller never
 //! waits for them. The search runs in a computation worker ([`super::pool`]), beside the run's
