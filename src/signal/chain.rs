@@ -12,6 +12,9 @@
 //! papers' force targets refer to — and the minimum and maximum of the raw signals for plotting.
 //!
 //! Filtering and RMS come from [`crate::signal`]; nothing here allocates after construction.
+//! A current that is not a number (NaN, ±∞: a log's gap, a sensor's dropout) is replaced by the
+//! same phase's last reading before the filters see it, so the estimate recovers with the sensor;
+//! flagging the fault and holding the override meanwhile is the safety envelope's work.
 //! The phase currents are gathered into blocks of [`BLOCK_FRAMES`] samples and filtered a block
 //! at a time (the filter bank's vector kernel, with the same bits as sample by sample), and the
 //! RMS of each sample is summed in order when the block is flushed, so a period's summary is the
@@ -67,6 +70,33 @@ pub struct PeriodSummary {
 /// Samples gathered before the filters run over them as one slice.
 pub const BLOCK_FRAMES: usize = 128;
 
+/// Puts in place of each current of `frames` (interleaved `u v w`) that is not a number the same
+/// phase's last one that was, and leaves in `last` each phase's last number.
+///
+/// A low-pass filter remembers its input: one NaN (a log's empty cell, a sensor's dropout) would
+/// make its state, and every estimate after it, NaN for good, while the safety envelope — which
+/// watches the raw samples, flags the fault and holds the override — clears the fault 100 ms
+/// later. Holding the last reading keeps the filter's memory finite, so the estimate recovers
+/// with the sensor. Currents that are all numbers are left as they are, bit for bit.
+fn hold_non_finite(frames: &mut [f64], last: &mut [f64; 3]) {
+    let (frames, _) = frames.as_chunks_mut::<3>();
+    if frames.iter().flatten().all(|i| i.is_finite()) {
+        if let Some(newest) = frames.last() {
+            *last = *newest;
+        }
+        return;
+    }
+    for frame in frames {
+        for (i, held) in frame.iter_mut().zip(last.iter_mut()) {
+            if i.is_finite() {
+                *held = *i;
+            } else {
+                *i = *held;
+            }
+        }
+    }
+}
+
 /// Per-sample processing and the running sums of one period.
 #[derive(Debug, Clone)]
 pub struct SignalChain {
@@ -77,6 +107,9 @@ pub struct SignalChain {
     spindle_block: Box<[f64; 3 * BLOCK_FRAMES]>,
     feed_block: Box<[f64; 3 * BLOCK_FRAMES]>,
     gathered: usize,
+    /// Each phase's last current that was a number, held in place of one that is not.
+    spindle_last_finite: [f64; 3],
+    feed_last_finite: [f64; 3],
     sums: Sums,
 }
 
@@ -115,6 +148,8 @@ impl SignalChain {
             spindle_block: Box::new([0.0; 3 * BLOCK_FRAMES]),
             feed_block: Box::new([0.0; 3 * BLOCK_FRAMES]),
             gathered: 0,
+            spindle_last_finite: [0.0; 3],
+            feed_last_finite: [0.0; 3],
             sums: Sums::default(),
         })
     }
@@ -167,6 +202,8 @@ impl SignalChain {
         let n = 3 * self.gathered;
         self.gathered = 0;
         let (spindle, feed) = (&mut self.spindle_block[..n], &mut self.feed_block[..n]);
+        hold_non_finite(spindle, &mut self.spindle_last_finite);
+        hold_non_finite(feed, &mut self.feed_last_finite);
         self.spindle_filter.process_slice(spindle);
         self.feed_filter.process_slice(feed);
         let sums = &mut self.sums;
@@ -225,6 +262,75 @@ impl SignalChain {
         self.spindle_filter.reset();
         self.feed_filter.reset();
         self.gathered = 0;
+        self.spindle_last_finite = [0.0; 3];
+        self.feed_last_finite = [0.0; 3];
         self.sums = Sums::default();
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::machine::SensorSample;
+    use crate::signal::butterworth::{butter, ButterworthSpec, Cutoff, FilterKind};
+
+    fn chain() -> SignalChain {
+        let lowpass = butter(&ButterworthSpec {
+            kind: FilterKind::Lowpass,
+            order: 4,
+            cutoff_hz: Cutoff::Single(500.0),
+            sample_rate_hz: 10_000.0,
+        })
+        .unwrap();
+        SignalChain::new(&lowpass, &lowpass).unwrap()
+    }
+
+    fn sample(n: usize, spindle_a: [f64; 3], feed_a: [f64; 3]) -> MachineStep {
+        MachineStep {
+            sensors: SensorSample {
+                time_s: n as f64 * 1e-4,
+                spindle_phase_currents_a: spindle_a,
+                feed_phase_currents_a: feed_a,
+                ..Default::default()
+            },
+            truth: None,
+        }
+    }
+
+    #[test]
+    fn a_current_that_is_not_a_number_is_held_and_the_estimate_recovers() {
+        // A steady three-phase set: the reading held in place of a lost one equals it, so the
+        // damaged stream must give the clean stream's summaries bit for bit, in the period of the
+        // damage and every one after (a NaN in a filter's memory would make them all NaN).
+        let (spindle, feed) = ([3.0, -1.0, -2.0], [1.0, -0.5, -0.5]);
+        let (mut clean, mut damaged) = (chain(), chain());
+        for period in 0..4 {
+            for k in 0..600 {
+                let n = period * 600 + k;
+                clean.push(&sample(n, spindle, feed));
+                let (mut s, mut f) = (spindle, feed);
+                match n {
+                    700 => s[1] = f64::NAN,
+                    701 => s = [f64::INFINITY; 3],
+                    1500 => f[2] = f64::NEG_INFINITY,
+                    _ => {}
+                }
+                damaged.push(&sample(n, s, f));
+            }
+            let (a, b) = (clean.finish_period(), damaged.finish_period());
+            assert!(b.spindle_current_rms_a.is_finite(), "period {period}");
+            assert_eq!(
+                a.spindle_current_rms_a, b.spindle_current_rms_a,
+                "period {period}"
+            );
+            assert_eq!(
+                a.feed_current_rms_a, b.feed_current_rms_a,
+                "period {period}"
+            );
+        }
+        // Reset forgets the held readings: a NaN first thing is held as no current.
+        damaged.reset();
+        damaged.push(&sample(0, [f64::NAN; 3], feed));
+        assert_eq!(damaged.finish_period().spindle_current_rms_a, 0.0);
     }
 }
