@@ -787,7 +787,7 @@ mod tests {
         // No references yet: both savings say so, for every run alike.
         let table = metrics_table(&[("a".into(), &run), ("b".into(), &run)]);
         assert!(
-            table.contains("— Saving vs safe fixed feed (%): no reference run yet"),
+            table.contains("— Saving vs safe fixed feed (%): no reference runs"),
             "{table}"
         );
         // References without a safe fixed feed: that run's reason is its own, and named.
@@ -797,7 +797,7 @@ mod tests {
             "{table}"
         );
         assert!(
-            table.contains("— Saving vs programmed feed (%), a: no reference run yet"),
+            table.contains("— Saving vs programmed feed (%), a: no reference runs"),
             "{table}"
         );
         assert!(!table.contains("programmed feed (%), b"), "{table}");

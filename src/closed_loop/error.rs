@@ -99,6 +99,12 @@ impl fmt::Display for LoopError {
                 "control period {period_s} s must be at least one sample and at most 10⁷ samples \
                  at {sample_rate_hz} Hz"
             ),
+            LoopError::NoTarget { from, force_n } if force_n.is_nan() => write!(
+                f,
+                "no force target: {from} cannot be turned into a force (this run's calibration \
+                 relates no current to the force: its feedback is not a motor current, or its \
+                 model is not defined there); give a target force"
+            ),
             LoopError::NoTarget { from, force_n } => write!(
                 f,
                 "no force target: {from} comes to {} N; give a target force",

@@ -163,7 +163,7 @@ impl MetricRow {
                  the target, so there is none to save against"
             }
             Missing::Saving | Missing::SafeFixedSaving => {
-                "no reference run yet: the fixed-feed runs it is measured against are not done"
+                "no reference runs: the fixed-feed runs it is measured against have not been made"
             }
             Missing::Uncontrolled if m.controlled_cutting_time_s <= 0.0 => {
                 "not controlled: the controller held no cut"
@@ -273,7 +273,7 @@ pub const METRIC_ROWS: [MetricRow; 22] = [
     .within(0.05, 0.5).missing(Missing::Uncontrolled),
     row("Peak force", "N", Better::Lower, |r| {
         Some(r.metrics.peak_force_n)
-    }).explained("The highest true force of the run; compare it with the force limit."),
+    }).explained("The highest regulated force of the run, true value: the largest control-period mean, the quantity the target and the limit are set on (the force on each tooth peaks higher within a period); compare it with the force limit."),
     row("Surface error range", "µm", Better::Lower, |r| {
         Some(r.metrics.surface_error_range_um).filter(|v| v.is_finite())
     }).explained("The wall's error from the tool and spindle bending under the force across the cut, largest minus smallest along the engaged wall (paper 004's cutting-force-induced error); its constant part is taken out by the tool-radius offset, this spread is not.")
@@ -449,7 +449,8 @@ pub fn not_best_note(runs: &[(&str, &RunResult)]) -> Option<String> {
         .collect();
     (!left_out.is_empty() && runs.len() > 1).then(|| {
         format!(
-            "not marked best: above the force limit for more than {:.0} % of the cycle — {}",
+            "not marked best on any row but the time above the limit: above the force limit for \
+             more than {:.0} % of the cycle — {}",
             ABOVE_LIMIT_SHARE_NOT_BEST * 100.0,
             left_out.join(", ")
         )
