@@ -169,9 +169,22 @@ impl MetricRow {
                 "not controlled: the controller held no cut"
             }
             Missing::Uncontrolled => "the controlled cut is too short to measure it",
+            Missing::Steps if m.steps.is_empty() && m.removed_volume_mm3 <= 0.0 => {
+                "nothing was cut, so no depth step was measured"
+            }
+            Missing::Steps if m.steps.is_empty() && !m.completed => {
+                "no depth step was cut before the run stopped"
+            }
             Missing::Steps if m.steps.is_empty() => "no depth step in this program",
             Missing::Steps => "the force never settled after a depth step",
-            Missing::Wall => "not modelled: this preset's tool stiffness or force law is not known",
+            Missing::Wall if run.settings.error_model.is_none() => {
+                "not modelled: this preset's tool stiffness or force law is not known"
+            }
+            Missing::Wall if m.removed_volume_mm3 <= 0.0 => "no wall was cut",
+            Missing::Wall => {
+                "not measured in this run: the estimate it is predicted from was not made here \
+                 (a feedback that does not estimate the in-plane force, or no power law)"
+            }
             Missing::Removal => "no material was removed",
             Missing::Never | Missing::Unfinished => "not measured in this run",
         }
@@ -660,6 +673,23 @@ mod tests {
             "{}",
             safe.why_missing(&none_safe)
         );
+        // A run that cut nothing (a bad filter setting's false overload stops it at once) says
+        // so, not that the preset has no depth steps or no wall model.
+        let mut uncut = fixed.clone();
+        uncut.metrics.removed_volume_mm3 = 0.0;
+        uncut.metrics.steps.clear();
+        uncut.metrics.surface_error_range_um = f64::NAN;
+        assert!(uncut.settings.error_model.is_some());
+        let wall = row("Surface error range");
+        assert_eq!((wall.value)(&uncut), None);
+        assert_eq!(wall.why_missing(&uncut), "no wall was cut");
+        let steps = row("Max overshoot after a depth step");
+        assert_eq!(
+            steps.why_missing(&uncut),
+            "nothing was cut, so no depth step was measured"
+        );
+        uncut.settings.error_model = None;
+        assert!(wall.why_missing(&uncut).starts_with("not modelled"));
 
         let mut held =
             simulate(&RunSpec::new(Preset::KimStepDoc, ControllerKind::Threshold)).unwrap();

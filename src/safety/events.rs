@@ -149,13 +149,13 @@ impl SafetyEvent {
             }
             SafetyEvent::FaultCleared { .. } => "sensor fault cleared".into(),
             SafetyEvent::Overload { force_n, .. } => {
-                format!("overload: {force_n:.0} N above the hard limit; feed hold")
+                format!("overload: an estimated {force_n:.0} N above the hard limit; feed hold")
             }
             SafetyEvent::ControllerFault { .. } => {
                 "controller fault: it asked for a non-finite override; override held".into()
             }
             SafetyEvent::CutBeforeArming { force_n, .. } => format!(
-                "warning: cutting ({force_n:.0} N) before the loop armed; the controller enters \
+                "warning: cutting (an estimated {force_n:.0} N) before the loop armed; the controller enters \
                  the cut uncontrolled (approach in air until the arming delay has passed)"
             ),
             SafetyEvent::AirCut {
