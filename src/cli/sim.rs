@@ -14,7 +14,9 @@ use crate::closed_loop::metrics::Metrics;
 use crate::closed_loop::paper_comparisons::PAPER_COMPARISONS;
 use crate::closed_loop::paper_defaults::preset_controller;
 use crate::closed_loop::references::{apply_references, ReferenceSearch, References};
-use crate::closed_loop::summary::{best_marks, not_best_note, METRIC_ROWS};
+use crate::closed_loop::summary::{
+    best_marks, missing_notes, negative_saving_notes, not_best_note, METRIC_ROWS,
+};
 use crate::closed_loop::trace::write_csv;
 use crate::control::registry::{ControllerConfig, ControllerKind};
 use crate::estimation::estimator::{Calibration, Feedback};
@@ -727,40 +729,16 @@ pub(crate) fn metrics_table(runs: &[(String, &RunResult)]) -> String {
         }
         out.push('\n');
     }
-    out.push_str(&missing_notes(runs));
     let named: Vec<(&str, &RunResult)> = runs.iter().map(|(n, r)| (n.as_str(), *r)).collect();
+    for note in missing_notes(&named) {
+        let _ = writeln!(out, "— {note}");
+    }
+    for note in negative_saving_notes(&named) {
+        let _ = writeln!(out, "{note}");
+    }
     if let Some(note) = not_best_note(&named) {
         out.push_str(&note);
         out.push('\n');
-    }
-    out
-}
-
-/// A line for each "—" of the table saying why it has no value, as the lab's table says on
-/// hover: `— Saving vs safe fixed feed (%): no safe fixed feed: …`, the runs named where they
-/// differ.
-fn missing_notes(runs: &[(String, &RunResult)]) -> String {
-    let mut out = String::new();
-    for row in &METRIC_ROWS {
-        let mut whys: Vec<(&'static str, Vec<&str>)> = Vec::new();
-        for (name, run) in runs {
-            if (row.value)(run).is_some() {
-                continue;
-            }
-            let why = row.why_missing(run);
-            match whys.iter_mut().find(|(w, _)| *w == why) {
-                Some((_, names)) => names.push(name),
-                None => whys.push((why, vec![name])),
-            }
-        }
-        let all_alike = whys.len() == 1 && whys[0].1.len() == runs.len();
-        for (why, names) in whys {
-            let _ = if all_alike {
-                writeln!(out, "— {}: {why}", row.heading())
-            } else {
-                writeln!(out, "— {}, {}: {why}", row.heading(), names.join(", "))
-            };
-        }
     }
     out
 }

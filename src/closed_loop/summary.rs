@@ -452,6 +452,40 @@ pub fn best_marks(
     best(&values, row.better, row.tolerance, shown)
 }
 
+/// A sentence for each row of a table with a "—", saying why it has no value (what a cell shows
+/// on hover, written out for a touch screen and the terminal): `Saving vs safe fixed feed (%):
+/// no safe fixed feed: …`, the runs named where their reasons differ or some have a value.
+///
+/// ```
+/// use cutlab::closed_loop::summary::missing_notes;
+/// assert!(missing_notes(&[]).is_empty());
+/// ```
+pub fn missing_notes(runs: &[(&str, &RunResult)]) -> Vec<String> {
+    let mut notes = Vec::new();
+    for row in &METRIC_ROWS {
+        let mut whys: Vec<(&'static str, Vec<&str>)> = Vec::new();
+        for (name, run) in runs {
+            if (row.value)(run).is_some() {
+                continue;
+            }
+            let why = row.why_missing(run);
+            match whys.iter_mut().find(|(w, _)| *w == why) {
+                Some((_, names)) => names.push(name),
+                None => whys.push((why, vec![name])),
+            }
+        }
+        let all_alike = whys.len() == 1 && whys[0].1.len() == runs.len();
+        for (why, names) in whys {
+            notes.push(if all_alike {
+                format!("{}: {why}", row.heading())
+            } else {
+                format!("{}, {}: {why}", row.heading(), names.join(", "))
+            });
+        }
+    }
+    notes
+}
+
 /// The sentence a table shows under its marks when a run was left out of them, naming each with
 /// its time above the limit; `None` when every run could be marked.
 pub fn not_best_note(runs: &[(&str, &RunResult)]) -> Option<String> {

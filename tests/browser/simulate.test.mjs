@@ -59,6 +59,8 @@ test('where no fixed feed keeps the force at the target, the saving against one 
   const safe = await row('Saving vs safe fixed feed (%)').textContent();
   assert.match(safe, /no safe fixed feed/);
   assert.doesNotMatch(safe, /not done/);
+  // Written out under the table as well, for a screen without hover.
+  await page.getByText(/^— Saving vs safe fixed feed \(%\): no safe fixed feed/).waitFor();
   assert.deepEqual(problems, []);
   await context.close();
 });

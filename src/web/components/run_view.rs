@@ -9,7 +9,8 @@ use crate::charts::{Axis, LineChart, Series, PALETTE};
 use crate::closed_loop::lab::RunResult;
 use crate::closed_loop::metrics::Metrics;
 use crate::closed_loop::summary::{
-    best_marks, format_metric, negative_saving_notes, not_best_note, MetricRow, METRIC_ROWS,
+    best_marks, format_metric, missing_notes, negative_saving_notes, not_best_note, MetricRow,
+    METRIC_ROWS,
 };
 use crate::web::components::chart::ChartCanvas;
 use crate::web::components::help::HelpToggle;
@@ -376,6 +377,11 @@ pub fn MetricsTable(
                         .collect_view()}
                 </tbody>
             </table>
+            // Each "—" says why on hover; written out too, for a touch screen.
+            {missing_notes(&named)
+                .into_iter()
+                .map(|note| view! { <p class="note missing-note">{format!("— {note}")}</p> })
+                .collect_view()}
             {not_best_note(&named).map(|note| view! { <p class="note">{note}</p> })}
             {negative_saving_notes(&named)
                 .into_iter()
