@@ -327,6 +327,24 @@ fn a_run_given_the_teach_cuts_calibration_equals_one_that_teaches_itself() {
     assert_eq!(reused.metrics, taught.metrics);
 }
 
+#[test]
+fn a_calibration_taught_at_another_spindle_speed_is_refused_and_says_why() {
+    // kim-step-doc teaches its line at 1000 rpm; maneerat-doc-4 cuts at 3000 rpm, where that
+    // line reads about −10 N for 630 N: a controller must not act on it.
+    let kim = simulate(&RunSpec::new(Preset::KimStepDoc, ControllerKind::Fixed)).unwrap();
+    let elsewhere = RunSpec::new(Preset::ManeeratDoc4, ControllerKind::Pi);
+    let message = LabRun::calibrated(&elsewhere, kim.calibration.clone())
+        .err()
+        .expect("refused")
+        .to_string();
+    assert!(message.contains("saw the spindle at 1000 rpm"), "{message}");
+    assert!(message.contains("3000 rpm"), "{message}");
+    assert!(message.contains("teach a cut on this program"), "{message}");
+    // On its own program the same calibration is taken.
+    let own = RunSpec::new(Preset::KimStepDoc, ControllerKind::Pi);
+    assert!(LabRun::calibrated(&own, kim.calibration).is_ok());
+}
+
 /// Natively only: a bisection is ten runs.
 #[cfg(not(target_arch = "wasm32"))]
 #[test]

@@ -35,6 +35,9 @@ pub enum LoopError {
         /// The path the run measures with.
         run: Feedback,
     },
+    /// A given calibration never saw the program's spindle speed (or feed): its estimate there
+    /// would be an extrapolation, and the controller would act on it.
+    CalibrationElsewhere(String),
     /// A teach cut on a machine that reports no force (no simulation truth, no dynamometer) and
     /// whose cut changes along the path, so the model of the cut cannot stand in.
     NoTeachForce,
@@ -71,6 +74,11 @@ impl fmt::Display for LoopError {
             LoopError::Controller(e) => write!(f, "controller: {e}"),
             LoopError::Machine(e) => write!(f, "{e}"),
             LoopError::Calibration(e) => write!(f, "calibration (teach cut): {e}"),
+            LoopError::CalibrationElsewhere(why) => write!(
+                f,
+                "{why}; teach a cut on this program, or give a calibration made at its speed \
+                 and feed"
+            ),
             LoopError::CalibrationFeedback { calibration, run } => write!(
                 f,
                 "the calibration is for {} feedback but the run measures with {}; choose \

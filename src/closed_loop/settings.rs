@@ -861,6 +861,13 @@ impl Plan {
                 run: self.chain.feedback,
             });
         }
+        let at = self.operating_point;
+        if let Some(why) = calibration
+            .estimator
+            .not_calibrated_at(at.spindle_rpm, at.feed_mm_min)
+        {
+            return Err(LoopError::CalibrationElsewhere(why));
+        }
         let target_force_n = self.target_force_n(calibration)?;
         let l = &self.limits;
         let mut envelope = EnvelopeConfig {

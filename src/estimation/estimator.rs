@@ -4,7 +4,9 @@
 
 use serde::{Deserialize, Serialize};
 
-use super::current_force::{FeedCurrentModel, ForceEstimate, SpindleCurrentModel};
+use super::current_force::{
+    FeedCurrentModel, ForceEstimate, SpindleCurrentModel, SpindleSpeedRow, RANGE_SLACK_FRACTION,
+};
 use super::speed::FvSpeedModel;
 use crate::signal::chain::PeriodSummary;
 
@@ -104,6 +106,54 @@ impl Estimator {
                 force_n: period.dynamometer_resultant_n,
                 in_range: true,
             },
+        }
+    }
+
+    /// Why this estimator cannot be read at a program's `spindle_rpm` and `feed_mm_min`: the
+    /// calibration never saw that speed (spindle model: no row within
+    /// [`RANGE_SLACK_FRACTION`] of it, none on each side of it in the same gear) or that feed (feed model: outside its range, loosely); `None` where it did,
+    /// where an operating point is not known (not finite), and for a dynamometer. A calibration
+    /// taught on another program comes here: at 3,000 rpm a 1,000 rpm line reads −10 N for 630 N.
+    ///
+    /// ```
+    /// use cutlab::estimation::estimator::Estimator;
+    /// assert_eq!(Estimator::Dynamometer.not_calibrated_at(3000.0, 500.0), None);
+    /// ```
+    pub fn not_calibrated_at(&self, spindle_rpm: f64, feed_mm_min: f64) -> Option<String> {
+        match self {
+            Estimator::Spindle { model, .. } if spindle_rpm.is_finite() => {
+                // Loosely: a measured speed sags under load (a log's mean speed sits a few
+                // percent under the command a teach cut was read at).
+                let slack = 1.0 + RANGE_SLACK_FRACTION;
+                let seen = |r: &SpindleSpeedRow| {
+                    spindle_rpm >= r.speed_rpm / slack && spindle_rpm <= r.speed_rpm * slack
+                };
+                let (_, _, between) = model.line_at(spindle_rpm);
+                let inside = between || model.rows.iter().any(seen);
+                (!inside).then(|| {
+                    let seen: Vec<String> = model
+                        .rows
+                        .iter()
+                        .map(|r| format!("{:.0}", r.speed_rpm))
+                        .collect();
+                    format!(
+                        "the calibration saw the spindle at {} rpm, not at this program's \
+                         {spindle_rpm:.0} rpm: its force estimate would be an extrapolation",
+                        seen.join(", ")
+                    )
+                })
+            }
+            Estimator::Feed { model } if feed_mm_min.is_finite() => {
+                let seen = model.feed_range_mm_min;
+                (!seen.contains_loosely(feed_mm_min.abs())).then(|| {
+                    format!(
+                        "the calibration saw feeds of {:.0}–{:.0} mm/min, not this program's \
+                         {feed_mm_min:.0} mm/min: its force estimate would be an extrapolation",
+                        seen.min, seen.max
+                    )
+                })
+            }
+            _ => None,
         }
     }
 
