@@ -359,10 +359,16 @@ impl SafetyEnvelope {
                     ChipLoadEnd::Highest => w.max_mm,
                     ChipLoadEnd::Lowest => w.min_mm,
                 };
+                let running_mm = w.feed_per_tooth_mm(
+                    sample.programmed_feed_mm_min,
+                    sample.spindle_command_rpm,
+                    self.output_pct,
+                );
                 self.emit(SafetyEvent::ChipLoad {
                     time_s,
                     end,
                     feed_per_tooth_mm,
+                    running_mm,
                 });
             }
         }

@@ -120,7 +120,24 @@ pub enum SafetyEvent {
         /// The feed per tooth there, mm.
         #[serde(deserialize_with = "crate::estimation::null_as_nan")]
         feed_per_tooth_mm: f64,
+        /// The feed per tooth the machine runs at once the envelope has held it, mm: the
+        /// window's end where the envelope's band reaches it, beyond it where even the band's
+        /// end cannot (a programmed feed far too high, or too low, for the cutter).
+        #[serde(
+            default = "not_known",
+            deserialize_with = "crate::estimation::null_as_nan"
+        )]
+        running_mm: f64,
     },
+}
+
+/// How far (a fraction) the feed per tooth the machine runs at may lie beyond the chip-load
+/// window's end before an event says the window could not be kept: more than the override's
+/// quantisation moves it.
+const CHIP_LOAD_REACH: f64 = 0.02;
+
+fn not_known() -> f64 {
+    f64::NAN
 }
 
 impl SafetyEvent {
@@ -171,6 +188,26 @@ impl SafetyEvent {
             ),
             SafetyEvent::EntrySettled { force_n, .. } => format!(
                 "entry: the cutter is in the cut at {force_n:.0} N; the controller takes over"
+            ),
+            SafetyEvent::ChipLoad {
+                end: ChipLoadEnd::Highest,
+                feed_per_tooth_mm,
+                running_mm,
+                ..
+            } if running_mm > feed_per_tooth_mm * (1.0 + CHIP_LOAD_REACH) => format!(
+                "chip load: even the lowest override the envelope allows runs {running_mm:.3} mm \
+                 per tooth, above the {feed_per_tooth_mm:.3} mm the edge takes: the programmed \
+                 feed is too high for this cutter"
+            ),
+            SafetyEvent::ChipLoad {
+                end: ChipLoadEnd::Lowest,
+                feed_per_tooth_mm,
+                running_mm,
+                ..
+            } if running_mm < feed_per_tooth_mm * (1.0 - CHIP_LOAD_REACH) => format!(
+                "chip load: even the highest override the envelope allows runs {running_mm:.3} mm \
+                 per tooth, below the {feed_per_tooth_mm:.3} mm under which the edge rubs: the \
+                 programmed feed is too low for this cutter"
             ),
             SafetyEvent::ChipLoad {
                 end,

@@ -169,6 +169,48 @@ fn the_chip_load_window_keeps_every_command_inside_it_and_says_when_it_holds() {
 }
 
 #[test]
+fn a_chip_load_window_beyond_the_band_is_said_to_be_out_of_reach() {
+    // 20,000 mm/min at 1000 rpm with two teeth: 10 mm per tooth at 100 %, 1 mm at the band's
+    // lowest 10 %, nearly seven times the 0.15 mm the edge takes. The envelope runs at 10 %
+    // (the band is the machine's) and the event must not claim the window holds.
+    let mut config = EnvelopeConfig::for_target(300.0);
+    config.min_override_pct = 10.0;
+    config.max_override_pct = 150.0;
+    config.chip_load = Some(ChipLoad {
+        teeth: 2,
+        min_mm: 0.02,
+        max_mm: 0.15,
+    });
+    let mut env = envelope(config);
+    let fast = |t: f64| SensorSample {
+        programmed_feed_mm_min: 20_000.0,
+        spindle_command_rpm: 1000.0,
+        ..running_sample(t)
+    };
+    let mut t = 0.0;
+    let mut last = 0.0;
+    for _ in 0..100 {
+        t += 0.05;
+        last = env.command(100.0, 300.0, t, 0.05, &fast(t)).override_pct;
+    }
+    assert_eq!(last, 10.0);
+    let mut events = Vec::new();
+    env.drain_events(&mut events);
+    let said: Vec<String> = events
+        .iter()
+        .filter(|e| matches!(e, SafetyEvent::ChipLoad { .. }))
+        .map(SafetyEvent::describe)
+        .collect();
+    assert_eq!(said.len(), 1, "{said:?}");
+    assert!(
+        said[0].contains("runs 1.000 mm per tooth, above the 0.150 mm"),
+        "{}",
+        said[0]
+    );
+    assert!(said[0].contains("too high for this cutter"), "{}", said[0]);
+}
+
+#[test]
 fn a_non_finite_request_is_one_controller_fault_event_and_the_override_holds() {
     let mut env = envelope(EnvelopeConfig::for_target(300.0));
     let s = running_sample(0.0);
