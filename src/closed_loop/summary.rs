@@ -165,6 +165,12 @@ impl MetricRow {
             Missing::Saving | Missing::SafeFixedSaving => {
                 "no reference runs: the fixed-feed runs it is measured against have not been made"
             }
+            Missing::Uncontrolled
+                if m.controlled_cutting_time_s <= 0.0 && m.removed_volume_mm3 <= 0.0 =>
+            {
+                "nothing was cut (a brake bench, or a run stopped in air), so there is no cut \
+                 whose force error to measure"
+            }
             Missing::Uncontrolled if m.controlled_cutting_time_s <= 0.0 => {
                 "not controlled: the controller held no cut"
             }

@@ -27,7 +27,9 @@ use super::scenario::Profile;
 use super::sensors::CurrentSensor;
 use super::signals::{AxisSignals, PlantSignals};
 use super::spindle_drive::SpindleDrive;
-use super::{non_negative, positive, PlantError, PlantModel, PlantSample, Sampling, Tick};
+use super::{
+    non_negative, positive, PlantError, PlantModel, PlantSample, Sampling, Tick, S_PER_MIN,
+};
 use crate::machine::{OverrideCommand, PlantTruth, SensorSample};
 use crate::math;
 
@@ -332,6 +334,8 @@ impl PlantModel for SecondOrderMachine {
             width_mm,
             feed_per_tooth_mm: f_tooth,
             path_position_mm: cnc.position_mm,
+            // The reduced model has no tool, but its cut has a depth and width: the volume swept.
+            material_removal_mm3_s: depth_mm * width_mm * v.max(0.0) / S_PER_MIN,
             tool_x_mm: cnc.position_mm,
             feed_current_rms_a: feed_rms,
             spindle_current_rms_a: sp.rms_current_a,
