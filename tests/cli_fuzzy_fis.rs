@@ -64,7 +64,7 @@ fn an_fll_engine_exported_as_fis_evaluates_the_same_through_either_file() {
     let (result, _) = cutlab(&["fuzzy", "export", "--rules", "dynamics", "--fis"], "");
     assert_eq!(
         result.unwrap_err(),
-        "FIS cannot express this engine: input E locks its range"
+        "FIS cannot express this engine: input E locks its range (a value outside it is taken at its nearest end), which FIS cannot say; write it as FLL"
     );
     // A broken FIS names its line.
     let broken = dir.join("broken.fis");

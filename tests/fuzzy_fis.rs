@@ -92,7 +92,7 @@ fn what_fis_cannot_say_is_refused_saying_so() {
     // Paper 002's inputs lock their range, which FIS has no key for.
     let paper = paper_002_engine(&RuleBase::Dynamics.table(), Defuzzifier::Centroid).unwrap();
     let e = write(&paper).unwrap_err().to_string();
-    assert_eq!(e, "FIS cannot express this engine: input E locks its range");
+    assert_eq!(e, "FIS cannot express this engine: input E locks its range (a value outside it is taken at its nearest end), which FIS cannot say; write it as FLL");
     let text = fll::write(&paper).replace("lock-range: true", "lock-range: false");
     let unlocked = fll::parse(&text).unwrap();
     let back = parse(&write(&unlocked).unwrap()).unwrap();

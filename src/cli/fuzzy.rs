@@ -32,7 +32,8 @@ enum FuzzyCommand {
     #[command(verbatim_doc_comment)]
     Eval(EvalArgs),
     /// Print paper 002's engine (E, EC → U on [-6, 6], seven triangles each, 49 rules), or an
-    /// engine file, as FLL or (--fis) FIS
+    /// engine file, as FLL or (--fis) FIS where FIS can express it (paper 002's engine locks its
+    /// inputs' ranges, which only FLL can say)
     Export(ExportArgs),
 }
 

@@ -665,7 +665,11 @@ pub fn write(engine: &Engine) -> Result<String, FuzzyError> {
         }
     }
     if let Some(v) = engine.inputs().iter().find(|v| v.lock_range) {
-        return Err(cannot(format!("input {} locks its range", v.name)));
+        return Err(cannot(format!(
+            "input {} locks its range (a value outside it is taken at its nearest end), which \
+             FIS cannot say; write it as FLL",
+            v.name
+        )));
     }
     let t = |n: Option<Norm>| {
         n.map_or(String::new(), |n| {
