@@ -41,6 +41,7 @@ use crate::closed_loop::lab::LabRun;
 use crate::closed_loop::metrics::Metrics;
 use crate::control::registry::{ControllerConfig, ParamError};
 use crate::estimation::estimator::Calibration;
+use crate::input::three_significant;
 use crate::work::{parallel_map_reporting as parallel_map, Work};
 use nelder_mead::NelderMead;
 pub use objective::Objective;
@@ -465,12 +466,13 @@ fn grid_axis(lo: f64, hi: f64, steps: usize) -> Vec<f64> {
 }
 
 /// The points no other point beats on both axes (smaller is better on each), by the first
-/// axis; ties keep the first. NaN points are never on the front.
+/// axis; points equal on both axes are on the front together (neither beats the other). NaN
+/// points are never on the front.
 ///
 /// ```
 /// use cutlab::tuning::pareto_front;
-/// let points = [(10.0, 5.0), (12.0, 3.0), (11.0, 6.0), (15.0, 1.0), (9.0, f64::NAN)];
-/// assert_eq!(pareto_front(&points), vec![0, 1, 3]);
+/// let points = [(10.0, 5.0), (12.0, 3.0), (11.0, 6.0), (15.0, 1.0), (9.0, f64::NAN), (12.0, 3.0)];
+/// assert_eq!(pareto_front(&points), vec![0, 1, 5, 3]);
 /// ```
 pub fn pareto_front(points: &[(f64, f64)]) -> Vec<usize> {
     let mut order: Vec<usize> = (0..points.len())
@@ -482,10 +484,11 @@ pub fn pareto_front(points: &[(f64, f64)]) -> Vec<usize> {
             .total_cmp(&points[b].0)
             .then(points[a].1.total_cmp(&points[b].1))
     });
-    let mut front = Vec::new();
+    let mut front: Vec<usize> = Vec::new();
     let mut best_second = f64::INFINITY;
     for i in order {
-        if points[i].1 < best_second {
+        let tied = front.last().is_some_and(|&last| points[last] == points[i]);
+        if points[i].1 < best_second || tied {
             best_second = points[i].1;
             front.push(i);
         }
@@ -840,10 +843,13 @@ fn tuned(evaluations: Vec<Evaluation>, converged: bool) -> Result<Tuned, TuningE
         .min_by(|a, b| a.cost.total_cmp(&b.cost))
         .cloned()
         .ok_or_else(|| TuningError::Setup("no evaluation succeeded".into()))?;
+    // Judged as the tables print them: two evaluations that read alike are marked alike, not
+    // one of them beaten by a thousandth of a second nobody sees.
+    let shown = |v: f64| three_significant(v).parse::<f64>().unwrap_or(f64::NAN);
     let pareto = pareto_front(
         &evaluations
             .iter()
-            .map(|e| (e.cycle_time_s, e.force_error_pct))
+            .map(|e| (shown(e.cycle_time_s), shown(e.force_error_pct)))
             .collect::<Vec<_>>(),
     );
     Ok(Tuned {
