@@ -819,7 +819,7 @@ impl VirtualBench {
         if !out.is_empty() {
             self.to_device.push_back((self.now_ms + self.reply_ms, out));
         }
-        if self.now_ms % u64::from(VIRTUAL_TICK_MS) == 0 {
+        if self.now_ms.is_multiple_of(u64::from(VIRTUAL_TICK_MS)) {
             while self
                 .to_device
                 .front()
@@ -831,7 +831,7 @@ impl VirtualBench {
             let bytes = self.device.tick(now_s);
             self.session.receive(&bytes, now_s);
         }
-        if self.now_ms % 100 == 0 {
+        if self.now_ms.is_multiple_of(100) {
             self.session.tick(now_s);
         }
         let _ = self.session.take_rows();
