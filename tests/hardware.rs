@@ -762,3 +762,209 @@ fn a_device_that_lacks_a_measurement_the_run_needs_is_not_armed() {
     let why = b.session.start_teach_cut(&spec(), b.now_s).unwrap_err();
     assert!(why.contains("program end"), "{why}");
 }
+
+/// The Hardware page's virtual device as the browser runs it: the emulator in its worker, on
+/// a wall clock at `time_scale` ([`ClockedDevice`]), ticked every [`VIRTUAL_TICK_MS`] (at most
+/// [`MAX_VIRTUAL_FRAMES_PER_TICK`] frames a tick, reading what the host wrote only at a tick's
+/// start); the host's answer to a tick's bytes reaches the worker `reply_ms` of wall time later
+/// (the two messages between the worker and the page, and the page's own work); the page's
+/// timer ticks the session every 100 ms.
+struct VirtualBench {
+    device: cutlab::protocol::device_worker::ClockedDevice,
+    session: HardwareSession,
+    now_ms: u64,
+    reply_ms: u64,
+    /// Bytes on their way to the worker: when they arrive (wall ms) and what.
+    to_device: std::collections::VecDeque<(u64, Vec<u8>)>,
+}
+
+impl VirtualBench {
+    fn new(time_scale: &str, reply_ms: u64) -> Self {
+        use cutlab::protocol::device_settings::DeviceSetting;
+        use cutlab::protocol::device_worker::{ClockedDevice, DeviceStart};
+        let start = DeviceStart::new(
+            &[
+                (DeviceSetting::Program, "maneerat-doc-1".to_string()),
+                (DeviceSetting::TimeScale, time_scale.to_string()),
+            ],
+            true,
+        );
+        let mut b = Self {
+            device: ClockedDevice::start(&start, 0.0).unwrap(),
+            session: HardwareSession::new(SessionOptions::default(), 0.0),
+            now_ms: 0,
+            reply_ms,
+            to_device: std::collections::VecDeque::new(),
+        };
+        b.run_until(|b| b.session.state() != LinkState::Handshaking, 5.0);
+        assert_eq!(
+            b.session.state(),
+            LinkState::Streaming,
+            "{}",
+            b.session.reason()
+        );
+        b
+    }
+
+    fn now_s(&self) -> f64 {
+        self.now_ms as f64 / 1000.0
+    }
+
+    /// One wall millisecond.
+    fn step(&mut self) {
+        use cutlab::protocol::device_worker::VIRTUAL_TICK_MS;
+        self.now_ms += 1;
+        let now_s = self.now_s();
+        let out = self.session.take_output();
+        if !out.is_empty() {
+            self.to_device.push_back((self.now_ms + self.reply_ms, out));
+        }
+        if self.now_ms.is_multiple_of(u64::from(VIRTUAL_TICK_MS)) {
+            while self
+                .to_device
+                .front()
+                .is_some_and(|(at, _)| *at <= self.now_ms)
+            {
+                let (_, bytes) = self.to_device.pop_front().unwrap();
+                self.device.receive(&bytes);
+            }
+            let bytes = self.device.tick(now_s);
+            self.session.receive(&bytes, now_s);
+        }
+        if self.now_ms.is_multiple_of(100) {
+            self.session.tick(now_s);
+        }
+        let _ = self.session.take_rows();
+    }
+
+    fn run_until(&mut self, done: impl Fn(&Self) -> bool, limit_s: f64) {
+        let until = self.now_ms + (limit_s * 1000.0) as u64;
+        while !done(self) && self.now_ms < until {
+            self.step();
+        }
+    }
+
+    fn events(&self) -> String {
+        self.session
+            .events()
+            .iter()
+            .map(|e| format!("{:8.3} {}\n", e.time_s, e.text))
+            .collect()
+    }
+
+    /// Runs a teach cut to its end (or `limit_s` of wall time).
+    fn teach(&mut self, limit_s: f64) {
+        self.session.teach_limits(&spec()).unwrap();
+        self.session.start_teach_cut(&spec(), self.now_s()).unwrap();
+        self.run_until(|b| b.session.stage() == Stage::Idle, limit_s);
+    }
+}
+
+/// The host's heartbeat interval of a device with the default 0.5 s watchdog, device seconds.
+const HEARTBEAT_INTERVAL_S: f64 = 0.1;
+
+/// The re-arm lines' times in `events`.
+fn rearm_times(session: &HardwareSession) -> Vec<f64> {
+    session
+        .events()
+        .iter()
+        .filter(|e| e.text.contains("re-arming the device"))
+        .map(|e| e.time_s)
+        .collect()
+}
+
+#[test]
+fn the_hosts_pacing_keeps_a_virtual_device_fed_at_every_time_scale_when_the_page_keeps_up() {
+    // The page answers each tick's bytes before the worker's next tick: from the slowest time
+    // scale the form allows to the fastest (which the worker's frame cap makes 40x), the
+    // host's heartbeats and commands, paced in device time, never let the device's watchdog
+    // fall back.
+    for (scale, wall_s) in [("0.01", 120.0), ("1", 60.0), ("8", 20.0), ("1000", 10.0)] {
+        let mut b = VirtualBench::new(scale, 5);
+        b.session.teach_limits(&spec()).unwrap();
+        b.session.start_teach_cut(&spec(), b.now_s()).unwrap();
+        b.run_until(|b| b.session.stage() == Stage::Idle, wall_s);
+        let events = b.events();
+        assert_eq!(
+            b.session.stats().watchdog_fallbacks,
+            0,
+            "x{scale}: {events}"
+        );
+        assert!(b.session.stats().heartbeats_sent > 0, "x{scale}: {events}");
+        if scale != "0.01" {
+            assert!(b.session.calibration().is_some(), "x{scale}: {events}");
+        }
+    }
+}
+
+#[test]
+fn a_virtual_device_answered_later_than_its_watchdog_falls_back_and_is_re_armed_once_per_attempt() {
+    // At 1000x the worker runs 400 frames (0.4 s of device time) a tick and reads the host's
+    // bytes only at a tick's start; a page that answers 15 ms late misses a tick, and the
+    // device hears nothing for 0.8 s: its watchdog falls back, whatever the host's pacing. The
+    // host then sees a batch of 400 samples at once: it re-arms once for the batch (not once
+    // an interval of its samples' time), logs it at the sample that sent it, and waits for
+    // the device's answer before the next attempt.
+    let mut b = VirtualBench::new("1000", 15);
+    b.teach(20.0);
+    let events = b.events();
+    assert!(b.session.stats().watchdog_fallbacks >= 1, "{events}");
+    let times = rearm_times(&b.session);
+    assert!(!times.is_empty(), "{events}");
+    for pair in times.windows(2) {
+        assert!(
+            pair[1] - pair[0] >= HEARTBEAT_INTERVAL_S - 1e-9,
+            "re-arms closer than an interval: {times:?}\n{events}"
+        );
+    }
+    assert!(
+        events.contains("device back under the host's control"),
+        "{events}"
+    );
+    // The teach cut saw the fallback: no calibration from it.
+    assert!(b.session.calibration().is_none(), "{events}");
+}
+
+#[test]
+fn a_teach_cut_that_sees_a_device_watchdog_fallback_is_abandoned_and_says_so() {
+    let mut config = maneerat(0.5);
+    // The device's receiver stalls for 1 s of device time 3 s into the teach cut's part.
+    config.faults = FaultInjection {
+        stall_at_s: Some(3.0),
+        stall_s: 1.0,
+        ..FaultInjection::default()
+    };
+    let mut b = Bench::new(config, SessionOptions::default());
+    b.session.teach_limits(&spec()).unwrap();
+    b.session.start_teach_cut(&spec(), b.now_s).unwrap();
+    b.run_until(|b| b.session.stage() != Stage::TeachCut, 60.0);
+    let events = b.events();
+    assert_eq!(b.session.stats().watchdog_fallbacks, 1, "{events}");
+    assert!(b.session.calibration().is_none(), "{events}");
+    assert_eq!(b.session.stage(), Stage::HoldingSafe, "{events}");
+    assert!(
+        events.contains("teach cut abandoned (the device's watchdog fell back"),
+        "{events}"
+    );
+    assert!(
+        b.session.reason().contains("run the teach cut again"),
+        "{}",
+        b.session.reason()
+    );
+    // The safe override is held (the device re-armed) until the part ends, then handed back.
+    b.run_until(|b| !b.session.holding(), 60.0);
+    let events = b.events();
+    assert!(!b.session.holding(), "{events}");
+    assert!(events.contains("re-arming the device"), "{events}");
+    assert!(b.session.calibration().is_none(), "{events}");
+    assert!(
+        b.rows
+            .iter()
+            .any(|r| r.phase == "held at the safe override"),
+        "{:?}",
+        b.rows
+            .iter()
+            .map(|r| r.phase)
+            .collect::<std::collections::BTreeSet<_>>()
+    );
+}

@@ -863,12 +863,13 @@ fn the_report_is_written_when_the_link_is_lost_in_the_teach_cut_or_the_device_is
         "{report}"
     );
     let events = report["events"].as_array().unwrap();
-    assert!(
-        events
-            .iter()
-            .any(|e| e["event"].as_str().unwrap().contains("arm (cycle start)")),
-        "{report}"
-    );
+    // The teach cut's part was armed; the run's, on a link already lost, is not.
+    let arms = events
+        .iter()
+        .filter(|e| e["event"].as_str().unwrap().contains("arm (cycle start)"))
+        .count();
+    assert_eq!(arms, 1, "{report}");
+    assert!(!stderr.contains("part 2, 0.000 s: arm"), "{stderr}");
 
     let newer = Capabilities {
         version_major: 3,
@@ -887,6 +888,48 @@ fn the_report_is_written_when_the_link_is_lost_in_the_teach_cut_or_the_device_is
     assert_eq!(report["device"], serde_json::Value::Null);
     assert_eq!(report["frames_received"], serde_json::Value::Null);
     assert!(report["error"].as_str().unwrap().contains("protocol 3.0"));
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// A link lost in the middle of the teach cut: the command fails saying the teach cut was
+/// abandoned, and no second part is armed on the dead link (no "arm (cycle start)" line for it).
+#[cfg(feature = "cli")]
+#[test]
+fn a_link_lost_in_the_teach_cut_arms_no_further_part() {
+    let _one = ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner());
+    let exe = env!("CARGO_BIN_EXE_cutlab");
+    let dir = scratch("lost-teach");
+    // The teach cut's part takes about 15 s of device time: the cable goes 8 s into it.
+    let device = format!(
+        "{exe} device --stdio --scenario maneerat-doc-1 --time-scale 20 --watchdog-s 5 \
+         --unplug-at-s 8"
+    );
+    let (out, report) = cutlab_host(
+        &dir,
+        &[
+            "--device-cmd",
+            &device,
+            "--controller",
+            "pi",
+            "--link-timeout-s",
+            "0.5",
+        ],
+    );
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success(), "{stderr}");
+    assert!(
+        stderr.contains("the teach cut (part 1) was abandoned"),
+        "{stderr}"
+    );
+    assert!(!stderr.contains("part 2, 0.000 s: arm"), "{stderr}");
+    let report = report.unwrap();
+    let arms = report["events"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|e| e["event"].as_str().unwrap().contains("arm (cycle start)"))
+        .count();
+    assert_eq!(arms, 1, "{report}");
     let _ = std::fs::remove_dir_all(&dir);
 }
 

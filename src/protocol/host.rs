@@ -265,6 +265,8 @@ pub struct HostSession {
     hold_latched: bool,
     /// The device clock of the latest Sample or device Heartbeat: what a command echoes.
     latest_device_time_us: Option<u32>,
+    /// The device time of the newest Sample received (unwrapped), s.
+    newest_sample_device_time_s: Option<f64>,
     /// The part's program ended (its end sample, or a heartbeat that says so).
     part_ended: bool,
     /// The override the bridge says it applies while armed (its latest Ack), if it does.
@@ -317,6 +319,7 @@ impl HostSession {
             active_faults: 0,
             hold_latched: false,
             latest_device_time_us: None,
+            newest_sample_device_time_s: None,
             part_ended: false,
             bridge_override_pct: None,
             commanded_pct: None,
@@ -360,6 +363,25 @@ impl HostSession {
             time_s,
             text: text.into(),
         });
+    }
+
+    /// Records an event at device time `device_time_s` (that of a sample in the batch the host
+    /// is working through, not the newest one received).
+    pub fn event_at(&mut self, device_time_s: f64, text: impl Into<String>) {
+        let time_s = self.last.map_or(0.0, |l| {
+            l.step.sensors.time_s - (l.device_time_s - device_time_s)
+        });
+        self.events.push(LinkEvent {
+            part: self.part,
+            time_s,
+            text: text.into(),
+        });
+    }
+
+    /// The device time of the newest Sample received, s: the device reads what the host sends
+    /// now no earlier than this (a batch of samples is answered after its newest one).
+    pub fn newest_sample_device_time_s(&self) -> Option<f64> {
+        self.newest_sample_device_time_s
     }
 
     /// Counts a loss of the link (the host's watchdog).
@@ -804,6 +826,7 @@ impl HostSession {
         }
         self.last = Some(sample);
         self.latest_device_time_us = Some(s.time_us);
+        self.newest_sample_device_time_s = Some(device_time_s);
         self.device_armed = s.flags & sample_flag::ARMED != 0;
         self.hold_latched = s.flags & sample_flag::HOLD_LATCHED != 0;
         // The E-stop flag (bit 6) says what the faults' E-stop bit says.
@@ -878,10 +901,14 @@ fn interpolate(a: &LinkSample, b: &LinkSample, f: f64) -> LinkSample {
 /// What a host keeps sending while it holds the device (docs/protocol.md §4 and §5): the command
 /// in force whenever it changes or has gone unacknowledged for two heartbeat intervals, a
 /// Heartbeat when nothing else went out for one interval (a fifth of the device's watchdog
-/// timeout), and an Arm every interval while the device reports its watchdog fallback.
+/// timeout), and, while the device reports its watchdog fallback, an Arm: one per attempt, the
+/// next an interval after the device answered it, or two intervals after it went out unanswered.
 ///
 /// Times are the device's, read from its samples, so a device that runs faster than real time
-/// (an emulator's `--time-scale`) is kept up in its own time. The native host
+/// (an emulator's `--time-scale`) is kept up in its own time. The host answers a batch of
+/// samples after its newest one, and the device reads the answer no earlier than that: an Arm is
+/// awaited from the newest sample's time, so the samples of the batch that raised the fallback
+/// (at a high time scale, up to a few hundred) cannot each send one more. The native host
 /// ([`super::link::HostLink`]) and the browser's Hardware page both keep up through this.
 #[derive(Debug, Clone, PartialEq)]
 pub struct KeepUp {
@@ -894,7 +921,10 @@ pub struct KeepUp {
     latency_pending: bool,
     /// When the host last sent anything.
     last_sent_s: f64,
-    last_arm_s: f64,
+    /// The latest Arm (the operator's, or a re-arm): its sequence number when this sent it, and
+    /// the device time its answer is awaited from.
+    arm_seq: Option<u32>,
+    arm_sent_s: f64,
 }
 
 impl KeepUp {
@@ -907,7 +937,8 @@ impl KeepUp {
             command_sent_s: 0.0,
             latency_pending: false,
             last_sent_s: 0.0,
-            last_arm_s: f64::NEG_INFINITY,
+            arm_seq: None,
+            arm_sent_s: f64::NEG_INFINITY,
         }
     }
 
@@ -920,7 +951,8 @@ impl KeepUp {
     /// is not re-armed before an interval has passed.
     pub fn armed(&mut self, now_s: f64) {
         self.command = None;
-        self.last_arm_s = now_s;
+        self.arm_seq = None;
+        self.arm_sent_s = now_s;
     }
 
     /// Bytes went out at `now_s`.
@@ -942,10 +974,19 @@ impl KeepUp {
             self.latency_pending = false;
             session.record_latency(now_s - self.command_sent_s);
         }
-        if session.in_fallback() && now_s - self.last_arm_s >= interval {
-            self.last_arm_s = now_s;
-            session.event("re-arming the device after its watchdog fallback");
-            session.arm(out);
+        if session.in_fallback() {
+            // An Arm the device answered (its Ack, or a later command's: they are read in
+            // order) left the fallback in place: try again after an interval; one lost on the
+            // line, after two.
+            let answered = self.arm_seq.is_none_or(|seq| session.acknowledged(seq));
+            let wait_s = if answered { interval } else { 2.0 * interval };
+            if now_s - self.arm_sent_s >= wait_s {
+                session.event_at(now_s, "re-arming the device after its watchdog fallback");
+                self.arm_seq = Some(session.arm(out));
+                self.arm_sent_s = session
+                    .newest_sample_device_time_s()
+                    .map_or(now_s, |newest| newest.max(now_s));
+            }
         }
         let changed = self.command != Some(command);
         // A command the device ignored as stale goes again at once, decided on fresher samples.
@@ -1197,6 +1238,49 @@ mod tests {
             }),
         ]);
         assert_eq!(s.take_alarm_faults(), [FaultKind::EStop]);
+    }
+
+    #[test]
+    fn a_batch_of_fallback_samples_is_re_armed_once_logged_at_its_sample() {
+        // 400 samples (0.4 s) in fallback arrive at once, as from a device running 40x real
+        // time: the device reads nothing the host sends before the batch's last sample.
+        let batch: Vec<Frame> = (1..=400)
+            .map(|seq| {
+                Frame::Sample(Sample {
+                    flags: sample_flag::IN_CYCLE | sample_flag::ARMED | sample_flag::FALLBACK,
+                    ..sample(seq, seq * 1000, 0)
+                })
+            })
+            .collect();
+        let mut s = session_with(&batch);
+        let mut keep = KeepUp::new(&caps());
+        keep.armed(0.0);
+        let command = OverrideCommand::default();
+        let mut out = Vec::new();
+        for l in drain(&mut s) {
+            keep.keep_up(&mut s, command, l.device_time_s, &mut out);
+            keep.sent(l.device_time_s);
+        }
+        let rearms: Vec<&LinkEvent> = s
+            .events()
+            .iter()
+            .filter(|e| e.text.starts_with("re-arming"))
+            .collect();
+        assert_eq!(rearms.len(), 1, "{rearms:?}");
+        // Sent at the first sample an interval after the arming (at 0.1 s or the one after, by
+        // rounding), and logged there.
+        assert!((rearms[0].time_s - 0.1).abs() <= 0.0011, "{rearms:?}");
+        // Unanswered two intervals after the batch's last sample: the next attempt.
+        keep.keep_up(&mut s, command, 0.4 + 0.15, &mut out);
+        let n = |s: &HostSession| {
+            s.events()
+                .iter()
+                .filter(|e| e.text.starts_with("re-arming"))
+                .count()
+        };
+        assert_eq!(n(&s), 1);
+        keep.keep_up(&mut s, command, 0.4 + 0.2, &mut out);
+        assert_eq!(n(&s), 2);
     }
 
     #[test]

@@ -667,8 +667,8 @@ impl HostLink {
     /// Arms the device for a new part. A part still running (a loop that stopped before its
     /// program's end) is handed back to the machine's own dial and left to end first.
     fn begin_part(&mut self) -> bool {
-        if self.alarm.is_some() {
-            // After an alarm the host arms nothing more.
+        if self.alarm.is_some() || self.lost {
+            // After an alarm, or with the link lost, the host arms nothing more.
             return false;
         }
         if self.part_running {

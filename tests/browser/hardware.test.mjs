@@ -354,9 +354,12 @@ test('the virtual device with injected faults: counters, the device watchdog, th
   await page.getByLabel('Time scale').fill('4');
   await page.getByLabel('Drop rate').fill('0.01');
   await page.getByLabel('Noise rate').fill('0.01');
-  // The receiver stalls inside the teach cut's part (the device watchdog is 0.5 s).
+  // The receiver stalls for 3 s inside the teach cut's part, longer than the device's 2 s
+  // watchdog (2 s, not 0.5 s: at 4x the page has half a second of wall time to answer each
+  // tick, which a busy computer always gives, docs/hardware.md §6).
+  await page.getByLabel('Device watchdog').fill('2');
   await page.getByLabel('Receiver stall at').fill('6');
-  await page.getByLabel('Receiver stall for').fill('1');
+  await page.getByLabel('Receiver stall for').fill('3');
   await page.getByRole('button', { name: 'Start the virtual device' }).click();
   await page.getByText('Link state: streaming').waitFor({ timeout: LONG });
   const longestTask = await watchLongTasks(page);
@@ -365,10 +368,16 @@ test('the virtual device with injected faults: counters, the device watchdog, th
   await waitForCounter(page, 'Samples lost (sequence gaps)', (n) => n > 10);
   await waitForCounter(page, 'Frames rejected (CRC, COBS, size)', (n) => n > 5);
   await waitForCounter(page, 'Bytes dropped while resynchronising', (n) => n > 0);
-  // The stall: the device falls back, the host sees it and re-arms.
+  // The stall: the device falls back, the host sees it and re-arms; the teach cut, whose fit
+  // would take the fallback's samples for the schedule's overrides, is abandoned and the page
+  // says so.
   await waitForCounter(page, 'Device watchdog fallbacks', (n) => n >= 1);
   await page.getByText(/re-arming the device after its watchdog fallback/).first().waitFor();
   await page.getByText(/device back under the host's control/).first().waitFor({ timeout: LONG });
+  await page.getByText(/teach cut abandoned: the device's watchdog fell back/).first().waitFor({ timeout: LONG });
+  // Once the part ends (handed back), the teach cut runs again on the next part.
+  await page.getByText(/the part ended: the device handed back/).first().waitFor({ timeout: LONG });
+  await confirm(page, 'Teach cut…', 'Start the teach cut', [/teach-cut overrides/]);
   await page.getByText(/teach cut over the link/).first().waitFor({ timeout: LONG });
   await page.getByText('Link state: streaming').waitFor();
   await confirm(page, 'Arm…', 'Arm now', [/Overload/]);

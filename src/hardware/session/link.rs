@@ -101,7 +101,8 @@ impl HardwareSession {
         self.copy_host_events();
     }
 
-    fn copy_host_events(&mut self) {
+    /// The protocol session's new events, at the device time of the sample being worked on.
+    pub(super) fn copy_host_events(&mut self) {
         let new: Vec<String> = self
             .host
             .events()

@@ -25,6 +25,9 @@ impl HardwareSession {
             sensorless: None,
             dynamometer: None,
         };
+        if s.flags & sample_flag::FALLBACK != 0 && matches!(self.activity, Activity::Teach(_)) {
+            self.teach_cut_fell_back(now_s);
+        }
         let idle_before = matches!(self.activity, Activity::Hold | Activity::Idle);
         let (mut teach_done, mut run_done) = (false, false);
         match &mut self.activity {
@@ -74,6 +77,8 @@ impl HardwareSession {
             );
         }
         self.keep_up(s.device_time_s);
+        // A re-arm this sample sent is logged at its time, not at the newest sample's.
+        self.copy_host_events();
         let sensors = &s.step.sensors;
         let truth = s.step.truth;
         let stage = self.stage();
@@ -143,6 +148,31 @@ impl HardwareSession {
             }
             Err(e) => self.end_part(program_end, format!("teach cut failed: {e}"), now_s),
         }
+    }
+
+    /// The device's watchdog fell back during the teach cut: from this sample on the machine runs
+    /// at the fallback override, while the fit would take each period for the override the
+    /// teach schedule commanded — a calibration made of both would be wrong without a word.
+    /// The teach cut is abandoned (no calibration) and the safe override held until the part
+    /// ends; the operator runs it again.
+    fn teach_cut_fell_back(&mut self, now_s: f64) {
+        let fallback_pct = self
+            .capabilities
+            .map_or(f64::NAN, |c| f64::from(c.fallback_override_cpct) / 100.0);
+        let why = format!(
+            "the device's watchdog fell back (override at most {fallback_pct} %), so the cut no \
+             longer follows the teach cut's overrides"
+        );
+        self.stop_work(&why, false);
+        self.hold_safe(now_s);
+        let safe = self.safe_override_pct();
+        self.set_state(
+            LinkState::Streaming,
+            format!(
+                "teach cut abandoned: {why}; no calibration made, run the teach cut again (the \
+                 override held at {safe} % until the part ends)"
+            ),
+        );
     }
 
     fn finish_run(&mut self, program_end: bool, now_s: f64) {
