@@ -457,6 +457,37 @@ fn a_stalled_receiver_fires_the_device_watchdog_and_both_sides_report_it() {
         .any(|r| (r.applied_override_pct - 50.0).abs() < 1e-9));
 }
 
+#[test]
+fn a_watchdog_fallback_in_the_teach_cut_abandons_it_and_arms_no_run() {
+    let _one = ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner());
+    // The same stall as above, inside the teach cut's part (its first 66 s of device time): the
+    // machine runs at the fallback's 50 % while the teach schedule would label those periods
+    // with its own overrides, so no calibration may be made of it, and no run follows.
+    let mut config = kim_device(2.0);
+    config.faults.stall_at_s = Some(20.0);
+    config.faults.stall_s = 4.0;
+    let (run, device, diagnostics) =
+        host_against_emulator(config, &kim_threshold(), HostOptions::default());
+    assert_eq!(device.watchdog_fallbacks, 1, "{diagnostics}");
+    let error = run
+        .result
+        .expect_err("no run after an abandoned teach cut")
+        .0;
+    assert!(
+        error.contains("the teach cut (part 1) was abandoned")
+            && error.contains("watchdog fell back"),
+        "{error}"
+    );
+    assert!(
+        run.events
+            .iter()
+            .any(|e| e.text.starts_with("teach cut abandoned")),
+        "{:?}",
+        run.events
+    );
+    assert_eq!(device.parts, 1, "a run's part was armed: {diagnostics}");
+}
+
 /// maneerat-doc-1's PI run (an 11 s program) from the simulation's calibration, so the device's
 /// first part is the run; the emulator with a watchdog that only the tests about it trip.
 fn maneerat_calibrated() -> (RunSpec, RunResult, DeviceConfig) {

@@ -18,7 +18,7 @@ use crate::closed_loop::teach_cut::TeachForce;
 use crate::estimation::estimator::Calibration;
 use crate::hardware::session::check_measured;
 use crate::protocol::host::{DeviceSummary, LinkEvent, LinkStats};
-use crate::protocol::link::{HostAlarm, HostError, HostLink, LinkPart};
+use crate::protocol::link::{HostAlarm, HostError, HostLink, LinkPart, TEACH_CUT_FELL_BACK};
 use crate::work::Work;
 
 /// A closed-loop run made over a link.
@@ -90,7 +90,7 @@ pub fn run_on_link(
         (None, Some(teach_force)) => LabRun::on_machines(
             spec,
             RunMachines::Separate {
-                teach: part(),
+                teach: Box::new(LinkPart::new(Rc::clone(&link)).abandoning_on_fallback()),
                 run: part(),
             },
             teach_force,
@@ -109,10 +109,11 @@ pub fn run_on_link(
     let lost = link.lost();
     let alarm = link.alarm().cloned();
     // What ended the session before the run's program could end, and in which part.
-    let stopped = match (&alarm, link.lost_in_part()) {
-        (Some(a), _) => Some((a.part, a.text.clone())),
-        (None, Some(part)) => Some((part, link.lost_reason())),
-        (None, None) => None,
+    let stopped = match (&alarm, link.lost_in_part(), link.fell_back_in_part()) {
+        (Some(a), _, _) => Some((a.part, a.text.clone())),
+        (None, Some(part), _) => Some((part, link.lost_reason())),
+        (None, None, Some(part)) => Some((part, TEACH_CUT_FELL_BACK.to_string())),
+        (None, None, None) => None,
     };
     let result = match (result, stopped) {
         (result, Some((part, why))) if part < run_part => {

@@ -20,7 +20,7 @@ use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 use super::device::DeviceEmulator;
-use super::frame::{AckResult, Capabilities, FaultKind, VERSION_MAJOR, VERSION_MINOR};
+use super::frame::{sample_flag, AckResult, Capabilities, FaultKind, VERSION_MAJOR, VERSION_MINOR};
 use super::host::{
     check_link_timeout_s, HostSession, KeepUp, LineBudget, LinkSample, DEFAULT_LINK_TIMEOUT_S,
     HELLO_INTERVAL_S,
@@ -370,6 +370,11 @@ impl Line for LockstepLine {
     }
 }
 
+/// Why a teach cut's part was abandoned on a watchdog fallback (the session's event and the
+/// run's error).
+pub const TEACH_CUT_FELL_BACK: &str = "teach cut abandoned: the device's watchdog fell back, so \
+    the cut no longer follows the teach cut's overrides; no calibration made, run it again";
+
 /// The host's end of a byte link to a device, after the handshake.
 pub struct HostLink {
     session: HostSession,
@@ -380,6 +385,9 @@ pub struct HostLink {
     lost: bool,
     /// The part under way when it died.
     lost_in_part: Option<u32>,
+    /// A teach cut's part in which the device's watchdog fell back: the part was abandoned, and
+    /// no further part is armed.
+    fell_back_in_part: Option<u32>,
     /// A part's samples are streaming.
     part_running: bool,
     /// The command, heartbeats and re-arming, in device time.
@@ -488,6 +496,7 @@ impl HostLink {
             capabilities,
             lost: false,
             lost_in_part: None,
+            fell_back_in_part: None,
             part_running: false,
             keep_up: KeepUp::new(&capabilities),
             device_time_s: 0.0,
@@ -616,6 +625,11 @@ impl HostLink {
         self.lost_in_part
     }
 
+    /// The teach cut's part that was abandoned because the device's watchdog fell back in it.
+    pub fn fell_back_in_part(&self) -> Option<u32> {
+        self.fell_back_in_part
+    }
+
     /// The event that recorded the link's loss.
     pub fn lost_reason(&self) -> String {
         self.session
@@ -667,8 +681,9 @@ impl HostLink {
     /// Arms the device for a new part. A part still running (a loop that stopped before its
     /// program's end) is handed back to the machine's own dial and left to end first.
     fn begin_part(&mut self) -> bool {
-        if self.alarm.is_some() || self.lost {
-            // After an alarm, or with the link lost, the host arms nothing more.
+        if self.alarm.is_some() || self.lost || self.fell_back_in_part.is_some() {
+            // After an alarm, with the link lost, or after an abandoned teach cut, the host
+            // arms nothing more.
             return false;
         }
         if self.part_running {
@@ -821,6 +836,8 @@ pub struct LinkPart {
     stop_at_s: Option<f64>,
     /// It did end there.
     stopped_at_limit: Rc<RefCell<bool>>,
+    /// A teach cut's part: it ends at the first sample of a watchdog fallback.
+    abandons_on_fallback: bool,
 }
 
 impl LinkPart {
@@ -835,7 +852,17 @@ impl LinkPart {
             last: MachineStep::default(),
             stop_at_s: None,
             stopped_at_limit: Rc::new(RefCell::new(false)),
+            abandons_on_fallback: false,
         }
+    }
+
+    /// The same part as a teach cut's: from the first sample of a device watchdog fallback on,
+    /// the machine runs at the fallback override while the teach schedule would label each period
+    /// with the override it commanded, so the part ends there, the session says so, and the link
+    /// arms no further part ([`HostLink::fell_back_in_part`]): no calibration is made of it.
+    pub fn abandoning_on_fallback(mut self) -> Self {
+        self.abandons_on_fallback = true;
+        self
     }
 
     /// Ends the part for the loop at machine time `stop_at_s` (a duration limit); the flag
@@ -874,6 +901,11 @@ impl Machine for LinkPart {
                 } else if link.alarm.is_some() {
                     // A device fault: the loop ends with this sample; the link holds the part.
                     self.done = true;
+                } else if self.abandons_on_fallback && s.flags & sample_flag::FALLBACK != 0 {
+                    self.done = true;
+                    link.fell_back_in_part = Some(link.session.part());
+                    link.session.event(TEACH_CUT_FELL_BACK);
+                    link.write_events();
                 } else if self.stop_at_s.is_some_and(|t| s.step.sensors.time_s >= t) {
                     self.done = true;
                     *self.stopped_at_limit.borrow_mut() = true;
