@@ -396,6 +396,24 @@ fn applied_overrides_pct(r: &RunResult) -> Vec<f64> {
 /// Natively only: three whole runs and a teach cut.
 #[cfg(not(target_arch = "wasm32"))]
 #[test]
+fn a_target_far_above_the_cut_leaves_the_controller_in_charge() {
+    // 5000 N on kim-step-doc, whose cut gives 300–700 N at 100 %: a fifth of the target (1000 N)
+    // lies above every cut, so the envelope once took the whole run for air and held the
+    // programmed feed, the controller silently off. It now asks for more feed, up to the ceiling.
+    let mut spec = RunSpec::new(Preset::KimStepDoc, ControllerKind::Pi);
+    spec.settings.target_force_n = Some(5_000.0);
+    let far = simulate(&spec).unwrap();
+    assert!(far.metrics.override_changes > 0, "{:?}", far.metrics);
+    let programmed = simulate(&RunSpec::new(Preset::KimStepDoc, ControllerKind::Fixed)).unwrap();
+    assert!(
+        far.metrics.cycle_time_s < programmed.metrics.cycle_time_s - 1.0,
+        "{} s against the programmed feed's {} s",
+        far.metrics.cycle_time_s,
+        programmed.metrics.cycle_time_s
+    );
+}
+
+#[test]
 fn the_safe_fixed_override_reported_is_the_one_the_machine_ran_at() {
     use cutlab::closed_loop::references::{fixed_feed_spec, references};
     // kim-step-doc's 0.1 mm per tooth lies inside SM45C's chip-load window (0.01–0.15 mm) from

@@ -56,8 +56,8 @@ use cutlab::closed_loop::references::{
 };
 use cutlab::closed_loop::settings::{
     air_cut_force_n, DEFAULT_CONTROL_PERIOD_S, DEFAULT_FEED_LOWPASS_HZ, DEFAULT_LOWPASS_ORDER,
-    DEFAULT_SPINDLE_LOWPASS_HZ, FORCE_LIMIT_FACTOR, MAX_AIR_CUT_FRACTION, MIN_CONTROL_PERIOD_S,
-    OVERLOAD_FACTOR, SENSOR_FAILURE_TOLERANCE,
+    DEFAULT_SPINDLE_LOWPASS_HZ, FORCE_LIMIT_FACTOR, MAX_AIR_CUT_FRACTION,
+    MAX_AIR_CUT_OF_CUT_FRACTION, MIN_CONTROL_PERIOD_S, OVERLOAD_FACTOR, SENSOR_FAILURE_TOLERANCE,
 };
 use cutlab::closed_loop::teach_cut::{TEACH_OVERRIDES_PCT, TEACH_STEP_S};
 use cutlab::control::registry::{ControllerConfig, ControllerKind};
@@ -923,7 +923,12 @@ fn estimation(facts: &mut Facts, m: &Matrix) {
                 .map(|p| {
                     let run = m.result(p, ControllerKind::Fixed);
                     let target_n = run.settings.target_force_n;
-                    100.0 * air_cut_force_n(target_n, run.calibration.air_force_estimate_n)
+                    100.0
+                        * air_cut_force_n(
+                            target_n,
+                            run.calibration.air_force_estimate_n,
+                            run.calibration.median_force_at_full_override_n,
+                        )
                         / target_n
                 }),
             0,
@@ -1062,6 +1067,10 @@ fn settings(facts: &mut Facts, m: &Matrix) {
         "envelope.max_air_cut_pct",
         fixed(100.0 * MAX_AIR_CUT_FRACTION, 0),
     );
+    facts.set(
+        "envelope.max_air_cut_of_cut_pct",
+        fixed(100.0 * MAX_AIR_CUT_OF_CUT_FRACTION, 0),
+    );
     facts.set("envelope.overload_factor", short(OVERLOAD_FACTOR, 1));
     facts.set("envelope.overload_s", short(dial.overload_time_s, 2));
     facts.set("metrics.force_limit_factor", short(FORCE_LIMIT_FACTOR, 2));
@@ -1132,7 +1141,7 @@ fn settings(facts: &mut Facts, m: &Matrix) {
         ),
     );
     // The air-cut threshold's margin over the air reading, where neither bound applies.
-    let margin = air_cut_force_n(100.0, 20.0) / 20.0;
+    let margin = air_cut_force_n(100.0, 20.0, f64::NAN) / 20.0;
     facts.set("envelope.air_margin", short(margin, 2));
     facts.set(
         "estimation.range_slack_pct",

@@ -66,6 +66,11 @@ const AIR_MARGIN: f64 = 1.5;
 /// large force in air still leaves the controller the light cuts (paper 003's 1 mm entry cuts at
 /// 40 % of the target at 100 %).
 pub const MAX_AIR_CUT_FRACTION: f64 = 0.35;
+/// Nor above this fraction of the force the teach cut cut at full override: a target far above
+/// what the program's cut gives (5000 N on kim-step-doc's 300–700 N) would otherwise put every
+/// cut under the threshold, and the envelope would hold the programmed feed all run as if the
+/// tool never left the air, the controller silently off.
+pub const MAX_AIR_CUT_OF_CUT_FRACTION: f64 = 0.5;
 /// The envelope calls readings stuck only after at least this many identical samples: a slow
 /// log's RMS value written to two decimals repeats from one sample to the next without a fault.
 const STUCK_SAMPLES: f64 = 10.0;
@@ -738,19 +743,28 @@ pub fn program_time_limit_s(
 
 /// The estimated force below which the safety envelope takes the tool for in air: a fifth of
 /// the target, raised to half again the force the calibrated model read in the teach cut's air
-/// (its bias there), but never above [`MAX_AIR_CUT_FRACTION`] of the target.
+/// (its bias there), but never above [`MAX_AIR_CUT_FRACTION`] of the target, nor above
+/// [`MAX_AIR_CUT_OF_CUT_FRACTION`] of the teach cut's median force at full override (NaN: not
+/// known, no such bound).
 ///
 /// ```
 /// use cutlab::closed_loop::settings::air_cut_force_n;
-/// assert_eq!(air_cut_force_n(320.0, f64::NAN), 64.0);   // no air seen: 20 %
-/// assert_eq!(air_cut_force_n(320.0, 68.0), 102.0);      // 1.5 × the air reading
-/// assert_eq!(air_cut_force_n(320.0, 300.0), 112.0);     // at most 35 %
+/// assert_eq!(air_cut_force_n(320.0, f64::NAN, 465.0), 64.0);   // no air seen: 20 %
+/// assert_eq!(air_cut_force_n(320.0, 68.0, 465.0), 102.0);      // 1.5 × the air reading
+/// assert_eq!(air_cut_force_n(320.0, 300.0, f64::NAN), 112.0);  // at most 35 %
+/// assert_eq!(air_cut_force_n(5000.0, 20.0, 465.0), 232.5);     // at most half the cut's force
 /// ```
-pub fn air_cut_force_n(target_force_n: f64, air_force_estimate_n: f64) -> f64 {
+pub fn air_cut_force_n(
+    target_force_n: f64,
+    air_force_estimate_n: f64,
+    median_force_at_full_override_n: f64,
+) -> f64 {
     let base = AIR_CUT_FRACTION * target_force_n;
     let biased = AIR_MARGIN * air_force_estimate_n;
     let threshold = if biased > base { biased } else { base };
-    threshold.min(MAX_AIR_CUT_FRACTION * target_force_n)
+    threshold
+        .min(MAX_AIR_CUT_FRACTION * target_force_n)
+        .min(MAX_AIR_CUT_OF_CUT_FRACTION * median_force_at_full_override_n)
 }
 
 impl Plan {
@@ -879,7 +893,11 @@ impl Plan {
             arming_trigger: l.arming_trigger,
             stuck_after_s: self.stuck_after_s,
             air_cut_force_n: if self.holds_in_air {
-                air_cut_force_n(target_force_n, calibration.air_force_estimate_n)
+                air_cut_force_n(
+                    target_force_n,
+                    calibration.air_force_estimate_n,
+                    calibration.median_force_at_full_override_n,
+                )
             } else {
                 0.0
             },
