@@ -436,6 +436,10 @@ test('without WebSerial the page says why and what works instead; the virtual de
   assert.match(await note.textContent(), /the virtual device below/);
   assert.match(await note.textContent(), /cutlab host --port/);
   assert.ok(await page.getByRole('button', { name: 'Connect to a serial port…' }).isDisabled());
+  // Before any link: no override reads as a 0 % feed hold, no round trip as 0 ms.
+  await page.getByText('Override: no link open.').waitFor();
+  const roundTrip = page.getByRole('table', { name: 'Link counters' }).getByRole('row', { name: /Command round trip/ });
+  assert.match(await roundTrip.textContent(), /no command acknowledged yet/);
 
   // A calibration saved by the command line: the run needs no teach cut.
   await mkdir(artifacts, { recursive: true });

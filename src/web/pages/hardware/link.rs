@@ -44,11 +44,15 @@ pub fn LinkPanel(ui: Ui, children: Children) -> impl IntoView {
                 ("Device faults", st.device_faults.to_string()),
                 (
                     "Command round trip, mean / max (ms)",
-                    format!(
-                        "{:.1} / {:.1}",
-                        1000.0 * st.command_latency_mean_s,
-                        1000.0 * st.command_latency_max_s
-                    ),
+                    if st.commands_acknowledged == 0 {
+                        "— (no command acknowledged yet)".to_string()
+                    } else {
+                        format!(
+                            "{:.1} / {:.1}",
+                            1000.0 * st.command_latency_mean_s,
+                            1000.0 * st.command_latency_max_s
+                        )
+                    },
                 ),
             ]
         })
@@ -73,12 +77,24 @@ pub fn LinkPanel(ui: Ui, children: Children) -> impl IntoView {
             }}
             {children()}
             <p class="overrides">
-                {move || s.with(|s| format!(
-                    "Override commanded {}, applied {}{}",
-                    pct(s.commanded_pct),
-                    pct(s.applied_pct),
-                    if s.fallback { " — the device is in its watchdog fallback" } else { "" },
-                ))}
+                {move || s.with(|s| if s.state.is_none() {
+                    // Nothing is commanded over a link that is not open: 0 % would read as a
+                    // feed hold.
+                    "Override: no link open.".to_string()
+                } else {
+                    format!(
+                        "Override commanded {}, applied {}{}",
+                        pct(s.commanded_pct),
+                        pct(s.applied_pct),
+                        if s.fallback {
+                            " — the device is in its watchdog fallback"
+                        } else if !s.commanded_pct.is_finite() {
+                            " — no command in force (the machine runs at what it applies itself)"
+                        } else {
+                            ""
+                        },
+                    )
+                })}
             </p>
             <p class="hold" role="status" aria-label="Feed hold at the machine">
                 {move || s.with(|s| s.hold.clone().map_or_else(
