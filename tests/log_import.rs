@@ -803,15 +803,7 @@ fn every_damage_leaves_every_data_line_a_row_and_every_other_line_counted() {
             assert_eq!(l.columns[0].values, [0.5]);
         }),
     ));
-    cases.push((
-        "a header alone",
-        "t [s],I [A],Phase\n".into(),
-        0,
-        Box::new(|l: &Log| {
-            assert!(l.header);
-            assert_eq!(l.account.header_lines, 1);
-        }),
-    ));
+    // A header alone is refused (a_file_without_data_rows_is_refused_saying_what_it_holds).
     for (what, text, expected_rows, check) in &cases {
         for chunk in [1, 7, 1 << 16] {
             let log = load_in_chunks(text.as_bytes(), chunk)
@@ -1084,4 +1076,53 @@ fn the_damaged_sample_accounts_for_each_of_its_fifteen_lines() {
         ]
     );
     assert_eq!(log.account.unread().len(), 8);
+}
+
+#[test]
+fn a_file_without_data_rows_is_refused_saying_what_it_holds() {
+    let empty = load(b"", None).unwrap_err();
+    assert_eq!(empty.line, 0);
+    assert!(
+        empty.to_string().starts_with("the file is empty"),
+        "{empty}"
+    );
+    let header_only = load(b"a,b,c\n", None).unwrap_err();
+    assert_eq!(
+        header_only.to_string(),
+        "line 1: no data rows: a header of 3 columns (\"a, b, c\") but no line of values after it"
+    );
+    // Chunked as the browser reads it: the same refusal.
+    assert_eq!(load_in_chunks(b"a,b,c\n", 1).unwrap_err(), header_only);
+    // One row is a log.
+    assert_eq!(load(b"a,b,c\n1,2,3\n", None).unwrap().rows, 1);
+}
+
+/// `rows` rows at 1 kHz of a 50 Hz current of amplitude `amplitude_a` named `name`.
+fn current_log(name: &str, rows: usize, current: impl Fn(f64) -> f64) -> String {
+    let mut csv = format!("time_s,{name},force_n\n");
+    for k in 0..rows {
+        let t = k as f64 * 1e-3;
+        csv += &format!("{t:.3},{:.4},150\n", current(t));
+    }
+    csv
+}
+
+#[test]
+fn a_current_that_swings_negative_is_guessed_a_phase_current_not_an_rms() {
+    let sine = current_log("spindle_current_a", 400, |t| {
+        10.0 * (2.0 * std::f64::consts::PI * 50.0 * t).sin()
+    });
+    let log = load(sine.as_bytes(), None).unwrap();
+    let column = &log.columns[1];
+    assert_eq!(column.role, Some(Role::PhaseCurrent));
+    let why = column.role_reason.as_deref().unwrap();
+    assert!(why.contains("the word \"current\""), "{why}");
+    assert!(why.contains("swings down to -10"), "{why}");
+    assert!(why.contains("an RMS is never negative"), "{why}");
+    // An RMS value with a little noise around an offset near zero stays an RMS.
+    let rms = current_log("spindle_current_a", 400, |t| {
+        0.5 + 5.0 * t - 0.6 * (t * 1e3 % 2.0)
+    });
+    let log = load(rms.as_bytes(), None).unwrap();
+    assert_eq!(log.columns[1].role, Some(Role::RmsCurrent));
 }

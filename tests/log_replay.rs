@@ -474,3 +474,46 @@ fn a_log_with_a_force_calibrates_the_line_its_currents_follow_from_one_two_or_th
         assert!((steady.force_n - 300.0).abs() < 1e-9);
     }
 }
+
+#[test]
+fn a_signed_current_calibrates_as_a_phase_and_the_assumed_speed_and_start_are_said() {
+    // As a reviewer's DAQ log: 1 kHz, a 50 Hz current of ±5 A then ±10 A named like an RMS,
+    // the force 150 then 300 N, no speed column.
+    let mut csv = String::from("time_s,spindle_current_a,force_n\n");
+    for k in 0..3000 {
+        let t = k as f64 * 1e-3;
+        let (amplitude_a, force_n) = if k < 1500 {
+            (5.0, 150.0)
+        } else {
+            (10.0, 300.0)
+        };
+        let i = amplitude_a * (2.0 * std::f64::consts::PI * 50.0 * t).sin();
+        csv += &format!("{t:.3},{i:.4},{force_n}\n");
+    }
+    let log = Arc::new(load(csv.as_bytes(), None).unwrap());
+    let mapping = Mapping::guess(&log);
+    assert_eq!(
+        mapping.columns_of(Channel::SpindlePhase),
+        ["spindle_current_a"]
+    );
+    assert_eq!(mapping.count(Channel::SpindleCurrent), 0);
+    let fit = fit_calibration(
+        &log,
+        &mapping,
+        &ReplaySettings::default(),
+        &ForceSource::Measured,
+    )
+    .unwrap();
+    let notes = fit.notes.join("\n");
+    assert!(!notes.contains("is an RMS value"), "{notes}");
+    assert!(notes.contains("one spindle phase"), "{notes}");
+    assert!(
+        notes.contains("the speed is assumed to be 1000 rpm (the log does not say it"),
+        "{notes}"
+    );
+    assert!(
+        notes.contains("its start is assumed to be there (the log does not show it)"),
+        "{notes}"
+    );
+    assert!(notes.contains("leaves out the first 1 s"), "{notes}");
+}

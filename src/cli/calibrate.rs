@@ -173,17 +173,11 @@ impl LogCalibrationArgs {
 }
 
 /// Reads `file` with the messy-log reader (any delimiter, decimal comma, quotes, damaged lines
-/// kept as gaps); a file without data rows is refused.
+/// kept as gaps); a file without data rows is refused ([`crate::log::load`] says so).
 pub fn read_log(file: &str) -> Result<crate::log::Log, CliError> {
     let bytes =
         std::fs::read(file).map_err(|e| CliError::new(format!("{file}: cannot read: {e}")))?;
-    let log = crate::log::load(&bytes, None).map_err(|e| CliError::new(format!("{file}: {e}")))?;
-    if log.rows == 0 {
-        return Err(CliError::new(format!(
-            "{file}: no data rows (a header line and at least one line of values are needed)"
-        )));
-    }
-    Ok(log)
+    crate::log::load(&bytes, None).map_err(|e| CliError::new(format!("{file}: {e}")))
 }
 
 /// One problem of a file as a note line: `note: line 12, Force [N]: …`.
@@ -272,6 +266,18 @@ pub fn run(args: CalibrateArgs, io: &mut Io<'_>) -> Result<(), CliError> {
         "{file}: {rows_with_force} rows with force, from {}\n",
         report.force_source
     );
+    let negative = report.negative_force;
+    if negative.rows > 0 {
+        let _ = writeln!(
+            out,
+            "note: {} rows with a negative force left out (the first on line {}, down to {} N): \
+             the fit reads a force's magnitude, so a negative one is a flipped sign or a damaged \
+             value",
+            negative.rows,
+            negative.first_line,
+            crate::input::readable(negative.lowest_n)
+        );
+    }
     out.push_str(&problem_notes(&log));
     if let Some(pct) = report.model_vs_measured_pct {
         let _ = writeln!(

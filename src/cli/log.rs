@@ -327,10 +327,9 @@ fn inspect(args: InspectArgs, io: &mut Io<'_>) -> Result<(), CliError> {
     }
     let mut out =
         format!(
-            "{path}: {} rows; delimiter {}, decimal {}, {}; time {}; sample period {}\n",
+            "{path}: {} rows; {}, {}; time {}; sample period {}\n",
             report.rows,
-            report.delimiter,
-            report.decimal,
+            log.dialect.in_words(),
             if report.header {
                 "a header"
             } else {
@@ -686,9 +685,6 @@ fn replay(args: ReplayArgs, io: &mut Io<'_>) -> Result<(), CliError> {
         .transpose()?;
     let sample_period_s = given_period(&args.period)?;
     let log = Arc::new(read_log(&path, sample_period_s, io)?);
-    if log.rows == 0 {
-        return Err(CliError::new(format!("{path}: no rows to replay")));
-    }
     if sample_period_s.is_none() {
         if let Some(why) = log.period_unknown() {
             return Err(CliError::new(format!(

@@ -36,6 +36,24 @@ impl Dialect {
             _ => ",",
         }
     }
+
+    /// The dialect in words for a sentence (`delimiter semicolon, decimal comma`): a bare `,` or
+    /// `;` there reads as punctuation (`delimiter ,, decimal .`).
+    ///
+    /// ```
+    /// use cutlab::log::csv::Dialect;
+    /// let d = Dialect { delimiter: b';', decimal_comma: true };
+    /// assert_eq!(d.in_words(), "delimiter semicolon, decimal comma");
+    /// ```
+    pub fn in_words(&self) -> String {
+        let delimiter = match self.delimiter {
+            b';' => "semicolon",
+            b'\t' => "tab",
+            _ => "comma",
+        };
+        let decimal = if self.decimal_comma { "comma" } else { "point" };
+        format!("delimiter {delimiter}, decimal {decimal}")
+    }
 }
 
 /// How much of the start is read to infer the dialect.

@@ -483,10 +483,37 @@ pub fn log_setup(
                 "no spindle-speed column: the speed is taken as {} rpm throughout",
                 crate::input::readable(rpm)
             ),
-            None => "no spindle-speed column and no speed given: the spindle is taken to run \
-                     from the first row"
-                .to_string(),
+            None => format!(
+                "no spindle-speed column and no speed given: the speed is assumed to be {} rpm \
+                 (the log does not say it; a fit's model is labelled with it and the control \
+                 period follows it): map a spindle-speed column to use the real one",
+                crate::input::readable(FALLBACK_SPINDLE_RPM)
+            ),
         });
+    }
+    // A spindle that runs at the first row started before the log or at it: which, the log
+    // cannot tell; the machine takes it to start there (see the module's documentation).
+    let first_speed_rpm = columns
+        .column(Channel::SpindleCommand)
+        .or(speed_column)
+        .map(|c| {
+            log.columns[c]
+                .values
+                .iter()
+                .copied()
+                .find(|v| v.is_finite())
+        });
+    let runs_at_first_row = match first_speed_rpm {
+        None => true,
+        Some(first) => first.is_some_and(|rpm| rpm.abs() > SPINDLE_RUNNING_RPM),
+    };
+    if runs_at_first_row {
+        notes.push(format!(
+            "the spindle runs from the log's first row, so its start is assumed to be there \
+             (the log does not show it): the envelope's arming delay counts from it, and a fit \
+             leaves out the first {} s as the spindle's starting transient",
+            crate::input::readable(crate::estimation::teach_fit::SETTLE_AFTER_SPINDLE_START_S)
+        ));
     }
     let spindle_rpm = options
         .spindle_rpm

@@ -112,7 +112,7 @@ pub struct LineProblem {
 /// zero bytes) or a quote that swallows the lines after it.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct ReadError {
-    /// The line where it shows (1-based).
+    /// The line where it shows (1-based; 0 for a file with no line at all).
     pub line: usize,
     /// What is wrong, and what to do.
     pub message: String,
@@ -120,6 +120,10 @@ pub struct ReadError {
 
 impl std::fmt::Display for ReadError {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        if self.line == 0 {
+            // No line to point at (an empty file).
+            return write!(f, "{}", self.message);
+        }
         write!(f, "line {}: {}", self.line, self.message)
     }
 }
@@ -487,7 +491,11 @@ impl LogBuilder {
         sink.account.lines = self.reader.lines_read();
         sink.account.bytes = self.reader.bytes_read();
         sink.account.cr_line_ends = self.reader.cr_line_ends();
-        Ok(sink.finish(dialect, sample_period_s))
+        let log = sink.finish(dialect, sample_period_s);
+        if log.rows == 0 {
+            return Err(no_data_rows(&log));
+        }
+        Ok(log)
     }
 }
 
@@ -892,6 +900,18 @@ impl RecordSink {
                 );
                 self.problem(self.header_line, Some(name.clone()), why.clone());
                 guess = Some((None, Some(why)));
+            }
+        }
+        if let Some((Some(Role::RmsCurrent), Some(why))) = &guess {
+            if let Some(lowest) = clearly_negative(&values) {
+                guess = Some((
+                    Some(Role::PhaseCurrent),
+                    Some(format!(
+                        "{why}, but it swings down to {}: an RMS is never negative, so a phase \
+                         current",
+                        readable(lowest)
+                    )),
+                ));
             }
         }
         let (role, role_reason) = guess.unwrap_or((None, None));
@@ -1330,6 +1350,55 @@ pub fn guess_role_from(name: &str, unit: Option<&str>, kind: ColumnKind) -> Opti
         Role::SpindleSpeed => speed(why),
         role => Some((role, why)),
     }
+}
+
+/// Why a log without data rows is refused: there is nothing to map, analyse, calibrate or
+/// replay. Says what the file held instead.
+fn no_data_rows(log: &Log) -> ReadError {
+    let lines = log.account.lines;
+    let message = if log.account.bytes == 0 {
+        "the file is empty: a log needs a line of values (after an optional header)".to_string()
+    } else if log.header {
+        let names: Vec<String> = log.columns.iter().map(|c| c.name.clone()).collect();
+        format!(
+            "no data rows: a header of {} column{} ({}) but no line of values after it",
+            names.len(),
+            if names.len() == 1 { "" } else { "s" },
+            excerpt(&period_log::some_names(&names))
+        )
+    } else {
+        format!(
+            "no data rows: none of its {lines} line{} holds values",
+            if lines == 1 { "" } else { "s" }
+        )
+    };
+    ReadError {
+        line: if log.account.bytes == 0 {
+            0
+        } else {
+            lines.max(1)
+        },
+        message,
+    }
+}
+
+/// The lowest value of a column that is clearly signed: at least a tenth of its finite values
+/// below zero, and its lowest below −10 % of its largest magnitude (an RMS or a drive's current
+/// magnitude with a small offset or noise around zero is not). `None` otherwise.
+///
+/// ```
+/// use cutlab::log::clearly_negative;
+/// let sine: Vec<f64> = (0..100).map(|k| 10.0 * (0.2 * k as f64).sin()).collect();
+/// assert!(clearly_negative(&sine).unwrap() < -9.9);
+/// assert_eq!(clearly_negative(&[5.0, 5.2, -0.01, 4.9, f64::NAN]), None);
+/// ```
+pub fn clearly_negative(values: &[f64]) -> Option<f64> {
+    let finite = || values.iter().copied().filter(|v| v.is_finite());
+    let count = finite().count();
+    let negative = finite().filter(|v| *v < 0.0).count();
+    let lowest = finite().fold(f64::INFINITY, f64::min);
+    let largest = finite().fold(0.0_f64, |m, v| m.max(v.abs()));
+    (count > 0 && negative * 10 >= count && lowest < -0.1 * largest).then_some(lowest)
 }
 
 /// Loads a whole file in memory at once (the command line; the browser pushes chunks).

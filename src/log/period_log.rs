@@ -56,6 +56,15 @@ pub enum LogError {
         /// The columns the log has.
         columns: Vec<String>,
     },
+    /// No row has a positive force: nothing to pair a current with.
+    NoPositiveForce {
+        /// Where the force came from (the report's `force_source`).
+        source: String,
+        /// The rows.
+        rows: usize,
+        /// The rows whose force is negative.
+        negative: NegativeForces,
+    },
     /// Neither model could be fitted.
     NoModel {
         /// Why the spindle model failed.
@@ -86,6 +95,35 @@ impl fmt::Display for LogError {
                 "no {name:?} column (the file's columns: {}); {purpose}",
                 some_names(columns)
             ),
+            LogError::NoPositiveForce {
+                source,
+                rows,
+                negative,
+            } => {
+                write!(f, "no row has a positive force ({source}): ")?;
+                if negative.rows == 0 {
+                    write!(f, "each of its {rows} rows is zero or missing")?;
+                } else {
+                    write!(
+                        f,
+                        "{} of its {rows} rows are negative (from line {}, down to {} N)",
+                        negative.rows,
+                        negative.first_line,
+                        crate::input::readable(negative.lowest_n)
+                    )?;
+                }
+                write!(
+                    f,
+                    "; the fit pairs each current with the force's magnitude, so it needs rows \
+                     cut with a positive force{}",
+                    if negative.rows * 2 > *rows {
+                        " (a force mostly negative is a dynamometer's sign flipped: negate the \
+                         column)"
+                    } else {
+                        ""
+                    }
+                )
+            }
             LogError::NoModel { spindle, feed } => write!(
                 f,
                 "no model could be fitted: spindle: {spindle}; feed: {feed}"
@@ -98,7 +136,7 @@ impl std::error::Error for LogError {}
 
 /// The first few of `names` for a message, and how many there are in all: a file with ten
 /// thousand columns must not make a ten-thousand-name error.
-fn some_names(names: &[String]) -> String {
+pub(crate) fn some_names(names: &[String]) -> String {
     const SHOWN: usize = 12;
     match names.len() {
         0 => "none".to_string(),
@@ -399,11 +437,45 @@ fn describe_time_steps(table: &LogTable) -> Option<String> {
     })
 }
 
+/// The rows whose force is negative, which the fit leaves out: a force the fit reads is a
+/// magnitude, so a negative one is a sign flipped or a damaged value.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct NegativeForces {
+    /// How many.
+    pub rows: usize,
+    /// The file line of the first (0 without any).
+    pub first_line: usize,
+    /// The lowest, N (NaN without any).
+    pub lowest_n: f64,
+}
+
+impl NegativeForces {
+    fn of(table: &LogTable, force_n: &[f64]) -> Self {
+        let mut negative = Self {
+            rows: 0,
+            first_line: 0,
+            lowest_n: f64::NAN,
+        };
+        for (row, &f) in force_n.iter().enumerate() {
+            if f.is_finite() && f < 0.0 {
+                if negative.rows == 0 {
+                    negative.first_line = table.line_of_row(row);
+                }
+                negative.rows += 1;
+                negative.lowest_n = negative.lowest_n.min(f);
+            }
+        }
+        negative
+    }
+}
+
 /// What a calibration from a log of control periods found.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct LogCalibration {
     /// Rows with a positive force.
     pub rows_with_force: usize,
+    /// Rows with a negative force, left out of the fit.
+    pub negative_force: NegativeForces,
     /// Median of the forces the spindle model was fitted to (NaN without any).
     pub median_force_n: f64,
     /// Median of the feed forces the feed model was fitted to (NaN without any).
@@ -488,12 +560,21 @@ pub fn calibrate_log(
                     .fold(0.0, f64::max)
             }))
     };
+    let positive = |force_n: &[f64]| force_n.iter().any(|f| f.is_finite() && *f > 0.0);
+    if !positive(&forces.resultant_n) && !positive(&forces.feed_n) {
+        return Err(LogError::NoPositiveForce {
+            source: forces.source.clone(),
+            rows: forces.resultant_n.len(),
+            negative: NegativeForces::of(table, &forces.resultant_n),
+        });
+    }
     let mut report = LogCalibration {
         rows_with_force: forces
             .resultant_n
             .iter()
             .filter(|f| f.is_finite() && **f > 0.0)
             .count(),
+        negative_force: NegativeForces::of(table, &forces.resultant_n),
         median_force_n: f64::NAN,
         median_feed_force_n: f64::NAN,
         force_source: forces.source.clone(),

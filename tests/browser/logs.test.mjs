@@ -53,7 +53,7 @@ test('two sample logs are opened, mapped, filtered, calibrated from, replayed an
   // Back to the DAQ log: its mapping was guessed; a wrong choice is said beside the table and
   // fixed by choosing again.
   await page.getByLabel(`Analyse ${DAQ}`).check();
-  await page.getByRole('status').filter({ hasText: 'delimiter ,, decimal point, a header; time Time [ms]; sample period 0.001 s' }).waitFor();
+  await page.getByRole('status').filter({ hasText: 'delimiter comma, decimal point, a header; time Time [ms]; sample period 0.001 s' }).waitFor();
   const force = page.getByRole('combobox', { name: 'F [N]' });
   assert.equal(await force.inputValue(), 'force');
   assert.equal(await page.getByRole('combobox', { name: 'S_I_W [A]' }).inputValue(), 'spindle-phase');

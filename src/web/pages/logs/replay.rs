@@ -109,6 +109,13 @@ pub fn ReplayPanel(shared: LogsState, fit: FitForm, replay: Replay) -> impl Into
     });
     let use_calibration = RwSignal::new("none".to_string());
     let (fit_done, stored) = (fit.done, fit.stored);
+    // A fit just made is what the person calibrated for: the replay uses it until they choose
+    // another calibration (each new fit chooses itself again).
+    Effect::new(move |_| {
+        if fit_done.with(Option::is_some) {
+            use_calibration.set("fit".to_string());
+        }
+    });
     let calibration_options = Signal::derive(move || {
         let mut options = vec![("none".to_string(), "None: regulate the current".to_string())];
         if fit_done.with(Option::is_some) {

@@ -21,19 +21,23 @@ pub fn LogSummary(
     let logs = shared.logs;
     let log = l.log.clone();
     let dialect = format!(
-        "{}: {} rows, {} columns; delimiter {}, decimal {}, {}; time {}; sample period {}; {} MB read in {:.2} s.",
+        "{}: {} rows, {} columns; {}, {}; time {}; sample period {}; {} read in {:.2} s.",
         l.name,
         log.rows,
         log.columns.len(),
-        log.dialect.delimiter_name(),
-        if log.dialect.decimal_comma { "comma" } else { "point" },
+        log.dialect.in_words(),
         if log.header { "a header" } else { "no header" },
         log.time_column
             .and_then(|t| log.columns.get(t))
             .map_or("none".to_string(), |c| c.name.clone()),
         log.sample_period_s
             .map_or("unknown".to_string(), |p| format!("{} s", readable(p))),
-        readable(l.bytes as f64 / 1e6),
+        // In the unit that reads best: "6e-6 MB" for a six-byte file said nothing.
+        match l.bytes {
+            b if b < 1000 => format!("{b} bytes"),
+            b if b < 1_000_000 => format!("{} kB", readable(b as f64 / 1e3)),
+            b => format!("{} MB", readable(b as f64 / 1e6)),
+        },
         l.load_s
     );
     let problems: Vec<String> = log
