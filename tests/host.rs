@@ -922,21 +922,20 @@ fn the_report_is_written_when_the_link_is_lost_in_the_teach_cut_or_the_device_is
     let _ = std::fs::remove_dir_all(&dir);
 }
 
-/// A link lost in the middle of the teach cut: the command fails saying the teach cut was
-/// abandoned, and no second part is armed on the dead link (no "arm (cycle start)" line for it).
+/// `cutlab host` running PI against maneerat-doc-1's emulated device (20× its time, a 5 s
+/// watchdog) whose cable is pulled at `unplug_at_s` of device time; the host waits 0.5 s.
 #[cfg(feature = "cli")]
-#[test]
-fn a_link_lost_in_the_teach_cut_arms_no_further_part() {
-    let _one = ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner());
+fn pi_host_unplugged_at(
+    dir: &std::path::Path,
+    unplug_at_s: f64,
+) -> (std::process::Output, Option<serde_json::Value>) {
     let exe = env!("CARGO_BIN_EXE_cutlab");
-    let dir = scratch("lost-teach");
-    // The teach cut's part takes about 15 s of device time: the cable goes 8 s into it.
     let device = format!(
         "{exe} device --stdio --scenario maneerat-doc-1 --time-scale 20 --watchdog-s 5 \
-         --unplug-at-s 8"
+         --unplug-at-s {unplug_at_s}"
     );
-    let (out, report) = cutlab_host(
-        &dir,
+    cutlab_host(
+        dir,
         &[
             "--device-cmd",
             &device,
@@ -945,7 +944,18 @@ fn a_link_lost_in_the_teach_cut_arms_no_further_part() {
             "--link-timeout-s",
             "0.5",
         ],
-    );
+    )
+}
+
+/// A link lost in the middle of the teach cut: the command fails saying the teach cut was
+/// abandoned, and no second part is armed on the dead link (no "arm (cycle start)" line for it).
+#[cfg(feature = "cli")]
+#[test]
+fn a_link_lost_in_the_teach_cut_arms_no_further_part() {
+    let _one = ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner());
+    let dir = scratch("lost-teach");
+    // The teach cut's part takes about 15 s of device time: the cable goes 8 s into it.
+    let (out, report) = pi_host_unplugged_at(&dir, 8.0);
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(!out.status.success(), "{stderr}");
     assert!(
@@ -970,24 +980,9 @@ fn a_link_lost_in_the_teach_cut_arms_no_further_part() {
 #[test]
 fn a_link_lost_in_the_closed_loop_fails_the_command_with_the_results_written() {
     let _one = ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner());
-    let exe = env!("CARGO_BIN_EXE_cutlab");
     let dir = scratch("lost");
     // The teach cut's part takes about 15 s of device time: the cable goes 7 s into the run.
-    let device = format!(
-        "{exe} device --stdio --scenario maneerat-doc-1 --time-scale 20 --watchdog-s 5 \
-         --unplug-at-s 22"
-    );
-    let (out, report) = cutlab_host(
-        &dir,
-        &[
-            "--device-cmd",
-            &device,
-            "--controller",
-            "pi",
-            "--link-timeout-s",
-            "0.5",
-        ],
-    );
+    let (out, report) = pi_host_unplugged_at(&dir, 22.0);
     let stdout = String::from_utf8_lossy(&out.stdout);
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(!out.status.success(), "{stdout}\n{stderr}");

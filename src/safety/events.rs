@@ -124,7 +124,7 @@ pub enum SafetyEvent {
         /// window's end where the envelope's band reaches it, beyond it where even the band's
         /// end cannot (a programmed feed far too high, or too low, for the cutter).
         #[serde(
-            default = "not_known",
+            default = "crate::estimation::nan",
             deserialize_with = "crate::estimation::null_as_nan"
         )]
         running_mm: f64,
@@ -135,10 +135,6 @@ pub enum SafetyEvent {
 /// window's end before an event says the window could not be kept: more than the override's
 /// quantisation moves it.
 const CHIP_LOAD_REACH: f64 = 0.02;
-
-fn not_known() -> f64 {
-    f64::NAN
-}
 
 impl SafetyEvent {
     /// When the event happened.
