@@ -274,7 +274,8 @@ pub fn parse(text: &str) -> Result<Engine, FuzzyError> {
         }
     }
     resolve_formulas(&pending, &mut inputs, &mut outputs)?;
-    refuse_no_rules(&blocks)?;
+    // Checked after the engine builds, so a missing variable is named first.
+    let no_rules = refuse_no_rules(&blocks);
     let names = Names::of(&inputs, &outputs);
     let blocks = blocks
         .into_iter()
@@ -291,7 +292,8 @@ pub fn parse(text: &str) -> Result<Engine, FuzzyError> {
             })
         })
         .collect::<Result<Vec<_>, FuzzyError>>()?;
-    Engine::with_blocks(name, inputs, outputs, blocks, FUZZYLITE_EPSILON)
+    let engine = Engine::with_blocks(name, inputs, outputs, blocks, FUZZYLITE_EPSILON)?;
+    no_rules.map(|()| engine)
 }
 
 /// An engine without a single rule is refused: every output would hold its default whatever the
