@@ -104,3 +104,51 @@ fn an_input_that_is_not_finite_is_refused_not_answered_with_the_default() {
     let e = result.unwrap_err();
     assert!(e.len() < 120 && e.contains("(10000 characters)"), "{e}");
 }
+
+/// paper 002's engine with its rules taken out: it loaded, and a controller running it held the
+/// feed fixed without a word. Every reader of a file refuses it at load, naming the empty block.
+#[test]
+fn an_engine_without_rules_is_refused_at_load_naming_the_empty_rule_block() {
+    let dir = std::env::temp_dir().join(format!("cutlab-fuzzy-norules-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("norules.fll");
+    let (result, fll) = cutlab(&["fuzzy", "export", "--rules", "experience"], "");
+    result.unwrap();
+    let rule_less: String = fll
+        .lines()
+        .filter(|l| !l.trim_start().starts_with("rule:"))
+        .map(|l| format!("{l}\n"))
+        .collect();
+    assert!(rule_less.len() < fll.len());
+    let block_line = 1 + rule_less
+        .lines()
+        .position(|l| l.starts_with("RuleBlock:"))
+        .unwrap();
+    std::fs::write(&path, &rule_less).unwrap();
+    let file = path.to_str().unwrap();
+    let why = format!(
+        "line {block_line}: the rule block \"rules\" is empty: a fuzzy engine without rules \
+         holds every output at its default whatever its inputs"
+    );
+    let (result, out) = cutlab(&["fuzzy", "eval", "--fll", file], "0 0\n");
+    let e = result.unwrap_err();
+    assert!(e.starts_with(&format!("{file}: {why}")), "{e}");
+    assert!(out.is_empty(), "{out}");
+    let (result, _) = cutlab(
+        &[
+            "sim",
+            "--scenario",
+            "maneerat-doc-1",
+            "--fuzzy-engine",
+            file,
+            "--no-references",
+        ],
+        "",
+    );
+    let e = result.unwrap_err();
+    assert!(
+        e.starts_with(&format!("--fuzzy-engine {file}: engine: {why}")),
+        "{e}"
+    );
+    std::fs::remove_dir_all(dir).ok();
+}

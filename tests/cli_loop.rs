@@ -438,3 +438,111 @@ fn savings_are_none_where_the_cycle_time_does_not_follow_the_feed() {
     let (value, _) = saving("maneerat-doc-1", "pi");
     assert!(value.is_number(), "{value}");
 }
+
+/// Two columns of one name would be indistinguishable (and equal: one scenario, one seed).
+#[test]
+fn compare_refuses_an_entry_given_twice_and_names_it() {
+    for (list, expected) in [
+        (
+            "pi,pi",
+            "--controllers: \"pi\" is given twice in \"pi,pi\" (entries 1 and 2)",
+        ),
+        (
+            "fixed, pi:kp=0.5 ,mrac,pi:kp=0.5",
+            "--controllers: \"pi:kp=0.5\" is given twice in \"fixed, pi:kp=0.5 ,mrac,pi:kp=0.5\" \
+             (entries 2 and 4)",
+        ),
+    ] {
+        let (result, _) = cutlab(&[
+            "compare",
+            "--scenario",
+            "maneerat-doc-1",
+            "--controllers",
+            list,
+            "--no-references",
+        ]);
+        let message = result.unwrap_err();
+        assert!(message.starts_with(expected), "{list}: {message}");
+        assert!(!message.contains('\n'));
+    }
+}
+
+/// `pi:kp=0.5:kp=0.9` or `--set kp=0.5 --set kp=0.9` would run one of the two values without a
+/// word: every front end that reads assignments refuses the repeat, naming the parameter, as
+/// `tune --param` does.
+#[test]
+fn a_parameter_given_twice_is_refused_naming_it_in_every_front_end() {
+    let repeat = "kp is given twice (kp=0.5, then kp=0.9); give each parameter once";
+    let cases: [(&[&str], String); 4] = [
+        (
+            &[
+                "compare",
+                "--scenario",
+                "maneerat-doc-1",
+                "--controllers",
+                "fixed,pi:kp=0.5:kp=0.9",
+            ],
+            format!("pi:kp=0.5:kp=0.9: {repeat}"),
+        ),
+        (
+            &[
+                "sim",
+                "--scenario",
+                "maneerat-doc-1",
+                "--controller",
+                "pi",
+                "--set",
+                "kp=0.5",
+                "--set",
+                "kp=0.9",
+            ],
+            format!("--set: {repeat}"),
+        ),
+        (
+            &[
+                "tune",
+                "--quiet",
+                "--controller",
+                "pi:kp=0.5:kp=0.9",
+                "--scenarios",
+                "maneerat-doc-1",
+                "--param",
+                "ki_per_s=0:1",
+            ],
+            format!("--controller: pi:kp=0.5:kp=0.9: {repeat}"),
+        ),
+        (
+            // Spaces around the key still name one parameter.
+            &[
+                "compare",
+                "--scenario",
+                "maneerat-doc-1",
+                "--controllers",
+                "pi:kp=0.5: kp =0.9",
+            ],
+            "pi:kp=0.5: kp =0.9: kp is given twice (kp=0.5, then kp =0.9)".to_string(),
+        ),
+    ];
+    for (args, expected) in cases {
+        let (result, _) = cutlab(args);
+        let message = result.unwrap_err();
+        assert!(message.starts_with(&expected), "{args:?}: {message}");
+    }
+    // Different parameters together still set both.
+    let spec = cutlab::cli::sim::spec_from_args(
+        &[
+            "--scenario",
+            "maneerat-doc-1",
+            "--controller",
+            "pi",
+            "--set",
+            "kp=0.5",
+            "--set",
+            "ki_per_s=2",
+        ]
+        .map(String::from),
+    )
+    .unwrap();
+    assert_eq!(spec.controller.get("kp"), Some(0.5));
+    assert_eq!(spec.controller.get("ki_per_s"), Some(2.0));
+}

@@ -136,6 +136,59 @@ fn force_errors_are_one_line_and_name_the_option() {
     assert_eq!(result.unwrap_err(), "missing required option --diameter-mm");
 }
 
+/// A slot's radial width is the diameter and no cut is wider than the cutter: a width that says
+/// otherwise was read as full immersion without a word.
+#[test]
+fn force_refuses_a_radial_width_the_cut_would_not_use() {
+    let with = |changes: &[(&'static str, &'static str)]| {
+        let mut args: Vec<&str> = SLOT.to_vec();
+        args.extend(["--material", "sm45c"]);
+        for (option, value) in changes {
+            let i = args.iter().position(|a| a == option).unwrap();
+            args[i + 1] = value;
+        }
+        cutlab(&args)
+    };
+    let e = with(&[("--radial-width-mm", "3")]).0.unwrap_err();
+    assert_eq!(
+        e,
+        "--radial-width-mm: a slot's radial width is the cutter's diameter (20 mm), not 3 mm; \
+         leave --radial-width-mm out for a slot, or give --mode up or down for a cut 3 mm wide"
+    );
+    let e = with(&[("--radial-width-mm", "30"), ("--mode", "down")])
+        .0
+        .unwrap_err();
+    assert_eq!(
+        e,
+        "--radial-width-mm: 30 mm is wider than the 20 mm cutter; the widest cut is the full \
+         diameter (--mode slot)"
+    );
+    // The width a slot has, or any width up to the diameter in up or down milling, runs.
+    let slot = json(
+        &SLOT
+            .iter()
+            .copied()
+            .chain(["--material", "sm45c"])
+            .collect::<Vec<_>>(),
+    );
+    assert_eq!(slot["radial_width_mm"].as_f64(), Some(20.0));
+    let (result, out) = with(&[("--radial-width-mm", "3"), ("--mode", "up")]);
+    result.unwrap();
+    let up: serde_json::Value = serde_json::from_str(&out).unwrap();
+    assert!(
+        (up["radial_width_mm"].as_f64().unwrap() - 3.0).abs() < 1e-9,
+        "{up}"
+    );
+    let mut without: Vec<&str> = SLOT.to_vec();
+    let i = without
+        .iter()
+        .position(|a| *a == "--radial-width-mm")
+        .unwrap();
+    without.drain(i..i + 2);
+    without.extend(["--material", "sm45c"]);
+    assert_eq!(json(&without)["radial_width_mm"].as_f64(), Some(20.0));
+}
+
 #[test]
 fn scenarios_lists_every_preset_with_its_source() {
     let (result, table) = cutlab(&["scenarios"]);
@@ -201,6 +254,32 @@ fn scenarios_errors_name_the_option() {
     assert!(result.unwrap_err().starts_with("--override"));
     let (result, _) = cutlab(&["scenarios", "--seed", "3"]);
     assert_eq!(result.unwrap_err(), "--seed only applies with --run NAME");
+}
+
+/// An open-loop run that names no seed takes every run's (`cutlab sim`, `tune`, the browser's
+/// form): one definition, which docs/plant.md's open-loop figures are computed with.
+#[test]
+fn scenarios_run_takes_every_runs_default_seed() {
+    use cutlab::closed_loop::definition::DEFAULT_SEED;
+    let args = [
+        "scenarios",
+        "--run",
+        "kim-step-doc",
+        "--max-s",
+        "0.2",
+        "--summary",
+    ];
+    let unseeded = json(&args);
+    assert_eq!(unseeded["seed"].as_u64(), Some(DEFAULT_SEED));
+    let seed = DEFAULT_SEED.to_string();
+    let seeded = json(&[&args[..], &["--seed", seed.as_str()]].concat());
+    assert_eq!(unseeded, seeded);
+    let (result, help) = cutlab(&["scenarios", "--help"]);
+    result.unwrap();
+    assert!(
+        help.contains(&format!("(default {DEFAULT_SEED}, as every run's)")),
+        "{help}"
+    );
 }
 
 /// A cut no end mill makes, or forces beyond f64, are refused naming the option: they once came

@@ -187,6 +187,27 @@ fn filter_design_errors_name_the_option() {
         error_of(&["filter", "design", "--order", "2", "--fs", "100"], b""),
         "missing required option --cutoff"
     );
+    // A list where one cut-off is expected is refused, whether the kind is given or the default
+    // low-pass (it was read as its first number, the second dropped); apply designs the same way.
+    assert_eq!(
+        error_of(&with(5, "40,50"), b""),
+        "--cutoff: a low-pass filter takes one cut-off, not a band (--kind is lowpass unless \
+         given)"
+    );
+    let mut applied = with(5, "40,50");
+    applied[1] = "apply";
+    assert!(error_of(&applied, b"").starts_with("--cutoff: a low-pass filter takes one cut-off"));
+    let high = error_of(
+        &[
+            "filter", "design", "--kind", "highpass", "--order", "2", "--cutoff", "5,10", "--fs",
+            "100",
+        ],
+        b"",
+    );
+    assert_eq!(
+        high,
+        "--cutoff: a high-pass filter takes one cut-off, not a band"
+    );
     assert!(error_of(&["filter", "frobnicate"], b"").starts_with("unknown filter subcommand"));
     assert!(error_of(&["filter"], b"").contains("design or apply"));
 }

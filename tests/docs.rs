@@ -1990,35 +1990,145 @@ fn paper_002(facts: &mut Facts) {
         "paper_002.table_1.settled_spindle_a",
         fixed(settled.iter().sum::<f64>() / settled.len() as f64, 2),
     );
+}
 
-    // `cutlab scenarios --run liu-current-step --summary`: the machining centre open-loop at
-    // 100 % override (seed 0, as that command runs it), its peaks and the current before the
-    // load step.
-    use cutlab::machine::{Machine, OverrideCommand};
-    use cutlab::plant::Plant;
-    let mut machine = preset.machine(0).unwrap();
-    let command = OverrideCommand {
-        override_pct: 100.0,
-        feed_hold: false,
-    };
-    let (mut spindle_a, mut feed_a, mut force_n, mut before_step_a) = (0.0, 0.0, 0.0, 0.0);
-    while !machine.finished() {
-        machine.step(command);
-        let s = machine.signals();
-        spindle_a = f64::max(spindle_a, s.truth.spindle_current_rms_a);
-        feed_a = f64::max(feed_a, s.truth.feed_current_rms_a);
-        force_n = f64::max(force_n, s.truth.force_resultant_n);
-        if s.time_s < BondGraphRun::PAPER_002_LOAD_STEP_TIME_S {
-            before_step_a = s.truth.spindle_current_rms_a;
+/// What `cutlab scenarios --run NAME --summary` reads from one preset at 100 % override, with the
+/// seed every run takes unless told (`DEFAULT_SEED`; `tests/cli_plant.rs` holds the command to
+/// it), and the few currents the page quotes beside those peaks.
+struct OpenLoop {
+    duration_s: f64,
+    peak_spindle_a: f64,
+    peak_spindle_after_3_s_a: f64,
+    peak_feed_a: f64,
+    peak_force_n: f64,
+    /// The spindle current on the last sample before the tool first meets the work.
+    air_spindle_a: f64,
+    /// The spindle current before [`BondGraphRun::PAPER_002_LOAD_STEP_TIME_S`].
+    before_load_step_spindle_a: f64,
+    /// The median spindle current after 3 s at each whole-millimetre depth the cut holds.
+    spindle_a_by_depth_mm: BTreeMap<u32, f64>,
+}
+
+impl OpenLoop {
+    fn run(preset: Preset) -> Self {
+        use cutlab::closed_loop::definition::DEFAULT_SEED;
+        use cutlab::machine::{Machine, OverrideCommand};
+        use cutlab::plant::Plant;
+        let mut machine = preset.machine(DEFAULT_SEED).unwrap();
+        let command = OverrideCommand {
+            override_pct: 100.0,
+            feed_hold: false,
+        };
+        let mut run = OpenLoop {
+            duration_s: 0.0,
+            peak_spindle_a: 0.0,
+            peak_spindle_after_3_s_a: 0.0,
+            peak_feed_a: 0.0,
+            peak_force_n: 0.0,
+            air_spindle_a: f64::NAN,
+            before_load_step_spindle_a: f64::NAN,
+            spindle_a_by_depth_mm: BTreeMap::new(),
+        };
+        let (mut in_air, mut by_depth) = (true, BTreeMap::<u32, Vec<f64>>::new());
+        let mut last_spindle_a = f64::NAN;
+        while !machine.finished() {
+            machine.step(command);
+            let s = machine.signals();
+            let t = &s.truth;
+            run.peak_spindle_a = run.peak_spindle_a.max(t.spindle_current_rms_a);
+            if s.time_s > 3.0 {
+                run.peak_spindle_after_3_s_a =
+                    run.peak_spindle_after_3_s_a.max(t.spindle_current_rms_a);
+                if t.depth_mm > 0.0 && t.depth_mm.fract() == 0.0 {
+                    by_depth
+                        .entry(t.depth_mm as u32)
+                        .or_default()
+                        .push(t.spindle_current_rms_a);
+                }
+            }
+            run.peak_feed_a = run.peak_feed_a.max(t.feed_current_rms_a);
+            run.peak_force_n = run.peak_force_n.max(t.force_resultant_n);
+            if in_air && t.depth_mm > 0.0 {
+                in_air = false;
+                run.air_spindle_a = last_spindle_a;
+            }
+            if s.time_s < BondGraphRun::PAPER_002_LOAD_STEP_TIME_S {
+                run.before_load_step_spindle_a = t.spindle_current_rms_a;
+            }
+            last_spindle_a = t.spindle_current_rms_a;
+            run.duration_s = s.time_s;
         }
+        run.spindle_a_by_depth_mm = by_depth
+            .into_iter()
+            .map(|(depth, currents)| (depth, cutlab::signal::stats::median(currents)))
+            .collect();
+        run
     }
-    facts.set("liu.open_loop.peak_spindle_a", fixed(spindle_a, 1));
+}
+
+/// The open-loop figures of docs/plant.md (and the liu run's in docs/papers.md), as
+/// `cutlab scenarios --run NAME --summary` gives them.
+fn open_loop(facts: &mut Facts) {
+    let runs: BTreeMap<&str, OpenLoop> = std::thread::scope(|scope| {
+        let handles: Vec<_> = Preset::ALL
+            .iter()
+            .map(|&p| scope.spawn(move || (p.name(), OpenLoop::run(p))))
+            .collect();
+        handles.into_iter().map(|h| h.join().unwrap()).collect()
+    });
+    let duration = |name: &str| short(runs[name].duration_s, 1);
+    for name in ["kim-step-doc", "kim-material-taper", "kim-circular-taper"] {
+        facts.set(&format!("open_loop.{name}.duration_s"), duration(name));
+    }
+    // The page says "maneerat … each": the three depths run one program.
+    let maneerat = duration("maneerat-doc-1");
+    for name in ["maneerat-doc-2", "maneerat-doc-4"] {
+        assert_eq!(duration(name), maneerat, "{name}");
+    }
+    facts.set("open_loop.maneerat.duration_s", maneerat);
+    facts.set("open_loop.liu.duration_s", duration("liu-current-step"));
+    facts.set("open_loop.bench.duration_s", duration("wang-brake-bench"));
+
+    let kim = &runs["kim-step-doc"];
+    facts.set(
+        "open_loop.kim-step-doc.air_spindle_a",
+        fixed(kim.air_spindle_a, 1),
+    );
+    let doc = |mm: u32| kim.spindle_a_by_depth_mm[&mm];
+    facts.set("open_loop.kim-step-doc.doc_5_spindle_a", fixed(doc(5), 1));
+    facts.set(
+        "open_loop.kim-step-doc.spindle_a_per_mm",
+        fixed((doc(5) - doc(1)) / 4.0, 2),
+    );
+    facts.set(
+        "open_loop.kim-step-doc.start_spindle_a",
+        fixed(kim.peak_spindle_a, 0),
+    );
+    let circle = &runs["kim-circular-taper"];
+    facts.set(
+        "open_loop.kim-circular-taper.air_spindle_a",
+        fixed(circle.air_spindle_a, 1),
+    );
+    facts.set(
+        "open_loop.kim-circular-taper.doc_2_spindle_a",
+        fixed(circle.spindle_a_by_depth_mm[&2], 1),
+    );
+    facts.set(
+        "open_loop.bench.peak_feed_a",
+        fixed(runs["wang-brake-bench"].peak_feed_a, 1),
+    );
+
+    let liu = &runs["liu-current-step"];
+    facts.set("liu.open_loop.peak_spindle_a", fixed(liu.peak_spindle_a, 1));
     facts.set(
         "liu.open_loop.before_step_spindle_a",
-        fixed(before_step_a, 0),
+        fixed(liu.before_load_step_spindle_a, 0),
     );
-    facts.set("liu.open_loop.peak_feed_a", fixed(feed_a, 2));
-    facts.set("liu.open_loop.peak_force_kn", fixed(force_n / 1000.0, 2));
+    facts.set("liu.open_loop.peak_feed_a", fixed(liu.peak_feed_a, 2));
+    facts.set(
+        "liu.open_loop.peak_force_kn",
+        fixed(liu.peak_force_n / 1000.0, 2),
+    );
 }
 
 /// Paper 004's network learned from trial cuts: on the stepped specimen's mechanistic forces,
@@ -2272,6 +2382,7 @@ fn all_facts() -> BTreeMap<String, String> {
         clock.elapsed().as_secs_f64()
     );
     paper_002(&mut facts);
+    open_loop(&mut facts);
     facts.0
 }
 

@@ -781,3 +781,43 @@ fn random_and_mutated_fll_loads_every_rule_and_term_or_is_refused_at_its_line() 
         "{loaded} loaded, {refused} refused"
     );
 }
+
+/// An engine with no rule at all holds its outputs at their defaults whatever the inputs: refused
+/// at load, saying so and where. An empty block beside one with rules adds nothing and loads.
+#[test]
+fn an_engine_without_a_single_rule_is_refused_where_an_empty_block_beside_rules_loads() {
+    let head = "Engine: e\nInputVariable: E\n  range: -1 1\n  term: A Triangle -1 0 1\n\
+                OutputVariable: U\n  range: -1 1\n  defuzzifier: Centroid 100\n  default: 0\n\
+                  term: B Triangle -1 0 1\n";
+    let why = "a fuzzy engine without rules holds every output at its default whatever its inputs";
+    let none = parse(head).unwrap_err().to_string();
+    assert_eq!(
+        none,
+        format!("the engine has no RuleBlock: {why}; add \"rule: if … then …\" lines")
+    );
+    let empty = parse(&format!("{head}RuleBlock: r\n  enabled: true\n"))
+        .unwrap_err()
+        .to_string();
+    assert!(
+        empty.starts_with(&format!("line 10: the rule block \"r\" is empty: {why}")),
+        "{empty}"
+    );
+    let both_empty = parse(&format!("{head}RuleBlock: r\nRuleBlock: s\n"))
+        .unwrap_err()
+        .to_string();
+    assert!(
+        both_empty.starts_with(&format!(
+            "line 10: every rule block is empty (2 blocks): {why}"
+        )),
+        "{both_empty}"
+    );
+    let mut engine = parse(&format!(
+        "{head}RuleBlock: r\nRuleBlock: s\n  rule: if E is A then U is B\n"
+    ))
+    .unwrap();
+    assert_eq!(engine.rules().len(), 1);
+    let mut out = [f64::NAN];
+    engine.evaluate(&[0.5], &mut out);
+    // B clipped at 0.5, symmetric about 0.
+    assert!(out[0].abs() < 1e-9, "{}", out[0]);
+}

@@ -210,16 +210,23 @@ pub(crate) fn design_from(args: &DesignOptions) -> Result<Sos, CliError> {
             )))
         }
     }
-    // One edge for a band or two for a low/high-pass: the design's own words.
+    // Two edges for a band, one for a low/high-pass (the default kind's too: the design would
+    // not read a second edge of a low-pass, so it is refused, never dropped): the design's own
+    // words.
     let kind = FilterSetting::Kind
         .read(args.kind.as_deref().unwrap_or_default())
         .ok()
         .flatten()
+        .or_else(|| FilterSetting::Kind.row().default_value())
         .and_then(|v| v.choice())
         .and_then(|name| name.parse::<FilterKind>().ok());
     if let Some(kind) = kind.filter(|k| k.is_band() != (edges.len() == 2)) {
+        let default_kind = match args.kind {
+            None => format!(" (--kind is {} unless given)", kind.name()),
+            Some(_) => String::new(),
+        };
         return Err(CliError::new(format!(
-            "--cutoff: {}",
+            "--cutoff: {}{default_kind}",
             DesignError::CutoffCount { kind }
         )));
     }

@@ -51,7 +51,8 @@ pub struct ForceArgs {
     axial_depth_mm: Option<String>,
     #[arg(
         long = "radial-width-mm",
-        help = "radial width of cut, mm (default: the diameter)",
+        help = "radial width of cut, mm, up to the diameter (default: the diameter; a slot's is \
+                the diameter)",
         value_name = "W",
         allow_hyphen_values = true
     )]
@@ -281,6 +282,34 @@ fn coefficients(args: &ForceArgs) -> Result<(Option<&'static str>, CuttingCoeffi
     }
 }
 
+/// A width the cut would not use is refused, never ignored: a slot's radial width is the
+/// cutter's diameter, and no cut is wider than the cutter ([`Immersion::new`] would read either
+/// as full immersion). A width equal to the diameter says what the cut does and passes.
+fn check_radial_width(
+    mode: MillingMode,
+    radial_width_mm: f64,
+    diameter_mm: f64,
+) -> Result<(), CliError> {
+    if radial_width_mm == diameter_mm {
+        return Ok(());
+    }
+    let (width, diameter) = (readable(radial_width_mm), readable(diameter_mm));
+    if mode == MillingMode::Slot {
+        return Err(CliError::new(format!(
+            "--radial-width-mm: a slot's radial width is the cutter's diameter ({diameter} mm), \
+             not {width} mm; leave --radial-width-mm out for a slot, or give --mode up or down \
+             for a cut {width} mm wide"
+        )));
+    }
+    if radial_width_mm > diameter_mm {
+        return Err(CliError::new(format!(
+            "--radial-width-mm: {width} mm is wider than the {diameter} mm cutter; the widest \
+             cut is the full diameter (--mode slot)"
+        )));
+    }
+    Ok(())
+}
+
 /// Runs `cutlab force`.
 pub fn run(args: ForceArgs, io: &mut Io<'_>) -> Result<(), CliError> {
     reject_extra(&args.extra, "")?;
@@ -314,6 +343,7 @@ pub fn run(args: ForceArgs, io: &mut Io<'_>) -> Result<(), CliError> {
         Some(_) => positive_option("radial-width-mm", &args.radial_width_mm)?,
         None => diameter_mm,
     };
+    check_radial_width(mode, radial_width_mm, diameter_mm)?;
     let feed_per_tooth_mm = positive_option("feed-per-tooth-mm", &args.feed_per_tooth_mm)?;
     cutter
         .check_cut(axial_depth_mm, feed_per_tooth_mm)

@@ -8,6 +8,7 @@ use serde::Serialize;
 
 use super::args::value_or;
 use super::{write_json, CliError, Io};
+use crate::closed_loop::definition::DEFAULT_SEED;
 use crate::input::{readable, table};
 use crate::machine::{Machine, OverrideCommand};
 use crate::plant::recording::OpenLoopSetting;
@@ -29,7 +30,7 @@ pub struct ScenariosArgs {
     run: Option<String>,
     #[arg(
         long = "seed",
-        help = "Seed of the sensor noise (default 0)",
+        help = format!("Seed of the sensor noise (default {DEFAULT_SEED}, as every run's)"),
         value_name = "N",
         allow_hyphen_values = true
     )]
@@ -156,7 +157,7 @@ fn list(args: &ScenariosArgs, io: &mut Io<'_>) -> Result<(), CliError> {
 }
 
 fn run_preset(preset: Preset, args: &ScenariosArgs, io: &mut Io<'_>) -> Result<(), CliError> {
-    let seed: u64 = value_or("seed", &args.seed, 0)?;
+    let seed: u64 = value_or("seed", &args.seed, DEFAULT_SEED)?;
     // The Machine page's field, with the option named.
     let override_pct = table::number(
         OpenLoopSetting::Override,

@@ -271,17 +271,45 @@ pub fn spec_from_args(args: &[String]) -> Result<RunSpec, CliError> {
     )
     .map_err(|e| super::args::one_line(&e, args, &<Sim as clap::CommandFactory>::command()))?;
     let engine = EngineFile::read(parsed.args.fuzzy_engine.as_deref())?;
-    let controller = match parsed.args.controller.as_deref() {
-        Some(name) => {
-            controller_with_settings(name, preset_option(&parsed.args.run)?, engine.as_ref())?
-        }
-        None => ControllerConfig::new(ControllerKind::Fixed),
+    // Settings alone (what these tests vary) run the fixed feed; `cutlab sim` asks for a
+    // controller.
+    let only_settings =
+        parsed.args.controller.is_none() && parsed.args.set.is_empty() && engine.is_none();
+    let controller = if only_settings {
+        ControllerConfig::new(ControllerKind::Fixed)
+    } else {
+        sim_controller(&parsed.args, &engine)?
     };
     spec(&parsed.args.run, controller)
 }
 
+/// The controller `sim`'s options describe: `--controller NAME` (an engine alone implies
+/// `fuzzy-engine`) with the preset's defaults, the engine, then the `--set` assignments through
+/// [`ControllerConfig::set_texts`] (a parameter given twice is refused).
+fn sim_controller(
+    args: &SimArgs,
+    engine: &Option<EngineFile>,
+) -> Result<ControllerConfig, CliError> {
+    let kind: ControllerKind = match (&args.controller, engine) {
+        (None, Some(_)) => ControllerKind::FuzzyEngine,
+        _ => required::<String>("controller", &args.controller)?
+            .parse()
+            .map_err(|e| CliError::new(format!("--controller: {e}")))?,
+    };
+    let mut controller = preset_controller(preset_option(&args.run)?, kind);
+    if let Some(file) = engine {
+        file.give_to(&mut controller)?;
+    }
+    check_engine_used(engine, std::iter::once(&controller))?;
+    controller
+        .set_texts(args.set.iter().map(String::as_str))
+        .map_err(|e| CliError::new(format!("--set: {e}")))?;
+    Ok(controller)
+}
+
 /// Parses `NAME` or `NAME:key=value:key=value`, starting from `preset`'s defaults (the paper's own
-/// parameters where it states them); a `fuzzy-engine` controller runs `engine` if given.
+/// parameters where it states them); a `fuzzy-engine` controller runs `engine` if given. The
+/// assignments go through [`ControllerConfig::set_texts`], which refuses a parameter given twice.
 pub fn controller_with_settings(
     text: &str,
     preset: Preset,
@@ -294,11 +322,9 @@ pub fn controller_with_settings(
     if let Some(file) = engine {
         file.give_to(&mut config)?;
     }
-    for assignment in parts {
-        config
-            .set_text(assignment)
-            .map_err(|e| CliError::new(format!("{text}: {e}")))?;
-    }
+    config
+        .set_texts(parts)
+        .map_err(|e| CliError::new(format!("{text}: {e}")))?;
     Ok(config)
 }
 
@@ -472,24 +498,7 @@ pub fn run_sim(args: SimArgs, io: &mut Io<'_>) -> Result<(), CliError> {
         }
         None => {
             let engine = EngineFile::read(args.fuzzy_engine.as_deref())?;
-            // An engine alone says which controller runs it.
-            let kind: ControllerKind = match (&args.controller, &engine) {
-                (None, Some(_)) => ControllerKind::FuzzyEngine,
-                _ => required::<String>("controller", &args.controller)?
-                    .parse()
-                    .map_err(|e| CliError::new(format!("--controller: {e}")))?,
-            };
-            let mut controller = preset_controller(preset_option(&args.run)?, kind);
-            if let Some(file) = &engine {
-                file.give_to(&mut controller)?;
-            }
-            check_engine_used(&engine, std::iter::once(&controller))?;
-            for assignment in &args.set {
-                controller
-                    .set_text(assignment)
-                    .map_err(|e| CliError::new(format!("--set: {e}")))?;
-            }
-            spec(&args.run, controller)?
+            spec(&args.run, sim_controller(&args, &engine)?)?
         }
     };
     let calibration = args
@@ -588,6 +597,7 @@ pub fn run_compare(args: CompareArgs, io: &mut Io<'_>) -> Result<(), CliError> {
                     )),
                 })
                 .collect::<Result<Vec<_>, CliError>>()?;
+            refuse_repeated_entries(&list, &named)?;
             check_engine_used(&engine, named.iter().map(|(_, c)| c))?;
             (
                 spec(&args.run, ControllerConfig::new(ControllerKind::Fixed))?,
@@ -653,6 +663,27 @@ pub fn run_compare(args: CompareArgs, io: &mut Io<'_>) -> Result<(), CliError> {
             .write_all(format!("{claim}\n{}\n", finding.text()).as_bytes())?;
     }
     fail_on_controller_faults(results.iter().map(|(n, _, r)| (n.as_str(), r)))
+}
+
+/// A `--controllers` entry given twice would make two columns of one name and the same numbers
+/// (one scenario, one seed): refused, naming it. Entries that differ in their text (`pi` and
+/// `pi:kp=0.45`) are columns of their own, named as typed, even where they set the same values.
+fn refuse_repeated_entries(
+    list: &str,
+    named: &[(String, ControllerConfig)],
+) -> Result<(), CliError> {
+    for (i, (name, _)) in named.iter().enumerate() {
+        if let Some(earlier) = named[..i].iter().position(|(n, _)| n == name) {
+            return Err(CliError::new(format!(
+                "--controllers: {name:?} is given twice in {list:?} (entries {} and {}); each \
+                 column is one controller: give each once, or tell them apart by a parameter \
+                 ({name}:key=value)",
+                earlier + 1,
+                i + 1
+            )));
+        }
+    }
+    Ok(())
 }
 
 /// Splits a saved comparison into its scenario (with the fixed-feed controller, for the

@@ -310,6 +310,23 @@ impl fmt::Display for ParamError {
 
 impl std::error::Error for ParamError {}
 
+/// `key=value` split into the trimmed key and the number.
+fn assignment_parts(assignment: &str) -> Result<(&str, f64), ParamError> {
+    let Some((key, value)) = assignment.split_once('=') else {
+        return Err(ParamError(format!(
+            "\"{assignment}\" is not of the form key=value"
+        )));
+    };
+    let key = key.trim();
+    let value: f64 = value.trim().parse().map_err(|_| {
+        ParamError(format!(
+            "{key}: cannot parse \"{}\" as a number",
+            value.trim()
+        ))
+    })?;
+    Ok((key, value))
+}
+
 /// A controller choice with its parameter values, each inside its range.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(try_from = "ControllerText", into = "ControllerText")]
@@ -614,19 +631,44 @@ impl ControllerConfig {
     /// assert!(c.set_text("kp=fast").unwrap_err().to_string().contains("kp"));
     /// ```
     pub fn set_text(&mut self, assignment: &str) -> Result<(), ParamError> {
-        let Some((key, value)) = assignment.split_once('=') else {
-            return Err(ParamError(format!(
-                "\"{assignment}\" is not of the form key=value"
-            )));
-        };
-        let key = key.trim();
-        let value: f64 = value.trim().parse().map_err(|_| {
-            ParamError(format!(
-                "{key}: cannot parse \"{}\" as a number",
-                value.trim()
-            ))
-        })?;
+        let (key, value) = assignment_parts(assignment)?;
         self.set(key, value)
+    }
+
+    /// Sets parameters from `key=value` texts in order: the parts of a spec `pi:kp=0.5:ki=2` or
+    /// repeated `--set` options. Every front end that takes several assignments goes through
+    /// here, so a parameter given twice is refused everywhere, naming it (otherwise the last
+    /// would silently win). Nothing is set unless every assignment is good.
+    ///
+    /// ```
+    /// use cutlab::control::registry::{ControllerConfig, ControllerKind};
+    /// let mut c = ControllerConfig::new(ControllerKind::Pi);
+    /// c.set_texts(["kp=0.8", "ki_per_s=2"]).unwrap();
+    /// assert_eq!(c.get("kp"), Some(0.8));
+    /// let e = c.set_texts(["kp=0.5", "kp=0.9"]).unwrap_err();
+    /// assert_eq!(e.to_string(), "kp is given twice (kp=0.5, then kp=0.9); give each parameter once");
+    /// assert_eq!(c.get("kp"), Some(0.8));
+    /// ```
+    pub fn set_texts<'a>(
+        &mut self,
+        assignments: impl IntoIterator<Item = &'a str>,
+    ) -> Result<(), ParamError> {
+        let mut updated = self.clone();
+        let mut given: Vec<(&str, &str)> = Vec::new();
+        for assignment in assignments {
+            let (key, value) = assignment_parts(assignment)?;
+            if let Some((_, earlier)) = given.iter().find(|(k, _)| *k == key) {
+                return Err(ParamError(format!(
+                    "{key} is given twice ({}, then {}); give each parameter once",
+                    earlier.trim(),
+                    assignment.trim()
+                )));
+            }
+            updated.set(key, value)?;
+            given.push((key, assignment));
+        }
+        *self = updated;
+        Ok(())
     }
 
     /// Builds the controller for a run. Cross-parameter checks happen here.

@@ -13,7 +13,9 @@
 //! fire a rule above fuzzylite's activation threshold ([`FUZZYLITE_EPSILON`]).
 //!
 //! Not supported, each an error naming the line: disabled variables or rule blocks, activation
-//! methods other than General, terms of a height other than 1, a missing defuzzifier. Nothing is
+//! methods other than General, terms of a height other than 1, a missing defuzzifier; and an
+//! engine without a single rule (fuzzylite loads one, but it holds its outputs at their defaults
+//! whatever the inputs: a controller running it would silently hold the feed). Nothing is
 //! silently dropped: an engine that loads here evaluates as written.
 
 use std::collections::{HashMap, HashSet};
@@ -62,6 +64,8 @@ enum Section {
 
 /// A rule block as read: its operators and its rule lines.
 struct BlockText {
+    /// The line of its `RuleBlock:`.
+    line: usize,
     name: String,
     operators: Operators,
     rules: Vec<(usize, String)>,
@@ -150,6 +154,7 @@ pub fn parse(text: &str) -> Result<Engine, FuzzyError> {
             }
             "RuleBlock" => {
                 blocks.push(BlockText {
+                    line: line_no,
                     name: value.to_string(),
                     operators: Operators {
                         conjunction: Some(Norm::Minimum),
@@ -269,6 +274,8 @@ pub fn parse(text: &str) -> Result<Engine, FuzzyError> {
         }
     }
     resolve_formulas(&pending, &mut inputs, &mut outputs)?;
+    // Checked after the engine builds, so a missing variable is named first.
+    let no_rules = refuse_no_rules(&blocks);
     let names = Names::of(&inputs, &outputs);
     let blocks = blocks
         .into_iter()
@@ -285,7 +292,31 @@ pub fn parse(text: &str) -> Result<Engine, FuzzyError> {
             })
         })
         .collect::<Result<Vec<_>, FuzzyError>>()?;
-    Engine::with_blocks(name, inputs, outputs, blocks, FUZZYLITE_EPSILON)
+    let engine = Engine::with_blocks(name, inputs, outputs, blocks, FUZZYLITE_EPSILON)?;
+    no_rules.map(|()| engine)
+}
+
+/// An engine without a single rule is refused: every output would hold its default whatever the
+/// inputs, so a controller running it would output nothing and a feed would stay fixed without a
+/// word (fuzzylite loads such a file; nothing useful evaluates it). A rule block left empty
+/// beside one with rules adds nothing and is kept, as written.
+fn refuse_no_rules(blocks: &[BlockText]) -> Result<(), FuzzyError> {
+    const WHY: &str = "a fuzzy engine without rules holds every output at its default whatever \
+                       its inputs; add \"rule: if … then …\" lines";
+    if blocks.iter().any(|b| !b.rules.is_empty()) {
+        return Ok(());
+    }
+    Err(match blocks {
+        [] => FuzzyError::new(format!("the engine has no RuleBlock: {WHY}")),
+        [block] => error(
+            block.line,
+            format!("the rule block {:?} is empty: {WHY}", block.name),
+        ),
+        [first, ..] => error(
+            first.line,
+            format!("every rule block is empty ({} blocks): {WHY}", blocks.len()),
+        ),
+    })
 }
 
 /// Remembers a Function term for [`resolve_formulas`], which parses it once every variable is
