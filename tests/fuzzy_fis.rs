@@ -201,3 +201,27 @@ fn random_and_mutated_fis_loads_every_rule_and_term_or_is_refused_at_its_line() 
         "{loaded} loaded, {refused} refused"
     );
 }
+
+/// A file whose `[Rules]` section is empty, or missing, is refused at load as an FLL file without
+/// rules is: the engine would hold its output at its default whatever the inputs, a fixed feed
+/// without a word. A missing variable is still named first.
+#[test]
+fn a_file_without_rules_is_refused_saying_where() {
+    let rules_at = BASE.find("[Rules]").unwrap();
+    let rules_line = BASE[..rules_at].lines().count() + 1;
+    let empty = format!("{}[Rules]\n", &BASE[..rules_at]);
+    let e = parse(&empty).unwrap_err().to_string();
+    assert!(
+        e.starts_with(&format!(
+            "line {rules_line}: the [Rules] section is empty: a fuzzy engine without rules holds \
+             every output at its default"
+        )),
+        "{e}"
+    );
+    let missing = parse(&BASE[..rules_at]).unwrap_err().to_string();
+    assert!(
+        missing.starts_with("the file has no [Rules] section: a fuzzy engine without rules"),
+        "{missing}"
+    );
+    assert!(parse(BASE).is_ok());
+}

@@ -662,11 +662,9 @@ fn replay(args: ReplayArgs, io: &mut Io<'_>) -> Result<(), CliError> {
         .parse()
         .map_err(|e| CliError::new(format!("--controller: {e}")))?;
     let mut controller = ControllerConfig::new(kind);
-    for assignment in &args.set {
-        controller
-            .set_text(assignment)
-            .map_err(|e| CliError::new(format!("--set: {e}")))?;
-    }
+    controller
+        .set_texts(args.set.iter().map(String::as_str))
+        .map_err(|e| CliError::new(format!("--set: {e}")))?;
     // The run's settings, through the run definition's rows as `cutlab sim`'s.
     let texts: Vec<(RunSetting, &str)> = [
         (RunSetting::TargetForce, &args.target_n),

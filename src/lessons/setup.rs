@@ -114,6 +114,8 @@ impl Setup {
     /// let s = Setup::from_link("#/simulate?preset=kim-step-doc&controller=pi&kp=0%2C3").unwrap();
     /// assert_eq!(s.page, LabPage::Simulate);
     /// assert_eq!(s.query[2], ("kp".to_string(), "0,3".to_string()));
+    /// let twice = Setup::from_link("#/simulate?controller=pi&kp=0.5&kp=0.9").unwrap_err();
+    /// assert_eq!(twice, "\"kp\" is given twice in the link (kp=0.5, then kp=0.9); give each setting once");
     /// ```
     pub fn from_link(link: &str) -> Result<Setup, String> {
         let path = link.trim().trim_start_matches('#').trim_start_matches('/');
@@ -132,7 +134,17 @@ impl Setup {
                 let (k, v) = pair.split_once('=').unwrap_or((pair, ""));
                 Ok((decode(k)?, decode(v)?))
             })
-            .collect::<Result<_, String>>()?;
+            .collect::<Result<Vec<(String, String)>, String>>()?;
+        // A key given twice would leave one of its values unread (which one depends on the
+        // reader): the link is refused, naming it.
+        for (i, (key, first)) in query.iter().enumerate() {
+            if let Some((_, second)) = query[i + 1..].iter().find(|(k, _)| k == key) {
+                return Err(format!(
+                    "\"{key}\" is given twice in the link ({key}={first}, then {key}={second}); \
+                     give each setting once"
+                ));
+            }
+        }
         Ok(Setup { page, query })
     }
 

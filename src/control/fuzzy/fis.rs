@@ -132,6 +132,7 @@ pub fn parse(text: &str) -> Result<Engine, FuzzyError> {
     let mut methods: [Option<(usize, String)>; 5] = Default::default();
     let mut variables: Vec<VariableText> = Vec::new();
     let mut rule_lines: Vec<(usize, String)> = Vec::new();
+    let mut rules_section_line: Option<usize> = None;
     let mut section: Option<FisSection> = None;
     for (index, raw) in text.lines().enumerate() {
         let line_no = index + 1;
@@ -143,7 +144,10 @@ pub fn parse(text: &str) -> Result<Engine, FuzzyError> {
         if line.starts_with('[') {
             section = Some(match line {
                 "[System]" => FisSection::System,
-                "[Rules]" => FisSection::Rules,
+                "[Rules]" => {
+                    rules_section_line = Some(line_no);
+                    FisSection::Rules
+                }
                 _ if line.starts_with("[Input") || line.starts_with("[Output") => {
                     let output = line.starts_with("[Output");
                     variables.push(VariableText {
@@ -349,12 +353,23 @@ pub fn parse(text: &str) -> Result<Engine, FuzzyError> {
         .iter()
         .map(|(line_no, text)| rule(*line_no, text, &inputs, &outputs))
         .collect::<Result<Vec<_>, _>>()?;
+    let no_rules = rules.is_empty();
     let block = RuleBlock {
         name: String::new(),
         operators,
         rules,
     };
-    Engine::with_blocks(name, inputs, outputs, vec![block], FUZZYLITE_EPSILON)
+    // Checked after the engine builds, so a missing variable is named first (as FLL does).
+    let engine = Engine::with_blocks(name, inputs, outputs, vec![block], FUZZYLITE_EPSILON)?;
+    if no_rules {
+        let why = crate::control::fuzzy::fll::NO_RULES_WHY;
+        let why = format!("{why}; add a line per rule under [Rules] (\"1 2, 1 (1) : 1\")");
+        return Err(match rules_section_line {
+            Some(line) => error(line, format!("the [Rules] section is empty: {why}")),
+            None => FuzzyError::new(format!("the file has no [Rules] section: {why}")),
+        });
+    }
+    Ok(engine)
 }
 
 fn range(line: usize, value: &str) -> Result<(f64, f64), FuzzyError> {

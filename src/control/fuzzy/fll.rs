@@ -296,25 +296,29 @@ pub fn parse(text: &str) -> Result<Engine, FuzzyError> {
     no_rules.map(|()| engine)
 }
 
+/// Why an engine file without a single rule is refused (FLL and FIS alike): fuzzylite loads one,
+/// but a controller running it would hold a fixed feed without a word.
+pub(crate) const NO_RULES_WHY: &str =
+    "a fuzzy engine without rules holds every output at its default whatever its inputs";
+
 /// An engine without a single rule is refused: every output would hold its default whatever the
 /// inputs, so a controller running it would output nothing and a feed would stay fixed without a
 /// word (fuzzylite loads such a file; nothing useful evaluates it). A rule block left empty
 /// beside one with rules adds nothing and is kept, as written.
 fn refuse_no_rules(blocks: &[BlockText]) -> Result<(), FuzzyError> {
-    const WHY: &str = "a fuzzy engine without rules holds every output at its default whatever \
-                       its inputs; add \"rule: if … then …\" lines";
+    let why = format!("{NO_RULES_WHY}; add \"rule: if … then …\" lines");
     if blocks.iter().any(|b| !b.rules.is_empty()) {
         return Ok(());
     }
     Err(match blocks {
-        [] => FuzzyError::new(format!("the engine has no RuleBlock: {WHY}")),
+        [] => FuzzyError::new(format!("the engine has no RuleBlock: {why}")),
         [block] => error(
             block.line,
-            format!("the rule block {:?} is empty: {WHY}", block.name),
+            format!("the rule block {:?} is empty: {why}", block.name),
         ),
         [first, ..] => error(
             first.line,
-            format!("every rule block is empty ({} blocks): {WHY}", blocks.len()),
+            format!("every rule block is empty ({} blocks): {why}", blocks.len()),
         ),
     })
 }
