@@ -12,7 +12,8 @@ use crate::estimation::estimator::Calibration;
 use crate::hardware::recording::LiveRow;
 use crate::machine::OverrideCommand;
 use crate::protocol::frame::{Ack, Capabilities};
-use crate::protocol::host::{DeviceSummary, HostSession, KeepUp, LinkStats};
+use crate::protocol::host::{DeviceSummary, HostSession, LinkStats};
+use crate::protocol::keep_up::KeepUp;
 
 pub(super) struct Teaching {
     pub(super) teach: TeachCut,

@@ -6,7 +6,8 @@ use super::{HardwareSession, LinkState};
 use crate::closed_loop::sample_loop::SampleLoop;
 use crate::machine::OverrideCommand;
 use crate::protocol::frame::{Ack, Capabilities, FaultKind, FrameType, VERSION_MAJOR};
-use crate::protocol::host::{DeviceSummary, KeepUp, LineBudget, HELLO_INTERVAL_S};
+use crate::protocol::host::{DeviceSummary, LineBudget, HELLO_INTERVAL_S};
+use crate::protocol::keep_up::KeepUp;
 
 impl HardwareSession {
     /// Takes the bytes that arrived at `now_s`.
