@@ -217,6 +217,11 @@ pub struct LinkEvent {
     pub part: u32,
     /// Machine time within the part (of the latest sample).
     pub time_s: f64,
+    /// The device's clock (unwrapped) at the sample the event belongs to: the latest one decoded
+    /// when it happened, or the time it was recorded at ([`HostSession::event_at`]); `None`
+    /// before any sample.
+    #[serde(skip)]
+    pub device_time_s: Option<f64>,
     /// What.
     pub text: String,
 }
@@ -358,9 +363,14 @@ impl HostSession {
     /// Records an event at the latest sample's time.
     pub fn event(&mut self, text: impl Into<String>) {
         let time_s = self.last.map_or(0.0, |l| l.step.sensors.time_s);
+        let device_time_s = self
+            .last
+            .map(|l| l.device_time_s)
+            .or(self.newest_sample_device_time_s);
         self.events.push(LinkEvent {
             part: self.part,
             time_s,
+            device_time_s,
             text: text.into(),
         });
     }
@@ -374,6 +384,7 @@ impl HostSession {
         self.events.push(LinkEvent {
             part: self.part,
             time_s,
+            device_time_s: Some(device_time_s),
             text: text.into(),
         });
     }
