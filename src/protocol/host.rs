@@ -187,7 +187,8 @@ pub struct LinkStats {
     pub frames_reordered: u64,
     /// Blocks the decoder rejected (CRC, COBS, oversized).
     pub frames_rejected: u64,
-    /// Bytes the decoder dropped while resynchronising.
+    /// Bytes the decoder dropped, part of no frame: garbage, rejected blocks, zeros beyond the
+    /// two that may stand between frames ([`super::codec::DecoderStats::bytes_dropped`]).
     pub bytes_dropped: u64,
     /// Frames of a type this host does not know, skipped.
     pub frames_unknown: u64,
@@ -208,6 +209,24 @@ pub struct LinkStats {
     pub command_latency_mean_s: f64,
     /// The longest such time.
     pub command_latency_max_s: f64,
+}
+
+impl LinkStats {
+    /// What came in, in words, for a link that did not come up: the bytes, how many of them
+    /// were part of no frame, and the blocks rejected.
+    ///
+    /// ```
+    /// use cutlab::protocol::host::LinkStats;
+    /// let s = LinkStats { bytes_received: 1000, bytes_dropped: 999, ..LinkStats::default() };
+    /// assert_eq!(s.received(), "1000 bytes received, 999 of them dropped (part of no frame), \
+    ///     0 frames rejected");
+    /// ```
+    pub fn received(&self) -> String {
+        format!(
+            "{} bytes received, {} of them dropped (part of no frame), {} frames rejected",
+            self.bytes_received, self.bytes_dropped, self.frames_rejected
+        )
+    }
 }
 
 /// Something that happened on the link.

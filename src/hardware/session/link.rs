@@ -41,11 +41,11 @@ impl HardwareSession {
             LinkState::Closed => return,
             LinkState::Handshaking => {
                 if now_s - self.connected_s > self.options.handshake_timeout_s {
-                    let s = self.host.stats();
                     self.close(format!(
-                        "no answer to Hello within {} s ({} bytes received, {} of them dropped): \
-                         is the device on, at this baud rate?",
-                        self.options.handshake_timeout_s, s.bytes_received, s.bytes_dropped
+                        "no answer to Hello within {} s ({}): is the device on, at this baud \
+                         rate?",
+                        self.options.handshake_timeout_s,
+                        self.host.stats().received()
                     ));
                 } else if now_s - self.last_hello_s >= HELLO_INTERVAL_S {
                     self.last_hello_s = now_s;

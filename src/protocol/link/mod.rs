@@ -449,10 +449,10 @@ impl HostLink {
             }
             let elapsed = start.elapsed().as_secs_f64();
             if elapsed > options.handshake_timeout_s {
-                let s = session.stats();
                 return Err(HostError(format!(
-                    "no answer to Hello within {} s ({} bytes received, {} of them dropped)",
-                    options.handshake_timeout_s, s.bytes_received, s.bytes_dropped
+                    "no answer to Hello within {} s ({})",
+                    options.handshake_timeout_s,
+                    session.stats().received()
                 )));
             }
             out.clear();
