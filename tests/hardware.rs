@@ -633,6 +633,35 @@ fn a_device_fault_alarms_an_over_current_holds_the_feed_until_reset_an_e_stop_ha
     assert!(events.contains("disarm: E-stop"), "{events}");
 }
 
+/// The event log stamps a device's fault with the device time of the sample it came with — as
+/// `cutlab host` does — not with the latest sample of the batch before (the page used to stamp
+/// the protocol session's events before applying the batch's samples), and the row of that
+/// sample carries it.
+#[test]
+fn a_device_fault_is_logged_at_the_sample_it_came_with() {
+    let mut config = maneerat(5.0);
+    config.faults.estop_at_s = Some(20.0);
+    let mut b = Bench::new(config, SessionOptions::default());
+    b.teach_and_arm(&spec());
+    b.run_until(|b| b.session.state() == LinkState::Alarm, 30.0);
+    let fault = "device fault e-stop raised";
+    let events = b.events();
+    let event = b
+        .session
+        .events()
+        .iter()
+        .find(|e| e.text.contains(fault))
+        .unwrap_or_else(|| panic!("{events}"));
+    let rows: Vec<&LiveRow> = b.rows.iter().filter(|r| r.event.contains(fault)).collect();
+    assert_eq!(rows.len(), 1, "{events}");
+    assert!(
+        (rows[0].time_s - event.time_s).abs() < 1e-9,
+        "the event at {} s, its row at {} s\n{events}",
+        event.time_s,
+        rows[0].time_s
+    );
+}
+
 /// docs/hardware.md is the reference design an engineer builds from (issue 31): every section of
 /// it must be there, each with what it must say, and the commissioning procedure must be the
 /// checks the page names before a new device's first Arm. Removing a section fails here.

@@ -1114,6 +1114,38 @@ fn host_and_device_options_are_checked_with_messages_that_name_them() {
     assert!(e.contains("no answer to Hello"), "{e}");
 }
 
+/// A device that sends nothing but garbage: the handshake gives up, and every byte that was part
+/// of no frame is counted dropped — a line of zeros (all frame delimiters) included, which the
+/// decoder used to take for silence ("0 of them dropped").
+#[cfg(feature = "cli")]
+#[test]
+fn a_device_that_sends_only_garbage_is_reported_with_its_bytes_dropped() {
+    let error = |args: &[&str]| common::cutlab_text(args, "").0.unwrap_err();
+    // (device, bytes received less bytes dropped): of a line of zeros, the first could stand
+    // between two frames.
+    for (device, kept) in [("cat /dev/zero", 1), ("yes", 0)] {
+        let e = error(&[
+            "host",
+            "--device-cmd",
+            device,
+            "--controller",
+            "threshold",
+            "--link-timeout-s",
+            "0.1",
+        ]);
+        let count = |after: &str| -> u64 {
+            let (head, _) = e.split_once(after).unwrap_or_else(|| panic!("{e}"));
+            let word = head.rsplit([' ', '(']).next().unwrap_or_default();
+            word.parse().unwrap_or_else(|_| panic!("{word:?} in {e}"))
+        };
+        let received = count(" bytes received");
+        let dropped = count(" of them dropped (part of no frame)");
+        assert!(e.contains("no answer to Hello"), "{e}");
+        assert!(received > 1000, "{device}: {e}");
+        assert_eq!(dropped + kept, received, "{device}: {e}");
+    }
+}
+
 /// Each part is a `Machine`: its first step arms the device and a fresh part starts at time
 /// zero; a part left before its program's end is disarmed and run out before the next starts.
 #[test]

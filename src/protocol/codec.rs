@@ -86,8 +86,11 @@ impl core::fmt::Display for DecodeError {
 pub struct DecoderStats {
     /// Every byte taken.
     pub bytes_received: u64,
-    /// Bytes (delimiters not counted) that did not end up in a valid frame: garbage, rejected
-    /// and oversized frames. Frames of an unknown type are not counted here: they were intact.
+    /// Bytes that did not end up in a valid frame: garbage, rejected and oversized frames, and
+    /// the zeros beyond the two that may stand between blocks (a third zero in a row ends one
+    /// more empty block after an empty one: it belongs to no frame, so a line of nothing but
+    /// zeros is all dropped bytes, not silence). The delimiters of rejected blocks are not
+    /// counted. Frames of an unknown type are not counted here: they were intact.
     pub bytes_dropped: u64,
     /// Frames decoded.
     pub frames_decoded: u64,
@@ -108,6 +111,8 @@ pub struct Decoder {
     len: usize,
     /// Inside an oversized block: drop until the next delimiter.
     discarding: bool,
+    /// The latest delimiter ended an empty block: one more in a row is a spare zero.
+    after_empty_block: bool,
     stats: DecoderStats,
 }
 
@@ -124,6 +129,7 @@ impl Decoder {
             block: [0u8; MAX_BLOCK_LEN],
             len: 0,
             discarding: false,
+            after_empty_block: false,
             stats: DecoderStats {
                 bytes_received: 0,
                 bytes_dropped: 0,
@@ -166,9 +172,17 @@ impl Decoder {
         s.bytes_received = s.bytes_received.saturating_add(1);
         if byte == DELIMITER {
             let len = core::mem::take(&mut self.len);
-            if core::mem::take(&mut self.discarding) || len == 0 {
+            if core::mem::take(&mut self.discarding) {
+                self.after_empty_block = false;
                 return None;
             }
+            if len == 0 {
+                if core::mem::replace(&mut self.after_empty_block, true) {
+                    s.bytes_dropped = s.bytes_dropped.saturating_add(1);
+                }
+                return None;
+            }
+            self.after_empty_block = false;
             let result = decode_block(self.block.get(..len).unwrap_or_default());
             let s = &mut self.stats;
             match &result {
@@ -304,6 +318,25 @@ mod tests {
         );
         assert_eq!(d.stats().bytes_dropped, junk.len() as u64);
         assert_eq!(d.stats().oversized, 1);
+    }
+
+    #[test]
+    fn zeros_beyond_the_two_between_frames_are_counted_dropped() {
+        let mut a = [0u8; MAX_FRAME_LEN];
+        let n = encode_frame(&Frame::Arm(Arm { seq: 9 }), &mut a).unwrap();
+        let mut d = Decoder::new();
+        // Back to back, and one zero shared between two frames: nothing dropped.
+        let shared: Vec<u8> = a[..n].iter().chain(&a[1..n]).copied().collect();
+        for bytes in [&a[..n], &a[..n], &shared[..]] {
+            assert!(d.frames(bytes).all(|f| f.is_ok()));
+        }
+        assert_eq!(d.stats().bytes_dropped, 0);
+        // A line of nothing but zeros: every zero but the first carries nothing (with the last
+        // frame's trailing zero, the first could stand between two frames).
+        assert_eq!(d.frames(&[0u8; 1000]).count(), 0);
+        assert_eq!(d.stats().bytes_dropped, 999);
+        assert_eq!(d.frames(&a[..n]).count(), 1);
+        assert_eq!(d.stats().bytes_dropped, 1000);
     }
 
     #[test]

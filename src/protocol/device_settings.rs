@@ -97,7 +97,8 @@ impl Table for DeviceSetting {
                 .noun("time scale")
                 .help("device seconds per wall second (1: real time); the device's watchdog, in device \
                  time, is that much shorter in wall time. In the browser the virtual device runs \
-                 at most 400 frames per 10 ms tick (40× real time); faster, it lags its clock"),
+                 at most 400 frames per 10 ms tick (40× real time; asked for more, 40×) and pauses \
+                 while the browser is away"),
             D::DropRate => Row::new("drop_rate", "drop-rate", "Drop rate", "per frame")
                 .takes(range(FAULT_RATE_RANGE), Shown::Number(0.0))
                 .noun("drop rate")

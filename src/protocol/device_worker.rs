@@ -27,9 +27,14 @@ use crate::input::table::{RowError, Table};
 /// How often the virtual device runs, ms.
 pub const VIRTUAL_TICK_MS: u32 = 10;
 
-/// Frames the virtual device runs at most per tick, so a tick stays short; behind the clock, it
-/// catches up over the next ticks.
+/// Frames the virtual device runs at most per tick, so a tick stays short; what a tick cannot
+/// run is not caught up later (see [`ClockedDevice`]).
 pub const MAX_VIRTUAL_FRAMES_PER_TICK: usize = 400;
+
+/// The most wall time one tick moves the virtual device's clock on by, ms: two ticks. A tick
+/// later than that finds a browser that was away (descheduled, throttled, busy), and the
+/// simulated machine was paused meanwhile (see [`ClockedDevice`]).
+pub const MAX_VIRTUAL_STEP_MS: u32 = 2 * VIRTUAL_TICK_MS;
 
 /// What the page asks its device worker for: the device form's texts, by row key, and whether to
 /// send the simulation's truth (off: a real bridge's twin, `cutlab device --no-truth`).
@@ -76,11 +81,30 @@ pub fn refusal(errors: &[RowError<DeviceSetting>]) -> String {
 }
 
 /// The device emulator on a wall clock at a time scale: what arrives waits in an inbox for the
-/// next [`tick`](Self::tick), which runs the frames due since power-on (at most
-/// [`MAX_VIRTUAL_FRAMES_PER_TICK`]).
+/// next [`tick`](Self::tick), which runs the frames due.
+///
+/// ## A simulated machine pauses while the browser is away
+///
+/// A real machine's clock runs on whatever its host does, and a host that stops answering for
+/// the device's watchdog timeout *is* a fault: the bridge firmware and `cutlab device` (its
+/// clock [`super::link::run_device`], anchored to power-on) keep that strict. This device is a
+/// simulation in the same browser as its host, and when the browser is descheduled both stop:
+/// on waking, a clock anchored to power-on would find scale × the delay due at once and run it
+/// before it could read the host's answer — a host that only looks silent, punished by the
+/// watchdog (at 8× a 60 ms stall is 0.48 s of device time, about the default 0.5 s watchdog).
+/// So each tick moves the clock on by the wall time since the last tick, at most
+/// [`MAX_VIRTUAL_STEP_MS`], times the scale; frames it cannot run
+/// ([`MAX_VIRTUAL_FRAMES_PER_TICK`]) are not caught up either. Time beyond is not simulated:
+/// the machine, its plant and its watchdog pause with the browser. What the device hears is
+/// unchanged: a host that keeps writing nothing while the ticks come — or a receiver stall or
+/// pulled cable injected at the device — still trips the watchdog after its timeout in device
+/// time.
 pub struct ClockedDevice {
     device: DeviceEmulator,
-    started_s: f64,
+    /// Wall time of the latest tick (or of power-on).
+    last_tick_s: f64,
+    /// Device time the clock has reached: the frames up to it are due.
+    due_s: f64,
     time_scale: f64,
     inbox: Vec<u8>,
     out: Vec<u8>,
@@ -104,7 +128,8 @@ impl ClockedDevice {
         let device = DeviceEmulator::new(asked.config).map_err(|e| e.to_string())?;
         Ok(Self {
             device,
-            started_s: now_s,
+            last_tick_s: now_s,
+            due_s: 0.0,
             time_scale: asked.time_scale,
             inbox: Vec::new(),
             out: Vec::with_capacity(64 * 1024),
@@ -116,20 +141,36 @@ impl ClockedDevice {
         self.inbox.extend_from_slice(bytes);
     }
 
-    /// At wall time `now_s`: the device reads its inbox, runs the frames due, and gives the
-    /// bytes it sent (empty if none).
+    /// At wall time `now_s`: the device reads its inbox, its clock moves on by the wall time
+    /// since the last tick (at most [`MAX_VIRTUAL_STEP_MS`]) times the scale, it runs the frames
+    /// due (at most [`MAX_VIRTUAL_FRAMES_PER_TICK`]), and gives the bytes it sent (empty if
+    /// none). A wall clock that stands still or goes back moves nothing.
     pub fn tick(&mut self, now_s: f64) -> Vec<u8> {
-        let due_s = (now_s - self.started_s) * self.time_scale;
+        let max_step_s = f64::from(MAX_VIRTUAL_STEP_MS) / 1000.0;
+        let wall_step_s = now_s - self.last_tick_s;
+        if wall_step_s > 0.0 {
+            self.last_tick_s = now_s;
+            self.due_s += wall_step_s.min(max_step_s) * self.time_scale;
+        }
         let inbox = std::mem::take(&mut self.inbox);
         self.device.receive(&inbox, &mut self.out);
         let mut frames = 0;
-        while self.device.time_s() + self.device.frame_period_s() <= due_s
-            && frames < MAX_VIRTUAL_FRAMES_PER_TICK
+        let period_s = self.device.frame_period_s();
+        while self.device.time_s() + period_s <= self.due_s && frames < MAX_VIRTUAL_FRAMES_PER_TICK
         {
             self.device.step_frame(&mut self.out);
             frames += 1;
         }
+        if frames == MAX_VIRTUAL_FRAMES_PER_TICK {
+            // What this tick could not run is dropped, not caught up.
+            self.due_s = self.device.time_s();
+        }
         std::mem::take(&mut self.out)
+    }
+
+    /// The device's counts (its watchdog's fallbacks among them).
+    pub fn stats(&self) -> super::device::DeviceStats {
+        self.device.stats()
     }
 
     /// Device seconds since power-on.
@@ -142,7 +183,7 @@ impl ClockedDevice {
 mod tests {
     use super::*;
     use crate::protocol::codec::{encode_frame, MAX_FRAME_LEN};
-    use crate::protocol::frame::{Arm, Frame, Hello, VERSION_MAJOR, VERSION_MINOR};
+    use crate::protocol::frame::{Arm, Frame, Heartbeat, Hello, VERSION_MAJOR, VERSION_MINOR};
 
     fn form(extra: &[(DeviceSetting, &str)]) -> Vec<(DeviceSetting, String)> {
         let mut texts = vec![(DeviceSetting::Program, "maneerat-doc-1".to_string())];
@@ -202,18 +243,86 @@ mod tests {
     }
 
     #[test]
-    fn a_tick_runs_at_most_its_frames_and_the_next_ticks_catch_up() {
+    fn a_tick_runs_at_most_its_frames_and_what_it_cannot_run_is_not_caught_up() {
+        // 1000× real time: a 10 ms tick asks for 10 s of frames, and runs 400.
+        let start = DeviceStart::new(&form(&[(DeviceSetting::TimeScale, "1000")]), true);
+        let mut clocked = ClockedDevice::start(&start, 0.0).unwrap();
+        let period_s = 0.001;
+        let per_tick_s = MAX_VIRTUAL_FRAMES_PER_TICK as f64 * period_s;
+        assert!(!clocked.tick(0.010).is_empty());
+        assert!((clocked.device_time_s() - per_tick_s).abs() < 1e-9);
+        // The same wall time again: nothing more is due.
+        assert!(clocked.tick(0.010).is_empty());
+        assert!((clocked.device_time_s() - per_tick_s).abs() < 1e-9);
+        clocked.tick(0.020);
+        assert!((clocked.device_time_s() - 2.0 * per_tick_s).abs() < 1e-9);
+    }
+
+    #[test]
+    fn a_late_tick_moves_the_clock_on_by_at_most_its_bounded_step() {
         let start = DeviceStart::new(&form(&[]), true);
         let mut clocked = ClockedDevice::start(&start, 0.0).unwrap();
-        // One second late: 1000 frames due, run over three ticks.
-        assert!(!clocked.tick(1.0).is_empty());
-        let period_s = 0.001;
-        let after_one = clocked.device_time_s();
-        assert!((after_one - MAX_VIRTUAL_FRAMES_PER_TICK as f64 * period_s).abs() < 1e-9);
+        // One second late at real time: 20 ms of device time, not 1 s.
         clocked.tick(1.0);
-        clocked.tick(1.0);
-        assert!((clocked.device_time_s() - 1.0).abs() < 1e-9);
-        assert!(clocked.tick(1.0).is_empty());
+        let step_s = f64::from(MAX_VIRTUAL_STEP_MS) / 1000.0;
+        assert!((clocked.device_time_s() - step_s).abs() < 1e-9);
+        // On time again: 10 ms more; a wall clock that goes back moves nothing.
+        clocked.tick(1.010);
+        assert!((clocked.device_time_s() - step_s - 0.010).abs() < 1e-9);
+        clocked.tick(0.5);
+        assert!((clocked.device_time_s() - step_s - 0.010).abs() < 1e-9);
+    }
+
+    /// A Heartbeat from the host, as a page sends one.
+    fn heartbeat(seq: u32) -> Vec<u8> {
+        let frame = Frame::Heartbeat(Heartbeat {
+            seq,
+            ..Heartbeat::default()
+        });
+        let mut buf = [0u8; MAX_FRAME_LEN];
+        let n = encode_frame(&frame, &mut buf).unwrap();
+        buf[..n].to_vec()
+    }
+
+    /// Ticks a device armed at 8× real time every 10 ms for 1 s of wall time, the host answering
+    /// each tick with a heartbeat before the next — but the browser away for `gap_s` after
+    /// 0.2 s, its ticks and its host alike. Its watchdog's fallbacks.
+    fn fallbacks_over_a_wall_gap(extra: &[(DeviceSetting, &str)], gap_s: f64) -> u64 {
+        let mut texts = vec![(DeviceSetting::TimeScale, "8")];
+        texts.extend_from_slice(extra);
+        let start = DeviceStart::new(&form(&texts), false);
+        let mut clocked = ClockedDevice::start(&start, 0.0).unwrap();
+        clocked.receive(&hello_and_arm());
+        let mut now_s = 0.0;
+        for seq in 1..=100 {
+            now_s += if seq == 20 { gap_s } else { 0.010 };
+            clocked.tick(now_s);
+            clocked.receive(&heartbeat(seq));
+        }
+        assert!(clocked.device_time_s() > 7.0, "{}", clocked.device_time_s());
+        clocked.stats().watchdog_fallbacks
+    }
+
+    #[test]
+    fn a_long_wall_gap_without_a_fault_does_not_trip_the_watchdog() {
+        // Two seconds away at 8×: the clock would owe 16 s, far over the 0.5 s watchdog.
+        assert_eq!(fallbacks_over_a_wall_gap(&[], 2.0), 0);
+        // Even with a watchdog shorter than one tick of the old catch-up (400 frames, 0.4 s).
+        assert_eq!(
+            fallbacks_over_a_wall_gap(&[(DeviceSetting::Watchdog, "0.2")], 2.0),
+            0
+        );
+    }
+
+    #[test]
+    fn a_receiver_stall_still_trips_the_watchdog_across_a_wall_gap() {
+        // The device deaf to the host for 2 s of device time from 1 s: the host silent to it.
+        let stall = [
+            (DeviceSetting::StallAt, "1"),
+            (DeviceSetting::StallFor, "2"),
+        ];
+        assert_eq!(fallbacks_over_a_wall_gap(&stall, 0.010), 1);
+        assert_eq!(fallbacks_over_a_wall_gap(&stall, 2.0), 1);
     }
 
     #[test]

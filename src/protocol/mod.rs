@@ -17,7 +17,8 @@
 //! |---|---|
 //! | [`crc`], [`cobs`], [`frame`], [`codec`] | the `no_std` codec: CRC-32, COBS, the frames and their layouts, framing |
 //! | [`json`] | frames as JSON lines (`cutlab protocol encode`/`decode`) |
-//! | [`host`] | the host's side without I/O: samples, faults, the stuck-override watch, the line budget, keeping a device up |
+//! | [`host`] | the host's side without I/O: samples, faults, the stuck-override watch, the line budget |
+//! | [`keep_up`] | keeping a device up: the command, heartbeats, re-arming after a watchdog fallback |
 //! | [`device`] | the device emulator without I/O: the simulated machine, its watchdog, fallback, latched hold and injected faults |
 //! | [`device_settings`] | the emulator's settings as one table, which `cutlab device` and the Hardware page's virtual device parse alike |
 //! | [`device_worker`] | the Hardware page's virtual device as its worker runs it: the start request, the emulator on a wall clock ticked by a timer |
@@ -40,5 +41,6 @@ pub mod device_worker;
 pub mod frame;
 pub mod host;
 pub mod json;
+pub mod keep_up;
 #[cfg(not(target_arch = "wasm32"))]
 pub mod link;

@@ -367,7 +367,7 @@ test('the virtual device with injected faults: counters, the device watchdog, th
   // Lost and corrupted frames are counted as they happen.
   await waitForCounter(page, 'Samples lost (sequence gaps)', (n) => n > 10);
   await waitForCounter(page, 'Frames rejected (CRC, COBS, size)', (n) => n > 5);
-  await waitForCounter(page, 'Bytes dropped while resynchronising', (n) => n > 0);
+  await waitForCounter(page, 'Bytes dropped (part of no frame)', (n) => n > 0);
   // The stall: the device falls back, the host sees it and re-arms; the teach cut, whose fit
   // would take the fallback's samples for the schedule's overrides, is abandoned and the page
   // says so.

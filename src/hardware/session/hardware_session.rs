@@ -12,7 +12,8 @@ use crate::estimation::estimator::Calibration;
 use crate::hardware::recording::LiveRow;
 use crate::machine::OverrideCommand;
 use crate::protocol::frame::{Ack, Capabilities};
-use crate::protocol::host::{DeviceSummary, HostSession, KeepUp, LinkStats};
+use crate::protocol::host::{DeviceSummary, HostSession, LinkStats};
+use crate::protocol::keep_up::KeepUp;
 
 pub(super) struct Teaching {
     pub(super) teach: TeachCut,
@@ -271,7 +272,16 @@ impl HardwareSession {
 
     /// Records an event at the latest sample's time; the next row carries it too.
     pub(super) fn event(&mut self, text: String) {
-        let time_s = self.session_time_s();
+        self.event_at(None, text);
+    }
+
+    /// Records an event at device time `device_time_s` (`None`: the latest sample's); the next
+    /// row carries it too.
+    pub(super) fn event_at(&mut self, device_time_s: Option<f64>, text: String) {
+        let time_s = match (device_time_s, self.first_device_time_s) {
+            (Some(t), Some(first)) => t - first,
+            _ => self.session_time_s(),
+        };
         // Events while no samples come (a silent device) wait for the next row; a few are
         // enough to say what happened.
         if self.pending_row_event.len() < MAX_PENDING_EVENT_TEXT {

@@ -6,7 +6,8 @@ use super::{HardwareSession, LinkState};
 use crate::closed_loop::sample_loop::SampleLoop;
 use crate::machine::OverrideCommand;
 use crate::protocol::frame::{Ack, Capabilities, FaultKind, FrameType, VERSION_MAJOR};
-use crate::protocol::host::{DeviceSummary, KeepUp, LineBudget, HELLO_INTERVAL_S};
+use crate::protocol::host::{DeviceSummary, LineBudget, LinkEvent, HELLO_INTERVAL_S};
+use crate::protocol::keep_up::KeepUp;
 
 impl HardwareSession {
     /// Takes the bytes that arrived at `now_s`.
@@ -24,10 +25,13 @@ impl HardwareSession {
                 self.handshake_done(c, now_s);
             }
         }
-        self.copy_host_events();
+        // Each event of the batch goes in at the sample it came with (the protocol session
+        // stamped it so), before that sample's row is made, so its row carries it.
         while let Some(sample) = self.host.next_sample() {
+            self.copy_host_events_until(Some(sample.device_time_s));
             self.sample(&sample, now_s);
         }
+        self.copy_host_events();
         self.watch_device_faults(now_s);
     }
 
@@ -37,11 +41,11 @@ impl HardwareSession {
             LinkState::Closed => return,
             LinkState::Handshaking => {
                 if now_s - self.connected_s > self.options.handshake_timeout_s {
-                    let s = self.host.stats();
                     self.close(format!(
-                        "no answer to Hello within {} s ({} bytes received, {} of them dropped): \
-                         is the device on, at this baud rate?",
-                        self.options.handshake_timeout_s, s.bytes_received, s.bytes_dropped
+                        "no answer to Hello within {} s ({}): is the device on, at this baud \
+                         rate?",
+                        self.options.handshake_timeout_s,
+                        self.host.stats().received()
                     ));
                 } else if now_s - self.last_hello_s >= HELLO_INTERVAL_S {
                     self.last_hello_s = now_s;
@@ -101,18 +105,35 @@ impl HardwareSession {
         self.copy_host_events();
     }
 
-    /// The protocol session's new events, at the device time of the sample being worked on.
+    /// The protocol session's new events, each at the device time of the sample it belongs to.
     pub(super) fn copy_host_events(&mut self) {
-        let new: Vec<String> = self
+        self.copy_host_events_until(None);
+    }
+
+    /// The protocol session's new events up to the first that belongs to a sample after
+    /// `until_device_time_s` (`None`: all), each at the device time of the sample it belongs to
+    /// (the latest sample's, for one recorded before any).
+    pub(super) fn copy_host_events_until(&mut self, until_device_time_s: Option<f64>) {
+        let due = |e: &LinkEvent| match (e.device_time_s, until_device_time_s) {
+            (Some(t), Some(until)) => t <= until,
+            _ => true,
+        };
+        let new: Vec<(Option<f64>, String)> = self
             .host
             .events()
             .iter()
             .skip(self.host_events_copied)
-            .map(|e| format!("link, part {}: {}", e.part, e.text))
+            .take_while(|e| due(e))
+            .map(|e| {
+                (
+                    e.device_time_s,
+                    format!("link, part {}: {}", e.part, e.text),
+                )
+            })
             .collect();
         self.host_events_copied += new.len();
-        for text in new {
-            self.event(text);
+        for (device_time_s, text) in new {
+            self.event_at(device_time_s, text);
         }
     }
 

@@ -77,8 +77,9 @@ impl HardwareSession {
             );
         }
         self.keep_up(s.device_time_s);
-        // A re-arm this sample sent is logged at its time, not at the newest sample's.
-        self.copy_host_events();
+        // A re-arm this sample sent is logged at its time, not at the newest sample's; the
+        // batch's later events wait for their own samples.
+        self.copy_host_events_until(Some(s.device_time_s));
         let sensors = &s.step.sensors;
         let truth = s.step.truth;
         let stage = self.stage();

@@ -23,7 +23,7 @@ pub fn LinkPanel(ui: Ui, children: Children) -> impl IntoView {
                     st.frames_rejected.to_string(),
                 ),
                 (
-                    "Bytes dropped while resynchronising",
+                    "Bytes dropped (part of no frame)",
                     st.bytes_dropped.to_string(),
                 ),
                 ("Frames of unknown type", st.frames_unknown.to_string()),
