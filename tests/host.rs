@@ -1101,6 +1101,22 @@ fn host_and_device_options_are_checked_with_messages_that_name_them() {
         "threshold"
     ])
     .contains("cannot open"));
+    // A parameter given twice is refused before any link is opened, as `cutlab sim` refuses it.
+    let twice = error(&[
+        "host",
+        "--device-cmd",
+        "true",
+        "--controller",
+        "pi",
+        "--set",
+        "kp=0.5",
+        "--set",
+        "kp=0.9",
+    ]);
+    assert!(
+        twice.contains("--set: kp is given twice (kp=0.5, then kp=0.9)"),
+        "{twice}"
+    );
     // A device that says nothing: the handshake gives up and says so.
     let e = error(&[
         "host",

@@ -414,11 +414,9 @@ fn controller_for(
     if let Some(engine) = engine {
         engine.give_to(&mut controller)?;
     }
-    for assignment in assignments {
-        controller
-            .set_text(assignment)
-            .map_err(|e| CliError::new(format!("--set: {e}")))?;
-    }
+    controller
+        .set_texts(assignments.iter().map(String::as_str))
+        .map_err(|e| CliError::new(format!("--set: {e}")))?;
     Ok(controller)
 }
 
