@@ -303,7 +303,10 @@ fn cut_before_arming_warnings(trace: &cutlab::closed_loop::trace::Trace) -> usiz
 
 /// The run `taught` again with the loop armed 20 s after spindle start, which leaves kim-step-doc's
 /// first depth steps uncontrolled, on a machine that offers no truth (the estimate alone).
-fn armed_late(spec: &RunSpec, taught: &cutlab::closed_loop::lab::RunResult) -> cutlab::closed_loop::trace::Trace {
+fn armed_late(
+    spec: &RunSpec,
+    taught: &cutlab::closed_loop::lab::RunResult,
+) -> cutlab::closed_loop::trace::Trace {
     let mut settings = taught.settings.clone();
     settings.envelope.arming_delay_s = 20.0;
     let controller = spec
