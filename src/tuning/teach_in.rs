@@ -491,6 +491,7 @@ pub fn teach_in_log(
         (None, None) => return Err(in_log("no current model could be fitted".into())),
     };
     notes.push(fit.selection_note());
+    notes.extend(fit.warnings());
     let at = OperatingPoint {
         spindle_rpm: fit.full_override.spindle_rpm,
         feed_mm_min: fit.full_override.feed_mm_min,
