@@ -582,6 +582,41 @@ fn feed_current_feedback_converts_the_target_and_refuses_down_milling() {
     assert!(e.contains("down milling"), "{e}");
 }
 
+/// Feed-current feedback on a mill reports the cut's entry once and its exit once: its period is
+/// whole spindle revolutions, as the spindle current's is. At 50 ms against kim-step-doc's 60 ms
+/// revolution each period's mean caught another share of the teeth's ripple, and the air-cut rule
+/// took one period in three of the steady 2 mm cut for air: 99 air/entry events.
+#[cfg(not(target_arch = "wasm32"))]
+#[test]
+fn feed_current_feedback_reports_a_cuts_entry_and_exit_once() {
+    use cutlab::estimation::estimator::Feedback;
+    use cutlab::safety::SafetyEvent;
+    let mut spec = RunSpec::new(Preset::KimStepDoc, ControllerKind::Threshold);
+    spec.settings.feedback = Some(Feedback::FeedCurrent);
+    let r = simulate(&spec).unwrap();
+    let rpm = Preset::KimStepDoc.mill_parameters().unwrap().spindle_rpm;
+    let revolutions = r.settings.control_period_s * rpm / 60.0;
+    assert!(
+        (revolutions - revolutions.round()).abs() < 1e-6,
+        "{} s is {revolutions} revolutions",
+        r.settings.control_period_s
+    );
+    let count = |f: fn(&SafetyEvent) -> bool| r.trace.events.iter().filter(|e| f(e)).count();
+    let events = &r.trace.events;
+    // The program enters its cut once and leaves it once: in air before the entry and after it.
+    assert_eq!(
+        count(|e| matches!(e, SafetyEvent::EntryHold { .. })),
+        1,
+        "{events:?}"
+    );
+    assert_eq!(
+        count(|e| matches!(e, SafetyEvent::AirCut { .. })),
+        2,
+        "{events:?}"
+    );
+    assert!(r.metrics.completed);
+}
+
 /// tests/reference/plant/liu_cut.csv (scripts/reference/plant_reference.py): liu-current-step's
 /// cut in closed form.
 const LIU_CUT: &str = include_str!("reference/plant/liu_cut.csv");

@@ -55,8 +55,8 @@ use cutlab::closed_loop::references::{
     apply_references, ReferenceSearch, REFERENCE_RESOLUTION_PCT,
 };
 use cutlab::closed_loop::settings::{
-    air_cut_force_n, DEFAULT_CONTROL_PERIOD_S, DEFAULT_FEED_LOWPASS_HZ, DEFAULT_LOWPASS_ORDER,
-    DEFAULT_SPINDLE_LOWPASS_HZ, FORCE_LIMIT_FACTOR, MAX_AIR_CUT_FRACTION,
+    air_cut_force_n, cut_before_arming_force_n, DEFAULT_CONTROL_PERIOD_S, DEFAULT_FEED_LOWPASS_HZ,
+    DEFAULT_LOWPASS_ORDER, DEFAULT_SPINDLE_LOWPASS_HZ, FORCE_LIMIT_FACTOR, MAX_AIR_CUT_FRACTION,
     MAX_AIR_CUT_OF_CUT_FRACTION, MIN_CONTROL_PERIOD_S, OVERLOAD_FACTOR, SENSOR_FAILURE_TOLERANCE,
 };
 use cutlab::closed_loop::teach_cut::{TEACH_OVERRIDES_PCT, TEACH_STEP_S};
@@ -1143,6 +1143,19 @@ fn settings(facts: &mut Facts, m: &Matrix) {
     // The air-cut threshold's margin over the air reading, where neither bound applies.
     let margin = air_cut_force_n(100.0, 20.0, f64::NAN) / 20.0;
     facts.set("envelope.air_margin", short(margin, 2));
+    // The cut-before-arming force: its share of the target, and its margin over the estimate's
+    // noise, each where the other bounds are unknown.
+    facts.set(
+        "envelope.cut_before_arming_fraction",
+        short(
+            cut_before_arming_force_n(100.0, f64::NAN, f64::NAN) / 100.0,
+            2,
+        ),
+    );
+    facts.set(
+        "envelope.cut_noise_sigmas",
+        short(cut_before_arming_force_n(0.0, f64::NAN, 1.0), 2),
+    );
     facts.set(
         "estimation.range_slack_pct",
         fixed(100.0 * RANGE_SLACK_FRACTION, 0),

@@ -482,6 +482,27 @@ fn a_logged_teach_cut_proposes_what_pandas_and_numpy_compute() {
             .starts_with("teach_cut_log.csv: no \"force_n\" column"),
         "{e}"
     );
+    // A file without data rows is refused by the reader, with what it held instead; a log built
+    // by hand without rows finds nothing to fit and says so, naming the file (no panic).
+    let header_only = cutlab::log::load(b"a,b,c\n", None).unwrap_err();
+    assert!(
+        header_only.to_string().contains("no data rows"),
+        "{header_only}"
+    );
+    let mut empty = log.clone();
+    empty.rows = 0;
+    empty.row_lines.clear();
+    for column in &mut empty.columns {
+        column.values.clear();
+        column.labels.clear();
+    }
+    let how = LogTeachIn {
+        map: &map,
+        geometry: None,
+        gear_change_rpm: 900.0,
+    };
+    let e = teach_in_log(&empty, "empty.csv", how).unwrap_err();
+    assert!(e.to_string().starts_with("empty.csv: "), "{e}");
 }
 
 #[test]

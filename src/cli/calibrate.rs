@@ -326,6 +326,9 @@ pub fn run(args: CalibrateArgs, io: &mut Io<'_>) -> Result<(), CliError> {
     } else if let Some(e) = &report.feed_error {
         let _ = writeln!(out, "feed model: not fitted: {e}");
     }
+    for warning in &report.warnings {
+        let _ = writeln!(out, "warning: {warning}");
+    }
     io.stdout.write_all(out.as_bytes())?;
     Ok(())
 }

@@ -116,9 +116,6 @@ impl FailureWatch {
     }
 }
 
-/// A force estimate above this fraction of the target, with the spindle at speed, before the
-/// loop has armed, is a cut the controller cannot shape.
-const CUT_BEFORE_ARMING_FRACTION: f64 = 0.5;
 /// The spindle is at speed within this fraction of its command (its run-up current would read as
 /// a force).
 const AT_SPEED_FRACTION: f64 = 0.02;
@@ -202,7 +199,8 @@ impl FeedbackLoop {
         &self.trace
     }
 
-    /// Warns once when the estimate shows a cut before the loop has armed.
+    /// Warns once when the estimate shows a cut before the loop has armed: above
+    /// [`LoopSettings::cut_before_arming_force_n`], which the estimate's noise in air stays below.
     fn watch_cut_before_arming(
         &mut self,
         period: &PeriodSummary,
@@ -223,7 +221,7 @@ impl FeedbackLoop {
             && at_speed
             && !falling
             && estimate.in_range
-            && force_n > CUT_BEFORE_ARMING_FRACTION * self.settings.target_force_n
+            && force_n > self.settings.cut_before_arming_force_n
         {
             self.warned_cut_before_arming = true;
             self.trace.events.push(SafetyEvent::CutBeforeArming {

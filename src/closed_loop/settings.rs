@@ -120,6 +120,9 @@ pub struct LoopSettings {
     pub target_force_n: f64,
     /// The force limit for the metrics' "time above the limit".
     pub force_limit_n: f64,
+    /// The estimated force above which a period before arming is a cut the controller cannot
+    /// shape, warned about once ([`cut_before_arming_force_n`]).
+    pub cut_before_arming_force_n: f64,
     /// The safety envelope.
     pub envelope: EnvelopeConfig,
     /// The run stops here if the program has not ended.
@@ -176,8 +179,8 @@ impl OperatingPoint {
 /// How the control period is chosen when nobody gave one.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum PeriodRule {
-    /// Whole spindle revolutions, at least [`MIN_CONTROL_PERIOD_S`] (spindle-current and
-    /// dynamometer feedback with a spindle running); else [`DEFAULT_CONTROL_PERIOD_S`].
+    /// Whole spindle revolutions, at least [`MIN_CONTROL_PERIOD_S`], with a spindle running
+    /// (whatever the feedback path); else [`DEFAULT_CONTROL_PERIOD_S`].
     WholeRevolutions,
     /// This period, s.
     Fixed(f64),
@@ -504,7 +507,7 @@ pub fn plan(
 ) -> Result<Plan, LoopError> {
     let mut notes = Vec::new();
     let feedback = settings.feedback.unwrap_or(context.default_feedback);
-    let control_period_s = control_period_s(settings, context, feedback, &mut notes)?;
+    let control_period_s = control_period_s(settings, context, &mut notes)?;
     let nyquist_hz = 0.5 * context.sample_rate_hz;
     let spindle_lowpass_hz = lowpass_hz(
         settings
@@ -613,10 +616,15 @@ fn chip_window(
 }
 
 /// The control period: the one asked for, else the context's rule; in whole samples.
+///
+/// Whole revolutions whatever the feedback path: the feed force ripples with the teeth as the
+/// spindle's torque does, and a period of a fraction of a revolution more or less aliases that
+/// ripple into its mean (kim-step-doc with feed-current feedback at 50 ms against a 60 ms
+/// revolution: a period mean swinging 91–173 N over three periods in a steady 2 mm cut, a
+/// teach-cut fit of R² 0.54, and the air-cut rule taking every third period for air).
 fn control_period_s(
     settings: &SettingsOverrides,
     context: &MachineContext,
-    feedback: Feedback,
     notes: &mut Vec<String>,
 ) -> Result<f64, LoopError> {
     let rate_hz = context.sample_rate_hz;
@@ -625,7 +633,7 @@ fn control_period_s(
         PeriodRule::Fixed(p) => p,
         PeriodRule::WholeRevolutions => {
             let rpm = context.operating_point.spindle_rpm;
-            if rpm > 0.0 && feedback != Feedback::FeedCurrent {
+            if rpm > 0.0 {
                 let revolution_s = 60.0 / rpm;
                 (MIN_CONTROL_PERIOD_S / revolution_s).ceil() * revolution_s
             } else {
@@ -765,6 +773,38 @@ pub fn air_cut_force_n(
     threshold
         .min(MAX_AIR_CUT_FRACTION * target_force_n)
         .min(MAX_AIR_CUT_OF_CUT_FRACTION * median_force_at_full_override_n)
+}
+
+/// An estimate above this fraction of the target, before the loop arms, is a cut heavy enough to
+/// warn about: a lighter one the controller takes over once armed without having loaded the tool.
+const CUT_BEFORE_ARMING_FRACTION: f64 = 0.5;
+/// An estimate this many standard deviations of the fit's residual above nothing is a cut, not
+/// the estimate's noise.
+const CUT_NOISE_SIGMAS: f64 = 3.0;
+
+/// The estimated force above which a period before the loop arms shows a cut the controller
+/// cannot shape (the cut-before-arming warning): above half the target (a lighter cut harms
+/// nothing), and above what the estimate reads without any cut, whatever the target — half again
+/// the largest force the teach cut's air read ([`AIR_MARGIN`]) and [`CUT_NOISE_SIGMAS`] times one
+/// period's spread about the calibration line. A NaN (not known: no air in the teach cut, a
+/// current read as the force) leaves its bound out.
+///
+/// ```
+/// use cutlab::closed_loop::settings::cut_before_arming_force_n;
+/// assert_eq!(cut_before_arming_force_n(372.0, 40.0, 10.0), 186.0); // half the target
+/// assert_eq!(cut_before_arming_force_n(5.0, 40.0, 10.0), 60.0);    // 1.5 × the air reading
+/// assert_eq!(cut_before_arming_force_n(5.0, -50.0, 15.0), 45.0);   // 3 σ of the estimate
+/// assert_eq!(cut_before_arming_force_n(5.0, f64::NAN, f64::NAN), 2.5);
+/// ```
+pub fn cut_before_arming_force_n(
+    target_force_n: f64,
+    air_force_estimate_n: f64,
+    residual_std_n: f64,
+) -> f64 {
+    // `f64::max` leaves a NaN out.
+    (CUT_BEFORE_ARMING_FRACTION * target_force_n)
+        .max(AIR_MARGIN * air_force_estimate_n)
+        .max(CUT_NOISE_SIGMAS * residual_std_n)
 }
 
 impl Plan {
@@ -920,6 +960,11 @@ impl Plan {
             lowpass_order: c.lowpass_order,
             target_force_n,
             force_limit_n: FORCE_LIMIT_FACTOR * target_force_n,
+            cut_before_arming_force_n: cut_before_arming_force_n(
+                target_force_n,
+                calibration.air_force_estimate_n,
+                calibration.estimator.residual_std_n(at.spindle_rpm),
+            ),
             envelope,
             max_duration_s: self.max_duration_s,
             sensor_failure_tolerance: SENSOR_FAILURE_TOLERANCE,

@@ -410,25 +410,44 @@ pub fn best(
     tolerance: Tolerance,
     shown: impl Fn(f64) -> String,
 ) -> Vec<bool> {
-    let finite = || values.iter().flatten().copied().filter(|v| v.is_finite());
+    best_among(values, &vec![true; values.len()], better, tolerance, shown)
+}
+
+/// [`best`] with only the `eligible` runs' values marked. The others' values still count as
+/// values to beat: the best eligible value is marked where it beats some other run's value —
+/// theirs included — beyond the tolerance, so a lone eligible run beside a run left out is marked
+/// where it beats that run, and not where that run did better.
+fn best_among(
+    values: &[Option<f64>],
+    eligible: &[bool],
+    better: Better,
+    tolerance: Tolerance,
+    shown: impl Fn(f64) -> String,
+) -> Vec<bool> {
+    let finite = |i: usize| values[i].filter(|v| v.is_finite());
+    let eligible_values = || {
+        (0..values.len())
+            .filter(|&i| eligible[i])
+            .filter_map(finite)
+    };
     let extreme = match better {
         _ if values.len() < 2 => None,
         Better::Neither => None,
-        Better::Lower => finite().reduce(f64::min),
-        Better::Higher => finite().reduce(f64::max),
+        Better::Lower => eligible_values().reduce(f64::min),
+        Better::Higher => eligible_values().reduce(f64::max),
     };
     let Some(extreme) = extreme else {
         return vec![false; values.len()];
     };
     let alike = |v: f64| shown(v) == shown(extreme) || !tolerance.separates(v, extreme);
-    let marks: Vec<bool> = values
-        .iter()
-        .map(|v| v.is_some_and(|v| v.is_finite() && alike(v)))
-        .collect();
-    if marks.iter().filter(|m| **m).count() == finite().count() {
-        return vec![false; values.len()];
-    }
-    marks
+    let worse = |v: f64| match better {
+        Better::Lower => v > extreme,
+        _ => v < extreme,
+    };
+    let beaten = (0..values.len()).any(|i| finite(i).is_some_and(|v| !alike(v) && worse(v)));
+    (0..values.len())
+        .map(|i| beaten && eligible[i] && finite(i).is_some_and(alike))
+        .collect()
 }
 
 /// A run that spent more than this share of its cycle above the force limit is never marked
@@ -443,19 +462,22 @@ pub fn may_be_best(run: &RunResult) -> bool {
 }
 
 /// The best marks of `row` over `runs` ([`best`]), a run above the force limit for more than
-/// [`ABOVE_LIMIT_SHARE_NOT_BEST`] of its cycle left out of every row but the time above the
-/// limit (where the least is best whoever it is).
+/// [`ABOVE_LIMIT_SHARE_NOT_BEST`] of its cycle never marked on any row but the time above the
+/// limit (where the least is best whoever it is). Its values still count as values to beat, so
+/// the runs within the limit are marked where they beat it: beside one such run, the other is
+/// the winner wherever it did better, not a table without a mark ([`not_best_note`] says so).
 pub fn best_marks(
     row: &MetricRow,
     runs: &[&RunResult],
     shown: impl Fn(f64) -> String,
 ) -> Vec<bool> {
     let judges_the_limit = row.label == "Time above limit";
-    let values: Vec<Option<f64>> = runs
+    let values: Vec<Option<f64>> = runs.iter().map(|r| (row.value)(r)).collect();
+    let eligible: Vec<bool> = runs
         .iter()
-        .map(|r| (row.value)(r).filter(|_| judges_the_limit || may_be_best(r)))
+        .map(|r| judges_the_limit || may_be_best(r))
         .collect();
-    best(&values, row.better, row.tolerance, shown)
+    best_among(&values, &eligible, row.better, row.tolerance, shown)
 }
 
 /// A sentence for each row of a table with a "—", saying why it has no value (what a cell shows
@@ -493,21 +515,41 @@ pub fn missing_notes(runs: &[(&str, &RunResult)]) -> Vec<String> {
 }
 
 /// The sentence a table shows under its marks when a run was left out of them, naming each with
-/// its time above the limit; `None` when every run could be marked.
+/// its time above the limit, and against what the others' marks stand: the runs within the limit
+/// are marked where they beat any run, those left out included; where none is within it, no run
+/// is marked on any other row. `None` when every run could be marked.
 pub fn not_best_note(runs: &[(&str, &RunResult)]) -> Option<String> {
     let left_out: Vec<String> = runs
         .iter()
         .filter(|(_, r)| !may_be_best(r))
         .map(|(name, r)| format!("{name} ({:.1} s)", r.metrics.time_above_limit_s))
         .collect();
-    (!left_out.is_empty() && runs.len() > 1).then(|| {
-        format!(
-            "not marked best on any row but the time above the limit: above the force limit for \
-             more than {:.0} % of the cycle — {}",
-            ABOVE_LIMIT_SHARE_NOT_BEST * 100.0,
-            left_out.join(", ")
-        )
-    })
+    if left_out.is_empty() || runs.len() < 2 {
+        return None;
+    }
+    let within: Vec<&str> = runs
+        .iter()
+        .filter(|(_, r)| may_be_best(r))
+        .map(|(name, _)| *name)
+        .collect();
+    let marks = match within.as_slice() {
+        [] => "No run kept within the limit, so none is marked best on any other row.".to_string(),
+        [one] => format!(
+            "{one} is the only run within the limit, the one to choose of these: it is marked \
+             best where it beat the runs left out (their values still count as ones to beat)."
+        ),
+        several => format!(
+            "The runs within the limit ({}) are marked best where one beats another run's \
+             value, those left out included.",
+            several.join(", ")
+        ),
+    };
+    Some(format!(
+        "not marked best on any row but the time above the limit: above the force limit for \
+         more than {:.0} % of the cycle — {}. {marks}",
+        ABOVE_LIMIT_SHARE_NOT_BEST * 100.0,
+        left_out.join(", ")
+    ))
 }
 
 /// Why a negative "Saving vs programmed feed" is what it is, in words, for each run that has one
@@ -626,6 +668,93 @@ mod tests {
                 shown
             ),
             [false, false]
+        );
+    }
+
+    #[test]
+    fn a_run_left_out_is_still_a_value_to_beat() {
+        // The first run is left out (above the force limit).
+        let eligible = [false, true];
+        let marks = |values: &[Option<f64>], better| {
+            best_among(values, &eligible, better, Tolerance::DEFAULT, shown)
+        };
+        // The lone run within the limit beats it: marked.
+        assert_eq!(
+            marks(&[Some(744.0), Some(561.0)], Better::Lower),
+            [false, true]
+        );
+        // It did better (a shorter cycle): nothing is marked, the better run being left out.
+        assert_eq!(
+            marks(&[Some(54.0), Some(76.0)], Better::Lower),
+            [false, false]
+        );
+        assert_eq!(
+            marks(&[Some(54.0), Some(76.0)], Better::Higher),
+            [false, true]
+        );
+        // Within the row's noise of it: nothing.
+        assert_eq!(
+            marks(&[Some(100.0), Some(101.0)], Better::Lower),
+            [false, false]
+        );
+        // Two runs within the limit that tie share the mark when they beat the one left out.
+        let three = [Some(900.0), Some(500.0), Some(501.0)];
+        let marked = best_among(
+            &three,
+            &[false, true, true],
+            Better::Lower,
+            Tolerance::DEFAULT,
+            shown,
+        );
+        assert_eq!(marked, [false, true, true]);
+        // Nobody within the limit: nothing.
+        let none = best_among(
+            &three,
+            &[false; 3],
+            Better::Lower,
+            Tolerance::DEFAULT,
+            shown,
+        );
+        assert_eq!(none, [false; 3]);
+    }
+
+    #[test]
+    fn beside_a_fixed_feed_above_the_limit_the_controller_wins_where_it_beat_it_and_says_so() {
+        use crate::closed_loop::definition::RunSpec;
+        use crate::closed_loop::lab::simulate;
+        use crate::control::registry::ControllerKind;
+        use crate::plant::Preset;
+        let run = |kind| simulate(&RunSpec::new(Preset::KimStepDoc, kind)).unwrap();
+        let (fixed, threshold) = (run(ControllerKind::Fixed), run(ControllerKind::Threshold));
+        // The fixed feed spends 18 s of its 54 s above the limit; threshold 0.7 s of 76 s.
+        assert!(!may_be_best(&fixed) && may_be_best(&threshold));
+        let marked: Vec<&str> = METRIC_ROWS
+            .iter()
+            .filter(|row| best_marks(row, &[&fixed, &threshold], format_metric)[1])
+            .map(|row| row.label)
+            .collect();
+        for label in [
+            "Peak force",
+            "Force IAE",
+            "Mean |error|",
+            "Time above limit",
+        ] {
+            assert!(marked.contains(&label), "{label} not in {marked:?}");
+        }
+        // Where the fixed feed did better (its shorter cycle), threshold is no winner.
+        for label in ["Cycle time", "Override changes", "Mean removal rate"] {
+            assert!(!marked.contains(&label), "{label} in {marked:?}");
+        }
+        let note = not_best_note(&[("fixed", &fixed), ("threshold", &threshold)]).unwrap();
+        assert!(
+            note.contains("— fixed (18.0 s). threshold is the only run within the limit"),
+            "{note}"
+        );
+        assert_eq!(not_best_note(&[("threshold", &threshold)]), None);
+        let both_out = not_best_note(&[("a", &fixed), ("b", &fixed)]).unwrap();
+        assert!(
+            both_out.ends_with("so none is marked best on any other row."),
+            "{both_out}"
         );
     }
 

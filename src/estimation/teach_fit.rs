@@ -16,6 +16,7 @@
 //!            modelled force: not in air (current above the idle one)
 //!                                    used periods at 100 % ─► median force, median speed and feed
 //!            settled periods in air ─► the estimator's reading there (its bias in air)
+//!            used periods per fitted line ─► load levels: under 3, a warning (R² proves nothing)
 //! ```
 //!
 //! Why each rule: a spindle starting or changing speed draws a current that says nothing about the
@@ -62,6 +63,12 @@ pub const AIR_FORCE_FRACTION: f64 = 0.02;
 pub const FULL_OVERRIDE_TOLERANCE_PCT: f64 = 0.5;
 /// A feed below this (mm/min) is the axes standing still.
 const STANDING_FEED_MM_MIN: f64 = 1e-6;
+/// Forces within this fraction of the largest force a line was fitted to are one load level.
+pub const LOAD_LEVEL_FRACTION: f64 = 0.05;
+/// A line fitted on fewer load levels than this is not determined by them: through two levels any
+/// line fits (R² near 1 whatever the current does between them), and one level leaves the slope
+/// to the noise. A third level is the first that can disagree with the line.
+pub const MIN_LOAD_LEVELS: usize = 3;
 
 /// One control period of a teach cut, as the fit takes it.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -146,6 +153,77 @@ pub struct FullOverride {
     pub feed_mm_min: f64,
 }
 
+/// A fitted line whose periods rest on fewer than [`MIN_LOAD_LEVELS`] load levels
+/// ([`load_levels_n`]): its coefficients are not determined and its R² proves nothing.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct FewLoadLevels {
+    /// The model: "spindle" (one line per calibrated speed) or "feed".
+    pub model: &'static str,
+    /// The calibrated speed of the spindle's line, rpm (NaN for the feed model).
+    pub speed_rpm: f64,
+    /// Each load level's median force, N, ascending.
+    pub levels_n: Vec<f64>,
+    /// The line's R².
+    pub r_squared: f64,
+}
+
+impl FewLoadLevels {
+    /// The warning, for people: how many levels, why it matters, what to do.
+    pub fn describe(&self) -> String {
+        let readable = crate::input::readable;
+        let line = if self.speed_rpm.is_finite() {
+            format!(
+                "the {} line at {} rpm",
+                self.model,
+                readable(self.speed_rpm)
+            )
+        } else {
+            format!("the {} model", self.model)
+        };
+        let levels: Vec<String> = self.levels_n.iter().map(|f| readable(f.round())).collect();
+        let n = self.levels_n.len();
+        format!(
+            "{line} rests on {n} load level{} ({} N), too few to determine it (at least \
+             {MIN_LOAD_LEVELS} are needed): its R² {:.4} proves nothing; teach over more loads: \
+             a teach cut over more depths or feeds, or at more fixed overrides",
+            if n == 1 { "" } else { "s" },
+            levels.join(", "),
+            self.r_squared
+        )
+    }
+}
+
+/// The load levels among `forces_n` (non-finite ones left out): from the lowest force up, each
+/// level takes the forces within [`LOAD_LEVEL_FRACTION`] of the largest force above its first.
+/// Each level's median, N.
+///
+/// ```
+/// use cutlab::estimation::teach_fit::load_levels_n;
+/// // A cut at two depths, with a little noise: two levels, whatever R² the line through them has.
+/// let two: Vec<f64> = (0..20).map(|k| if k < 10 { 150.0 } else { 300.0 } + (k % 3) as f64).collect();
+/// assert_eq!(load_levels_n(&two), vec![151.0, 301.0]);
+/// // A ramp from 100 to 400 N: many.
+/// let ramp: Vec<f64> = (0..60).map(|k| 100.0 + 5.0 * k as f64).collect();
+/// assert!(load_levels_n(&ramp).len() > 10);
+/// ```
+pub fn load_levels_n(forces_n: &[f64]) -> Vec<f64> {
+    let mut sorted: Vec<f64> = forces_n.iter().copied().filter(|f| f.is_finite()).collect();
+    sorted.sort_by(f64::total_cmp);
+    let width_n = LOAD_LEVEL_FRACTION * sorted.iter().fold(0.0, |m: f64, f| m.max(f.abs()));
+    let mut levels = Vec::new();
+    let mut start = 0;
+    while start < sorted.len() {
+        let end = start
+            + sorted[start..]
+                .iter()
+                .take_while(|&&f| f <= sorted[start] + width_n)
+                .count();
+        levels.push(median(sorted[start..end].iter().copied()));
+        start = end;
+    }
+    levels
+}
+
 /// What a fit made, and what it rests on.
 #[derive(Debug, Clone, PartialEq)]
 pub struct TeachFit {
@@ -157,9 +235,21 @@ pub struct TeachFit {
     pub excluded: Exclusions,
     /// The operating point at 100 % override.
     pub full_override: FullOverride,
+    /// The fitted lines that rest on too few load levels (none for a dynamometer, which is not
+    /// fitted).
+    pub few_load_levels: Vec<FewLoadLevels>,
 }
 
 impl TeachFit {
+    /// The fit's warnings for people (a line on too few load levels), for every front end to
+    /// show beside its R².
+    pub fn warnings(&self) -> Vec<String> {
+        self.few_load_levels
+            .iter()
+            .map(FewLoadLevels::describe)
+            .collect()
+    }
+
     /// One line for people: how many periods were used and why the others were not.
     pub fn selection_note(&self) -> String {
         let e = &self.excluded;
@@ -333,7 +423,7 @@ pub fn fit(
         spindle_rpm: over_full(&|p| p.summary.spindle_speed_rpm),
         feed_mm_min: over_full(&|p| p.summary.feed_mm_min),
     };
-    let points = used
+    let points: Vec<FitPoint> = used
         .iter()
         .zip(currents.iter().zip(&forces).zip(&identified_rpm))
         .map(|(&i, ((&current_a, &force_n), &speed_rpm))| FitPoint {
@@ -344,12 +434,59 @@ pub fn fit(
             feed_mm_min: periods[i].summary.feed_mm_min,
         })
         .collect();
+    let few_load_levels = few_load_levels(&calibration.estimator, &points);
     Ok(TeachFit {
         calibration,
         points,
         excluded,
         full_override,
+        few_load_levels,
     })
+}
+
+/// The lines of `estimator` whose `points` (those the fit used) rest on too few load levels: each
+/// calibrated speed of the spindle model over the points nearest its speed, the feed model over
+/// all of them.
+fn few_load_levels(estimator: &Estimator, points: &[FitPoint]) -> Vec<FewLoadLevels> {
+    let few = |model, speed_rpm, forces: Vec<f64>, r_squared| {
+        let levels_n = load_levels_n(&forces);
+        (levels_n.len() < MIN_LOAD_LEVELS).then_some(FewLoadLevels {
+            model,
+            speed_rpm,
+            levels_n,
+            r_squared,
+        })
+    };
+    match estimator {
+        Estimator::Spindle { model, .. } => {
+            let nearest_row = |speed_rpm: f64| {
+                (0..model.rows.len()).min_by(|&a, &b| {
+                    let off = |i: usize| (model.rows[i].speed_rpm - speed_rpm).abs();
+                    off(a).total_cmp(&off(b))
+                })
+            };
+            model
+                .rows
+                .iter()
+                .enumerate()
+                .filter_map(|(i, row)| {
+                    let forces = points
+                        .iter()
+                        .filter(|p| nearest_row(p.speed_rpm) == Some(i))
+                        .map(|p| p.force_n)
+                        .collect();
+                    few("spindle", row.speed_rpm, forces, row.quality.r_squared)
+                })
+                .collect()
+        }
+        Estimator::Feed { model } => {
+            let forces = points.iter().map(|p| p.force_n).collect();
+            few("feed", f64::NAN, forces, model.quality.r_squared)
+                .into_iter()
+                .collect()
+        }
+        Estimator::Dynamometer => Vec::new(),
+    }
 }
 
 /// The settled periods (spindle past its start, speed steady, override settled, axes feeding)
@@ -523,6 +660,62 @@ mod tests {
         assert!(taught
             .selection_note()
             .starts_with("10 of 20 control periods used"));
+    }
+
+    #[test]
+    fn a_line_on_two_load_levels_is_warned_about_and_one_on_many_is_not() {
+        // Two depths, ten periods each, a little current noise: R² near 1, and it proves nothing.
+        let two: Vec<TeachPeriod> = (0..20)
+            .map(|k| {
+                let f = if k < 10 { 150.0 } else { 300.0 };
+                period(k, f, line(f) + 0.002 * (k % 3) as f64)
+            })
+            .collect();
+        let taught = spindle_fit(&two, ForceOrigin::Measured).unwrap();
+        let r_squared = match &taught.calibration.estimator {
+            Estimator::Spindle { model, .. } => model.rows[0].quality.r_squared,
+            other => panic!("{other:?}"),
+        };
+        assert!(r_squared > 0.999, "{r_squared}");
+        assert_eq!(taught.few_load_levels.len(), 1);
+        assert_eq!(taught.few_load_levels[0].levels_n, vec![150.0, 300.0]);
+        let warnings = taught.warnings();
+        assert!(!warnings[0].contains("  "), "{warnings:?}");
+        assert!(
+            warnings[0]
+                .starts_with("the spindle line at 1000 rpm rests on 2 load levels (150, 300 N)")
+                && warnings[0].contains("R² 1.0000 proves nothing")
+                && warnings[0].contains("a teach cut over more depths or feeds"),
+            "{warnings:?}"
+        );
+        // A third level can disagree with the line: no warning.
+        let mut three = two.clone();
+        three.extend((20..30).map(|k| period(k, 220.0, line(220.0))));
+        let taught = spindle_fit(&three, ForceOrigin::Measured).unwrap();
+        assert!(taught.warnings().is_empty(), "{:?}", taught.warnings());
+        // The feed model too: one level (a single cut at one feed), three coefficients.
+        let one_feed: Vec<TeachPeriod> = (0..30)
+            .map(|k| {
+                let f = 200.0 + (k % 3) as f64;
+                let mut p = period(k, f, f64::NAN);
+                p.summary.feed_current_rms_a = 1.0 + 0.001 * f + 0.01 * ((k * 7) % 5) as f64;
+                p.summary.feed_mm_min = 100.0 + 50.0 * (k % 2) as f64;
+                p
+            })
+            .collect();
+        let fed = fit(
+            &one_feed,
+            Feedback::FeedCurrent,
+            ForceOrigin::Measured,
+            1.0,
+            GEAR_CHANGE_RPM,
+        )
+        .unwrap();
+        let w = fed.warnings();
+        assert!(
+            w.len() == 1 && w[0].starts_with("the feed model rests on 1 load level (201 N)"),
+            "{w:?}"
+        );
     }
 
     #[test]

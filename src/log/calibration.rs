@@ -216,6 +216,7 @@ impl LogFitWork {
         })?;
         let mut notes = self.notes.clone();
         notes.push(fit.selection_note());
+        notes.extend(fit.warnings());
         let mut calibration = fit.calibration;
         if self.rms_only {
             // An RMS value stands for three phases of its own value; a phase's peak is √2 of it.

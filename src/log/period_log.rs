@@ -497,6 +497,9 @@ pub struct LogCalibration {
     pub feed: Option<FeedCurrentModel>,
     /// Why not.
     pub feed_error: Option<String>,
+    /// The fits' warnings: a line resting on too few load levels
+    /// ([`TeachFit::warnings`]).
+    pub warnings: Vec<String>,
     /// The spindle model's fit, with its calibration and the rows it used.
     #[serde(skip)]
     pub spindle_fit: Option<TeachFit>,
@@ -585,6 +588,7 @@ pub fn calibrate_log(
         spindle_error: None,
         feed: None,
         feed_error: None,
+        warnings: Vec::new(),
         spindle_fit: None,
         feed_fit: None,
     };
@@ -631,6 +635,11 @@ pub fn calibrate_log(
     } else {
         report.feed_error = Some("needs columns feed_current_rms_a and feed_mm_min".into());
     }
+    report.warnings = [&report.spindle_fit, &report.feed_fit]
+        .into_iter()
+        .flatten()
+        .flat_map(TeachFit::warnings)
+        .collect();
     if report.spindle.is_none() && report.feed.is_none() {
         return Err(LogError::NoModel {
             spindle: report.spindle_error.clone().unwrap_or_default(),
@@ -666,6 +675,25 @@ mod tests {
             Some(20)
         );
         assert!(calibrate_log(&t, None, 900.0).unwrap().spindle.is_some());
+    }
+
+    #[test]
+    fn a_log_on_two_load_levels_is_fitted_with_a_warning() {
+        // `spindle_log`'s ramp over 20 loads: no warning.
+        let ramp = calibrate_log(&table(&spindle_log("")), None, 900.0).unwrap();
+        assert!(ramp.warnings.is_empty(), "{:?}", ramp.warnings);
+        let mut csv = String::from("spindle_current_rms_a,spindle_speed_rpm,force_n\n");
+        for i in 0..20 {
+            let force = if i < 10 { 100.0 } else { 200.0 };
+            csv += &format!("{},1000,{force}\n", 5.0 + 0.01 * force);
+        }
+        let two = calibrate_log(&table(&csv), None, 900.0).unwrap();
+        assert_eq!(two.warnings.len(), 1, "{:?}", two.warnings);
+        assert!(
+            two.warnings[0].contains("rests on 2 load levels (100, 200 N)"),
+            "{:?}",
+            two.warnings
+        );
     }
 
     #[test]

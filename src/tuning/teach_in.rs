@@ -458,10 +458,9 @@ pub fn teach_in_log(
     name: &str,
     how: LogTeachIn<'_>,
 ) -> Result<LoggedTeachIn, TuningError> {
+    // A log without data rows never gets here from a file: the reader refuses it, saying what the
+    // file held instead. One built by hand finds no cutting rows to fit below.
     let in_log = |e: String| TuningError::TeachIn(format!("{name}: {e}"));
-    if log.rows == 0 {
-        return Err(in_log("the file has no data rows".into()));
-    }
     let table = LogTable::from_log(log, how.map).map_err(in_log)?;
     let fitted = calibrate_log(&table, how.geometry, how.gear_change_rpm)
         .map_err(|e| in_log(e.to_string()))?;
@@ -492,6 +491,7 @@ pub fn teach_in_log(
         (None, None) => return Err(in_log("no current model could be fitted".into())),
     };
     notes.push(fit.selection_note());
+    notes.extend(fit.warnings());
     let at = OperatingPoint {
         spindle_rpm: fit.full_override.spindle_rpm,
         feed_mm_min: fit.full_override.feed_mm_min,
