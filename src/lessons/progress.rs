@@ -74,6 +74,57 @@ impl StudentProgress {
     }
 }
 
+/// What the lesson panel says of a step's completion: the progress remembers a step once done,
+/// but the panel never says "Step done" under a check the work shown now fails.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum StepStatus {
+    /// Not done, or not met by the work shown: nothing said (the check says why).
+    Open,
+    /// The work shown now meets the check.
+    Done,
+    /// Done earlier; nothing checked since the step opened.
+    DoneEarlier,
+    /// Done earlier, but the work shown now does not meet the check.
+    DoneEarlierNotNow,
+}
+
+impl StepStatus {
+    /// The status of a step done before (`done_before`, as the progress keeps it) whose check of
+    /// the work shown now is met (`Some(true)`), failed (`Some(false)`) or not made (`None`).
+    ///
+    /// ```
+    /// use cutlab::lessons::progress::StepStatus;
+    /// assert_eq!(StepStatus::of(true, Some(false)), StepStatus::DoneEarlierNotNow);
+    /// assert_eq!(StepStatus::of(false, Some(true)), StepStatus::Done);
+    /// ```
+    pub fn of(done_before: bool, met_now: Option<bool>) -> StepStatus {
+        match (done_before, met_now) {
+            (_, Some(true)) => StepStatus::Done,
+            (true, None) => StepStatus::DoneEarlier,
+            (true, Some(false)) => StepStatus::DoneEarlierNotNow,
+            (false, _) => StepStatus::Open,
+        }
+    }
+
+    /// What the panel says, `work` naming what is checked ("run", "answer"); `None` for
+    /// [`StepStatus::Open`].
+    pub fn words(self, work: &str) -> Option<String> {
+        match self {
+            StepStatus::Open => None,
+            StepStatus::Done => Some("Step done.".into()),
+            StepStatus::DoneEarlier => Some("You did this step earlier.".into()),
+            StepStatus::DoneEarlierNotNow => Some(format!(
+                "You met this step earlier; the {work} now shown does not meet it."
+            )),
+        }
+    }
+
+    /// Whether the step's explanation is shown beside it (not under a check failed now).
+    pub fn explains(self) -> bool {
+        matches!(self, StepStatus::Done | StepStatus::DoneEarlier)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -88,5 +139,26 @@ mod tests {
         assert_eq!(p.done_count("a", 2), 1);
         p.open_step("a", 1);
         assert_eq!((p.open.as_deref(), p.of("a").step), (Some("a"), 1));
+    }
+
+    #[test]
+    fn a_step_done_earlier_is_never_called_done_under_a_check_failed_now() {
+        // The reviewer's sensorless-cross-check step 2: met, then a run at override 70 failed.
+        let status = StepStatus::of(true, Some(false));
+        assert_eq!(
+            status.words("run").as_deref(),
+            Some("You met this step earlier; the run now shown does not meet it.")
+        );
+        assert!(!status.explains());
+        assert_eq!(
+            StepStatus::of(true, None).words("run").as_deref(),
+            Some("You did this step earlier.")
+        );
+        assert_eq!(StepStatus::of(false, Some(false)).words("run"), None);
+        assert_eq!(
+            StepStatus::of(false, Some(true)).words("run").as_deref(),
+            Some("Step done.")
+        );
+        assert!(StepStatus::of(false, Some(true)).explains());
     }
 }

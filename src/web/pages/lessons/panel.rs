@@ -2,7 +2,8 @@
 //! a multiple-choice answer checked here, the runs the lab's page finishes or the Logs page's
 //! replays (each condition met or not, with the measured value), or the Signal chain page's
 //! filter, checked on request.
-//! A step whose check is met is saved as done.
+//! A step whose check is met is saved as done; the panel says "Step done" only while the work
+//! shown meets the check ([`StepStatus`]).
 
 use std::sync::Arc;
 
@@ -11,6 +12,7 @@ use leptos::prelude::*;
 use super::{feed, open_step, store};
 use crate::closed_loop::lab::RunResult;
 use crate::lessons::check::{ConditionOutcome, Evidence};
+use crate::lessons::progress::StepStatus;
 use crate::lessons::setup::{Defined, LabPage, Setup};
 use crate::lessons::shipped::shipped_lesson;
 use crate::lessons::{Lesson, StepCheck};
@@ -193,6 +195,12 @@ fn StepView(lesson: Arc<Lesson>, index: usize) -> impl IntoView {
         .into_any(),
     };
     let explain = step.explain.clone();
+    let work = match (&step.check, step.setup.page) {
+        (StepCheck::Choice { .. }, _) => "answer",
+        (_, LabPage::SignalChain) => "filter",
+        (_, LabPage::Logs) => "replay",
+        _ => "run",
+    };
     view! {
         <h3>"Step " {index + 1} " of " {count} ": " {step.title.clone()}</h3>
         <p class="lesson-task">{step.task.clone()}</p>
@@ -225,9 +233,19 @@ fn StepView(lesson: Arc<Lesson>, index: usize) -> impl IntoView {
                     </ul>
                 }.into_any()),
             }}
-            {move || done.get().then(|| view! {
-                <p class="lesson-done" role="status">"Step done. " {explain.clone()}</p>
-            })}
+            {move || {
+                let met_now = match &*checked.read() {
+                    Checked::Waiting | Checked::Problem(_) => None,
+                    Checked::Answer(right) => Some(*right),
+                    Checked::Conditions(outcomes) => Some(outcomes.iter().all(|o| o.met)),
+                };
+                let status = StepStatus::of(done.get(), met_now);
+                status.words(work).map(|words| {
+                    let class = if status.explains() { "lesson-done" } else { "lesson-done unmet" };
+                    let explain = status.explains().then(|| explain.clone());
+                    view! { <p class=class role="status">{words} " " {explain}</p> }
+                })
+            }}
         </div>
         <div class="button-row">
             <button type="button" on:click=set_up>"Set up this step"</button>
