@@ -38,15 +38,26 @@ fn LessonView(lesson: Arc<Lesson>) -> impl IntoView {
     let close = move |_| store::update(|p| p.open = None);
     let title = lesson.title.clone();
     let paper = lesson.paper.clone();
+    // Below 1100 px the panel is a bar at the bottom of the window (www/lessons.css), which the
+    // student can shrink to the step, its task and its check while editing the page above.
+    let minimised = RwSignal::new(false);
     view! {
-        <aside class="lesson-panel" aria-labelledby="lesson-panel-title">
-            <p class="lesson-kicker">"Lesson · paper " {paper}</p>
+        <aside class="lesson-panel" class:minimised=move || minimised.get()
+            aria-labelledby="lesson-panel-title">
+            <div class="lesson-bar">
+                <p class="lesson-kicker">"Lesson · paper " {paper}</p>
+                <button type="button" class="lesson-toggle"
+                    aria-expanded=move || (!minimised.get()).to_string()
+                    on:click=move |_| minimised.update(|m| *m = !*m)>
+                    {move || if minimised.get() { "Show the whole lesson" } else { "Shrink the lesson" }}
+                </button>
+            </div>
             <h2 id="lesson-panel-title">{title}</h2>
             {move || {
                 let index = step.get();
                 view! { <StepView lesson=lesson.clone() index=index /> }
             }}
-            <div class="button-row">
+            <div class="button-row lesson-detail">
                 <a href="#/lessons">"All lessons"</a>
                 <button type="button" on:click=close>"Close the lesson"</button>
             </div>
@@ -204,6 +215,7 @@ fn StepView(lesson: Arc<Lesson>, index: usize) -> impl IntoView {
     view! {
         <h3>"Step " {index + 1} " of " {count} ": " {step.title.clone()}</h3>
         <p class="lesson-task">{step.task.clone()}</p>
+        <div class="lesson-detail">
         {(hint_count > 0).then(|| view! {
             <ol class="lesson-hints">
                 {move || hints.iter().take(hints_shown.get()).map(|h| view! { <li>{h.clone()}</li> }).collect_view()}
@@ -214,6 +226,7 @@ fn StepView(lesson: Arc<Lesson>, index: usize) -> impl IntoView {
             </button>
         })}
         {check_view}
+        </div>
         <div class="lesson-check" aria-live="polite">
             {move || match checked.get() {
                 Checked::Waiting => None,
@@ -242,12 +255,12 @@ fn StepView(lesson: Arc<Lesson>, index: usize) -> impl IntoView {
                 let status = StepStatus::of(done.get(), met_now);
                 status.words(work).map(|words| {
                     let class = if status.explains() { "lesson-done" } else { "lesson-done unmet" };
-                    let explain = status.explains().then(|| explain.clone());
-                    view! { <p class=class role="status">{words} " " {explain}</p> }
+                    let explain = status.explains().then(|| format!(" {explain}"));
+                    view! { <p class=class role="status">{words} {explain}</p> }
                 })
             }}
         </div>
-        <div class="button-row">
+        <div class="button-row lesson-detail">
             <button type="button" on:click=set_up>"Set up this step"</button>
             <button type="button" disabled={index == 0}
                 on:click=move |_| open_step(&previous, index.saturating_sub(1))>"Previous step"</button>
