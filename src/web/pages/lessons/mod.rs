@@ -57,8 +57,9 @@ pub fn LessonsPage() -> impl IntoView {
         });
     let progress = store::progress();
     let (export_error, set_export_error) = signal(None::<String>);
+    let report_lessons = lessons.clone();
     let export = move |_| {
-        let text = store::progress().with_untracked(|p| p.to_json());
+        let text = store::progress().with_untracked(|p| p.to_report_json(&report_lessons));
         set_export_error
             .set(download_text("cutlab-lessons-progress.json", "application/json", &text).err());
     };
