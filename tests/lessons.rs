@@ -195,3 +195,153 @@ fn lesson_check_names_each_problem_and_fails_and_passes_a_good_lesson() {
         "{out}"
     );
 }
+
+/// The shipped lesson `id`.
+fn lesson(id: &str) -> Lesson {
+    shipped()
+        .into_iter()
+        .map(|l| l.unwrap())
+        .find(|l| l.id == id)
+        .unwrap()
+}
+
+#[test]
+fn a_teachers_mistakes_are_refused_at_their_field() {
+    // A solution on another page is refused for that, not for a key the other page reads.
+    assert_eq!(
+        refusal("solution-other-page.json"),
+        "tests/data/lessons/solution-other-page.json:33: steps[1].solution: the solution is on \
+         the compare page, the step on the simulate page: a solution is the step's own page, as \
+         the student leaves it"
+    );
+    // A solution on another preset checks another experiment than the student's.
+    assert_eq!(
+        refusal("solution-other-preset.json"),
+        "tests/data/lessons/solution-other-preset.json:33: steps[1].solution: the solution's \
+         preset is \"kim-step-doc\", the setup's \"maneerat-doc-2\": a solution solves the step's \
+         own experiment, so give the same preset"
+    );
+    // One run on Simulate: "cycle time of A below that of A" compared a run with itself.
+    assert_eq!(
+        refusal("than-on-simulate.json"),
+        "tests/data/lessons/than-on-simulate.json:29: steps[1].check.conditions[0].than: than \
+         compares one Compare variant with another; the simulate page has one run, so give a \
+         value instead"
+    );
+    assert_eq!(
+        refusal("no-choices.json"),
+        "tests/data/lessons/no-choices.json:12: steps[0].check.choices: a question needs at \
+         least two choices; this one has 0"
+    );
+}
+
+#[test]
+fn lesson_check_refuses_a_lesson_not_named_after_its_file() {
+    let (result, out) = common::cutlab_text(
+        &["lesson", "check", "tests/data/lessons/named-otherwise.json"],
+        "",
+    );
+    assert!(result.is_err(), "{out}");
+    assert!(
+        out.contains(
+            "tests/data/lessons/named-otherwise.json:2: id: the lesson \"pi-gain\" is in a file \
+             named named-otherwise.json: name it pi-gain.json, as the lab finds it"
+        ),
+        "{out}"
+    );
+}
+
+#[test]
+fn own_log_steps_keep_the_log_the_student_opened_and_name_what_to_click() {
+    use cutlab::lessons::setup::Setup;
+    use cutlab::log::link::SAMPLES;
+    let own_log = lesson("own-log");
+    // Step 1 names the button the Logs page shows, not a file name it never shows.
+    let (file, label) = SAMPLES[0];
+    assert!(
+        own_log.steps[0].task.contains(label),
+        "{}",
+        own_log.steps[0].task
+    );
+    assert!(!own_log.steps[0].task.contains(file));
+    // The address the Logs page writes once the sample is open and S_Strom is grouped by Phase.
+    let analysed = format!("#/logs?sample={file}&column=S_Strom%20%5BA%5D&by=Phase");
+    for step in &own_log.steps[1..3] {
+        // The next step keeps that analysis ("in the same analysis")…
+        assert!(step.setup.held_by(&analysed), "{}", step.setup.link());
+        // …and a reload from the lesson's link opens the sample again.
+        assert_eq!(step.setup.value("sample"), Some(file));
+        assert!(!step.setup.held_by("#/logs"));
+    }
+    // Step 4 sets up its replay form over it.
+    assert!(!own_log.steps[3].setup.held_by(&analysed));
+    // A run page is reset to the step's starting point when the student changed a setting.
+    let simulate = Setup::from_link("#/simulate?preset=kim-step-doc&controller=fixed").unwrap();
+    assert!(!simulate.held_by("#/simulate?preset=kim-step-doc&controller=fixed&override=70"));
+}
+
+#[test]
+fn current_as_force_says_what_its_check_measures_and_why_a_controller_fails() {
+    use cutlab::lessons::setup::Setup;
+    let lesson = lesson("current-as-force");
+    let step = &lesson.steps[1];
+    assert!(
+        step.task.contains("try another controller"),
+        "{}",
+        step.task
+    );
+    let checker = Checker::new();
+    let run = |controller: &str| {
+        let link = format!("#/simulate?preset=kim-step-doc&controller={controller}");
+        checker
+            .check_step(&lesson, 1, &Setup::from_link(&link).unwrap())
+            .unwrap()
+            .unwrap()
+    };
+    // The hint says PI and MRAC at their defaults stay above the limit too long, and the
+    // threshold law meets the bound: the check agrees.
+    for slow in ["pi", "mrac"] {
+        let out = run(slow);
+        assert!(!out.met(), "{slow}: {:?}", out.outcomes);
+        assert!(step
+            .hints
+            .iter()
+            .any(|h| h.contains("PI") && h.contains("MRAC")));
+    }
+    assert!(run("threshold").met());
+}
+
+#[test]
+fn a_metric_not_measured_says_why() {
+    use cutlab::lessons::setup::Setup;
+    let lesson = lesson("adaptive-convergence");
+    // The reviewer's γ₃ = 500: "measured not measured" with no reason.
+    let link = "#/simulate?preset=maneerat-doc-2&controller=mrac&gamma_beta_pct_per_s=500";
+    let out = Checker::new()
+        .check_step(&lesson, 1, &Setup::from_link(link).unwrap())
+        .unwrap()
+        .unwrap();
+    let settling = &out.outcomes[0];
+    assert_eq!(settling.value, None, "{settling:?}");
+    assert!(
+        settling.measured.starts_with("not measured: "),
+        "{}",
+        settling.measured
+    );
+    assert_eq!(
+        settling.measured,
+        "not measured: the force never settled after a depth step"
+    );
+}
+
+#[test]
+fn step_titles_say_what_their_task_asks() {
+    let tuning = lesson("tuning-trade-off");
+    assert_eq!(
+        tuning.steps[1].title,
+        "Trade a second of cycle time for accuracy"
+    );
+    assert!(tuning.steps[1]
+        .task
+        .contains("at most about a second longer"));
+}

@@ -78,6 +78,9 @@ pub fn check_file(file: &str, checker: &Checker) -> (String, Vec<LessonError>) {
         Ok(lesson) => lesson,
         Err(e) => return (String::new(), vec![e]),
     };
+    if let Err(e) = lesson.named_after_file(&text, file) {
+        return (String::new(), vec![e]);
+    }
     let mut report = String::new();
     let mut problems = Vec::new();
     let steps = lesson.steps.len();

@@ -13,6 +13,7 @@ use super::setup::{LabPage, VARIANT_NAMES};
 use crate::closed_loop::definition::{RunSetting, SettingValue};
 use crate::closed_loop::lab::RunResult;
 use crate::closed_loop::metrics::{compute, metric_values, Metrics, MetricsConfig};
+use crate::closed_loop::summary::{MetricRow, METRIC_ROWS};
 use crate::closed_loop::trace::Trace;
 use crate::control::registry::ControllerKind;
 use crate::input::table::Table;
@@ -208,9 +209,17 @@ fn metric_words(name: &str) -> String {
     name[..name.len() - unit_suffix].replace('_', " ")
 }
 
-/// A number as a student reads it: four significant figures, no trailing zeros.
+/// A number as a student reads it: four significant figures, no trailing zeros
+/// ([`crate::input::significant`]); but a value from 0.00005 to 0.001, where that would write an
+/// exponent, to four decimals as [`crate::input::readable`] writes a message's numbers: a gain of
+/// −1.778e-4 dB reads "-0.0002 dB", as near 0 dB as it is.
 pub fn shown(value: f64) -> String {
-    crate::input::significant(value, 4)
+    if (5e-5..1e-3).contains(&value.abs()) {
+        let text = format!("{value:.4}");
+        text.trim_end_matches('0').to_string()
+    } else {
+        crate::input::significant(value, 4)
+    }
 }
 
 fn with_unit(value: f64, unit: &str) -> String {
@@ -223,7 +232,7 @@ fn with_unit(value: f64, unit: &str) -> String {
 
 impl StepCondition {
     /// Whether this condition can be evaluated on `page`'s work; a message saying why not.
-    pub fn fits(&self, page: LabPage) -> Result<(), String> {
+    pub fn fits(&self, page: LabPage) -> Result<(), FieldProblem> {
         let on_runs = matches!(
             self.subject,
             Subject::Metric(_)
@@ -242,17 +251,40 @@ impl StepCondition {
             _ => page == LabPage::SignalChain,
         };
         if !fits {
-            return Err(format!(
-                "this condition cannot be checked on the {} page",
-                page.slug()
+            return Err((
+                "",
+                format!(
+                    "this condition cannot be checked on the {} page",
+                    page.slug()
+                ),
             ));
         }
         let other = match self.wanted {
             Wanted::Variant(_, other) => Some(other),
             _ => None,
         };
+        if on_runs && other.is_some() && page != LabPage::Compare {
+            return Err((
+                "than",
+                format!(
+                    "than compares one Compare variant with another; the {} page has one run, \
+                     so give a value instead",
+                    page.slug()
+                ),
+            ));
+        }
+        if other == Some(self.variant) {
+            let name = VARIANT_NAMES.get(self.variant).unwrap_or(&"?");
+            return Err((
+                "than",
+                format!(
+                    "than names the variant measured ({name}): a value is never below or above \
+                     itself"
+                ),
+            ));
+        }
         if on_runs && (self.variant >= runs || other.is_some_and(|o| o >= runs)) {
-            return Err(format!("the {} page has no such variant", page.slug()));
+            return Err(("", format!("the {} page has no such variant", page.slug())));
         }
         Ok(())
     }
@@ -339,6 +371,50 @@ impl StepCondition {
         }
     }
 
+    /// Why this condition's subject has no value on `work`'s run `variant` (or replay of `of`),
+    /// in words: "not measured: the force never settled after a depth step" — the reason the
+    /// results table gives beside its "—" ([`MetricRow::why_missing`]).
+    fn not_measured(
+        &self,
+        work: Evidence<'_>,
+        variant: usize,
+        of: Option<ControllerKind>,
+    ) -> String {
+        let why = match (work, &self.subject) {
+            (Evidence::Runs(runs), Subject::Metric(name)) => runs.get(variant).map(|run| {
+                let words = metric_words(name);
+                let label = |row: &&MetricRow| row.label.to_lowercase();
+                METRIC_ROWS
+                    .iter()
+                    .find(|row| label(row) == words)
+                    .or_else(|| {
+                        METRIC_ROWS
+                            .iter()
+                            .find(|row| label(row).starts_with(&words))
+                    })
+                    .map_or("the run has no such value", |row| row.why_missing(run))
+                    .to_string()
+            }),
+            (Evidence::Runs(_), _) => None,
+            (Evidence::Replays(replays), Subject::Replay { .. }) => of.map(|of| {
+                if replays.iter().any(|r| r.controller.kind() == of) {
+                    format!("the {} replay has no such value", of.label())
+                } else {
+                    format!("no {} replay was done (tick it and replay)", of.label())
+                }
+            }),
+            _ => None,
+        };
+        match why {
+            Some(why) if variant > 0 || matches!(self.wanted, Wanted::Variant(..)) => {
+                let name = VARIANT_NAMES.get(variant).unwrap_or(&"?");
+                format!("not measured for {name}: {why}")
+            }
+            Some(why) => format!("not measured: {why}"),
+            None => "not measured".to_string(),
+        }
+    }
+
     /// Evaluates the condition on `work`.
     pub fn evaluate(&self, work: Evidence<'_>) -> ConditionOutcome {
         let variants = matches!(work, Evidence::Runs(runs) if runs.len() > 1)
@@ -363,20 +439,27 @@ impl StepCondition {
         };
         let value = measure(self.variant).filter(|v| v.is_finite());
         let subject = self.subject_words(variants);
+        let replay_of = match self.subject {
+            Subject::Replay { of, .. } => Some(of),
+            _ => None,
+        };
         let (wants, met, measured) = match self.wanted {
             Wanted::Holds => {
                 let met = value == Some(1.0);
                 let measured = match value {
                     Some(_) if met => "yes".to_string(),
                     Some(_) => "no".to_string(),
-                    None => "not measured".to_string(),
+                    None => self.not_measured(work, self.variant, None),
                 };
                 (subject, met, measured)
             }
             Wanted::Value(op, wanted) => (
                 format!("{subject} {} {}", op.words(), with_unit(wanted, unit)),
                 value.is_some_and(|v| op.holds(v, wanted)),
-                value.map_or("not measured".to_string(), |v| with_unit(v, unit)),
+                value.map_or_else(
+                    || self.not_measured(work, self.variant, replay_of),
+                    |v| with_unit(v, unit),
+                ),
             ),
             Wanted::Replay(op, other) => {
                 let other_value = measure_replay(other).filter(|v| v.is_finite());
@@ -387,7 +470,8 @@ impl StepCondition {
                         with_unit(o, unit),
                         other.label()
                     ),
-                    _ => "not measured".to_string(),
+                    (None, _) => self.not_measured(work, 0, replay_of),
+                    (Some(_), None) => self.not_measured(work, 0, Some(other)),
                 };
                 (
                     format!(
@@ -410,7 +494,8 @@ impl StepCondition {
                             with_unit(o, unit)
                         )
                     }
-                    _ => "not measured".to_string(),
+                    (None, _) => self.not_measured(work, self.variant, None),
+                    (Some(_), None) => self.not_measured(work, other, None),
                 };
                 (
                     format!("{subject} {} that of {other_name}", op.words()),
@@ -749,5 +834,9 @@ mod tests {
         assert_eq!(shown(1234.6), "1235");
         assert_eq!(shown(0.05), "0.05");
         assert_eq!(shown(0.0), "0");
+        // A gain a hair below 0 dB, as the reviewer saw "-1.778e-4 dB".
+        assert_eq!(shown(-1.778e-4), "-0.0002");
+        assert_eq!(shown(9.9e-4), "0.001");
+        assert_eq!(shown(2.5e-5), "2.5e-5");
     }
 }

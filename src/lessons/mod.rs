@@ -33,7 +33,7 @@ use serde::Deserialize;
 
 use check::{StepCondition, StepConditionText};
 use locate::{line_of, path_text, PathPart};
-use setup::Setup;
+use setup::{LabPage, Setup};
 
 /// The papers a lesson can come from (`docs/papers`).
 pub const PAPERS: [&str; 5] = ["000", "001", "002", "003", "004"];
@@ -233,7 +233,16 @@ impl Lesson {
                             "a multiple-choice check names its answer (from 0)".into(),
                         )
                     })?;
-                    if choices.len() < 2 || answer >= choices.len() {
+                    if choices.len() < 2 {
+                        return Err(error(
+                            step_path(i, &["check", "choices"]),
+                            format!(
+                                "a question needs at least two choices; this one has {}",
+                                choices.len()
+                            ),
+                        ));
+                    }
+                    if answer >= choices.len() {
                         return Err(error(
                             step_path(i, &["check", "answer"]),
                             format!(
@@ -274,9 +283,12 @@ impl Lesson {
                         let condition = text
                             .resolve()
                             .map_err(|(name, message)| error(at(name), message))?;
-                        condition.fits(setup.page).map_err(|m| {
+                        condition.fits(setup.page).map_err(|(name, m)| {
                             let mut path = step_path(i, &["check", "conditions"]);
                             path.push(PathPart::Index(j));
+                            if !name.is_empty() {
+                                path.push(PathPart::Field(name.to_string()));
+                            }
                             error(path, m)
                         })?;
                         conditions.push(condition);
@@ -287,17 +299,38 @@ impl Lesson {
                             "a step with conditions gives its reference solution (a link)".into(),
                         )
                     })?;
-                    let solution = read_setup(&solution_text)
-                        .map_err(|m| error(step_path(i, &["solution"]), m))?;
+                    // The page first: a solution on another page would otherwise be refused for
+                    // a key that page reads differently, which says nothing of the real mistake.
+                    let at_solution = || step_path(i, &["solution"]);
+                    let solution =
+                        Setup::from_link(&solution_text).map_err(|m| error(at_solution(), m))?;
                     if solution.page != setup.page {
                         return Err(error(
-                            step_path(i, &["solution"]),
+                            at_solution(),
                             format!(
-                                "the solution is on the {} page, the step on the {} page",
+                                "the solution is on the {} page, the step on the {} page: a \
+                                 solution is the step's own page, as the student leaves it",
                                 solution.page.slug(),
                                 setup.page.slug()
                             ),
                         ));
+                    }
+                    solution.define().map_err(|m| error(at_solution(), m))?;
+                    // A solution on another experiment would meet the check on that one,
+                    // which is not the experiment the student is given.
+                    for key in experiment_keys(setup.page) {
+                        let (given, solved) = (setup.value(key), solution.value(key));
+                        if given != solved {
+                            return Err(error(
+                                at_solution(),
+                                format!(
+                                    "the solution's {key} is {}, the setup's {}: a solution \
+                                     solves the step's own experiment, so give the same {key}",
+                                    solved.map_or("the default".into(), |v| format!("\"{v}\"")),
+                                    given.map_or("the default".into(), |v| format!("\"{v}\"")),
+                                ),
+                            ));
+                        }
                     }
                     StepCheck::Conditions {
                         conditions,
@@ -327,6 +360,57 @@ impl Lesson {
             paper: raw.paper,
             steps,
         })
+    }
+}
+
+impl Lesson {
+    /// Whether the lesson is in a file named after its id, `ID.json`, as the lab ships it and a
+    /// link `#/lessons/ID` finds it; an error at its `id` otherwise. `cutlab lesson check` asks it
+    /// of every file it checks (`text` is the file's, for the line).
+    ///
+    /// ```
+    /// use cutlab::lessons::Lesson;
+    /// let text = r##"{"id": "x", "title": "T", "teaches": "t", "paper": "003",
+    ///   "steps": [{"title": "s", "setup": "#/simulate?preset=kim-step-doc&controller=fixed",
+    ///     "task": "Which?", "check": {"choices": ["a", "b"], "answer": 1}}]}"##;
+    /// let lesson = Lesson::from_json(text, "lessons/x.json").unwrap();
+    /// assert!(lesson.named_after_file(text, "lessons/x.json").is_ok());
+    /// let e = lesson.named_after_file(text, "lessons/y.json").unwrap_err();
+    /// assert_eq!((e.line, e.field.as_str()), (1, "id"));
+    /// ```
+    pub fn named_after_file(&self, text: &str, file: &str) -> Result<(), LessonError> {
+        let path = std::path::Path::new(file);
+        let stem = path
+            .file_stem()
+            .and_then(|s| s.to_str())
+            .unwrap_or_default();
+        let json = path.extension().is_some_and(|e| e == "json");
+        if json && stem == self.id {
+            return Ok(());
+        }
+        let field = vec![PathPart::Field("id".into())];
+        Err(LessonError {
+            file: file.to_string(),
+            line: line_of(text, &field),
+            field: path_text(&field),
+            message: format!(
+                "the lesson \"{}\" is in a file named {}: name it {}.json, as the lab finds it",
+                self.id,
+                path.file_name().and_then(|s| s.to_str()).unwrap_or(file),
+                self.id
+            ),
+        })
+    }
+}
+
+/// The keys of a setup on `page` that choose the experiment itself (a run page's preset, the
+/// Logs page's sample log), which a step's solution keeps as its setup gives them. (The Signal
+/// chain page's `preset` is a filter, which the student may well choose.)
+fn experiment_keys(page: LabPage) -> &'static [&'static str] {
+    match page {
+        LabPage::Simulate | LabPage::Compare => &["preset"],
+        LabPage::Logs => &["sample"],
+        _ => &[],
     }
 }
 

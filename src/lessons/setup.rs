@@ -148,6 +148,35 @@ impl Setup {
         Ok(Setup { page, query })
     }
 
+    /// Whether the address `current` (a URL hash) already shows this setup: the same page, with
+    /// every key of this setup's query at the same value, and no other key — but on the Logs
+    /// page, where the other keys are the student's own work on the log (its sample, column,
+    /// grouping), any other keys. A step whose setup the page already shows keeps the page as it
+    /// is instead of resetting it to the setup's link; on a page of runs another key would be
+    /// another experiment than the step's starting point, so it is reset.
+    ///
+    /// ```
+    /// use cutlab::lessons::setup::Setup;
+    /// let logs = Setup::from_link("#/logs").unwrap();
+    /// assert!(logs.held_by("#/logs?sample=synthetic-kim-step-doc-export.csv&column=S_Strom%20%5BA%5D"));
+    /// let sample = Setup::from_link("#/logs?sample=synthetic-kim-step-doc-export.csv").unwrap();
+    /// assert!(!sample.held_by("#/logs"));
+    /// assert!(!logs.held_by("#/simulate"));
+    /// let run = Setup::from_link("#/simulate?preset=kim-step-doc&controller=pi").unwrap();
+    /// assert!(run.held_by("#/simulate?controller=pi&preset=kim-step-doc"));
+    /// assert!(!run.held_by("#/simulate?preset=kim-step-doc&controller=pi&kp=0.9"));
+    /// ```
+    pub fn held_by(&self, current: &str) -> bool {
+        Setup::from_link(current).is_ok_and(|shown| {
+            shown.page == self.page
+                && (self.page == LabPage::Logs || shown.query.len() == self.query.len())
+                && self
+                    .query
+                    .iter()
+                    .all(|(k, v)| shown.value(k).is_some_and(|s| s == v))
+        })
+    }
+
     /// The link this setup opens.
     pub fn link(&self) -> String {
         let query: Vec<String> = self
@@ -210,7 +239,8 @@ impl Setup {
         }
     }
 
-    fn value(&self, key: &str) -> Option<&str> {
+    /// The value of `key` in the query, if given.
+    pub fn value(&self, key: &str) -> Option<&str> {
         self.query
             .iter()
             .find(|(k, _)| k == key)

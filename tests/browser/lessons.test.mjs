@@ -60,6 +60,13 @@ test('a lesson opened by its link checks a run as it finishes and keeps the prog
   const reloaded = page.getByRole('complementary', { name: TITLE });
   await reloaded.getByRole('heading', { name: /^Step 2 of 2/ }).waitFor();
   await reloaded.getByRole('status').filter({ hasText: /^Step done\./ }).waitFor();
+  // The student raises the entry override again: the step stays done in the progress, but the
+  // panel does not say "Step done" under a check the run shown fails.
+  await page.getByRole('textbox', { name: /^Entry override/ }).fill('150');
+  await aboveLimit.filter({ hasText: /^Not met: / }).waitFor({ timeout: RUN_TIMEOUT });
+  await reloaded.getByRole('status')
+    .filter({ hasText: /^You met this step earlier; the run now shown does not meet it\.$/ }).waitFor();
+  assert.equal(await reloaded.getByText(/Step done/).count(), 0);
   await page.getByRole('navigation', { name: 'Lab sections' }).getByRole('link', { name: 'Lessons' }).click();
   const card = page.getByRole('listitem').filter({ has: page.getByRole('heading', { name: TITLE }) });
   await card.getByText('2 of 2 steps done').waitFor();
@@ -91,7 +98,9 @@ test('the own-log lesson checks a replay the student starts on the sample export
   await page.getByRole('button', { name: 'Replay', exact: true }).click();
   const checks = panel.getByRole('list', { name: 'Check of your run' });
   const changes = checks.getByRole('listitem').filter({ hasText: 'override changes of the PI with anti-windup replay' });
-  await changes.filter({ hasText: /^Not met: .* — measured not measured$/ }).waitFor({ timeout: RUN_TIMEOUT });
+  await changes.filter({
+    hasText: /^Not met: .* — measured not measured: no PI with anti-windup replay was done \(tick it and replay\)$/,
+  }).waitFor({ timeout: RUN_TIMEOUT });
 
   // The student ticks the PI controller by its label and replays: the check turns, with the counts.
   await page.getByLabel('Replay PI with anti-windup').check();
@@ -103,6 +112,79 @@ test('the own-log lesson checks a replay the student starts on the sample export
   assert.deepEqual(problems, []);
   await context.close();
 });
+
+test('the log a student opens in own-log stays open through the next steps and a reload', async () => {
+  const { page, problems, context } = await openLab(browser, server.url, '#/lessons/own-log', { width: 1440, height: 1000 });
+  const panel = page.getByRole('complementary', { name: 'Your own machine\'s log' });
+  await panel.getByRole('heading', { name: /^Step 1 of 4/ }).waitFor();
+  // Step 1 names the button the Logs page shows; the student presses it.
+  const button = page.getByRole('button', { name: /^Synthetic CNC export: 60 ms RMS currents/ });
+  const task = await panel.getByText(/^Open the sample export/).textContent();
+  assert.ok(task.includes(`press "${await button.textContent()}"`), task);
+  await button.click();
+  const loaded = page.getByRole('status').filter({ hasText: 'Loaded synthetic-kim-step-doc-export.csv' });
+  await loaded.waitFor({ timeout: RUN_TIMEOUT });
+  // Step 2: the log is still open; the student analyses the spindle current grouped by phase.
+  await panel.getByRole('button', { name: 'Next step' }).click();
+  await panel.getByRole('heading', { name: /^Step 2 of 4/ }).waitFor();
+  await page.getByRole('heading', { level: 1, name: /Machine logs/ }).waitFor();
+  await loaded.waitFor();
+  assert.match(page.url(), /#\/logs\?sample=synthetic-kim-step-doc-export\.csv/);
+  await page.getByLabel('Column', { exact: true }).selectOption({ label: 'S_Strom [A]' });
+  await page.getByLabel('Statistics per label of').selectOption({ label: 'Phase' });
+  // (The address names the column and grouping where they differ from the page's own picks.)
+  await page.waitForTimeout(500);
+  // Step 3, "in the same analysis": the same address, column and grouping.
+  const analysed = page.url();
+  await panel.getByRole('button', { name: 'Next step' }).click();
+  await panel.getByRole('heading', { name: /^Step 3 of 4/ }).waitFor();
+  assert.equal(page.url(), analysed);
+  await page.getByRole('table').getByText('Schnitt 5 mm').first().waitFor({ timeout: RUN_TIMEOUT });
+  assert.equal(await page.getByLabel('Column', { exact: true }).inputValue(), 'S_Strom [A]');
+  // A reload keeps it, and so does the lesson's own link.
+  await page.reload();
+  await page.getByRole('status').filter({ hasText: 'Loaded synthetic-kim-step-doc-export.csv' }).waitFor({ timeout: RUN_TIMEOUT });
+  assert.equal(await page.getByLabel('Statistics per label of').inputValue(), 'Phase');
+  await page.goto(`${server.url}#/lessons/own-log`);
+  await page.waitForURL(/#\/logs\?sample=synthetic-kim-step-doc-export\.csv/);
+  await page.getByRole('status').filter({ hasText: 'Loaded synthetic-kim-step-doc-export.csv' }).waitFor({ timeout: RUN_TIMEOUT });
+  assert.deepEqual(problems, []);
+  await context.close();
+});
+
+for (const viewport of [{ width: 390, height: 844 }, { width: 1024, height: 768 }]) {
+  test(`at ${viewport.width} px the lesson stays in sight while the student edits the page`, async () => {
+    const { page, problems, context } = await openLab(browser, server.url, '#/lessons/entry-and-envelope', viewport);
+    const panel = page.getByRole('complementary', { name: TITLE });
+    await panel.getByRole('heading', { name: /^Step 1 of 2/ }).waitFor();
+    const inView = async () => {
+      const box = await panel.boundingBox();
+      return box.y >= 0 && box.y < viewport.height && box.y + box.height <= viewport.height + 1;
+    };
+    assert.equal(await inView(), true, 'panel in the window at the top of the page');
+    // Far down the page, at a field the student edits, it is still there.
+    const entry = page.getByRole('textbox', { name: /^Entry override/ });
+    await entry.scrollIntoViewIfNeeded();
+    await page.mouse.wheel(0, 3000);
+    assert.equal(await inView(), true, 'panel in the window further down');
+    const box = await panel.boundingBox();
+    assert.ok(box.height <= viewport.height * 0.5, `the panel leaves the page room: ${box.height} px`);
+    // Shrunk, it keeps the step, its task and its check, and grows back.
+    const toggle = panel.getByRole('button', { name: 'Shrink the lesson' });
+    await toggle.click();
+    const grow = panel.getByRole('button', { name: 'Show the whole lesson' });
+    assert.equal(await grow.getAttribute('aria-expanded'), 'false');
+    await panel.getByRole('heading', { name: /^Step 1 of 2/ }).waitFor();
+    assert.equal(await panel.getByText(/^The lab puts a safety envelope/).isVisible(), true);
+    assert.equal(await panel.getByRole('button', { name: /^Show a hint/ }).isVisible(), false);
+    assert.ok((await panel.boundingBox()).height < box.height);
+    await grow.click();
+    await panel.getByRole('button', { name: /^Show a hint/ }).waitFor();
+    await screenshot(page, `lessons-panel-${viewport.width}`);
+    assert.deepEqual(problems, []);
+    await context.close();
+  });
+}
 
 test('an unknown lesson is said so, and every control of the list is named', async () => {
   const { page, problems, context } = await openLab(browser, server.url, '#/lessons/no-such-lesson');

@@ -22,12 +22,18 @@ use crate::web::components::page::PageShell;
 use crate::web::components::runner::next_task;
 use crate::web::route::sub_path;
 
-/// Opens step `step` of `lesson` beside the lab: remembers it, then goes to the page it sets up.
+/// Opens step `step` of `lesson` beside the lab: remembers it, then goes to the page it sets up
+/// — unless the page shown already holds that setup ([`Setup::held_by`](crate::lessons::setup::Setup::held_by)), so that a step never
+/// throws away what the student did there (the log opened on the Logs page).
 pub fn open_step(lesson: &Lesson, step: usize) {
     let step = step.min(lesson.steps.len().saturating_sub(1));
     store::update(|p| p.open_step(&lesson.id, step));
     if let Some(s) = lesson.steps.get(step) {
-        let _ = window().location().set_hash(&s.setup.link());
+        let location = window().location();
+        let current = location.hash().unwrap_or_default();
+        if !s.setup.held_by(&current) {
+            let _ = location.set_hash(&s.setup.link());
+        }
     }
 }
 
@@ -51,8 +57,9 @@ pub fn LessonsPage() -> impl IntoView {
         });
     let progress = store::progress();
     let (export_error, set_export_error) = signal(None::<String>);
+    let report_lessons = lessons.clone();
     let export = move |_| {
-        let text = store::progress().with_untracked(|p| p.to_json());
+        let text = store::progress().with_untracked(|p| p.to_report_json(&report_lessons));
         set_export_error
             .set(download_text("cutlab-lessons-progress.json", "application/json", &text).err());
     };

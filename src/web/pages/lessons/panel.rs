@@ -2,7 +2,8 @@
 //! a multiple-choice answer checked here, the runs the lab's page finishes or the Logs page's
 //! replays (each condition met or not, with the measured value), or the Signal chain page's
 //! filter, checked on request.
-//! A step whose check is met is saved as done.
+//! A step whose check is met is saved as done; the panel says "Step done" only while the work
+//! shown meets the check ([`StepStatus`]).
 
 use std::sync::Arc;
 
@@ -11,6 +12,7 @@ use leptos::prelude::*;
 use super::{feed, open_step, store};
 use crate::closed_loop::lab::RunResult;
 use crate::lessons::check::{ConditionOutcome, Evidence};
+use crate::lessons::progress::StepStatus;
 use crate::lessons::setup::{Defined, LabPage, Setup};
 use crate::lessons::shipped::shipped_lesson;
 use crate::lessons::{Lesson, StepCheck};
@@ -36,15 +38,26 @@ fn LessonView(lesson: Arc<Lesson>) -> impl IntoView {
     let close = move |_| store::update(|p| p.open = None);
     let title = lesson.title.clone();
     let paper = lesson.paper.clone();
+    // Below 1100 px the panel is a bar at the bottom of the window (www/lessons.css), which the
+    // student can shrink to the step, its task and its check while editing the page above.
+    let minimised = RwSignal::new(false);
     view! {
-        <aside class="lesson-panel" aria-labelledby="lesson-panel-title">
-            <p class="lesson-kicker">"Lesson · paper " {paper}</p>
+        <aside class="lesson-panel" class:minimised=move || minimised.get()
+            aria-labelledby="lesson-panel-title">
+            <div class="lesson-bar">
+                <p class="lesson-kicker">"Lesson · paper " {paper}</p>
+                <button type="button" class="lesson-toggle"
+                    aria-expanded=move || (!minimised.get()).to_string()
+                    on:click=move |_| minimised.update(|m| *m = !*m)>
+                    {move || if minimised.get() { "Show the whole lesson" } else { "Shrink the lesson" }}
+                </button>
+            </div>
             <h2 id="lesson-panel-title">{title}</h2>
             {move || {
                 let index = step.get();
                 view! { <StepView lesson=lesson.clone() index=index /> }
             }}
-            <div class="button-row">
+            <div class="button-row lesson-detail">
                 <a href="#/lessons">"All lessons"</a>
                 <button type="button" on:click=close>"Close the lesson"</button>
             </div>
@@ -193,9 +206,16 @@ fn StepView(lesson: Arc<Lesson>, index: usize) -> impl IntoView {
         .into_any(),
     };
     let explain = step.explain.clone();
+    let work = match (&step.check, step.setup.page) {
+        (StepCheck::Choice { .. }, _) => "answer",
+        (_, LabPage::SignalChain) => "filter",
+        (_, LabPage::Logs) => "replay",
+        _ => "run",
+    };
     view! {
         <h3>"Step " {index + 1} " of " {count} ": " {step.title.clone()}</h3>
         <p class="lesson-task">{step.task.clone()}</p>
+        <div class="lesson-detail">
         {(hint_count > 0).then(|| view! {
             <ol class="lesson-hints">
                 {move || hints.iter().take(hints_shown.get()).map(|h| view! { <li>{h.clone()}</li> }).collect_view()}
@@ -206,6 +226,7 @@ fn StepView(lesson: Arc<Lesson>, index: usize) -> impl IntoView {
             </button>
         })}
         {check_view}
+        </div>
         <div class="lesson-check" aria-live="polite">
             {move || match checked.get() {
                 Checked::Waiting => None,
@@ -225,11 +246,21 @@ fn StepView(lesson: Arc<Lesson>, index: usize) -> impl IntoView {
                     </ul>
                 }.into_any()),
             }}
-            {move || done.get().then(|| view! {
-                <p class="lesson-done" role="status">"Step done. " {explain.clone()}</p>
-            })}
+            {move || {
+                let met_now = match &*checked.read() {
+                    Checked::Waiting | Checked::Problem(_) => None,
+                    Checked::Answer(right) => Some(*right),
+                    Checked::Conditions(outcomes) => Some(outcomes.iter().all(|o| o.met)),
+                };
+                let status = StepStatus::of(done.get(), met_now);
+                status.words(work).map(|words| {
+                    let class = if status.explains() { "lesson-done" } else { "lesson-done unmet" };
+                    let explain = status.explains().then(|| format!(" {explain}"));
+                    view! { <p class=class role="status">{words} {explain}</p> }
+                })
+            }}
         </div>
-        <div class="button-row">
+        <div class="button-row lesson-detail">
             <button type="button" on:click=set_up>"Set up this step"</button>
             <button type="button" disabled={index == 0}
                 on:click=move |_| open_step(&previous, index.saturating_sub(1))>"Previous step"</button>
