@@ -61,7 +61,7 @@ pub const DEFAULT_TARGET_FRACTION: f64 = 0.8;
 /// is a sensor that no longer reads as it did.
 pub const SENSOR_FAILURE_TOLERANCE: f64 = 0.3;
 /// Above the air estimate by this factor, an estimated force is a cut.
-const AIR_MARGIN: f64 = 1.5;
+pub const AIR_MARGIN: f64 = 1.5;
 /// The air-cut threshold never rises above this fraction of the target: a model that reads a
 /// large force in air still leaves the controller the light cuts (paper 003's 1 mm entry cuts at
 /// 40 % of the target at 100 %).
@@ -777,10 +777,10 @@ pub fn air_cut_force_n(
 
 /// An estimate above this fraction of the target, before the loop arms, is a cut heavy enough to
 /// warn about: a lighter one the controller takes over once armed without having loaded the tool.
-const CUT_BEFORE_ARMING_FRACTION: f64 = 0.5;
+pub const CUT_BEFORE_ARMING_FRACTION: f64 = 0.5;
 /// An estimate this many standard deviations of the fit's residual above nothing is a cut, not
 /// the estimate's noise.
-const CUT_NOISE_SIGMAS: f64 = 3.0;
+pub const CUT_NOISE_SIGMAS: f64 = 3.0;
 
 /// The estimated force above which a period before the loop arms shows a cut the controller
 /// cannot shape (the cut-before-arming warning): above half the target (a lighter cut harms
