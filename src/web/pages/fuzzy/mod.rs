@@ -30,7 +30,7 @@ use std::sync::Arc;
 use leptos::prelude::*;
 
 use crate::control::fuzzy::engine::{Defuzzifier, Engine};
-use crate::control::fuzzy::fll;
+use crate::control::fuzzy::fll as fuzzylite;
 use crate::control::fuzzy::rules::{paper_002_engine, paper_002_table, RuleBase, RuleTable};
 use crate::web::components::fields::parse_number;
 use crate::web::components::later::{effect_after_mount, Later};
@@ -169,7 +169,11 @@ impl Fuzzy {
             }
             Source::Imported(..) => self
                 .studied
-                .with(|e| e.as_ref().ok().map(|e| fll::to_url_text(&fll::write(e))))
+                .with(|e| {
+                    e.as_ref()
+                        .ok()
+                        .map(|e| fuzzylite::to_url_text(&fuzzylite::write(e)))
+                })
                 .map(|text| vec![("engine".to_string(), text)])
                 .unwrap_or_default(),
         }
@@ -187,8 +191,8 @@ impl Fuzzy {
         if let Some(table) = get("rules").and_then(decode_rule_table) {
             self.table.set(table);
         }
-        if let Some(text) = get("engine").map(fll::from_url_text) {
-            match fll::parse(&text) {
+        if let Some(text) = get("engine").map(fuzzylite::from_url_text) {
+            match fuzzylite::parse(&text) {
                 Ok(engine) => self.study(engine),
                 Err(e) => self.import_error.set(Some(format!(
                     "The engine in the link could not be read: {e}"

@@ -235,11 +235,16 @@ mod tests {
             )
         );
         // Compare's variant B is named by its controller: the experience table's, not A's.
-        let href = compare_href(&experience);
-        assert!(href.contains("a.controller=fuzzy-dynamics"), "{href}");
-        assert!(href.contains("b.controller=fuzzy-experience"), "{href}");
-        assert!(!href.contains("b.rules"), "{href}");
-        let href = simulate_href(&experience);
-        assert!(href.contains("controller=fuzzy-experience"), "{href}");
+        assert_eq!(
+            controller_query(&experience, "b."),
+            vec![("b.controller".to_string(), "fuzzy-experience".to_string())]
+        );
+        assert_eq!(
+            controller_query(&edited, "b."),
+            vec![
+                ("b.controller".to_string(), "fuzzy-dynamics".to_string()),
+                ("b.rules".to_string(), encode_rule_table(&edited)),
+            ]
+        );
     }
 }
