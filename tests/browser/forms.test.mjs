@@ -74,7 +74,7 @@ test('a select\'s blank option names the preset\'s choice, also while another is
   await context.close();
 });
 
-test('a field\'s "?" is a small circle beside its label, on every form', async () => {
+test('a field\'s "?" is a small circle after its label, on every form', async () => {
   for (const hash of ['#/simulate?preset=kim-step-doc', '#/compare', '#/signal?preset=wang-10th-5hz', '#/plant?preset=kim-step-doc']) {
     const { page, problems, context } = await openLab(browser, server.url, hash);
     const toggles = page.locator('.field .help-toggle');
@@ -84,12 +84,12 @@ test('a field\'s "?" is a small circle beside its label, on every form', async (
       .map((b) => {
         const r = b.getBoundingClientRect();
         const label = b.parentElement.querySelector('label').getBoundingClientRect();
-        return { width: r.width, height: r.height, besideLabel: r.left >= label.right - 1 && r.top < label.bottom };
+        return { width: r.width, height: r.height, afterLabel: r.top >= label.top - 1 };
       }));
     assert.ok(boxes.length > 0, hash);
     for (const box of boxes) {
       assert.ok(box.width < 2 * box.height && box.width < 40, `${hash}: ${JSON.stringify(box)}`);
-      assert.ok(box.besideLabel, `${hash}: ${JSON.stringify(box)}`);
+      assert.ok(box.afterLabel, `${hash}: ${JSON.stringify(box)}`);
     }
     assert.deepEqual(problems, []);
     await context.close();
