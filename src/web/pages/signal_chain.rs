@@ -380,7 +380,8 @@ fn bench_lede() -> String {
         .map_or((0.0, 0.0), |b| {
             (b.feed_drive.harmonic_5th, b.feed_drive.harmonic_7th)
         });
-    let pct = |h: f64| format!("{:.0} %", 100.0 * h);
+    // A no-break space: "3 %" never splits across lines.
+    let pct = |h: f64| format!("{:.0}\u{a0}%", 100.0 * h);
     format!(
         "Four seconds of the feed motor's phase currents on paper 000's brake bench (a \
          magnetic-particle brake loads the servo; 600 mm/min), through the filter designed above. \
@@ -562,7 +563,7 @@ mod tests {
         }
         let text = bench_lede();
         assert!(
-            text.contains(&format!("±{:.0} %", 100.0 * harmonics)),
+            text.contains(&format!("±{:.0}\u{a0}%", 100.0 * harmonics)),
             "{text}"
         );
     }
