@@ -63,3 +63,35 @@ test('Tune names each scenario by its title and rounds what it reports', async (
   assert.deepEqual(problems, []);
   await context.close();
 });
+
+test('a select\'s blank option names the preset\'s choice, also while another is chosen', async () => {
+  const { page, problems, context } = await openLab(browser, server.url, '#/simulate?preset=kim-step-doc&seed=1&feedback=feed&controller=pi');
+  const form = page.getByRole('form', { name: 'Run settings' });
+  const feedback = form.getByRole('combobox', { name: 'Force measured from' });
+  assert.equal(await feedback.inputValue(), 'feed');
+  assert.equal(await feedback.locator('option[value=""]').textContent(), "The preset's: Spindle current (paper 003)");
+  assert.deepEqual(problems, []);
+  await context.close();
+});
+
+test('a field\'s "?" is a small circle after its label, on every form', async () => {
+  for (const hash of ['#/simulate?preset=kim-step-doc', '#/compare', '#/signal?preset=wang-10th-5hz', '#/plant?preset=kim-step-doc']) {
+    const { page, problems, context } = await openLab(browser, server.url, hash);
+    const toggles = page.locator('.field .help-toggle');
+    await toggles.first().waitFor();
+    const boxes = await toggles.evaluateAll((buttons) => buttons
+      .filter((b) => b.offsetParent !== null)
+      .map((b) => {
+        const r = b.getBoundingClientRect();
+        const label = b.parentElement.querySelector('label').getBoundingClientRect();
+        return { width: r.width, height: r.height, afterLabel: r.top >= label.top - 1 };
+      }));
+    assert.ok(boxes.length > 0, hash);
+    for (const box of boxes) {
+      assert.ok(box.width < 2 * box.height && box.width < 40, `${hash}: ${JSON.stringify(box)}`);
+      assert.ok(box.afterLabel, `${hash}: ${JSON.stringify(box)}`);
+    }
+    assert.deepEqual(problems, []);
+    await context.close();
+  }
+});

@@ -193,3 +193,63 @@ test('an engine from fuzzylite\'s corpus is imported, shown whole, and runs in S
   assert.deepEqual(problems, []);
   await context.close();
 });
+
+test('the rule base in use is pressed, and Compare names the experience table\'s variant by it', async () => {
+  const { page, problems, context } = await openLab(browser, server.url, '#/fuzzy', { width: 1440, height: 900 });
+  const experience = page.getByRole('button', { name: 'Experience-based (MacVicar-Whelan)' });
+  const dynamics = page.getByRole('button', { name: 'Dynamics-based (paper 002, Table 4)' });
+  // The page opens on paper 002's own table.
+  assert.equal(await dynamics.getAttribute('aria-pressed'), 'true');
+  assert.equal(await experience.getAttribute('aria-pressed'), 'false');
+  await experience.click();
+  assert.equal(await experience.getAttribute('aria-pressed'), 'true');
+  assert.equal(await dynamics.getAttribute('aria-pressed'), 'false');
+  // Pressed looks pressed: filled, not the outline of the other.
+  const fill = (b) => b.evaluate((el) => getComputedStyle(el).backgroundColor);
+  assert.notEqual(await fill(experience), await fill(dynamics));
+  // An edited table is neither base.
+  const cell = page.getByLabel('Output when E is PB and EC is PB');
+  await cell.selectOption('NB');
+  assert.equal(await experience.getAttribute('aria-pressed'), 'false');
+  await cell.selectOption('PB');
+  assert.equal(await experience.getAttribute('aria-pressed'), 'true');
+  await page.getByRole('link', { name: 'Open in Compare' }).click();
+  await page.getByRole('heading', { level: 1, name: /Compare/ }).waitFor();
+  const variantB = page.getByRole('group', { name: 'Variant B' });
+  assert.equal(await variantB.getByLabel('Controller', { exact: true }).inputValue(), 'fuzzy-experience');
+  const table = page.getByRole('table', { name: /Metrics of the runs/ });
+  for (const name of ['A: fuzzy-dynamics', 'B: fuzzy-experience']) {
+    await table.getByRole('columnheader', { name }).waitFor({ timeout: RUN_TIMEOUT });
+  }
+  assert.deepEqual(problems, []);
+  await context.close();
+});
+
+test('an imported engine and the text typed survive a reload and a visit to Simulate; a refused FLL keeps the engine', async () => {
+  const { page, problems, context } = await openLab(browser, server.url, '#/fuzzy', { width: 1440, height: 900 });
+  await page.getByLabel('FLL or FIS file to import').setInputFiles(CORPUS_ENGINE);
+  await importChosenFile(page);
+  await page.getByText(/Showing the imported engine "linear_tip_calculator"/).waitFor();
+  // The table's own links run a table, which is not shown now.
+  assert.equal(await page.getByRole('link', { name: 'Simulate with this table' }).isVisible(), false);
+  assert.match(page.url(), /engine=Engine\*_linear!_tip!_calculator~/);
+  // An FLL with no rules is refused, said so, and the engine studied stays.
+  const text = page.getByLabel('Engine text (FLL or FIS)');
+  const noRules = (await readFile(CORPUS_ENGINE, 'utf8')).split('\n').filter((l) => !/^\s*rule:/.test(l)).join('\n');
+  await text.fill(noRules);
+  await page.getByRole('button', { name: 'Import FLL or FIS' }).click();
+  await page.getByText(/The FLL could not be read: .*without rules.*The engine studied is unchanged\./).waitFor();
+  await page.getByText(/Showing the imported engine "linear_tip_calculator"/).waitFor();
+  // Reload: the engine from the link, the typed text from the tab's storage.
+  await page.reload();
+  await page.getByText(/Showing the imported engine "linear_tip_calculator"/).waitFor();
+  assert.equal(await page.getByLabel('Engine text (FLL or FIS)').inputValue(), noRules);
+  // To Simulate and back by the menu (a bare link): the same engine.
+  await page.getByRole('link', { name: 'Use in Simulate' }).click();
+  assert.equal(await page.getByLabel('Controller', { exact: true }).inputValue(), 'fuzzy-engine');
+  await page.getByRole('navigation', { name: 'Lab sections' }).getByRole('link', { name: 'Fuzzy rules' }).click();
+  await page.getByText(/Showing the imported engine "linear_tip_calculator"/).waitFor();
+  assert.match(page.url(), /engine=Engine\*_linear!_tip!_calculator~/);
+  assert.deepEqual(problems, []);
+  await context.close();
+});

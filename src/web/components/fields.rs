@@ -45,15 +45,17 @@ pub fn NumberField(
     let input_id = id.clone();
     view! {
         <div class="field" class:field-invalid=move || error.get().is_some() hidden=move || hidden.get()>
-            <label for=id>
-                {move || label.get()}
-                {move || {
-                    label
-                        .with(|l| shows_unit(l, unit))
-                        .then(|| view! { <span class="unit">" (" {unit} ")"</span> })
-                }}
-            </label>
-            {(!help.is_empty()).then(|| view! { <HelpToggle subject=label help=help /> })}
+            <div class="field-head">
+                <label for=id>
+                    {move || label.get()}
+                    {move || {
+                        label
+                            .with(|l| shows_unit(l, unit))
+                            .then(|| view! { <span class="unit">" (" {unit} ")"</span> })
+                    }}
+                </label>
+                {(!help.is_empty()).then(|| view! { <HelpToggle subject=label help=help /> })}
+            </div>
             <input
                 id=input_id
                 type="text"
@@ -144,8 +146,10 @@ pub fn ChoiceField(
     let invalid = move || error.is_some_and(|e| e.get().is_some());
     view! {
         <div class="field" class:field-invalid=invalid hidden=move || hidden.get()>
-            <label for=id.clone()>{label}</label>
-            {(!help.is_empty()).then(|| view! { <HelpToggle subject=label.to_string() help=help /> })}
+            <div class="field-head">
+                <label for=id.clone()>{label}</label>
+                {(!help.is_empty()).then(|| view! { <HelpToggle subject=label.to_string() help=help /> })}
+            </div>
             <select
                 id=id
                 on:change=move |ev| value.set(event_target_value(&ev))

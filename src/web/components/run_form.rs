@@ -123,9 +123,11 @@ impl ScenarioForm {
     }
 }
 
-/// What each blank field of a scenario form resolves to on `preset_name`, from the run's plan
-/// ([`crate::closed_loop::settings::Plan::planned_text`]) for the settings as parsed (the
-/// preset's alone while a field is wrong).
+/// What each field of a scenario form resolves to when left blank on `preset_name`, from the
+/// run's plan ([`crate::closed_loop::settings::Plan::planned_text`]) for the other settings as
+/// parsed (the preset's alone while a field is wrong). A field the form sets is planned without
+/// its own value ([`RunSetting::apply`] with `None`), so a select's blank option ("The preset's")
+/// names the preset's choice, not the one the user picked instead.
 fn planned_texts(preset_name: &str, choice: Option<ScenarioChoice>) -> Placeholders {
     let Some(preset) = Preset::from_name(preset_name) else {
         return Placeholders::new();
@@ -142,7 +144,16 @@ fn planned_texts(preset_name: &str, choice: Option<ScenarioChoice>) -> Placehold
     };
     RunSetting::ALL
         .into_iter()
-        .filter_map(|s| Some((s.spec().query_key, plan.planned_text(s, &spec)?)))
+        .filter_map(|s| {
+            let text = if s != RunSetting::Seed && s.value_in(&spec).is_some() {
+                let mut blank = spec.clone();
+                s.apply(&mut blank, None);
+                preset_plan(&blank).ok()?.planned_text(s, &blank)
+            } else {
+                plan.planned_text(s, &spec)
+            };
+            Some((s.spec().query_key, text?))
+        })
         .collect()
 }
 
@@ -708,5 +719,46 @@ pub fn ControllerFields(
             />
             {fields}
         </fieldset>
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A parsed form of `preset` with `texts` typed into its fields.
+    fn choice(preset: Preset, texts: &[(RunSetting, &str)]) -> ScenarioChoice {
+        let spec = parse_texts(preset, ControllerConfig::new(ControllerKind::Fixed), texts)
+            .expect("the test's texts parse");
+        ScenarioChoice {
+            preset,
+            seed: spec.seed,
+            settings: spec.settings,
+            plant: spec.plant,
+        }
+    }
+
+    #[test]
+    fn a_blank_field_names_the_presets_value_not_the_one_chosen_instead() {
+        let preset = Preset::from_name("kim-step-doc").expect("a preset");
+        let own = planned_texts(preset.name(), None);
+        let key = |s: RunSetting| s.spec().query_key;
+        let own_feedback = own[key(RunSetting::Feedback)].clone();
+        let own_speed = own[key(RunSetting::SpindleSpeed)].clone();
+        // The preset's own feedback is not the one chosen below, so the check can fail.
+        assert_ne!(own_feedback, "feed");
+        assert_ne!(own_speed, "5000");
+        let chosen = planned_texts(
+            preset.name(),
+            Some(choice(
+                preset,
+                &[
+                    (RunSetting::Feedback, "feed"),
+                    (RunSetting::SpindleSpeed, "5000"),
+                ],
+            )),
+        );
+        assert_eq!(chosen[key(RunSetting::Feedback)], own_feedback);
+        assert_eq!(chosen[key(RunSetting::SpindleSpeed)], own_speed);
     }
 }

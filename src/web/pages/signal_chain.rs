@@ -14,6 +14,7 @@ use crate::closed_loop::recording_jobs::BenchRequest;
 use crate::closed_loop::transfer::JobRequest;
 use crate::input::table::{form_errors, Table};
 use crate::plant::recording::PhaseRecording;
+use crate::plant::Preset;
 use crate::signal::butterworth::{ButterworthSpec, FilterKind};
 use crate::signal::design_settings::{
     parse_design, query_texts, FilterPreset, FilterSetting, PAPER_FILTERS,
@@ -369,6 +370,32 @@ fn ResponseCharts(design: Memo<Design>) -> impl IntoView {
     }
 }
 
+/// What the bench's currents show: the three-phase RMS of balanced sines is steady, but the feed
+/// drive's 5th and 7th harmonics (the bench's own, [`Preset::bench_config`]) beat with the
+/// fundamental at six times the supply frequency, a ripple of about ±(h₅ + h₇) on the raw RMS,
+/// which a low-pass below the harmonics removes.
+fn bench_lede() -> String {
+    let (h5, h7) = Preset::WangBrakeBench
+        .bench_config(1)
+        .map_or((0.0, 0.0), |b| {
+            (b.feed_drive.harmonic_5th, b.feed_drive.harmonic_7th)
+        });
+    // A no-break space: "3 %" never splits across lines.
+    let pct = |h: f64| format!("{:.0}\u{a0}%", 100.0 * h);
+    format!(
+        "Four seconds of the feed motor's phase currents on paper 000's brake bench (a \
+         magnetic-particle brake loads the servo; 600 mm/min), through the filter designed above. \
+         The three-phase RMS of balanced sines is steady — the amplitude over √2 — but this drive's \
+         currents carry {} of 5th and {} of 7th harmonic, which make the raw RMS ripple by about \
+         ±{} at six times the supply frequency, on top of the sensors' noise; a low-pass below the \
+         harmonics leaves a smooth RMS that follows the load. The spectrum shows the 4 Hz supply \
+         frequency that paper 000 found rising with load.",
+        pct(h5),
+        pct(h7),
+        pct(h5 + h7)
+    )
+}
+
 /// Paper 000's bench current through the design: the recording is made once, in a computation
 /// worker (the page's thread stays free while the bench's 13 s at 10 kHz compute); the filter
 /// is re-applied on the page whenever the design changes. The filtering and each chart's series
@@ -435,10 +462,7 @@ fn BenchFiltered(design: Memo<Design>) -> impl IntoView {
     view! {
         <h2>"The filter on a motor current"</h2>
         <p class="lede">
-            <WithPaperLinks text="Four seconds of the feed motor's phase currents on paper 000's brake \
-                bench (a magnetic-particle brake loads the servo; 600 mm/min), through the filter \
-                designed above. The three-phase RMS of a balanced set is steady — the amplitude over \
-                √2 — and the spectrum shows the 4 Hz supply frequency that paper 000 found rising with load." />
+            <WithPaperLinks text=bench_lede() />
         </p>
         <RunProgress runner=bench.clone() id="bench-progress" />
         <p class="hint" aria-live="polite">{move || peak_text.get()}</p>
@@ -449,5 +473,98 @@ fn BenchFiltered(design: Memo<Design>) -> impl IntoView {
                 <ChartCanvas label="Amplitude spectrum of i_u" chart=current_chart(2) />
             </Later>
         </div>
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::plant::recording::BenchRecording;
+    use crate::work::Work;
+
+    /// The strongest bin of `spectrum` above `above_hz`, Hz.
+    fn strongest_hz(spectrum: &crate::signal::spectrum::AmplitudeSpectrum, above_hz: f64) -> f64 {
+        spectrum
+            .freq_hz
+            .iter()
+            .zip(&spectrum.amplitude)
+            .filter(|(f, _)| **f > above_hz)
+            .max_by(|a, b| a.1.total_cmp(b.1))
+            .map_or(f64::NAN, |(f, _)| *f)
+    }
+
+    /// Half the range of `values` over their mean.
+    fn relative_ripple(values: &[f64]) -> f64 {
+        let (lo, hi) = values
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| {
+                (lo.min(*v), hi.max(*v))
+            });
+        let mean = values.iter().sum::<f64>() / values.len() as f64;
+        (hi - lo) / 2.0 / mean
+    }
+
+    #[test]
+    fn the_bench_text_says_why_the_raw_rms_ripples_and_the_filtered_does_not() {
+        let recording = BenchRecording::loaded_step(1)
+            .expect("the bench")
+            .run_to_end()
+            .expect("a recording");
+        let wang = PAPER_FILTERS
+            .iter()
+            .find(|p| p.name == "wang-10th-5hz")
+            .expect("paper 003's filter");
+        let (_, sos) = parse_design(&wang.texts()).expect("a design");
+        let filtered = filtered_phases(&recording, &sos).expect("filtered");
+        let rms = |v: &[f64]| -> Vec<f64> {
+            v.chunks_exact(3)
+                .map(|f| three_phase_rms(f[0], f[1], f[2]))
+                .collect()
+        };
+        let (raw, clean) = (rms(&recording.phases_a), rms(&filtered));
+        let bench = Preset::WangBrakeBench.bench_config(1).expect("the bench");
+        let harmonics = bench.feed_drive.harmonic_5th + bench.feed_drive.harmonic_7th;
+        let mean = raw.iter().sum::<f64>() / raw.len() as f64;
+        let centred: Vec<f64> = raw.iter().map(|r| r - mean).collect();
+        let ripple =
+            amplitude_spectrum(&centred, recording.sample_rate_hz, Window::Hann).expect("spectrum");
+        // The raw RMS's strongest ripple is at six times the supply frequency ...
+        let supply_hz = strongest_hz(&recording.raw_spectrum, 0.5);
+        let ripple_hz = strongest_hz(&ripple, 0.5);
+        assert!(
+            (ripple_hz - 6.0 * supply_hz).abs() <= 0.5,
+            "ripple at {ripple_hz} Hz, supply {supply_hz} Hz"
+        );
+        // ... and about ±(h5 + h7) of the mean, as the text says.
+        let at = |f: f64| {
+            ripple
+                .freq_hz
+                .iter()
+                .zip(&ripple.amplitude)
+                .find(|(g, _)| **g == f)
+                .map_or(0.0, |(_, a)| *a)
+        };
+        let relative = at(ripple_hz) / mean;
+        assert!(
+            (0.7 * harmonics..1.3 * harmonics).contains(&relative),
+            "ripple {relative} of the mean vs harmonics {harmonics}"
+        );
+        // The filter, below the harmonics, smooths it: in each half second between its start
+        // (the first second) and the load's change near the end, the filtered RMS moves less
+        // than a third of the raw.
+        let n = raw.len();
+        for k in 2..=5 {
+            let part = k * n / 8..(k + 1) * n / 8;
+            let (r, c) = (
+                relative_ripple(&raw[part.clone()]),
+                relative_ripple(&clean[part]),
+            );
+            assert!(c < r / 3.0, "half second {k}: filtered {c}, raw {r}");
+        }
+        let text = bench_lede();
+        assert!(
+            text.contains(&format!("±{:.0}\u{a0}%", 100.0 * harmonics)),
+            "{text}"
+        );
     }
 }

@@ -2,12 +2,9 @@
 //! file's extension or the text's first line; paper 002's engine with any table comes into the
 //! editable table, any other engine is studied whole.
 
-use std::sync::Arc;
-
 use leptos::prelude::*;
 
-use super::{Fuzzy, Source};
-use crate::control::fuzzy::rules::paper_002_table;
+use super::Fuzzy;
 use crate::control::fuzzy::{fis, fll, Format};
 use crate::web::components::download::download_text;
 use crate::web::js::read_chosen_file;
@@ -15,8 +12,10 @@ use crate::web::js::read_chosen_file;
 /// The FLL fieldset.
 #[component]
 pub fn FllPanel(fuzzy: Fuzzy) -> impl IntoView {
-    let (fll_error, set_fll_error) = signal(None::<String>);
-    let fll_text = RwSignal::new(String::new());
+    // Kept by the page (the text and a refusal outlive this panel's redraw).
+    let fll_error = fuzzy.import_error;
+    let set_fll_error = fuzzy.import_error;
+    let fll_text = fuzzy.engine_text;
     // The chosen file's name, whose extension says its format.
     let file_name = RwSignal::new(String::new());
     let export = move |_| {
@@ -49,23 +48,12 @@ pub fn FllPanel(fuzzy: Fuzzy) -> impl IntoView {
         match format.parse(&text) {
             Ok(engine) => {
                 set_fll_error.set(None);
-                // The page shows the file's own defuzzifier; changing it afterwards is a choice.
-                if let Some(output) = engine.outputs().first() {
-                    fuzzy.defuzzifier.set(output.defuzzifier.name().to_string());
-                }
-                // Into the editable table only if the file is paper 002's engine with some table:
-                // anything else is kept whole.
-                match paper_002_table(&engine) {
-                    Ok(t) => {
-                        fuzzy.table.set(t);
-                        fuzzy.source.set(Source::Table);
-                    }
-                    Err(why) => fuzzy
-                        .source
-                        .set(Source::Imported(Arc::new(engine), why.to_string())),
-                }
+                fuzzy.study(engine);
             }
-            Err(e) => set_fll_error.set(Some(format!("The {name} could not be read: {e}"))),
+            // The engine studied before stays.
+            Err(e) => set_fll_error.set(Some(format!(
+                "The {name} could not be read: {e}. The engine studied is unchanged."
+            ))),
         }
     };
     let on_file = move |ev: leptos::ev::Event| {

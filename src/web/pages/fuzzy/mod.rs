@@ -30,12 +30,13 @@ use std::sync::Arc;
 use leptos::prelude::*;
 
 use crate::control::fuzzy::engine::{Defuzzifier, Engine};
-use crate::control::fuzzy::rules::{paper_002_engine, RuleBase, RuleTable};
+use crate::control::fuzzy::fll as fuzzylite;
+use crate::control::fuzzy::rules::{paper_002_engine, paper_002_table, RuleBase, RuleTable};
 use crate::web::components::fields::parse_number;
 use crate::web::components::later::{effect_after_mount, Later};
 use crate::web::components::page::PageShell;
 use crate::web::components::run_form::{decode_rule_table, encode_rule_table};
-use crate::web::route::{query_params, replace_query, Page};
+use crate::web::route::{hash_with_query, query_params, replace_query, Page};
 use charts::FuzzyCharts;
 use engine::EnginePanel;
 use fll::FllPanel;
@@ -60,6 +61,10 @@ struct Fuzzy {
     table: RwSignal<RuleTable>,
     defuzzifier: RwSignal<String>,
     source: RwSignal<Source>,
+    /// The engine text (FLL or FIS) in the import field, as typed or read from a file.
+    engine_text: RwSignal<String>,
+    /// Why the last import (or the link's engine) was refused.
+    import_error: RwSignal<Option<String>>,
     e_text: RwSignal<String>,
     ec_text: RwSignal<String>,
     /// The engine studied, whatever its shape.
@@ -121,11 +126,82 @@ impl Fuzzy {
             table,
             defuzzifier,
             source,
+            engine_text: RwSignal::new(String::new()),
+            import_error: RwSignal::new(None),
             e_text,
             ec_text,
             studied,
             engine,
             viewer,
+        }
+    }
+
+    /// Studies `engine`: paper 002's engine with some table comes into the editable table, any
+    /// other is kept whole; the page shows the engine's own defuzzifier (changing it afterwards
+    /// is a choice).
+    fn study(&self, engine: Engine) {
+        if let Some(output) = engine.outputs().first() {
+            self.defuzzifier.set(output.defuzzifier.name().to_string());
+        }
+        match paper_002_table(&engine) {
+            Ok(t) => {
+                self.table.set(t);
+                self.source.set(Source::Table);
+            }
+            Err(why) => self
+                .source
+                .set(Source::Imported(Arc::new(engine), why.to_string())),
+        }
+    }
+
+    /// The page's link: the table (`rules=`), or the imported engine as FLL with the defuzzifier
+    /// chosen (`engine=`, as Simulate's links carry one); the defuzzifier where not the default.
+    /// Tracked.
+    fn query(&self) -> Vec<(String, String)> {
+        match self.source.get() {
+            Source::Table => {
+                let mut q = vec![("rules".to_string(), encode_rule_table(&self.table.get()))];
+                let d = self.defuzzifier.get();
+                if d != Defuzzifier::WeightedAverage.name() {
+                    q.push(("defuzzifier".to_string(), d));
+                }
+                q
+            }
+            Source::Imported(..) => self
+                .studied
+                .with(|e| {
+                    e.as_ref()
+                        .ok()
+                        .map(|e| fuzzylite::to_url_text(&fuzzylite::write(e)))
+                })
+                .map(|text| vec![("engine".to_string(), text)])
+                .unwrap_or_default(),
+        }
+    }
+
+    /// Takes the state a link (`query`) holds: its table or engine, its defuzzifier; an engine
+    /// that does not read is reported beside the import field and the table kept.
+    fn load(&self, query: &[(String, String)]) {
+        let get = |key: &str| {
+            query
+                .iter()
+                .find(|(k, _)| k == key)
+                .map(|(_, v)| v.as_str())
+        };
+        if let Some(table) = get("rules").and_then(decode_rule_table) {
+            self.table.set(table);
+        }
+        if let Some(text) = get("engine").map(fuzzylite::from_url_text) {
+            match fuzzylite::parse(&text) {
+                Ok(engine) => self.study(engine),
+                Err(e) => self.import_error.set(Some(format!(
+                    "The engine in the link could not be read: {e}"
+                ))),
+            }
+            self.engine_text.set(text);
+        }
+        if let Some(d) = get("defuzzifier").filter(|d| Defuzzifier::from_name(d).is_some()) {
+            self.defuzzifier.set(d.to_string());
         }
     }
 
@@ -139,22 +215,47 @@ impl Fuzzy {
     }
 }
 
+/// This tab's storage of the page's last link and of the engine text in the import field: they
+/// outlive a reload and a visit to another page (Simulate, with "Use in Simulate").
+const STORED_LINK_KEY: &str = "cutlab.fuzzy.link";
+/// See [`STORED_LINK_KEY`].
+const STORED_TEXT_KEY: &str = "cutlab.fuzzy.engine-text";
+
+fn stored(key: &str) -> Option<String> {
+    let storage = window().session_storage().ok().flatten()?;
+    storage.get_item(key).ok().flatten()
+}
+
+/// Keeps `value` under `key`; a browser that keeps nothing loses it with the page.
+fn store(key: &str, value: &str) {
+    if let Some(storage) = window().session_storage().ok().flatten() {
+        let _ = storage.set_item(key, value);
+    }
+}
+
 /// The Fuzzy rules page.
 #[component]
 pub fn FuzzyPage() -> impl IntoView {
-    let query = query_params(&window().location().hash().unwrap_or_default());
-    let initial = query
-        .iter()
-        .find(|(k, _)| k == "rules")
-        .and_then(|(_, v)| decode_rule_table(v))
-        .unwrap_or_else(|| RuleBase::Dynamics.table());
-    let fuzzy = Fuzzy::new(initial);
+    let mut query = query_params(&window().location().hash().unwrap_or_default());
+    // A bare link (the menu's) opens what this tab last studied here.
+    if query.is_empty() {
+        query = stored(STORED_LINK_KEY)
+            .map(|hash| query_params(&hash))
+            .unwrap_or_default();
+    }
+    let fuzzy = Fuzzy::new(RuleBase::Dynamics.table());
+    fuzzy.load(&query);
+    // The text last typed (or read from a file) in this tab, imported or not, is kept too: it
+    // is the student's, where the link's engine is only its written form.
+    if let Some(text) = stored(STORED_TEXT_KEY).filter(|t| !t.trim().is_empty()) {
+        fuzzy.engine_text.set(text);
+    }
     effect_after_mount(move || {
-        replace_query(
-            Page::Fuzzy,
-            &[("rules".to_string(), encode_rule_table(&fuzzy.table.get()))],
-        );
+        let query = fuzzy.query();
+        store(STORED_LINK_KEY, &hash_with_query(Page::Fuzzy, &query));
+        replace_query(Page::Fuzzy, &query);
     });
+    Effect::new(move |_| fuzzy.engine_text.with(|text| store(STORED_TEXT_KEY, text)));
     let run = RunMoment::new(fuzzy);
     let run_for_charts = run.clone();
     view! {

@@ -66,20 +66,57 @@ fn cell(fuzzy: Fuzzy, e: usize, ec: usize) -> impl IntoView {
     }
 }
 
+/// The controller that runs `table`, as a link's `controller` and `rules`: a built-in rule
+/// base is its own controller (`fuzzy-experience`, `fuzzy-dynamics`), so Simulate and Compare
+/// name the table run; an edited table runs on `fuzzy-dynamics` with its `rules`.
+fn controller_of(table: &RuleTable) -> (ControllerKind, Option<String>) {
+    if *table == RuleBase::Experience.table() {
+        (ControllerKind::FuzzyExperience, None)
+    } else if *table == RuleBase::Dynamics.table() {
+        (ControllerKind::FuzzyDynamics, None)
+    } else {
+        (
+            ControllerKind::FuzzyDynamics,
+            Some(encode_rule_table(table)),
+        )
+    }
+}
+
+/// The query pairs of the controller that runs `table` ([`controller_of`]), each key after
+/// `prefix` (Compare's `b.`).
+fn controller_query(table: &RuleTable, prefix: &str) -> Vec<(String, String)> {
+    let (kind, rules) = controller_of(table);
+    let mut q = vec![(format!("{prefix}controller"), kind.name().to_string())];
+    q.extend(rules.map(|r| (format!("{prefix}rules"), r)));
+    q
+}
+
+/// Simulate with `table` on paper 002's preset.
+fn simulate_href(table: &RuleTable) -> String {
+    let mut q = vec![(
+        "preset".to_string(),
+        Preset::LiuCurrentStep.name().to_string(),
+    )];
+    q.extend(controller_query(table, ""));
+    hash_with_query(Page::Simulate, &q)
+}
+
 /// Compare with `table` as variant B beside paper 002's own dynamics table (variant A), on
 /// paper 002's preset, in the URL form Compare's controller forms read.
 fn compare_href(table: &RuleTable) -> String {
-    let fuzzy_dynamics = ControllerKind::FuzzyDynamics.name().to_string();
-    hash_with_query(
-        Page::Compare,
-        &[
-            ("preset".into(), Preset::LiuCurrentStep.name().into()),
-            ("variants".into(), "2".into()),
-            ("a.controller".into(), fuzzy_dynamics.clone()),
-            ("b.controller".into(), fuzzy_dynamics),
-            ("b.rules".into(), encode_rule_table(table)),
-        ],
-    )
+    let mut q = vec![
+        (
+            "preset".to_string(),
+            Preset::LiuCurrentStep.name().to_string(),
+        ),
+        ("variants".to_string(), "2".to_string()),
+        (
+            "a.controller".to_string(),
+            ControllerKind::FuzzyDynamics.name().to_string(),
+        ),
+    ];
+    q.extend(controller_query(table, "b."));
+    hash_with_query(Page::Compare, &q)
 }
 
 /// The rule table's fieldset.
@@ -99,11 +136,20 @@ pub fn RuleTablePanel(fuzzy: Fuzzy) -> impl IntoView {
                     .iter()
                     .map(|b| {
                         let b = *b;
+                        // Pressed while the table studied is this base's, unedited.
+                        let pressed = move || {
+                            matches!(source.get(), Source::Table) && table.with(|t| *t == b.table())
+                        };
                         view! {
-                            <button type="button" on:click=move |_| {
-                                table.set(b.table());
-                                source.set(Source::Table);
-                            }>
+                            <button
+                                type="button"
+                                class="toggle"
+                                aria-pressed=move || if pressed() { "true" } else { "false" }
+                                on:click=move |_| {
+                                    table.set(b.table());
+                                    source.set(Source::Table);
+                                }
+                            >
                                 {b.label()}
                             </button>
                         }
@@ -153,15 +199,52 @@ pub fn RuleTablePanel(fuzzy: Fuzzy) -> impl IntoView {
                 options=Defuzzifier::ALL.iter().map(|d| (d.name(), d.label())).collect()
                 value=defuzzifier
             />
-            <p class="hint">
-                <a href=move || format!(
-                    "#/simulate?preset=liu-current-step&controller=fuzzy-dynamics&rules={}",
-                    encode_rule_table(&table.get())
-                )>"Simulate with this table"</a>
+            // An imported engine has its own links (the Engine panel's); these run the table.
+            <p class="hint" hidden=move || !matches!(source.get(), Source::Table)>
+                <a href=move || simulate_href(&table.get())>"Simulate with this table"</a>
                 " · "
                 <a href=move || compare_href(&table.get())>"Open in Compare"</a>
                 " (beside paper 002's own table)"
             </p>
         </fieldset>
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_built_in_table_runs_as_its_own_controller_and_an_edited_one_with_its_rules() {
+        let experience = RuleBase::Experience.table();
+        assert_eq!(
+            controller_of(&experience),
+            (ControllerKind::FuzzyExperience, None)
+        );
+        assert_eq!(
+            controller_of(&RuleBase::Dynamics.table()),
+            (ControllerKind::FuzzyDynamics, None)
+        );
+        let mut edited = experience;
+        edited[0][0] = 3;
+        assert_eq!(
+            controller_of(&edited),
+            (
+                ControllerKind::FuzzyDynamics,
+                Some(encode_rule_table(&edited))
+            )
+        );
+        // Compare's variant B is named by its controller: the experience table's, not A's.
+        assert_eq!(
+            controller_query(&experience, "b."),
+            vec![("b.controller".to_string(), "fuzzy-experience".to_string())]
+        );
+        assert_eq!(
+            controller_query(&edited, "b."),
+            vec![
+                ("b.controller".to_string(), "fuzzy-dynamics".to_string()),
+                ("b.rules".to_string(), encode_rule_table(&edited)),
+            ]
+        );
     }
 }

@@ -25,6 +25,7 @@ use crate::closed_loop::recording_jobs::OpenLoopRequest;
 use crate::closed_loop::transfer::JobRequest;
 use crate::input::table::{self, form_errors};
 use crate::plant::recording::{BlockRow, OpenLoopRecording, OpenLoopRun, OpenLoopSetting};
+use crate::plant::scenario::Profile;
 use crate::plant::Preset;
 use crate::web::components::chart::ChartCanvas;
 use crate::web::components::fields::SelectField;
@@ -55,6 +56,28 @@ fn time_chart(y: &str, series: Vec<Series>) -> LineChart {
     c
 }
 
+/// `profile`'s points drawn over the whole path (0 to `length_mm`): a profile is constant beyond
+/// its ends ([`Profile::value_at`]), so the first value is drawn back to the start and the last
+/// held section to the end — a constant profile (one point) is a line, not a dot.
+fn profile_along_path(profile: &Profile, length_mm: f64) -> Vec<(f64, f64)> {
+    let mut points: Vec<(f64, f64)> = profile
+        .points()
+        .iter()
+        .map(|p| (p.position_mm, p.value))
+        .collect();
+    if let Some(&(first_mm, first)) = points.first() {
+        if first_mm > 0.0 {
+            points.insert(0, (0.0, first));
+        }
+    }
+    if let Some(&(last_mm, last)) = points.last() {
+        if last_mm < length_mm {
+            points.push((length_mm, last));
+        }
+    }
+    points
+}
+
 /// Every chart of a recording, in page order, with its accessible name.
 fn recording_charts(rec: &OpenLoopRecording) -> Vec<(&'static str, LineChart)> {
     let r = &rec.rows;
@@ -76,22 +99,12 @@ fn recording_charts(rec: &OpenLoopRecording) -> Vec<(&'static str, LineChart)> {
         depth.series.push(Series::new(
             "axial depth",
             PALETTE[0],
-            scenario
-                .depth_profile()
-                .points()
-                .iter()
-                .map(|p| (p.position_mm, p.value))
-                .collect(),
+            profile_along_path(scenario.depth_profile(), scenario.total_length_mm()),
         ));
         depth.series.push(Series::new(
             "radial width",
             PALETTE[1],
-            scenario
-                .width_profile()
-                .points()
-                .iter()
-                .map(|p| (p.position_mm, p.value))
-                .collect(),
+            profile_along_path(scenario.width_profile(), scenario.total_length_mm()),
         ));
         depth.fit();
         charts.push(("Depth and width of cut along the path", depth));
@@ -421,5 +434,36 @@ pub fn PlantPage() -> impl IntoView {
             <LearningPanel preset=preset />
             <OwnCutsPanel />
         </PageShell>
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_cut_profiles_are_drawn_over_the_whole_path() {
+        let preset = Preset::from_name("kim-step-doc").expect("a preset");
+        let scenario = preset.scenario().expect("a mill preset");
+        let length_mm = scenario.total_length_mm();
+        let depth = profile_along_path(scenario.depth_profile(), length_mm);
+        let width = profile_along_path(scenario.width_profile(), length_mm);
+        // The depth's last breakpoint is before the end of the path: its section is held there.
+        let last_break_mm = scenario
+            .depth_profile()
+            .points()
+            .last()
+            .expect("points")
+            .position_mm;
+        assert!(last_break_mm < length_mm, "{last_break_mm} vs {length_mm}");
+        for line in [&depth, &width] {
+            assert_eq!(line.first().map(|p| p.0), Some(0.0));
+            assert_eq!(line.last().map(|p| p.0), Some(length_mm));
+        }
+        let held = scenario.depth_profile().value_at(length_mm);
+        assert_eq!(depth.last().map(|p| p.1), Some(held));
+        // A constant width is a line over the path, not a single point.
+        assert_eq!(scenario.width_profile().points().len(), 1);
+        assert_eq!(width.len(), 2);
     }
 }
