@@ -97,7 +97,7 @@ impl StudentProgress {
                 .and_then(|l| l.steps.get(index))
                 .map(|s| s.title.clone()),
         };
-        let report = Report {
+        let report = ProgressReport {
             steps_counted_from: 1,
             open: self.open.clone(),
             lessons: self
@@ -126,7 +126,7 @@ impl StudentProgress {
 
 /// The downloaded progress ([`StudentProgress::to_report_json`]).
 #[derive(Serialize)]
-struct Report {
+struct ProgressReport {
     /// Always 1: every step number below counts as the panel does.
     steps_counted_from: u8,
     open: Option<String>,

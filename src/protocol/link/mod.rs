@@ -10,6 +10,11 @@
 //! in-process with pipes. The host speaks over a [`Line`]: that threaded reader and a writer, or a
 //! [`LockstepLine`] to an emulator in the same process with no latency and no clock, which makes
 //! a run over the protocol deterministic (docs/protocol.md §8, "What the protocol costs").
+//!
+//! | file | what |
+//! |---|---|
+//! | this file | the device emulator on the wall clock, the host's link and its lines |
+//! | `part` | [`LinkPart`]: one part the device runs, as the Machine the closed loop drives |
 
 use std::cell::RefCell;
 use std::io::{Read, Write};
