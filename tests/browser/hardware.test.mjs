@@ -351,14 +351,19 @@ test('a real device behind a fake serial port: handshake, teach cut, arm, acknow
 test('the virtual device with injected faults: counters, the device watchdog, the host watchdog, and a reload mid-run', async () => {
   const { page, problems, context } = await openWith('#/hardware?preset=maneerat-doc-1');
   await page.getByLabel('Program (preset)').selectOption('maneerat-doc-1');
-  await page.getByLabel('Time scale').fill('4');
+  await page.getByLabel('Time scale').fill('2');
   await page.getByLabel('Drop rate').fill('0.01');
   await page.getByLabel('Noise rate').fill('0.01');
   // The receiver stalls for 3 s inside the teach cut's part, longer than the device's 2 s
-  // watchdog (2 s, not 0.5 s: at 4x the page has half a second of wall time to answer each
-  // tick, which a busy computer always gives, docs/hardware.md §6).
+  // watchdog (2 s, not 0.5 s: at 2x the page has a second of wall time to answer each tick,
+  // which a busy computer always gives, docs/hardware.md §6). The part starts when the teach
+  // cut arms the device, about a second of device time after power-on here, and lasts 15 s;
+  // the stall must begin after the arm, or the device never armed has no watchdog to trip.
+  // At 10 s of device time, it leaves the test 4.5 s of wall time to confirm the teach cut
+  // (at 6 s and 4x it left 1.2 s, which a loaded CI machine once missed), and it ends, with
+  // the host's re-arm, well before the part's end.
   await page.getByLabel('Device watchdog').fill('2');
-  await page.getByLabel('Receiver stall at').fill('6');
+  await page.getByLabel('Receiver stall at').fill('10');
   await page.getByLabel('Receiver stall for').fill('3');
   await page.getByRole('button', { name: 'Start the virtual device' }).click();
   await page.getByText('Link state: streaming').waitFor({ timeout: LONG });
@@ -381,7 +386,7 @@ test('the virtual device with injected faults: counters, the device watchdog, th
   await page.getByText(/teach cut over the link/).first().waitFor({ timeout: LONG });
   await page.getByText('Link state: streaming').waitFor();
   await confirm(page, 'Arm…', 'Arm now', [/Overload/]);
-  // A reload while the loop runs (a second of it in: 4000 samples at 4× real time): the
+  // A reload while the loop runs (two seconds of it in: 4000 samples at 2× real time): the
   // recording so far is offered afterwards.
   await page.waitForFunction(() => /recording “.*closed loop”: ([4-9]\d{3}|\d{5,}) rows/.test(document.body.innerText), null, { timeout: LONG });
   const shown = await page.getByText(/recording “.*closed loop”: \d+ rows/).textContent();
@@ -391,7 +396,7 @@ test('the virtual device with injected faults: counters, the device watchdog, th
   const offered = page.getByRole('region', { name: 'Unfinished recordings' });
   await offered.waitFor({ timeout: LONG });
   const stored = Number((await offered.getByRole('listitem').first().textContent()).match(/(\d+) rows/)[1]);
-  // At most a second of it is lost: 4000 samples at 4× real time and 1 kHz.
+  // At most two seconds of it are lost: 4000 samples at 2× real time and 1 kHz.
   assert.ok(stored >= rowsShown - 4000 && stored > 0, `${stored} rows stored of ${rowsShown} shown`);
   await offered.getByRole('button', { name: /^Keep / }).click();
   await offered.waitFor({ state: 'detached' });
@@ -403,10 +408,12 @@ test('the virtual device with injected faults: counters, the device watchdog, th
   await kept.waitFor({ state: 'detached' });
   assert.equal(await page.getByRole('table', { name: 'Stored recordings' }).getByRole('row').count(), recordings - 1);
 
-  // Again, to the host's watchdog: the virtual cable comes out at 22 s of device time, during
-  // the closed loop's part (the teach cut's part ends about 17 s after power-on).
+  // Again, to the host's watchdog: the virtual cable comes out at 26 s of device time, during
+  // the closed loop's part. The teach cut's part ends about 16 s after power-on, and the
+  // closed loop's (12–13 s long) must be armed before the cable comes out: 10 s of device time,
+  // 2.5 s of wall time at 4x, for the test to confirm the arming.
   await page.getByLabel('Time scale').fill('4');
-  await page.getByLabel('Cable pulled at').fill('22');
+  await page.getByLabel('Cable pulled at').fill('26');
   await page.getByLabel('Host watchdog').fill('1');
   await page.getByRole('button', { name: 'Start the virtual device' }).click();
   await page.getByText('Link state: streaming').waitFor({ timeout: LONG });
