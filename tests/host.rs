@@ -43,6 +43,12 @@ static ONE_AT_A_TIME: Mutex<()> = Mutex::new(());
 
 const TIME_SCALE: f64 = 20.0;
 
+/// The device's watchdog in the real-time tests that are not about it: 20 s of device time, a
+/// second of wall time at 20×, so a loaded machine (another build beside the tests, load average
+/// 8) that holds the host thread up for a few tenths of a second does not trip it. The watchdog
+/// tests themselves give it 10 or 15 s (0.5 or 0.75 s of wall time) and a fault longer still.
+const CALM_WATCHDOG_S: f64 = 20.0;
+
 /// The device on a thread and the host on this one, joined by two pipes (the caller holds
 /// [`ONE_AT_A_TIME`]).
 fn host_against_emulator(
@@ -84,9 +90,9 @@ fn host_against_emulator_calibrated(
     (run, stats, diagnostics)
 }
 
-/// The emulator of kim-step-doc with a watchdog of `watchdog_s` device seconds. Tests that are
-/// not about the watchdog give it 5 s (a quarter second of wall time at 20×), so a busy machine
-/// that holds the host up for a moment does not trip it.
+/// The emulator of kim-step-doc with a watchdog of `watchdog_s` device seconds. Tests in real
+/// time that are not about the watchdog give it [`CALM_WATCHDOG_S`]; the lockstep tests, which
+/// have no wall clock, 5 s.
 fn kim_device(watchdog_s: f64) -> DeviceConfig {
     let mut config = DeviceConfig::new(Preset::KimStepDoc);
     config.watchdog_timeout_s = watchdog_s;
@@ -274,7 +280,7 @@ fn the_closed_loop_over_the_protocol_matches_the_simulation() {
     let spec = kim_threshold();
     let sim = simulate(&spec).unwrap();
     let (run, device, diagnostics) =
-        host_against_emulator(kim_device(5.0), &spec, HostOptions::default());
+        host_against_emulator(kim_device(CALM_WATCHDOG_S), &spec, HostOptions::default());
     assert_like_sim(&sim, &run);
     let s = run.stats;
     assert!(!run.link_lost, "{:?}", run.events);
@@ -299,7 +305,7 @@ fn a_saved_calibration_replaces_the_teach_cut_over_the_link() {
     let saved = CalibrationFile::new(sim.calibration.clone(), "sim teach cut").to_json();
     let calibration = CalibrationFile::from_json(&saved).unwrap().calibration;
     let (run, device, diagnostics) = host_against_emulator_calibrated(
-        kim_device(5.0),
+        kim_device(CALM_WATCHDOG_S),
         &spec,
         HostOptions::default(),
         Some(calibration),
@@ -358,7 +364,7 @@ fn a_bridge_without_truth_is_taught_by_the_cut_model_or_needs_a_calibration() {
     );
 
     // kim-step-doc's depth steps along the part: without truth the host refuses to guess.
-    let mut config = kim_device(5.0);
+    let mut config = kim_device(CALM_WATCHDOG_S);
     config.sim_truth = false;
     let (run, _, _) = host_against_emulator(config, &kim_threshold(), HostOptions::default());
     let e = run.result.unwrap_err().to_string();
@@ -370,7 +376,7 @@ fn a_lossy_noisy_line_still_completes_and_the_losses_are_counted() {
     let _one = ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner());
     let spec = kim_threshold();
     let sim = simulate(&spec).unwrap();
-    let mut config = kim_device(5.0);
+    let mut config = kim_device(CALM_WATCHDOG_S);
     config.faults = FaultInjection {
         drop_rate: 0.01,
         noise_rate: 0.01,
@@ -394,13 +400,15 @@ fn a_lossy_noisy_line_still_completes_and_the_losses_are_counted() {
 #[test]
 fn an_unplugged_cable_alarms_the_host_and_the_device_falls_back() {
     let _one = ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner());
-    // The device's watchdog (5 s of device time) fires while the host's (1 s of wall time, 20 s
-    // of device time) is still waiting.
-    let mut config = kim_device(5.0);
+    // The device's watchdog (15 s of device time, 0.75 s of wall time) fires while the host's
+    // (2 s of wall time, 40 s of device time) is still waiting; each is long enough that a loaded
+    // machine holding a thread up for a few tenths of a second trips neither before the cable
+    // comes out.
+    let mut config = kim_device(15.0);
     // In the closed loop (the teach cut's part takes the first 66 s of device time).
     config.faults.unplug_at_s = Some(100.0);
     let options = HostOptions {
-        link_timeout_s: 1.0,
+        link_timeout_s: 2.0,
         ..HostOptions::default()
     };
     let (run, device, diagnostics) = host_against_emulator(config, &kim_threshold(), options);
@@ -425,11 +433,12 @@ fn an_unplugged_cable_alarms_the_host_and_the_device_falls_back() {
 #[test]
 fn a_stalled_receiver_fires_the_device_watchdog_and_both_sides_report_it() {
     let _one = ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner());
-    // A 4 s stall against a 2 s watchdog: the stall fires it, a hiccup of the test machine
-    // (under 0.1 s of wall time) does not.
-    let mut config = kim_device(2.0);
+    // A 12 s stall against a 10 s watchdog: the stall fires it, a hiccup of the test machine
+    // (under half a second of wall time at 20×) does not. The stall outlasts the watchdog by
+    // less than the device's 5 s limit on a fallback, beyond which it would latch a feed hold.
+    let mut config = kim_device(10.0);
     config.faults.stall_at_s = Some(90.0);
-    config.faults.stall_s = 4.0;
+    config.faults.stall_s = 12.0;
     let (run, device, diagnostics) =
         host_against_emulator(config, &kim_threshold(), HostOptions::default());
     assert_eq!(device.watchdog_fallbacks, 1, "{diagnostics}");
@@ -463,9 +472,9 @@ fn a_watchdog_fallback_in_the_teach_cut_abandons_it_and_arms_no_run() {
     // The same stall as above, inside the teach cut's part (its first 66 s of device time): the
     // machine runs at the fallback's 50 % while the teach schedule would label those periods
     // with its own overrides, so no calibration may be made of it, and no run follows.
-    let mut config = kim_device(2.0);
+    let mut config = kim_device(10.0);
     config.faults.stall_at_s = Some(20.0);
-    config.faults.stall_s = 4.0;
+    config.faults.stall_s = 12.0;
     let (run, device, diagnostics) =
         host_against_emulator(config, &kim_threshold(), HostOptions::default());
     assert_eq!(device.watchdog_fallbacks, 1, "{diagnostics}");
@@ -741,7 +750,7 @@ fn the_binary_runs_the_host_against_the_binary_device() {
     let exe = env!("CARGO_BIN_EXE_cutlab");
     let dir = scratch("binary");
     let device =
-        format!("{exe} device --stdio --scenario maneerat-doc-1 --time-scale 20 --watchdog-s 5");
+        format!("{exe} device --stdio --scenario maneerat-doc-1 --time-scale 20 --watchdog-s 20");
     let (out, report) = cutlab_host(&dir, &["--device-cmd", &device, "--controller", "pi"]);
     let stdout = String::from_utf8_lossy(&out.stdout);
     let stderr = String::from_utf8_lossy(&out.stderr);
@@ -803,7 +812,7 @@ fn the_host_runs_an_imported_fuzzy_engine() {
     );
     let engine_text = std::fs::read_to_string(engine_path).unwrap();
     let device =
-        format!("{exe} device --stdio --scenario maneerat-doc-1 --time-scale 20 --watchdog-s 5");
+        format!("{exe} device --stdio --scenario maneerat-doc-1 --time-scale 20 --watchdog-s 20");
     let (out, report) = cutlab_host(
         &dir,
         &[
@@ -922,8 +931,10 @@ fn the_report_is_written_when_the_link_is_lost_in_the_teach_cut_or_the_device_is
     let _ = std::fs::remove_dir_all(&dir);
 }
 
-/// `cutlab host` running PI against maneerat-doc-1's emulated device (20× its time, a 5 s
-/// watchdog) whose cable is pulled at `unplug_at_s` of device time; the host waits 0.5 s.
+/// `cutlab host` running PI against maneerat-doc-1's emulated device (20× its time, a 20 s
+/// watchdog: a second of wall time) whose cable is pulled at `unplug_at_s` of device time; the
+/// host waits 1 s (both long enough that a loaded machine holding a process up for a few tenths
+/// of a second trips neither before the cable comes out).
 #[cfg(feature = "cli")]
 fn pi_host_unplugged_at(
     dir: &std::path::Path,
@@ -931,7 +942,7 @@ fn pi_host_unplugged_at(
 ) -> (std::process::Output, Option<serde_json::Value>) {
     let exe = env!("CARGO_BIN_EXE_cutlab");
     let device = format!(
-        "{exe} device --stdio --scenario maneerat-doc-1 --time-scale 20 --watchdog-s 5 \
+        "{exe} device --stdio --scenario maneerat-doc-1 --time-scale 20 --watchdog-s 20 \
          --unplug-at-s {unplug_at_s}"
     );
     cutlab_host(
@@ -942,7 +953,7 @@ fn pi_host_unplugged_at(
             "--controller",
             "pi",
             "--link-timeout-s",
-            "0.5",
+            "1",
         ],
     )
 }
