@@ -29,7 +29,7 @@ use std::fmt::Write as _;
 use super::engine::{
     Antecedent, Conclusion, Defuzzifier, Engine, Hedge, InputVariable, Norm, Operators,
     OutputVariable, Proposition, Rule, RuleBlock, SNorm, Term, VariableRef, WeightedKind,
-    DEFAULT_RESOLUTION, FUZZYLITE_EPSILON,
+    DEFAULT_RESOLUTION, FUZZYLITE_EPSILON, NO_RULES_WHY,
 };
 use super::fll::{float, formula_names, number};
 use super::function::Formula;
@@ -362,7 +362,7 @@ pub fn parse(text: &str) -> Result<Engine, FuzzyError> {
     // Checked after the engine builds, so a missing variable is named first (as FLL does).
     let engine = Engine::with_blocks(name, inputs, outputs, vec![block], FUZZYLITE_EPSILON)?;
     if no_rules {
-        let why = crate::control::fuzzy::fll::NO_RULES_WHY;
+        let why = NO_RULES_WHY;
         let why = format!("{why}; add a line per rule under [Rules] (\"1 2, 1 (1) : 1\")");
         return Err(match rules_section_line {
             Some(line) => error(line, format!("the [Rules] section is empty: {why}")),

@@ -24,7 +24,7 @@ use std::fmt::Write as _;
 use super::engine::{
     Antecedent, Conclusion, Defuzzifier, Engine, Hedge, InputVariable, Norm, Operators,
     OutputVariable, Proposition, Rule, RuleBlock, SNorm, Term, VariableRef, WeightedKind,
-    DEFAULT_RESOLUTION, FUZZYLITE_EPSILON,
+    DEFAULT_RESOLUTION, FUZZYLITE_EPSILON, NO_RULES_WHY,
 };
 use super::function::{Formula, Var};
 use super::membership::Shape;
@@ -295,11 +295,6 @@ pub fn parse(text: &str) -> Result<Engine, FuzzyError> {
     let engine = Engine::with_blocks(name, inputs, outputs, blocks, FUZZYLITE_EPSILON)?;
     no_rules.map(|()| engine)
 }
-
-/// Why an engine file without a single rule is refused (FLL and FIS alike): fuzzylite loads one,
-/// but a controller running it would hold a fixed feed without a word.
-pub(crate) const NO_RULES_WHY: &str =
-    "a fuzzy engine without rules holds every output at its default whatever its inputs";
 
 /// An engine without a single rule is refused: every output would hold its default whatever the
 /// inputs, so a controller running it would output nothing and a feed would stay fixed without a

@@ -16,6 +16,13 @@ use crate::control::fuzzy::FuzzyError;
 /// never allocates); paper 002's engine has 7.
 pub const CROSSING_RESERVE_TERMS: usize = 64;
 
+/// Why an engine file without a single rule is refused, by the FLL and the FIS reader alike (each
+/// says where, in its own terms): fuzzylite loads one, but a controller running it would hold a
+/// fixed feed without a word. (An engine built in code may have no rules: a test's, or one being
+/// assembled.)
+pub(crate) const NO_RULES_WHY: &str =
+    "a fuzzy engine without rules holds every output at its default whatever its inputs";
+
 /// The name of what a rule refers to, for messages.
 fn rule_error(number: usize, message: impl std::fmt::Display) -> FuzzyError {
     FuzzyError::new(format!("rule {number}: {message}"))

@@ -73,6 +73,7 @@ use std::ops::Range;
 
 pub use super::FUZZYLITE_EPSILON;
 pub use build::CROSSING_RESERVE_TERMS;
+pub(crate) use build::NO_RULES_WHY;
 pub use defuzzify::{Defuzzifier, WeightedKind};
 pub use operators::{Hedge, Norm, SNorm};
 pub use rule::{
