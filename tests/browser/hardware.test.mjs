@@ -414,8 +414,8 @@ test('the virtual device with injected faults: counters, the device watchdog, th
   // Again, to the host's watchdog: the virtual cable comes out at 26 s of device time, during
   // the closed loop's part. The teach cut's part ends about 16 s after power-on, and the
   // closed loop's (12–13 s long) must be armed before the cable comes out: 10 s of device time,
-  // 2.5 s of wall time at 4x, for the test to confirm the arming.
-  await page.getByLabel('Time scale').fill('4');
+  // 5 s of wall time at 2x, for the test to confirm the arming.
+  await page.getByLabel('Time scale').fill('2');
   await page.getByLabel('Cable pulled at').fill('26');
   await page.getByLabel('Host watchdog').fill('1');
   await page.getByRole('button', { name: 'Start the virtual device' }).click();
