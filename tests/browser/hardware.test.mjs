@@ -57,6 +57,13 @@ async function waitForCounter(page, name, ok, timeout = LONG) {
   }
 }
 
+/** `error` with the page's event log appended: a wait that timed out says what the link did. */
+async function withEventLog(page, error) {
+  const log = await page.getByRole('region', { name: 'Events' }).innerText({ timeout: 2000 }).catch(() => '(no event log)');
+  error.message += `\nThe page's events:\n${log}`;
+  return error;
+}
+
 /** Confirms the dialog the button `opener` opens, checking it names the limits. */
 async function confirm(page, opener, confirmName, mentions) {
   await page.getByRole('button', { name: opener }).click();
@@ -352,88 +359,93 @@ test('a real device behind a fake serial port: handshake, teach cut, arm, acknow
 
 test('the virtual device with injected faults: counters, the device watchdog, the host watchdog, and a reload mid-run', async () => {
   const { page, problems, context } = await openWith('#/hardware?preset=maneerat-doc-1');
-  await page.getByLabel('Program (preset)').selectOption('maneerat-doc-1');
-  await page.getByLabel('Time scale').fill('2');
-  await page.getByLabel('Drop rate').fill('0.01');
-  await page.getByLabel('Noise rate').fill('0.01');
-  // The receiver stalls for 3 s inside the teach cut's part, longer than the device's 2 s
-  // watchdog (2 s, not 0.5 s: at 2x the page has a second of wall time to answer each tick,
-  // which a busy computer always gives, docs/hardware.md §6). The part starts when the teach
-  // cut arms the device, about a second of device time after power-on here, and lasts 15 s;
-  // the stall must begin after the arm, or the device never armed has no watchdog to trip.
-  // At 10 s of device time, it leaves the test 4.5 s of wall time to confirm the teach cut
-  // (at 6 s and 4x it left 1.2 s, which a loaded CI machine once missed), and it ends, with
-  // the host's re-arm, well before the part's end.
-  await page.getByLabel('Device watchdog').fill('2');
-  await page.getByLabel('Receiver stall at').fill('10');
-  await page.getByLabel('Receiver stall for').fill('3');
-  await page.getByRole('button', { name: 'Start the virtual device' }).click();
-  await page.getByText('Link state: streaming').waitFor({ timeout: LONG });
-  const longestTask = await watchLongTasks(page);
-  await confirm(page, 'Teach cut…', 'Start the teach cut', [/teach-cut overrides/]);
-  // Lost and corrupted frames are counted as they happen.
-  await waitForCounter(page, 'Samples lost (sequence gaps)', (n) => n > 10);
-  await waitForCounter(page, 'Frames rejected (CRC, COBS, size)', (n) => n > 5);
-  await waitForCounter(page, 'Bytes dropped (part of no frame)', (n) => n > 0);
-  // The stall: the device falls back, the host sees it and re-arms; the teach cut, whose fit
-  // would take the fallback's samples for the schedule's overrides, is abandoned and the page
-  // says so.
-  await waitForCounter(page, 'Device watchdog fallbacks', (n) => n >= 1);
-  await page.getByText(/re-arming the device after its watchdog fallback/).first().waitFor();
-  await page.getByText(/device back under the host's control/).first().waitFor({ timeout: LONG });
-  await page.getByText(/teach cut abandoned: the device's watchdog fell back/).first().waitFor({ timeout: LONG });
-  // Once the part ends (handed back), the teach cut runs again on the next part.
-  await page.getByText(/the part ended: the device handed back/).first().waitFor({ timeout: LONG });
-  await confirm(page, 'Teach cut…', 'Start the teach cut', [/teach-cut overrides/]);
-  await page.getByText(/teach cut over the link/).first().waitFor({ timeout: LONG });
-  await page.getByText('Link state: streaming').waitFor();
-  await confirm(page, 'Arm…', 'Arm now', [/Overload/]);
-  // A reload while the loop runs (two seconds of it in: 4000 samples at 2× real time): the
-  // recording so far is offered afterwards.
-  await page.waitForFunction(() => /recording “.*closed loop”: ([4-9]\d{3}|\d{5,}) rows/.test(document.body.innerText), null, { timeout: LONG });
-  const shown = await page.getByText(/recording “.*closed loop”: \d+ rows/).textContent();
-  const rowsShown = Number(shown.match(/: (\d+) rows/)[1]);
-  assert.ok((await longestTask()) < 200, `the page froze for ${await longestTask()} ms`);
-  await page.reload();
-  const offered = page.getByRole('region', { name: 'Unfinished recordings' });
-  await offered.waitFor({ timeout: LONG });
-  const stored = Number((await offered.getByRole('listitem').first().textContent()).match(/(\d+) rows/)[1]);
-  // At most a second of it is lost (the recording is stored every 0.5 s): 2000 samples at 2×
-  // real time and 1 kHz.
-  assert.ok(stored >= rowsShown - 2000 && stored > 0, `${stored} rows stored of ${rowsShown} shown`);
-  await offered.getByRole('button', { name: /^Keep / }).click();
-  await offered.waitFor({ state: 'detached' });
-  const kept = page.getByRole('table', { name: 'Stored recordings' }).getByRole('row').filter({ hasText: /cut short: the page closed/ });
-  await kept.waitFor();
-  // Deleted, it is gone from the list, which is read back from the store.
-  const recordings = await page.getByRole('table', { name: 'Stored recordings' }).getByRole('row').count();
-  await kept.getByRole('button', { name: /^Delete / }).click();
-  await kept.waitFor({ state: 'detached' });
-  assert.equal(await page.getByRole('table', { name: 'Stored recordings' }).getByRole('row').count(), recordings - 1);
+  try {
+    await page.getByLabel('Program (preset)').selectOption('maneerat-doc-1');
+    await page.getByLabel('Time scale').fill('2');
+    await page.getByLabel('Drop rate').fill('0.01');
+    await page.getByLabel('Noise rate').fill('0.01');
+    // The receiver stalls for 3 s inside the teach cut's part, longer than the device's 2 s
+    // watchdog (2 s, not 0.5 s: at 2x the page has a second of wall time to answer each tick,
+    // which a busy computer always gives, docs/hardware.md §6). The part starts when the teach
+    // cut arms the device, about a second of device time after power-on here, and lasts 15 s;
+    // the stall must begin after the arm, or the device never armed has no watchdog to trip.
+    // At 10 s of device time, it leaves the test 4.5 s of wall time to confirm the teach cut
+    // (at 6 s and 4x it left 1.2 s, which a loaded CI machine once missed), and it ends, with
+    // the host's re-arm, well before the part's end.
+    await page.getByLabel('Device watchdog').fill('2');
+    await page.getByLabel('Receiver stall at').fill('10');
+    await page.getByLabel('Receiver stall for').fill('3');
+    await page.getByRole('button', { name: 'Start the virtual device' }).click();
+    await page.getByText('Link state: streaming').waitFor({ timeout: LONG });
+    const longestTask = await watchLongTasks(page);
+    await confirm(page, 'Teach cut…', 'Start the teach cut', [/teach-cut overrides/]);
+    // Lost and corrupted frames are counted as they happen.
+    await waitForCounter(page, 'Samples lost (sequence gaps)', (n) => n > 10);
+    await waitForCounter(page, 'Frames rejected (CRC, COBS, size)', (n) => n > 5);
+    await waitForCounter(page, 'Bytes dropped (part of no frame)', (n) => n > 0);
+    // The stall: the device falls back, the host sees it and re-arms; the teach cut, whose fit
+    // would take the fallback's samples for the schedule's overrides, is abandoned and the page
+    // says so.
+    await waitForCounter(page, 'Device watchdog fallbacks', (n) => n >= 1);
+    await page.getByText(/re-arming the device after its watchdog fallback/).first().waitFor();
+    await page.getByText(/device back under the host's control/).first().waitFor({ timeout: LONG });
+    await page.getByText(/teach cut abandoned: the device's watchdog fell back/).first().waitFor({ timeout: LONG });
+    // Once the part ends (handed back), the teach cut runs again on the next part.
+    await page.getByText(/the part ended: the device handed back/).first().waitFor({ timeout: LONG });
+    await confirm(page, 'Teach cut…', 'Start the teach cut', [/teach-cut overrides/]);
+    await page.getByText(/teach cut over the link/).first().waitFor({ timeout: LONG });
+    await page.getByText('Link state: streaming').waitFor();
+    await confirm(page, 'Arm…', 'Arm now', [/Overload/]);
+    // A reload while the loop runs (two seconds of it in: 4000 samples at 2× real time): the
+    // recording so far is offered afterwards.
+    await page.waitForFunction(() => /recording “.*closed loop”: ([4-9]\d{3}|\d{5,}) rows/.test(document.body.innerText), null, { timeout: LONG });
+    const shown = await page.getByText(/recording “.*closed loop”: \d+ rows/).textContent();
+    const rowsShown = Number(shown.match(/: (\d+) rows/)[1]);
+    assert.ok((await longestTask()) < 200, `the page froze for ${await longestTask()} ms`);
+    await page.reload();
+    const offered = page.getByRole('region', { name: 'Unfinished recordings' });
+    await offered.waitFor({ timeout: LONG });
+    const stored = Number((await offered.getByRole('listitem').first().textContent()).match(/(\d+) rows/)[1]);
+    // At most a second of it is lost (the recording is stored every 0.5 s): 2000 samples at 2×
+    // real time and 1 kHz.
+    assert.ok(stored >= rowsShown - 2000 && stored > 0, `${stored} rows stored of ${rowsShown} shown`);
+    await offered.getByRole('button', { name: /^Keep / }).click();
+    await offered.waitFor({ state: 'detached' });
+    const kept = page.getByRole('table', { name: 'Stored recordings' }).getByRole('row').filter({ hasText: /cut short: the page closed/ });
+    await kept.waitFor();
+    // Deleted, it is gone from the list, which is read back from the store.
+    const recordings = await page.getByRole('table', { name: 'Stored recordings' }).getByRole('row').count();
+    await kept.getByRole('button', { name: /^Delete / }).click();
+    await kept.waitFor({ state: 'detached' });
+    assert.equal(await page.getByRole('table', { name: 'Stored recordings' }).getByRole('row').count(), recordings - 1);
 
-  // Again, to the host's watchdog: the virtual cable comes out at 26 s of device time, during
-  // the closed loop's part. The teach cut's part ends about 16 s after power-on, and the
-  // closed loop's (12–13 s long) must be armed before the cable comes out: 10 s of device time,
-  // 5 s of wall time at 2x, for the test to confirm the arming.
-  await page.getByLabel('Time scale').fill('2');
-  await page.getByLabel('Cable pulled at').fill('26');
-  await page.getByLabel('Host watchdog').fill('1');
-  await page.getByRole('button', { name: 'Start the virtual device' }).click();
-  await page.getByText('Link state: streaming').waitFor({ timeout: LONG });
-  await confirm(page, 'Teach cut…', 'Start the teach cut', [/teach-cut overrides/]);
-  await page.getByText(/teach cut over the link/).first().waitFor({ timeout: LONG });
-  await page.getByText('Link state: streaming').waitFor();
-  await confirm(page, 'Arm…', 'Arm now', [/alarms after 1 s without samples/]);
-  await page.getByText('Link state: alarm').waitFor({ timeout: LONG });
-  await page.getByRole('alert').filter({ hasText: 'host watchdog: no sample for 1 s while the part ran' }).waitFor();
-  assert.equal(await counter(page, 'Link losses (host watchdog, port lost)'), 1);
-  await page.getByRole('button', { name: 'Acknowledge the alarm' }).click();
-  await page.getByText(/The alarm stays: the device is still silent/).waitFor();
-  await screenshot(page, 'hardware-virtual-alarm');
-  await page.getByRole('button', { name: 'Disconnect' }).click();
-  await page.getByText('Link state: closed').waitFor();
-  assert.deepEqual(problems, []);
-  await context.close();
+    // Again, to the host's watchdog: the virtual cable comes out at 26 s of device time, during
+    // the closed loop's part. The teach cut's part ends about 16 s after power-on, and the
+    // closed loop's (12–13 s long) must be armed before the cable comes out: 10 s of device time,
+    // 5 s of wall time at 2x, for the test to confirm the arming.
+    await page.getByLabel('Time scale').fill('2');
+    await page.getByLabel('Cable pulled at').fill('26');
+    await page.getByLabel('Host watchdog').fill('1');
+    await page.getByRole('button', { name: 'Start the virtual device' }).click();
+    await page.getByText('Link state: streaming').waitFor({ timeout: LONG });
+    await confirm(page, 'Teach cut…', 'Start the teach cut', [/teach-cut overrides/]);
+    await page.getByText(/teach cut over the link/).first().waitFor({ timeout: LONG });
+    await page.getByText('Link state: streaming').waitFor();
+    await confirm(page, 'Arm…', 'Arm now', [/alarms after 1 s without samples/]);
+    await page.getByText('Link state: alarm').waitFor({ timeout: LONG });
+    await page.getByRole('alert').filter({ hasText: 'host watchdog: no sample for 1 s while the part ran' }).waitFor();
+    assert.equal(await counter(page, 'Link losses (host watchdog, port lost)'), 1);
+    await page.getByRole('button', { name: 'Acknowledge the alarm' }).click();
+    await page.getByText(/The alarm stays: the device is still silent/).waitFor();
+    await screenshot(page, 'hardware-virtual-alarm');
+    await page.getByRole('button', { name: 'Disconnect' }).click();
+    await page.getByText('Link state: closed').waitFor();
+    assert.deepEqual(problems, []);
+  } catch (e) {
+    throw await withEventLog(page, e);
+  } finally {
+    await context.close();
+  }
 });
 
 test('without WebSerial the page says why and what works instead; the virtual device runs from a saved calibration, and Escape returns to the safe override', async () => {
