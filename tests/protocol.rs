@@ -698,7 +698,7 @@ fn frame_to_json_line(f: &Frame) -> String {
 #[test]
 fn the_line_budget_table_in_the_specification_is_what_the_host_computes() {
     use cutlab::protocol::frame::{feature, measured};
-    use cutlab::protocol::host::LineBudget;
+    use cutlab::protocol::line_budget::LineBudget;
     let doc = include_str!("../docs/protocol.md");
     let caps = |rate: f32, truth: bool, baud: u32| Capabilities {
         version_major: 2,

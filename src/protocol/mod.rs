@@ -17,7 +17,8 @@
 //! |---|---|
 //! | [`crc`], [`cobs`], [`frame`], [`codec`] | the `no_std` codec: CRC-32, COBS, the frames and their layouts, framing |
 //! | [`json`] | frames as JSON lines (`cutlab protocol encode`/`decode`) |
-//! | [`host`] | the host's side without I/O: samples, faults, the stuck-override watch, the line budget |
+//! | [`line_budget`] | what a device's stream asks of its line against its baud rate, which both hosts check before arming |
+//! | [`host`] | the host's side without I/O: samples, faults, the stuck-override watch |
 //! | [`keep_up`] | keeping a device up: the command, heartbeats, re-arming after a watchdog fallback |
 //! | [`device`] | the device emulator without I/O: the simulated machine, its watchdog, fallback, latched hold and injected faults |
 //! | [`device_settings`] | the emulator's settings as one table, which `cutlab device` and the Hardware page's virtual device parse alike |
@@ -42,5 +43,6 @@ pub mod frame;
 pub mod host;
 pub mod json;
 pub mod keep_up;
+pub mod line_budget;
 #[cfg(not(target_arch = "wasm32"))]
 pub mod link;

@@ -6,8 +6,9 @@ use super::{HardwareSession, LinkState};
 use crate::closed_loop::sample_loop::SampleLoop;
 use crate::machine::OverrideCommand;
 use crate::protocol::frame::{Ack, Capabilities, FaultKind, FrameType, VERSION_MAJOR};
-use crate::protocol::host::{DeviceSummary, LineBudget, LinkEvent, HELLO_INTERVAL_S};
+use crate::protocol::host::{DeviceSummary, LinkEvent, HELLO_INTERVAL_S};
 use crate::protocol::keep_up::KeepUp;
+use crate::protocol::line_budget::LineBudget;
 
 impl HardwareSession {
     /// Takes the bytes that arrived at `now_s`.

@@ -27,10 +27,10 @@ use std::time::{Duration, Instant};
 use super::device::DeviceEmulator;
 use super::frame::{AckResult, Capabilities, FaultKind, VERSION_MAJOR, VERSION_MINOR};
 use super::host::{
-    check_link_timeout_s, HostSession, LineBudget, LinkSample, DEFAULT_LINK_TIMEOUT_S,
-    HELLO_INTERVAL_S,
+    check_link_timeout_s, HostSession, LinkSample, DEFAULT_LINK_TIMEOUT_S, HELLO_INTERVAL_S,
 };
 use super::keep_up::KeepUp;
+use super::line_budget::LineBudget;
 use crate::machine::OverrideCommand;
 
 mod part;
