@@ -55,11 +55,14 @@ use cutlab::closed_loop::references::{
     apply_references, ReferenceSearch, REFERENCE_RESOLUTION_PCT,
 };
 use cutlab::closed_loop::settings::{
-    air_cut_force_n, cut_before_arming_force_n, DEFAULT_CONTROL_PERIOD_S, DEFAULT_FEED_LOWPASS_HZ,
-    DEFAULT_LOWPASS_ORDER, DEFAULT_SPINDLE_LOWPASS_HZ, FORCE_LIMIT_FACTOR, MAX_AIR_CUT_FRACTION,
-    MAX_AIR_CUT_OF_CUT_FRACTION, MIN_CONTROL_PERIOD_S, OVERLOAD_FACTOR, SENSOR_FAILURE_TOLERANCE,
+    DEFAULT_CONTROL_PERIOD_S, DEFAULT_FEED_LOWPASS_HZ, DEFAULT_LOWPASS_ORDER,
+    DEFAULT_SPINDLE_LOWPASS_HZ, FORCE_LIMIT_FACTOR, MIN_CONTROL_PERIOD_S, OVERLOAD_FACTOR,
+    SENSOR_FAILURE_TOLERANCE,
 };
 use cutlab::closed_loop::teach_cut::{TEACH_OVERRIDES_PCT, TEACH_STEP_S};
+use cutlab::closed_loop::thresholds::{
+    air_cut_force_n, cut_before_arming_force_n, MAX_AIR_CUT_FRACTION, MAX_AIR_CUT_OF_CUT_FRACTION,
+};
 use cutlab::control::registry::{ControllerConfig, ControllerKind};
 use cutlab::estimation::current_force::RANGE_SLACK_FRACTION;
 use cutlab::estimation::estimator::{Estimator, Feedback};
