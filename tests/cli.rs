@@ -657,6 +657,64 @@ fn tune_teach_in_reads_a_logged_teach_cut_as_calibrate_does() {
     assert!(e.starts_with(TEACH_LOG), "{e}");
 }
 
+/// `cutlab host --calibration FILE` says what the calibration rests on, in the words of the fit's
+/// other front ends: a version 1 file (saved before files kept their load levels) cannot tell.
+#[cfg(unix)]
+#[test]
+fn the_host_warns_that_an_older_calibration_file_cannot_tell_its_load_levels() {
+    use std::process::Command;
+    let exe = env!("CARGO_BIN_EXE_cutlab");
+    let dir = std::env::temp_dir().join(format!("cutlab-host-v1-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let shipped = std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/www/data/kim-step-doc-calibration.json"
+    ))
+    .unwrap();
+    let run = |file: &std::path::Path| {
+        let out = Command::new(exe)
+            .args([
+                "host",
+                "--device-cmd",
+                &format!(
+                    "{exe} device --stdio --scenario kim-step-doc --time-scale 40 --watchdog-s 2"
+                ),
+                "--controller",
+                "threshold",
+                "--duration-s",
+                "1",
+                "--no-references",
+                "--calibration",
+                file.to_str().unwrap(),
+            ])
+            .output()
+            .unwrap();
+        assert!(out.status.success(), "{out:?}");
+        String::from_utf8(out.stdout).unwrap()
+    };
+    // Today's file: the teach cut's lines rest on enough loads, no warning.
+    let today = dir.join("today.json");
+    std::fs::write(&today, &shipped).unwrap();
+    let out = run(&today);
+    assert!(!out.contains("warning:"), "{out}");
+    let mut json: serde_json::Value = serde_json::from_str(&shipped).unwrap();
+    json["version"] = 1.into();
+    json["calibration"]
+        .as_object_mut()
+        .unwrap()
+        .remove("few_load_levels");
+    let older = dir.join("older.json");
+    std::fs::write(&older, json.to_string()).unwrap();
+    let out = run(&older);
+    assert!(
+        out.contains(
+            "warning: the calibration does not say how many load levels its lines rest on (saved \
+             by an older cutlab)"
+        ),
+        "{out}"
+    );
+}
+
 /// The hardware path as a person types it: a teach cut over the link (`cutlab host` against the
 /// device with no simulation truth, the force modelled from the cut) saved with
 /// --save-calibration, then proposed from by `cutlab tune --teach-in --calibration`.

@@ -55,11 +55,14 @@ use cutlab::closed_loop::references::{
     apply_references, ReferenceSearch, REFERENCE_RESOLUTION_PCT,
 };
 use cutlab::closed_loop::settings::{
-    air_cut_force_n, cut_before_arming_force_n, DEFAULT_CONTROL_PERIOD_S, DEFAULT_FEED_LOWPASS_HZ,
-    DEFAULT_LOWPASS_ORDER, DEFAULT_SPINDLE_LOWPASS_HZ, FORCE_LIMIT_FACTOR, MAX_AIR_CUT_FRACTION,
-    MAX_AIR_CUT_OF_CUT_FRACTION, MIN_CONTROL_PERIOD_S, OVERLOAD_FACTOR, SENSOR_FAILURE_TOLERANCE,
+    DEFAULT_CONTROL_PERIOD_S, DEFAULT_FEED_LOWPASS_HZ, DEFAULT_LOWPASS_ORDER,
+    DEFAULT_SPINDLE_LOWPASS_HZ, FORCE_LIMIT_FACTOR, MIN_CONTROL_PERIOD_S, OVERLOAD_FACTOR,
+    SENSOR_FAILURE_TOLERANCE,
 };
 use cutlab::closed_loop::teach_cut::{TEACH_OVERRIDES_PCT, TEACH_STEP_S};
+use cutlab::closed_loop::thresholds::{
+    air_cut_force_n, cut_before_arming_force_n, MAX_AIR_CUT_FRACTION, MAX_AIR_CUT_OF_CUT_FRACTION,
+};
 use cutlab::control::registry::{ControllerConfig, ControllerKind};
 use cutlab::estimation::current_force::RANGE_SLACK_FRACTION;
 use cutlab::estimation::estimator::{Estimator, Feedback};
@@ -2020,6 +2023,15 @@ struct OpenLoop {
     before_load_step_spindle_a: f64,
     /// The median spindle current after 3 s at each whole-millimetre depth the cut holds.
     spindle_a_by_depth_mm: BTreeMap<u32, f64>,
+    /// The mean cutting torque on the spindle there, N·m.
+    torque_nm_by_depth_mm: BTreeMap<u32, f64>,
+    /// The spindle current's dip where the axes slow most at 2 mm depth (kim-circular-taper's
+    /// corner B, where the axes stop): 1 − the lowest current within 0.5 s of it over the median
+    /// current at 2 mm.
+    corner_dip_at_2_mm: f64,
+    /// The median feed current from 1 s (the axes at speed) to the end of the first excitation
+    /// step: the brake bench's feed drive unloaded.
+    unloaded_feed_a: f64,
 }
 
 impl OpenLoop {
@@ -2041,8 +2053,15 @@ impl OpenLoop {
             air_spindle_a: f64::NAN,
             before_load_step_spindle_a: f64::NAN,
             spindle_a_by_depth_mm: BTreeMap::new(),
+            torque_nm_by_depth_mm: BTreeMap::new(),
+            corner_dip_at_2_mm: f64::NAN,
+            unloaded_feed_a: f64::NAN,
         };
-        let (mut in_air, mut by_depth) = (true, BTreeMap::<u32, Vec<f64>>::new());
+        let (mut in_air, mut by_depth) = (true, BTreeMap::<u32, Vec<(f64, f64)>>::new());
+        // The cut's spindle current in time, and where the axes went slowest at 2 mm.
+        let (mut cutting, mut slowest_at_2) = (Vec::new(), (f64::INFINITY, f64::NAN));
+        let first_step_s = cutlab::plant::bench::BrakeBenchConfig::default().step_duration_s;
+        let mut unloaded_feed = Vec::new();
         let mut last_spindle_a = f64::NAN;
         while !machine.finished() {
             machine.step(command);
@@ -2056,8 +2075,17 @@ impl OpenLoop {
                     by_depth
                         .entry(t.depth_mm as u32)
                         .or_default()
-                        .push(t.spindle_current_rms_a);
+                        .push((t.spindle_current_rms_a, t.spindle_torque_nm));
                 }
+                if t.depth_mm > 0.0 {
+                    cutting.push((s.time_s, t.spindle_current_rms_a));
+                }
+                if t.depth_mm == 2.0 && t.feed_per_tooth_mm < slowest_at_2.0 {
+                    slowest_at_2 = (t.feed_per_tooth_mm, s.time_s);
+                }
+            }
+            if s.time_s >= 1.0 && s.time_s < first_step_s {
+                unloaded_feed.push(t.feed_current_rms_a);
             }
             run.peak_feed_a = run.peak_feed_a.max(t.feed_current_rms_a);
             run.peak_force_n = run.peak_force_n.max(t.force_resultant_n);
@@ -2071,10 +2099,23 @@ impl OpenLoop {
             last_spindle_a = t.spindle_current_rms_a;
             run.duration_s = s.time_s;
         }
-        run.spindle_a_by_depth_mm = by_depth
-            .into_iter()
-            .map(|(depth, currents)| (depth, cutlab::signal::stats::median(currents)))
-            .collect();
+        use cutlab::signal::stats::median;
+        for (depth, samples) in by_depth {
+            let currents = samples.iter().map(|s| s.0);
+            run.spindle_a_by_depth_mm.insert(depth, median(currents));
+            // The torque swings with each tooth: its mean, not its median, is the cut's.
+            let mean_torque_nm = samples.iter().map(|s| s.1).sum::<f64>() / samples.len() as f64;
+            run.torque_nm_by_depth_mm.insert(depth, mean_torque_nm);
+        }
+        if let Some(&at_2_a) = run.spindle_a_by_depth_mm.get(&2) {
+            let corner_s = slowest_at_2.1;
+            let lowest_a = cutting
+                .iter()
+                .filter(|(time_s, _)| (time_s - corner_s).abs() <= 0.5)
+                .fold(f64::INFINITY, |m: f64, s| m.min(s.1));
+            run.corner_dip_at_2_mm = 1.0 - lowest_a / at_2_a;
+        }
+        run.unloaded_feed_a = median(unloaded_feed);
         run
     }
 }
@@ -2082,6 +2123,7 @@ impl OpenLoop {
 /// The open-loop figures of docs/plant.md (and the liu run's in docs/papers.md), as
 /// `cutlab scenarios --run NAME --summary` gives them.
 fn open_loop(facts: &mut Facts) {
+    use cutlab::closed_loop::definition::DEFAULT_SEED;
     let runs: BTreeMap<&str, OpenLoop> = std::thread::scope(|scope| {
         let handles: Vec<_> = Preset::ALL
             .iter()
@@ -2117,6 +2159,27 @@ fn open_loop(facts: &mut Facts) {
         "open_loop.kim-step-doc.start_spindle_a",
         fixed(kim.peak_spindle_a, 0),
     );
+    // The steps are the spindle's sensitivity at the cut's 1000 rpm times the torque each
+    // millimetre adds, as the page explains them.
+    let sensitivity_a_per_nm = Preset::KimStepDoc
+        .sim_config(DEFAULT_SEED)
+        .spindle_drive
+        .sensitivity_a_per_nm(1000.0);
+    let torque = |mm: u32| kim.torque_nm_by_depth_mm[&mm];
+    let torque_per_mm_nm = (torque(5) - torque(1)) / 4.0;
+    let step_a = (doc(5) - doc(1)) / 4.0;
+    assert!(
+        (sensitivity_a_per_nm * torque_per_mm_nm / step_a - 1.0).abs() < 0.02,
+        "S {sensitivity_a_per_nm} A/N·m × {torque_per_mm_nm} N·m/mm is not the step {step_a} A"
+    );
+    facts.set(
+        "open_loop.kim-step-doc.sensitivity_a_per_nm",
+        fixed(sensitivity_a_per_nm, 2),
+    );
+    facts.set(
+        "open_loop.kim-step-doc.torque_per_mm_nm",
+        fixed(torque_per_mm_nm, 2),
+    );
     let circle = &runs["kim-circular-taper"];
     facts.set(
         "open_loop.kim-circular-taper.air_spindle_a",
@@ -2127,8 +2190,21 @@ fn open_loop(facts: &mut Facts) {
         fixed(circle.spindle_a_by_depth_mm[&2], 1),
     );
     facts.set(
+        "open_loop.kim-circular-taper.corner_dip_pct",
+        fixed(100.0 * circle.corner_dip_at_2_mm, 0),
+    );
+    facts.set(
         "open_loop.bench.peak_feed_a",
         fixed(runs["wang-brake-bench"].peak_feed_a, 1),
+    );
+    // The first excitation step is the brake released: the drive's idle current.
+    assert_eq!(
+        cutlab::plant::bench::BrakeBenchConfig::default().excitation_steps_a[0],
+        0.0
+    );
+    facts.set(
+        "open_loop.bench.unloaded_feed_a",
+        fixed(runs["wang-brake-bench"].unloaded_feed_a, 2),
     );
 
     let liu = &runs["liu-current-step"];
@@ -2142,6 +2218,43 @@ fn open_loop(facts: &mut Facts) {
         "liu.open_loop.peak_force_kn",
         fixed(liu.peak_force_n / 1000.0, 2),
     );
+}
+
+/// docs/plant.md's model constants: the feed drive's idle current and sensitivity at its
+/// defaults (closed form, at the bench's 600 mm/min), and the spindle's start from rest to
+/// 1000 and 3000 rpm without load (the drive alone, stepped at the presets' 10 kHz): its peak
+/// current and the time until the speed is within 1 % of the command.
+fn plant_constants(facts: &mut Facts) {
+    use cutlab::plant::feed_drive::FeedDriveConfig;
+    use cutlab::plant::spindle_drive::{SpindleDrive, SpindleDriveConfig};
+    let feed = FeedDriveConfig::default();
+    let idle_a = feed.idle_rms_current_a(600.0);
+    let a_per_n = (feed.steady_rms_current_a(1000.0, 600.0) - idle_a) / 1000.0;
+    facts.set("plant.feed.idle_at_600_a", fixed(idle_a, 2));
+    facts.set(
+        "plant.feed.a_per_nm",
+        fixed(a_per_n / feed.torque_per_force_nm_per_n(), 2),
+    );
+    facts.set("plant.feed.ma_per_n", fixed(1000.0 * a_per_n, 2));
+
+    let start = |rpm: f64| {
+        let dt_s = 1e-4;
+        let mut drive = SpindleDrive::new(SpindleDriveConfig::default(), dt_s).unwrap();
+        let mut peak_a = 0.0f64;
+        for k in 1..=200_000 {
+            let out = drive.step(rpm, 0.0);
+            peak_a = peak_a.max(out.rms_current_a);
+            if (out.speed_rpm - rpm).abs() < 0.01 * rpm {
+                return (peak_a, k as f64 * dt_s);
+            }
+        }
+        panic!("the spindle never reached {rpm} rpm");
+    };
+    let (peak_1000_a, start_1000_s) = start(1000.0);
+    let (_, start_3000_s) = start(3000.0);
+    facts.set("plant.spindle.start_1000_a", fixed(peak_1000_a, 0));
+    facts.set("plant.spindle.start_1000_s", fixed(start_1000_s, 2));
+    facts.set("plant.spindle.start_3000_s", fixed(start_3000_s, 1));
 }
 
 /// Paper 004's network learned from trial cuts: on the stepped specimen's mechanistic forces,
@@ -2396,6 +2509,7 @@ fn all_facts() -> BTreeMap<String, String> {
     );
     paper_002(&mut facts);
     open_loop(&mut facts);
+    plant_constants(&mut facts);
     facts.0
 }
 

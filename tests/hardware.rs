@@ -15,6 +15,7 @@ use cutlab::closed_loop::definition::RunSpec;
 use cutlab::closed_loop::lab::simulate;
 use cutlab::control::registry::ControllerKind;
 use cutlab::estimation::estimator::Feedback;
+use cutlab::estimation::load_levels::{FewLoadLevels, LineModel};
 use cutlab::hardware::recording::{LiveRow, Recorder, RecordingMeta};
 use cutlab::hardware::session::{
     HardwareSession, LinkState, SessionOptions, Stage, TaughtCalibration,
@@ -471,12 +472,28 @@ fn a_device_without_truth_is_taught_from_the_cut_model_and_a_saved_calibration_n
     // No truth on the rows either.
     assert!(b.rows.iter().all(|r| r.force_n.is_nan()));
 
+    // The teach cut over the link knows what its lines rest on, and warns of it as the fit's
+    // other front ends do (one event per warning, the fit's own words).
+    assert!(taught.calibration.few_load_levels.is_some());
+    let warned: Vec<String> = b
+        .session
+        .events()
+        .iter()
+        .filter_map(|e| e.text.strip_prefix("calibration warning: "))
+        .map(str::to_string)
+        .collect();
+    assert_eq!(warned, taught.warnings());
+
     // The calibration saved as a file and loaded into a fresh session arms at once.
     let file = CalibrationFile::new(taught.calibration.clone(), "teach cut over the link");
     let read = CalibrationFile::from_json(&file.to_json()).unwrap();
+    assert_eq!(
+        read.calibration.few_load_levels,
+        taught.calibration.few_load_levels
+    );
     let mut b = Bench::new(maneerat(0.5), SessionOptions::default());
     b.session.set_calibration(TaughtCalibration {
-        calibration: read.calibration,
+        calibration: read.calibration.clone(),
         settings: None,
         source: "a file".into(),
     });
@@ -492,6 +509,36 @@ fn a_device_without_truth_is_taught_from_the_cut_model_and_a_saved_calibration_n
         why.starts_with("the calibration is for spindle feedback but the run measures with feed"),
         "{why}"
     );
+
+    // A saved calibration whose line rests on two load levels warns when it is loaded, and one
+    // saved before cutlab kept them says it cannot tell.
+    let mut two = read.calibration.clone();
+    two.few_load_levels = Some(vec![FewLoadLevels {
+        model: LineModel::Spindle,
+        speed_rpm: 3000.0,
+        levels_n: vec![150.0, 300.0],
+        r_squared: 0.9995,
+    }]);
+    let mut unknown = read.calibration;
+    unknown.few_load_levels = None;
+    for (calibration, expected) in [
+        (
+            two,
+            "calibration warning: the spindle line at 3000 rpm rests on 2 load levels (150, 300 N)",
+        ),
+        (
+            unknown,
+            "calibration warning: the calibration does not say how many load levels",
+        ),
+    ] {
+        b.session.set_calibration(TaughtCalibration {
+            calibration,
+            settings: None,
+            source: "another file".into(),
+        });
+        let last = &b.session.events().last().unwrap().text;
+        assert!(last.starts_with(expected), "{}", b.events());
+    }
 }
 
 /// The envelope's overload holds the feed, and the device latches the hold: it stays through

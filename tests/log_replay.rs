@@ -6,6 +6,9 @@
 // A whole recorded run at 10 kHz: native only (the wasm suite has the reader's tests).
 #![cfg(not(target_arch = "wasm32"))]
 
+#[path = "common/log_fit.rs"]
+mod log_fit;
+
 use std::cell::RefCell;
 use std::fmt::Write as _;
 use std::rc::Rc;
@@ -18,7 +21,6 @@ use cutlab::closed_loop::lab::{settled_settings, teach_cut_only};
 use cutlab::closed_loop::trace::Trace;
 use cutlab::control::registry::{ControllerConfig, ControllerKind, RunContext};
 use cutlab::estimation::estimator::Feedback;
-use cutlab::log::calibration::{fit_calibration, ForceSource};
 use cutlab::log::load;
 use cutlab::log::mapping::{Channel, Mapping};
 use cutlab::log::replay::{write_replay_csv, EnvelopeState, ReplayRun, ReplaySettings};
@@ -26,6 +28,7 @@ use cutlab::machine::{Machine, MachineStep, OverrideCommand, SensorSample};
 use cutlab::plant::Preset;
 use cutlab::safety::{SafetyEvent, SensorFault};
 use cutlab::work::Work;
+use log_fit::measured_fit;
 
 /// Settings with the time limit left out: a replay ends where its log does.
 fn without_time_limit(
@@ -414,17 +417,9 @@ fn phase_log(columns: usize) -> String {
 #[test]
 fn a_log_with_a_force_calibrates_the_line_its_currents_follow_from_one_two_or_three_phases() {
     for columns in [3, 2, 1] {
-        let log = Arc::new(load(phase_log(columns).as_bytes(), None).unwrap());
-        let mapping = Mapping::guess(&log);
+        let (log, mapping, fit) = measured_fit(phase_log(columns).as_bytes());
         assert_eq!(mapping.count(Channel::SpindlePhase), columns);
         assert_eq!(mapping.columns_of(Channel::Force), ["Fx [N]"]);
-        let fit = fit_calibration(
-            &log,
-            &mapping,
-            &ReplaySettings::default(),
-            &ForceSource::Measured,
-        )
-        .unwrap();
         let cutlab::estimation::estimator::Estimator::Spindle { model, .. } =
             &fit.calibration.estimator
         else {
@@ -490,20 +485,12 @@ fn a_signed_current_calibrates_as_a_phase_and_the_assumed_speed_and_start_are_sa
         let i = amplitude_a * (2.0 * std::f64::consts::PI * 50.0 * t).sin();
         csv += &format!("{t:.3},{i:.4},{force_n}\n");
     }
-    let log = Arc::new(load(csv.as_bytes(), None).unwrap());
-    let mapping = Mapping::guess(&log);
+    let (_, mapping, fit) = measured_fit(csv.as_bytes());
     assert_eq!(
         mapping.columns_of(Channel::SpindlePhase),
         ["spindle_current_a"]
     );
     assert_eq!(mapping.count(Channel::SpindleCurrent), 0);
-    let fit = fit_calibration(
-        &log,
-        &mapping,
-        &ReplaySettings::default(),
-        &ForceSource::Measured,
-    )
-    .unwrap();
     let notes = fit.notes.join("\n");
     assert!(!notes.contains("is an RMS value"), "{notes}");
     assert!(notes.contains("one spindle phase"), "{notes}");

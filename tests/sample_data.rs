@@ -5,6 +5,8 @@
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
 
 mod common;
+#[path = "common/log_fit.rs"]
+mod log_fit;
 
 use cutlab::closed_loop::config::RunConfiguration;
 use cutlab::control::fuzzy::fll;
@@ -333,15 +335,12 @@ fn the_synthetic_machine_export_reads_and_analyses_by_phase() {
 /// columns map themselves, and its force calibrates the spindle current it was recorded with.
 #[test]
 fn the_synthetic_daq_capture_maps_itself_and_calibrates() {
-    use cutlab::log::calibration::{fit_calibration, ForceSource};
-    use cutlab::log::mapping::{Channel, Mapping};
-    use cutlab::log::replay::ReplaySettings;
+    use cutlab::log::mapping::Channel;
     let bytes = std::fs::read(format!("{DATA}synthetic-maneerat-doc-2-daq.csv")).unwrap();
-    let log = std::sync::Arc::new(cutlab::log::load(&bytes, None).unwrap());
+    let (log, mapping, fit) = log_fit::measured_fit(&bytes);
     assert_eq!(log.rows, 12_000);
     assert_eq!(log.sample_period_s, Some(0.001));
     assert!(log.problems.is_empty(), "{:?}", log.problems);
-    let mapping = Mapping::guess(&log);
     assert_eq!(mapping.count(Channel::SpindlePhase), 3);
     for (channel, column) in [
         (Channel::Time, "Time [ms]"),
@@ -353,13 +352,6 @@ fn the_synthetic_daq_capture_maps_itself_and_calibrates() {
     ] {
         assert_eq!(mapping.columns_of(channel), [column], "{channel:?}");
     }
-    let fit = fit_calibration(
-        &log,
-        &mapping,
-        &ReplaySettings::default(),
-        &ForceSource::Measured,
-    )
-    .unwrap();
     let cutlab::estimation::estimator::Estimator::Spindle { model, .. } =
         &fit.calibration.estimator
     else {

@@ -5,7 +5,7 @@
 //! ```json
 //! {
 //!   "format": "cutlab-calibration",
-//!   "version": 1,
+//!   "version": 2,
 //!   "source": "teach cut on kim-step-doc, seed 1",
 //!   "calibration": {
 //!     "estimator": { "feedback": "spindle", "model": { "gear_change_rpm": 900.0, "rows": [ … ] },
@@ -14,10 +14,17 @@
 //!     "regulated_per_resultant": 1.0,
 //!     "periods": 512,
 //!     "max_phase_current_a": 18.2,
-//!     "duration_s": 65.9
+//!     "duration_s": 65.9,
+//!     "few_load_levels": []
 //!   }
 //! }
 //! ```
+//!
+//! Version 2 added `few_load_levels`: the fitted lines that rest on too few load levels to be
+//! determined ([`crate::estimation::load_levels::FewLoadLevels`]), so that a saved calibration
+//! warns when it is loaded as its teach cut did when it was made
+//! ([`crate::estimation::teach_fit::load_level_warnings`]). A version 1 file is still read; its
+//! lines' load levels are unknown (`None`), and the warnings say so.
 //!
 //! Reading checks more than the JSON's shape: every number the estimator divides by or compares
 //! with must be finite and of the right sign, spindle rows must ascend in speed, and a model that
@@ -30,7 +37,7 @@ use std::fmt;
 
 use serde::{Deserialize, Serialize};
 
-use super::file_format::{check_format, FormatError};
+use super::file_format::{check_format_versions, FormatError};
 use crate::estimation::current_force::{FitQuality, Range};
 use crate::estimation::estimator::{Calibration, Estimator, Feedback};
 
@@ -42,8 +49,10 @@ pub const MAX_SENSITIVITY_A_PER_N: f64 = 10.0;
 
 /// The `format` every calibration file carries.
 pub const FORMAT: &str = "cutlab-calibration";
-/// The version this build writes and reads.
-pub const VERSION: u32 = 1;
+/// The version this build writes (and the newest it reads).
+pub const VERSION: u32 = 2;
+/// The oldest version this build reads: version 1 files lack `few_load_levels`.
+pub const OLDEST_VERSION: u32 = 1;
 
 /// A calibration with what made it.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -51,7 +60,7 @@ pub const VERSION: u32 = 1;
 pub struct CalibrationFile {
     /// Always [`FORMAT`].
     pub format: String,
-    /// Always [`VERSION`] for files this build writes.
+    /// [`VERSION`] for files this build writes; from [`OLDEST_VERSION`] for those it reads.
     pub version: u32,
     /// Where the calibration came from, for people ("teach cut on kim-step-doc, seed 1",
     /// "log spindle-2026-11-20.csv, column S_current").
@@ -119,7 +128,7 @@ impl CalibrationFile {
     /// assert!(e.to_string().contains("\"format\" must be \"cutlab-calibration\""), "{e}");
     /// ```
     pub fn from_json(text: &str) -> Result<Self, CalibrationFileError> {
-        check_format(text, FORMAT, VERSION, "calibration")?;
+        check_format_versions(text, FORMAT, OLDEST_VERSION..=VERSION, "calibration")?;
         let file: Self = serde_json::from_str(text)
             .map_err(|e| CalibrationFileError(crate::input::one_short_line(&e.to_string())))?;
         check_calibration(&file.calibration).map_err(CalibrationFileError)?;
@@ -399,6 +408,64 @@ mod tests {
     }
 
     #[test]
+    fn a_saved_calibration_keeps_its_few_load_levels_warning() {
+        use crate::estimation::load_levels::{FewLoadLevels, LineModel};
+        use crate::estimation::teach_fit::load_level_warnings;
+        let mut file = saved(Preset::KimStepDoc);
+        // kim-step-doc's teach cut runs over many loads: nothing to warn of, and the file says so.
+        assert_eq!(file.calibration.few_load_levels, Some(Vec::new()));
+        assert!(file.to_json().contains("\"few_load_levels\": []"));
+        assert!(load_level_warnings(&file.calibration).is_empty());
+        let two = FewLoadLevels {
+            model: LineModel::Spindle,
+            speed_rpm: 1000.0,
+            levels_n: vec![150.0, 300.0],
+            r_squared: 0.9995,
+        };
+        file.calibration.few_load_levels = Some(vec![two.clone()]);
+        let read = CalibrationFile::from_json(&file.to_json()).unwrap();
+        assert_eq!(read.calibration.few_load_levels, Some(vec![two.clone()]));
+        // The same sentence as the fit gave.
+        assert_eq!(load_level_warnings(&read.calibration), vec![two.describe()]);
+        assert!(load_level_warnings(&read.calibration)[0]
+            .starts_with("the spindle line at 1000 rpm rests on 2 load levels (150, 300 N)"));
+    }
+
+    #[test]
+    fn a_version_1_file_is_read_and_says_its_load_levels_are_unknown() {
+        let mut json: serde_json::Value =
+            serde_json::from_str(&saved(Preset::KimStepDoc).to_json()).unwrap();
+        json["version"] = 1.into();
+        json["calibration"]
+            .as_object_mut()
+            .unwrap()
+            .remove("few_load_levels");
+        let read = CalibrationFile::from_json(&json.to_string()).unwrap();
+        assert_eq!(read.calibration.few_load_levels, None);
+        let warnings = crate::estimation::teach_fit::load_level_warnings(&read.calibration);
+        assert_eq!(warnings.len(), 1, "{warnings:?}");
+        assert!(
+            warnings[0].starts_with(
+                "the calibration does not say how many load levels its lines rest on (saved by \
+                 an older cutlab)"
+            ),
+            "{warnings:?}"
+        );
+        // Saved again, it still cannot say (null, not an empty list).
+        let again = CalibrationFile::from_json(&read.to_json()).unwrap();
+        assert_eq!(again.calibration.few_load_levels, None);
+        // A dynamometer fits nothing: nothing to be unknown.
+        let mut dyn_json: serde_json::Value =
+            serde_json::from_str(&saved(Preset::ManeeratSecondOrder).to_json()).unwrap();
+        dyn_json["calibration"]
+            .as_object_mut()
+            .unwrap()
+            .remove("few_load_levels");
+        let read = CalibrationFile::from_json(&dyn_json.to_string()).unwrap();
+        assert!(crate::estimation::teach_fit::load_level_warnings(&read.calibration).is_empty());
+    }
+
+    #[test]
     fn other_files_and_versions_are_named_as_such() {
         for (text, expected) in [
             ("not json", "not a cutlab calibration"),
@@ -407,8 +474,8 @@ mod tests {
                 "\"format\" must be \"cutlab-calibration\"",
             ),
             (
-                r#"{"format": "cutlab-calibration", "version": 2}"#,
-                "newer cutlab",
+                r#"{"format": "cutlab-calibration", "version": 3}"#,
+                "version 3, written by a newer cutlab; this one reads versions 1 to 2",
             ),
             (
                 r#"{"format": "cutlab-calibration", "version": 1}"#,

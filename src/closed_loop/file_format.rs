@@ -3,6 +3,7 @@
 //! gets a message about that rather than about its first unexpected field.
 
 use std::fmt;
+use std::ops::RangeInclusive;
 
 use serde::Deserialize;
 
@@ -26,6 +27,28 @@ impl fmt::Display for FormatError {
 /// assert!(e.to_string().contains("version 3, written by a newer cutlab"));
 /// ```
 pub fn check_format(text: &str, format: &str, version: u32, what: &str) -> Result<(), FormatError> {
+    check_format_versions(text, format, version..=version, what)
+}
+
+/// [`check_format`] for a kind of file this build reads in several versions (`versions`, the
+/// newest last): an older one is read as it was written, a newer one is refused as such.
+///
+/// ```
+/// use cutlab::closed_loop::file_format::check_format_versions;
+/// let file = |v: u32| format!(r#"{{"format": "x", "version": {v}}}"#);
+/// assert!(check_format_versions(&file(1), "x", 1..=2, "thing").is_ok());
+/// assert!(check_format_versions(&file(2), "x", 1..=2, "thing").is_ok());
+/// let e = check_format_versions(&file(3), "x", 1..=2, "thing").unwrap_err();
+/// assert!(e.to_string().contains("this one reads versions 1 to 2"), "{e}");
+/// let e = check_format_versions(&file(0), "x", 1..=2, "thing").unwrap_err();
+/// assert!(e.to_string().starts_with("\"version\" must be 1 to 2, found"), "{e}");
+/// ```
+pub fn check_format_versions(
+    text: &str,
+    format: &str,
+    versions: RangeInclusive<u32>,
+    what: &str,
+) -> Result<(), FormatError> {
     #[derive(Deserialize)]
     struct Opening {
         format: Option<String>,
@@ -44,14 +67,21 @@ pub fn check_format(text: &str, format: &str, version: u32, what: &str) -> Resul
                 .map_or("nothing".to_string(), |f| crate::input::excerpt(&f))
         )));
     }
+    let (oldest, newest) = (*versions.start(), *versions.end());
+    let readable = if oldest == newest {
+        newest.to_string()
+    } else {
+        format!("{oldest} to {newest}")
+    };
     match opening.version.as_ref().and_then(serde_json::Value::as_u64) {
-        Some(v) if v == u64::from(version) => Ok(()),
-        Some(v) if v > u64::from(version) => Err(FormatError(format!(
-            "this {what} is version {v}, written by a newer cutlab; this one reads version \
-             {version}"
+        Some(v) if (u64::from(oldest)..=u64::from(newest)).contains(&v) => Ok(()),
+        Some(v) if v > u64::from(newest) => Err(FormatError(format!(
+            "this {what} is version {v}, written by a newer cutlab; this one reads version{} \
+             {readable}",
+            if oldest == newest { "" } else { "s" }
         ))),
         _ => Err(FormatError(format!(
-            "\"version\" must be {version}, found {}",
+            "\"version\" must be {readable}, found {}",
             opening
                 .version
                 .map_or("nothing".to_string(), |v| crate::input::excerpt(

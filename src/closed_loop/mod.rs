@@ -8,6 +8,7 @@
 //! | [`paper_defaults`] | the defaults a preset's paper states: a controller's parameters ([`paper_defaults::preset_controller`]) and paper 002's control period |
 //! | [`definition`] | the run definition: every setting a person may change ([`definition::RunSetting`], one table for the form, the command line and a saved configuration) and [`definition::RunSpec`], a run as asked for |
 //! | [`error`] | [`error::LoopError`], why a run could not be set up or made |
+//! | [`thresholds`] | the loop's force thresholds from the target and the calibration: the air-cut force and its caps, the cut-before-arming force |
 //! | [`settings`] | the one resolution of a request on a machine: [`settings::plan`] before the teach cut, [`settings::Plan::settle`] after it |
 //! | [`run_table`] | the run's settings as rows of the generic tables ([`crate::input::table`]), with the defaults a fresh form shows |
 //! | [`sample_loop`] | the pushed-sample shape every loop shares, and [`sample_loop::OnMachine`], which pulls from a machine |
@@ -49,6 +50,7 @@ pub mod sample_loop;
 pub mod settings;
 pub mod summary;
 pub mod teach_cut;
+pub mod thresholds;
 pub mod trace;
 pub mod transfer;
 pub mod trial_cuts;

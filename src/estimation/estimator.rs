@@ -7,6 +7,7 @@ use serde::{Deserialize, Serialize};
 use super::current_force::{
     FeedCurrentModel, ForceEstimate, SpindleCurrentModel, SpindleSpeedRow, RANGE_SLACK_FRACTION,
 };
+use super::load_levels::FewLoadLevels;
 use super::speed::FvSpeedModel;
 use crate::signal::chain::PeriodSummary;
 
@@ -244,6 +245,12 @@ pub struct Calibration {
     pub max_phase_current_a: f64,
     /// How long the teach cut ran (machine time).
     pub duration_s: f64,
+    /// The fitted lines that rest on too few load levels to be determined (empty when none do,
+    /// and for a dynamometer); `None` for a calibration saved before cutlab kept them (a
+    /// version 1 calibration file), which cannot say. Shown through
+    /// [`load_level_warnings`](super::teach_fit::load_level_warnings).
+    #[serde(default)]
+    pub few_load_levels: Option<Vec<FewLoadLevels>>,
 }
 
 impl Estimator {

@@ -3,6 +3,7 @@
 //! | module | what it holds |
 //! |---|---|
 //! | [`current_force`] | paper 000's feed-current model and paper 003's spindle-current model, their calibration from a teach cut, and range checks |
+//! | [`load_levels`] | how many distinct loads a fitted current line rests on, and the warning for a line on too few ([`FewLoadLevels`](load_levels::FewLoadLevels)) |
 //! | [`estimator`] | [`Feedback`](estimator::Feedback) (which current measures the force), the calibrated [`Estimator`](estimator::Estimator) a loop calls every period, and the [`Calibration`](estimator::Calibration) a teach cut makes |
 //! | [`cut_forces`] | a logged cut's force from its feed, speed, depth and width (mechanistic model), for calibration without a dynamometer |
 //! | [`cut_settings`] | such a cut's settings as one table (material, cutter, mode, depth, width) that the Logs page and `cutlab calibrate` parse alike |
@@ -14,6 +15,7 @@ pub mod current_force;
 pub mod cut_forces;
 pub mod cut_settings;
 pub mod estimator;
+pub mod load_levels;
 pub mod power_law_fit;
 pub mod speed;
 pub mod teach_fit;

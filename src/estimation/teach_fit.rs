@@ -36,6 +36,7 @@ use serde::Serialize;
 
 use super::current_force::{FeedCurrentModel, SpindleCurrentModel};
 use super::estimator::{Calibration, Estimator, Feedback};
+use super::load_levels::{load_levels_n, FewLoadLevels, LineModel, MIN_LOAD_LEVELS};
 use super::speed::FvSpeedModel;
 #[cfg(test)]
 use super::speed::GEAR_CHANGE_RPM;
@@ -63,13 +64,6 @@ pub const AIR_FORCE_FRACTION: f64 = 0.02;
 pub const FULL_OVERRIDE_TOLERANCE_PCT: f64 = 0.5;
 /// A feed below this (mm/min) is the axes standing still.
 const STANDING_FEED_MM_MIN: f64 = 1e-6;
-/// Forces within this fraction of the largest force a line was fitted to are one load level.
-pub const LOAD_LEVEL_FRACTION: f64 = 0.05;
-/// A line fitted on fewer load levels than this is not determined by them: through two levels any
-/// line fits (R² near 1 whatever the current does between them), and one level leaves the slope
-/// to the noise. A third level is the first that can disagree with the line.
-pub const MIN_LOAD_LEVELS: usize = 3;
-
 /// One control period of a teach cut, as the fit takes it.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct TeachPeriod {
@@ -153,75 +147,46 @@ pub struct FullOverride {
     pub feed_mm_min: f64,
 }
 
-/// A fitted line whose periods rest on fewer than [`MIN_LOAD_LEVELS`] load levels
-/// ([`load_levels_n`]): its coefficients are not determined and its R² proves nothing.
-#[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct FewLoadLevels {
-    /// The model: "spindle" (one line per calibrated speed) or "feed".
-    pub model: &'static str,
-    /// The calibrated speed of the spindle's line, rpm (NaN for the feed model).
-    pub speed_rpm: f64,
-    /// Each load level's median force, N, ascending.
-    pub levels_n: Vec<f64>,
-    /// The line's R².
-    pub r_squared: f64,
-}
-
-impl FewLoadLevels {
-    /// The warning, for people: how many levels, why it matters, what to do.
-    pub fn describe(&self) -> String {
-        let readable = crate::input::readable;
-        let line = if self.speed_rpm.is_finite() {
-            format!(
-                "the {} line at {} rpm",
-                self.model,
-                readable(self.speed_rpm)
-            )
-        } else {
-            format!("the {} model", self.model)
-        };
-        let levels: Vec<String> = self.levels_n.iter().map(|f| readable(f.round())).collect();
-        let n = self.levels_n.len();
-        format!(
-            "{line} rests on {n} load level{} ({} N), too few to determine it (at least \
-             {MIN_LOAD_LEVELS} are needed): its R² {:.4} proves nothing; teach over more loads: \
-             a teach cut over more depths or feeds, or at more fixed overrides",
-            if n == 1 { "" } else { "s" },
-            levels.join(", "),
-            self.r_squared
-        )
-    }
-}
-
-/// The load levels among `forces_n` (non-finite ones left out): from the lowest force up, each
-/// level takes the forces within [`LOAD_LEVEL_FRACTION`] of the largest force above its first.
-/// Each level's median, N.
+/// The warnings a calibration carries, for every front end to show beside it — after a fit, and
+/// when a saved calibration is loaded: one per fitted line on too few load levels
+/// ([`FewLoadLevels::describe`]), or one saying it cannot tell for a calibration saved before
+/// cutlab kept its load levels (a version 1 calibration file). A dynamometer fits nothing and
+/// warns of nothing.
 ///
 /// ```
-/// use cutlab::estimation::teach_fit::load_levels_n;
-/// // A cut at two depths, with a little noise: two levels, whatever R² the line through them has.
-/// let two: Vec<f64> = (0..20).map(|k| if k < 10 { 150.0 } else { 300.0 } + (k % 3) as f64).collect();
-/// assert_eq!(load_levels_n(&two), vec![151.0, 301.0]);
-/// // A ramp from 100 to 400 N: many.
-/// let ramp: Vec<f64> = (0..60).map(|k| 100.0 + 5.0 * k as f64).collect();
-/// assert!(load_levels_n(&ramp).len() > 10);
+/// use cutlab::estimation::estimator::{Calibration, Estimator};
+/// use cutlab::estimation::load_levels::{FewLoadLevels, LineModel};
+/// use cutlab::estimation::teach_fit::load_level_warnings;
+/// let mut c = Calibration {
+///     estimator: Estimator::Dynamometer,
+///     air_force_estimate_n: f64::NAN,
+///     median_force_at_full_override_n: 300.0,
+///     regulated_per_resultant: 1.0,
+///     periods: 100,
+///     max_phase_current_a: 0.0,
+///     duration_s: 10.0,
+///     few_load_levels: None,
+/// };
+/// assert!(load_level_warnings(&c).is_empty());
+/// c.few_load_levels = Some(vec![FewLoadLevels {
+///     model: LineModel::Feed,
+///     speed_rpm: f64::NAN,
+///     levels_n: vec![200.4],
+///     r_squared: 0.5,
+/// }]);
+/// let w = load_level_warnings(&c);
+/// assert!(w[0].starts_with("the feed model rests on 1 load level (200 N)"), "{w:?}");
 /// ```
-pub fn load_levels_n(forces_n: &[f64]) -> Vec<f64> {
-    let mut sorted: Vec<f64> = forces_n.iter().copied().filter(|f| f.is_finite()).collect();
-    sorted.sort_by(f64::total_cmp);
-    let width_n = LOAD_LEVEL_FRACTION * sorted.iter().fold(0.0, |m: f64, f| m.max(f.abs()));
-    let mut levels = Vec::new();
-    let mut start = 0;
-    while start < sorted.len() {
-        let end = start
-            + sorted[start..]
-                .iter()
-                .take_while(|&&f| f <= sorted[start] + width_n)
-                .count();
-        levels.push(median(sorted[start..end].iter().copied()));
-        start = end;
+pub fn load_level_warnings(calibration: &Calibration) -> Vec<String> {
+    match &calibration.few_load_levels {
+        Some(lines) => lines.iter().map(FewLoadLevels::describe).collect(),
+        None if matches!(calibration.estimator, Estimator::Dynamometer) => Vec::new(),
+        None => vec![format!(
+            "the calibration does not say how many load levels its lines rest on (saved by an \
+             older cutlab): a line on fewer than {MIN_LOAD_LEVELS} is not determined by them, \
+             whatever its R²; teach again to know"
+        )],
     }
-    levels
 }
 
 /// What a fit made, and what it rests on.
@@ -235,19 +200,13 @@ pub struct TeachFit {
     pub excluded: Exclusions,
     /// The operating point at 100 % override.
     pub full_override: FullOverride,
-    /// The fitted lines that rest on too few load levels (none for a dynamometer, which is not
-    /// fitted).
-    pub few_load_levels: Vec<FewLoadLevels>,
 }
 
 impl TeachFit {
     /// The fit's warnings for people (a line on too few load levels), for every front end to
-    /// show beside its R².
+    /// show beside its R²: the calibration's own ([`load_level_warnings`]).
     pub fn warnings(&self) -> Vec<String> {
-        self.few_load_levels
-            .iter()
-            .map(FewLoadLevels::describe)
-            .collect()
+        load_level_warnings(&self.calibration)
     }
 
     /// One line for people: how many periods were used and why the others were not.
@@ -408,21 +367,6 @@ pub fn fit(
         &estimator,
         median_force_at_full_override_n,
     );
-    let calibration = Calibration {
-        estimator,
-        air_force_estimate_n,
-        median_force_at_full_override_n,
-        // NaN without truth: left out of the median.
-        regulated_per_resultant: over_full(&|p| p.force_n / p.summary.force_mean_resultant_n),
-        periods: used.len(),
-        max_phase_current_a,
-        duration_s: periods.last().map_or(0.0, |p| p.summary.end_time_s),
-    };
-    let full_override = FullOverride {
-        periods: at_full.len(),
-        spindle_rpm: over_full(&|p| p.summary.spindle_speed_rpm),
-        feed_mm_min: over_full(&|p| p.summary.feed_mm_min),
-    };
     let points: Vec<FitPoint> = used
         .iter()
         .zip(currents.iter().zip(&forces).zip(&identified_rpm))
@@ -434,13 +378,28 @@ pub fn fit(
             feed_mm_min: periods[i].summary.feed_mm_min,
         })
         .collect();
-    let few_load_levels = few_load_levels(&calibration.estimator, &points);
+    let few_load_levels = Some(few_load_levels(&estimator, &points));
+    let calibration = Calibration {
+        estimator,
+        air_force_estimate_n,
+        median_force_at_full_override_n,
+        // NaN without truth: left out of the median.
+        regulated_per_resultant: over_full(&|p| p.force_n / p.summary.force_mean_resultant_n),
+        periods: used.len(),
+        max_phase_current_a,
+        duration_s: periods.last().map_or(0.0, |p| p.summary.end_time_s),
+        few_load_levels,
+    };
+    let full_override = FullOverride {
+        periods: at_full.len(),
+        spindle_rpm: over_full(&|p| p.summary.spindle_speed_rpm),
+        feed_mm_min: over_full(&|p| p.summary.feed_mm_min),
+    };
     Ok(TeachFit {
         calibration,
         points,
         excluded,
         full_override,
-        few_load_levels,
     })
 }
 
@@ -475,13 +434,18 @@ fn few_load_levels(estimator: &Estimator, points: &[FitPoint]) -> Vec<FewLoadLev
                         .filter(|p| nearest_row(p.speed_rpm) == Some(i))
                         .map(|p| p.force_n)
                         .collect();
-                    few("spindle", row.speed_rpm, forces, row.quality.r_squared)
+                    few(
+                        LineModel::Spindle,
+                        row.speed_rpm,
+                        forces,
+                        row.quality.r_squared,
+                    )
                 })
                 .collect()
         }
         Estimator::Feed { model } => {
             let forces = points.iter().map(|p| p.force_n).collect();
-            few("feed", f64::NAN, forces, model.quality.r_squared)
+            few(LineModel::Feed, f64::NAN, forces, model.quality.r_squared)
                 .into_iter()
                 .collect()
         }
@@ -677,8 +641,9 @@ mod tests {
             other => panic!("{other:?}"),
         };
         assert!(r_squared > 0.999, "{r_squared}");
-        assert_eq!(taught.few_load_levels.len(), 1);
-        assert_eq!(taught.few_load_levels[0].levels_n, vec![150.0, 300.0]);
+        let few = taught.calibration.few_load_levels.as_deref().unwrap();
+        assert_eq!(few.len(), 1);
+        assert_eq!(few[0].levels_n, vec![150.0, 300.0]);
         let warnings = taught.warnings();
         assert!(!warnings[0].contains("  "), "{warnings:?}");
         assert!(

@@ -122,6 +122,8 @@ fn uncalibrated(feedback: Feedback, spindle_rpm: f64) -> Calibration {
         // Unknown: the envelope keeps its default sensor-fault limit.
         max_phase_current_a: 0.0,
         duration_s: 0.0,
+        // Nothing fitted: no line to rest on too few loads.
+        few_load_levels: Some(Vec::new()),
     }
 }
 

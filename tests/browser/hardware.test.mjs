@@ -481,8 +481,22 @@ test('without WebSerial the page says why and what works instead; the virtual de
   await writeFile(broken, '{"format": "cutlab-calibration", "version": 1, "calibration": 3}');
   await page.getByLabel('Load a calibration file (cutlab-calibration JSON)').setInputFiles(broken);
   await page.getByText(/hardware-calibration-broken\.json: /).waitFor();
+  // A version 1 file, saved before calibrations kept their load levels, is read, and the page
+  // says it cannot tell what its lines rest on (the words of the fit's other front ends).
+  const warnings = page.getByRole('list', { name: 'Calibration warnings' });
+  const older = join(artifacts, 'hardware-calibration-v1.json');
+  const v1 = structuredClone(savedText);
+  v1.version = 1;
+  delete v1.calibration.few_load_levels;
+  await writeFile(older, JSON.stringify(v1));
+  await page.getByLabel('Load a calibration file (cutlab-calibration JSON)').setInputFiles(older);
+  await warnings.getByText(/^Warning: the calibration does not say how many load levels its lines rest on/).waitFor();
   await page.getByLabel('Load a calibration file (cutlab-calibration JSON)').setInputFiles(saved);
   await page.getByText(/In use: file hardware-calibration\.json .*spindle feedback/).waitFor();
+  // Today's file knows its teach cut's levels: enough, nothing to warn of.
+  assert.equal(savedText.version, 2);
+  assert.deepEqual(savedText.calibration.few_load_levels, []);
+  assert.equal(await warnings.getByRole('listitem').count(), 0);
 
   // The virtual device, as a real bridge's twin (no truth), is one click away.
   await page.getByLabel("Send the simulation's truth (off: a real bridge's twin)").uncheck();

@@ -4,6 +4,7 @@
 use crate::closed_loop::error::LoopError;
 use crate::closed_loop::settings::ChainSettings;
 use crate::estimation::estimator::Calibration;
+use crate::estimation::teach_fit::load_level_warnings;
 
 /// A calibration the closed loop can use, with what it was made with.
 #[derive(Debug, Clone, PartialEq)]
@@ -18,6 +19,13 @@ pub struct TaughtCalibration {
 }
 
 impl TaughtCalibration {
+    /// What to warn the operator of before using it, one sentence each: a fitted line that rests
+    /// on too few load levels, or a saved calibration that cannot say
+    /// ([`load_level_warnings`], the words every front end uses).
+    pub fn warnings(&self) -> Vec<String> {
+        load_level_warnings(&self.calibration)
+    }
+
     /// Why a run with the signal chain `settings` cannot use this calibration, if it cannot: the
     /// feedback path must be the calibration's, and after a teach cut over this link the signal
     /// chain too (the fitted line holds for those only).

@@ -229,6 +229,16 @@ impl HardwareSession {
     /// Uses `calibration` for the next runs (a saved one, or one taught elsewhere).
     pub fn set_calibration(&mut self, calibration: TaughtCalibration) {
         self.event(format!("calibration loaded: {}", calibration.source));
+        self.use_calibration(calibration);
+    }
+
+    /// Uses `calibration` from now on and warns of what it rests on
+    /// ([`TaughtCalibration::warnings`]): after a teach cut over the link and when a saved one
+    /// is loaded alike.
+    pub(super) fn use_calibration(&mut self, calibration: TaughtCalibration) {
+        for warning in calibration.warnings() {
+            self.event(format!("calibration warning: {warning}"));
+        }
         self.calibration = Some(calibration);
     }
 

@@ -140,10 +140,11 @@ impl HardwareSession {
                     "teach cut complete: {} periods fitted over {:.1} s",
                     calibration.periods, calibration.duration_s
                 );
-                self.calibration = Some(TaughtCalibration {
+                let source = format!("teach cut over the link (part {})", self.host.part());
+                self.use_calibration(TaughtCalibration {
                     calibration,
                     settings: Some(t.settings),
-                    source: format!("teach cut over the link (part {})", self.host.part()),
+                    source,
                 });
                 self.end_part(program_end, text, now_s);
             }

@@ -50,6 +50,8 @@ pub struct Snapshot {
     pub fallback: bool,
     /// The calibration in use, described.
     pub calibration: Option<String>,
+    /// What the calibration in use warns of ([`TaughtCalibration::warnings`]).
+    pub calibration_warnings: Vec<String>,
     /// The override Disarm, Escape and alarms command.
     pub safe_override_pct: f64,
     /// The latest events, oldest first.
@@ -522,11 +524,17 @@ impl Station {
             )
         });
         let calibration = self.calibration_text();
+        let calibration_warnings = self
+            .calibration
+            .as_ref()
+            .map(TaughtCalibration::warnings)
+            .unwrap_or_default();
         let Some(s) = &self.session else {
             return Snapshot {
                 recording,
                 port,
                 calibration,
+                calibration_warnings,
                 ..Snapshot::default()
             };
         };
@@ -546,6 +554,7 @@ impl Station {
             applied_pct: latest.map_or(f64::NAN, |r| r.applied_override_pct),
             fallback: s.in_fallback(),
             calibration,
+            calibration_warnings,
             safe_override_pct: s.safe_override_pct(),
             events: events
                 .iter()

@@ -88,6 +88,12 @@ pub fn CalibrationFieldset(station: StationRef, ui: Ui) -> impl IntoView {
                     |c| format!("In use: {c}"),
                 )}
             </p>
+            // The fit's own words, as the Logs page and `cutlab calibrate` show them.
+            <ul class="hint" aria-label="Calibration warnings">
+                {move || ui.snapshot.with(|s| s.calibration_warnings.clone()).into_iter().map(|w| {
+                    view! { <li>{format!("Warning: {w}")}</li> }
+                }).collect_view()}
+            </ul>
             <div class="field">
                 <label for="hw-calibration-file">"Load a calibration file (cutlab-calibration JSON)"</label>
                 <input
