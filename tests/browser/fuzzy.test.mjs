@@ -47,7 +47,9 @@ test('"Open in Compare" runs the edited table beside paper 002\'s own', async ()
   await variantB.getByText('Using the rule table edited on the Fuzzy rules page.').waitFor();
   assert.equal(await variantA.getByText('Using the rule table edited on the Fuzzy rules page.').count(), 0);
   const table = page.getByRole('table', { name: /Metrics of the runs/ });
-  await table.getByRole('columnheader', { name: 'B: fuzzy-dynamics' }).waitFor({ timeout: 120_000 });
+  // Named by the table it runs, not only by its controller, which A shares.
+  await table.getByRole('columnheader', { name: 'B: fuzzy-dynamics (edited table)', exact: true }).waitFor({ timeout: 120_000 });
+  await table.getByRole('columnheader', { name: 'A: fuzzy-dynamics', exact: true }).waitFor();
   assert.deepEqual(problems, []);
   await context.close();
 });
