@@ -187,6 +187,9 @@ test("the fuzzy rule bases' comparison starts from the paper's own settings", as
   assert.equal(experience, '—');
   const settling = table.getByRole('row').filter({ has: page.getByRole('rowheader', { name: 'Max settling time (s)' }) });
   assert.equal(await settling.getByRole('cell').first().locator('[title]').getAttribute('title'), 'the force never settled after a depth step');
+  // Never settling is a loss: the dynamics rules' settling time beats it and is marked best.
+  assert.equal(await settling.getByRole('cell').nth(1).getByLabel('best').count(), 1);
+  assert.equal(await settling.getByRole('cell').first().getByLabel('best').count(), 0);
   assert.match(await finding.textContent(), new RegExp(`in ${dynamics} s against never`));
   // Its twin samples every 0.2 s; the claim holds there too, measured from its own runs.
   const first = await finding.textContent();
