@@ -104,6 +104,10 @@ pub enum Missing {
     Removal,
 }
 
+/// Why a run has no settling time though it has depth steps: the one "—" that is a failure at
+/// its metric ([`MetricRow::failed`]).
+const NEVER_SETTLED: &str = "the force never settled after a depth step";
+
 /// One row of the metrics table.
 #[derive(Clone, Copy)]
 pub struct MetricRow {
@@ -145,6 +149,32 @@ impl MetricRow {
         MetricRow { missing, ..self }
     }
 
+    /// Whether `run`'s value of this row is missing because the run failed at the metric: the
+    /// force never settled after any of its depth steps, so it has no settling time, a result
+    /// worse than any settling time, which [`best_marks`] counts as beaten. Every other "—" says
+    /// the metric does not apply to the run (no depth step, nothing cut or controlled, no wall
+    /// model, no reference runs, a program stopped early, which "Program finished" judges): no
+    /// result, so it neither beats nor loses to a value. Decided by [`MetricRow::why_missing`]'s
+    /// words, so what a "—" says on hover and how the marks count it cannot disagree.
+    ///
+    /// ```
+    /// use cutlab::closed_loop::definition::RunSpec;
+    /// use cutlab::closed_loop::lab::simulate;
+    /// use cutlab::closed_loop::summary::METRIC_ROWS;
+    /// use cutlab::control::registry::ControllerKind;
+    /// use cutlab::plant::Preset;
+    /// let row = |label| METRIC_ROWS.iter().find(|r| r.label == label).unwrap();
+    /// let mut run = simulate(&RunSpec::new(Preset::KimStepDoc, ControllerKind::Threshold)).unwrap();
+    /// assert!(!row("Max settling time").failed(&run));
+    /// run.metrics.max_settling_time_s = None; // none of its depth steps settled
+    /// assert!(row("Max settling time").failed(&run));
+    /// run.metrics.controlled_cutting_time_s = 0.0; // no controlled cut: IAE does not apply
+    /// assert!(!row("Force IAE").failed(&run));
+    /// ```
+    pub fn failed(&self, run: &RunResult) -> bool {
+        (self.value)(run).is_none() && self.why_missing(run) == NEVER_SETTLED
+    }
+
     /// Why this row shows "—" for `run`, in a few words a person reads on hover.
     pub fn why_missing(&self, run: &RunResult) -> &'static str {
         let m = &run.metrics;
@@ -182,7 +212,7 @@ impl MetricRow {
                 "no depth step was cut before the run stopped"
             }
             Missing::Steps if m.steps.is_empty() => "no depth step in this program",
-            Missing::Steps => "the force never settled after a depth step",
+            Missing::Steps => NEVER_SETTLED,
             Missing::Wall if run.settings.error_model.is_none() => {
                 "not modelled: this preset's tool stiffness or force law is not known"
             }
@@ -410,16 +440,28 @@ pub fn best(
     tolerance: Tolerance,
     shown: impl Fn(f64) -> String,
 ) -> Vec<bool> {
-    best_among(values, &vec![true; values.len()], better, tolerance, shown)
+    let n = values.len();
+    best_among(
+        values,
+        &vec![true; n],
+        &vec![false; n],
+        better,
+        tolerance,
+        shown,
+    )
 }
 
 /// [`best`] with only the `eligible` runs' values marked. The others' values still count as
 /// values to beat: the best eligible value is marked where it beats some other run's value —
 /// theirs included — beyond the tolerance, so a lone eligible run beside a run left out is marked
-/// where it beats that run, and not where that run did better.
+/// where it beats that run, and not where that run did better. A run that `failed` at the metric
+/// (its value missing as a loss, [`MetricRow::failed`]) is beaten by every value, so a run that
+/// settled is marked beside one that never did; any other missing value is no result and beats
+/// nothing.
 fn best_among(
     values: &[Option<f64>],
     eligible: &[bool],
+    failed: &[bool],
     better: Better,
     tolerance: Tolerance,
     shown: impl Fn(f64) -> String,
@@ -444,7 +486,8 @@ fn best_among(
         Better::Lower => v > extreme,
         _ => v < extreme,
     };
-    let beaten = (0..values.len()).any(|i| finite(i).is_some_and(|v| !alike(v) && worse(v)));
+    let beaten =
+        (0..values.len()).any(|i| failed[i] || finite(i).is_some_and(|v| !alike(v) && worse(v)));
     (0..values.len())
         .map(|i| beaten && eligible[i] && finite(i).is_some_and(alike))
         .collect()
@@ -466,6 +509,7 @@ pub fn may_be_best(run: &RunResult) -> bool {
 /// limit (where the least is best whoever it is). Its values still count as values to beat, so
 /// the runs within the limit are marked where they beat it: beside one such run, the other is
 /// the winner wherever it did better, not a table without a mark ([`not_best_note`] says so).
+/// A run that failed at the row's metric ([`MetricRow::failed`]: never settled) is beaten there.
 pub fn best_marks(
     row: &MetricRow,
     runs: &[&RunResult],
@@ -477,7 +521,15 @@ pub fn best_marks(
         .iter()
         .map(|r| judges_the_limit || may_be_best(r))
         .collect();
-    best_among(&values, &eligible, row.better, row.tolerance, shown)
+    let failed: Vec<bool> = runs.iter().map(|r| row.failed(r)).collect();
+    best_among(
+        &values,
+        &eligible,
+        &failed,
+        row.better,
+        row.tolerance,
+        shown,
+    )
 }
 
 /// A sentence for each row of a table with a "—", saying why it has no value (what a cell shows
@@ -676,7 +728,14 @@ mod tests {
         // The first run is left out (above the force limit).
         let eligible = [false, true];
         let marks = |values: &[Option<f64>], better| {
-            best_among(values, &eligible, better, Tolerance::DEFAULT, shown)
+            best_among(
+                values,
+                &eligible,
+                &[false; 2],
+                better,
+                Tolerance::DEFAULT,
+                shown,
+            )
         };
         // The lone run within the limit beats it: marked.
         assert_eq!(
@@ -702,6 +761,7 @@ mod tests {
         let marked = best_among(
             &three,
             &[false, true, true],
+            &[false; 3],
             Better::Lower,
             Tolerance::DEFAULT,
             shown,
@@ -710,6 +770,7 @@ mod tests {
         // Nobody within the limit: nothing.
         let none = best_among(
             &three,
+            &[false; 3],
             &[false; 3],
             Better::Lower,
             Tolerance::DEFAULT,
@@ -733,11 +794,16 @@ mod tests {
             .filter(|row| best_marks(row, &[&fixed, &threshold], format_metric)[1])
             .map(|row| row.label)
             .collect();
+        // The fixed feed never settled after any depth step ("—"): a loss to threshold's time.
+        assert!(METRIC_ROWS
+            .iter()
+            .any(|row| row.label == "Max settling time" && row.failed(&fixed)));
         for label in [
             "Peak force",
             "Force IAE",
             "Mean |error|",
             "Time above limit",
+            "Max settling time",
         ] {
             assert!(marked.contains(&label), "{label} not in {marked:?}");
         }
@@ -755,6 +821,58 @@ mod tests {
         assert!(
             both_out.ends_with("so none is marked best on any other row."),
             "{both_out}"
+        );
+    }
+
+    #[test]
+    fn a_run_that_never_settled_loses_the_settling_time_to_one_that_settled() {
+        use crate::closed_loop::definition::RunSpec;
+        use crate::closed_loop::lab::simulate;
+        use crate::control::registry::ControllerKind;
+        use crate::plant::Preset;
+        let row = |label: &str| METRIC_ROWS.iter().find(|r| r.label == label).unwrap();
+        let settling = row("Max settling time");
+        let settled =
+            simulate(&RunSpec::new(Preset::KimStepDoc, ControllerKind::Threshold)).unwrap();
+        assert!(may_be_best(&settled) && !settled.metrics.steps.is_empty());
+        assert!((settling.value)(&settled).is_some());
+        // The same run, but the force never settled after any of its depth steps.
+        let mut unsettled = settled.clone();
+        unsettled.metrics.max_settling_time_s = None;
+        unsettled.metrics.steps_not_settled = unsettled.metrics.steps.len();
+        assert_eq!(settling.why_missing(&unsettled), NEVER_SETTLED);
+        assert!(settling.failed(&unsettled) && !settling.failed(&settled));
+        assert_eq!(
+            best_marks(settling, &[&unsettled, &settled], format_metric),
+            [false, true]
+        );
+        assert_eq!(
+            best_marks(settling, &[&settled, &unsettled], format_metric),
+            [true, false]
+        );
+        // The depth steps the run never settled after are beaten on their own row as before.
+        assert_eq!(
+            best_marks(
+                row("Depth steps never settled"),
+                &[&unsettled, &settled],
+                format_metric
+            ),
+            [false, true]
+        );
+        // A "—" that means the metric does not apply is no loss: a run without depth steps (a
+        // program that has none) leaves the settled run unmarked, alone with a value.
+        let mut stepless = settled.clone();
+        stepless.metrics.steps.clear();
+        stepless.metrics.max_settling_time_s = None;
+        assert!(!settling.failed(&stepless));
+        assert_eq!(
+            best_marks(settling, &[&stepless, &settled], format_metric),
+            [false, false]
+        );
+        // And where the metric failed for every run, nothing is marked.
+        assert_eq!(
+            best_marks(settling, &[&unsettled, &unsettled], format_metric),
+            [false, false]
         );
     }
 

@@ -50,6 +50,34 @@ test('a paper comparison runs its controllers side by side with the best values 
   await context.close();
 });
 
+test('variants running different rule tables are named by them, never alike', async () => {
+  // Paper 002's dynamics table (`rules=`, 49 digits, level + 3 row by row), edited in one cell
+  // two ways, and the experience table given to the dynamics controller.
+  const dynamics = '0001122001123401123451123445123445523444553444456';
+  const experience = '0000123000123400123450123456123456623456663456666';
+  const edited1 = dynamics.slice(0, 48) + '0';
+  const edited2 = '6' + dynamics.slice(1);
+  const link = '#/compare?preset=liu-current-step&variants=4'
+    + `&a.controller=fuzzy-dynamics&a.rules=${edited1}`
+    + `&b.controller=fuzzy-dynamics&b.rules=${edited2}`
+    + `&c.controller=fuzzy-dynamics&c.rules=${experience}`
+    + `&d.controller=fuzzy-dynamics&d.rules=${edited1}`;
+  const { page, problems, context } = await openLab(browser, server.url, link, { width: 1440, height: 900 });
+  const table = page.getByRole('table', { name: /Metrics of the runs/ });
+  const names = [
+    'A: fuzzy-dynamics (edited table 1)',
+    'B: fuzzy-dynamics (edited table 2)',
+    'C: fuzzy-dynamics (experience table)',
+    // The same table as A's: the same name.
+    'D: fuzzy-dynamics (edited table 1)',
+  ];
+  for (const name of names) {
+    await table.getByRole('columnheader', { name, exact: true }).waitFor({ timeout: RUN_TIMEOUT });
+  }
+  assert.deepEqual(problems, []);
+  await context.close();
+});
+
 test('variants can be added and removed', async () => {
   const { page, problems, context } = await openLab(browser, server.url, '#/compare?preset=maneerat-doc-1');
   await page.getByRole('group', { name: 'Variant B' }).waitFor();
@@ -159,6 +187,9 @@ test("the fuzzy rule bases' comparison starts from the paper's own settings", as
   assert.equal(experience, '—');
   const settling = table.getByRole('row').filter({ has: page.getByRole('rowheader', { name: 'Max settling time (s)' }) });
   assert.equal(await settling.getByRole('cell').first().locator('[title]').getAttribute('title'), 'the force never settled after a depth step');
+  // Never settling is a loss: the dynamics rules' settling time beats it and is marked best.
+  assert.equal(await settling.getByRole('cell').nth(1).getByLabel('best').count(), 1);
+  assert.equal(await settling.getByRole('cell').first().getByLabel('best').count(), 0);
   assert.match(await finding.textContent(), new RegExp(`in ${dynamics} s against never`));
   // Its twin samples every 0.2 s; the claim holds there too, measured from its own runs.
   const first = await finding.textContent();

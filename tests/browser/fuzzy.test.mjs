@@ -47,7 +47,47 @@ test('"Open in Compare" runs the edited table beside paper 002\'s own', async ()
   await variantB.getByText('Using the rule table edited on the Fuzzy rules page.').waitFor();
   assert.equal(await variantA.getByText('Using the rule table edited on the Fuzzy rules page.').count(), 0);
   const table = page.getByRole('table', { name: /Metrics of the runs/ });
-  await table.getByRole('columnheader', { name: 'B: fuzzy-dynamics' }).waitFor({ timeout: 120_000 });
+  // Named by the table it runs, not only by its controller, which A shares.
+  await table.getByRole('columnheader', { name: 'B: fuzzy-dynamics (edited table)', exact: true }).waitFor({ timeout: 120_000 });
+  await table.getByRole('columnheader', { name: 'A: fuzzy-dynamics', exact: true }).waitFor();
+  assert.deepEqual(problems, []);
+  await context.close();
+});
+
+test('the defuzzifier chosen is the one Simulate and Compare run, and the run is named by it', async () => {
+  const { page, problems, context } = await openLab(browser, server.url, '#/fuzzy', { width: 1440, height: 900 });
+  await page.getByRole('button', { name: 'Dynamics-based (paper 002, Table 4)' }).click();
+  await page.getByLabel('Defuzzifier', { exact: true }).selectOption('Centroid');
+  await page.getByText(/with Centroid \(exact\) the table runs as the engine "paper002_dynamics_Centroid"/).waitFor();
+  // Simulate runs the table and the defuzzifier as one engine, named after both.
+  await page.getByRole('link', { name: 'Simulate with this table' }).click();
+  await page.getByRole('heading', { level: 1, name: /Simulate/ }).waitFor();
+  assert.equal(await page.getByLabel('Controller', { exact: true }).inputValue(), 'fuzzy-engine');
+  await page.getByText(/^Engine "paper002_dynamics_Centroid": E = /).waitFor();
+  assert.match(page.url(), /defuzzifier\*_Centroid/);
+  const simulated = page.getByRole('table', { name: /Metrics of the run/ });
+  await page.getByRole('status').filter({ hasText: 'Running' }).waitFor({ state: 'detached', timeout: RUN_TIMEOUT });
+  assert.match(await simulated.getByRole('row', { name: /Cycle time/ }).textContent(), /\d/);
+  // Back by the menu; an edited table with the same defuzzifier, in Compare beside paper 002's
+  // own: the column names the engine it runs.
+  await page.getByRole('navigation', { name: 'Lab sections' }).getByRole('link', { name: 'Fuzzy rules' }).click();
+  assert.equal(await page.getByLabel('Defuzzifier', { exact: true }).inputValue(), 'Centroid');
+  await page.getByLabel('Output when E is PB and EC is PB').selectOption('NB');
+  await page.getByRole('link', { name: 'Open in Compare' }).click();
+  await page.getByRole('heading', { level: 1, name: /Compare/ }).waitFor();
+  const variantB = page.getByRole('group', { name: 'Variant B' });
+  assert.equal(await variantB.getByLabel('Controller', { exact: true }).inputValue(), 'fuzzy-engine');
+  await variantB.getByText(/^Engine "paper002_edited_Centroid": /).waitFor();
+  const table = page.getByRole('table', { name: /Metrics of the runs/ });
+  for (const name of ['A: fuzzy-dynamics', 'B: fuzzy-engine (paper002_edited_Centroid)']) {
+    await table.getByRole('columnheader', { name, exact: true }).waitFor({ timeout: RUN_TIMEOUT });
+  }
+  // Paper 002's own defuzzifier again: the table runs on its own controller, as before.
+  await page.goto(server.url + '#/fuzzy');
+  await page.getByLabel('Defuzzifier', { exact: true }).selectOption('WeightedAverage');
+  await page.getByRole('link', { name: 'Simulate with this table' }).click();
+  assert.equal(await page.getByLabel('Controller', { exact: true }).inputValue(), 'fuzzy-dynamics');
+  await page.getByText('Using the rule table edited on the Fuzzy rules page.').waitFor();
   assert.deepEqual(problems, []);
   await context.close();
 });

@@ -186,6 +186,39 @@ for (const viewport of [{ width: 390, height: 844 }, { width: 1024, height: 768 
   });
 }
 
+test('at 1280 px the docked lesson sits beside the page, clear of the navigation, and stays in sight', async () => {
+  const viewport = { width: 1280, height: 800 };
+  const { page, problems, context } = await openLab(browser, server.url, '#/lessons/entry-and-envelope', viewport);
+  const panel = page.getByRole('complementary', { name: TITLE });
+  await panel.getByRole('heading', { name: /^Step 1 of 2/ }).waitFor();
+  // Docked (not the narrow window's bar): its shrink toggle is hidden.
+  assert.equal(await panel.getByRole('button', { name: 'Shrink the lesson' }).isVisible(), false);
+  // At least 4 px from every pill of the navigation, and below the header it sits in.
+  const clear = (a, b, gap) => a.x + a.width + gap <= b.x || b.x + b.width + gap <= a.x
+    || a.y + a.height + gap <= b.y || b.y + b.height + gap <= a.y;
+  const box = await panel.boundingBox();
+  const pills = await page.getByRole('navigation', { name: 'Lab sections' }).getByRole('link').all();
+  assert.ok(pills.length > 5);
+  for (const pill of pills) {
+    const p = await pill.boundingBox();
+    assert.ok(clear(box, p, 4), `the panel ${JSON.stringify(box)} touches "${await pill.textContent()}" ${JSON.stringify(p)}`);
+  }
+  const header = await page.getByRole('banner').boundingBox();
+  assert.ok(box.y >= header.y + header.height, `panel top ${box.y} inside the header (to ${header.y + header.height})`);
+  assert.ok(box.y + box.height <= viewport.height, `at the top of the page the panel runs out of the window: ${JSON.stringify(box)}`);
+  // Beside the page, not over it.
+  const main = await page.getByRole('main').boundingBox();
+  assert.ok(main.x + main.width <= box.x, `the page (to ${main.x + main.width}) runs under the panel (from ${box.x})`);
+  // Far down the page, at a field the student edits, it is still in the window.
+  await page.getByRole('textbox', { name: /^Entry override/ }).scrollIntoViewIfNeeded();
+  await page.mouse.wheel(0, 3000);
+  const scrolled = await panel.boundingBox();
+  assert.ok(scrolled.y >= 0 && scrolled.y + scrolled.height <= viewport.height + 1, `scrolled: ${JSON.stringify(scrolled)}`);
+  await screenshot(page, 'lessons-panel-1280');
+  assert.deepEqual(problems, []);
+  await context.close();
+});
+
 test('an unknown lesson is said so, and every control of the list is named', async () => {
   const { page, problems, context } = await openLab(browser, server.url, '#/lessons/no-such-lesson');
   await page.getByRole('alert').filter({ hasText: /no lesson named .no-such-lesson./ }).waitFor();

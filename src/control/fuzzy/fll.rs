@@ -761,6 +761,21 @@ pub(crate) fn float(v: f64) -> String {
     }
 }
 
+/// The engine's name in FLL text that [`write`] wrote (its first line), read without parsing
+/// the rest: what names a kept engine in a list of runs.
+///
+/// ```
+/// use cutlab::control::fuzzy::engine::Defuzzifier;
+/// use cutlab::control::fuzzy::fll::{write, written_name};
+/// use cutlab::control::fuzzy::rules::{paper_002_engine, RuleBase};
+/// let engine = paper_002_engine(&RuleBase::Dynamics.table(), Defuzzifier::Centroid).unwrap();
+/// assert_eq!(written_name(&write(&engine)), Some("paper002"));
+/// assert_eq!(written_name("InputVariable: E"), None);
+/// ```
+pub fn written_name(text: &str) -> Option<&str> {
+    text.lines().next()?.strip_prefix("Engine:").map(str::trim)
+}
+
 /// Writes `engine` as FLL that fuzzylite 6 loads. Integral defuzzifiers are written with their
 /// resolution (cutlab's exact paths ignore it; raise it in fuzzylite to approach cutlab's exact
 /// values).

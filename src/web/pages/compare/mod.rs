@@ -19,7 +19,7 @@ use leptos::prelude::*;
 use crate::closed_loop::config::RunConfiguration;
 use crate::closed_loop::definition::RunSpec;
 use crate::closed_loop::lab::RunResult;
-use crate::control::registry::ControllerKind;
+use crate::control::registry::{run_names, ControllerKind};
 use crate::web::components::later::{effect_after_mount, now_and_after_mount, Later};
 use crate::web::components::page::PageShell;
 use crate::web::components::run_form::{
@@ -125,10 +125,15 @@ pub fn ComparePage() -> impl IntoView {
         debounce.request(start);
     });
 
+    // Each column by its variant and its controller, with the table or engine it runs where that
+    // is not its kind's own, so two columns of different laws never read alike.
     let named = |runs: Vec<Arc<RunResult>>| {
+        let controllers: Vec<_> = runs.iter().map(|r| &r.spec.controller).collect();
+        let names = run_names(&controllers);
         runs.into_iter()
             .zip(VARIANT_NAMES)
-            .map(|(r, variant)| (format!("{variant}: {}", r.spec.controller.kind().name()), r))
+            .zip(names)
+            .map(|((r, variant), name)| (format!("{variant}: {name}"), r))
             .collect::<Vec<NamedRun>>()
     };
     let done = runner.finished();

@@ -32,6 +32,7 @@ use leptos::prelude::*;
 use crate::control::fuzzy::engine::{Defuzzifier, Engine};
 use crate::control::fuzzy::fll as fuzzylite;
 use crate::control::fuzzy::rules::{paper_002_engine, paper_002_table, RuleBase, RuleTable};
+use crate::control::registry::PAPER_002_DEFUZZIFIER;
 use crate::web::components::fields::parse_number;
 use crate::web::components::later::{effect_after_mount, Later};
 use crate::web::components::page::PageShell;
@@ -77,12 +78,12 @@ struct Fuzzy {
 impl Fuzzy {
     fn new(table: RuleTable) -> Self {
         let table = RwSignal::new(table);
-        let defuzzifier = RwSignal::new(Defuzzifier::WeightedAverage.name().to_string());
+        let defuzzifier = RwSignal::new(PAPER_002_DEFUZZIFIER.name().to_string());
         let source = RwSignal::new(Source::Table);
         let e_text = RwSignal::new("2".to_string());
         let ec_text = RwSignal::new("-1".to_string());
         let studied = Memo::new(move |_| -> Result<Arc<Engine>, String> {
-            let d = Defuzzifier::from_name(&defuzzifier.get()).unwrap_or(Defuzzifier::Centroid);
+            let d = chosen(&defuzzifier.get());
             match source.get() {
                 Source::Table => paper_002_engine(&table.get(), d)
                     .map(Arc::new)
@@ -162,7 +163,7 @@ impl Fuzzy {
             Source::Table => {
                 let mut q = vec![("rules".to_string(), encode_rule_table(&self.table.get()))];
                 let d = self.defuzzifier.get();
-                if d != Defuzzifier::WeightedAverage.name() {
+                if d != PAPER_002_DEFUZZIFIER.name() {
                     q.push(("defuzzifier".to_string(), d));
                 }
                 q
@@ -205,6 +206,11 @@ impl Fuzzy {
         }
     }
 
+    /// The defuzzifier chosen (tracked).
+    fn chosen_defuzzifier(&self) -> Defuzzifier {
+        chosen(&self.defuzzifier.get())
+    }
+
     /// Whether the rule of cell (E level `e`, EC level `ec`) fires at the viewer's point.
     fn is_firing(&self, e: usize, ec: usize) -> bool {
         matches!(self.source.get(), Source::Table)
@@ -213,6 +219,12 @@ impl Fuzzy {
                     .is_some_and(|(_, f)| f.iter().any(|(r, _)| *r == e * 7 + ec))
             })
     }
+}
+
+/// The defuzzifier named `name` (the select's value, always one of [`Defuzzifier::ALL`]'s names;
+/// paper 002's otherwise).
+fn chosen(name: &str) -> Defuzzifier {
+    Defuzzifier::from_name(name).unwrap_or(PAPER_002_DEFUZZIFIER)
 }
 
 /// This tab's storage of the page's last link and of the engine text in the import field: they
