@@ -761,7 +761,7 @@ pub(crate) fn float(v: f64) -> String {
     }
 }
 
-/// The engine's name in FLL text that [`write`] wrote (its first line), read without parsing
+/// The engine's name in FLL text that [`write()`] wrote (its first line), read without parsing
 /// the rest: what names a kept engine in a list of runs.
 ///
 /// ```
