@@ -677,7 +677,7 @@ fn the_host_warns_that_an_older_calibration_file_cannot_tell_its_load_levels() {
                 "host",
                 "--device-cmd",
                 &format!(
-                    "{exe} device --stdio --scenario kim-step-doc --time-scale 40 --watchdog-s 2"
+                    "{exe} device --stdio --scenario kim-step-doc --time-scale 40 --watchdog-s 20"
                 ),
                 "--controller",
                 "threshold",
@@ -713,6 +713,82 @@ fn the_host_warns_that_an_older_calibration_file_cannot_tell_its_load_levels() {
         ),
         "{out}"
     );
+}
+
+/// Every other command that loads a saved calibration says what `cutlab host` says of it, in the
+/// same words: `cutlab sim`, `cutlab log replay` and `cutlab tune --teach-in` warn that a version
+/// 1 file cannot tell what its lines rest on, and say nothing of today's file.
+#[test]
+fn every_command_that_loads_a_calibration_warns_that_an_older_file_cannot_tell() {
+    const CANNOT_TELL: &str = "the calibration does not say how many load levels its lines rest \
+                               on (saved by an older cutlab)";
+    let dir = std::env::temp_dir().join(format!("cutlab-v1-everywhere-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let shipped = std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/www/data/kim-step-doc-calibration.json"
+    ))
+    .unwrap();
+    let today = dir.join("today.json");
+    std::fs::write(&today, &shipped).unwrap();
+    let mut json: serde_json::Value = serde_json::from_str(&shipped).unwrap();
+    json["version"] = 1.into();
+    json["calibration"]
+        .as_object_mut()
+        .unwrap()
+        .remove("few_load_levels");
+    let older = dir.join("older.json");
+    std::fs::write(&older, json.to_string()).unwrap();
+    let export = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/www/data/synthetic-kim-step-doc-export.csv"
+    );
+    let commands: [(&str, Vec<&str>); 3] = [
+        (
+            "sim",
+            vec![
+                "sim",
+                "--scenario",
+                "kim-step-doc",
+                "--controller",
+                "threshold",
+                "--no-references",
+            ],
+        ),
+        (
+            "log replay",
+            vec![
+                "log",
+                "replay",
+                export,
+                "--current",
+                "S_Strom [A]",
+                "--controller",
+                "pi",
+                "--target-n",
+                "372",
+            ],
+        ),
+        (
+            "tune --teach-in",
+            vec!["tune", "--teach-in", "--scenarios", "kim-step-doc"],
+        ),
+    ];
+    for (what, args) in &commands {
+        for (file, warns) in [(&today, false), (&older, true)] {
+            let mut args = args.clone();
+            args.extend(["--calibration", file.to_str().unwrap()]);
+            let (result, out) = common::cutlab_text(&args, "");
+            assert!(result.is_ok(), "{what}: {result:?}\n{out}");
+            assert_eq!(
+                out.contains(CANNOT_TELL),
+                warns,
+                "{what} with {}:\n{out}",
+                file.display()
+            );
+        }
+    }
+    let _ = std::fs::remove_dir_all(&dir);
 }
 
 /// The hardware path as a person types it: a teach cut over the link (`cutlab host` against the

@@ -20,6 +20,7 @@ use crate::closed_loop::summary::{
 use crate::closed_loop::trace::write_csv;
 use crate::control::registry::{ControllerConfig, ControllerKind};
 use crate::estimation::estimator::{Calibration, Feedback};
+use crate::estimation::teach_fit::load_level_warnings;
 use crate::plant::Preset;
 use crate::safety::SafetyEvent;
 use crate::work::Work;
@@ -537,6 +538,11 @@ pub fn run_sim(args: SimArgs, io: &mut Io<'_>) -> Result<(), CliError> {
     }
     let table = metrics_table(&[(spec.controller.kind().name().to_string(), &result)]);
     io.stdout.write_all(table.as_bytes())?;
+    // What the calibration rests on (the teach cut's or the file's), in the fit's words, as
+    // `cutlab host`, `cutlab calibrate` and the Hardware page say it.
+    for warning in load_level_warnings(&result.calibration) {
+        writeln!(io.stdout, "warning: {warning}")?;
+    }
     fail_on_controller_faults([(spec.controller.kind().name(), &result)])
 }
 

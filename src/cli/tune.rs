@@ -545,6 +545,10 @@ fn describe(t: &TeachIn) -> String {
             current(paper.reference_current_a)
         );
     }
+    // What the calibration rests on, in the fit's words (as `cutlab calibrate` says it).
+    for warning in &t.warnings {
+        let _ = writeln!(out, "  warning: {warning}");
+    }
     out
 }
 

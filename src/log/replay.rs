@@ -37,6 +37,7 @@ use crate::closed_loop::settings::{plan, LoopSettings, TargetRule};
 use crate::closed_loop::trace::{csv_field, Trace, TraceRow};
 use crate::control::registry::ControllerConfig;
 use crate::estimation::estimator::{Calibration, Estimator, Feedback};
+use crate::estimation::teach_fit::load_level_warnings;
 use crate::plant::cnc::OverrideMode;
 use crate::plant::deflection::ErrorModel;
 use crate::safety::{ChipLoad, SafetyEvent};
@@ -205,6 +206,11 @@ fn prepare(
              the current in A, and force_est_n is left out)"
                 .to_string(),
         );
+    }
+    // What a given calibration rests on, in the fit's words, as every other front end that
+    // loads one says it (a line on too few load levels, or a file too old to tell).
+    if settings.calibration.is_some() {
+        notes.extend(load_level_warnings(&calibration));
     }
     let sample_rate_hz = setup.context.sample_rate_hz;
     let feedback_loop = FeedbackLoop::wire(

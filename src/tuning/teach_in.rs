@@ -38,6 +38,7 @@ use crate::closed_loop::settings::{OperatingPoint, DEFAULT_TARGET_FRACTION};
 use crate::estimation::current_force::{FeedCurrentModel, Range, SpindleCurrentModel};
 use crate::estimation::cut_forces::CutGeometry;
 use crate::estimation::estimator::{Calibration, Estimator, Feedback};
+use crate::estimation::teach_fit::load_level_warnings;
 use crate::log::period_log::{calibrate_log, LogTable};
 
 /// The narrowest threshold gap a teach-in proposes, % of target.
@@ -252,6 +253,9 @@ pub struct TeachIn {
     pub proposal: Proposal,
     /// The preset's own target, if it has one.
     pub paper: Option<PaperTarget>,
+    /// What the calibration rests on, in the fit's words ([`load_level_warnings`]): a line on
+    /// too few load levels, or a file saved before calibrations kept them. Empty when sound.
+    pub warnings: Vec<String>,
 }
 
 /// The operating point of `spec`'s program (its plant edits included).
@@ -318,6 +322,7 @@ fn teach_in_of(
         source,
         learned,
         proposal,
+        warnings: load_level_warnings(calibration),
     })
 }
 
@@ -491,7 +496,6 @@ pub fn teach_in_log(
         (None, None) => return Err(in_log("no current model could be fitted".into())),
     };
     notes.push(fit.selection_note());
-    notes.extend(fit.warnings());
     let at = OperatingPoint {
         spindle_rpm: fit.full_override.spindle_rpm,
         feed_mm_min: fit.full_override.feed_mm_min,
@@ -506,6 +510,7 @@ pub fn teach_in_log(
             learned,
             proposal,
             paper: None,
+            warnings: fit.warnings(),
         },
         notes,
     })

@@ -128,6 +128,11 @@ pub fn TeachInTable(
                 .into_iter()
                 .chain(from_file.get())
                 .collect();
+            // What each calibration rests on, in the fit's words, under the table.
+            let warnings: Vec<String> = list
+                .iter()
+                .flat_map(|t| t.warnings.iter().map(move |w| format!("Warning: {}: {w}", t.source)))
+                .collect();
             (!list.is_empty()).then(|| view! {
             <TableScroll label="Teach-in".to_string()>
             <table aria-label="Teach-in">
@@ -172,6 +177,9 @@ pub fn TeachInTable(
                 </tbody>
             </table>
             </TableScroll>
+            <ul class="hint" aria-label="Teach-in warnings">
+                {warnings.into_iter().map(|w| view! { <li>{w}</li> }).collect_view()}
+            </ul>
             })
         }}
     }
