@@ -657,6 +657,32 @@ fn tune_teach_in_reads_a_logged_teach_cut_as_calibrate_does() {
     assert!(e.starts_with(TEACH_LOG), "{e}");
 }
 
+/// What a version 1 calibration file cannot tell, as every command that loads one says it.
+const CANNOT_TELL_LOAD_LEVELS: &str = "the calibration does not say how many load levels its \
+                                       lines rest on (saved by an older cutlab)";
+
+/// The shipped kim-step-doc calibration written into `dir` as today's file and as its version 1
+/// twin (saved before files kept their load levels): `(today, older)`.
+fn today_and_older_calibrations(dir: &std::path::Path) -> (std::path::PathBuf, std::path::PathBuf) {
+    std::fs::create_dir_all(dir).unwrap();
+    let shipped = std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/www/data/kim-step-doc-calibration.json"
+    ))
+    .unwrap();
+    let today = dir.join("today.json");
+    std::fs::write(&today, &shipped).unwrap();
+    let mut json: serde_json::Value = serde_json::from_str(&shipped).unwrap();
+    json["version"] = 1.into();
+    json["calibration"]
+        .as_object_mut()
+        .unwrap()
+        .remove("few_load_levels");
+    let older = dir.join("older.json");
+    std::fs::write(&older, json.to_string()).unwrap();
+    (today, older)
+}
+
 /// `cutlab host --calibration FILE` says what the calibration rests on, in the words of the fit's
 /// other front ends: a version 1 file (saved before files kept their load levels) cannot tell.
 #[cfg(unix)]
@@ -665,12 +691,7 @@ fn the_host_warns_that_an_older_calibration_file_cannot_tell_its_load_levels() {
     use std::process::Command;
     let exe = env!("CARGO_BIN_EXE_cutlab");
     let dir = std::env::temp_dir().join(format!("cutlab-host-v1-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let shipped = std::fs::read_to_string(concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/www/data/kim-step-doc-calibration.json"
-    ))
-    .unwrap();
+    let (today, older) = today_and_older_calibrations(&dir);
     let run = |file: &std::path::Path| {
         let out = Command::new(exe)
             .args([
@@ -693,26 +714,14 @@ fn the_host_warns_that_an_older_calibration_file_cannot_tell_its_load_levels() {
         String::from_utf8(out.stdout).unwrap()
     };
     // Today's file: the teach cut's lines rest on enough loads, no warning.
-    let today = dir.join("today.json");
-    std::fs::write(&today, &shipped).unwrap();
     let out = run(&today);
     assert!(!out.contains("warning:"), "{out}");
-    let mut json: serde_json::Value = serde_json::from_str(&shipped).unwrap();
-    json["version"] = 1.into();
-    json["calibration"]
-        .as_object_mut()
-        .unwrap()
-        .remove("few_load_levels");
-    let older = dir.join("older.json");
-    std::fs::write(&older, json.to_string()).unwrap();
     let out = run(&older);
     assert!(
-        out.contains(
-            "warning: the calibration does not say how many load levels its lines rest on (saved \
-             by an older cutlab)"
-        ),
+        out.contains(&format!("warning: {CANNOT_TELL_LOAD_LEVELS}")),
         "{out}"
     );
+    let _ = std::fs::remove_dir_all(&dir);
 }
 
 /// Every other command that loads a saved calibration says what `cutlab host` says of it, in the
@@ -720,25 +729,8 @@ fn the_host_warns_that_an_older_calibration_file_cannot_tell_its_load_levels() {
 /// 1 file cannot tell what its lines rest on, and say nothing of today's file.
 #[test]
 fn every_command_that_loads_a_calibration_warns_that_an_older_file_cannot_tell() {
-    const CANNOT_TELL: &str = "the calibration does not say how many load levels its lines rest \
-                               on (saved by an older cutlab)";
     let dir = std::env::temp_dir().join(format!("cutlab-v1-everywhere-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let shipped = std::fs::read_to_string(concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/www/data/kim-step-doc-calibration.json"
-    ))
-    .unwrap();
-    let today = dir.join("today.json");
-    std::fs::write(&today, &shipped).unwrap();
-    let mut json: serde_json::Value = serde_json::from_str(&shipped).unwrap();
-    json["version"] = 1.into();
-    json["calibration"]
-        .as_object_mut()
-        .unwrap()
-        .remove("few_load_levels");
-    let older = dir.join("older.json");
-    std::fs::write(&older, json.to_string()).unwrap();
+    let (today, older) = today_and_older_calibrations(&dir);
     let export = concat!(
         env!("CARGO_MANIFEST_DIR"),
         "/www/data/synthetic-kim-step-doc-export.csv"
@@ -781,7 +773,7 @@ fn every_command_that_loads_a_calibration_warns_that_an_older_file_cannot_tell()
             let (result, out) = common::cutlab_text(&args, "");
             assert!(result.is_ok(), "{what}: {result:?}\n{out}");
             assert_eq!(
-                out.contains(CANNOT_TELL),
+                out.contains(CANNOT_TELL_LOAD_LEVELS),
                 warns,
                 "{what} with {}:\n{out}",
                 file.display()
