@@ -2,7 +2,8 @@
 //! way is better, how far apart two values must be to differ ([`Tolerance`]), why a value is
 //! missing ([`MetricRow::why_missing`]), and which runs have the best value of a row
 //! ([`best_marks`]: only beyond the row's tolerance, never a run that spent a share of its cycle
-//! above the force limit, which the table says with [`not_best_note`]).
+//! above the force limit, which the table says with [`not_best_note`], nor one that left more
+//! depth steps unsettled than another, [`MetricRow::outranked`]).
 
 use super::lab::RunResult;
 use crate::input::three_significant;
@@ -104,9 +105,25 @@ pub enum Missing {
     Removal,
 }
 
-/// Why a run has no settling time though it has depth steps: the one "—" that is a failure at
-/// its metric ([`MetricRow::failed`]).
-const NEVER_SETTLED: &str = "the force never settled after a depth step";
+/// How many of a row's cases a run failed, out of how many it met: the depth steps after which
+/// the force never settled, of the steps cut. Among runs that met as many cases, one that failed
+/// more is beaten on the row whatever its value ([`best_marks`]): a run that settled two of five
+/// depth steps quickly has not done better than one that settled four, and a run that settled
+/// none (no value, "—") loses to one that settled any.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Shortfall {
+    pub failed: usize,
+    pub out_of: usize,
+}
+
+/// What a row counts as its cases, for [`MetricRow::shortfall`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Cases {
+    /// None: the value alone ranks the runs.
+    Unranked,
+    /// The depth steps, failed where the force never settled after one.
+    DepthSteps,
+}
 
 /// One row of the metrics table.
 #[derive(Clone, Copy)]
@@ -128,6 +145,8 @@ pub struct MetricRow {
     pub tolerance: Tolerance,
     /// Why [`MetricRow::value`] may be `None` ([`MetricRow::why_missing`]).
     pub missing: Missing,
+    /// The cases that rank before the value ([`MetricRow::shortfall`]).
+    pub cases: Cases,
 }
 
 impl MetricRow {
@@ -149,30 +168,53 @@ impl MetricRow {
         MetricRow { missing, ..self }
     }
 
-    /// Whether `run`'s value of this row is missing because the run failed at the metric: the
-    /// force never settled after any of its depth steps, so it has no settling time, a result
-    /// worse than any settling time, which [`best_marks`] counts as beaten. Every other "—" says
-    /// the metric does not apply to the run (no depth step, nothing cut or controlled, no wall
-    /// model, no reference runs, a program stopped early, which "Program finished" judges): no
-    /// result, so it neither beats nor loses to a value. Decided by [`MetricRow::why_missing`]'s
-    /// words, so what a "—" says on hover and how the marks count it cannot disagree.
+    /// This row with cases that rank the runs before its value.
+    const fn counting(self, cases: Cases) -> MetricRow {
+        MetricRow { cases, ..self }
+    }
+
+    /// How many of this row's cases `run` failed, out of how many it met; `None` for a row
+    /// ranked by its value alone.
     ///
     /// ```
     /// use cutlab::closed_loop::definition::RunSpec;
     /// use cutlab::closed_loop::lab::simulate;
-    /// use cutlab::closed_loop::summary::METRIC_ROWS;
+    /// use cutlab::closed_loop::summary::{Shortfall, METRIC_ROWS};
     /// use cutlab::control::registry::ControllerKind;
     /// use cutlab::plant::Preset;
     /// let row = |label| METRIC_ROWS.iter().find(|r| r.label == label).unwrap();
-    /// let mut run = simulate(&RunSpec::new(Preset::KimStepDoc, ControllerKind::Threshold)).unwrap();
-    /// assert!(!row("Max settling time").failed(&run));
-    /// run.metrics.max_settling_time_s = None; // none of its depth steps settled
-    /// assert!(row("Max settling time").failed(&run));
-    /// run.metrics.controlled_cutting_time_s = 0.0; // no controlled cut: IAE does not apply
-    /// assert!(!row("Force IAE").failed(&run));
+    /// let run = simulate(&RunSpec::new(Preset::KimStepDoc, ControllerKind::Threshold)).unwrap();
+    /// // Five depth steps; at the 1 mm one even the envelope's ceiling leaves the force under the band.
+    /// assert_eq!(row("Max settling time").shortfall(&run), Some(Shortfall { failed: 1, out_of: 5 }));
+    /// assert_eq!(row("Force IAE").shortfall(&run), None);
     /// ```
-    pub fn failed(&self, run: &RunResult) -> bool {
-        (self.value)(run).is_none() && self.why_missing(run) == NEVER_SETTLED
+    pub fn shortfall(&self, run: &RunResult) -> Option<Shortfall> {
+        let m = &run.metrics;
+        match self.cases {
+            Cases::Unranked => None,
+            Cases::DepthSteps => Some(Shortfall {
+                failed: m.steps_not_settled,
+                out_of: m.steps.len(),
+            }),
+        }
+    }
+
+    /// Which of `runs` are beaten on this row before their values are compared: those that failed
+    /// more of its cases than another run that met as many ([`Shortfall`]). All `false` for a row
+    /// ranked by its value alone.
+    pub fn outranked(&self, runs: &[&RunResult]) -> Vec<bool> {
+        let shortfalls: Vec<Option<Shortfall>> = runs.iter().map(|r| self.shortfall(r)).collect();
+        shortfalls
+            .iter()
+            .map(|own| {
+                own.is_some_and(|own| {
+                    shortfalls
+                        .iter()
+                        .flatten()
+                        .any(|other| other.out_of == own.out_of && other.failed < own.failed)
+                })
+            })
+            .collect()
     }
 
     /// Why this row shows "—" for `run`, in a few words a person reads on hover.
@@ -212,7 +254,7 @@ impl MetricRow {
                 "no depth step was cut before the run stopped"
             }
             Missing::Steps if m.steps.is_empty() => "no depth step in this program",
-            Missing::Steps => NEVER_SETTLED,
+            Missing::Steps => "the force never settled after a depth step",
             Missing::Wall if run.settings.error_model.is_none() => {
                 "not modelled: this preset's tool stiffness or force law is not known"
             }
@@ -231,7 +273,15 @@ impl MetricRow {
         match self.better {
             _ if self.yes_no => self.help.to_string(),
             Better::Neither => self.help.to_string(),
-            _ => format!("{} {}", self.help, self.tolerance.rule(self.unit)),
+            _ => {
+                let first = match self.cases {
+                    Cases::Unranked => "",
+                    Cases::DepthSteps => {
+                        " A run that left more depth steps unsettled than another is beaten here, whatever its time."
+                    }
+                };
+                format!("{} {}{first}", self.help, self.tolerance.rule(self.unit))
+            }
         }
     }
 
@@ -270,6 +320,7 @@ const fn row(
         value,
         tolerance: Tolerance::DEFAULT,
         missing: Missing::Never,
+        cases: Cases::Unranked,
     }
 }
 
@@ -369,7 +420,7 @@ pub const METRIC_ROWS: [MetricRow; 22] = [
     row("Max settling time", "s", Better::Lower, |r| {
         r.metrics.max_settling_time_s
     }).explained("The longest time after a depth step until the force stays within the settling band around the target.")
-    .within(0.05, 0.05).missing(Missing::Steps),
+    .within(0.05, 0.05).missing(Missing::Steps).counting(Cases::DepthSteps),
     row(
         "Force fluctuation, last 10 s",
         "% of target",
@@ -454,14 +505,14 @@ pub fn best(
 /// [`best`] with only the `eligible` runs' values marked. The others' values still count as
 /// values to beat: the best eligible value is marked where it beats some other run's value —
 /// theirs included — beyond the tolerance, so a lone eligible run beside a run left out is marked
-/// where it beats that run, and not where that run did better. A run that `failed` at the metric
-/// (its value missing as a loss, [`MetricRow::failed`]) is beaten by every value, so a run that
-/// settled is marked beside one that never did; any other missing value is no result and beats
-/// nothing.
+/// where it beats that run, and not where that run did better. An `outranked` run
+/// ([`MetricRow::outranked`]: more depth steps left unsettled, its value missing or not) is
+/// beaten by every eligible value, so a run that settled is marked beside one that never did;
+/// any other missing value is no result and beats nothing.
 fn best_among(
     values: &[Option<f64>],
     eligible: &[bool],
-    failed: &[bool],
+    outranked: &[bool],
     better: Better,
     tolerance: Tolerance,
     shown: impl Fn(f64) -> String,
@@ -487,7 +538,7 @@ fn best_among(
         _ => v < extreme,
     };
     let beaten =
-        (0..values.len()).any(|i| failed[i] || finite(i).is_some_and(|v| !alike(v) && worse(v)));
+        (0..values.len()).any(|i| outranked[i] || finite(i).is_some_and(|v| !alike(v) && worse(v)));
     (0..values.len())
         .map(|i| beaten && eligible[i] && finite(i).is_some_and(alike))
         .collect()
@@ -509,7 +560,8 @@ pub fn may_be_best(run: &RunResult) -> bool {
 /// limit (where the least is best whoever it is). Its values still count as values to beat, so
 /// the runs within the limit are marked where they beat it: beside one such run, the other is
 /// the winner wherever it did better, not a table without a mark ([`not_best_note`] says so).
-/// A run that failed at the row's metric ([`MetricRow::failed`]: never settled) is beaten there.
+/// A run [`MetricRow::outranked`] on the row (more depth steps left unsettled than another) is
+/// beaten there and never marked.
 pub fn best_marks(
     row: &MetricRow,
     runs: &[&RunResult],
@@ -517,15 +569,16 @@ pub fn best_marks(
 ) -> Vec<bool> {
     let judges_the_limit = row.label == "Time above limit";
     let values: Vec<Option<f64>> = runs.iter().map(|r| (row.value)(r)).collect();
+    let outranked = row.outranked(runs);
     let eligible: Vec<bool> = runs
         .iter()
-        .map(|r| judges_the_limit || may_be_best(r))
+        .zip(&outranked)
+        .map(|(r, &outranked)| !outranked && (judges_the_limit || may_be_best(r)))
         .collect();
-    let failed: Vec<bool> = runs.iter().map(|r| row.failed(r)).collect();
     best_among(
         &values,
         &eligible,
-        &failed,
+        &outranked,
         row.better,
         row.tolerance,
         shown,
@@ -795,9 +848,11 @@ mod tests {
             .map(|row| row.label)
             .collect();
         // The fixed feed never settled after any depth step ("—"): a loss to threshold's time.
-        assert!(METRIC_ROWS
-            .iter()
-            .any(|row| row.label == "Max settling time" && row.failed(&fixed)));
+        let settling = METRIC_ROWS.iter().find(|r| r.label == "Max settling time");
+        assert_eq!(
+            settling.map(|row| row.outranked(&[&fixed, &threshold])),
+            Some(vec![true, false])
+        );
         for label in [
             "Peak force",
             "Force IAE",
@@ -840,8 +895,11 @@ mod tests {
         let mut unsettled = settled.clone();
         unsettled.metrics.max_settling_time_s = None;
         unsettled.metrics.steps_not_settled = unsettled.metrics.steps.len();
-        assert_eq!(settling.why_missing(&unsettled), NEVER_SETTLED);
-        assert!(settling.failed(&unsettled) && !settling.failed(&settled));
+        assert_eq!(
+            settling.why_missing(&unsettled),
+            "the force never settled after a depth step"
+        );
+        assert_eq!(settling.outranked(&[&unsettled, &settled]), [true, false]);
         assert_eq!(
             best_marks(settling, &[&unsettled, &settled], format_metric),
             [false, true]
@@ -864,7 +922,8 @@ mod tests {
         let mut stepless = settled.clone();
         stepless.metrics.steps.clear();
         stepless.metrics.max_settling_time_s = None;
-        assert!(!settling.failed(&stepless));
+        stepless.metrics.steps_not_settled = 0;
+        assert_eq!(settling.outranked(&[&stepless, &settled]), [false, false]);
         assert_eq!(
             best_marks(settling, &[&stepless, &settled], format_metric),
             [false, false]
@@ -874,6 +933,48 @@ mod tests {
             best_marks(settling, &[&unsettled, &unsettled], format_metric),
             [false, false]
         );
+    }
+
+    #[test]
+    fn a_run_that_left_more_depth_steps_unsettled_loses_the_settling_time_however_quick() {
+        use crate::closed_loop::definition::RunSpec;
+        use crate::closed_loop::lab::simulate;
+        use crate::control::registry::ControllerKind;
+        use crate::plant::Preset;
+        let row = |label: &str| METRIC_ROWS.iter().find(|r| r.label == label).unwrap();
+        let settling = row("Max settling time");
+        let steady =
+            simulate(&RunSpec::new(Preset::KimStepDoc, ControllerKind::Threshold)).unwrap();
+        let steps = steady.metrics.steps.len();
+        assert!(steps >= 3 && steady.metrics.steps_not_settled < steps - 1);
+        // The same run, but one more step never settled, and the ones it settled settled faster:
+        // its max is over fewer steps, a flattering number.
+        let mut quick = steady.clone();
+        quick.metrics.steps_not_settled += 1;
+        quick.metrics.max_settling_time_s = steady.metrics.max_settling_time_s.map(|t| t / 4.0);
+        assert_eq!(
+            best_marks(settling, &[&quick, &steady], format_metric),
+            [false, true]
+        );
+        assert_eq!(
+            best_marks(settling, &[&steady, &quick], format_metric),
+            [true, false]
+        );
+        // Among runs that left as many unsettled, the time decides as before.
+        let mut also_quick = quick.clone();
+        also_quick.metrics.max_settling_time_s = steady.metrics.max_settling_time_s;
+        assert_eq!(
+            best_marks(settling, &[&quick, &also_quick], format_metric),
+            [true, false]
+        );
+        // A run stopped before its later steps met fewer of them: not compared by its count.
+        let mut stopped = quick.clone();
+        stopped.metrics.steps.truncate(steps - 1);
+        assert_eq!(settling.outranked(&[&stopped, &steady]), [false, false]);
+        // The row's help says so.
+        assert!(settling
+            .help_with_rule()
+            .contains("more depth steps unsettled"));
     }
 
     #[test]
