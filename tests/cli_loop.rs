@@ -339,6 +339,59 @@ fn a_saved_configuration_reproduces_the_runs_it_describes() {
     std::fs::remove_dir_all(dir).ok();
 }
 
+/// A saved comparison's columns are named as the Compare page names them, by the law each runs
+/// (`control::run_names`); runs of one law, which the page tells apart by the form beside each
+/// column, are numbered.
+#[test]
+fn a_saved_comparison_names_its_columns_as_the_compare_page_does() {
+    use cutlab::closed_loop::config::RunConfiguration;
+    use cutlab::closed_loop::definition::RunSpec;
+    use cutlab::control::fuzzy::rules::RuleBase;
+    use cutlab::control::registry::ControllerKind;
+    use cutlab::plant::Preset;
+
+    let dir = scratch("config-names");
+    let run = |kind| RunSpec::new(Preset::ManeeratDoc1, kind);
+    let dynamics = run(ControllerKind::FuzzyDynamics);
+    let mut experience_table = dynamics.clone();
+    experience_table
+        .controller
+        .set_rule_table(RuleBase::Experience.table())
+        .unwrap();
+    let pi = run(ControllerKind::Pi);
+    let mut tuned = pi.clone();
+    tuned.controller.set_text("kp=0.5").unwrap();
+    let path = dir.join("four.json");
+    let runs = vec![dynamics, experience_table, pi, tuned];
+    std::fs::write(&path, RunConfiguration::new(runs, None).to_json()).unwrap();
+    let (result, out) = cutlab(&[
+        "compare",
+        "--config",
+        &path.to_string_lossy(),
+        "--no-references",
+    ]);
+    result.unwrap();
+    let headings: Vec<&str> = out
+        .lines()
+        .nth(1)
+        .unwrap()
+        .split("  ")
+        .map(str::trim)
+        .filter(|h| !h.is_empty())
+        .collect();
+    assert_eq!(
+        headings,
+        [
+            "fuzzy-dynamics",
+            "fuzzy-dynamics (experience table)",
+            "pi",
+            "pi (2)"
+        ],
+        "{out}"
+    );
+    std::fs::remove_dir_all(dir).ok();
+}
+
 #[test]
 fn a_saved_calibration_reproduces_the_teach_cut_run_and_is_refused_for_another_feedback() {
     let dir = scratch("calibration");

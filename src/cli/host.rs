@@ -26,7 +26,6 @@ use crate::closed_loop::paper_defaults::preset_controller;
 use crate::closed_loop::references::{apply_references, references, References};
 use crate::closed_loop::trace::write_csv;
 use crate::control::registry::{ControllerConfig, ControllerKind};
-use crate::estimation::teach_fit::load_level_warnings;
 use crate::hardware::host_settings::HostSetting;
 use crate::hardware::link_run::run_on_link;
 use crate::hardware::serial_settings::SerialSetting;
@@ -630,11 +629,7 @@ pub fn run(args: HostArgs, io: &mut Io<'_>) -> Result<(), CliError> {
         s.link_losses
     )?;
     writeln!(io.stdout, "references: {}", outcome.references_source)?;
-    // What the calibration rests on (the teach cut's or the file's), in the fit's words: the
-    // Hardware page and `cutlab calibrate` say the same.
-    for warning in load_level_warnings(&result.calibration) {
-        writeln!(io.stdout, "warning: {warning}")?;
-    }
+    super::print_calibration_warnings(io.stdout, &result.calibration)?;
     // The results are printed and written; a run the host could not finish under control still
     // fails the command, so a script notices (as `cutlab sim` does on a controller fault).
     if outcome.link_lost {

@@ -259,6 +259,18 @@ pub fn read_calibration(path: &str) -> Result<CalibrationFile, CliError> {
         .map_err(|e| CliError::new(format!("--calibration {path}: {e}")))
 }
 
+/// Prints what `calibration` rests on (the teach cut's or a file's), in the fit's words, one
+/// `warning:` line each, as `cutlab calibrate` and the Hardware page say it.
+pub fn print_calibration_warnings(
+    out: &mut dyn Write,
+    calibration: &Calibration,
+) -> Result<(), CliError> {
+    for warning in crate::estimation::teach_fit::load_level_warnings(calibration) {
+        writeln!(out, "warning: {warning}")?;
+    }
+    Ok(())
+}
+
 /// Writes `calibration`, made by `source`, to the file `--save-calibration PATH` names.
 pub fn save_calibration(
     path: &str,

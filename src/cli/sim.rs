@@ -19,8 +19,8 @@ use crate::closed_loop::summary::{
 };
 use crate::closed_loop::trace::write_csv;
 use crate::control::registry::{ControllerConfig, ControllerKind};
+use crate::control::run_names::run_names;
 use crate::estimation::estimator::{Calibration, Feedback};
-use crate::estimation::teach_fit::load_level_warnings;
 use crate::plant::Preset;
 use crate::safety::SafetyEvent;
 use crate::work::Work;
@@ -538,11 +538,7 @@ pub fn run_sim(args: SimArgs, io: &mut Io<'_>) -> Result<(), CliError> {
     }
     let table = metrics_table(&[(spec.controller.kind().name().to_string(), &result)]);
     io.stdout.write_all(table.as_bytes())?;
-    // What the calibration rests on (the teach cut's or the file's), in the fit's words, as
-    // `cutlab host`, `cutlab calibrate` and the Hardware page say it.
-    for warning in load_level_warnings(&result.calibration) {
-        writeln!(io.stdout, "warning: {warning}")?;
-    }
+    super::print_calibration_warnings(io.stdout, &result.calibration)?;
     fail_on_controller_faults([(spec.controller.kind().name(), &result)])
 }
 
@@ -713,17 +709,18 @@ fn one_scenario(
                 i + 1
             )));
         }
-        let kind = run.controller.kind().name();
-        let same_kind = named
-            .iter()
-            .filter(|(_, c)| c.kind() == run.controller.kind())
-            .count();
-        let name = if same_kind == 0 {
-            kind.to_string()
-        } else {
-            format!("{kind} ({})", same_kind + 1)
+        named.push((String::new(), run.controller));
+    }
+    // Named as the Compare page names its columns, by the law each runs; the page tells runs of
+    // one law apart by the form beside each column, a table by a number.
+    let configs: Vec<&ControllerConfig> = named.iter().map(|(_, c)| c).collect();
+    let names = run_names(&configs);
+    for (i, name) in names.iter().enumerate() {
+        let same = names[..i].iter().filter(|n| *n == name).count();
+        named[i].0 = match same {
+            0 => name.clone(),
+            _ => format!("{name} ({})", same + 1),
         };
-        named.push((name, run.controller));
     }
     Ok((base, named))
 }

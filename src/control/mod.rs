@@ -4,6 +4,7 @@
 //! |---|---|
 //! | [`law`] | the interface every controller implements, and what it reports of itself |
 //! | [`registry`] | every controller the lab offers: parameters with units, defaults and ranges, building one for a run |
+//! | [`run_names`] | how runs of several configurations side by side are named, by the law each runs |
 //! | [`fixed`] | fixed feed, the baseline |
 //! | [`restriction`] | paper 000's current restriction |
 //! | [`threshold`] | paper 003's threshold-proportional control |
@@ -18,4 +19,5 @@ pub mod mrac;
 pub mod pi;
 pub mod registry;
 pub mod restriction;
+pub mod run_names;
 pub mod threshold;

@@ -19,7 +19,8 @@ use leptos::prelude::*;
 use crate::closed_loop::config::RunConfiguration;
 use crate::closed_loop::definition::RunSpec;
 use crate::closed_loop::lab::RunResult;
-use crate::control::registry::{run_names, ControllerKind};
+use crate::control::registry::ControllerKind;
+use crate::control::run_names::run_names;
 use crate::web::components::later::{effect_after_mount, now_and_after_mount, Later};
 use crate::web::components::page::PageShell;
 use crate::web::components::run_form::{
