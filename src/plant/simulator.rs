@@ -180,7 +180,7 @@ impl SampleCurrents {
 
 /// Whether a block's phase currents and sensor readings are worked out together after its
 /// physics ([`PlantModel::advance_block`]), or each sample's with its physics. They feed
-/// nothing back, so the bits are the same either way; natively the block stages take 8–10 %
+/// nothing back, so the bits are the same either way; natively the block stages take 6–10 %
 /// less time, in the browser's worker (wasm under V8) 4–9 % more (docs/benchmarks.md,
 /// "The block stages at opt-level 3"), so wasm reads sample by sample.
 const READ_AFTER_PHYSICS: bool = !cfg!(target_arch = "wasm32");
