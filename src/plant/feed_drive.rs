@@ -252,12 +252,32 @@ impl ThreePhaseWaveform {
         ]
     }
 
+    /// [`ThreePhaseWaveform::currents_from_trig`] at `point`.
+    #[inline(always)]
+    pub fn currents_at(&self, point: PhasePoint) -> [f64; 3] {
+        self.currents_from_trig(point.amplitude_a, point.cos_theta, point.sin_theta)
+    }
+
     /// Time-RMS of one phase per unit amplitude, √(1 + h_5² + h_7²)/√2.
     pub fn rms_per_amplitude(&self) -> f64 {
         ((1.0 + self.harmonic_5th * self.harmonic_5th + self.harmonic_7th * self.harmonic_7th)
             / 2.0)
             .sqrt()
     }
+}
+
+/// What a drive's phase currents at one sample are made from: their amplitude and the cosine
+/// and sine of the current vector's angle. A simulation keeps a block's points and works out
+/// their currents together ([`ThreePhaseWaveform::currents_at`]) after the block's physics:
+/// nothing in a drive depends on its phase currents.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct PhasePoint {
+    /// Phase-current amplitude.
+    pub amplitude_a: f64,
+    /// cos θ.
+    pub cos_theta: f64,
+    /// sin θ.
+    pub sin_theta: f64,
 }
 
 /// Paper 003 eq 7: √((i_u² + i_v² + i_w²)/3).
@@ -448,9 +468,23 @@ impl FeedDrive {
     /// its latest step left).
     #[inline(always)]
     pub fn phase_currents_a(&self, iq_a: f64) -> [f64; 3] {
-        let theta = &self.electrical;
-        self.waveform
-            .currents_from_trig(iq_a, theta.cos(), theta.sin())
+        self.waveform.currents_at(self.phase_point(iq_a))
+    }
+
+    /// What [`FeedDrive::phase_currents_a`] makes the currents from: the amplitude `iq_a` and
+    /// the electrical angle's cosine and sine now.
+    #[inline(always)]
+    pub fn phase_point(&self, iq_a: f64) -> PhasePoint {
+        PhasePoint {
+            amplitude_a: iq_a,
+            cos_theta: self.electrical.cos(),
+            sin_theta: self.electrical.sin(),
+        }
+    }
+
+    /// The shape of its phase currents.
+    pub fn waveform(&self) -> &ThreePhaseWaveform {
+        &self.waveform
     }
 }
 

@@ -132,12 +132,25 @@ pub trait PlantModel {
     fn advance(&mut self, tick: Tick, command: OverrideCommand) -> PlantSample;
 
     /// [`PlantModel::advance`] for a sample whose internal signals nobody will read unless it
-    /// ends the run (a sample inside a block, [`Machine::step_block`]): the sensors, the truth
-    /// and `finished` are the same; the other signals may be left out, which spares work a
-    /// plant does only to show them.
+    /// ends the run (a sample inside a block, [`advance_sample_by_sample`]): the sensors, the
+    /// truth and `finished` are the same; the other signals may be left out, which spares work
+    /// a plant does only to show them.
     #[inline(always)]
     fn advance_unkept(&mut self, tick: Tick, command: OverrideCommand) -> PlantSample {
         self.advance(tick, command)
+    }
+
+    /// What [`Machine::step_block`] does for this plant: [`Machine::step`] sample after sample,
+    /// keeping only the block's last sample (or the one that finished the run) as the latest.
+    /// The default advances sample after sample ([`advance_sample_by_sample`]); a plant that
+    /// works out part of a block's samples together (the simulator: the phase currents and
+    /// sensor readings, which feed nothing back) overrides it, with the same bits.
+    #[inline(always)]
+    fn advance_block(&mut self, command: OverrideCommand, out: &mut [BlockStep]) -> usize
+    where
+        Self: Sized,
+    {
+        advance_sample_by_sample(self, command, out)
     }
 
     /// Back to the state right after construction; returns the signals to show before the
@@ -242,41 +255,51 @@ impl<P: PlantModel> Machine for P {
         self.sampling().latest.finished
     }
 
-    /// [`Machine::step`] sample after sample, keeping only the block's last sample as the latest:
-    /// nothing can look at the latest sample while the block runs (plants do not read it back,
-    /// see [`PlantModel::advance`]), so the others are only written to `out`, which saves storing
-    /// every internal signal of every sample.
+    /// [`PlantModel::advance_block`].
     #[inline(always)]
     fn step_block(&mut self, command: OverrideCommand, out: &mut [BlockStep]) -> usize {
-        let n = out.len();
-        for (i, slot) in out.iter_mut().enumerate() {
-            if self.sampling().latest.finished {
-                slot.step = self.sampling().machine_step();
-                slot.dynamometer = None;
-                return i + 1;
-            }
-            let tick = self.sampling_mut().tick();
-            let sample = if i + 1 == n {
-                self.advance(tick, command)
-            } else {
-                self.advance_unkept(tick, command)
-            };
-            slot.step = MachineStep {
-                sensors: sample.sensors,
-                truth: Some(sample.signals.truth),
-            };
-            slot.dynamometer = None;
-            if sample.finished || i + 1 == n {
-                self.sampling_mut().latest = sample;
-                return i + 1;
-            }
-        }
-        n
+        self.advance_block(command, out)
     }
 
     fn sensorless_force(&self) -> Option<SensorlessEstimate> {
         self.power_law_force()
     }
+}
+
+/// [`Machine::step`] sample after sample, keeping only the block's last sample as the latest:
+/// nothing can look at the latest sample while the block runs (plants do not read it back, see
+/// [`PlantModel::advance`]), so the others are only written to `out`, which saves storing every
+/// internal signal of every sample.
+#[inline(always)]
+pub fn advance_sample_by_sample<P: PlantModel>(
+    plant: &mut P,
+    command: OverrideCommand,
+    out: &mut [BlockStep],
+) -> usize {
+    let n = out.len();
+    for (i, slot) in out.iter_mut().enumerate() {
+        if plant.sampling().latest.finished {
+            slot.step = plant.sampling().machine_step();
+            slot.dynamometer = None;
+            return i + 1;
+        }
+        let tick = plant.sampling_mut().tick();
+        let sample = if i + 1 == n {
+            plant.advance(tick, command)
+        } else {
+            plant.advance_unkept(tick, command)
+        };
+        slot.step = MachineStep {
+            sensors: sample.sensors,
+            truth: Some(sample.signals.truth),
+        };
+        slot.dynamometer = None;
+        if sample.finished || i + 1 == n {
+            plant.sampling_mut().latest = sample;
+            return i + 1;
+        }
+    }
+    n
 }
 
 impl<P: PlantModel> Plant for P {

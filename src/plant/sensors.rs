@@ -354,6 +354,25 @@ impl CurrentSensor {
         }
     }
 
+    /// [`CurrentSensor::read`] of each sample of `currents_a` in turn, the reading replacing
+    /// the true currents: the same bits as reading them one by one. A simulation reads a
+    /// block's samples together after the block's physics, since nothing there depends on
+    /// them; each phase keeps its own lag and noise stream, so a sample's phases are
+    /// independent chains, stepped side by side.
+    #[inline(always)]
+    pub fn read_block(&mut self, currents_a: &mut [[f64; 3]]) {
+        // One branch on the wiring per block, as `read` does per sample.
+        if self.measured == 2 {
+            for sample in currents_a.iter_mut() {
+                *sample = self.read_phases::<2>(*sample);
+            }
+        } else {
+            for sample in currents_a.iter_mut() {
+                *sample = self.read_phases::<3>(*sample);
+            }
+        }
+    }
+
     /// [`CurrentSensor::read`] with `MEASURED` (2 or 3) phases measured.
     #[inline(always)]
     fn read_phases<const MEASURED: usize>(&mut self, currents_a: [f64; 3]) -> [f64; 3] {

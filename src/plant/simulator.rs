@@ -27,7 +27,7 @@
 use serde::{Deserialize, Serialize};
 
 use super::cnc::{samples_per, AppliedOverride, CncConfig, Control, Every};
-use super::feed_drive::{three_phase_rms_a, FeedDrive, FeedDriveConfig};
+use super::feed_drive::{three_phase_rms_a, FeedDrive, FeedDriveConfig, PhasePoint};
 use super::materials::{CuttingCoefficients, Material};
 use super::mechanics::{mean_forces, Immersion, MillingForceModel, MillingMode};
 use super::power_law::{
@@ -39,7 +39,9 @@ use super::sensors::{CurrentSensor, CurrentSensorConfig};
 use super::signals::{AxisSignals, PlantSignals};
 use super::spindle_drive::{SpindleDrive, SpindleDriveConfig};
 use super::{positive, Plant, PlantError, PlantModel, PlantSample, Sampling, Tick};
-use crate::machine::{OverrideCommand, PlantTruth, SensorSample, SensorlessEstimate};
+use crate::machine::{
+    BlockStep, MachineStep, OverrideCommand, PlantTruth, SensorSample, SensorlessEstimate,
+};
 use crate::math;
 
 /// Which feed axis the feed-current sensors are on.
@@ -147,6 +149,45 @@ impl SimConfig {
         Ok(())
     }
 }
+
+/// What the phase currents of one sample are made from: the measured feed axis's and the
+/// spindle's amplitude and angle.
+#[derive(Debug, Clone, Copy, Default)]
+struct PhasePoints {
+    feed: PhasePoint,
+    spindle: PhasePoint,
+}
+
+/// One sample's phase currents (the measured feed axis's and the spindle's) and what the
+/// sensors read of them.
+#[derive(Debug, Clone, Copy)]
+struct SampleCurrents {
+    feed_a: [f64; 3],
+    spindle_a: [f64; 3],
+    feed_read_a: [f64; 3],
+    spindle_read_a: [f64; 3],
+}
+
+impl SampleCurrents {
+    /// Not worked out yet: [`Simulator::read_currents`] fills them in after a block's physics.
+    const LATER: Self = Self {
+        feed_a: [f64::NAN; 3],
+        spindle_a: [f64::NAN; 3],
+        feed_read_a: [f64::NAN; 3],
+        spindle_read_a: [f64::NAN; 3],
+    };
+}
+
+/// Whether a block's phase currents and sensor readings are worked out together after its
+/// physics ([`PlantModel::advance_block`]), or each sample's with its physics. They feed
+/// nothing back, so the bits are the same either way; natively the block stages take 6–10 %
+/// less time, in the browser's worker (wasm under V8) 4–9 % more (docs/benchmarks.md,
+/// "The block stages at opt-level 3"), so wasm reads sample by sample.
+const READ_AFTER_PHYSICS: bool = !cfg!(target_arch = "wasm32");
+
+/// Samples whose phase currents and sensor readings are worked out together: a closed loop's
+/// block (64 samples, [`crate::closed_loop::sample_loop`]) fits in one.
+const CHUNK: usize = 64;
 
 /// Noise streams: the feed sensor uses 0–2, the spindle sensor 3–5.
 const FEED_SENSOR_STREAM: u64 = 0;
@@ -387,11 +428,20 @@ impl Simulator {
             .min(self.scenario.segments().len().saturating_sub(1))
     }
 
-    /// One sample ([`PlantModel::advance`]); with `keep` false ([`PlantModel::advance_unkept`]),
-    /// the unmeasured axis's phase currents, seen only in the signals, are left out (NaN) unless
-    /// the run ends here.
+    /// One sample. With `read_now` false, only its physics: the phase currents of the measured
+    /// feed axis and the spindle and what the sensors read of them are left NaN (with the RMS
+    /// of the measured feed currents in the truth), for [`Simulator::read_currents`] to work out
+    /// from the phase points returned beside the sample. With `keep` false (a sample inside a
+    /// block, whose internal signals nobody reads), the unmeasured axis's phase currents, seen
+    /// only in the signals, are left out unless the run ends here.
     #[inline(always)]
-    fn advance_with(&mut self, tick: Tick, command: OverrideCommand, keep: bool) -> PlantSample {
+    fn physics(
+        &mut self,
+        tick: Tick,
+        command: OverrideCommand,
+        keep: bool,
+        read_now: bool,
+    ) -> (PlantSample, PhasePoints) {
         let time_s = tick.time_s;
         let ipo_tick = self.ipo.tick();
 
@@ -468,27 +518,37 @@ impl Simulator {
         let finished = cnc.finished || time_s >= self.config.max_duration_s;
         let mut ax = self.axes[0].step_without_currents(vx, -force_x_n, 0.0);
         let mut ay = self.axes[1].step_without_currents(vy, -force_y_n, 0.0);
-        let all_signals = keep || finished;
-        if all_signals || self.config.measured_axis == FeedAxis::X {
-            ax.phase_currents_a = self.axes[0].phase_currents_a(ax.iq_a);
+        let (measured, unmeasured) = match self.config.measured_axis {
+            FeedAxis::X => ((&self.axes[0], &ax), (&self.axes[1], &mut ay)),
+            FeedAxis::Y => ((&self.axes[1], &ay), (&self.axes[0], &mut ax)),
+        };
+        let feed_point = measured.0.phase_point(measured.1.iq_a);
+        if keep || finished {
+            unmeasured.1.phase_currents_a = unmeasured.0.phase_currents_a(unmeasured.1.iq_a);
         }
-        if all_signals || self.config.measured_axis == FeedAxis::Y {
-            ay.phase_currents_a = self.axes[1].phase_currents_a(ay.iq_a);
-        }
-        let spindle = self.spindle.step(spindle_command_rpm, forces.torque_nm);
+        let spindle = self
+            .spindle
+            .step_without_currents(spindle_command_rpm, forces.torque_nm);
+        let points = PhasePoints {
+            feed: feed_point,
+            spindle: self.spindle.phase_point(spindle.rms_current_a),
+        };
         if spindle.running && self.spindle_started_at_s.is_none() {
             self.spindle_started_at_s = Some(time_s);
         } else if !spindle.running {
             self.spindle_started_at_s = None;
         }
 
-        // 6. Sensors.
-        let measured = match self.config.measured_axis {
-            FeedAxis::X => &ax,
-            FeedAxis::Y => &ay,
+        // 6. Sensors: now, or for a whole block after its physics (Simulator::read_currents).
+        let currents = if read_now {
+            self.read_sample(points)
+        } else {
+            SampleCurrents::LATER
         };
-        let feed_read = self.feed_sensor.read(measured.phase_currents_a);
-        let spindle_read = self.spindle_sensor.read(spindle.phase_currents_a);
+        match self.config.measured_axis {
+            FeedAxis::X => ax.phase_currents_a = currents.feed_a,
+            FeedAxis::Y => ay.phase_currents_a = currents.feed_a,
+        }
 
         // Paper 004's sensorless estimate from what the CNC knows, once per interpolation period.
         if ipo_tick {
@@ -520,13 +580,12 @@ impl Simulator {
         let resultant_n = forces.resultant_n();
         let power_w = forces.power_w(spindle.speed_rpm);
         let removal = cut_depth_mm * cut_width_mm * math::max(feed_mm_min, 0.0) / 60.0;
-        let feed_rms = three_phase_rms_a(measured.phase_currents_a);
         let time_since_start_s = self.spindle_started_at_s.map_or(0.0, |t| time_s - t);
 
         let sensors = SensorSample {
             time_s,
-            feed_phase_currents_a: feed_read,
-            spindle_phase_currents_a: spindle_read,
+            feed_phase_currents_a: currents.feed_read_a,
+            spindle_phase_currents_a: currents.spindle_read_a,
             spindle_fv_voltage_v: spindle.fv_voltage_v,
             spindle_speed_rpm: spindle.speed_rpm,
             spindle_command_rpm,
@@ -551,7 +610,11 @@ impl Simulator {
             material_removal_mm3_s: removal,
             tool_x_mm: point.position_mm[0],
             tool_y_mm: point.position_mm[1],
-            feed_current_rms_a: feed_rms,
+            feed_current_rms_a: if read_now {
+                three_phase_rms_a(currents.feed_a)
+            } else {
+                f64::NAN
+            },
             spindle_current_rms_a: spindle.rms_current_a,
         };
         let signals = PlantSignals {
@@ -577,19 +640,144 @@ impl Simulator {
                 phase_currents_a: ay.phase_currents_a,
             },
             spindle_motor_torque_nm: spindle.motor_torque_nm,
-            spindle_phase_currents_a: spindle.phase_currents_a,
+            spindle_phase_currents_a: currents.spindle_a,
             fv_voltage_v: spindle.fv_voltage_v,
-            feed_currents_read_a: feed_read,
-            spindle_currents_read_a: spindle_read,
+            feed_currents_read_a: currents.feed_read_a,
+            spindle_currents_read_a: currents.spindle_read_a,
             brake_excitation_a: f64::NAN,
             brake_torque_nm: f64::NAN,
             ..PlantSignals::from_control(time_s, truth, &control)
         };
-        PlantSample {
+        let sample = PlantSample {
             sensors,
             signals,
             finished,
+        };
+        (sample, points)
+    }
+
+    /// One sample's phase currents from its phase points, and what the sensors read of them.
+    #[inline(always)]
+    fn read_sample(&mut self, points: PhasePoints) -> SampleCurrents {
+        let feed_a = self.measured_axis().waveform().currents_at(points.feed);
+        let spindle_a = self.spindle.waveform().currents_at(points.spindle);
+        SampleCurrents {
+            feed_a,
+            spindle_a,
+            feed_read_a: self.feed_sensor.read(feed_a),
+            spindle_read_a: self.spindle_sensor.read(spindle_a),
         }
+    }
+
+    /// The feed axis the feed sensor is on.
+    #[inline(always)]
+    fn measured_axis(&self) -> &FeedDrive {
+        match self.config.measured_axis {
+            FeedAxis::X => &self.axes[0],
+            FeedAxis::Y => &self.axes[1],
+        }
+    }
+
+    /// The phase currents of samples whose physics has run and what the sensors read of them,
+    /// written into `out` (and into `latest`, the last of them in full, if it is to be kept):
+    /// first every sample's true currents from its phase points, then each sensor's readings
+    /// in order ([`CurrentSensor::read_block`]). Nothing in the physics depends on them, so a
+    /// block's come out with the same bits as sample by sample.
+    #[inline(always)]
+    fn read_currents(
+        &mut self,
+        points: &[PhasePoints],
+        out: &mut [BlockStep],
+        latest: Option<&mut PlantSample>,
+    ) {
+        let n = points.len().min(out.len()).min(CHUNK);
+        if n == 0 {
+            return;
+        }
+        let mut feed = [[0.0; 3]; CHUNK];
+        let mut spindle = [[0.0; 3]; CHUNK];
+        let (feed, spindle) = (&mut feed[..n], &mut spindle[..n]);
+        let (feed_waveform, spindle_waveform) =
+            (*self.measured_axis().waveform(), *self.spindle.waveform());
+        for ((p, f), s) in points.iter().zip(feed.iter_mut()).zip(spindle.iter_mut()) {
+            *f = feed_waveform.currents_at(p.feed);
+            *s = spindle_waveform.currents_at(p.spindle);
+        }
+        for (slot, f) in out.iter_mut().zip(feed.iter()) {
+            if let Some(truth) = &mut slot.step.truth {
+                truth.feed_current_rms_a = three_phase_rms_a(*f);
+            }
+        }
+        let (true_feed, true_spindle) = (feed[n - 1], spindle[n - 1]);
+        self.feed_sensor.read_block(feed);
+        self.spindle_sensor.read_block(spindle);
+        for ((slot, f), s) in out.iter_mut().zip(feed.iter()).zip(spindle.iter()) {
+            slot.step.sensors.feed_phase_currents_a = *f;
+            slot.step.sensors.spindle_phase_currents_a = *s;
+        }
+        if let Some(sample) = latest {
+            let last = &out[n - 1].step;
+            sample.sensors = last.sensors;
+            if let Some(truth) = last.truth {
+                sample.signals.truth = truth;
+            }
+            let signals = &mut sample.signals;
+            match self.config.measured_axis {
+                FeedAxis::X => signals.axis_x.phase_currents_a = true_feed,
+                FeedAxis::Y => signals.axis_y.phase_currents_a = true_feed,
+            }
+            signals.spindle_phase_currents_a = true_spindle;
+            signals.feed_currents_read_a = feed[n - 1];
+            signals.spindle_currents_read_a = spindle[n - 1];
+        }
+    }
+
+    /// Up to [`CHUNK`] samples of a block ([`PlantModel::advance_block`]): their physics sample
+    /// after sample, then their phase currents and readings together. `holds_blocks_end` says
+    /// whether the block's last sample is in `out`; it is kept as the latest. Returns how many
+    /// samples were written and whether the block has ended (at its last sample, or where the
+    /// run finished).
+    #[inline(always)]
+    fn advance_chunk(
+        &mut self,
+        command: OverrideCommand,
+        out: &mut [BlockStep],
+        holds_blocks_end: bool,
+    ) -> (usize, bool) {
+        if self.sampling.latest.finished {
+            // A finished run repeats its last sample.
+            if let Some(slot) = out.first_mut() {
+                slot.step = self.sampling.machine_step();
+                slot.dynamometer = None;
+            }
+            return (out.len().min(1), true);
+        }
+        let mut points = [PhasePoints::default(); CHUNK];
+        let n = out.len().min(CHUNK);
+        let mut latest = None;
+        let mut stepped = 0;
+        for (slot, point) in out[..n].iter_mut().zip(points.iter_mut()) {
+            let tick = self.sampling.tick();
+            let blocks_end = holds_blocks_end && stepped + 1 == n;
+            let (sample, p) = self.physics(tick, command, blocks_end, false);
+            *point = p;
+            slot.step = MachineStep {
+                sensors: sample.sensors,
+                truth: Some(sample.signals.truth),
+            };
+            slot.dynamometer = None;
+            stepped += 1;
+            if sample.finished || blocks_end {
+                latest = Some(sample);
+                break;
+            }
+        }
+        self.read_currents(&points[..stepped], &mut out[..stepped], latest.as_mut());
+        let ended = latest.is_some();
+        if let Some(sample) = latest {
+            self.sampling.latest = sample;
+        }
+        (stepped, ended)
     }
 
     /// The override the machine applies now.
@@ -609,12 +797,29 @@ impl PlantModel for Simulator {
 
     #[inline(always)]
     fn advance(&mut self, tick: Tick, command: OverrideCommand) -> PlantSample {
-        self.advance_with(tick, command, true)
+        self.physics(tick, command, true, true).0
     }
 
     #[inline(always)]
     fn advance_unkept(&mut self, tick: Tick, command: OverrideCommand) -> PlantSample {
-        self.advance_with(tick, command, false)
+        self.physics(tick, command, false, true).0
+    }
+
+    #[inline(always)]
+    fn advance_block(&mut self, command: OverrideCommand, out: &mut [BlockStep]) -> usize {
+        if !READ_AFTER_PHYSICS {
+            return super::advance_sample_by_sample(self, command, out);
+        }
+        let (mut done, n) = (0, out.len());
+        while done < n {
+            let end = (done + CHUNK).min(n);
+            let (stepped, ended) = self.advance_chunk(command, &mut out[done..end], end == n);
+            done += stepped;
+            if ended || stepped == 0 {
+                break;
+            }
+        }
+        done
     }
 
     fn power_law_force(&self) -> Option<SensorlessEstimate> {

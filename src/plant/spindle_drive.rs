@@ -41,7 +41,7 @@ use serde::{Deserialize, Serialize};
 use std::f64::consts::TAU;
 
 use super::dynamics::SecondOrderLag;
-use super::feed_drive::ThreePhaseWaveform;
+use super::feed_drive::{PhasePoint, ThreePhaseWaveform};
 use super::{in_range, non_negative, positive, rad_s_from_rpm, rpm_from_rad_s, PlantError};
 use crate::math::{self, Phasor};
 
@@ -391,6 +391,21 @@ impl SpindleDrive {
     /// the top speed) and the cutting torque `cutting_torque_nm` at the spindle.
     #[inline(always)]
     pub fn step(&mut self, command_rpm: f64, cutting_torque_nm: f64) -> SpindleDriveOutput {
+        let mut out = self.step_without_currents(command_rpm, cutting_torque_nm);
+        out.phase_currents_a = self.phase_currents_a(out.rms_current_a);
+        out
+    }
+
+    /// [`SpindleDrive::step`] without the phase currents (left NaN): a simulation that works
+    /// out a block's phase currents together (they feed nothing back) asks
+    /// [`SpindleDrive::phase_point`] for what they are made of right after, the same bits as
+    /// `step`'s.
+    #[inline(always)]
+    pub fn step_without_currents(
+        &mut self,
+        command_rpm: f64,
+        cutting_torque_nm: f64,
+    ) -> SpindleDriveOutput {
         let c = &self.config;
         let k = &self.k;
         let command_rpm = math::clamp(command_rpm, -k.max_spindle_rpm, k.max_spindle_rpm);
@@ -449,14 +464,33 @@ impl SpindleDrive {
             load_torque_nm,
             motor_torque_nm,
             rms_current_a,
-            phase_currents_a: self.waveform.currents_from_trig(
-                rms_current_a * std::f64::consts::SQRT_2,
-                self.electrical_angle.cos(),
-                self.electrical_angle.sin(),
-            ),
+            phase_currents_a: [f64::NAN; 3],
             fv_voltage_v: k.fv_volts_per_rpm * motor_rpm.abs(),
             running: !stopped,
         }
+    }
+
+    /// The phase currents for the RMS current `rms_current_a` at the stator's present angle
+    /// (the one its latest step left).
+    #[inline(always)]
+    pub fn phase_currents_a(&self, rms_current_a: f64) -> [f64; 3] {
+        self.waveform.currents_at(self.phase_point(rms_current_a))
+    }
+
+    /// What [`SpindleDrive::phase_currents_a`] makes the currents from: the amplitude √2·RMS
+    /// and the stator angle's cosine and sine now.
+    #[inline(always)]
+    pub fn phase_point(&self, rms_current_a: f64) -> PhasePoint {
+        PhasePoint {
+            amplitude_a: rms_current_a * std::f64::consts::SQRT_2,
+            cos_theta: self.electrical_angle.cos(),
+            sin_theta: self.electrical_angle.sin(),
+        }
+    }
+
+    /// The shape of its phase currents.
+    pub fn waveform(&self) -> &ThreePhaseWaveform {
+        &self.waveform
     }
 }
 
