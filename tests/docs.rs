@@ -1,4 +1,5 @@
-//! docs/controllers.md, docs/papers.md and docs/plant.md say what the tool computes today.
+//! docs/controllers.md, docs/papers.md, docs/plant.md, docs/hardware.md and docs/protocol.md say
+//! what the tool computes today.
 //!
 //! Every number the tool produces is marked in the Markdown source with an invisible HTML comment
 //! pair around the value as the page shows it:
@@ -13,7 +14,9 @@
 //! Each key's value is computed once, below, by code calling the library, one function per group
 //! of facts (the comparison on the presets, the estimation, the envelope's and controllers'
 //! settings, paper 000's bench, paper 001, 003 and 004's figures, paper 002's grid over its
-//! readings), formatted as the page shows it. Where the prose reads the numbers ("both tables
+//! readings, the link's constants), formatted as the page shows it. A constant of the code (a
+//! default, a limit, a frame's size) is read from its one definition in src/, so changing it
+//! fails here until the page says the new value. Where the prose reads the numbers ("both tables
 //! cycle", "no sooner up to 0.1 s"), the function asserts that reading, so a change that makes a
 //! sentence untrue fails here, naming the figures, instead of being blessed into the page.
 //! `cargo test --test docs` fails on a marked value the tool does not give, on a marker whose key
@@ -2477,12 +2480,362 @@ fn paper_004_surface_error(facts: &mut Facts, m: &Matrix) {
         .all(|x| x.surface_error_range_um > maneerat_fixed));
 }
 
+// ---------------------------------------------------------------------------------------------
+// The reference documents' constants: docs/hardware.md and docs/protocol.md state the link's
+// limits, defaults and sizes, and each is read here from its one definition in src/.
+// ---------------------------------------------------------------------------------------------
+
+/// `n` as the pages write a small count in prose ("five times"), digits beyond ten.
+fn count_word(n: usize) -> String {
+    const WORDS: [&str; 11] = [
+        "zero", "one", "two", "three", "four", "five", "six", "seven", "eight", "nine", "ten",
+    ];
+    WORDS
+        .get(n)
+        .map_or_else(|| n.to_string(), |w| (*w).to_string())
+}
+
+/// `x`, which must be a whole number, as one.
+fn whole(x: f64) -> usize {
+    assert!(
+        x >= 0.0 && x.fract().abs() < 1e-9,
+        "{x} is not a whole number"
+    );
+    x.round() as usize
+}
+
+/// The share lost by averaging a sinusoid of `f_hz` over blocks of `t_s` before the RMS:
+/// 1 − sin(πfT)/(πfT), in percent.
+fn block_mean_loss_pct(f_hz: f64, t_s: f64) -> f64 {
+    let x = std::f64::consts::PI * f_hz * t_s;
+    100.0 * (1.0 - x.sin() / x)
+}
+
+/// docs/hardware.md's and docs/protocol.md's numbers of the link: the frame sizes and the line
+/// budget's terms, the device's and the host's watchdogs and defaults, the stuck-override and
+/// phase-sum checks, the emulator's sampling and queues, the virtual device's worker, the
+/// reduce-only limits and the teach cut's schedule.
+fn link_constants(facts: &mut Facts) {
+    use cutlab::closed_loop::teach_cut::TEACH_OVERRIDES_PCT;
+    use cutlab::estimation::load_levels::MIN_LOAD_LEVELS;
+    use cutlab::hardware::commissioning::REDUCE_ONLY_MAX_OVERRIDE_PCT;
+    use cutlab::hardware::serial_settings::parse_serial;
+    use cutlab::hardware::session::SessionOptions;
+    use cutlab::protocol::codec::{CRC_LEN, MAX_BLOCK_LEN};
+    use cutlab::protocol::device::{
+        DeviceConfig, DeviceEmulator, CURRENT_A_PER_COUNT, DEFAULT_FALLBACK_LIMIT_S,
+        DEFAULT_FALLBACK_PCT, DEFAULT_WATCHDOG_S, DISARMED_OVERRIDE_PCT, FV_V_PER_COUNT,
+        HEARTBEAT_INTERVAL_S, PHASE_CHECK_MIN_A, PHASE_CHECK_WINDOW_S, PHASE_SUM_TOLERANCE,
+        TIME_SCALE_RANGE, WATCHDOG_RANGE_S,
+    };
+    use cutlab::protocol::device_worker::{
+        MAX_VIRTUAL_FRAMES_PER_TICK, MAX_VIRTUAL_STEP_MS, VIRTUAL_TICK_MS,
+    };
+    use cutlab::protocol::frame::{
+        sample_flag, FrameType, MAX_PAYLOAD_LEN, VERSION_MAJOR, VERSION_MINOR,
+    };
+    use cutlab::protocol::host::{
+        DEFAULT_LINK_TIMEOUT_S, HELLO_INTERVAL_S, LINK_TIMEOUT_RANGE_S, MAX_FILLED_GAP,
+        OVERRIDE_CHECK_MOVING_FRACTION, OVERRIDE_CHECK_STEADY_FRACTION, OVERRIDE_CHECK_STEADY_S,
+        OVERRIDE_MISMATCH_FRACTION, OVERRIDE_MISMATCH_PCT, OVERRIDE_MISMATCH_S,
+    };
+    use cutlab::protocol::keep_up::KeepUp;
+    use cutlab::protocol::line_budget::{
+        wire_len, LineBudget, BITS_PER_BYTE, COMMANDS_PER_S, LINE_LOAD_LIMIT,
+    };
+    use cutlab::protocol::link::{DEVICE_QUEUE_CHUNKS, HOST_QUEUE_CHUNKS, READ_CHUNK};
+
+    let config = DeviceConfig::new(Preset::KimStepDoc);
+    let emulator = DeviceEmulator::new(config.clone()).unwrap();
+    let caps = emulator.capabilities().clone();
+    let sample_rate_hz = f64::from(caps.sample_rate_hz);
+    let sample_period_s = 1.0 / sample_rate_hz;
+
+    // §1's budget: a frame on the wire, and what the device's stream asks of its line.
+    let overhead = wire_len(FrameType::Hello) - FrameType::Hello.payload_len();
+    assert!(FrameType::ALL
+        .iter()
+        .all(|t| wire_len(*t) - t.payload_len() == overhead));
+    facts.set("link.wire_overhead_bytes", overhead.to_string());
+    facts.set("link.crc_bytes", CRC_LEN.to_string());
+    for (t, key) in [
+        (FrameType::Sample, "sample"),
+        (FrameType::SimTruth, "sim_truth"),
+        (FrameType::Heartbeat, "heartbeat"),
+        (FrameType::Ack, "ack"),
+    ] {
+        facts.set(&format!("link.wire_bytes.{key}"), wire_len(t).to_string());
+    }
+    for t in FrameType::ALL {
+        facts.set(
+            &format!("link.payload_bytes.{}", t.name().to_ascii_lowercase()),
+            t.payload_len().to_string(),
+        );
+    }
+    facts.set("link.bits_per_byte", short(BITS_PER_BYTE, 0));
+    facts.set(
+        "link.device_heartbeats_per_s",
+        short(1.0 / HEARTBEAT_INTERVAL_S, 3),
+    );
+    facts.set("link.device_heartbeat_s", short(HEARTBEAT_INTERVAL_S, 3));
+    facts.set("link.commands_per_s", short(COMMANDS_PER_S, 0));
+    facts.set("link.command_period_ms", short(1000.0 / COMMANDS_PER_S, 1));
+    // The budget's command rate allows for at least the default control period's.
+    assert!(1.0 / COMMANDS_PER_S <= MIN_CONTROL_PERIOD_S);
+    facts.set(
+        "link.min_default_period_ms",
+        short(1000.0 * MIN_CONTROL_PERIOD_S, 1),
+    );
+    facts.set("link.load_limit_pct", short(100.0 * LINE_LOAD_LIMIT, 1));
+    let budget = |rate: f64, baud: u32| {
+        let mut c = caps.clone();
+        c.features = 0;
+        c.sample_rate_hz = rate as f32;
+        c.line_baud = baud;
+        LineBudget::of(&c)
+    };
+    let most_at_115200 = (1..5000)
+        .rev()
+        .find(|r| budget(f64::from(*r), 115_200).fits())
+        .unwrap();
+    facts.set("link.most_samples_at_115200", most_at_115200.to_string());
+    // "1000 samples/s need 921 600 baud".
+    assert!(!budget(1000.0, 115_200).fits() && budget(1000.0, 921_600).fits());
+    facts.set(
+        "link.spindle_lowpass_hz",
+        short(DEFAULT_SPINDLE_LOWPASS_HZ, 1),
+    );
+    let least_rate = 2.0 * DEFAULT_SPINDLE_LOWPASS_HZ;
+    assert!(least_rate > f64::from(most_at_115200));
+    facts.set("link.least_rate_for_spindle_filter", short(least_rate, 0));
+
+    // §2's framing.
+    facts.set("link.max_payload_bytes", MAX_PAYLOAD_LEN.to_string());
+    facts.set("link.max_block_bytes", MAX_BLOCK_LEN.to_string());
+    facts.set("link.least_block_bytes", (1 + CRC_LEN).to_string());
+    facts.set("link.version_major", VERSION_MAJOR.to_string());
+    facts.set("link.version_minor", VERSION_MINOR.to_string());
+    facts.set(
+        "link.hold_latched_flag_bit",
+        sample_flag::HOLD_LATCHED.trailing_zeros().to_string(),
+    );
+
+    // §4–5: the handshake, the heartbeats, the watchdogs.
+    facts.set("link.hello_interval_s", short(HELLO_INTERVAL_S, 3));
+    facts.set(
+        "link.hello_interval_words",
+        if HELLO_INTERVAL_S == 0.25 {
+            "quarter second".to_string()
+        } else {
+            format!("{} s", short(HELLO_INTERVAL_S, 3))
+        },
+    );
+    let options = SessionOptions::new(DEFAULT_LINK_TIMEOUT_S, None).unwrap();
+    facts.set(
+        "link.handshake_times",
+        count_word(whole(options.handshake_timeout_s / DEFAULT_LINK_TIMEOUT_S)),
+    );
+    facts.set(
+        "link.handshake_default_s",
+        short(options.handshake_timeout_s, 2),
+    );
+    facts.set(
+        "link.host_watchdog_default_s",
+        short(DEFAULT_LINK_TIMEOUT_S, 2),
+    );
+    facts.set(
+        "link.host_watchdog_range_s",
+        format!(
+            "{} to {}",
+            short(LINK_TIMEOUT_RANGE_S.0, 3),
+            short(LINK_TIMEOUT_RANGE_S.1, 3)
+        ),
+    );
+    let heartbeat_share =
+        KeepUp::new(&caps).heartbeat_interval_s() / (f64::from(caps.watchdog_timeout_ms) / 1e3);
+    facts.set(
+        "link.heartbeat_share",
+        match whole((1.0 / heartbeat_share).round()) {
+            5 => "fifth".to_string(),
+            n => format!("1/{n}"),
+        },
+    );
+    facts.set("link.max_filled_gap", MAX_FILLED_GAP.to_string());
+    facts.set(
+        "link.moving_pct",
+        short(100.0 * OVERRIDE_CHECK_MOVING_FRACTION, 1),
+    );
+    facts.set(
+        "link.steady_pct",
+        short(100.0 * OVERRIDE_CHECK_STEADY_FRACTION, 1),
+    );
+    facts.set("link.steady_s", short(OVERRIDE_CHECK_STEADY_S, 3));
+    facts.set("link.mismatch_points", short(OVERRIDE_MISMATCH_PCT, 1));
+    facts.set(
+        "link.mismatch_pct",
+        short(100.0 * OVERRIDE_MISMATCH_FRACTION, 1),
+    );
+    facts.set("link.mismatch_s", short(OVERRIDE_MISMATCH_S, 3));
+    facts.set("link.phase_window_s", short(PHASE_CHECK_WINDOW_S, 3));
+    facts.set("link.phase_min_a", short(PHASE_CHECK_MIN_A, 2));
+    facts.set("link.phase_sum_pct", short(100.0 * PHASE_SUM_TOLERANCE, 1));
+
+    // The emulator's defaults (its Capabilities say the same).
+    assert_eq!(
+        f64::from(caps.watchdog_timeout_ms),
+        1e3 * DEFAULT_WATCHDOG_S
+    );
+    assert_eq!(
+        f64::from(caps.fallback_override_cpct),
+        100.0 * DEFAULT_FALLBACK_PCT
+    );
+    assert_eq!(
+        f64::from(caps.fallback_limit_ms),
+        1e3 * DEFAULT_FALLBACK_LIMIT_S
+    );
+    facts.set("device.watchdog_s", short(DEFAULT_WATCHDOG_S, 3));
+    facts.set("device.fallback_pct", short(DEFAULT_FALLBACK_PCT, 1));
+    facts.set(
+        "device.fallback_limit_s",
+        short(DEFAULT_FALLBACK_LIMIT_S, 3),
+    );
+    facts.set(
+        "device.over_current_a",
+        short(f64::from(caps.over_current_a), 1),
+    );
+    facts.set("device.disarmed_pct", short(DISARMED_OVERRIDE_PCT, 1));
+    // §5's example: a loop that cut the feed to 30 % against a fixed fallback.
+    facts.set(
+        "device.fixed_fallback_raise_pct",
+        fixed(100.0 * (DEFAULT_FALLBACK_PCT / 30.0 - 1.0), 0),
+    );
+    // §5: the default watchdog at 50× in wall time, and the host's heartbeat interval then.
+    let wall_ms = 1e3 * DEFAULT_WATCHDOG_S / 50.0;
+    facts.set("device.watchdog_at_50x_ms", short(wall_ms, 1));
+    facts.set(
+        "device.heartbeat_at_50x_ms",
+        short(wall_ms * heartbeat_share, 1),
+    );
+    facts.set("device.watchdog_max_s", short(WATCHDOG_RANGE_S.1, 3));
+    facts.set(
+        "device.time_scale_range",
+        format!(
+            "{}–{}",
+            short(TIME_SCALE_RANGE.0, 3),
+            short(TIME_SCALE_RANGE.1, 3)
+        ),
+    );
+    facts.set("device.sample_period_ms", short(1e3 * sample_period_s, 3));
+    facts.set("device.sample_rate_khz", short(sample_rate_hz / 1e3, 3));
+    facts.set(
+        "device.plant_rate_khz",
+        short(sample_rate_hz * config.decimation as f64 / 1e3, 3),
+    );
+    facts.set("device.decimation", config.decimation.to_string());
+    facts.set(
+        "device.current_ma_per_count",
+        short(1e3 * CURRENT_A_PER_COUNT, 3),
+    );
+    facts.set(
+        "device.current_range_a",
+        fixed((f64::from(i16::MAX) * CURRENT_A_PER_COUNT).floor(), 0),
+    );
+    facts.set("device.fv_mv_per_count", short(1e3 * FV_V_PER_COUNT, 3));
+    facts.set("device.queue_chunks", DEVICE_QUEUE_CHUNKS.to_string());
+    assert_eq!(READ_CHUNK % 1024, 0);
+    facts.set("device.read_chunk_kib", (READ_CHUNK / 1024).to_string());
+    let host_queue = HOST_QUEUE_CHUNKS * READ_CHUNK;
+    assert_eq!(host_queue % (1 << 20), 0);
+    facts.set("link.host_queue_mib", (host_queue >> 20).to_string());
+    // §7: what block means lose, at the emulator's sample period. Paper 003's spindle: two pole
+    // pairs, 1000 rpm, and 8000 rpm.
+    let electrical_hz = |rpm: f64| 2.0 * rpm / 60.0;
+    facts.set(
+        "device.block_loss_1000rpm_pct",
+        short(
+            block_mean_loss_pct(electrical_hz(1000.0), sample_period_s),
+            1,
+        ),
+    );
+    facts.set(
+        "device.block_loss_8000rpm_pct",
+        fixed(
+            block_mean_loss_pct(electrical_hz(8000.0), sample_period_s),
+            0,
+        ),
+    );
+    facts.set(
+        "device.block_loss_100hz_pct",
+        short(block_mean_loss_pct(100.0, sample_period_s), 1),
+    );
+    facts.set("device.hz_at_1000rpm", fixed(electrical_hz(1000.0), 0));
+    facts.set("device.hz_at_8000rpm", fixed(electrical_hz(8000.0), 0));
+
+    // The virtual device's worker (docs/hardware.md §6).
+    facts.set("virtual.tick_ms", VIRTUAL_TICK_MS.to_string());
+    facts.set(
+        "virtual.frames_per_tick",
+        MAX_VIRTUAL_FRAMES_PER_TICK.to_string(),
+    );
+    let most_scale =
+        MAX_VIRTUAL_FRAMES_PER_TICK as f64 / (f64::from(VIRTUAL_TICK_MS) / 1e3 * sample_rate_hz);
+    facts.set("virtual.most_scale", short(most_scale, 2));
+    facts.set("virtual.max_step_ms", MAX_VIRTUAL_STEP_MS.to_string());
+    assert_eq!(MAX_VIRTUAL_STEP_MS % VIRTUAL_TICK_MS, 0);
+    facts.set(
+        "virtual.max_step_ticks",
+        count_word((MAX_VIRTUAL_STEP_MS / VIRTUAL_TICK_MS) as usize),
+    );
+    facts.set(
+        "virtual.answer_at_8x_ms",
+        short(1e3 * DEFAULT_WATCHDOG_S / 8.0, 2),
+    );
+    facts.set(
+        "virtual.tick_at_most_scale_s",
+        short(f64::from(VIRTUAL_TICK_MS) / 1e3 * most_scale, 3),
+    );
+    // "at 40× … leaves it about one 10 ms tick": the watchdog in wall time is one to two ticks.
+    let answer_ticks = 1e3 * DEFAULT_WATCHDOG_S / most_scale / f64::from(VIRTUAL_TICK_MS);
+    assert!((1.0..2.0).contains(&answer_ticks), "{answer_ticks}");
+
+    // The Hardware page: its serial read buffer, reduce-only limits and teach cut.
+    facts.set(
+        "hardware.read_buffer_bytes",
+        parse_serial::<&str>(&[]).unwrap().buffer_size.to_string(),
+    );
+    facts.set(
+        "hardware.reduce_only_pct",
+        short(REDUCE_ONLY_MAX_OVERRIDE_PCT, 1),
+    );
+    facts.set(
+        "hardware.reduce_only_cpct",
+        fixed(100.0 * REDUCE_ONLY_MAX_OVERRIDE_PCT, 0),
+    );
+    // The teach cut's schedule inside them (its full schedule and step are set with the
+    // estimation's facts).
+    facts.set(
+        "teach.reduce_only_overrides_pct",
+        TEACH_OVERRIDES_PCT
+            .iter()
+            .map(|p| short(p.min(REDUCE_ONLY_MAX_OVERRIDE_PCT), 1))
+            .collect::<Vec<_>>()
+            .join(", "),
+    );
+    facts.set("teach.min_load_levels", count_word(MIN_LOAD_LEVELS));
+}
+
 fn root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
 }
 
 /// The documents the facts are marked in.
-const DOCS: [&str; 3] = ["docs/controllers.md", "docs/papers.md", "docs/plant.md"];
+const DOCS: [&str; 5] = [
+    "docs/controllers.md",
+    "docs/papers.md",
+    "docs/plant.md",
+    "docs/hardware.md",
+    "docs/protocol.md",
+];
 
 fn all_facts() -> BTreeMap<String, String> {
     let mut facts = Facts::default();
@@ -2510,6 +2863,7 @@ fn all_facts() -> BTreeMap<String, String> {
     paper_002(&mut facts);
     open_loop(&mut facts);
     plant_constants(&mut facts);
+    link_constants(&mut facts);
     facts.0
 }
 
