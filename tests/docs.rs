@@ -1,5 +1,5 @@
-//! docs/controllers.md, docs/papers.md, docs/plant.md, docs/hardware.md and docs/protocol.md say
-//! what the tool computes today.
+//! docs/controllers.md, docs/papers.md, docs/plant.md, docs/hardware.md, docs/protocol.md and
+//! docs/logs.md say what the tool computes today.
 //!
 //! Every number the tool produces is marked in the Markdown source with an invisible HTML comment
 //! pair around the value as the page shows it:
@@ -14,7 +14,8 @@
 //! Each key's value is computed once, below, by code calling the library, one function per group
 //! of facts (the comparison on the presets, the estimation, the envelope's and controllers'
 //! settings, paper 000's bench, paper 001, 003 and 004's figures, paper 002's grid over its
-//! readings, the link's constants), formatted as the page shows it. A constant of the code (a
+//! readings, the link's constants, a worked example's prose read from its transcripts, which
+//! tests/transcripts.rs holds to the tool), formatted as the page shows it. A constant of the code (a
 //! default, a limit, a frame's size) is read from its one definition in src/, so changing it
 //! fails here until the page says the new value. Where the prose reads the numbers ("both tables
 //! cycle", "no sooner up to 0.1 s"), the function asserts that reading, so a change that makes a
@@ -2909,17 +2910,125 @@ fn link_constants(facts: &mut Facts) {
     facts.set("teach.min_load_levels", count_word(MIN_LOAD_LEVELS));
 }
 
+// ---------------------------------------------------------------------------------------------
+// docs/logs.md: the load-level rule's constants, and the worked example's prose read from its
+// transcripts (which tests/transcripts.rs holds to the tool's output; scripts/docs blesses the
+// transcripts first, so this reads what the tool prints today).
+// ---------------------------------------------------------------------------------------------
+
+/// The number right after the first `before` in `text` (up to a space, a comma, "%" or ")").
+fn number_after(text: &str, before: &str) -> f64 {
+    let start = text
+        .find(before)
+        .unwrap_or_else(|| panic!("no {before:?} in {text:?}"))
+        + before.len();
+    let rest = &text[start..];
+    let end = rest
+        .find(|c: char| !(c.is_ascii_digit() || c == '.' || c == '-'))
+        .unwrap_or(rest.len());
+    rest[..end]
+        .parse()
+        .unwrap_or_else(|_| panic!("no number after {before:?} in {text:?}"))
+}
+
+/// The one line of `text` that contains `what`.
+fn line_with<'a>(text: &'a str, what: &str) -> &'a str {
+    let mut found = text.lines().filter(|l| l.contains(what));
+    let line = found
+        .next()
+        .unwrap_or_else(|| panic!("no line with {what:?}"));
+    assert!(found.next().is_none(), "more than one line with {what:?}");
+    line
+}
+
+fn logs_facts(facts: &mut Facts) {
+    use cutlab::estimation::load_levels::{LOAD_LEVEL_FRACTION, MIN_LOAD_LEVELS};
+    facts.set("logs.load_level_pct", short(100.0 * LOAD_LEVEL_FRACTION, 1));
+    facts.set("logs.min_load_levels", MIN_LOAD_LEVELS.to_string());
+
+    let doc = std::fs::read_to_string(root().join("docs/logs.md")).unwrap();
+    let example = &doc[doc
+        .find("## Worked example: calibrate from a log, replay a controller on it")
+        .unwrap()..];
+    let example = &example[..example.find("\n## ").unwrap_or(example.len())];
+    // The calibration: its line and R².
+    let line = line_with(example, "rpm: I = ");
+    let idle_a = number_after(line, "I = ");
+    let slope_a_per_n = number_after(line, "A + ");
+    let r_squared = number_after(line, "R² ");
+    facts.set("logs.export.r_squared", fixed(r_squared, 2));
+    // The replay.
+    let command = line_with(example, "--target-n ");
+    let target_n = number_after(command, "--target-n ");
+    facts.set("logs.replay.target_n", short(target_n, 1));
+    facts.set(
+        "logs.replay.target_a",
+        fixed(idle_a + slope_a_per_n * target_n, 2),
+    );
+    let head = line_with(example, "control periods of ");
+    facts.set(
+        "logs.replay.period_ms",
+        short(1e3 * number_after(head, "control periods of "), 1),
+    );
+    let event_s = |what: &str| number_after(line_with(example, what).trim_start(), "");
+    let armed_s = event_s("s  armed:");
+    facts.set("logs.replay.armed_s", fixed(armed_s, 0));
+    facts.set(
+        "logs.replay.entry_s",
+        fixed(event_s("entry: the tool entered the cut"), 1),
+    );
+    facts.set(
+        "logs.replay.engaged_s",
+        fixed(event_s("entry: the cutter is in the cut"), 1),
+    );
+    let air = example
+        .lines()
+        .find(|l| l.contains("air cut: override held at "))
+        .unwrap();
+    facts.set(
+        "logs.replay.held_pct",
+        short(number_after(air, "held at "), 1),
+    );
+    let summary = line_with(example, "override while armed:");
+    let mean_pct = number_after(summary, ", mean ");
+    let own_pct = number_after(summary, "the log's own: mean ");
+    assert!(
+        mean_pct < own_pct,
+        "PI's mean override is below the log's own"
+    );
+    facts.set("logs.replay.mean_pct", fixed(mean_pct, 0));
+    facts.set("logs.replay.own_mean_pct", fixed(own_pct, 0));
+    facts.set(
+        "logs.replay.limited_periods",
+        fixed(number_after(summary, "); "), 0),
+    );
+    // The first row of replay.csv: the spindle's run-up read through the calibration.
+    let csv = example
+        .lines()
+        .skip_while(|l| !l.starts_with("time_s,current_a,"))
+        .nth(1)
+        .unwrap();
+    let cells: Vec<f64> = csv.split(',').filter_map(|c| c.parse().ok()).collect();
+    facts.set("logs.replay.first_current_a", fixed(cells[1], 0));
+    facts.set("logs.replay.first_estimate_n", fixed(cells[2], 0));
+    facts.set(
+        "logs.replay.dial_step_pct",
+        short(EnvelopeConfig::default_for_dial().resolution.step_pct(), 1),
+    );
+}
+
 fn root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
 }
 
 /// The documents the facts are marked in.
-const DOCS: [&str; 5] = [
+const DOCS: [&str; 6] = [
     "docs/controllers.md",
     "docs/papers.md",
     "docs/plant.md",
     "docs/hardware.md",
     "docs/protocol.md",
+    "docs/logs.md",
 ];
 
 fn all_facts() -> BTreeMap<String, String> {
@@ -2949,6 +3058,7 @@ fn all_facts() -> BTreeMap<String, String> {
     open_loop(&mut facts);
     plant_constants(&mut facts);
     link_constants(&mut facts);
+    logs_facts(&mut facts);
     facts.0
 }
 
