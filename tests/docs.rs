@@ -1,5 +1,5 @@
-//! docs/controllers.md, docs/papers.md, docs/plant.md, docs/hardware.md, docs/protocol.md and
-//! docs/logs.md say what the tool computes today.
+//! docs/controllers.md, docs/papers.md, docs/plant.md, docs/hardware.md, docs/protocol.md,
+//! docs/logs.md and docs/tuning.md say what the tool computes today.
 //!
 //! Every number the tool produces is marked in the Markdown source with an invisible HTML comment
 //! pair around the value as the page shows it:
@@ -14,7 +14,7 @@
 //! Each key's value is computed once, below, by code calling the library, one function per group
 //! of facts (the comparison on the presets, the estimation, the envelope's and controllers'
 //! settings, paper 000's bench, paper 001, 003 and 004's figures, paper 002's grid over its
-//! readings, the link's constants, a worked example's prose read from its transcripts, which
+//! readings, the link's constants, the worked examples' prose read from their transcripts, which
 //! tests/transcripts.rs holds to the tool), formatted as the page shows it. A constant of the code (a
 //! default, a limit, a frame's size) is read from its one definition in src/, so changing it
 //! fails here until the page says the new value. Where the prose reads the numbers ("both tables
@@ -3017,18 +3017,174 @@ fn logs_facts(facts: &mut Facts) {
     );
 }
 
+// ---------------------------------------------------------------------------------------------
+// docs/tuning.md: the teach-in's rule and the search's constants from their definitions, and the
+// worked examples' prose read from their transcripts (held to the tool by tests/transcripts.rs).
+// ---------------------------------------------------------------------------------------------
+
+fn tuning_facts(facts: &mut Facts) {
+    use cutlab::closed_loop::settings::DEFAULT_TARGET_FRACTION;
+    use cutlab::estimation::teach_fit::FULL_OVERRIDE_TOLERANCE_PCT;
+    use cutlab::tuning::nelder_mead::NelderMead;
+    use cutlab::tuning::teach_in::{MIN_PROPOSED_GAP_PCT, NOISE_SIGMAS};
+    use cutlab::tuning::{Objective, MAX_SWEEP_POINTS};
+
+    facts.set(
+        "tuning.target_pct",
+        short(100.0 * DEFAULT_TARGET_FRACTION, 1),
+    );
+    facts.set(
+        "tuning.limit_above_target_pct",
+        short(100.0 * (FORCE_LIMIT_FACTOR - 1.0), 1),
+    );
+    facts.set(
+        "tuning.limit_pct_of_full",
+        short(100.0 * DEFAULT_TARGET_FRACTION * FORCE_LIMIT_FACTOR, 1),
+    );
+    facts.set(
+        "tuning.full_override_tolerance_pct",
+        short(FULL_OVERRIDE_TOLERANCE_PCT, 2),
+    );
+    facts.set("tuning.noise_sigmas", short(NOISE_SIGMAS, 1));
+    facts.set("tuning.min_gap_pct", short(MIN_PROPOSED_GAP_PCT, 1));
+    facts.set("tuning.max_sweep_points", MAX_SWEEP_POINTS.to_string());
+    let w = Objective::default();
+    facts.set(
+        "tuning.default_weights",
+        [
+            w.cycle_time,
+            w.force_error,
+            w.time_above_limit,
+            w.override_activity,
+        ]
+        .map(|x| short(x, 3))
+        .join(", "),
+    );
+    let search = NelderMead::default();
+    let power_of_ten = |x: f64| {
+        let e = x.log10().round();
+        assert!(
+            (x / 10f64.powf(e) - 1.0).abs() < 1e-12,
+            "{x} is not a power of ten"
+        );
+        let digits: String = format!("{}", -e as i64)
+            .chars()
+            .map(|c| match c {
+                '0' => '⁰',
+                '1' => '¹',
+                '2' => '²',
+                '3' => '³',
+                '4' => '⁴',
+                '5' => '⁵',
+                '6' => '⁶',
+                '7' => '⁷',
+                '8' => '⁸',
+                _ => '⁹',
+            })
+            .collect();
+        format!("10⁻{digits}")
+    };
+    facts.set("tuning.cost_tolerance", power_of_ten(search.cost_tolerance));
+    facts.set(
+        "tuning.point_tolerance",
+        power_of_ten(search.point_tolerance),
+    );
+
+    let doc = std::fs::read_to_string(root().join("docs/tuning.md")).unwrap();
+    // The simulated teach-ins: kim-step-doc's gap about its target (paper 003's 0.4 A gap in
+    // newtons is the estimation's `kim_step.gap_0_4_a_n`), liu-current-step's and
+    // maneerat-doc-2's loads beside the papers' targets.
+    let teach = &doc[doc
+        .find("$ cutlab tune --teach-in --scenarios kim-step-doc,maneerat-doc-2,liu-current-step")
+        .unwrap()..];
+    let teach = &teach[..teach.find("```").unwrap()];
+    // A scenario's block: its header line and the indented lines under it.
+    let block = |name: &str| {
+        let start = teach
+            .find(&format!("\n{name} (simulated teach cut"))
+            .unwrap()
+            + 1;
+        let rest = &teach[start..];
+        let end = rest
+            .match_indices('\n')
+            .map(|(i, _)| i + 1)
+            .find(|&i| !rest[i..].starts_with("  "))
+            .unwrap_or(rest.len());
+        &rest[..end]
+    };
+    let kim = block("kim-step-doc");
+    let kim_target_n = number_after(kim, "proposed target ");
+    let kim_gap_pct = number_after(kim, "threshold gap ");
+    facts.set("tuning.kim.gap_pct", fixed(kim_gap_pct, 1));
+    facts.set("tuning.kim.target_n", fixed(kim_target_n, 0));
+    facts.set(
+        "tuning.kim.gap_n",
+        fixed(kim_gap_pct / 100.0 * kim_target_n, 0),
+    );
+    let liu = block("liu-current-step");
+    facts.set(
+        "tuning.liu.reference_a",
+        fixed(number_after(liu, "reference current "), 3),
+    );
+    let maneerat = block("maneerat-doc-2");
+    facts.set(
+        "tuning.maneerat_2.full_n",
+        fixed(number_after(maneerat, "force at 100 % override "), 0),
+    );
+    facts.set(
+        "tuning.maneerat_2.paper_n",
+        fixed(number_after(maneerat, "target force: "), 0),
+    );
+
+    // The search's front: the narrow output range against the best point.
+    let example = &doc[doc
+        .find("## Worked example: paper 002's scaling factors")
+        .unwrap()..];
+    let best = line_with(example, "best: ");
+    for (key, name) in [
+        ("error_range", "error_range_pct="),
+        ("change_range", "change_range_pct="),
+        ("output_range", "output_range_pct="),
+    ] {
+        facts.set(
+            &format!("tuning.example.best_{key}_pct"),
+            fixed(number_after(best, name), 0),
+        );
+    }
+    let front: Vec<Vec<f64>> = example
+        .lines()
+        .skip_while(|l| !l.contains("error_range_pct  change_range_pct"))
+        .skip(1)
+        .take_while(|l| !l.starts_with("```"))
+        .map(|l| l.split_whitespace().map(|c| c.parse().unwrap()).collect())
+        .collect();
+    let narrow = front.iter().min_by(|a, b| a[2].total_cmp(&b[2])).unwrap();
+    let best_row = front.iter().min_by(|a, b| a[3].total_cmp(&b[3])).unwrap();
+    assert!(narrow[4] < best_row[4] && narrow[5] > best_row[5]);
+    facts.set("tuning.example.narrow_output_pct", fixed(narrow[2], 0));
+    facts.set(
+        "tuning.example.narrow_faster_s",
+        fixed(best_row[4] - narrow[4], 1),
+    );
+    facts.set("tuning.example.narrow_error_pct", fixed(narrow[5], 1));
+    facts.set("tuning.example.narrow_above_s", fixed(narrow[6], 2));
+    facts.set("tuning.example.best_error_pct", fixed(best_row[5], 1));
+    facts.set("tuning.example.best_above_s", fixed(best_row[6], 2));
+}
+
 fn root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
 }
 
 /// The documents the facts are marked in.
-const DOCS: [&str; 6] = [
+const DOCS: [&str; 7] = [
     "docs/controllers.md",
     "docs/papers.md",
     "docs/plant.md",
     "docs/hardware.md",
     "docs/protocol.md",
     "docs/logs.md",
+    "docs/tuning.md",
 ];
 
 fn all_facts() -> BTreeMap<String, String> {
@@ -3059,6 +3215,7 @@ fn all_facts() -> BTreeMap<String, String> {
     plant_constants(&mut facts);
     link_constants(&mut facts);
     logs_facts(&mut facts);
+    tuning_facts(&mut facts);
     facts.0
 }
 
