@@ -3117,9 +3117,10 @@ fn tuning_facts(facts: &mut Facts) {
     let kim_gap_pct = number_after(kim, "threshold gap ");
     facts.set("tuning.kim.gap_pct", fixed(kim_gap_pct, 1));
     facts.set("tuning.kim.target_n", fixed(kim_target_n, 0));
+    // The gap is the band's whole width: ± half of it about the target.
     facts.set(
         "tuning.kim.gap_n",
-        fixed(kim_gap_pct / 100.0 * kim_target_n, 0),
+        fixed(kim_gap_pct / 100.0 * kim_target_n / 2.0, 0),
     );
     let liu = block("liu-current-step");
     facts.set(
