@@ -1,5 +1,5 @@
 //! docs/controllers.md, docs/papers.md, docs/plant.md, docs/hardware.md, docs/protocol.md,
-//! docs/logs.md and docs/tuning.md say what the tool computes today.
+//! docs/logs.md, docs/tuning.md and docs/run-definition.md say what the tool computes today.
 //!
 //! Every number the tool produces is marked in the Markdown source with an invisible HTML comment
 //! pair around the value as the page shows it:
@@ -3173,12 +3173,150 @@ fn tuning_facts(facts: &mut Facts) {
     facts.set("tuning.example.best_above_s", fixed(best_row[6], 2));
 }
 
+// ---------------------------------------------------------------------------------------------
+// docs/run-definition.md: the resolution's rules and the teach cut's fit, from their constants
+// (the period, low-passes, envelope factors and teach schedule shared with
+// docs/controllers.md are set with the settings), and the chip-load window on kim-step-doc.
+// ---------------------------------------------------------------------------------------------
+
+fn run_definition_facts(facts: &mut Facts, m: &Matrix) {
+    use cutlab::estimation::teach_fit::{SETTLE_AFTER_SPINDLE_START_S, STEADY_SPEED_FRACTION};
+    use cutlab::plant::materials::Material;
+    use cutlab::tuning::teach_in::operating_point;
+
+    facts.set(
+        "run.paper_002_period_ms",
+        fixed(1000.0 * PAPER_002_CONTROL_PERIOD_S, 0),
+    );
+    facts.set(
+        "teach.spindle_start_settle_s",
+        short(SETTLE_AFTER_SPINDLE_START_S, 2),
+    );
+    facts.set(
+        "teach.steady_speed_pct",
+        short(100.0 * STEADY_SPEED_FRACTION, 2),
+    );
+    // The air-cut threshold's share of the target and the sensor-fault current's factor, in words.
+    facts.set(
+        "run.air_cut_share",
+        match whole((1.0 / AIR_CUT_FRACTION).round()) {
+            5 => "a fifth".to_string(),
+            n => format!("1/{n}"),
+        },
+    );
+    let kim = &m.result(Preset::KimStepDoc, ControllerKind::Fixed);
+    let fault_factor = kim.settings.envelope.max_current_a / kim.calibration.max_phase_current_a;
+    facts.set(
+        "run.fault_current_times",
+        match short(fault_factor, 2).as_str() {
+            "2" => "twice".to_string(),
+            other => format!("{other} times"),
+        },
+    );
+    // The chip-load windows of a large cutter, and the diameter below which they scale.
+    let large_mm = 20.0;
+    for (material, key) in [
+        (Material::Sm45c, "sm45c"),
+        (Material::Aluminium, "aluminium"),
+        (Material::ToolSteel, "tool_steel"),
+    ] {
+        let (lo, hi) = material.feed_per_tooth_window_mm(large_mm);
+        facts.set(&format!("run.chip.{key}_max_mm"), short(hi, 3));
+        if key == "sm45c" {
+            facts.set("run.chip.min_mm", short(lo, 3));
+        } else {
+            assert_eq!(
+                fixed(lo, 6),
+                fixed(Material::Sm45c.feed_per_tooth_window_mm(large_mm).0, 6)
+            );
+        }
+    }
+    let full = Material::Sm45c.feed_per_tooth_window_mm(large_mm).1;
+    let scaled_at_1_mm = Material::Sm45c.feed_per_tooth_window_mm(1.0).1;
+    let small_cutter_mm = full / scaled_at_1_mm;
+    assert!(Material::Sm45c.feed_per_tooth_window_mm(small_cutter_mm).1 == full);
+    facts.set("run.chip.small_cutter_mm", short(small_cutter_mm, 1));
+    // kim-step-doc: the window's top as an override, against the machine's highest.
+    let window = kim.settings.envelope.chip_load.unwrap();
+    let at = operating_point(&RunSpec::new(Preset::KimStepDoc, ControllerKind::Fixed));
+    let (_, top_pct) = window
+        .override_range_pct(at.feed_mm_min, at.spindle_rpm)
+        .unwrap();
+    let per_tooth_at_100 = at.feed_mm_min / (f64::from(window.teeth) * at.spindle_rpm);
+    facts.set("run.chip.kim_top_pct", fixed(top_pct, 0));
+    facts.set("run.chip.kim_top_mm", short(window.max_mm, 3));
+    facts.set(
+        "run.chip.kim_machine_top_mm",
+        short(
+            kim.settings.envelope.max_override_pct / 100.0 * per_tooth_at_100,
+            3,
+        ),
+    );
+    assert!(top_pct < kim.settings.envelope.max_override_pct);
+}
+
+/// `v` as docs/run-definition.md's table writes a bound: at most three decimals, thousands
+/// spaced, a minus sign.
+fn table_number(v: f64) -> String {
+    let text = short(v.abs(), 3);
+    let (whole_part, rest) = text.split_at(text.find('.').unwrap_or(text.len()));
+    let mut out = String::new();
+    for (i, c) in whole_part.chars().enumerate() {
+        if i > 0 && (whole_part.len() - i) % 3 == 0 {
+            out.push(' ');
+        }
+        out.push(c);
+    }
+    format!("{}{out}{rest}", if v < 0.0 { "−" } else { "" })
+}
+
+/// docs/run-definition.md's table of settings: each static range from the setting's row (the
+/// overrides a machine caps show their lowest only).
+fn run_setting_ranges(facts: &mut Facts) {
+    for setting in RunSetting::ALL {
+        let Some((min, max)) = setting.range_on(f64::INFINITY) else {
+            continue;
+        };
+        let field = setting.spec().json_field;
+        // The band's arming override is said in words; the others a machine caps show their
+        // lowest and "what the machine applies".
+        if setting == RunSetting::ArmingOverride {
+            continue;
+        }
+        if matches!(setting, RunSetting::MaxOverride | RunSetting::EntryOverride) {
+            facts.set(&format!("run.range.{field}.min"), table_number(min));
+        } else {
+            facts.set(
+                &format!("run.range.{field}"),
+                format!("{} – {}", table_number(min), table_number(max)),
+            );
+        }
+    }
+}
+
+/// The table's defaults that live in the plant: the tool's modulus and paper 002's load step.
+fn run_plant_defaults(facts: &mut Facts) {
+    use cutlab::plant::deflection::CARBIDE_YOUNGS_MODULUS_GPA;
+    facts.set(
+        "run.carbide_modulus_gpa",
+        short(CARBIDE_YOUNGS_MODULUS_GPA, 1),
+    );
+    facts.set(
+        "run.load_step_time_s",
+        short(BondGraphRun::PAPER_002_LOAD_STEP_TIME_S, 2),
+    );
+    facts.set(
+        "run.default_load_step_pct",
+        short(BondGraphRun::DEFAULT_LOAD_STEP_PCT, 1),
+    );
+}
+
 fn root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
 }
 
 /// The documents the facts are marked in.
-const DOCS: [&str; 7] = [
+const DOCS: [&str; 8] = [
     "docs/controllers.md",
     "docs/papers.md",
     "docs/plant.md",
@@ -3186,6 +3324,7 @@ const DOCS: [&str; 7] = [
     "docs/protocol.md",
     "docs/logs.md",
     "docs/tuning.md",
+    "docs/run-definition.md",
 ];
 
 fn all_facts() -> BTreeMap<String, String> {
@@ -3205,6 +3344,9 @@ fn all_facts() -> BTreeMap<String, String> {
     paper_004_learning(&mut facts);
     paper_004_surface_error(&mut facts, &matrix);
     extra_runs(&mut facts, &matrix);
+    run_definition_facts(&mut facts, &matrix);
+    run_setting_ranges(&mut facts);
+    run_plant_defaults(&mut facts);
     log_calibration(&mut facts);
     paper_000_bench(&mut facts);
     eprintln!(
