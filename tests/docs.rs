@@ -1,5 +1,6 @@
 //! docs/controllers.md, docs/papers.md, docs/plant.md, docs/hardware.md, docs/protocol.md,
-//! docs/logs.md, docs/tuning.md and docs/run-definition.md say what the tool computes today.
+//! docs/logs.md, docs/tuning.md, docs/run-definition.md and docs/signal-chain.md say what the
+//! tool computes today.
 //!
 //! Every number the tool produces is marked in the Markdown source with an invisible HTML comment
 //! pair around the value as the page shows it:
@@ -3311,12 +3312,54 @@ fn run_plant_defaults(facts: &mut Facts) {
     );
 }
 
+// ---------------------------------------------------------------------------------------------
+// docs/signal-chain.md: the design's order limit, the windows' loss between bins, the feed
+// drive's harmonics behind the three-phase RMS's ripple.
+// ---------------------------------------------------------------------------------------------
+
+fn signal_chain_facts(facts: &mut Facts) {
+    use cutlab::plant::feed_drive::FeedDriveConfig;
+    use cutlab::signal::butterworth::MAX_ORDER;
+    use cutlab::signal::spectrum::Window;
+
+    facts.set("signal.orders", format!("1–{MAX_ORDER}"));
+    // A sine `offset` bins off a bin reads low by the window's gain there; half-way between two
+    // bins is the worst for the rectangular and Hann windows.
+    let len = 1024;
+    let low_pct = |w: Window, offset: f64| {
+        let c = w.coefficients(len);
+        let sum: f64 = c.iter().sum();
+        let (re, im) = c.iter().enumerate().fold((0.0, 0.0), |(re, im), (n, w)| {
+            let phase = std::f64::consts::TAU * offset * n as f64 / len as f64;
+            (re + w * phase.cos(), im - w * phase.sin())
+        });
+        100.0 * (1.0 - (re * re + im * im).sqrt() / sum)
+    };
+    facts.set(
+        "signal.rectangular_low_pct",
+        fixed(low_pct(Window::Rectangular, 0.5), 0),
+    );
+    facts.set("signal.hann_low_pct", fixed(low_pct(Window::Hann, 0.5), 0));
+    // The flat top's largest error anywhere between two bins.
+    let flat_top_pct = (0..=50)
+        .map(|k| low_pct(Window::FlatTop, f64::from(k) / 100.0).abs())
+        .fold(0.0, f64::max);
+    facts.set("signal.flat_top_within_pct", fixed(flat_top_pct, 2));
+    let feed = FeedDriveConfig::default();
+    facts.set("signal.feed_h5_pct", short(100.0 * feed.harmonic_5th, 1));
+    facts.set("signal.feed_h7_pct", short(100.0 * feed.harmonic_7th, 1));
+    facts.set(
+        "signal.feed_ripple_pct",
+        short(100.0 * (feed.harmonic_5th + feed.harmonic_7th), 1),
+    );
+}
+
 fn root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
 }
 
 /// The documents the facts are marked in.
-const DOCS: [&str; 8] = [
+const DOCS: [&str; 9] = [
     "docs/controllers.md",
     "docs/papers.md",
     "docs/plant.md",
@@ -3325,6 +3368,7 @@ const DOCS: [&str; 8] = [
     "docs/logs.md",
     "docs/tuning.md",
     "docs/run-definition.md",
+    "docs/signal-chain.md",
 ];
 
 fn all_facts() -> BTreeMap<String, String> {
@@ -3347,6 +3391,7 @@ fn all_facts() -> BTreeMap<String, String> {
     run_definition_facts(&mut facts, &matrix);
     run_setting_ranges(&mut facts);
     run_plant_defaults(&mut facts);
+    signal_chain_facts(&mut facts);
     log_calibration(&mut facts);
     paper_000_bench(&mut facts);
     eprintln!(
