@@ -1,6 +1,6 @@
 //! docs/controllers.md, docs/papers.md, docs/plant.md, docs/hardware.md, docs/protocol.md,
-//! docs/logs.md, docs/tuning.md, docs/run-definition.md and docs/signal-chain.md say what the
-//! tool computes today.
+//! docs/logs.md, docs/tuning.md, docs/run-definition.md, docs/signal-chain.md and docs/fuzzy.md
+//! say what the tool computes today.
 //!
 //! Every number the tool produces is marked in the Markdown source with an invisible HTML comment
 //! pair around the value as the page shows it:
@@ -3354,12 +3354,75 @@ fn signal_chain_facts(facts: &mut Facts) {
     );
 }
 
+// ---------------------------------------------------------------------------------------------
+// docs/fuzzy.md: the engine's constants, Table 4's printed shape and repair, and the fuzzy
+// controller's defaults.
+// ---------------------------------------------------------------------------------------------
+
+/// `n` as an ordinal word ("seventh"), digits beyond ten.
+fn ordinal_word(n: usize) -> String {
+    const WORDS: [&str; 11] = [
+        "zeroth", "first", "second", "third", "fourth", "fifth", "sixth", "seventh", "eighth",
+        "ninth", "tenth",
+    ];
+    WORDS
+        .get(n)
+        .map_or_else(|| format!("{n}th"), |w| (*w).to_string())
+}
+
+fn fuzzy_facts(facts: &mut Facts) {
+    use cutlab::control::fuzzy::engine::{
+        CROSSING_RESERVE_TERMS, DEFAULT_RESOLUTION, FUZZYLITE_EPSILON,
+    };
+    use cutlab::control::fuzzy::rules::{LEVEL_NAMES, TABLE_4_AS_PRINTED, TABLE_4_SPURIOUS_COLUMN};
+
+    facts.set("fuzzy.epsilon", format!("{FUZZYLITE_EPSILON:e}"));
+    facts.set("fuzzy.crossing_terms", CROSSING_RESERVE_TERMS.to_string());
+    facts.set("fuzzy.default_resolution", DEFAULT_RESOLUTION.to_string());
+    facts.set(
+        "fuzzy.table_4.printed_entries",
+        count_word(TABLE_4_AS_PRINTED[0].len()),
+    );
+    facts.set("fuzzy.table_4.labels", count_word(LEVEL_NAMES.len()));
+    facts.set(
+        "fuzzy.table_4.dropped_ordinal",
+        ordinal_word(TABLE_4_SPURIOUS_COLUMN + 1),
+    );
+    facts.set(
+        "fuzzy.table_4.dropped_position",
+        (TABLE_4_SPURIOUS_COLUMN + 1).to_string(),
+    );
+    for kind in [
+        ControllerKind::FuzzyDynamics,
+        ControllerKind::FuzzyExperience,
+    ] {
+        for key in ["error_range_pct", "change_range_pct", "output_range_pct"] {
+            let value = ControllerConfig::new(kind).get(key).unwrap();
+            let first = ControllerConfig::new(ControllerKind::FuzzyDynamics)
+                .get(key)
+                .unwrap();
+            assert_eq!(value, first, "both tables default {key} alike");
+        }
+    }
+    let default = ControllerConfig::new(ControllerKind::FuzzyDynamics);
+    for key in ["error_range_pct", "change_range_pct", "output_range_pct"] {
+        facts.set(
+            &format!("fuzzy.default.{key}"),
+            short(default.get(key).unwrap(), 3),
+        );
+    }
+    facts.set(
+        "fuzzy.paper_002_period_s",
+        short(PAPER_002_CONTROL_PERIOD_S, 3),
+    );
+}
+
 fn root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
 }
 
 /// The documents the facts are marked in.
-const DOCS: [&str; 9] = [
+const DOCS: [&str; 10] = [
     "docs/controllers.md",
     "docs/papers.md",
     "docs/plant.md",
@@ -3369,6 +3432,7 @@ const DOCS: [&str; 9] = [
     "docs/tuning.md",
     "docs/run-definition.md",
     "docs/signal-chain.md",
+    "docs/fuzzy.md",
 ];
 
 fn all_facts() -> BTreeMap<String, String> {
@@ -3392,6 +3456,7 @@ fn all_facts() -> BTreeMap<String, String> {
     run_setting_ranges(&mut facts);
     run_plant_defaults(&mut facts);
     signal_chain_facts(&mut facts);
+    fuzzy_facts(&mut facts);
     log_calibration(&mut facts);
     paper_000_bench(&mut facts);
     eprintln!(
