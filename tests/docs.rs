@@ -2619,7 +2619,8 @@ fn link_constants(facts: &mut Facts) {
         MAX_VIRTUAL_FRAMES_PER_TICK, MAX_VIRTUAL_STEP_MS, VIRTUAL_TICK_MS,
     };
     use cutlab::protocol::frame::{
-        sample_flag, FrameType, MAX_PAYLOAD_LEN, VERSION_MAJOR, VERSION_MINOR,
+        command_flag, fault_flag, sample_flag, AckResult, FaultKind, FrameType, MAX_PAYLOAD_LEN,
+        VERSION_MAJOR, VERSION_MINOR,
     };
     use cutlab::protocol::host::{
         DEFAULT_LINK_TIMEOUT_S, HELLO_INTERVAL_S, LINK_TIMEOUT_RANGE_S, MAX_FILLED_GAP,
@@ -2669,10 +2670,7 @@ fn link_constants(facts: &mut Facts) {
     facts.set("link.command_period_ms", short(1000.0 / COMMANDS_PER_S, 1));
     // The budget's command rate allows for at least the default control period's.
     assert!(1.0 / COMMANDS_PER_S <= MIN_CONTROL_PERIOD_S);
-    facts.set(
-        "link.min_default_period_ms",
-        short(1000.0 * MIN_CONTROL_PERIOD_S, 1),
-    );
+    // (The shortest default period is chain.min_period_ms.)
     facts.set("link.load_limit_pct", short(100.0 * LINE_LOAD_LIMIT, 1));
     let budget = |rate: f64, baud: u32| {
         let mut c = caps.clone();
@@ -2688,10 +2686,7 @@ fn link_constants(facts: &mut Facts) {
     facts.set("link.most_samples_at_115200", most_at_115200.to_string());
     // "1000 samples/s need 921 600 baud".
     assert!(!budget(1000.0, 115_200).fits() && budget(1000.0, 921_600).fits());
-    facts.set(
-        "link.spindle_lowpass_hz",
-        short(DEFAULT_SPINDLE_LOWPASS_HZ, 1),
-    );
+
     let least_rate = 2.0 * DEFAULT_SPINDLE_LOWPASS_HZ;
     assert!(least_rate > f64::from(most_at_115200));
     facts.set("link.least_rate_for_spindle_filter", short(least_rate, 0));
@@ -2702,10 +2697,37 @@ fn link_constants(facts: &mut Facts) {
     facts.set("link.least_block_bytes", (1 + CRC_LEN).to_string());
     facts.set("link.version_major", VERSION_MAJOR.to_string());
     facts.set("link.version_minor", VERSION_MINOR.to_string());
+    // The codes §3–5 name in prose: fault kinds, Sample flag and fault bits, Ack results.
+    let bit = |mask: u8| mask.trailing_zeros().to_string();
+    for (kind, key) in [
+        (FaultKind::Sensor, "sensor"),
+        (FaultKind::OverCurrent, "over_current"),
+        (FaultKind::Watchdog, "watchdog"),
+        (FaultKind::EStop, "estop"),
+        (FaultKind::FallbackLimit, "fallback_limit"),
+    ] {
+        facts.set(&format!("link.fault_kind.{key}"), kind.code().to_string());
+    }
+    facts.set("link.flag_bit.fallback", bit(sample_flag::FALLBACK));
+    facts.set("link.flag_bit.estop", bit(sample_flag::ESTOP));
+    facts.set("link.flag_bit.hold_latched", bit(sample_flag::HOLD_LATCHED));
+    facts.set("link.fault_bit.watchdog", bit(fault_flag::WATCHDOG));
     facts.set(
-        "link.hold_latched_flag_bit",
-        sample_flag::HOLD_LATCHED.trailing_zeros().to_string(),
+        "link.fault_bit.fallback_limit",
+        bit(fault_flag::FALLBACK_LIMIT),
     );
+    facts.set(
+        "link.ack_flag_bit.hold_latched",
+        bit(command_flag::HOLD_LATCHED),
+    );
+    for (result, key) in [
+        (AckResult::NotArmed, "not_armed"),
+        (AckResult::Refused, "refused"),
+        (AckResult::Stale, "stale"),
+        (AckResult::CauseActive, "cause_active"),
+    ] {
+        facts.set(&format!("link.ack_result.{key}"), result.code().to_string());
+    }
 
     // §4–5: the handshake, the heartbeats, the watchdogs.
     facts.set("link.hello_interval_s", short(HELLO_INTERVAL_S, 3));
