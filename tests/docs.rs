@@ -1,6 +1,6 @@
 //! docs/controllers.md, docs/papers.md, docs/plant.md, docs/hardware.md, docs/protocol.md,
-//! docs/logs.md, docs/tuning.md, docs/run-definition.md, docs/signal-chain.md and docs/fuzzy.md
-//! say what the tool computes today.
+//! docs/logs.md, docs/tuning.md, docs/run-definition.md, docs/signal-chain.md, docs/fuzzy.md and
+//! docs/lessons.md say what the tool computes today.
 //!
 //! Every number the tool produces is marked in the Markdown source with an invisible HTML comment
 //! pair around the value as the page shows it:
@@ -3439,12 +3439,21 @@ fn fuzzy_facts(facts: &mut Facts) {
     );
 }
 
+/// docs/lessons.md: the papers a lesson may walk.
+fn lessons_facts(facts: &mut Facts) {
+    use cutlab::lessons::PAPERS;
+    facts.set(
+        "lessons.papers",
+        format!("`{}` to `{}`", PAPERS[0], PAPERS[PAPERS.len() - 1]),
+    );
+}
+
 fn root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
 }
 
 /// The documents the facts are marked in.
-const DOCS: [&str; 10] = [
+const DOCS: [&str; 11] = [
     "docs/controllers.md",
     "docs/papers.md",
     "docs/plant.md",
@@ -3455,6 +3464,7 @@ const DOCS: [&str; 10] = [
     "docs/run-definition.md",
     "docs/signal-chain.md",
     "docs/fuzzy.md",
+    "docs/lessons.md",
 ];
 
 fn all_facts() -> BTreeMap<String, String> {
@@ -3479,6 +3489,7 @@ fn all_facts() -> BTreeMap<String, String> {
     run_plant_defaults(&mut facts);
     signal_chain_facts(&mut facts);
     fuzzy_facts(&mut facts);
+    lessons_facts(&mut facts);
     log_calibration(&mut facts);
     paper_000_bench(&mut facts);
     eprintln!(
