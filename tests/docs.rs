@@ -16,7 +16,9 @@
 //! of facts (the comparison on the presets, the estimation, the envelope's and controllers'
 //! settings, paper 000's bench, paper 001, 003 and 004's figures, paper 002's grid over its
 //! readings, the link's constants, the worked examples' prose read from their transcripts, which
-//! tests/transcripts.rs holds to the tool), formatted as the page shows it. A constant of the code (a
+//! tests/transcripts.rs holds to the tool), formatted as the page shows it. A constant the test
+//! cannot import (private, or behind the `web` feature) is read from its definition's source
+//! text (`source_constant`), which accepts a literal only. A constant of the code (a
 //! default, a limit, a frame's size) is read from its one definition in src/, so changing it
 //! fails here until the page says the new value. Where the prose reads the numbers ("both tables
 //! cycle", "no sooner up to 0.1 s"), the function asserts that reading, so a change that makes a
@@ -3448,6 +3450,59 @@ fn lessons_facts(facts: &mut Facts) {
     );
 }
 
+// ---------------------------------------------------------------------------------------------
+// Constants the test cannot import (private, or behind the `web` feature): read from their one
+// definition in the source text, so a change there fails here too.
+// ---------------------------------------------------------------------------------------------
+
+/// The value of `const NAME: T = LITERAL;` in `path` (from the checkout's root); a constant
+/// defined by an expression is refused, so the reading never guesses.
+fn source_constant(path: &str, name: &str) -> f64 {
+    let text = std::fs::read_to_string(root().join(path)).unwrap();
+    let start = text
+        .find(&format!("const {name}: "))
+        .unwrap_or_else(|| panic!("{path} defines no const {name}"));
+    let rest = &text[start..];
+    let value = rest[rest.find('=').unwrap() + 1..rest.find(';').unwrap()].trim();
+    value
+        .replace('_', "")
+        .parse()
+        .unwrap_or_else(|_| panic!("{path}: {name} = {value} is not a literal"))
+}
+
+/// The reference docs' constants that live where the test cannot import them: the Hardware
+/// page's live view and recording flush, the link's input passes, the search's initial simplex.
+fn source_constants(facts: &mut Facts) {
+    let station = "src/web/hardware/station.rs";
+    facts.set(
+        "hardware.live_window_s",
+        short(source_constant(station, "LIVE_WINDOW_S"), 2),
+    );
+    let flush_s = source_constant(station, "FLUSH_INTERVAL_S");
+    facts.set(
+        "hardware.flush_interval",
+        if flush_s == 0.5 {
+            "half second".to_string()
+        } else {
+            format!("{} s", short(flush_s, 3))
+        },
+    );
+    facts.set(
+        "link.chunks_per_pass",
+        count_word(whole(source_constant(
+            "src/protocol/link/mod.rs",
+            "MAX_CHUNKS_PER_PASS",
+        ))),
+    );
+    facts.set(
+        "tuning.initial_step_pct",
+        short(
+            100.0 * source_constant("src/tuning/nelder_mead.rs", "INITIAL_STEP"),
+            1,
+        ),
+    );
+}
+
 fn root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
 }
@@ -3490,6 +3545,7 @@ fn all_facts() -> BTreeMap<String, String> {
     signal_chain_facts(&mut facts);
     fuzzy_facts(&mut facts);
     lessons_facts(&mut facts);
+    source_constants(&mut facts);
     log_calibration(&mut facts);
     paper_000_bench(&mut facts);
     eprintln!(
