@@ -3503,6 +3503,20 @@ fn source_constants(facts: &mut Facts) {
     );
 }
 
+/// docs/protocol.md's remaining figures of the link: when a Sample's microsecond clock wraps,
+/// how many strings the CRC is checked on beyond the catalogue's, and the dial's table.
+fn protocol_more(facts: &mut Facts) {
+    facts.set("link.time_wrap_min", fixed(2f64.powi(32) / 1e6 / 60.0, 1));
+    let framing: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(root().join("tests/reference/protocol/framing.json")).unwrap(),
+    )
+    .unwrap();
+    let strings = framing["crc32"].as_array().unwrap();
+    // The first is the catalogue's check value, "123456789".
+    assert_eq!(strings[0]["data"], "313233343536373839");
+    facts.set("link.crc_more_strings", (strings.len() - 1).to_string());
+}
+
 fn root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
 }
@@ -3546,6 +3560,7 @@ fn all_facts() -> BTreeMap<String, String> {
     fuzzy_facts(&mut facts);
     lessons_facts(&mut facts);
     source_constants(&mut facts);
+    protocol_more(&mut facts);
     log_calibration(&mut facts);
     paper_000_bench(&mut facts);
     eprintln!(
