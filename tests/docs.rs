@@ -3517,6 +3517,22 @@ fn protocol_more(facts: &mut Facts) {
     facts.set("link.crc_more_strings", (strings.len() - 1).to_string());
 }
 
+/// docs/logs.md: the shipped teach-cut log's fit, which the page recommends over a controlled run.
+fn logs_teach_cut_fit(facts: &mut Facts) {
+    use cutlab::estimation::speed::GEAR_CHANGE_RPM;
+    use cutlab::log::period_log::{calibrate_log, LogTable};
+    let bytes = std::fs::read(root().join("www/data/kim-step-doc-teach-cut.csv")).unwrap();
+    let log = cutlab::log::load(&bytes, None).unwrap();
+    let table = LogTable::from_log(&log, &[]).unwrap();
+    let fit = calibrate_log(&table, None, GEAR_CHANGE_RPM).unwrap();
+    let rows = fit.spindle.unwrap().rows;
+    assert_eq!(rows.len(), 1);
+    facts.set(
+        "logs.teach_cut.r_squared",
+        fixed(rows[0].quality.r_squared, 3),
+    );
+}
+
 fn root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
 }
@@ -3561,6 +3577,7 @@ fn all_facts() -> BTreeMap<String, String> {
     lessons_facts(&mut facts);
     source_constants(&mut facts);
     protocol_more(&mut facts);
+    logs_teach_cut_fit(&mut facts);
     log_calibration(&mut facts);
     paper_000_bench(&mut facts);
     eprintln!(
