@@ -2637,7 +2637,7 @@ fn link_constants(facts: &mut Facts) {
 
     let config = DeviceConfig::new(Preset::KimStepDoc);
     let emulator = DeviceEmulator::new(config.clone()).unwrap();
-    let caps = emulator.capabilities().clone();
+    let caps = *emulator.capabilities();
     let sample_rate_hz = f64::from(caps.sample_rate_hz);
     let sample_period_s = 1.0 / sample_rate_hz;
 
@@ -2671,11 +2671,11 @@ fn link_constants(facts: &mut Facts) {
     facts.set("link.commands_per_s", short(COMMANDS_PER_S, 0));
     facts.set("link.command_period_ms", short(1000.0 / COMMANDS_PER_S, 1));
     // The budget's command rate allows for at least the default control period's.
-    assert!(1.0 / COMMANDS_PER_S <= MIN_CONTROL_PERIOD_S);
+    const { assert!(1.0 / COMMANDS_PER_S <= MIN_CONTROL_PERIOD_S) };
     // (The shortest default period is chain.min_period_ms.)
     facts.set("link.load_limit_pct", short(100.0 * LINE_LOAD_LIMIT, 1));
     let budget = |rate: f64, baud: u32| {
-        let mut c = caps.clone();
+        let mut c = caps;
         c.features = 0;
         c.sample_rate_hz = rate as f32;
         c.line_baud = baud;
@@ -3724,4 +3724,104 @@ fn blessing_writes_the_tools_values_and_leaves_the_rest() {
          <!-- tool:table -->\n| x |\n<!-- /tool -->\nAfter.\n"
     );
     assert!(problems(&[("small.md", &new)], &facts).is_empty());
+}
+
+// ---------------------------------------------------------------------------------------------
+// docs/protocol.md §3's layout tables against the codec.
+// ---------------------------------------------------------------------------------------------
+
+/// Bytes of a layout table's type cell: `u8`, `i16[3]`, `f32 × 16`.
+fn layout_size(ty: &str) -> usize {
+    let (base, count) = if let Some((base, n)) = ty.split_once('[') {
+        (base, n.trim_end_matches(']').parse::<usize>().unwrap())
+    } else if let Some((base, n)) = ty.split_once(" × ") {
+        (base, n.parse::<usize>().unwrap())
+    } else {
+        (ty, 1)
+    };
+    let bytes = match base.trim() {
+        "u8" | "i8" => 1,
+        "u16" | "i16" => 2,
+        "u32" | "i32" | "f32" => 4,
+        other => panic!("docs/protocol.md: unknown type {other:?}"),
+    };
+    bytes * count
+}
+
+/// `SetOverride` as `FrameType::name` writes it: `set-override`.
+fn kebab(name: &str) -> String {
+    let mut out = String::new();
+    for (i, c) in name.chars().enumerate() {
+        if c.is_ascii_uppercase() && i > 0 {
+            out.push('-');
+        }
+        out.push(c.to_ascii_lowercase());
+    }
+    out
+}
+
+/// Every frame's layout table in docs/protocol.md §3 starts at offset 1 (after the type byte),
+/// each field starts where the one before ends, and the last ends at the payload length the
+/// codec reads and writes: an offset or a size edited in one place only fails here.
+#[test]
+fn the_protocol_layout_tables_add_up_to_each_frames_payload() {
+    use cutlab::protocol::frame::FrameType;
+    let doc = std::fs::read_to_string(root().join("docs/protocol.md")).unwrap();
+    let section = &doc[doc.find("## 3. Frames").unwrap()..doc.find("## 4. Conversation").unwrap()];
+    let mut fields: BTreeMap<String, Vec<(usize, usize, String)>> = BTreeMap::new();
+    let (mut heading_frame, mut row_frame) = (String::new(), String::new());
+    let mut has_frame_column = false;
+    for line in section.lines() {
+        if let Some(h) = line.strip_prefix("### 0x") {
+            heading_frame = kebab(h.split_whitespace().nth(1).unwrap().trim_end_matches(','));
+            has_frame_column = false;
+            continue;
+        }
+        if !line.starts_with('|') || line.starts_with("|---") {
+            continue;
+        }
+        let cells: Vec<&str> = line.trim_matches('|').split('|').map(str::trim).collect();
+        if cells.contains(&"offset") {
+            has_frame_column = cells[0] == "frame";
+            continue;
+        }
+        let (frame, rest) = if has_frame_column {
+            if !cells[0].is_empty() {
+                row_frame = kebab(cells[0]);
+            }
+            (row_frame.clone(), &cells[1..])
+        } else {
+            (heading_frame.clone(), &cells[..])
+        };
+        // The frame-type table's rows (`| 0x01 | Hello | …`) are not layouts.
+        let Ok(offset) = rest[0].split_whitespace().next().unwrap().parse::<usize>() else {
+            continue;
+        };
+        fields
+            .entry(frame)
+            .or_default()
+            .push((offset, layout_size(rest[1]), rest[2].to_string()));
+    }
+    for t in FrameType::ALL {
+        let rows = fields
+            .get(t.name())
+            .unwrap_or_else(|| panic!("docs/protocol.md §3 has no layout of {}", t.name()));
+        let mut next = 1;
+        for (offset, size, field) in rows {
+            assert_eq!(
+                *offset,
+                next,
+                "docs/protocol.md §3, {}: {field} at offset {offset}, the field before ends at {next}",
+                t.name()
+            );
+            next = offset + size;
+        }
+        assert_eq!(
+            next,
+            t.payload_len(),
+            "docs/protocol.md §3, {}: the fields end at {next}, the codec's payload is {} bytes",
+            t.name(),
+            t.payload_len()
+        );
+    }
 }
