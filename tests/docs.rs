@@ -3533,6 +3533,84 @@ fn logs_teach_cut_fit(facts: &mut Facts) {
     );
 }
 
+/// The rows of the sweep table a `cutlab tune … --sweep` transcript prints after `command`
+/// (its continuation line, indented, as the transcript writes it: the prose quotes the same
+/// options), as numbers (the best row's `*` dropped).
+fn sweep_rows(doc: &str, command: &str) -> Vec<Vec<f64>> {
+    let after = &doc[doc
+        .find(command)
+        .unwrap_or_else(|| panic!("no transcript with {command:?}"))..];
+    after
+        .lines()
+        .skip_while(|l| !l.contains("objective  cycle (s)"))
+        .skip(1)
+        .take_while(|l| !l.starts_with('$') && !l.starts_with("```"))
+        .map(|l| {
+            l.split_whitespace()
+                .map(|c| c.trim_end_matches('*').parse().unwrap())
+                .collect()
+        })
+        .collect()
+}
+
+/// docs/tuning.md's two sweeps, read from their transcripts: k_ec alone, and the error and
+/// output ranges together.
+fn tuning_sweeps(facts: &mut Facts) {
+    let doc = std::fs::read_to_string(root().join("docs/tuning.md")).unwrap();
+    // Columns: the parameters, objective, cycle, error, above, activity.
+    let ec = sweep_rows(&doc, "\n    --param change_range_pct=20:1000 --sweep 5");
+    assert_eq!(ec.len(), 5);
+    let (first, second, last) = (&ec[0], &ec[1], &ec[ec.len() - 1]);
+    facts.set("tuning.sweep_ec.first_pct", short(first[0], 1));
+    facts.set("tuning.sweep_ec.first_activity_pct", fixed(first[5], 0));
+    facts.set("tuning.sweep_ec.first_objective", fixed(first[1], 2));
+    facts.set("tuning.sweep_ec.second_pct", short(second[0], 1));
+    facts.set("tuning.sweep_ec.second_activity_pct", fixed(second[5], 0));
+    facts.set("tuning.sweep_ec.last_pct", short(last[0], 1));
+    facts.set(
+        "tuning.sweep_ec.rest_objective",
+        // As printed: rounding the printed 2.965 again would round it twice.
+        span(ec[1..].iter().map(|r| r[1]), 3),
+    );
+    // "at 20 % … the override chatters": far more travel than anywhere else.
+    assert!(ec[1..].iter().all(|r| first[5] > 5.0 * r[5]));
+
+    let grid = sweep_rows(
+        &doc,
+        "\n    --param error_range_pct=20:200 --param output_range_pct=2:60 --sweep 3",
+    );
+    assert_eq!(grid.len(), 9);
+    // Columns: error range, output range, objective, cycle, error, above, activity.
+    let at = |e: usize, u: usize| &grid[3 * e + u];
+    let (low_e, mid_e, high_e) = (at(0, 0)[0], at(1, 0)[0], at(2, 0)[0]);
+    let (low_u, high_u) = (at(0, 0)[1], at(0, 2)[1]);
+    facts.set("tuning.sweep_2d.low_e_pct", short(low_e, 1));
+    facts.set("tuning.sweep_2d.mid_e_pct", short(mid_e, 1));
+    facts.set("tuning.sweep_2d.high_e_pct", short(high_e, 1));
+    facts.set("tuning.sweep_2d.low_u_pct", short(low_u, 1));
+    facts.set("tuning.sweep_2d.high_u_pct", short(high_u, 1));
+    facts.set(
+        "tuning.sweep_2d.low_e_objective",
+        span((0..3).map(|u| at(0, u)[2]), 1),
+    );
+    facts.set(
+        "tuning.sweep_2d.low_e_activity_pct",
+        fixed((0..3).map(|u| at(0, u)[6]).fold(0.0, f64::max), 0),
+    );
+    facts.set("tuning.sweep_2d.low_u_above_s", fixed(at(1, 0)[5], 1));
+    facts.set(
+        "tuning.sweep_2d.high_u_mid_e_activity_pct",
+        fixed(at(1, 2)[6], 0),
+    );
+    facts.set(
+        "tuning.sweep_2d.high_u_high_e_activity_pct",
+        fixed(at(2, 2)[6], 0),
+    );
+    // The readings: a narrow output range stays above the limit longest, a wide one calmed by
+    // a wide error range.
+    assert!(at(1, 0)[5] > at(1, 1)[5] && at(2, 2)[6] < at(1, 2)[6]);
+}
+
 fn root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
 }
@@ -3578,6 +3656,7 @@ fn all_facts() -> BTreeMap<String, String> {
     source_constants(&mut facts);
     protocol_more(&mut facts);
     logs_teach_cut_fit(&mut facts);
+    tuning_sweeps(&mut facts);
     log_calibration(&mut facts);
     paper_000_bench(&mut facts);
     eprintln!(
