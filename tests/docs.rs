@@ -3166,7 +3166,13 @@ fn tuning_facts(facts: &mut Facts) {
     let example = &doc[doc
         .find("## Worked example: paper 002's scaling factors")
         .unwrap()..];
-    let best = line_with(example, "best: ");
+    // The search's best, then (a budget of one evaluation) the defaults'.
+    let bests: Vec<&str> = example
+        .lines()
+        .filter(|l| l.starts_with("best: "))
+        .collect();
+    assert_eq!(bests.len(), 2, "{bests:?}");
+    let (best, defaults) = (bests[0], bests[1]);
     for (key, name) in [
         ("error_range", "error_range_pct="),
         ("change_range", "change_range_pct="),
@@ -3195,6 +3201,30 @@ fn tuning_facts(facts: &mut Facts) {
     facts.set("tuning.example.narrow_error_pct", fixed(narrow[5], 1));
     facts.set("tuning.example.narrow_above_s", fixed(narrow[6], 2));
     facts.set("tuning.example.best_error_pct", fixed(best_row[5], 1));
+    // The defaults alone against the search's best.
+    let (default_objective, best_objective) = (
+        number_after(defaults, "(objective "),
+        number_after(best, "(objective "),
+    );
+    let (default_error, default_cycle) = (
+        number_after(defaults, "force error "),
+        number_after(defaults, "cycle "),
+    );
+    assert!(best_objective < default_objective);
+    facts.set(
+        "tuning.example.default_objective",
+        fixed(default_objective, 2),
+    );
+    facts.set("tuning.example.best_objective", fixed(best_objective, 2));
+    facts.set("tuning.example.default_error_pct", fixed(default_error, 1));
+    facts.set(
+        "tuning.example.error_gain_points",
+        fixed(default_error - number_after(best, "force error "), 1),
+    );
+    facts.set(
+        "tuning.example.cycle_cost_s",
+        fixed(number_after(best, "cycle ") - default_cycle, 1),
+    );
     facts.set("tuning.example.best_above_s", fixed(best_row[6], 2));
 }
 
