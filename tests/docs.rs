@@ -3073,6 +3073,16 @@ fn tuning_facts(facts: &mut Facts) {
     facts.set("tuning.noise_sigmas", short(NOISE_SIGMAS, 1));
     facts.set("tuning.min_gap_pct", short(MIN_PROPOSED_GAP_PCT, 1));
     facts.set("tuning.max_sweep_points", MAX_SWEEP_POINTS.to_string());
+    // The scenarios' programs at 100 % override, longest beside shortest.
+    for (preset, key) in [
+        (Preset::KimStepDoc, "tuning.kim_program_s"),
+        (Preset::ManeeratDoc1, "tuning.maneerat_1_program_s"),
+    ] {
+        facts.set(
+            key,
+            fixed(preset.scenario().unwrap().nominal_duration_s(), 0),
+        );
+    }
     let w = Objective::default();
     facts.set(
         "tuning.default_weights",
