@@ -2342,6 +2342,74 @@ fn plant_constants(facts: &mut Facts) {
         );
     }
 
+    // The spindle drive's table of defaults, and its phase currents' slip and harmonics.
+    let d = &spindle;
+    let table = [
+        (
+            "gears",
+            format!(
+                "{} rpm, 1:{}, 1:{}",
+                short(d.gear_change_rpm, 1),
+                short(d.high_gear_ratio, 3),
+                short(d.low_gear_ratio, 3)
+            ),
+        ),
+        ("efficiency", short(d.gear_efficiency, 3)),
+        (
+            "motor",
+            format!(
+                "{}, {} rpm, {} rpm",
+                d.pole_pairs,
+                short(d.base_speed_rpm, 1),
+                short(d.max_motor_speed_rpm, 1)
+            ),
+        ),
+        (
+            "magnetising",
+            format!(
+                "{} A, {} N·m/A",
+                short(d.magnetizing_current_a, 2),
+                short(d.torque_per_amp_nm_per_a, 3)
+            ),
+        ),
+        (
+            "torque",
+            format!(
+                "{} N·m, {} N·m, {} Hz",
+                short(d.torque_limit_nm, 1),
+                short(d.rated_torque_nm, 1),
+                short(d.rated_slip_hz, 2)
+            ),
+        ),
+        (
+            "drag",
+            format!(
+                "{} N·m, {} N·m per 1000 rpm",
+                short(d.drag_torque_nm, 3),
+                short(d.drag_nm_per_krpm, 3)
+            ),
+        ),
+        ("inertia", format!("{} kg·m²", short(d.inertia_kg_m2, 3))),
+        (
+            "speed_loop",
+            format!(
+                "{} Hz, {}",
+                short(d.bandwidth_hz, 2),
+                short(d.damping_ratio, 3)
+            ),
+        ),
+        (
+            "fv",
+            format!("{} V per 1000 motor rpm", short(d.fv_volts_per_krpm, 3)),
+        ),
+    ];
+    for (key, value) in table {
+        facts.set(&format!("plant.spindle.table.{key}"), value);
+    }
+    facts.set("plant.spindle.rated_slip_hz", short(d.rated_slip_hz, 2));
+    facts.set("plant.spindle.h5_pct", short(100.0 * d.harmonic_5th, 2));
+    facts.set("plant.spindle.h7_pct", short(100.0 * d.harmonic_7th, 2));
+
     let (peak_1000_a, start_1000_s) = start(1000.0);
     let (_, start_3000_s) = start(3000.0);
     facts.set("plant.spindle.start_1000_a", fixed(peak_1000_a, 0));
