@@ -2275,6 +2275,70 @@ fn plant_constants(facts: &mut Facts) {
         fixed(a_per_n / feed.torque_per_force_nm_per_n(), 2),
     );
     facts.set("plant.feed.ma_per_n", fixed(1000.0 * a_per_n, 2));
+    // The feed drive's table of defaults.
+    let f = &feed;
+    let g_m_s2 = 9.81;
+    for (key, value) in [
+        ("pitch", format!("{} mm", short(f.screw_pitch_mm, 2))),
+        (
+            "efficiency",
+            format!(
+                "{}, {}",
+                short(f.efficiency, 3),
+                short(f.screw_efficiency, 3)
+            ),
+        ),
+        (
+            "friction",
+            format!(
+                "{} N (μ {} on {} kg)",
+                short(f.guide_friction_n, 1),
+                short(f.guide_friction_n / (f.table_mass_kg * g_m_s2), 2),
+                short(f.table_mass_kg, 1)
+            ),
+        ),
+        ("preload", format!("{} N", short(f.preload_n, 1))),
+        ("mass", format!("{} kg", short(f.table_mass_kg, 1))),
+        (
+            "damping",
+            format!("{} N per mm/s", short(f.damping_n_s_per_mm, 2)),
+        ),
+        (
+            "inertia",
+            format!("{} kg·m²", short(f.rotor_inertia_kg_m2, 5)),
+        ),
+        (
+            "motor",
+            format!(
+                "{}, {} Wb (K_t = {} N·m/A)",
+                f.pole_pairs,
+                short(f.flux_linkage_wb, 3),
+                short(f.torque_constant_nm_per_a(), 3)
+            ),
+        ),
+        (
+            "servo",
+            format!(
+                "{} Hz, {}",
+                short(f.servo_bandwidth_hz, 2),
+                short(f.servo_damping_ratio, 3)
+            ),
+        ),
+        (
+            "friction_band",
+            format!("{} mm/min", short(f.friction_band_mm_min, 2)),
+        ),
+        (
+            "harmonics",
+            format!(
+                "{} %, {} %",
+                short(100.0 * f.harmonic_5th, 2),
+                short(100.0 * f.harmonic_7th, 2)
+            ),
+        ),
+    ] {
+        facts.set(&format!("plant.feed.table.{key}"), value);
+    }
 
     let start = |rpm: f64| {
         let dt_s = 1e-4;
