@@ -2275,6 +2275,60 @@ fn plant_constants(facts: &mut Facts) {
         fixed(a_per_n / feed.torque_per_force_nm_per_n(), 2),
     );
     facts.set("plant.feed.ma_per_n", fixed(1000.0 * a_per_n, 2));
+    // The current sensors' table: each channel's transducer, burden, bandwidth, ADC, full
+    // scale (the ADC's range through the transducer and burden), offsets and noise.
+    {
+        use cutlab::plant::sensors::CurrentSensorConfig;
+        let signed = |v: f64| short(v, 3).replace('-', "−");
+        for (config, key) in [
+            (CurrentSensorConfig::feed(), "feed"),
+            (CurrentSensorConfig::spindle(), "spindle"),
+        ] {
+            let h = &config.hall;
+            let cells = [
+                (
+                    "transducer",
+                    format!(
+                        "{} A → {} mA",
+                        short(h.rated_input_a, 2),
+                        short(h.rated_output_ma, 2)
+                    ),
+                ),
+                ("burden", format!("{} Ω", short(h.burden_ohm, 1))),
+                (
+                    "bandwidth",
+                    format!("{} kHz", short(h.bandwidth_hz / 1e3, 3)),
+                ),
+                (
+                    "adc",
+                    format!(
+                        "{} bit, ±{} V",
+                        config.adc.bits,
+                        short(config.adc.range_v, 2)
+                    ),
+                ),
+                (
+                    "full_scale",
+                    format!("±{} A", fixed(config.full_scale_a(), 1)),
+                ),
+                (
+                    "offsets",
+                    format!(
+                        "{} mA",
+                        h.offsets_a
+                            .iter()
+                            .map(|o| signed(1e3 * o))
+                            .collect::<Vec<_>>()
+                            .join(", ")
+                    ),
+                ),
+                ("noise", format!("{} mA", short(1e3 * h.noise_a, 2))),
+            ];
+            for (cell, value) in cells {
+                facts.set(&format!("plant.sensor.{key}.{cell}"), value);
+            }
+        }
+    }
     // The feed drive's table of defaults.
     let f = &feed;
     let g_m_s2 = 9.81;
