@@ -2329,6 +2329,28 @@ fn plant_constants(facts: &mut Facts) {
             }
         }
     }
+    // The materials' cutting coefficients (Altintas' mechanistic model).
+    {
+        use cutlab::plant::materials::Material;
+        for (material, key) in [
+            (Material::Sm45c, "sm45c"),
+            (Material::Aluminium, "aluminium"),
+            (Material::Gc30, "gc30"),
+            (Material::ToolSteel, "tool_steel"),
+        ] {
+            let c = material.coefficients();
+            for (name, value) in [
+                ("ktc", c.ktc_n_mm2),
+                ("krc", c.krc_n_mm2),
+                ("kac", c.kac_n_mm2),
+                ("kte", c.kte_n_mm),
+                ("kre", c.kre_n_mm),
+                ("kae", c.kae_n_mm),
+            ] {
+                facts.set(&format!("plant.material.{key}.{name}"), short(value, 2));
+            }
+        }
+    }
     // The feed drive's table of defaults.
     let f = &feed;
     let g_m_s2 = 9.81;
