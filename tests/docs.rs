@@ -2351,6 +2351,32 @@ fn plant_constants(facts: &mut Facts) {
             }
         }
     }
+    // liu-current-step's machine: its idle spindle speed (eq 5's steady state at S_e1 and no
+    // feed voltage) and its spindle channel.
+    {
+        use cutlab::plant::bond_graph::{BondGraphParams, CutLoad};
+        let p = BondGraphParams::machining_centre();
+        let idle = p
+            .steady_state(p.spindle_voltage_v, 0.0, CutLoad::NONE)
+            .unwrap();
+        facts.set(
+            "plant.bond_graph.idle_rpm",
+            fixed(idle.spindle_speed_rad_s * 60.0 / std::f64::consts::TAU, 0),
+        );
+        let sensor = BondGraphRun::paper_002(BondGraphRun::DEFAULT_LOAD_STEP_PCT).spindle_sensor;
+        facts.set(
+            "plant.bond_graph.spindle_hall_a",
+            short(sensor.hall.rated_input_a, 2),
+        );
+        facts.set(
+            "plant.bond_graph.spindle_burden_ohm",
+            short(sensor.hall.burden_ohm, 1),
+        );
+        facts.set(
+            "plant.bond_graph.spindle_full_scale_a",
+            fixed(sensor.full_scale_a(), 0),
+        );
+    }
     // The feed drive's table of defaults.
     let f = &feed;
     let g_m_s2 = 9.81;
