@@ -1,4 +1,6 @@
-//! docs/controllers.md, docs/papers.md and docs/plant.md say what the tool computes today.
+//! docs/controllers.md, docs/papers.md, docs/plant.md, docs/hardware.md, docs/protocol.md,
+//! docs/logs.md, docs/tuning.md, docs/run-definition.md, docs/signal-chain.md, docs/fuzzy.md and
+//! docs/lessons.md say what the tool computes today.
 //!
 //! Every number the tool produces is marked in the Markdown source with an invisible HTML comment
 //! pair around the value as the page shows it:
@@ -13,7 +15,12 @@
 //! Each key's value is computed once, below, by code calling the library, one function per group
 //! of facts (the comparison on the presets, the estimation, the envelope's and controllers'
 //! settings, paper 000's bench, paper 001, 003 and 004's figures, paper 002's grid over its
-//! readings), formatted as the page shows it. Where the prose reads the numbers ("both tables
+//! readings, the link's constants, the worked examples' prose read from their transcripts, which
+//! tests/transcripts.rs holds to the tool), formatted as the page shows it. A constant the test
+//! cannot import (private, or behind the `web` feature) is read from its definition's source
+//! text (`source_constant`), which accepts a literal only. A constant of the code (a
+//! default, a limit, a frame's size) is read from its one definition in src/, so changing it
+//! fails here until the page says the new value. Where the prose reads the numbers ("both tables
 //! cycle", "no sooner up to 0.1 s"), the function asserts that reading, so a change that makes a
 //! sentence untrue fails here, naming the figures, instead of being blessed into the page.
 //! `cargo test --test docs` fails on a marked value the tool does not give, on a marker whose key
@@ -1218,6 +1225,18 @@ fn paper_000_bench(facts: &mut Facts) {
     let closed_form = ThreePhaseWaveform::new(fd.harmonic_5th, fd.harmonic_7th).rms_per_amplitude()
         / fd.torque_constant_nm_per_a();
     facts.set("bench.slope_a_per_nm", fixed(line.slope_a_per_nm, 3));
+    // The fitted line against the closed form (the ideal bench's): slope and idle, percent off.
+    let closed_idle_a = fd.idle_rms_current_a(config.feed_mm_min);
+    facts.set(
+        "bench.line_off_closed_form_pct",
+        span(
+            [
+                100.0 * (line.slope_a_per_nm / closed_form - 1.0).abs(),
+                100.0 * (line.idle_current_a / closed_idle_a - 1.0).abs(),
+            ],
+            1,
+        ),
+    );
     facts.set("bench.closed_form_a_per_nm", fixed(closed_form, 2));
     facts.set("bench.idle_a", fixed(line.idle_current_a, 3));
     facts.set("bench.r_squared", fixed(line.r_squared, 3));
@@ -2002,10 +2021,30 @@ fn paper_002(facts: &mut Facts) {
         .filter(|row| row[0] >= 5.0 && row[0] < 6.0)
         .map(|row| row[1])
         .collect();
-    facts.set(
-        "paper_002.table_1.settled_spindle_a",
-        fixed(settled.iter().sum::<f64>() / settled.len() as f64, 2),
-    );
+    let settled_a = settled.iter().sum::<f64>() / settled.len() as f64;
+    facts.set("paper_002.table_1.settled_spindle_a", fixed(settled_a, 2));
+    // "settles in ≈ 3 s", read as tests/plant_reduced.rs reads it: the end of the first 1 s
+    // window (whole cycles of the ripple) from which on every window's mean is within 2 % of
+    // the settled current.
+    let rows: Vec<Vec<f64>> = bond_graph
+        .lines()
+        .filter(|l| l.starts_with(|c: char| c.is_ascii_digit()))
+        .map(|l| {
+            l.split(',')
+                .map(|c| c.parse::<f64>().unwrap())
+                .collect::<Vec<_>>()
+        })
+        .collect();
+    let window = 100;
+    assert!((rows[window][0] - rows[0][0] - 1.0).abs() < 1e-9);
+    let mean_from =
+        |k: usize| rows[k..k + window].iter().map(|r| r[1]).sum::<f64>() / window as f64;
+    let last = rows.len() - window;
+    let first_steady = (0..=last)
+        .find(|&k| (k..=last).all(|j| (mean_from(j) / settled_a - 1.0).abs() < 0.02))
+        .unwrap();
+    let settle_s = rows[first_steady + window - 1][0];
+    facts.set("paper_002.table_1.settle_s", fixed(settle_s, 0));
 }
 
 /// What `cutlab scenarios --run NAME --summary` reads from one preset at 100 % override, with the
@@ -2236,6 +2275,172 @@ fn plant_constants(facts: &mut Facts) {
         fixed(a_per_n / feed.torque_per_force_nm_per_n(), 2),
     );
     facts.set("plant.feed.ma_per_n", fixed(1000.0 * a_per_n, 2));
+    // The current sensors' table: each channel's transducer, burden, bandwidth, ADC, full
+    // scale (the ADC's range through the transducer and burden), offsets and noise.
+    {
+        use cutlab::plant::sensors::CurrentSensorConfig;
+        let signed = |v: f64| short(v, 3).replace('-', "−");
+        for (config, key) in [
+            (CurrentSensorConfig::feed(), "feed"),
+            (CurrentSensorConfig::spindle(), "spindle"),
+        ] {
+            let h = &config.hall;
+            let cells = [
+                (
+                    "transducer",
+                    format!(
+                        "{} A → {} mA",
+                        short(h.rated_input_a, 2),
+                        short(h.rated_output_ma, 2)
+                    ),
+                ),
+                ("burden", format!("{} Ω", short(h.burden_ohm, 1))),
+                (
+                    "bandwidth",
+                    format!("{} kHz", short(h.bandwidth_hz / 1e3, 3)),
+                ),
+                (
+                    "adc",
+                    format!(
+                        "{} bit, ±{} V",
+                        config.adc.bits,
+                        short(config.adc.range_v, 2)
+                    ),
+                ),
+                (
+                    "full_scale",
+                    format!("±{} A", fixed(config.full_scale_a(), 1)),
+                ),
+                (
+                    "offsets",
+                    format!(
+                        "{} mA",
+                        h.offsets_a
+                            .iter()
+                            .map(|o| signed(1e3 * o))
+                            .collect::<Vec<_>>()
+                            .join(", ")
+                    ),
+                ),
+                ("noise", format!("{} mA", short(1e3 * h.noise_a, 2))),
+            ];
+            for (cell, value) in cells {
+                facts.set(&format!("plant.sensor.{key}.{cell}"), value);
+            }
+        }
+    }
+    // The materials' cutting coefficients (Altintas' mechanistic model).
+    {
+        use cutlab::plant::materials::Material;
+        for (material, key) in [
+            (Material::Sm45c, "sm45c"),
+            (Material::Aluminium, "aluminium"),
+            (Material::Gc30, "gc30"),
+            (Material::ToolSteel, "tool_steel"),
+        ] {
+            let c = material.coefficients();
+            for (name, value) in [
+                ("ktc", c.ktc_n_mm2),
+                ("krc", c.krc_n_mm2),
+                ("kac", c.kac_n_mm2),
+                ("kte", c.kte_n_mm),
+                ("kre", c.kre_n_mm),
+                ("kae", c.kae_n_mm),
+            ] {
+                facts.set(&format!("plant.material.{key}.{name}"), short(value, 2));
+            }
+        }
+    }
+    // liu-current-step's machine: its idle spindle speed (eq 5's steady state at S_e1 and no
+    // feed voltage) and its spindle channel.
+    {
+        use cutlab::plant::bond_graph::{BondGraphParams, CutLoad};
+        let p = BondGraphParams::machining_centre();
+        let idle = p
+            .steady_state(p.spindle_voltage_v, 0.0, CutLoad::NONE)
+            .unwrap();
+        facts.set(
+            "plant.bond_graph.idle_rpm",
+            fixed(idle.spindle_speed_rad_s * 60.0 / std::f64::consts::TAU, 0),
+        );
+        let sensor = BondGraphRun::paper_002(BondGraphRun::DEFAULT_LOAD_STEP_PCT).spindle_sensor;
+        facts.set(
+            "plant.bond_graph.spindle_hall_a",
+            short(sensor.hall.rated_input_a, 2),
+        );
+        facts.set(
+            "plant.bond_graph.spindle_burden_ohm",
+            short(sensor.hall.burden_ohm, 1),
+        );
+        facts.set(
+            "plant.bond_graph.spindle_full_scale_a",
+            fixed(sensor.full_scale_a(), 0),
+        );
+    }
+    // The feed drive's table of defaults.
+    let f = &feed;
+    let g_m_s2 = 9.81;
+    for (key, value) in [
+        ("pitch", format!("{} mm", short(f.screw_pitch_mm, 2))),
+        (
+            "efficiency",
+            format!(
+                "{}, {}",
+                short(f.efficiency, 3),
+                short(f.screw_efficiency, 3)
+            ),
+        ),
+        (
+            "friction",
+            format!(
+                "{} N (μ {} on {} kg)",
+                short(f.guide_friction_n, 1),
+                short(f.guide_friction_n / (f.table_mass_kg * g_m_s2), 2),
+                short(f.table_mass_kg, 1)
+            ),
+        ),
+        ("preload", format!("{} N", short(f.preload_n, 1))),
+        ("mass", format!("{} kg", short(f.table_mass_kg, 1))),
+        (
+            "damping",
+            format!("{} N per mm/s", short(f.damping_n_s_per_mm, 2)),
+        ),
+        (
+            "inertia",
+            format!("{} kg·m²", short(f.rotor_inertia_kg_m2, 5)),
+        ),
+        (
+            "motor",
+            format!(
+                "{}, {} Wb (K_t = {} N·m/A)",
+                f.pole_pairs,
+                short(f.flux_linkage_wb, 3),
+                short(f.torque_constant_nm_per_a(), 3)
+            ),
+        ),
+        (
+            "servo",
+            format!(
+                "{} Hz, {}",
+                short(f.servo_bandwidth_hz, 2),
+                short(f.servo_damping_ratio, 3)
+            ),
+        ),
+        (
+            "friction_band",
+            format!("{} mm/min", short(f.friction_band_mm_min, 2)),
+        ),
+        (
+            "harmonics",
+            format!(
+                "{} %, {} %",
+                short(100.0 * f.harmonic_5th, 2),
+                short(100.0 * f.harmonic_7th, 2)
+            ),
+        ),
+    ] {
+        facts.set(&format!("plant.feed.table.{key}"), value);
+    }
 
     let start = |rpm: f64| {
         let dt_s = 1e-4;
@@ -2250,6 +2455,127 @@ fn plant_constants(facts: &mut Facts) {
         }
         panic!("the spindle never reached {rpm} rpm");
     };
+    // The gear change: at its speed the low ratio brings the motor back below base speed, and
+    // the sensitivity jumps by the base speed over the low gear's motor speed there.
+    let spindle = SpindleDriveConfig::default();
+    let change_rpm = spindle.gear_change_rpm;
+    let low_motor_rpm = change_rpm * spindle.low_gear_ratio;
+    assert!(low_motor_rpm < spindle.base_speed_rpm);
+    facts.set("plant.spindle.gear_change_rpm", fixed(change_rpm, 0));
+    facts.set("plant.spindle.low_ratio", fixed(spindle.low_gear_ratio, 3));
+    facts.set("plant.spindle.base_rpm", fixed(spindle.base_speed_rpm, 0));
+    facts.set(
+        "plant.spindle.low_motor_rpm_at_change",
+        fixed(low_motor_rpm, 0),
+    );
+    let jump = spindle.base_speed_rpm / low_motor_rpm;
+    let simulated_jump =
+        spindle.sensitivity_a_per_nm(change_rpm) / spindle.sensitivity_a_per_nm(change_rpm - 1e-6);
+    assert!(
+        (simulated_jump / jump - 1.0).abs() < 1e-6,
+        "{simulated_jump} against {jump}"
+    );
+    facts.set("plant.spindle.sensitivity_jump", fixed(jump, 2));
+    // Flat from the change up to the speed where the low gear's motor reaches base speed.
+    let flat_to_rpm = spindle.base_speed_rpm / spindle.low_gear_ratio;
+    let s_at = |rpm: f64| spindle.sensitivity_a_per_nm(rpm);
+    assert!((s_at(flat_to_rpm - 1.0) / s_at(change_rpm) - 1.0).abs() < 1e-9);
+    assert!(s_at(flat_to_rpm + 10.0) > s_at(change_rpm) * (1.0 + 1e-6));
+    facts.set("plant.spindle.flat_to_rpm", fixed(flat_to_rpm.floor(), 0));
+
+    // liu-current-step's machining centre with Table 1's spindle inductance: the spindle's
+    // armature and inertia ring (m_s = 0 decouples them from the table) with this damping ratio.
+    {
+        use cutlab::plant::bond_graph::{BondGraphParams, CutLoad};
+        let p = BondGraphParams {
+            spindle_inductance_h: BondGraphParams::default().spindle_inductance_h,
+            feed_inductance_h: BondGraphParams::default().feed_inductance_h,
+            ..BondGraphParams::machining_centre()
+        };
+        assert_eq!(p.spindle_conversion_m, 0.0);
+        let (a, _) = p.state_space(CutLoad::NONE);
+        let trace = a[0][0] + a[1][1];
+        let det = a[0][0] * a[1][1] - a[0][1] * a[1][0];
+        let natural_rad_s = det.sqrt();
+        let damping = -trace / (2.0 * natural_rad_s);
+        // "rings at a few hertz for seconds".
+        let natural_hz = natural_rad_s / std::f64::consts::TAU;
+        assert!((2.0..10.0).contains(&natural_hz), "{natural_hz} Hz");
+        assert!(1.0 / (damping * natural_rad_s) > 1.0);
+        facts.set(
+            "plant.machining_centre.table_1_l_damping",
+            short(damping, 3),
+        );
+    }
+
+    // The spindle drive's table of defaults, and its phase currents' slip and harmonics.
+    let d = &spindle;
+    let table = [
+        (
+            "gears",
+            format!(
+                "{} rpm, 1:{}, 1:{}",
+                short(d.gear_change_rpm, 1),
+                short(d.high_gear_ratio, 3),
+                short(d.low_gear_ratio, 3)
+            ),
+        ),
+        ("efficiency", short(d.gear_efficiency, 3)),
+        (
+            "motor",
+            format!(
+                "{}, {} rpm, {} rpm",
+                d.pole_pairs,
+                short(d.base_speed_rpm, 1),
+                short(d.max_motor_speed_rpm, 1)
+            ),
+        ),
+        (
+            "magnetising",
+            format!(
+                "{} A, {} N·m/A",
+                short(d.magnetizing_current_a, 2),
+                short(d.torque_per_amp_nm_per_a, 3)
+            ),
+        ),
+        (
+            "torque",
+            format!(
+                "{} N·m, {} N·m, {} Hz",
+                short(d.torque_limit_nm, 1),
+                short(d.rated_torque_nm, 1),
+                short(d.rated_slip_hz, 2)
+            ),
+        ),
+        (
+            "drag",
+            format!(
+                "{} N·m, {} N·m per 1000 rpm",
+                short(d.drag_torque_nm, 3),
+                short(d.drag_nm_per_krpm, 3)
+            ),
+        ),
+        ("inertia", format!("{} kg·m²", short(d.inertia_kg_m2, 3))),
+        (
+            "speed_loop",
+            format!(
+                "{} Hz, {}",
+                short(d.bandwidth_hz, 2),
+                short(d.damping_ratio, 3)
+            ),
+        ),
+        (
+            "fv",
+            format!("{} V per 1000 motor rpm", short(d.fv_volts_per_krpm, 3)),
+        ),
+    ];
+    for (key, value) in table {
+        facts.set(&format!("plant.spindle.table.{key}"), value);
+    }
+    facts.set("plant.spindle.rated_slip_hz", short(d.rated_slip_hz, 2));
+    facts.set("plant.spindle.h5_pct", short(100.0 * d.harmonic_5th, 2));
+    facts.set("plant.spindle.h7_pct", short(100.0 * d.harmonic_7th, 2));
+
     let (peak_1000_a, start_1000_s) = start(1000.0);
     let (_, start_3000_s) = start(3000.0);
     facts.set("plant.spindle.start_1000_a", fixed(peak_1000_a, 0));
@@ -2477,12 +2803,1106 @@ fn paper_004_surface_error(facts: &mut Facts, m: &Matrix) {
         .all(|x| x.surface_error_range_um > maneerat_fixed));
 }
 
+// ---------------------------------------------------------------------------------------------
+// The reference documents' constants: docs/hardware.md and docs/protocol.md state the link's
+// limits, defaults and sizes, and each is read here from its one definition in src/.
+// ---------------------------------------------------------------------------------------------
+
+/// `n` as the pages write a small count in prose ("five times"), digits beyond ten.
+fn count_word(n: usize) -> String {
+    const WORDS: [&str; 11] = [
+        "zero", "one", "two", "three", "four", "five", "six", "seven", "eight", "nine", "ten",
+    ];
+    WORDS
+        .get(n)
+        .map_or_else(|| n.to_string(), |w| (*w).to_string())
+}
+
+/// `x`, which must be a whole number, as one.
+fn whole(x: f64) -> usize {
+    assert!(
+        x >= 0.0 && x.fract().abs() < 1e-9,
+        "{x} is not a whole number"
+    );
+    x.round() as usize
+}
+
+/// The share lost by averaging a sinusoid of `f_hz` over blocks of `t_s` before the RMS:
+/// 1 − sin(πfT)/(πfT), in percent.
+fn block_mean_loss_pct(f_hz: f64, t_s: f64) -> f64 {
+    let x = std::f64::consts::PI * f_hz * t_s;
+    100.0 * (1.0 - x.sin() / x)
+}
+
+/// docs/hardware.md's and docs/protocol.md's numbers of the link: the frame sizes and the line
+/// budget's terms, the device's and the host's watchdogs and defaults, the stuck-override and
+/// phase-sum checks, the emulator's sampling and queues, the virtual device's worker, the
+/// reduce-only limits and the teach cut's schedule.
+fn link_constants(facts: &mut Facts) {
+    use cutlab::closed_loop::teach_cut::TEACH_OVERRIDES_PCT;
+    use cutlab::estimation::load_levels::MIN_LOAD_LEVELS;
+    use cutlab::hardware::commissioning::REDUCE_ONLY_MAX_OVERRIDE_PCT;
+    use cutlab::hardware::serial_settings::parse_serial;
+    use cutlab::hardware::session::SessionOptions;
+    use cutlab::protocol::codec::{CRC_LEN, MAX_BLOCK_LEN};
+    use cutlab::protocol::device::{
+        DeviceConfig, DeviceEmulator, CURRENT_A_PER_COUNT, DEFAULT_FALLBACK_LIMIT_S,
+        DEFAULT_FALLBACK_PCT, DEFAULT_WATCHDOG_S, DISARMED_OVERRIDE_PCT, FV_V_PER_COUNT,
+        HEARTBEAT_INTERVAL_S, PHASE_CHECK_MIN_A, PHASE_CHECK_WINDOW_S, PHASE_SUM_TOLERANCE,
+        TIME_SCALE_RANGE, WATCHDOG_RANGE_S,
+    };
+    use cutlab::protocol::device_worker::{
+        MAX_VIRTUAL_FRAMES_PER_TICK, MAX_VIRTUAL_STEP_MS, VIRTUAL_TICK_MS,
+    };
+    use cutlab::protocol::frame::{
+        command_flag, fault_flag, sample_flag, AckResult, FaultKind, FrameType, MAX_PAYLOAD_LEN,
+        VERSION_MAJOR, VERSION_MINOR,
+    };
+    use cutlab::protocol::host::{
+        DEFAULT_LINK_TIMEOUT_S, HELLO_INTERVAL_S, LINK_TIMEOUT_RANGE_S, MAX_FILLED_GAP,
+        OVERRIDE_CHECK_MOVING_FRACTION, OVERRIDE_CHECK_STEADY_FRACTION, OVERRIDE_CHECK_STEADY_S,
+        OVERRIDE_MISMATCH_FRACTION, OVERRIDE_MISMATCH_PCT, OVERRIDE_MISMATCH_S,
+    };
+    use cutlab::protocol::keep_up::KeepUp;
+    use cutlab::protocol::line_budget::{
+        wire_len, LineBudget, BITS_PER_BYTE, COMMANDS_PER_S, LINE_LOAD_LIMIT,
+    };
+    use cutlab::protocol::link::{DEVICE_QUEUE_CHUNKS, HOST_QUEUE_CHUNKS, READ_CHUNK};
+
+    let config = DeviceConfig::new(Preset::KimStepDoc);
+    let emulator = DeviceEmulator::new(config.clone()).unwrap();
+    let caps = *emulator.capabilities();
+    let sample_rate_hz = f64::from(caps.sample_rate_hz);
+    let sample_period_s = 1.0 / sample_rate_hz;
+
+    // §1's budget: a frame on the wire, and what the device's stream asks of its line.
+    let overhead = wire_len(FrameType::Hello) - FrameType::Hello.payload_len();
+    assert!(FrameType::ALL
+        .iter()
+        .all(|t| wire_len(*t) - t.payload_len() == overhead));
+    facts.set("link.wire_overhead_bytes", overhead.to_string());
+    facts.set("link.crc_bytes", CRC_LEN.to_string());
+    for (t, key) in [
+        (FrameType::Sample, "sample"),
+        (FrameType::SimTruth, "sim_truth"),
+        (FrameType::Heartbeat, "heartbeat"),
+        (FrameType::Ack, "ack"),
+    ] {
+        facts.set(&format!("link.wire_bytes.{key}"), wire_len(t).to_string());
+    }
+    for t in FrameType::ALL {
+        facts.set(
+            &format!("link.payload_bytes.{}", t.name().to_ascii_lowercase()),
+            t.payload_len().to_string(),
+        );
+    }
+    facts.set("link.bits_per_byte", short(BITS_PER_BYTE, 0));
+    facts.set(
+        "link.device_heartbeats_per_s",
+        short(1.0 / HEARTBEAT_INTERVAL_S, 3),
+    );
+    facts.set("link.device_heartbeat_s", short(HEARTBEAT_INTERVAL_S, 3));
+    facts.set("link.commands_per_s", short(COMMANDS_PER_S, 0));
+    facts.set("link.command_period_ms", short(1000.0 / COMMANDS_PER_S, 1));
+    // The budget's command rate allows for at least the default control period's.
+    const { assert!(1.0 / COMMANDS_PER_S <= MIN_CONTROL_PERIOD_S) };
+    // (The shortest default period is chain.min_period_ms.)
+    facts.set("link.load_limit_pct", short(100.0 * LINE_LOAD_LIMIT, 1));
+    let budget = |rate: f64, baud: u32| {
+        let mut c = caps;
+        c.features = 0;
+        c.sample_rate_hz = rate as f32;
+        c.line_baud = baud;
+        LineBudget::of(&c)
+    };
+    let most_at_115200 = (1..5000)
+        .rev()
+        .find(|r| budget(f64::from(*r), 115_200).fits())
+        .unwrap();
+    facts.set("link.most_samples_at_115200", most_at_115200.to_string());
+    // "1000 samples/s need 921 600 baud".
+    assert!(!budget(1000.0, 115_200).fits() && budget(1000.0, 921_600).fits());
+
+    let least_rate = 2.0 * DEFAULT_SPINDLE_LOWPASS_HZ;
+    assert!(least_rate > f64::from(most_at_115200));
+    facts.set("link.least_rate_for_spindle_filter", short(least_rate, 0));
+
+    // §2's framing.
+    facts.set("link.max_payload_bytes", MAX_PAYLOAD_LEN.to_string());
+    facts.set("link.max_block_bytes", MAX_BLOCK_LEN.to_string());
+    facts.set("link.least_block_bytes", (1 + CRC_LEN).to_string());
+    facts.set("link.version_major", VERSION_MAJOR.to_string());
+    facts.set("link.version_minor", VERSION_MINOR.to_string());
+    // The codes §3–5 name in prose: fault kinds, Sample flag and fault bits, Ack results.
+    let bit = |mask: u8| mask.trailing_zeros().to_string();
+    for (kind, key) in [
+        (FaultKind::Sensor, "sensor"),
+        (FaultKind::OverCurrent, "over_current"),
+        (FaultKind::Watchdog, "watchdog"),
+        (FaultKind::EStop, "estop"),
+        (FaultKind::FallbackLimit, "fallback_limit"),
+    ] {
+        facts.set(&format!("link.fault_kind.{key}"), kind.code().to_string());
+    }
+    facts.set("link.flag_bit.fallback", bit(sample_flag::FALLBACK));
+    facts.set("link.flag_bit.estop", bit(sample_flag::ESTOP));
+    facts.set("link.flag_bit.hold_latched", bit(sample_flag::HOLD_LATCHED));
+    facts.set("link.fault_bit.watchdog", bit(fault_flag::WATCHDOG));
+    facts.set(
+        "link.fault_bit.fallback_limit",
+        bit(fault_flag::FALLBACK_LIMIT),
+    );
+    facts.set(
+        "link.ack_flag_bit.hold_latched",
+        bit(command_flag::HOLD_LATCHED),
+    );
+    for (result, key) in [
+        (AckResult::NotArmed, "not_armed"),
+        (AckResult::Refused, "refused"),
+        (AckResult::Stale, "stale"),
+        (AckResult::CauseActive, "cause_active"),
+    ] {
+        facts.set(&format!("link.ack_result.{key}"), result.code().to_string());
+    }
+
+    // §4–5: the handshake, the heartbeats, the watchdogs.
+    facts.set("link.hello_interval_s", short(HELLO_INTERVAL_S, 3));
+    facts.set(
+        "link.hello_interval_words",
+        if HELLO_INTERVAL_S == 0.25 {
+            "quarter second".to_string()
+        } else {
+            format!("{} s", short(HELLO_INTERVAL_S, 3))
+        },
+    );
+    let options = SessionOptions::new(DEFAULT_LINK_TIMEOUT_S, None).unwrap();
+    facts.set(
+        "link.handshake_times",
+        count_word(whole(options.handshake_timeout_s / DEFAULT_LINK_TIMEOUT_S)),
+    );
+    facts.set(
+        "link.handshake_default_s",
+        short(options.handshake_timeout_s, 2),
+    );
+    facts.set(
+        "link.host_watchdog_default_s",
+        short(DEFAULT_LINK_TIMEOUT_S, 2),
+    );
+    facts.set(
+        "link.host_watchdog_range_s",
+        format!(
+            "{} to {}",
+            short(LINK_TIMEOUT_RANGE_S.0, 3),
+            short(LINK_TIMEOUT_RANGE_S.1, 3)
+        ),
+    );
+    let heartbeat_share =
+        KeepUp::new(&caps).heartbeat_interval_s() / (f64::from(caps.watchdog_timeout_ms) / 1e3);
+    facts.set(
+        "link.heartbeat_share",
+        match whole((1.0 / heartbeat_share).round()) {
+            5 => "fifth".to_string(),
+            n => format!("1/{n}"),
+        },
+    );
+    facts.set("link.max_filled_gap", MAX_FILLED_GAP.to_string());
+    facts.set(
+        "link.moving_pct",
+        short(100.0 * OVERRIDE_CHECK_MOVING_FRACTION, 1),
+    );
+    facts.set(
+        "link.steady_pct",
+        short(100.0 * OVERRIDE_CHECK_STEADY_FRACTION, 1),
+    );
+    facts.set("link.steady_s", short(OVERRIDE_CHECK_STEADY_S, 3));
+    facts.set("link.mismatch_points", short(OVERRIDE_MISMATCH_PCT, 1));
+    facts.set(
+        "link.mismatch_pct",
+        short(100.0 * OVERRIDE_MISMATCH_FRACTION, 1),
+    );
+    facts.set("link.mismatch_s", short(OVERRIDE_MISMATCH_S, 3));
+    facts.set("link.phase_window_s", short(PHASE_CHECK_WINDOW_S, 3));
+    facts.set("link.phase_min_a", short(PHASE_CHECK_MIN_A, 2));
+    facts.set("link.phase_sum_pct", short(100.0 * PHASE_SUM_TOLERANCE, 1));
+
+    // The emulator's defaults (its Capabilities say the same).
+    assert_eq!(
+        f64::from(caps.watchdog_timeout_ms),
+        1e3 * DEFAULT_WATCHDOG_S
+    );
+    assert_eq!(
+        f64::from(caps.fallback_override_cpct),
+        100.0 * DEFAULT_FALLBACK_PCT
+    );
+    assert_eq!(
+        f64::from(caps.fallback_limit_ms),
+        1e3 * DEFAULT_FALLBACK_LIMIT_S
+    );
+    facts.set("device.watchdog_s", short(DEFAULT_WATCHDOG_S, 3));
+    facts.set("device.fallback_pct", short(DEFAULT_FALLBACK_PCT, 1));
+    facts.set(
+        "device.fallback_limit_s",
+        short(DEFAULT_FALLBACK_LIMIT_S, 3),
+    );
+    facts.set(
+        "device.over_current_a",
+        short(f64::from(caps.over_current_a), 1),
+    );
+    facts.set("device.disarmed_pct", short(DISARMED_OVERRIDE_PCT, 1));
+    // §5's example: a loop that cut the feed to 30 % against a fixed fallback.
+    facts.set(
+        "device.fixed_fallback_raise_pct",
+        fixed(100.0 * (DEFAULT_FALLBACK_PCT / 30.0 - 1.0), 0),
+    );
+    // §5: the default watchdog at 50× in wall time, and the host's heartbeat interval then.
+    let wall_ms = 1e3 * DEFAULT_WATCHDOG_S / 50.0;
+    facts.set("device.watchdog_at_50x_ms", short(wall_ms, 1));
+    facts.set(
+        "device.heartbeat_at_50x_ms",
+        short(wall_ms * heartbeat_share, 1),
+    );
+    facts.set("device.watchdog_max_s", short(WATCHDOG_RANGE_S.1, 3));
+    facts.set(
+        "device.time_scale_range",
+        format!(
+            "{}–{}",
+            short(TIME_SCALE_RANGE.0, 3),
+            short(TIME_SCALE_RANGE.1, 3)
+        ),
+    );
+    facts.set("device.sample_period_ms", short(1e3 * sample_period_s, 3));
+    facts.set("device.sample_rate_khz", short(sample_rate_hz / 1e3, 3));
+    facts.set(
+        "device.plant_rate_khz",
+        short(sample_rate_hz * config.decimation as f64 / 1e3, 3),
+    );
+    facts.set("device.decimation", config.decimation.to_string());
+    facts.set(
+        "device.current_ma_per_count",
+        short(1e3 * CURRENT_A_PER_COUNT, 3),
+    );
+    facts.set(
+        "device.current_range_a",
+        fixed((f64::from(i16::MAX) * CURRENT_A_PER_COUNT).floor(), 0),
+    );
+    facts.set("device.fv_mv_per_count", short(1e3 * FV_V_PER_COUNT, 3));
+    facts.set("device.queue_chunks", DEVICE_QUEUE_CHUNKS.to_string());
+    assert_eq!(READ_CHUNK % 1024, 0);
+    facts.set("device.read_chunk_kib", (READ_CHUNK / 1024).to_string());
+    let host_queue = HOST_QUEUE_CHUNKS * READ_CHUNK;
+    assert_eq!(host_queue % (1 << 20), 0);
+    facts.set("link.host_queue_mib", (host_queue >> 20).to_string());
+    // §7: what block means lose, at the emulator's sample period. Paper 003's spindle: two pole
+    // pairs, 1000 rpm, and 8000 rpm.
+    let electrical_hz = |rpm: f64| 2.0 * rpm / 60.0;
+    facts.set(
+        "device.block_loss_1000rpm_pct",
+        short(
+            block_mean_loss_pct(electrical_hz(1000.0), sample_period_s),
+            1,
+        ),
+    );
+    facts.set(
+        "device.block_loss_8000rpm_pct",
+        fixed(
+            block_mean_loss_pct(electrical_hz(8000.0), sample_period_s),
+            0,
+        ),
+    );
+    facts.set(
+        "device.block_loss_100hz_pct",
+        short(block_mean_loss_pct(100.0, sample_period_s), 1),
+    );
+    facts.set("device.hz_at_1000rpm", fixed(electrical_hz(1000.0), 0));
+    facts.set("device.hz_at_8000rpm", fixed(electrical_hz(8000.0), 0));
+
+    // The virtual device's worker (docs/hardware.md §6).
+    facts.set("virtual.tick_ms", VIRTUAL_TICK_MS.to_string());
+    facts.set(
+        "virtual.frames_per_tick",
+        MAX_VIRTUAL_FRAMES_PER_TICK.to_string(),
+    );
+    let most_scale =
+        MAX_VIRTUAL_FRAMES_PER_TICK as f64 / (f64::from(VIRTUAL_TICK_MS) / 1e3 * sample_rate_hz);
+    facts.set("virtual.most_scale", short(most_scale, 2));
+    facts.set("virtual.max_step_ms", MAX_VIRTUAL_STEP_MS.to_string());
+    assert_eq!(MAX_VIRTUAL_STEP_MS % VIRTUAL_TICK_MS, 0);
+    facts.set(
+        "virtual.max_step_ticks",
+        count_word((MAX_VIRTUAL_STEP_MS / VIRTUAL_TICK_MS) as usize),
+    );
+    facts.set(
+        "virtual.answer_at_8x_ms",
+        short(1e3 * DEFAULT_WATCHDOG_S / 8.0, 2),
+    );
+    facts.set(
+        "virtual.tick_at_most_scale_s",
+        short(f64::from(VIRTUAL_TICK_MS) / 1e3 * most_scale, 3),
+    );
+    // "at 40× … leaves it about one 10 ms tick": the watchdog in wall time is one to two ticks.
+    let answer_ticks = 1e3 * DEFAULT_WATCHDOG_S / most_scale / f64::from(VIRTUAL_TICK_MS);
+    assert!((1.0..2.0).contains(&answer_ticks), "{answer_ticks}");
+
+    // The Hardware page: its serial read buffer, reduce-only limits and teach cut.
+    facts.set(
+        "hardware.read_buffer_bytes",
+        parse_serial::<&str>(&[]).unwrap().buffer_size.to_string(),
+    );
+    facts.set(
+        "hardware.reduce_only_pct",
+        short(REDUCE_ONLY_MAX_OVERRIDE_PCT, 1),
+    );
+    facts.set(
+        "hardware.reduce_only_cpct",
+        fixed(100.0 * REDUCE_ONLY_MAX_OVERRIDE_PCT, 0),
+    );
+    // The teach cut's schedule inside them (its full schedule and step are set with the
+    // estimation's facts).
+    facts.set(
+        "teach.reduce_only_overrides_pct",
+        TEACH_OVERRIDES_PCT
+            .iter()
+            .map(|p| short(p.min(REDUCE_ONLY_MAX_OVERRIDE_PCT), 1))
+            .collect::<Vec<_>>()
+            .join(", "),
+    );
+    facts.set("teach.min_load_levels", count_word(MIN_LOAD_LEVELS));
+}
+
+// ---------------------------------------------------------------------------------------------
+// docs/logs.md: the load-level rule's constants, and the worked example's prose read from its
+// transcripts (which tests/transcripts.rs holds to the tool's output; scripts/docs blesses the
+// transcripts first, so this reads what the tool prints today).
+// ---------------------------------------------------------------------------------------------
+
+/// The number right after the first `before` in `text` (up to a space, a comma, "%" or ")").
+fn number_after(text: &str, before: &str) -> f64 {
+    let start = text
+        .find(before)
+        .unwrap_or_else(|| panic!("no {before:?} in {text:?}"))
+        + before.len();
+    let rest = &text[start..];
+    let end = rest
+        .find(|c: char| !(c.is_ascii_digit() || c == '.' || c == '-'))
+        .unwrap_or(rest.len());
+    rest[..end]
+        .parse()
+        .unwrap_or_else(|_| panic!("no number after {before:?} in {text:?}"))
+}
+
+/// The one line of `text` that contains `what`.
+fn line_with<'a>(text: &'a str, what: &str) -> &'a str {
+    let mut found = text.lines().filter(|l| l.contains(what));
+    let line = found
+        .next()
+        .unwrap_or_else(|| panic!("no line with {what:?}"));
+    assert!(found.next().is_none(), "more than one line with {what:?}");
+    line
+}
+
+fn logs_facts(facts: &mut Facts) {
+    use cutlab::estimation::load_levels::{LOAD_LEVEL_FRACTION, MIN_LOAD_LEVELS};
+    facts.set("logs.load_level_pct", short(100.0 * LOAD_LEVEL_FRACTION, 1));
+    facts.set("logs.min_load_levels", MIN_LOAD_LEVELS.to_string());
+
+    let doc = std::fs::read_to_string(root().join("docs/logs.md")).unwrap();
+    let example = &doc[doc
+        .find("## Worked example: calibrate from a log, replay a controller on it")
+        .unwrap()..];
+    let example = &example[..example.find("\n## ").unwrap_or(example.len())];
+    // The calibration: its line and R².
+    let line = line_with(example, "rpm: I = ");
+    let idle_a = number_after(line, "I = ");
+    let slope_a_per_n = number_after(line, "A + ");
+    let r_squared = number_after(line, "R² ");
+    facts.set("logs.export.r_squared", fixed(r_squared, 2));
+    // The replay.
+    let command = line_with(example, "--target-n ");
+    let target_n = number_after(command, "--target-n ");
+    facts.set("logs.replay.target_n", short(target_n, 1));
+    facts.set(
+        "logs.replay.target_a",
+        fixed(idle_a + slope_a_per_n * target_n, 2),
+    );
+    let head = line_with(example, "control periods of ");
+    facts.set(
+        "logs.replay.period_ms",
+        short(1e3 * number_after(head, "control periods of "), 1),
+    );
+    let event_s = |what: &str| number_after(line_with(example, what).trim_start(), "");
+    let armed_s = event_s("s  armed:");
+    facts.set("logs.replay.armed_s", fixed(armed_s, 0));
+    facts.set(
+        "logs.replay.entry_s",
+        fixed(event_s("entry: the tool entered the cut"), 1),
+    );
+    facts.set(
+        "logs.replay.engaged_s",
+        fixed(event_s("entry: the cutter is in the cut"), 1),
+    );
+    let air = example
+        .lines()
+        .find(|l| l.contains("air cut: override held at "))
+        .unwrap();
+    facts.set(
+        "logs.replay.held_pct",
+        short(number_after(air, "held at "), 1),
+    );
+    let summary = line_with(example, "override while armed:");
+    let mean_pct = number_after(summary, ", mean ");
+    let own_pct = number_after(summary, "the log's own: mean ");
+    assert!(
+        mean_pct < own_pct,
+        "PI's mean override is below the log's own"
+    );
+    facts.set("logs.replay.mean_pct", fixed(mean_pct, 0));
+    facts.set("logs.replay.own_mean_pct", fixed(own_pct, 0));
+    facts.set(
+        "logs.replay.limited_periods",
+        fixed(number_after(summary, "); "), 0),
+    );
+    // The first row of replay.csv: the spindle's run-up read through the calibration.
+    let csv = example
+        .lines()
+        .skip_while(|l| !l.starts_with("time_s,current_a,"))
+        .nth(1)
+        .unwrap();
+    let cells: Vec<f64> = csv.split(',').filter_map(|c| c.parse().ok()).collect();
+    facts.set("logs.replay.first_current_a", fixed(cells[1], 0));
+    facts.set("logs.replay.first_estimate_n", fixed(cells[2], 0));
+    facts.set(
+        "logs.replay.dial_step_pct",
+        short(EnvelopeConfig::default_for_dial().resolution.step_pct(), 1),
+    );
+}
+
+// ---------------------------------------------------------------------------------------------
+// docs/tuning.md: the teach-in's rule and the search's constants from their definitions, and the
+// worked examples' prose read from their transcripts (held to the tool by tests/transcripts.rs).
+// ---------------------------------------------------------------------------------------------
+
+fn tuning_facts(facts: &mut Facts) {
+    use cutlab::closed_loop::settings::DEFAULT_TARGET_FRACTION;
+    use cutlab::estimation::teach_fit::FULL_OVERRIDE_TOLERANCE_PCT;
+    use cutlab::tuning::nelder_mead::NelderMead;
+    use cutlab::tuning::teach_in::{MIN_PROPOSED_GAP_PCT, NOISE_SIGMAS};
+    use cutlab::tuning::{Objective, MAX_SWEEP_POINTS};
+
+    facts.set(
+        "tuning.target_pct",
+        short(100.0 * DEFAULT_TARGET_FRACTION, 1),
+    );
+    facts.set(
+        "tuning.limit_above_target_pct",
+        short(100.0 * (FORCE_LIMIT_FACTOR - 1.0), 1),
+    );
+    facts.set(
+        "tuning.limit_pct_of_full",
+        short(100.0 * DEFAULT_TARGET_FRACTION * FORCE_LIMIT_FACTOR, 1),
+    );
+    facts.set(
+        "tuning.full_override_tolerance_pct",
+        short(FULL_OVERRIDE_TOLERANCE_PCT, 2),
+    );
+    facts.set("tuning.noise_sigmas", short(NOISE_SIGMAS, 1));
+    facts.set("tuning.min_gap_pct", short(MIN_PROPOSED_GAP_PCT, 1));
+    facts.set("tuning.max_sweep_points", MAX_SWEEP_POINTS.to_string());
+    // The scenarios' programs at 100 % override, longest beside shortest.
+    for (preset, key) in [
+        (Preset::KimStepDoc, "tuning.kim_program_s"),
+        (Preset::ManeeratDoc1, "tuning.maneerat_1_program_s"),
+    ] {
+        facts.set(
+            key,
+            fixed(preset.scenario().unwrap().nominal_duration_s(), 0),
+        );
+    }
+    let w = Objective::default();
+    facts.set(
+        "tuning.default_weights",
+        [
+            w.cycle_time,
+            w.force_error,
+            w.time_above_limit,
+            w.override_activity,
+        ]
+        .map(|x| short(x, 3))
+        .join(", "),
+    );
+    let search = NelderMead::default();
+    let power_of_ten = |x: f64| {
+        let e = x.log10().round();
+        assert!(
+            (x / 10f64.powf(e) - 1.0).abs() < 1e-12,
+            "{x} is not a power of ten"
+        );
+        let digits: String = format!("{}", -e as i64)
+            .chars()
+            .map(|c| match c {
+                '0' => '⁰',
+                '1' => '¹',
+                '2' => '²',
+                '3' => '³',
+                '4' => '⁴',
+                '5' => '⁵',
+                '6' => '⁶',
+                '7' => '⁷',
+                '8' => '⁸',
+                _ => '⁹',
+            })
+            .collect();
+        format!("10⁻{digits}")
+    };
+    facts.set("tuning.cost_tolerance", power_of_ten(search.cost_tolerance));
+    facts.set(
+        "tuning.point_tolerance",
+        power_of_ten(search.point_tolerance),
+    );
+
+    let doc = std::fs::read_to_string(root().join("docs/tuning.md")).unwrap();
+    // The simulated teach-ins: kim-step-doc's gap about its target (paper 003's 0.4 A gap in
+    // newtons is the estimation's `kim_step.gap_0_4_a_n`), liu-current-step's and
+    // maneerat-doc-2's loads beside the papers' targets.
+    let teach = &doc[doc
+        .find("$ cutlab tune --teach-in --scenarios kim-step-doc,maneerat-doc-2,liu-current-step")
+        .unwrap()..];
+    let teach = &teach[..teach.find("```").unwrap()];
+    // A scenario's block: its header line and the indented lines under it.
+    let block = |name: &str| {
+        let start = teach
+            .find(&format!("\n{name} (simulated teach cut"))
+            .unwrap()
+            + 1;
+        let rest = &teach[start..];
+        let end = rest
+            .match_indices('\n')
+            .map(|(i, _)| i + 1)
+            .find(|&i| !rest[i..].starts_with("  "))
+            .unwrap_or(rest.len());
+        &rest[..end]
+    };
+    let kim = block("kim-step-doc");
+    let kim_target_n = number_after(kim, "proposed target ");
+    let kim_gap_pct = number_after(kim, "threshold gap ");
+    facts.set("tuning.kim.gap_pct", fixed(kim_gap_pct, 1));
+    facts.set("tuning.kim.target_n", fixed(kim_target_n, 0));
+    // The gap is the band's whole width: ± half of it about the target.
+    facts.set(
+        "tuning.kim.gap_n",
+        fixed(kim_gap_pct / 100.0 * kim_target_n / 2.0, 0),
+    );
+    let liu = block("liu-current-step");
+    facts.set(
+        "tuning.liu.reference_a",
+        fixed(number_after(liu, "reference current "), 3),
+    );
+    let maneerat = block("maneerat-doc-2");
+    facts.set(
+        "tuning.maneerat_2.full_n",
+        fixed(number_after(maneerat, "force at 100 % override "), 0),
+    );
+    facts.set(
+        "tuning.maneerat_2.paper_n",
+        fixed(number_after(maneerat, "target force: "), 0),
+    );
+
+    // The search's front: the narrow output range against the best point.
+    let example = &doc[doc
+        .find("## Worked example: paper 002's scaling factors")
+        .unwrap()..];
+    // The search's best, then (a budget of one evaluation) the defaults'.
+    let bests: Vec<&str> = example
+        .lines()
+        .filter(|l| l.starts_with("best: "))
+        .collect();
+    assert_eq!(bests.len(), 2, "{bests:?}");
+    let (best, defaults) = (bests[0], bests[1]);
+    for (key, name) in [
+        ("error_range", "error_range_pct="),
+        ("change_range", "change_range_pct="),
+        ("output_range", "output_range_pct="),
+    ] {
+        facts.set(
+            &format!("tuning.example.best_{key}_pct"),
+            fixed(number_after(best, name), 0),
+        );
+    }
+    let front: Vec<Vec<f64>> = example
+        .lines()
+        .skip_while(|l| !l.contains("error_range_pct  change_range_pct"))
+        .skip(1)
+        .take_while(|l| !l.starts_with("```"))
+        .map(|l| l.split_whitespace().map(|c| c.parse().unwrap()).collect())
+        .collect();
+    let narrow = front.iter().min_by(|a, b| a[2].total_cmp(&b[2])).unwrap();
+    let best_row = front.iter().min_by(|a, b| a[3].total_cmp(&b[3])).unwrap();
+    assert!(narrow[4] < best_row[4] && narrow[5] > best_row[5]);
+    facts.set("tuning.example.narrow_output_pct", fixed(narrow[2], 0));
+    facts.set(
+        "tuning.example.narrow_faster_s",
+        fixed(best_row[4] - narrow[4], 1),
+    );
+    facts.set("tuning.example.narrow_error_pct", fixed(narrow[5], 1));
+    facts.set("tuning.example.narrow_above_s", fixed(narrow[6], 2));
+    facts.set("tuning.example.best_error_pct", fixed(best_row[5], 1));
+    // The defaults alone against the search's best.
+    let (default_objective, best_objective) = (
+        number_after(defaults, "(objective "),
+        number_after(best, "(objective "),
+    );
+    let (default_error, default_cycle) = (
+        number_after(defaults, "force error "),
+        number_after(defaults, "cycle "),
+    );
+    assert!(best_objective < default_objective);
+    facts.set(
+        "tuning.example.default_objective",
+        fixed(default_objective, 2),
+    );
+    facts.set("tuning.example.best_objective", fixed(best_objective, 2));
+    facts.set("tuning.example.default_error_pct", fixed(default_error, 1));
+    facts.set(
+        "tuning.example.error_gain_points",
+        fixed(default_error - number_after(best, "force error "), 1),
+    );
+    facts.set(
+        "tuning.example.cycle_cost_s",
+        fixed(number_after(best, "cycle ") - default_cycle, 1),
+    );
+    facts.set("tuning.example.best_above_s", fixed(best_row[6], 2));
+}
+
+// ---------------------------------------------------------------------------------------------
+// docs/run-definition.md: the resolution's rules and the teach cut's fit, from their constants
+// (the period, low-passes, envelope factors and teach schedule shared with
+// docs/controllers.md are set with the settings), and the chip-load window on kim-step-doc.
+// ---------------------------------------------------------------------------------------------
+
+fn run_definition_facts(facts: &mut Facts, m: &Matrix) {
+    use cutlab::estimation::teach_fit::{SETTLE_AFTER_SPINDLE_START_S, STEADY_SPEED_FRACTION};
+    use cutlab::plant::materials::Material;
+    use cutlab::tuning::teach_in::operating_point;
+
+    facts.set(
+        "run.paper_002_period_ms",
+        fixed(1000.0 * PAPER_002_CONTROL_PERIOD_S, 0),
+    );
+    facts.set(
+        "teach.spindle_start_settle_s",
+        short(SETTLE_AFTER_SPINDLE_START_S, 2),
+    );
+    facts.set(
+        "teach.steady_speed_pct",
+        short(100.0 * STEADY_SPEED_FRACTION, 2),
+    );
+    // The air-cut threshold's share of the target and the sensor-fault current's factor, in words.
+    facts.set(
+        "run.air_cut_share",
+        match whole((1.0 / AIR_CUT_FRACTION).round()) {
+            5 => "a fifth".to_string(),
+            n => format!("1/{n}"),
+        },
+    );
+    let kim = &m.result(Preset::KimStepDoc, ControllerKind::Fixed);
+    let fault_factor = kim.settings.envelope.max_current_a / kim.calibration.max_phase_current_a;
+    facts.set(
+        "run.fault_current_times",
+        match short(fault_factor, 2).as_str() {
+            "2" => "twice".to_string(),
+            other => format!("{other} times"),
+        },
+    );
+    // The chip-load windows of a large cutter, and the diameter below which they scale.
+    let large_mm = 20.0;
+    for (material, key) in [
+        (Material::Sm45c, "sm45c"),
+        (Material::Aluminium, "aluminium"),
+        (Material::ToolSteel, "tool_steel"),
+    ] {
+        let (lo, hi) = material.feed_per_tooth_window_mm(large_mm);
+        facts.set(&format!("run.chip.{key}_max_mm"), short(hi, 3));
+        if key == "sm45c" {
+            facts.set("run.chip.min_mm", short(lo, 3));
+        } else {
+            assert_eq!(
+                fixed(lo, 6),
+                fixed(Material::Sm45c.feed_per_tooth_window_mm(large_mm).0, 6)
+            );
+        }
+    }
+    let full = Material::Sm45c.feed_per_tooth_window_mm(large_mm).1;
+    let scaled_at_1_mm = Material::Sm45c.feed_per_tooth_window_mm(1.0).1;
+    let small_cutter_mm = full / scaled_at_1_mm;
+    assert!(Material::Sm45c.feed_per_tooth_window_mm(small_cutter_mm).1 == full);
+    facts.set("run.chip.small_cutter_mm", short(small_cutter_mm, 1));
+    // kim-step-doc: the window's top as an override, against the machine's highest.
+    let window = kim.settings.envelope.chip_load.unwrap();
+    let at = operating_point(&RunSpec::new(Preset::KimStepDoc, ControllerKind::Fixed));
+    let (_, top_pct) = window
+        .override_range_pct(at.feed_mm_min, at.spindle_rpm)
+        .unwrap();
+    let per_tooth_at_100 = at.feed_mm_min / (f64::from(window.teeth) * at.spindle_rpm);
+    facts.set("run.chip.kim_top_pct", fixed(top_pct, 0));
+    facts.set("run.chip.kim_top_mm", short(window.max_mm, 3));
+    facts.set(
+        "run.chip.kim_machine_top_mm",
+        short(
+            kim.settings.envelope.max_override_pct / 100.0 * per_tooth_at_100,
+            3,
+        ),
+    );
+    assert!(top_pct < kim.settings.envelope.max_override_pct);
+}
+
+/// `v` as docs/run-definition.md's table writes a bound: at most three decimals, thousands
+/// spaced, a minus sign.
+fn table_number(v: f64) -> String {
+    let text = short(v.abs(), 3);
+    let (whole_part, rest) = text.split_at(text.find('.').unwrap_or(text.len()));
+    let mut out = String::new();
+    for (i, c) in whole_part.chars().enumerate() {
+        if i > 0 && (whole_part.len() - i) % 3 == 0 {
+            out.push(' ');
+        }
+        out.push(c);
+    }
+    format!("{}{out}{rest}", if v < 0.0 { "−" } else { "" })
+}
+
+/// docs/run-definition.md's table of settings: each static range from the setting's row (the
+/// overrides a machine caps show their lowest only).
+fn run_setting_ranges(facts: &mut Facts) {
+    for setting in RunSetting::ALL {
+        let Some((min, max)) = setting.range_on(f64::INFINITY) else {
+            continue;
+        };
+        let field = setting.spec().json_field;
+        // The band's arming override is said in words; the others a machine caps show their
+        // lowest and "what the machine applies".
+        if setting == RunSetting::ArmingOverride {
+            continue;
+        }
+        if matches!(setting, RunSetting::MaxOverride | RunSetting::EntryOverride) {
+            facts.set(&format!("run.range.{field}.min"), table_number(min));
+        } else {
+            facts.set(
+                &format!("run.range.{field}"),
+                format!("{} – {}", table_number(min), table_number(max)),
+            );
+        }
+    }
+}
+
+/// The table's defaults that live in the plant: the tool's modulus and paper 002's load step.
+fn run_plant_defaults(facts: &mut Facts) {
+    use cutlab::plant::deflection::CARBIDE_YOUNGS_MODULUS_GPA;
+    facts.set(
+        "run.carbide_modulus_gpa",
+        short(CARBIDE_YOUNGS_MODULUS_GPA, 1),
+    );
+    facts.set(
+        "run.load_step_time_s",
+        short(BondGraphRun::PAPER_002_LOAD_STEP_TIME_S, 2),
+    );
+    facts.set(
+        "run.default_load_step_pct",
+        short(BondGraphRun::DEFAULT_LOAD_STEP_PCT, 1),
+    );
+}
+
+// ---------------------------------------------------------------------------------------------
+// docs/signal-chain.md: the design's order limit, the windows' loss between bins, the feed
+// drive's harmonics behind the three-phase RMS's ripple.
+// ---------------------------------------------------------------------------------------------
+
+fn signal_chain_facts(facts: &mut Facts) {
+    use cutlab::plant::feed_drive::FeedDriveConfig;
+    use cutlab::signal::butterworth::MAX_ORDER;
+    use cutlab::signal::spectrum::Window;
+
+    facts.set("signal.orders", format!("1–{MAX_ORDER}"));
+    // A sine `offset` bins off a bin reads low by the window's gain there; half-way between two
+    // bins is the worst for the rectangular and Hann windows.
+    let len = 1024;
+    let low_pct = |w: Window, offset: f64| {
+        let c = w.coefficients(len);
+        let sum: f64 = c.iter().sum();
+        let (re, im) = c.iter().enumerate().fold((0.0, 0.0), |(re, im), (n, w)| {
+            let phase = std::f64::consts::TAU * offset * n as f64 / len as f64;
+            (re + w * phase.cos(), im - w * phase.sin())
+        });
+        100.0 * (1.0 - (re * re + im * im).sqrt() / sum)
+    };
+    facts.set(
+        "signal.rectangular_low_pct",
+        fixed(low_pct(Window::Rectangular, 0.5), 0),
+    );
+    facts.set("signal.hann_low_pct", fixed(low_pct(Window::Hann, 0.5), 0));
+    // The flat top's largest error anywhere between two bins.
+    let flat_top_pct = (0..=50)
+        .map(|k| low_pct(Window::FlatTop, f64::from(k) / 100.0).abs())
+        .fold(0.0, f64::max);
+    facts.set("signal.flat_top_within_pct", fixed(flat_top_pct, 2));
+    let feed = FeedDriveConfig::default();
+    facts.set("signal.feed_h5_pct", short(100.0 * feed.harmonic_5th, 1));
+    facts.set("signal.feed_h7_pct", short(100.0 * feed.harmonic_7th, 1));
+    facts.set(
+        "signal.feed_ripple_pct",
+        short(100.0 * (feed.harmonic_5th + feed.harmonic_7th), 1),
+    );
+}
+
+// ---------------------------------------------------------------------------------------------
+// docs/fuzzy.md: the engine's constants, Table 4's printed shape and repair, and the fuzzy
+// controller's defaults.
+// ---------------------------------------------------------------------------------------------
+
+/// `n` as an ordinal word ("seventh"), digits beyond ten.
+fn ordinal_word(n: usize) -> String {
+    const WORDS: [&str; 11] = [
+        "zeroth", "first", "second", "third", "fourth", "fifth", "sixth", "seventh", "eighth",
+        "ninth", "tenth",
+    ];
+    WORDS
+        .get(n)
+        .map_or_else(|| format!("{n}th"), |w| (*w).to_string())
+}
+
+fn fuzzy_facts(facts: &mut Facts) {
+    use cutlab::control::fuzzy::engine::{
+        CROSSING_RESERVE_TERMS, DEFAULT_RESOLUTION, FUZZYLITE_EPSILON,
+    };
+    use cutlab::control::fuzzy::rules::{LEVEL_NAMES, TABLE_4_AS_PRINTED, TABLE_4_SPURIOUS_COLUMN};
+
+    facts.set("fuzzy.epsilon", format!("{FUZZYLITE_EPSILON:e}"));
+    facts.set("fuzzy.crossing_terms", CROSSING_RESERVE_TERMS.to_string());
+    facts.set("fuzzy.default_resolution", DEFAULT_RESOLUTION.to_string());
+    facts.set(
+        "fuzzy.table_4.printed_entries",
+        count_word(TABLE_4_AS_PRINTED[0].len()),
+    );
+    facts.set("fuzzy.table_4.labels", count_word(LEVEL_NAMES.len()));
+    facts.set(
+        "fuzzy.table_4.dropped_ordinal",
+        ordinal_word(TABLE_4_SPURIOUS_COLUMN + 1),
+    );
+    facts.set(
+        "fuzzy.table_4.dropped_position",
+        (TABLE_4_SPURIOUS_COLUMN + 1).to_string(),
+    );
+    for kind in [
+        ControllerKind::FuzzyDynamics,
+        ControllerKind::FuzzyExperience,
+    ] {
+        for key in ["error_range_pct", "change_range_pct", "output_range_pct"] {
+            let value = ControllerConfig::new(kind).get(key).unwrap();
+            let first = ControllerConfig::new(ControllerKind::FuzzyDynamics)
+                .get(key)
+                .unwrap();
+            assert_eq!(value, first, "both tables default {key} alike");
+        }
+    }
+    let default = ControllerConfig::new(ControllerKind::FuzzyDynamics);
+    for key in ["error_range_pct", "change_range_pct", "output_range_pct"] {
+        facts.set(
+            &format!("fuzzy.default.{key}"),
+            short(default.get(key).unwrap(), 3),
+        );
+    }
+    facts.set(
+        "fuzzy.paper_002_period_s",
+        short(PAPER_002_CONTROL_PERIOD_S, 3),
+    );
+}
+
+/// docs/lessons.md: the papers a lesson may walk.
+fn lessons_facts(facts: &mut Facts) {
+    use cutlab::lessons::PAPERS;
+    facts.set(
+        "lessons.papers",
+        format!("`{}` to `{}`", PAPERS[0], PAPERS[PAPERS.len() - 1]),
+    );
+}
+
+// ---------------------------------------------------------------------------------------------
+// Constants the test cannot import (private, or behind the `web` feature): read from their one
+// definition in the source text, so a change there fails here too.
+// ---------------------------------------------------------------------------------------------
+
+/// The value of `const NAME: T = LITERAL;` in `path` (from the checkout's root); a constant
+/// defined by an expression is refused, so the reading never guesses.
+fn source_constant(path: &str, name: &str) -> f64 {
+    let text = std::fs::read_to_string(root().join(path)).unwrap();
+    let start = text
+        .find(&format!("const {name}: "))
+        .unwrap_or_else(|| panic!("{path} defines no const {name}"));
+    let rest = &text[start..];
+    let value = rest[rest.find('=').unwrap() + 1..rest.find(';').unwrap()].trim();
+    value
+        .replace('_', "")
+        .parse()
+        .unwrap_or_else(|_| panic!("{path}: {name} = {value} is not a literal"))
+}
+
+/// The reference docs' constants that live where the test cannot import them: the Hardware
+/// page's live view and recording flush, the link's input passes, the search's initial simplex.
+fn source_constants(facts: &mut Facts) {
+    let station = "src/web/hardware/station.rs";
+    facts.set(
+        "hardware.live_window_s",
+        short(source_constant(station, "LIVE_WINDOW_S"), 2),
+    );
+    let flush_s = source_constant(station, "FLUSH_INTERVAL_S");
+    facts.set(
+        "hardware.flush_interval",
+        if flush_s == 0.5 {
+            "half second".to_string()
+        } else {
+            format!("{} s", short(flush_s, 3))
+        },
+    );
+    facts.set(
+        "link.chunks_per_pass",
+        count_word(whole(source_constant(
+            "src/protocol/link/mod.rs",
+            "MAX_CHUNKS_PER_PASS",
+        ))),
+    );
+    facts.set(
+        "tuning.initial_step_pct",
+        short(
+            100.0 * source_constant("src/tuning/nelder_mead.rs", "INITIAL_STEP"),
+            1,
+        ),
+    );
+}
+
+/// docs/protocol.md's remaining figures of the link: when a Sample's microsecond clock wraps,
+/// how many strings the CRC is checked on beyond the catalogue's, and the dial's table.
+fn protocol_more(facts: &mut Facts) {
+    facts.set("link.time_wrap_min", fixed(2f64.powi(32) / 1e6 / 60.0, 1));
+    let framing: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(root().join("tests/reference/protocol/framing.json")).unwrap(),
+    )
+    .unwrap();
+    let strings = framing["crc32"].as_array().unwrap();
+    // The first is the catalogue's check value, "123456789".
+    assert_eq!(strings[0]["data"], "313233343536373839");
+    facts.set("link.crc_more_strings", (strings.len() - 1).to_string());
+}
+
+/// docs/logs.md: the shipped teach-cut log's fit, which the page recommends over a controlled run.
+fn logs_teach_cut_fit(facts: &mut Facts) {
+    use cutlab::estimation::speed::GEAR_CHANGE_RPM;
+    use cutlab::log::period_log::{calibrate_log, LogTable};
+    let bytes = std::fs::read(root().join("www/data/kim-step-doc-teach-cut.csv")).unwrap();
+    let log = cutlab::log::load(&bytes, None).unwrap();
+    let table = LogTable::from_log(&log, &[]).unwrap();
+    let fit = calibrate_log(&table, None, GEAR_CHANGE_RPM).unwrap();
+    let rows = fit.spindle.unwrap().rows;
+    assert_eq!(rows.len(), 1);
+    facts.set(
+        "logs.teach_cut.r_squared",
+        fixed(rows[0].quality.r_squared, 3),
+    );
+}
+
+/// The rows of the sweep table a `cutlab tune … --sweep` transcript prints after `command`
+/// (its continuation line, indented, as the transcript writes it: the prose quotes the same
+/// options), as numbers (the best row's `*` dropped).
+fn sweep_rows(doc: &str, command: &str) -> Vec<Vec<f64>> {
+    let after = &doc[doc
+        .find(command)
+        .unwrap_or_else(|| panic!("no transcript with {command:?}"))..];
+    after
+        .lines()
+        .skip_while(|l| !l.contains("objective  cycle (s)"))
+        .skip(1)
+        .take_while(|l| !l.starts_with('$') && !l.starts_with("```"))
+        .map(|l| {
+            l.split_whitespace()
+                .map(|c| c.trim_end_matches('*').parse().unwrap())
+                .collect()
+        })
+        .collect()
+}
+
+/// docs/tuning.md's two sweeps, read from their transcripts: k_ec alone, and the error and
+/// output ranges together.
+fn tuning_sweeps(facts: &mut Facts) {
+    let doc = std::fs::read_to_string(root().join("docs/tuning.md")).unwrap();
+    // Columns: the parameters, objective, cycle, error, above, activity.
+    let ec = sweep_rows(&doc, "\n    --param change_range_pct=20:1000 --sweep 5");
+    assert_eq!(ec.len(), 5);
+    let (first, second, last) = (&ec[0], &ec[1], &ec[ec.len() - 1]);
+    facts.set("tuning.sweep_ec.first_pct", short(first[0], 1));
+    facts.set("tuning.sweep_ec.first_activity_pct", fixed(first[5], 0));
+    facts.set("tuning.sweep_ec.first_objective", fixed(first[1], 2));
+    facts.set("tuning.sweep_ec.second_pct", short(second[0], 1));
+    facts.set("tuning.sweep_ec.second_activity_pct", fixed(second[5], 0));
+    facts.set("tuning.sweep_ec.last_pct", short(last[0], 1));
+    facts.set(
+        "tuning.sweep_ec.rest_objective",
+        // As printed: rounding the printed 2.965 again would round it twice.
+        span(ec[1..].iter().map(|r| r[1]), 3),
+    );
+    // "at 20 % … the override chatters": far more travel than anywhere else.
+    assert!(ec[1..].iter().all(|r| first[5] > 5.0 * r[5]));
+
+    let grid = sweep_rows(
+        &doc,
+        "\n    --param error_range_pct=20:200 --param output_range_pct=2:60 --sweep 3",
+    );
+    assert_eq!(grid.len(), 9);
+    // Columns: error range, output range, objective, cycle, error, above, activity.
+    let at = |e: usize, u: usize| &grid[3 * e + u];
+    let (low_e, mid_e, high_e) = (at(0, 0)[0], at(1, 0)[0], at(2, 0)[0]);
+    let (low_u, high_u) = (at(0, 0)[1], at(0, 2)[1]);
+    facts.set("tuning.sweep_2d.low_e_pct", short(low_e, 1));
+    facts.set("tuning.sweep_2d.mid_e_pct", short(mid_e, 1));
+    facts.set("tuning.sweep_2d.high_e_pct", short(high_e, 1));
+    facts.set("tuning.sweep_2d.low_u_pct", short(low_u, 1));
+    facts.set("tuning.sweep_2d.high_u_pct", short(high_u, 1));
+    facts.set(
+        "tuning.sweep_2d.low_e_objective",
+        span((0..3).map(|u| at(0, u)[2]), 1),
+    );
+    facts.set(
+        "tuning.sweep_2d.low_e_activity_pct",
+        fixed((0..3).map(|u| at(0, u)[6]).fold(0.0, f64::max), 0),
+    );
+    facts.set("tuning.sweep_2d.low_u_above_s", fixed(at(1, 0)[5], 1));
+    facts.set(
+        "tuning.sweep_2d.high_u_mid_e_activity_pct",
+        fixed(at(1, 2)[6], 0),
+    );
+    facts.set(
+        "tuning.sweep_2d.high_u_high_e_activity_pct",
+        fixed(at(2, 2)[6], 0),
+    );
+    // The readings: a narrow output range stays above the limit longest, a wide one calmed by
+    // a wide error range.
+    assert!(at(1, 0)[5] > at(1, 1)[5] && at(2, 2)[6] < at(1, 2)[6]);
+}
+
 fn root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
 }
 
 /// The documents the facts are marked in.
-const DOCS: [&str; 3] = ["docs/controllers.md", "docs/papers.md", "docs/plant.md"];
+const DOCS: [&str; 11] = [
+    "docs/controllers.md",
+    "docs/papers.md",
+    "docs/plant.md",
+    "docs/hardware.md",
+    "docs/protocol.md",
+    "docs/logs.md",
+    "docs/tuning.md",
+    "docs/run-definition.md",
+    "docs/signal-chain.md",
+    "docs/fuzzy.md",
+    "docs/lessons.md",
+];
 
 fn all_facts() -> BTreeMap<String, String> {
     let mut facts = Facts::default();
@@ -2501,6 +3921,16 @@ fn all_facts() -> BTreeMap<String, String> {
     paper_004_learning(&mut facts);
     paper_004_surface_error(&mut facts, &matrix);
     extra_runs(&mut facts, &matrix);
+    run_definition_facts(&mut facts, &matrix);
+    run_setting_ranges(&mut facts);
+    run_plant_defaults(&mut facts);
+    signal_chain_facts(&mut facts);
+    fuzzy_facts(&mut facts);
+    lessons_facts(&mut facts);
+    source_constants(&mut facts);
+    protocol_more(&mut facts);
+    logs_teach_cut_fit(&mut facts);
+    tuning_sweeps(&mut facts);
     log_calibration(&mut facts);
     paper_000_bench(&mut facts);
     eprintln!(
@@ -2510,6 +3940,9 @@ fn all_facts() -> BTreeMap<String, String> {
     paper_002(&mut facts);
     open_loop(&mut facts);
     plant_constants(&mut facts);
+    link_constants(&mut facts);
+    logs_facts(&mut facts);
+    tuning_facts(&mut facts);
     facts.0
 }
 
@@ -2644,4 +4077,104 @@ fn blessing_writes_the_tools_values_and_leaves_the_rest() {
          <!-- tool:table -->\n| x |\n<!-- /tool -->\nAfter.\n"
     );
     assert!(problems(&[("small.md", &new)], &facts).is_empty());
+}
+
+// ---------------------------------------------------------------------------------------------
+// docs/protocol.md §3's layout tables against the codec.
+// ---------------------------------------------------------------------------------------------
+
+/// Bytes of a layout table's type cell: `u8`, `i16[3]`, `f32 × 16`.
+fn layout_size(ty: &str) -> usize {
+    let (base, count) = if let Some((base, n)) = ty.split_once('[') {
+        (base, n.trim_end_matches(']').parse::<usize>().unwrap())
+    } else if let Some((base, n)) = ty.split_once(" × ") {
+        (base, n.parse::<usize>().unwrap())
+    } else {
+        (ty, 1)
+    };
+    let bytes = match base.trim() {
+        "u8" | "i8" => 1,
+        "u16" | "i16" => 2,
+        "u32" | "i32" | "f32" => 4,
+        other => panic!("docs/protocol.md: unknown type {other:?}"),
+    };
+    bytes * count
+}
+
+/// `SetOverride` as `FrameType::name` writes it: `set-override`.
+fn kebab(name: &str) -> String {
+    let mut out = String::new();
+    for (i, c) in name.chars().enumerate() {
+        if c.is_ascii_uppercase() && i > 0 {
+            out.push('-');
+        }
+        out.push(c.to_ascii_lowercase());
+    }
+    out
+}
+
+/// Every frame's layout table in docs/protocol.md §3 starts at offset 1 (after the type byte),
+/// each field starts where the one before ends, and the last ends at the payload length the
+/// codec reads and writes: an offset or a size edited in one place only fails here.
+#[test]
+fn the_protocol_layout_tables_add_up_to_each_frames_payload() {
+    use cutlab::protocol::frame::FrameType;
+    let doc = std::fs::read_to_string(root().join("docs/protocol.md")).unwrap();
+    let section = &doc[doc.find("## 3. Frames").unwrap()..doc.find("## 4. Conversation").unwrap()];
+    let mut fields: BTreeMap<String, Vec<(usize, usize, String)>> = BTreeMap::new();
+    let (mut heading_frame, mut row_frame) = (String::new(), String::new());
+    let mut has_frame_column = false;
+    for line in section.lines() {
+        if let Some(h) = line.strip_prefix("### 0x") {
+            heading_frame = kebab(h.split_whitespace().nth(1).unwrap().trim_end_matches(','));
+            has_frame_column = false;
+            continue;
+        }
+        if !line.starts_with('|') || line.starts_with("|---") {
+            continue;
+        }
+        let cells: Vec<&str> = line.trim_matches('|').split('|').map(str::trim).collect();
+        if cells.contains(&"offset") {
+            has_frame_column = cells[0] == "frame";
+            continue;
+        }
+        let (frame, rest) = if has_frame_column {
+            if !cells[0].is_empty() {
+                row_frame = kebab(cells[0]);
+            }
+            (row_frame.clone(), &cells[1..])
+        } else {
+            (heading_frame.clone(), &cells[..])
+        };
+        // The frame-type table's rows (`| 0x01 | Hello | …`) are not layouts.
+        let Ok(offset) = rest[0].split_whitespace().next().unwrap().parse::<usize>() else {
+            continue;
+        };
+        fields
+            .entry(frame)
+            .or_default()
+            .push((offset, layout_size(rest[1]), rest[2].to_string()));
+    }
+    for t in FrameType::ALL {
+        let rows = fields
+            .get(t.name())
+            .unwrap_or_else(|| panic!("docs/protocol.md §3 has no layout of {}", t.name()));
+        let mut next = 1;
+        for (offset, size, field) in rows {
+            assert_eq!(
+                *offset,
+                next,
+                "docs/protocol.md §3, {}: {field} at offset {offset}, the field before ends at {next}",
+                t.name()
+            );
+            next = offset + size;
+        }
+        assert_eq!(
+            next,
+            t.payload_len(),
+            "docs/protocol.md §3, {}: the fields end at {next}, the codec's payload is {} bytes",
+            t.name(),
+            t.payload_len()
+        );
+    }
 }
