@@ -1443,6 +1443,45 @@ fn a_handshake_whose_line_budget_does_not_fit_is_refused() {
     }
 }
 
+/// A control period set shorter than the handshake allowed for asks the line for an Ack a
+/// period: both hosts refuse to arm a run whose commands do not fit, and say what to change.
+#[test]
+fn a_control_period_too_short_for_the_line_is_refused_before_arming() {
+    use cutlab::hardware::session::{check_line, HardwareSession, LinkState, SessionOptions};
+    let mut config = DeviceConfig::new(Preset::ManeeratDoc1);
+    config.line_baud = 921_600;
+    config.sim_truth = false;
+    let caps = *DeviceEmulator::new(config.clone()).unwrap().capabilities();
+    let mut spec = RunSpec::new(Preset::ManeeratDoc1, ControllerKind::Threshold);
+    assert_eq!(check_line(&caps, &spec), Ok(()));
+    spec.settings.control_period_s = Some(0.001);
+    let why = check_line(&caps, &spec).unwrap_err();
+    assert!(why.contains("lengthen the control period"), "{why}");
+
+    // The native host: refused before the teach cut's first command.
+    let run = lockstep(config.clone(), &spec, None);
+    let e = run.result.unwrap_err();
+    assert!(e.0.contains("lengthen the control period"), "{e}");
+
+    // The Hardware page's session: streaming, yet the teach cut is not armed.
+    let device = Rc::new(RefCell::new(DeviceEmulator::new(config).unwrap()));
+    let mut session = HardwareSession::new(SessionOptions::default(), 0.0);
+    let mut answer = Vec::new();
+    device
+        .borrow_mut()
+        .receive(&session.take_output(), &mut answer);
+    session.receive(&answer, 0.01);
+    assert_eq!(
+        session.state(),
+        LinkState::Streaming,
+        "{}",
+        session.reason()
+    );
+    let refused = session.start_teach_cut(&spec, 0.02).unwrap_err();
+    assert!(refused.contains("lengthen the control period"), "{refused}");
+    assert_eq!(session.state(), LinkState::Streaming);
+}
+
 /// An open transducer (it reads 0 A) breaks its drive's three-phase sum: the device raises a
 /// sensor fault naming the channel and the host's alarm stops the loop within a second.
 #[test]

@@ -16,7 +16,7 @@ use crate::closed_loop::lab::{
 use crate::closed_loop::metrics::compute;
 use crate::closed_loop::teach_cut::TeachForce;
 use crate::estimation::estimator::Calibration;
-use crate::hardware::session::check_measured;
+use crate::hardware::session::{check_line, check_measured};
 use crate::protocol::host::{DeviceSummary, LinkEvent, LinkStats};
 use crate::protocol::link::{HostAlarm, HostError, HostLink, LinkPart, TEACH_CUT_FELL_BACK};
 use crate::work::Work;
@@ -56,6 +56,7 @@ pub fn run_on_link(
     let device = DeviceSummary::of(link.capabilities());
     if let Err(why) = check_measured(link.capabilities(), false)
         .and_then(|()| check_measured(link.capabilities(), calibration.is_some()))
+        .and_then(|()| check_line(link.capabilities(), spec))
     {
         let mut link = link;
         link.finish();

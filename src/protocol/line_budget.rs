@@ -12,8 +12,9 @@ pub const BITS_PER_BYTE: f64 = 10.0;
 /// repeated commands, fault reports and the bursts a USB-serial adapter's latency timer makes.
 pub const LINE_LOAD_LIMIT: f64 = 0.7;
 
-/// Commands (and their Acks) a second the line budget allows for: one per control period of
-/// 20 ms, the shortest the lab uses, and more than the reference host sends.
+/// Commands (and their Acks) a second the handshake's line budget allows for: one per control
+/// period of 20 ms, half the shortest default period. A run whose period is set shorter asks for
+/// more, which the hosts check before arming it ([`LineBudget::for_period`]).
 pub const COMMANDS_PER_S: f64 = 50.0;
 
 /// A frame's length on the wire: its payload, 4 bytes of CRC, 1 of COBS overhead (payload and
@@ -30,6 +31,8 @@ pub struct LineBudget {
     pub bits_per_s: f64,
     /// The device's declared baud rate (0: none).
     pub baud: u32,
+    /// The commands a second it allows for: [`COMMANDS_PER_S`], or a run's one per period.
+    pub commands_per_s: f64,
 }
 
 impl LineBudget {
@@ -49,6 +52,37 @@ impl LineBudget {
     /// assert!(!LineBudget::of(&caps).fits());
     /// ```
     pub fn of(caps: &Capabilities) -> Self {
+        Self::with_commands(caps, COMMANDS_PER_S)
+    }
+
+    /// The budget of a device with `caps` running a loop of `control_period_s`: one command and
+    /// its Ack a period, and never less than the handshake allowed for ([`COMMANDS_PER_S`]).
+    ///
+    /// ```
+    /// use cutlab::protocol::line_budget::LineBudget;
+    /// # let mut caps = cutlab::protocol::device::DeviceEmulator::new(
+    /// #     cutlab::protocol::device::DeviceConfig::new(cutlab::plant::Preset::KimStepDoc)).unwrap()
+    /// #     .capabilities().clone();
+    /// caps.features = 0;
+    /// caps.sample_rate_hz = 100.0;
+    /// caps.line_baud = 115_200;
+    /// assert!(LineBudget::for_period(&caps, 0.05).fits());
+    /// assert_eq!(LineBudget::for_period(&caps, 0.05), LineBudget::of(&caps));
+    /// // A 2 ms period's 500 Acks a second do not fit beside the samples.
+    /// let fast = LineBudget::for_period(&caps, 0.002);
+    /// assert!(!fast.fits() && fast.refusal().unwrap().contains("lengthen the control period"));
+    /// ```
+    pub fn for_period(caps: &Capabilities, control_period_s: f64) -> Self {
+        // A period that is not a positive number allows for no rate at all: refused.
+        let per_period = if control_period_s > 0.0 {
+            1.0 / control_period_s
+        } else {
+            f64::INFINITY
+        };
+        Self::with_commands(caps, per_period.max(COMMANDS_PER_S))
+    }
+
+    fn with_commands(caps: &Capabilities, commands_per_s: f64) -> Self {
         let rate = f64::from(caps.sample_rate_hz);
         let sample = wire_len(FrameType::Sample) as f64
             + if caps.features & feature::SIM_TRUTH != 0 {
@@ -61,10 +95,11 @@ impl LineBudget {
         // Each way is its own wire; the device's way carries the most, and the Acks.
         let device_bytes_per_s = rate * sample
             + device_heartbeats_per_s * heartbeat
-            + COMMANDS_PER_S * wire_len(FrameType::Ack) as f64;
+            + commands_per_s * wire_len(FrameType::Ack) as f64;
         Self {
             bits_per_s: device_bytes_per_s * BITS_PER_BYTE,
             baud: caps.line_baud,
+            commands_per_s,
         }
     }
 
@@ -79,11 +114,21 @@ impl LineBudget {
             format!(
                 "the device's line cannot carry its stream: {:.0} bit/s at the busiest is {:.0} % \
                  of its {} baud, above the {:.0} % a line may plan to use (docs/protocol.md §1): \
-                 lower the sample rate or raise the baud rate",
+                 {}",
                 self.bits_per_s,
                 100.0 * self.bits_per_s / f64::from(self.baud),
                 self.baud,
-                100.0 * LINE_LOAD_LIMIT
+                100.0 * LINE_LOAD_LIMIT,
+                if self.commands_per_s > COMMANDS_PER_S {
+                    format!(
+                        "its {:.0} commands a second (one per control period) are more than \
+                         the {COMMANDS_PER_S:.0} the handshake allowed for; lengthen the control \
+                         period, lower the sample rate or raise the baud rate",
+                        self.commands_per_s
+                    )
+                } else {
+                    "lower the sample rate or raise the baud rate".to_string()
+                }
             )
         })
     }

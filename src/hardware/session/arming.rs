@@ -9,6 +9,7 @@ use crate::closed_loop::teach_cut::{TeachForce, TEACH_OVERRIDES_PCT, TEACH_STEP_
 use crate::estimation::estimator::{Calibration, Feedback};
 use crate::protocol::frame::{measured, Capabilities};
 use crate::protocol::host::DeviceSummary;
+use crate::protocol::line_budget::LineBudget;
 use crate::safety::OverrideResolution;
 
 /// The limits a run will be held to, for the confirmation the operator reads before arming.
@@ -176,11 +177,23 @@ impl HardwareSession {
             return Err(why);
         }
         check_measured(caps, false)?;
+        check_line(caps, spec)?;
         self.check_safe_override(caps)?;
         let run = closed_loop_of(spec, &plan, &taught.calibration, sample_rate_hz)
             .map_err(|e| e.to_string())?;
         Ok((run, taught.calibration.clone()))
     }
+}
+
+/// Whether the device's line carries `spec`'s loop: the handshake allowed for a command a
+/// [`COMMANDS_PER_S`](crate::protocol::line_budget::COMMANDS_PER_S) period, and a control period
+/// set shorter by hand asks for more ([`LineBudget::for_period`]). A spec that does not resolve
+/// on the device says why, as the run would.
+pub fn check_line(caps: &Capabilities, spec: &RunSpec) -> Result<(), String> {
+    let plan = plan_on(spec, f64::from(caps.sample_rate_hz)).map_err(|e| e.to_string())?;
+    LineBudget::for_period(caps, plan.chain.control_period_s)
+        .refusal()
+        .map_or(Ok(()), Err)
 }
 
 /// Whether the device measures what a teach cut (`teach`) or a closed loop needs

@@ -51,7 +51,7 @@
 //! | [`hardware_session`] | the session itself ([`HardwareSession`]): its fields, the constructor, what the page reads, the bookkeeping of state changes, events and the device's clock |
 //! | [`link`] | bytes in, time passing, the port closing: the handshake, the host's watchdog, device faults, what is due to be sent; [`describe_ack`] |
 //! | [`work`] | each sample pushed into the teach cut or the run, a row per sample, and how the work ends (held at the safe override, handed back, an alarm) |
-//! | [`arming`] | before arming: the device ready, what it measures ([`check_measured`]), the limits the operator confirms ([`ArmLimits`]) |
+//! | [`arming`] | before arming: the device ready, what it measures ([`check_measured`]), whether its line carries the run ([`check_line`]), the limits the operator confirms ([`ArmLimits`]) |
 //! | [`operator`] | the operator's commands: teach cut, arm, disarm, reset the feed hold, acknowledge an alarm, disconnect |
 //!
 //! [`TeachCut`]: crate::closed_loop::teach_cut::TeachCut
@@ -68,7 +68,7 @@ pub mod options;
 pub mod state;
 pub mod work;
 
-pub use arming::{check_measured, ArmLimits};
+pub use arming::{check_line, check_measured, ArmLimits};
 pub use calibration::TaughtCalibration;
 pub use hardware_session::HardwareSession;
 pub use link::describe_ack;

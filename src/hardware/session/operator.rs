@@ -1,7 +1,7 @@
 //! The operator's commands: teach cut, arm, disarm, reset the feed hold, acknowledge an alarm,
 //! disconnect; and what the machine gets if the link is lost now.
 
-use super::arming::{check_measured, teach_force};
+use super::arming::{check_line, check_measured, teach_force};
 use super::hardware_session::{Activity, PeriodValues, Running, Teaching, NO_PERIOD};
 use super::{HardwareSession, LinkState};
 use crate::closed_loop::definition::RunSpec;
@@ -18,6 +18,7 @@ impl HardwareSession {
         self.check_safe_override(&caps)?;
         let plan = plan_on(spec, f64::from(caps.sample_rate_hz)).map_err(|e| e.to_string())?;
         check_measured(&caps, true)?;
+        check_line(&caps, spec)?;
         let teach = TeachCut::new(
             f64::from(caps.sample_rate_hz),
             &plan,
